@@ -1,0 +1,33 @@
+// tallyd: the capture daemon. Parses flags and calls into the core library.
+#include <CLI/CLI.hpp>
+
+#include "commands/commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"tallyd: Tally's capture daemon and instrumentation tool"};
+  app.require_subcommand(1);
+  tally::cli::InstrumentArgs instrumentArgs;
+  auto* instrument = app.add_subcommand("instrument", "Instrument a SPIR-V module and print its site table as JSON");
+  instrument->add_option("input", instrumentArgs.input, "SPIR-V module (.spv), or - for standard input")->required();
+  instrument->add_option("-o,--output", instrumentArgs.output, "Where to write the instrumented module");
+  instrument->add_option("--mode", instrumentArgs.mode, "exact | subgroup | sampled:N")->capture_default_str();
+  instrument->add_option("--set", instrumentArgs.set, "Descriptor set of the counter buffer")->capture_default_str();
+  instrument->add_option("--binding", instrumentArgs.binding, "Binding of the counter buffer")->capture_default_str();
+  instrument->add_option("--first-slot", instrumentArgs.firstSlot, "First counter slot")->capture_default_str();
+  instrument->add_option("--width", instrumentArgs.width, "int64 | uint32_pair")->capture_default_str();
+  instrument->add_flag("--analyze", instrumentArgs.analyzeOnly, "Print the site table without rewriting");
+
+  tally::cli::DemoArgs demoArgs;
+  auto* demo = app.add_subcommand("demo", "Instrument the project's own shaders and print their site tables");
+  demo->add_option("--shaders", demoArgs.shaderDir, "Folder of <pass>.<stage>.glsl files")->capture_default_str();
+  demo->add_option("--mode", demoArgs.mode, "exact | subgroup | sampled:N")->capture_default_str();
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  if (*instrument) return tally::cli::runInstrument(instrumentArgs);
+  if (*demo) return tally::cli::runDemo(demoArgs);
+  return 2;
+}

@@ -1,0 +1,272 @@
+#include "spirv/instrument.hpp"
+
+#include <charconv>
+#include <map>
+#include <tuple>
+
+#include "spirv/find_sites.hpp"
+#include "spirv/inject.hpp"
+#include "spirv/module.hpp"
+#include "spirv/types.hpp"
+#include "spirv/validate.hpp"
+
+namespace tally::spirv {
+
+std::string_view toString(Stage stage) {
+  switch (stage) {
+    case Stage::Vertex: return "vertex";
+    case Stage::TessControl: return "tess_control";
+    case Stage::TessEval: return "tess_eval";
+    case Stage::Geometry: return "geometry";
+    case Stage::Fragment: return "fragment";
+    case Stage::Compute: return "compute";
+    case Stage::Task: return "task";
+    case Stage::Mesh: return "mesh";
+    case Stage::Other: break;
+  }
+  return "other";
+}
+
+std::string_view toString(SiteKind kind) {
+  switch (kind) {
+    case SiteKind::TextureRead: return "texture_read";
+    case SiteKind::AttachmentRead: return "attachment_read";
+    case SiteKind::ImageWrite: return "image_write";
+    case SiteKind::ImageAtomic: return "image_atomic";
+    case SiteKind::BufferRead: return "buffer_read";
+    case SiteKind::BufferWrite: return "buffer_write";
+    case SiteKind::OutputWrite: return "output_write";
+    case SiteKind::Invocation: return "invocation";
+  }
+  return "invocation";
+}
+
+std::optional<SiteKind> siteKindFromString(std::string_view name) {
+  for (auto k : {SiteKind::TextureRead, SiteKind::AttachmentRead, SiteKind::ImageWrite, SiteKind::ImageAtomic,
+                 SiteKind::BufferRead, SiteKind::BufferWrite, SiteKind::OutputWrite, SiteKind::Invocation}) {
+    if (toString(k) == name) return k;
+  }
+  return std::nullopt;
+}
+
+std::optional<Stage> stageFromString(std::string_view name) {
+  for (auto s : {Stage::Vertex, Stage::TessControl, Stage::TessEval, Stage::Geometry, Stage::Fragment,
+                 Stage::Compute, Stage::Task, Stage::Mesh, Stage::Other}) {
+    if (toString(s) == name) return s;
+  }
+  return std::nullopt;
+}
+
+Result<Mode> parseMode(std::string_view text) {
+  if (text == "exact") return Mode{CountMode::Exact, 1};
+  if (text == "subgroup") return Mode{CountMode::Subgroup, 1};
+  constexpr std::string_view kSampled = "sampled:";
+  if (text.starts_with(kSampled)) {
+    std::string_view digits = text.substr(kSampled.size());
+    uint32_t n = 0;
+    auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), n);
+    if (ec != std::errc() || end != digits.data() + digits.size() || digits.empty()) {
+      return makeError("mode '" + std::string(text) + "': N in sampled:N must be a whole number");
+    }
+    // 65536: one counted invocation per 256x256 tile; beyond that a 4K frame has under 200 samples.
+    if (n < 2 || n > 65536) return makeError("mode '" + std::string(text) + "': N must be between 2 and 65536");
+    return Mode{CountMode::Sampled, n};
+  }
+  return makeError("unknown mode '" + std::string(text) + "' (expected exact, subgroup or sampled:N)");
+}
+
+std::string toString(const Mode& mode) {
+  switch (mode.kind) {
+    case CountMode::Exact: return "exact";
+    case CountMode::Subgroup: return "subgroup";
+    case CountMode::Sampled: return "sampled:" + std::to_string(mode.sampleRate);
+  }
+  return "exact";
+}
+
+Result<std::vector<uint32_t>> wordsFromBytes(std::span<const uint8_t> bytes) {
+  if (bytes.empty()) return makeError("empty file: not SPIR-V");
+  if (bytes.size() % 4 != 0) {
+    return makeError("truncated SPIR-V: " + std::to_string(bytes.size()) + " bytes is not a whole number of 32-bit words");
+  }
+  std::vector<uint32_t> words(bytes.size() / 4);
+  for (size_t i = 0; i < words.size(); ++i) {
+    words[i] = uint32_t{bytes[4 * i]} | uint32_t{bytes[4 * i + 1]} << 8 | uint32_t{bytes[4 * i + 2]} << 16 |
+               uint32_t{bytes[4 * i + 3]} << 24;
+  }
+  return words;
+}
+
+namespace {
+
+// Slots are per (stage, kind, resource); buffers also split by access width
+// so that bytes = count x element size holds for every slot.
+using SlotKey = std::tuple<int, int, int64_t, int64_t, int64_t, std::string, int64_t, uint32_t, std::string>;
+
+SlotKey slotKey(const Site& s) {
+  bool buffer = s.kind == SiteKind::BufferRead || s.kind == SiteKind::BufferWrite;
+  bool perEntry = s.kind == SiteKind::Invocation || s.kind == SiteKind::OutputWrite;
+  int64_t index = s.dynamicIndex ? -2 : (s.index ? static_cast<int64_t>(*s.index) : -1);
+  return {static_cast<int>(s.stage), static_cast<int>(s.kind), s.set, s.binding, index,
+          s.set < 0 ? s.resource : std::string(), s.location ? static_cast<int64_t>(*s.location) : -1,
+          buffer ? s.elementBytes : 0u, perEntry ? s.entryPoint : std::string()};
+}
+
+Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOptions& options, bool rewrite) {
+  // Framing and header first, for a precise message; then full validation.
+  auto parsed = Module::parse(input);
+  if (!parsed) return makeError(parsed.error());
+  if (options.validate) {
+    if (auto error = validate(input)) return makeError("invalid SPIR-V: " + *error);
+  }
+  for (const auto& cap : parsed->capabilities) {
+    if (static_cast<spv::Capability>(cap.word(1)) == spv::Capability::Kernel) {
+      return makeError("unsupported SPIR-V: OpenCL kernel modules are not shaders");
+    }
+  }
+
+  Instrumented result;
+  result.versionIn = parsed->version;
+  Module module = std::move(parsed).value();
+
+  // Refuse a module that already uses the counter binding.
+  {
+    DefIndex defs(module);
+    for (const auto& inst : module.globals) {
+      if (inst.opcode() != spv::Op::OpVariable) continue;
+      auto set = defs.decorationValue(inst.resultId(), spv::Decoration::DescriptorSet);
+      auto binding = defs.decorationValue(inst.resultId(), spv::Decoration::Binding);
+      if (set == options.set && binding == options.binding) {
+        std::string name = defs.name(inst.resultId());
+        return makeError("module already uses descriptor set " + std::to_string(options.set) + " binding " +
+                         std::to_string(options.binding) + (name.empty() ? "" : " ('" + name + "')") +
+                         ", which the counters need; choose another set/binding");
+      }
+    }
+  }
+
+  auto scanOnce = [&](const Module& m, const DefIndex& defs, const Types& types) { return findSites(m, defs, types); };
+  std::unique_ptr<DefIndex> defs = std::make_unique<DefIndex>(module);
+  std::unique_ptr<Types> types = std::make_unique<Types>(*defs);
+  auto scan = scanOnce(module, *defs, *types);
+  if (!scan) return makeError(scan.error());
+  if (!scan->needsInline.empty()) {
+    std::string reason = scan->needsInline;
+    auto inlined = inlineAll(module.serialize());
+    if (!inlined) return makeError(inlined.error());
+    auto reparsed = Module::parse(*inlined);
+    if (!reparsed) return makeError("after inlining: " + reparsed.error());
+    module = std::move(reparsed).value();
+    defs = std::make_unique<DefIndex>(module);
+    types = std::make_unique<Types>(*defs);
+    scan = scanOnce(module, *defs, *types);
+    if (!scan) return makeError(scan.error());
+    if (!scan->needsInline.empty()) {
+      return makeError("unsupported SPIR-V: cannot resolve resources even after inlining: " + scan->needsInline);
+    }
+    result.inlined = true;
+    result.notes.push_back("functions inlined: " + reason);
+  }
+  result.notes.insert(result.notes.end(), scan->notes.begin(), scan->notes.end());
+
+  // Slots.
+  std::map<SlotKey, std::pair<uint32_t, uint32_t>> slotOf;
+  std::vector<uint32_t> slots;
+  uint32_t next = options.firstSlot;
+  for (const auto& found : scan->sites) {
+    uint32_t count = 1;
+    if (found.site.dynamicIndex) count = found.arrayLength != 0 ? found.arrayLength : kRuntimeArraySlots;
+    auto key = slotKey(found.site);
+    auto it = slotOf.find(key);
+    if (it == slotOf.end()) {
+      it = slotOf.emplace(key, std::make_pair(next, count)).first;
+      next += count;
+    }
+    slots.push_back(it->second.first);
+    Site site = found.site;
+    site.slot = it->second.first;
+    site.slotCount = it->second.second;
+    result.sites.push_back(std::move(site));
+  }
+  result.slotCount = next - options.firstSlot;
+
+  if (!rewrite) {
+    result.words.assign(input.begin(), input.end());
+    result.versionOut = result.versionIn;
+    return result;
+  }
+  if (auto error = injectCounters(module, *defs, *types, *scan, slots, options, result.notes); !error.empty()) {
+    return makeError(error);
+  }
+  result.versionOut = module.version;
+  result.words = module.serialize();
+  if (options.validate) {
+    if (auto error = validate(result.words)) {
+      return makeError("internal error: the instrumented module does not validate: " + *error);
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+Result<Instrumented> instrument(std::span<const uint32_t> words, const InstrumentOptions& options) {
+  if (options.mode.kind == CountMode::Sampled && options.mode.sampleRate < 2) {
+    return makeError("sampled mode needs N >= 2");
+  }
+  return run(words, options, true);
+}
+
+Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options) {
+  return run(words, options, false);
+}
+
+nlohmann::json toJson(const Site& s) {
+  nlohmann::json j;
+  j["slot"] = s.slot;
+  if (s.slotCount != 1) j["slots"] = s.slotCount;
+  j["stage"] = toString(s.stage);
+  j["entry_point"] = s.entryPoint;
+  j["kind"] = toString(s.kind);
+  j["set"] = s.set;
+  j["binding"] = s.binding;
+  if (s.dynamicIndex) {
+    j["index"] = "dynamic";
+  } else if (s.index) {
+    j["index"] = *s.index;
+  } else {
+    j["index"] = nullptr;
+  }
+  j["resource"] = s.resource;
+  if (s.location) j["location"] = *s.location;
+  j["element_type"] = s.elementType;
+  j["element_bytes"] = s.elementBytes;
+  j["opcode"] = s.opcode;
+  if (s.line != 0) {
+    j["file"] = s.file;
+    j["line"] = s.line;
+  }
+  return j;
+}
+
+nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
+  nlohmann::json sites = nlohmann::json::array();
+  for (const auto& s : r.sites) sites.push_back(toJson(s));
+  return {
+      {"sites", std::move(sites)},
+      {"slot_count", r.slotCount},
+      {"first_slot", options.firstSlot},
+      {"mode", toString(options.mode)},
+      {"counters",
+       {{"set", options.set},
+        {"binding", options.binding},
+        {"width", options.width == CounterWidth::Int64 ? "int64" : "uint32_pair"},
+        {"bytes_per_slot", 8}}},
+      {"spirv_version_in", versionString(r.versionIn)},
+      {"spirv_version_out", versionString(r.versionOut)},
+      {"inlined", r.inlined},
+      {"notes", r.notes},
+  };
+}
+
+}  // namespace tally::spirv

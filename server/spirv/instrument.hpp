@@ -1,0 +1,79 @@
+// Counter injection: rewrites a SPIR-V module so that every memory access
+// site increments a 64-bit counter in a storage buffer. See docs/measurement.md.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+#include "spirv/sites.hpp"
+
+namespace tally::spirv {
+
+enum class CountMode {
+  Exact,     // one atomic per access
+  Subgroup,  // reduce across the subgroup, one atomic per subgroup and slot
+  Sampled,   // count in 1 of N pixels/invocations (stratified), scale by N
+};
+
+struct Mode {
+  CountMode kind = CountMode::Exact;
+  uint32_t sampleRate = 1;  // N for Sampled, 1 otherwise
+};
+
+// "exact", "subgroup", "sampled:N" (N in [2, 65536]).
+Result<Mode> parseMode(std::string_view text);
+std::string toString(const Mode& mode);
+
+// How a 64-bit counter is incremented.
+enum class CounterWidth {
+  Int64,       // OpAtomicIAdd on uint64 (needs shaderInt64 + shaderBufferInt64Atomics)
+  Uint32Pair,  // 32-bit add on the low word, carry into the high word on wrap
+};
+
+// Bit per Stage (1u << int(Stage)).
+constexpr uint32_t stageBit(Stage s) { return 1u << static_cast<uint32_t>(s); }
+constexpr uint32_t kAllStages = 0xffffffffu;
+
+struct InstrumentOptions {
+  Mode mode;
+  uint32_t set = 7;      // descriptor set of the counter buffer (7: the last of lavapipe's 8)
+  uint32_t binding = 0;  // binding of the counter buffer
+  uint32_t firstSlot = 0;  // slots start here, so several modules can share one buffer
+  CounterWidth width = CounterWidth::Int64;
+  // Stages whose subgroup operations the device supports; Subgroup mode falls
+  // back to Exact elsewhere (lavapipe: fragment and compute only).
+  uint32_t subgroupStages = kAllStages;
+  // Validate input and output with SPIRV-Tools.
+  bool validate = true;
+};
+
+struct Instrumented {
+  std::vector<uint32_t> words;   // the rewritten module
+  std::vector<Site> sites;       // every site found, in module order
+  uint32_t slotCount = 0;        // slots used: [firstSlot, firstSlot + slotCount)
+  uint32_t versionIn = 0;        // SPIR-V version word of the input (0x00010000 = 1.0)
+  uint32_t versionOut = 0;       // raised to 1.3 when subgroup mode needs it
+  bool inlined = false;          // functions were inlined to resolve resources
+  std::vector<std::string> notes;  // fallbacks taken, for the user
+};
+
+// Instruments a module. Fails with a one-line reason on invalid or
+// unsupported input, or when the module already uses the counter binding.
+Result<Instrumented> instrument(std::span<const uint32_t> words, const InstrumentOptions& options);
+
+// Sites only, without rewriting (same resolution rules, same slots).
+Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options);
+
+nlohmann::json toJson(const Site& site);
+nlohmann::json toJson(const Instrumented& result, const InstrumentOptions& options);
+
+// Bytes read as a little-endian buffer of uint32 words, with a clear error for
+// sizes that are not a whole number of words.
+Result<std::vector<uint32_t>> wordsFromBytes(std::span<const uint8_t> bytes);
+
+}  // namespace tally::spirv

@@ -1,0 +1,55 @@
+// The site table: what the instrumentation found and where it counts it.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace tally::spirv {
+
+// Shader stage of the entry point that reaches a site.
+enum class Stage { Vertex, TessControl, TessEval, Geometry, Fragment, Compute, Task, Mesh, Other };
+
+// What kind of access a site is; see docs/measurement.md for the byte model.
+enum class SiteKind {
+  TextureRead,     // OpImageSample*/Fetch/Gather/Read (+ sparse), not on SubpassData
+  AttachmentRead,  // subpassLoad: OpImageRead on a SubpassData image
+  ImageWrite,      // OpImageWrite
+  ImageAtomic,     // OpAtomic* through OpImageTexelPointer
+  BufferRead,      // OpLoad / OpAtomicLoad / OpCopyMemory source through a buffer pointer
+  BufferWrite,     // OpStore / OpAtomicStore / atomic RMW / OpCopyMemory target through a buffer pointer
+  OutputWrite,     // fragment output per Location, counted once per invocation that returns
+  Invocation,      // one per entry point, counted on entry
+};
+
+std::string_view toString(Stage stage);
+std::string_view toString(SiteKind kind);
+std::optional<SiteKind> siteKindFromString(std::string_view name);
+std::optional<Stage> stageFromString(std::string_view name);
+
+struct Site {
+  uint32_t slot = 0;        // first counter slot (a 64-bit counter) of this site's resource
+  uint32_t slotCount = 1;   // >1 when the descriptor array index is dynamic: one slot per element
+  Stage stage = Stage::Other;
+  std::string entryPoint;
+  SiteKind kind = SiteKind::Invocation;
+  // Resource. set/binding are -1 where there is none (invocation, output_write,
+  // PhysicalStorageBuffer pointers) or it could not be resolved.
+  int64_t set = -1;
+  int64_t binding = -1;
+  std::optional<uint32_t> index;  // constant descriptor array index
+  bool dynamicIndex = false;      // index known only at run time (slot + index)
+  std::string resource;           // OpName of the variable, or "physical_storage_buffer"
+  std::optional<uint32_t> location;  // output_write: the fragment output Location
+  // Element accessed, where known: for buffers the loaded/stored type, for
+  // images the declared format (sampled images: the format of the bound view
+  // decides, elementBytes is 0).
+  std::string elementType;
+  uint32_t elementBytes = 0;
+  std::string opcode;  // the instruction that accesses memory, e.g. "OpImageSampleImplicitLod"
+  std::string file;    // from OpLine, when present
+  uint32_t line = 0;
+};
+
+}  // namespace tally::spirv
