@@ -92,9 +92,12 @@ Result<std::vector<uint32_t>> compile(std::string_view source, spirv::Stage stag
   shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientVulkan, 100);
   shader.setEnvClient(glslang::EShClientVulkan, client);
   shader.setEnvTarget(glslang::EShTargetSpv, spv);
-  if (options.debugInfo) shader.setDebugInfo(true);
 
-  auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
+  // EShMsgDebugInfo gives OpLine/OpSource as `glslangValidator -g` does;
+  // TShader::setDebugInfo would also ask for NonSemantic debug info, which
+  // glslang 12 emits broken for nested scopes.
+  auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules |
+                                           (options.debugInfo ? EShMsgDebugInfo : 0));
   Includer includer(options.includeDirs);
   if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
     return makeError(options.fileName + ": " + shader.getInfoLog());

@@ -1,0 +1,28 @@
+// Vertex stage shared by forward.vert and gbuffer.vert: one body, so both
+// renderers (and zprepass.vert, via `invariant`) rasterise identical positions.
+#define TALLY_DRAWS
+#include "common.h"
+
+layout(location = kAttribPosition) in vec3 inPosition;
+layout(location = kAttribNormal) in vec3 inNormal;
+layout(location = kAttribTangent) in vec4 inTangent;
+layout(location = kAttribUv) in vec2 inUv;
+
+layout(push_constant) uniform PushBlock { DrawPush push; };
+
+layout(location = 0) out vec3 outPosition;  // world space (m)
+layout(location = 1) out vec3 outNormal;
+layout(location = 2) out vec4 outTangent;
+layout(location = 3) out vec2 outUv;
+
+invariant gl_Position;
+
+void main() {
+  mat4 model = draws[push.drawIndex].model;
+  vec4 world = model * vec4(inPosition, 1.0);
+  gl_Position = camera.viewProj * world;
+  outPosition = world.xyz;
+  outNormal = mat3(model) * inNormal;  // DrawData::model has uniform scale
+  outTangent = vec4(mat3(model) * inTangent.xyz, inTangent.w);
+  outUv = inUv;
+}

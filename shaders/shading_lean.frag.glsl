@@ -1,0 +1,49 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_nonuniform_qualifier : require
+// Lean visibility buffer (Burns & Hunt 2013), shading pass (full screen):
+// from the 32-bit id alone, fetch the triangle, project its three vertices
+// again and derive the perspective-correct barycentrics at the pixel centre
+// and their change across one pixel; uv derivatives follow from those.
+// Same resources as shading.frag but one visibility target instead of two.
+#define TALLY_LIGHTS
+#define TALLY_DRAWS
+#define TALLY_MATERIALS
+#define TALLY_MESH
+#include "common.h"
+
+layout(early_fragment_tests) in;
+
+layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2D visibilityTarget;  // R32_UINT
+
+// See shading.frag: non-uniform indexing, no fallback on lavapipe yet.
+layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
+
+layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
+
+void main() {
+  uint id = texelFetch(visibilityTarget, ivec2(gl_FragCoord.xy), 0).r;
+  uint drawId = visibilityDrawId(id);
+  mat4 model = draws[drawId].model;
+  uvec3 v = fetchTriangle(draws[drawId].firstIndex, draws[drawId].vertexOffset, visibilityTriangleId(id));
+  Vertex v0 = vertices[v.x], v1 = vertices[v.y], v2 = vertices[v.z];
+
+  mat4 clipFromObject = camera.viewProj * model;
+  Barycentrics b = barycentricsFromClip(clipFromObject * vec4(toVec3(v0.position), 1.0),
+                                        clipFromObject * vec4(toVec3(v1.position), 1.0),
+                                        clipFromObject * vec4(toVec3(v2.position), 1.0), gl_FragCoord.xy);
+  Interpolated a = interpolateVertices(v0, v1, v2, b.lambda, model);
+  mat3x2 uvs = mat3x2(uvOf(v0), uvOf(v1), uvOf(v2));
+  vec2 dx = uvs * b.ddx, dy = uvs * b.ddy;
+
+  uint material = draws[drawId].materialIndex;
+  uint maps[kMapCount] = materials[material].maps;
+  Surface s = surfaceFromMaps(textureGrad(materialMaps[nonuniformEXT(maps[kMapDiffuse])], a.uv, dx, dy),
+                              textureGrad(materialMaps[nonuniformEXT(maps[kMapAmbient])], a.uv, dx, dy),
+                              textureGrad(materialMaps[nonuniformEXT(maps[kMapSpecular])], a.uv, dx, dy),
+                              textureGrad(materialMaps[nonuniformEXT(maps[kMapRoughness])], a.uv, dx, dy),
+                              textureGrad(materialMaps[nonuniformEXT(maps[kMapNormal])], a.uv, dx, dy),
+                              a.normal, a.tangent, materials[material].baseColor,
+                              materials[material].roughnessFactor);
+  outColor = vec4(shade(s, a.position), 1.0);
+}

@@ -1,0 +1,18 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Tonemap (full screen, after fullscreen.vert): Reinhard on luminance, one HDR
+// texel per pixel. Writes linear values: the LDR target is R8G8B8A8_SRGB, so
+// the hardware encodes on store. No depth/stencil attachment.
+#include "shared.h"
+
+layout(set = kSetPassInput, binding = kBindingHdrTarget) uniform sampler2D hdrTarget;  // RGBA16F
+layout(std140, set = kSetFrame, binding = kBindingLighting) uniform LightingBlock { Lighting lighting; };
+
+layout(location = kOutColor) out vec4 outColor;
+
+void main() {
+  vec3 hdr = texelFetch(hdrTarget, ivec2(gl_FragCoord.xy), 0).rgb * lighting.exposure;
+  float luminance = dot(hdr, vec3(0.2126, 0.7152, 0.0722));
+  vec3 ldr = hdr * (1.0 / (1.0 + luminance));  // L / (1 + L), hue kept
+  outColor = vec4(clamp(ldr, 0.0, 1.0), 1.0);
+}
