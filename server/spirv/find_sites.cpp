@@ -191,6 +191,49 @@ class Scanner {
     s.placement = Placement::EntryStart;
     s.entryIndex = e;
     scan_.sites.push_back(std::move(s));
+    if (ep.stage == Stage::Vertex) addVertexInputSites(e);
+    if (ep.stage == Stage::Fragment && !hasExecutionMode(ep.function, spv::ExecutionMode::EarlyFragmentTests)) {
+      scan_.notes.push_back("fragment entry point '" + ep.name +
+                            "' has no early_fragment_tests: its counters are side effects, so depth and stencil "
+                            "tests run after it and rejected fragments are counted too");
+    }
+  }
+
+  bool hasExecutionMode(uint32_t function, spv::ExecutionMode mode) const {
+    for (const auto& inst : module_.executionModes) {
+      if (inst.word(1) == function && static_cast<spv::ExecutionMode>(inst.word(2)) == mode) return true;
+    }
+    return false;
+  }
+
+  // Vertex attributes are fetched from vertex buffers once per vertex
+  // invocation, whatever the shader does with them: one buffer_read per
+  // input Location, counted on entry. (Index-buffer reads are not visible to
+  // shaders; the capture adds them from the draw's index count.)
+  void addVertexInputSites(uint32_t e) {
+    const EntryPoint& ep = scan_.entryPoints[e];
+    for (uint32_t var : ep.interface) {
+      const Instruction* v = defs_.def(var);
+      if (v == nullptr || v->opcode() != spv::Op::OpVariable) continue;
+      if (static_cast<spv::StorageClass>(v->word(3)) != spv::StorageClass::Input) continue;
+      if (defs_.hasDecoration(var, spv::Decoration::BuiltIn)) continue;
+      auto location = defs_.decorationValue(var, spv::Decoration::Location);
+      if (!location) continue;
+      uint32_t type = types_.pointee(v->resultType());
+      FoundSite s;
+      s.site.kind = SiteKind::BufferRead;
+      s.site.stage = ep.stage;
+      s.site.entryPoint = ep.name;
+      s.site.location = *location;
+      s.site.resource = "vertex_input " + defs_.name(var);
+      s.site.elementType = types_.name(type);
+      s.site.elementBytes = types_.byteSize(type);
+      s.site.opcode = "OpFunction";
+      s.function = ep.functionIndex;
+      s.placement = Placement::EntryStart;
+      s.entryIndex = e;
+      scan_.sites.push_back(std::move(s));
+    }
   }
 
   // One output_write site per Location of each non-builtin Output variable of
@@ -347,6 +390,16 @@ class Scanner {
         s.site.set = r.set;
         s.site.binding = r.binding;
         s.site.resource = defs_.name(r.variable);
+        if (s.site.resource.empty()) {
+          // Anonymous block instance: name it by its block type.
+          const Instruction* var = defs_.def(r.variable);
+          uint32_t type = types_.pointee(var->resultType());
+          if (const Instruction* t = defs_.def(type); t && (t->opcode() == spv::Op::OpTypeArray ||
+                                                           t->opcode() == spv::Op::OpTypeRuntimeArray)) {
+            type = t->word(2);
+          }
+          s.site.resource = defs_.name(type);
+        }
         s.site.index = r.constIndex;
         if (r.dynamicIndex != 0) {
           s.site.dynamicIndex = true;

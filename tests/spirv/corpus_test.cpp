@@ -115,10 +115,11 @@ const std::vector<CorpusShader>& corpus() {
   return shaders;
 }
 
-// "KIND SET BINDING [N]|[dyn]", "output_write loc L", "invocation".
+// "KIND SET BINDING [N]|[dyn]", "output_write loc L", "vertex_input loc L", "invocation".
 std::string siteKey(const Site& s) {
   std::string kind(spirv::toString(s.kind));
   if (s.kind == SiteKind::Invocation) return kind;
+  if (s.kind == SiteKind::BufferRead && s.location) return "vertex_input loc " + std::to_string(*s.location);
   if (s.kind == SiteKind::OutputWrite) {
     return kind + " loc " + (s.location ? std::to_string(*s.location) : std::string("?"));
   }
@@ -296,10 +297,10 @@ TEST_P(CorpusTest, SitesMatchExpectation) {
         if (s.kind == SiteKind::OutputWrite) {
           EXPECT_EQ(shader.stage, Stage::Fragment) << "output_write outside a fragment shader: " << describe(s);
         }
-        if (s.set == -1 && s.binding == -1 && isBuffer(s.kind)) {
+        if (s.set == -1 && s.binding == -1 && isBuffer(s.kind) && !s.location) {
           EXPECT_EQ(s.resource, "physical_storage_buffer") << describe(s);
         }
-        if (debugInfo && isAccess(s.kind)) {
+        if (debugInfo && isAccess(s.kind) && !s.location) {  // vertex inputs have no source line
           EXPECT_GT(s.line, 0u) << "no OpLine source line with debug info: " << describe(s);
         }
       }

@@ -112,9 +112,39 @@ void main() { gl_Position = camera.mvp * vec4(position, 1.0); }
   EXPECT_FALSE(contains(disassemble(r.words), "OpGroupNonUniform"));
   EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](auto& n) { return contains(n, "vertex"); }));
   auto reads = sitesOf(r, SiteKind::BufferRead);
+  ASSERT_EQ(reads.size(), 2u);
+  // The vertex attribute: fetched once per vertex invocation, counted on entry.
+  EXPECT_EQ(reads[0]->location, 0u);
+  EXPECT_EQ(reads[0]->set, -1);
+  EXPECT_EQ(reads[0]->resource, "vertex_input position");
+  EXPECT_EQ(reads[0]->elementBytes, 12u);  // vec3
+  // The uniform block.
+  EXPECT_EQ(reads[1]->set, 0);
+  EXPECT_EQ(reads[1]->resource, "camera");
+  EXPECT_EQ(reads[1]->elementBytes, 64u);  // mat4
+  EXPECT_EQ(reads[1]->elementType, "mat4x4<f32>");
+}
+
+TEST(Instrument, NotesFragmentShadersWithoutEarlyFragmentTests) {
+  auto late = instrumentOk(compileGlsl(kTextured, Stage::Fragment));
+  EXPECT_TRUE(std::any_of(late.notes.begin(), late.notes.end(),
+                          [](auto& n) { return contains(n, "no early_fragment_tests"); }));
+  std::string early = std::string(kTextured).replace(13, 0, "layout(early_fragment_tests) in;\n");
+  auto r = instrumentOk(compileGlsl(early, Stage::Fragment));
+  EXPECT_TRUE(std::none_of(r.notes.begin(), r.notes.end(),
+                           [](auto& n) { return contains(n, "early_fragment_tests"); }));
+}
+
+TEST(Instrument, AnonymousBlocksAreNamedByTheirType) {
+  const char* fs = R"(#version 450
+layout(set = 0, binding = 0) uniform CameraBlock { vec4 tint; };
+layout(location = 0) out vec4 color;
+void main() { color = tint; }
+)";
+  auto r = instrumentOk(compileGlsl(fs, Stage::Fragment));
+  auto reads = sitesOf(r, SiteKind::BufferRead);
   ASSERT_EQ(reads.size(), 1u);
-  EXPECT_EQ(reads[0]->elementBytes, 64u);  // mat4
-  EXPECT_EQ(reads[0]->elementType, "mat4x4<f32>");
+  EXPECT_EQ(reads[0]->resource, "CameraBlock");
 }
 
 TEST(Instrument, SampledModeCountsOneFragmentPerTileScaledByN) {
