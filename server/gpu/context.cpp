@@ -1,0 +1,528 @@
+#include "gpu/context.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+
+#include "gpu/vk_check.hpp"
+#include "spirv/instrument.hpp"
+
+namespace tally::gpu {
+namespace {
+
+// Vulkan 1.1 is the floor: subgroup operations, SPIR-V 1.3, vkGetPhysicalDeviceFeatures2.
+constexpr uint32_t kMinApiVersion = VK_API_VERSION_1_1;
+constexpr uint32_t kMaxApiVersion = VK_API_VERSION_1_3;
+constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+const char* typeName(VkPhysicalDeviceType type) {
+  switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
+    default: return "other";
+  }
+}
+
+// Lower is preferred: discrete, integrated, virtual, CPU, other.
+int typeRank(VkPhysicalDeviceType type) {
+  switch (type) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+    default: return 4;
+  }
+}
+
+uint32_t clampVersion(uint32_t version) {
+  // Patch level does not matter for apiVersion; compare major.minor only.
+  uint32_t v = VK_MAKE_API_VERSION(0, VK_API_VERSION_MAJOR(version), VK_API_VERSION_MINOR(version), 0);
+  return std::min(v, kMaxApiVersion);
+}
+
+struct Candidate {
+  uint32_t index = 0;
+  VkPhysicalDevice handle = VK_NULL_HANDLE;
+  VkPhysicalDeviceProperties properties = {};
+  int queueFamily = -1;  // first family with graphics + compute
+  uint32_t timestampValidBits = 0;
+};
+
+std::vector<Candidate> enumerateCandidates(VkInstance instance) {
+  uint32_t count = 0;
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, nullptr));
+  std::vector<VkPhysicalDevice> handles(count);
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &count, handles.data()));
+  handles.resize(count);
+  std::vector<Candidate> candidates;
+  for (uint32_t i = 0; i < count; ++i) {
+    Candidate c;
+    c.index = i;
+    c.handle = handles[i];
+    vkGetPhysicalDeviceProperties(c.handle, &c.properties);
+    uint32_t familyCount = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(c.handle, &familyCount, nullptr);
+    std::vector<VkQueueFamilyProperties> families(familyCount);
+    vkGetPhysicalDeviceQueueFamilyProperties(c.handle, &familyCount, families.data());
+    for (uint32_t f = 0; f < familyCount; ++f) {
+      VkQueueFlags want = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+      if ((families[f].queueFlags & want) == want && families[f].queueCount > 0) {
+        c.queueFamily = static_cast<int>(f);
+        c.timestampValidBits = families[f].timestampValidBits;
+        break;
+      }
+    }
+    candidates.push_back(c);
+  }
+  return candidates;
+}
+
+std::string describeCandidate(const Candidate& c) {
+  return std::to_string(c.index) + ": " + c.properties.deviceName + " [" + typeName(c.properties.deviceType) +
+         ", Vulkan " + versionString(c.properties.apiVersion) + "]";
+}
+
+std::string candidateList(const std::vector<Candidate>& candidates) {
+  if (candidates.empty()) return "none";
+  std::string text;
+  for (const auto& c : candidates) text += (text.empty() ? "" : "; ") + describeCandidate(c);
+  return text;
+}
+
+// Why a device cannot run Tally, or "" when it can.
+std::string unsuitable(const Candidate& c) {
+  if (c.properties.apiVersion < kMinApiVersion)
+    return "it supports only Vulkan " + versionString(c.properties.apiVersion);
+  if (c.queueFamily < 0) return "it has no queue with graphics and compute";
+  return "";
+}
+
+Result<Candidate> choose(const std::vector<Candidate>& candidates, const std::string& selector) {
+  if (candidates.empty()) return makeError("no Vulkan physical device found (is a driver / ICD installed?)");
+  if (!selector.empty()) {
+    bool digits =
+        std::all_of(selector.begin(), selector.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
+    const Candidate* match = nullptr;
+    if (digits) {
+      size_t index = 0;
+      auto [end, ec] = std::from_chars(selector.data(), selector.data() + selector.size(), index);
+      if (ec == std::errc() && end == selector.data() + selector.size() && index < candidates.size()) {
+        match = &candidates[index];
+      }
+    } else {
+      std::string needle = lower(selector);
+      for (const auto& c : candidates) {
+        if (lower(c.properties.deviceName).find(needle) != std::string::npos) {
+          match = &c;
+          break;
+        }
+      }
+    }
+    if (match == nullptr) {
+      return makeError("no Vulkan device matches '" + selector +
+                       "'; available: " + candidateList(candidates));
+    }
+    if (auto why = unsuitable(*match); !why.empty()) {
+      return makeError("Vulkan device '" + describeCandidate(*match) + "' cannot be used: " + why);
+    }
+    return *match;
+  }
+  const Candidate* best = nullptr;
+  for (const auto& c : candidates) {
+    if (!unsuitable(c).empty()) continue;
+    if (best == nullptr || typeRank(c.properties.deviceType) < typeRank(best->properties.deviceType))
+      best = &c;
+  }
+  if (best == nullptr) {
+    std::string reasons;
+    for (const auto& c : candidates)
+      reasons += (reasons.empty() ? "" : "; ") + describeCandidate(c) + ": " + unsuitable(c);
+    return makeError("no usable Vulkan device (" + reasons + ")");
+  }
+  return *best;
+}
+
+bool hasExtension(const std::vector<VkExtensionProperties>& extensions, const char* name) {
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                             VkDebugUtilsMessageTypeFlagsEXT,
+                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
+  if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
+    std::fprintf(stderr, "vulkan: %s\n", data->pMessage);
+  }
+  return VK_FALSE;
+}
+
+uint32_t toStageMask(VkShaderStageFlags stages) {
+  using spirv::Stage;
+  using spirv::stageBit;
+  uint32_t mask = 0;
+  if (stages & VK_SHADER_STAGE_VERTEX_BIT) mask |= stageBit(Stage::Vertex);
+  if (stages & VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT) mask |= stageBit(Stage::TessControl);
+  if (stages & VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT) mask |= stageBit(Stage::TessEval);
+  if (stages & VK_SHADER_STAGE_GEOMETRY_BIT) mask |= stageBit(Stage::Geometry);
+  if (stages & VK_SHADER_STAGE_FRAGMENT_BIT) mask |= stageBit(Stage::Fragment);
+  if (stages & VK_SHADER_STAGE_COMPUTE_BIT) mask |= stageBit(Stage::Compute);
+  if (stages & VK_SHADER_STAGE_TASK_BIT_EXT) mask |= stageBit(Stage::Task);
+  if (stages & VK_SHADER_STAGE_MESH_BIT_EXT) mask |= stageBit(Stage::Mesh);
+  return mask;
+}
+
+void createInstance(Context& ctx, const ContextOptions& options) {
+  uint32_t loaderVersion = VK_API_VERSION_1_0;
+  // vkEnumerateInstanceVersion exists from loader 1.1 on; a 1.0 loader lacks it.
+  auto enumerateVersion = reinterpret_cast<PFN_vkEnumerateInstanceVersion>(
+      vkGetInstanceProcAddr(VK_NULL_HANDLE, "vkEnumerateInstanceVersion"));
+  if (enumerateVersion != nullptr) VK_CHECK(enumerateVersion(&loaderVersion));
+  if (loaderVersion < kMinApiVersion) {
+    throw std::runtime_error("the Vulkan loader supports only Vulkan " + versionString(loaderVersion) +
+                             "; Tally needs 1.1");
+  }
+  ctx.apiVersion = clampVersion(loaderVersion);
+
+  std::vector<const char*> layers;
+  std::vector<const char*> extensions;
+  if (options.validation) {
+    uint32_t count = 0;
+    VK_CHECK(vkEnumerateInstanceLayerProperties(&count, nullptr));
+    std::vector<VkLayerProperties> available(count);
+    VK_CHECK(vkEnumerateInstanceLayerProperties(&count, available.data()));
+    available.resize(count);
+    for (const auto& layer : available) {
+      if (std::strcmp(layer.layerName, kValidationLayer) == 0) {
+        layers.push_back(kValidationLayer);
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+      }
+    }
+  }
+
+  VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = options.applicationName.c_str();
+  app.pEngineName = "tally";
+  app.apiVersion = ctx.apiVersion;
+
+  VkInstanceCreateInfo info = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  info.pApplicationInfo = &app;
+  info.enabledLayerCount = static_cast<uint32_t>(layers.size());
+  info.ppEnabledLayerNames = layers.data();
+  info.enabledExtensionCount = static_cast<uint32_t>(extensions.size());
+  info.ppEnabledExtensionNames = extensions.data();
+  VkResult result = vkCreateInstance(&info, nullptr, &ctx.instance);
+  if (result == VK_ERROR_INCOMPATIBLE_DRIVER) {
+    throw std::runtime_error("vkCreateInstance: no compatible Vulkan driver (ICD) found");
+  }
+  VK_CHECK(result);
+
+  if (!layers.empty()) {
+    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(ctx.instance, "vkCreateDebugUtilsMessengerEXT"));
+    if (create != nullptr) {
+      VkDebugUtilsMessengerCreateInfoEXT messengerInfo = {
+          VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+      messengerInfo.messageSeverity =
+          VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+      messengerInfo.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                                  VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                                  VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+      messengerInfo.pfnUserCallback = debugCallback;
+      VK_CHECK(create(ctx.instance, &messengerInfo, nullptr, &ctx.messenger));
+    }
+  }
+}
+
+// Queries what the chosen device supports and creates the logical device with
+// the features the instrumentation and the renderers use, where present.
+void createDevice(Context& ctx, const Candidate& chosen) {
+  ctx.physicalDevice = chosen.handle;
+  ctx.physicalDeviceIndex = chosen.index;
+  ctx.queueFamily = static_cast<uint32_t>(chosen.queueFamily);
+  ctx.properties = chosen.properties;
+  ctx.limits = chosen.properties.limits;
+  ctx.timestampPeriod = chosen.properties.limits.timestampPeriod;
+  ctx.timestampValidBits = chosen.timestampValidBits;
+  ctx.timestamps = chosen.timestampValidBits > 0;
+  ctx.apiVersion = std::min(ctx.apiVersion, clampVersion(chosen.properties.apiVersion));
+  vkGetPhysicalDeviceMemoryProperties(ctx.physicalDevice, &ctx.memoryProperties);
+  const bool v12 = ctx.apiVersion >= VK_API_VERSION_1_2;
+  const bool v13 = ctx.apiVersion >= VK_API_VERSION_1_3;
+
+  uint32_t extCount = 0;
+  VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, nullptr));
+  std::vector<VkExtensionProperties> available(extCount);
+  VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, available.data()));
+  available.resize(extCount);
+  const bool hasBarycentric = hasExtension(available, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
+  const bool hasAtomicInt64Ext = !v12 && hasExtension(available, VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
+  const bool hasDriverPropsExt = !v12 && hasExtension(available, VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
+
+  // Properties: subgroups (1.1), driver (1.2 or extension).
+  VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  props2.pNext = &subgroup;
+  if (v12 || hasDriverPropsExt) subgroup.pNext = &driver;
+  vkGetPhysicalDeviceProperties2(ctx.physicalDevice, &props2);
+  if (v12 || hasDriverPropsExt) {
+    ctx.driverName = driver.driverName;
+    ctx.driverInfo = driver.driverInfo;
+    ctx.driverID = driver.driverID;
+  }
+
+  // Supported features.
+  VkPhysicalDeviceFeatures2 have = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  VkPhysicalDeviceVulkan11Features have11 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
+  VkPhysicalDeviceVulkan12Features have12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceVulkan13Features have13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  VkPhysicalDeviceShaderAtomicInt64Features haveAtomic = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
+  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR haveBary = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
+  void** tail = &have.pNext;
+  auto append = [&tail](auto& s) {
+    *tail = &s;
+    tail = &s.pNext;
+  };
+  if (v12) {
+    append(have11);
+    append(have12);
+  }
+  if (v13) append(have13);
+  if (hasAtomicInt64Ext) append(haveAtomic);
+  if (hasBarycentric) append(haveBary);
+  vkGetPhysicalDeviceFeatures2(ctx.physicalDevice, &have);
+  if (!v12)
+    haveAtomic.shaderBufferInt64Atomics = hasAtomicInt64Ext ? haveAtomic.shaderBufferInt64Atomics : VK_FALSE;
+  const VkPhysicalDeviceFeatures& h = have.features;
+
+  // Enabled features: a fresh chain, set only where supported.
+  VkPhysicalDeviceFeatures2 want = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  VkPhysicalDeviceVulkan11Features want11 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
+  VkPhysicalDeviceVulkan12Features want12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceVulkan13Features want13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  VkPhysicalDeviceShaderAtomicInt64Features wantAtomic = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
+  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR wantBary = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
+  tail = &want.pNext;
+  VkPhysicalDeviceFeatures& w = want.features;
+  // Counters: 64-bit integers and stores/atomics from every stage.
+  w.shaderInt64 = h.shaderInt64;
+  w.fragmentStoresAndAtomics = h.fragmentStoresAndAtomics;
+  w.vertexPipelineStoresAndAtomics = h.vertexPipelineStoresAndAtomics;
+  w.pipelineStatisticsQuery = h.pipelineStatisticsQuery;
+  w.shaderStorageImageWriteWithoutFormat = h.shaderStorageImageWriteWithoutFormat;
+  w.shaderStorageImageReadWithoutFormat = h.shaderStorageImageReadWithoutFormat;
+  w.samplerAnisotropy = h.samplerAnisotropy;
+  w.shaderInt16 = h.shaderInt16;
+  w.independentBlend = h.independentBlend;
+  w.depthClamp = h.depthClamp;
+  w.fillModeNonSolid = h.fillModeNonSolid;  // wireframe views
+  w.multiDrawIndirect = h.multiDrawIndirect;
+  w.drawIndirectFirstInstance = h.drawIndirectFirstInstance;
+  w.shaderSampledImageArrayDynamicIndexing = h.shaderSampledImageArrayDynamicIndexing;
+  w.shaderStorageBufferArrayDynamicIndexing = h.shaderStorageBufferArrayDynamicIndexing;
+  // robustBufferAccess stays off: it changes what is measured (and costs time).
+  bool atomics64 = false;
+  bool extendedTypes = false;
+  bool hostReset = false;
+  bool bda = false;
+  bool indexing = false;
+  if (v12) {
+    want11.shaderDrawParameters = have11.shaderDrawParameters;
+    want11.storageBuffer16BitAccess = have11.storageBuffer16BitAccess;
+    want12.shaderBufferInt64Atomics = have12.shaderBufferInt64Atomics;
+    want12.shaderSubgroupExtendedTypes = have12.shaderSubgroupExtendedTypes;
+    want12.hostQueryReset = have12.hostQueryReset;
+    want12.bufferDeviceAddress = have12.bufferDeviceAddress;
+    want12.scalarBlockLayout = have12.scalarBlockLayout;
+    want12.storageBuffer8BitAccess = have12.storageBuffer8BitAccess;
+    want12.shaderInt8 = have12.shaderInt8;
+    want12.shaderFloat16 = have12.shaderFloat16;
+    want12.timelineSemaphore = have12.timelineSemaphore;
+    want12.drawIndirectCount = have12.drawIndirectCount;
+    want12.vulkanMemoryModel = have12.vulkanMemoryModel;
+    want12.vulkanMemoryModelDeviceScope = have12.vulkanMemoryModelDeviceScope;
+    indexing = have12.runtimeDescriptorArray && have12.shaderSampledImageArrayNonUniformIndexing &&
+               have12.descriptorBindingPartiallyBound;
+    if (indexing) {
+      want12.descriptorIndexing = have12.descriptorIndexing;
+      want12.runtimeDescriptorArray = VK_TRUE;
+      want12.shaderSampledImageArrayNonUniformIndexing = VK_TRUE;
+      want12.descriptorBindingPartiallyBound = VK_TRUE;
+      want12.descriptorBindingVariableDescriptorCount = have12.descriptorBindingVariableDescriptorCount;
+      want12.descriptorBindingSampledImageUpdateAfterBind =
+          have12.descriptorBindingSampledImageUpdateAfterBind;
+    }
+    atomics64 = have12.shaderBufferInt64Atomics;
+    extendedTypes = have12.shaderSubgroupExtendedTypes;
+    hostReset = have12.hostQueryReset;
+    bda = have12.bufferDeviceAddress;
+    append(want11);
+    append(want12);
+  } else if (hasAtomicInt64Ext) {
+    wantAtomic.shaderBufferInt64Atomics = haveAtomic.shaderBufferInt64Atomics;
+    atomics64 = haveAtomic.shaderBufferInt64Atomics;
+    append(wantAtomic);
+    ctx.enabledExtensions.push_back(VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
+  }
+  if (v13) {
+    want13.synchronization2 = have13.synchronization2;
+    want13.dynamicRendering = have13.dynamicRendering;
+    want13.maintenance4 = have13.maintenance4;
+    append(want13);
+  }
+  if (hasBarycentric && haveBary.fragmentShaderBarycentric) {
+    wantBary.fragmentShaderBarycentric = VK_TRUE;
+    append(wantBary);
+    ctx.enabledExtensions.push_back(VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
+    ctx.fragmentBarycentric = true;
+  }
+  if (hasDriverPropsExt) ctx.enabledExtensions.push_back(VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
+
+  ctx.shaderInt64 = h.shaderInt64;
+  ctx.int64Atomics = h.shaderInt64 && atomics64;
+  ctx.fragmentStoresAndAtomics = h.fragmentStoresAndAtomics;
+  ctx.vertexPipelineStoresAndAtomics = h.vertexPipelineStoresAndAtomics;
+  ctx.pipelineStatistics = h.pipelineStatisticsQuery;
+  ctx.storageImageWriteWithoutFormat = h.shaderStorageImageWriteWithoutFormat;
+  ctx.storageImageReadWithoutFormat = h.shaderStorageImageReadWithoutFormat;
+  ctx.shaderSubgroupExtendedTypes = extendedTypes;
+  ctx.hostQueryReset = hostReset;
+  ctx.bufferDeviceAddress = bda;
+  ctx.descriptorIndexing = indexing;
+  ctx.subgroupSize = subgroup.subgroupSize;
+  // Subgroup counting elects a lane (basic), groups lanes by slot (ballot)
+  // and adds lane counts (arithmetic).
+  constexpr VkSubgroupFeatureFlags kNeeded =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+  ctx.subgroupArithmetic = (subgroup.supportedOperations & kNeeded) == kNeeded;
+  ctx.subgroupStages = ctx.subgroupArithmetic ? toStageMask(subgroup.supportedStages) : 0;
+  // Not known to be fixed in a later Mesa: applies to every llvmpipe until checked.
+  ctx.volatileHelperInvocationCrashes = ctx.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+
+  float priority = 1.0f;
+  VkDeviceQueueCreateInfo queueInfo = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  queueInfo.queueFamilyIndex = ctx.queueFamily;
+  queueInfo.queueCount = 1;
+  queueInfo.pQueuePriorities = &priority;
+
+  std::vector<const char*> extensionNames;
+  for (const auto& name : ctx.enabledExtensions) extensionNames.push_back(name.c_str());
+  VkDeviceCreateInfo info = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  info.pNext = &want;
+  info.queueCreateInfoCount = 1;
+  info.pQueueCreateInfos = &queueInfo;
+  info.enabledExtensionCount = static_cast<uint32_t>(extensionNames.size());
+  info.ppEnabledExtensionNames = extensionNames.data();
+  VK_CHECK(vkCreateDevice(ctx.physicalDevice, &info, nullptr, &ctx.device));
+  vkGetDeviceQueue(ctx.device, ctx.queueFamily, 0, &ctx.queue);
+
+  VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  poolInfo.queueFamilyIndex = ctx.queueFamily;
+  VK_CHECK(vkCreateCommandPool(ctx.device, &poolInfo, nullptr, &ctx.commandPool));
+}
+
+}  // namespace
+
+std::string versionString(uint32_t apiVersion) {
+  return std::to_string(VK_API_VERSION_MAJOR(apiVersion)) + "." +
+         std::to_string(VK_API_VERSION_MINOR(apiVersion)) + "." +
+         std::to_string(VK_API_VERSION_PATCH(apiVersion));
+}
+
+Result<Context> createContext(const ContextOptions& options) {
+  Context ctx;
+  try {
+    createInstance(ctx, options);
+    auto chosen = choose(enumerateCandidates(ctx.instance), options.device);
+    if (!chosen) {
+      destroyContext(ctx);
+      return makeError(chosen.error());
+    }
+    createDevice(ctx, *chosen);
+  } catch (const std::exception& e) {
+    destroyContext(ctx);
+    return makeError(std::string("Vulkan setup failed: ") + e.what());
+  }
+  return ctx;
+}
+
+void destroyContext(Context& ctx) {
+  if (ctx.device != VK_NULL_HANDLE) {
+    vkDeviceWaitIdle(ctx.device);
+    if (ctx.commandPool != VK_NULL_HANDLE) vkDestroyCommandPool(ctx.device, ctx.commandPool, nullptr);
+    vkDestroyDevice(ctx.device, nullptr);
+  }
+  if (ctx.messenger != VK_NULL_HANDLE) {
+    auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(ctx.instance, "vkDestroyDebugUtilsMessengerEXT"));
+    if (destroy != nullptr) destroy(ctx.instance, ctx.messenger, nullptr);
+  }
+  if (ctx.instance != VK_NULL_HANDLE) vkDestroyInstance(ctx.instance, nullptr);
+  ctx = Context{};
+}
+
+Result<std::vector<std::string>> listDevices() {
+  Context ctx;
+  try {
+    createInstance(ctx, {});
+    std::vector<std::string> lines;
+    for (const auto& c : enumerateCandidates(ctx.instance)) {
+      std::string line = describeCandidate(c);
+      if (auto why = unsuitable(c); !why.empty()) line += " (unusable: " + why + ")";
+      lines.push_back(line);
+    }
+    destroyContext(ctx);
+    return lines;
+  } catch (const std::exception& e) {
+    destroyContext(ctx);
+    return makeError(std::string("Vulkan setup failed: ") + e.what());
+  }
+}
+
+nlohmann::json describe(const Context& ctx) {
+  char vendor[16];
+  std::snprintf(vendor, sizeof vendor, "0x%04X", ctx.properties.vendorID);
+  char deviceId[16];
+  std::snprintf(deviceId, sizeof deviceId, "0x%04X", ctx.properties.deviceID);
+  return {
+      {"index", ctx.physicalDeviceIndex},
+      {"name", ctx.properties.deviceName},
+      {"type", typeName(ctx.properties.deviceType)},
+      {"vendorID", vendor},
+      {"deviceID", deviceId},
+      {"apiVersion", versionString(ctx.properties.apiVersion)},
+      {"usedApiVersion", versionString(ctx.apiVersion)},
+      {"driverVersion", ctx.properties.driverVersion},
+      {"driverName", ctx.driverName},
+      {"driverInfo", ctx.driverInfo},
+      {"timestampPeriodNs", ctx.timestampPeriod},
+      {"subgroupSize", ctx.subgroupSize},
+      {"features",
+       {{"int64Atomics", ctx.int64Atomics},
+        {"subgroupArithmetic", ctx.subgroupArithmetic},
+        {"subgroupStages", ctx.subgroupStages},
+        {"fragmentBarycentric", ctx.fragmentBarycentric},
+        {"pipelineStatistics", ctx.pipelineStatistics},
+        {"timestamps", ctx.timestamps},
+        {"descriptorIndexing", ctx.descriptorIndexing},
+        {"bufferDeviceAddress", ctx.bufferDeviceAddress}}},
+      {"quirks", {{"volatileHelperInvocationCrashes", ctx.volatileHelperInvocationCrashes}}},
+  };
+}
+
+}  // namespace tally::gpu

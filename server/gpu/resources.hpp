@@ -1,0 +1,82 @@
+// Buffers, images, one-shot command submission, upload and readback.
+// Plain structs + free functions (niagara resources.h). Every Vulkan call is
+// checked with VK_CHECK (throws VulkanError).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "gpu/context.hpp"
+
+namespace tally::gpu {
+
+struct Buffer {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VkDeviceSize size = 0;
+  void* mapped = nullptr;  // persistently mapped when host-visible, else null
+  bool coherent = false;   // host-coherent memory: no flush/invalidate needed
+};
+
+struct Image {
+  VkImage image = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkExtent2D extent = {};
+  VkImageAspectFlags aspect = VK_IMAGE_ASPECT_COLOR_BIT;
+};
+
+enum class MemoryUse {
+  DeviceLocal,  // GPU-only
+  Upload,       // host-visible, written by the CPU (staging, uniforms)
+  Readback,     // host-visible, read by the CPU (prefers host-cached)
+};
+
+// A memory type allowed by typeBits with all `required` flags; `preferred`
+// flags win ties. Throws VulkanError(VK_ERROR_OUT_OF_DEVICE_MEMORY) if none.
+uint32_t selectMemoryType(const VkPhysicalDeviceMemoryProperties& properties, uint32_t typeBits,
+                          VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0);
+
+Buffer createBuffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use);
+void destroyBuffer(const Context& ctx, Buffer& buffer);
+
+// 2D, one mip level, one layer, optimal tiling, device-local, with a view
+// (aspect derived from the format). Starts in VK_IMAGE_LAYOUT_UNDEFINED.
+Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat format,
+                  VkImageUsageFlags usage);
+void destroyImage(const Context& ctx, Image& image);
+
+// Records commands with `record`, submits them on ctx.queue and waits.
+void submitAndWait(const Context& ctx, const std::function<void(VkCommandBuffer)>& record);
+
+// A full-resource layout transition with conservative ALL_COMMANDS barriers;
+// for setup and readback paths, not for per-pass synchronisation.
+void transitionImage(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to);
+
+// Host <-> buffer. Host-visible buffers are written/read through the mapping;
+// device-local ones through a temporary staging buffer.
+void uploadBuffer(const Context& ctx, const Buffer& buffer, std::span<const uint8_t> data,
+                  VkDeviceSize offset = 0);
+std::vector<uint8_t> readBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset = 0,
+                                VkDeviceSize size = VK_WHOLE_SIZE);
+// Fills `size` bytes from `offset` with zero (vkCmdFillBuffer), then waits.
+void zeroBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset = 0,
+                VkDeviceSize size = VK_WHOLE_SIZE);
+
+// Tightly packed texels of the whole image (width * height * texel bytes).
+// Upload leaves the image in `finalLayout`; readback expects `currentLayout`
+// and leaves it there.
+void uploadImage(const Context& ctx, const Image& image, std::span<const uint8_t> texels,
+                 VkImageLayout finalLayout);
+std::vector<uint8_t> readImage(const Context& ctx, const Image& image, VkImageLayout currentLayout);
+
+// Bytes per texel of an uncompressed colour or depth format; 0 for formats
+// this table does not know (block-compressed, multi-planar).
+uint32_t formatBytes(VkFormat format);
+
+}  // namespace tally::gpu

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Builds the exactness tests for the GPU test machine, which has the NVIDIA
+# Vulkan driver but none of our build dependencies: a Release binary with
+# libstdc++ and libgcc linked statically (glslang and SPIRV-Tools are static
+# libraries already), so that it needs only libc and the Vulkan loader there.
+# The shaders are copied next to it; run.sh points TALLY_SHADER_DIR at them.
+#
+#   tests/gpu/build.sh            -> build-gpu/tests/integration/{tally_exactness_tests,shaders/}
+#   BUILD_DIR=out tests/gpu/build.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+build="${BUILD_DIR:-build-gpu}"
+cmake -S . -B "$build" -G Ninja \
+  -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_EXE_LINKER_FLAGS="-static-libstdc++ -static-libgcc" >/dev/null
+cmake --build "$build" --target tally_exactness_tests -j"$(nproc)"
+
+dir="$build/tests/integration"
+strip "$dir/tally_exactness_tests"
+rm -rf "$dir/shaders"
+cp -r tests/integration/shaders "$dir/shaders"
+echo "built $dir/tally_exactness_tests ($(du -h "$dir/tally_exactness_tests" | cut -f1)); needs: $(
+  ldd "$dir/tally_exactness_tests" | awk '/=>/ {print $1}' | tr '\n' ' ')"

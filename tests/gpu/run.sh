@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# Runs the exactness tests on the GPU test machine (NVIDIA H100/H200: NVIDIA
+# Vulkan driver installed, Vulkan loader not). Build first with
+# tests/gpu/build.sh; bring the loader's Debian packages in .gl/ (see
+# DESIGN.md "Devices"): libvulkan1, and libglvnd0 + libglx0 (the NVIDIA ICD,
+# libGLX_nvidia.so.0, hands out no vkCreateInstance without GLVND's
+# libGLdispatch). From the repository root, on any x86-64 Debian machine:
+#   o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+#   mkdir -p .gl /tmp/amd64/partial; apt-get $o update
+#   (cd .gl && apt-get $o download libvulkan1 libglvnd0 libglx0 libegl1 libgl1 libopengl0 libgles2)
+#
+#   tests/gpu/run.sh [BINARY_DIR]     BINARY_DIR defaults to build-gpu/tests/integration
+#   OUT=dir  where results go (default ./gpu-out): exactness.json (gtest),
+#            exactness_stats.json (statistics and timings), exactness.log
+#   Extra arguments after BINARY_DIR go to the test binary (e.g. --gtest_filter=...).
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+
+bin_dir="${1:-build-gpu/tests/integration}"
+shift || true
+out="${OUT:-./gpu-out}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+if [ ! -x "$bin_dir/tally_exactness_tests" ]; then
+  echo "run.sh: no test binary at $bin_dir/tally_exactness_tests (build it with tests/gpu/build.sh)" >&2
+  exit 2
+fi
+bin_dir="$(cd "$bin_dir" && pwd)"
+binary="$bin_dir/tally_exactness_tests"
+
+# The Vulkan loader: unpacked from the Debian packages brought along.
+shopt -s nullglob
+debs=(.gl/*.deb)
+if [ ${#debs[@]} -gt 0 ]; then
+  for f in "${debs[@]}"; do dpkg -x "$f" /; done
+  ldconfig
+elif ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
+  echo "run.sh: no Vulkan loader installed and no .gl/*.deb to unpack" >&2
+  exit 2
+fi
+
+# The NVIDIA ICD lives outside the loader's search path on that machine.
+nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+icd_found=false
+for d in /etc/vulkan/icd.d /usr/share/vulkan/icd.d /usr/local/share/vulkan/icd.d; do
+  if compgen -G "$d/*.json" >/dev/null; then icd_found=true; fi
+done
+if [ -f "$nvidia_icd" ] && [ "$icd_found" = false ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
+  export VK_DRIVER_FILES="$nvidia_icd"
+fi
+
+# Shaders travel next to the binary (build.sh copies them).
+if [ -z "${TALLY_SHADER_DIR:-}" ] && [ -d "$bin_dir/shaders" ]; then
+  export TALLY_SHADER_DIR="$bin_dir/shaders"
+fi
+
+# The binary writes exactness_stats.json into its working directory.
+work="$(mktemp -d)"
+(
+  cd "$work" && "$binary" --gtest_output="json:$out/exactness.json" "$@"
+) 2>&1 | tee "$out/exactness.log"
+status=${PIPESTATUS[0]}
+if [ -f "$work/exactness_stats.json" ]; then
+  cp "$work/exactness_stats.json" "$out/exactness_stats.json"
+else
+  echo "run.sh: the tests wrote no exactness_stats.json" >&2
+fi
+rm -rf "$work"
+echo "run.sh: tests exited with $status; results in $out"
+exit "$status"
