@@ -97,7 +97,7 @@ Result<std::vector<uint32_t>> compile(std::string_view source, spirv::Stage stag
   // TShader::setDebugInfo would also ask for NonSemantic debug info, which
   // glslang 12 emits broken for nested scopes.
   auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules |
-                                           (options.debugInfo ? EShMsgDebugInfo : 0));
+                                           (options.debugInfo ? static_cast<int>(EShMsgDebugInfo) : 0));
   Includer includer(options.includeDirs);
   if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
     return makeError(options.fileName + ": " + shader.getInfoLog());

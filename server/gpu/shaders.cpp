@@ -23,12 +23,24 @@ void destroyShaderModule(const Context& ctx, VkShaderModule& module) {
 }
 
 glsl::Target glslTarget(const Context& ctx) {
-  if (ctx.apiVersion >= VK_API_VERSION_1_3 && !ctx.volatileHelperInvocationCrashes)
-    return glsl::Target::Vulkan13;
+  if (ctx.apiVersion >= VK_API_VERSION_1_3) return glsl::Target::Vulkan13;
   if (ctx.apiVersion >= VK_API_VERSION_1_2) return glsl::Target::Vulkan12;
   if (ctx.apiVersion >= VK_API_VERSION_1_1) return glsl::Target::Vulkan11;
   return glsl::Target::Vulkan10;
 }
+
+namespace {
+bool usesDemote(std::span<const uint32_t> module) {
+  constexpr uint32_t kOpDemoteToHelperInvocation = 5380;
+  for (size_t at = 5; at < module.size();) {
+    uint32_t count = module[at] >> 16;
+    if ((module[at] & 0xffffu) == kOpDemoteToHelperInvocation) return true;
+    if (count == 0) break;
+    at += count;
+  }
+  return false;
+}
+}  // namespace
 
 spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mode, uint32_t firstSlot,
                                               std::span<const uint32_t> module) {
@@ -39,8 +51,9 @@ spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mo
   options.subgroupStages = ctx.subgroupStages;
   // Keep the counter buffer in the last set the device can bind (lavapipe: 8 sets, so set 7).
   options.set = std::min<uint32_t>(options.set, ctx.limits.maxBoundDescriptorSets - 1);
-  constexpr uint32_t kSpirv16 = 0x00010600;  // version word of SPIR-V 1.6
-  if (ctx.volatileHelperInvocationCrashes && module.size() > 1 && module[1] >= kSpirv16) {
+  // Subgroup mode reads HelperInvocation volatile in modules that demote,
+  // which Mesa 22.3's lavapipe cannot compile: count those exactly there.
+  if (ctx.volatileHelperInvocationCrashes && usesDemote(module)) {
     options.subgroupStages &= ~spirv::stageBit(spirv::Stage::Fragment);
   }
   return options;

@@ -19,18 +19,15 @@ namespace tally::gpu {
 VkShaderModule createShaderModule(const Context& ctx, std::span<const uint32_t> words);
 void destroyShaderModule(const Context& ctx, VkShaderModule& module);
 
-// The newest GLSL target the context's Vulkan version accepts and Tally's
-// counters run on. Where ctx.volatileHelperInvocationCrashes (lavapipe), that
-// is Vulkan 1.2 / SPIR-V 1.5: there HelperInvocation is a plain input, so
-// subgroup counting in fragment shaders works.
+// The newest GLSL target (and so SPIR-V version) the device accepts.
 glsl::Target glslTarget(const Context& ctx);
 
 // Instrumentation options that this device can run: Int64 counters where
 // shaderBufferInt64Atomics is present (Uint32Pair otherwise), and subgroup
 // counting only in the stages whose subgroup operations the device supports.
 // Given the module, also: on ctx.volatileHelperInvocationCrashes devices,
-// fragment subgroup counting of a SPIR-V 1.6+ module falls back to exact
-// (the library notes it) instead of crashing the driver.
+// fragment subgroup counting of a module that demotes (and so needs a
+// volatile HelperInvocation read) falls back to exact, with a note.
 spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mode, uint32_t firstSlot = 0,
                                               std::span<const uint32_t> module = {});
 

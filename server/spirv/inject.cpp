@@ -25,13 +25,27 @@ constexpr uint32_t kGroupReduce = 0;
 constexpr uint32_t kMemoryModelVulkan = 3;
 
 // The helper functions the injected calls go to.
-enum class Helper { Exact, Subgroup, SubgroupFragment, SampledFragment, SampledCompute, SampledVertex };
+// Subgroup helpers come in two forms: for a slot that is the same in every
+// lane (a constant: most sites) one reduction suffices; a run-time slot
+// (dynamic descriptor index) needs the waterfall loop over distinct slots.
+enum class Helper {
+  Exact,
+  Subgroup,
+  SubgroupFragment,
+  SubgroupUniform,
+  SubgroupUniformFragment,
+  SampledFragment,
+  SampledCompute,
+  SampledVertex
+};
 
 const char* helperName(Helper h) {
   switch (h) {
     case Helper::Exact: return "tally_count_exact";
     case Helper::Subgroup: return "tally_count_subgroup";
     case Helper::SubgroupFragment: return "tally_count_subgroup";
+    case Helper::SubgroupUniform:
+    case Helper::SubgroupUniformFragment: return "tally_count_subgroup_uniform";
     case Helper::SampledFragment:
     case Helper::SampledCompute:
     case Helper::SampledVertex: return "tally_count_sampled";
@@ -61,6 +75,11 @@ class Injector {
       }
     }
     vulkanMemoryModel_ = !m_.memoryModel.empty() && m_.memoryModel[0].word(2) == kMemoryModelVulkan;
+    for (const auto& f : m_.functions) {
+      for (const auto& inst : f.insts) {
+        if (inst.opcode() == spv::Op::OpDemoteToHelperInvocation) demotes_ = true;
+      }
+    }
   }
 
   std::string run(const SiteScan& scan, const std::vector<uint32_t>& slots) {
@@ -68,7 +87,7 @@ class Injector {
     bool subgroup = false;
     for (const auto& ep : scan.entryPoints) {
       Helper h = helperFor(ep.stage);
-      if (h == Helper::Subgroup || h == Helper::SubgroupFragment) subgroup = true;
+      if (h != Helper::Exact && options_.mode.kind == CountMode::Subgroup) subgroup = true;
     }
     if (subgroup && m_.version < kVersion13) {
       notes_.push_back("SPIR-V version raised from " + versionString(m_.version) +
@@ -92,7 +111,10 @@ class Injector {
     for (size_t i = 0; i < scan.sites.size(); ++i) {
       const FoundSite& s = scan.sites[i];
       const EntryPoint& ep = scan.entryPoints[s.entryIndex];
-      uint32_t helper = helperFunction(helperFor(ep.stage), ep.stage);
+      Helper kind = helperFor(ep.stage);
+      if (s.dynamicIndex == 0 && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
+      if (s.dynamicIndex == 0 && kind == Helper::SubgroupFragment) kind = Helper::SubgroupUniformFragment;
+      uint32_t helper = helperFunction(kind, ep.stage);
       const auto& insts = m_.functions[s.function].insts;
       switch (s.placement) {
         case Placement::AfterInstruction: {
@@ -284,7 +306,10 @@ class Injector {
                                std::vector<uint32_t>{tPtr(spv::StorageClass::Input, valueType), found,
                                                      static_cast<uint32_t>(spv::StorageClass::Input)});
       decorate(found, spv::Decoration::BuiltIn, {static_cast<uint32_t>(b)});
-      if (b == spv::BuiltIn::HelperInvocation && m_.version >= kVersion16 && !vulkanMemoryModel_) {
+      // Only demotion can turn an invocation into a helper mid-shader; then
+      // the read must be volatile. (Mesa 22.3's lavapipe aborts on volatile
+      // HelperInvocation loads, so they are not emitted without need.)
+      if (b == spv::BuiltIn::HelperInvocation && demotes_ && !vulkanMemoryModel_) {
         decorate(found, spv::Decoration::Volatile);
       }
       createdBuiltins_.emplace_back(static_cast<uint32_t>(b), found);
@@ -419,7 +444,8 @@ class Injector {
 
   uint32_t helperFunction(Helper h, Stage stage) {
     // Sampled and subgroup-fragment helpers read stage builtins: one per stage.
-    auto key = std::make_pair(h, h == Helper::Exact || h == Helper::Subgroup ? Stage::Other : stage);
+    bool stageFree = h == Helper::Exact || h == Helper::Subgroup || h == Helper::SubgroupUniform;
+    auto key = std::make_pair(h, stageFree ? Stage::Other : stage);
     if (auto it = helpers_.find(key); it != helpers_.end()) return it->second;
 
     uint32_t fnType = type(spv::Op::OpTypeFunction, {tVoid(), tU32()});
@@ -447,25 +473,42 @@ class Injector {
         break;
       }
       case Helper::Subgroup:
-      case Helper::SubgroupFragment: {
+      case Helper::SubgroupFragment:
+      case Helper::SubgroupUniform:
+      case Helper::SubgroupUniformFragment: {
         uint32_t end = 0;
-        if (h == Helper::SubgroupFragment) {
+        if (h == Helper::SubgroupFragment || h == Helper::SubgroupUniformFragment) {
           // Helper lanes take part in subgroup operations but must not be
           // counted, and an atomic from one has no effect: keep them out.
           uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
           std::vector<uint32_t> load = {var};
-          if (vulkanMemoryModel_ && m_.version >= kVersion16) load.push_back(1);  // Volatile access
+          if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
           uint32_t isHelper = op(b, spv::Op::OpLoad, tBool(), load);
           uint32_t body = m_.newId();
           end = m_.newId();
           selection(b, isHelper, end, body, end);
           label(b, body);
         }
+        uint32_t scope = constantU32(kScopeSubgroup);
+        if (h == Helper::SubgroupUniform || h == Helper::SubgroupUniformFragment) {
+          uint32_t count = op(b, spv::Op::OpGroupNonUniformIAdd, tU32(), {scope, kGroupReduce, one});
+          uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
+          uint32_t add = m_.newId(), done = m_.newId();
+          selection(b, elected, add, done, done);
+          label(b, add);
+          emitAdd(b, slot, count);
+          branch(b, done);
+          label(b, done);
+          if (end != 0) {
+            branch(b, end);
+            label(b, end);
+          }
+          break;
+        }
         // Waterfall: each pass takes the lanes whose slot equals the first
         // active lane's, adds their count in one atomic, and lets them leave.
         uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
         uint32_t take = m_.newId(), took = m_.newId(), add = m_.newId(), skip = m_.newId();
-        uint32_t scope = constantU32(kScopeSubgroup);
         branch(b, header);
         label(b, header);
         opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
@@ -537,6 +580,7 @@ class Injector {
   const InstrumentOptions& options_;
   std::vector<std::string>& notes_;
   bool vulkanMemoryModel_ = false;
+  bool demotes_ = false;  // the module uses OpDemoteToHelperInvocation
   spv::StorageClass storageClass_ = spv::StorageClass::StorageBuffer;
   uint32_t counters_ = 0;
   uint32_t elementPtr_ = 0;

@@ -245,10 +245,9 @@ TEST_P(FragmentExactness, FullScreenPassCountsMatch) {
   checkFragmentPass(ctx, GetParam(), std::nullopt, "FragmentExactness");
 }
 
-// Subgroup counting of SPIR-V 1.6 fragment shaders, where HelperInvocation
-// must be Volatile. Where that crashes the driver (lavapipe, see
-// Context::volatileHelperInvocationCrashes) the fragment stage falls back to
-// exact counting with a note; either way the counts must be exact.
+// Subgroup counting of SPIR-V 1.6 fragment shaders (a module without
+// demotion: HelperInvocation is read non-volatile, which lavapipe compiles).
+// The counts must be exact.
 TEST(FragmentSpirv16, SubgroupCountsMatch) {
   REQUIRE_CONTEXT(ctx);
   if (ctx->apiVersion < VK_API_VERSION_1_3) GTEST_SKIP() << "SPIR-V 1.6 needs Vulkan 1.3";

@@ -96,7 +96,41 @@ TEST(Instrument, SubgroupModeRaisesOldModulesTo13AndSkipsHelperLanes) {
   EXPECT_TRUE(contains(dis, "OpGroupNonUniformIAdd %uint %uint_3 Reduce"));
   EXPECT_TRUE(contains(dis, "OpGroupNonUniformElect"));
   EXPECT_TRUE(contains(dis, "BuiltIn HelperInvocation"));
-  EXPECT_TRUE(contains(dis, "OpLoopMerge"));  // waterfall over distinct slots
+  EXPECT_FALSE(contains(dis, "Volatile"));    // no demotion: a plain read
+  EXPECT_FALSE(contains(dis, "OpLoopMerge"));  // constant slots: one reduction
+}
+
+TEST(Instrument, SubgroupModeLoopsOverDistinctSlotsForDynamicIndices) {
+  const char* fs = R"(#version 450
+layout(set = 0, binding = 0) uniform sampler2D maps[4];
+layout(location = 0) flat in int material;
+layout(location = 0) out vec4 color;
+void main() { color = texture(maps[material & 3], vec2(0.5)); }
+)";
+  InstrumentOptions options;
+  options.mode = {CountMode::Subgroup, 1};
+  auto r = instrumentOk(compileGlsl(fs, Stage::Fragment), options);
+  std::string dis = disassemble(r.words);
+  EXPECT_TRUE(contains(dis, "OpGroupNonUniformBroadcastFirst"));
+  EXPECT_TRUE(contains(dis, "OpLoopMerge"));  // the waterfall
+  EXPECT_TRUE(contains(dis, "%tally_count_subgroup_uniform_fragment"));  // and constant-slot sites
+}
+
+TEST(Instrument, SubgroupHelperReadIsVolatileOnlyWhenTheModuleDemotes) {
+  const char* fs = R"(#version 450
+#extension GL_EXT_demote_to_helper_invocation : require
+layout(set = 0, binding = 0) uniform sampler2D tex;
+layout(location = 0) out vec4 color;
+void main() {
+  vec4 c = texture(tex, vec2(0.5));
+  if (c.a < 0.5) demote;
+  color = c;
+}
+)";
+  InstrumentOptions options;
+  options.mode = {CountMode::Subgroup, 1};
+  auto r = instrumentOk(compileGlsl(fs, Stage::Fragment), options);
+  EXPECT_TRUE(contains(disassemble(r.words), "OpDecorate %gl_HelperInvocation Volatile"));
 }
 
 TEST(Instrument, SubgroupModeFallsBackToExactWhereTheStageLacksSubgroups) {
