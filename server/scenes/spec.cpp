@@ -1,0 +1,147 @@
+#include "scenes/spec.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scenes/gltf.hpp"
+#include "scenes/procedural.hpp"
+
+namespace tally::scenes {
+namespace {
+
+constexpr const char* kNames = "\"atrium\", \"planes\", \"sky\" or {\"gltf\": \"path\"}";
+constexpr int64_t kMaxTextureSizeLimit = 16384;  // the largest image dimension Vulkan devices commonly allow
+
+std::string join(const std::vector<std::string>& keys) {
+  std::string s;
+  for (const std::string& k : keys) s += (s.empty() ? "" : ", ") + k;
+  return s;
+}
+
+// Every key of `spec` must be one of `allowed`.
+std::optional<Error> checkKeys(const nlohmann::json& spec, const std::vector<std::string>& allowed,
+                               const std::string& kind) {
+  for (const auto& [key, value] : spec.items()) {
+    bool known = false;
+    for (const std::string& a : allowed) known = known || a == key;
+    if (!known) return makeError(key + ": unknown key for " + kind + " (allowed: " + join(allowed) + ")");
+  }
+  return std::nullopt;
+}
+
+// Integer field in [lo, hi], or the default when absent.
+Result<int64_t> integerField(const nlohmann::json& spec, const char* key, int64_t lo, int64_t hi,
+                             int64_t dflt) {
+  if (!spec.contains(key)) return dflt;
+  const nlohmann::json& v = spec[key];
+  bool ok = v.is_number_integer();
+  int64_t x = 0;
+  if (ok) {
+    if (v.is_number_unsigned()) {
+      uint64_t u = v.get<uint64_t>();
+      ok = u <= uint64_t(hi);
+      x = int64_t(u);
+    } else {
+      x = v.get<int64_t>();
+    }
+    ok = ok && x >= lo && x <= hi;
+  }
+  if (!ok)
+    return makeError(std::string(key) + ": must be an integer between " + std::to_string(lo) + " and " +
+                     std::to_string(hi) + ", got " + v.dump());
+  return x;
+}
+
+// Number field in (lo, hi] or [lo, hi], or the default when absent.
+Result<double> numberField(const nlohmann::json& spec, const char* key, double lo, bool loOpen, double hi,
+                           double dflt) {
+  if (!spec.contains(key)) return dflt;
+  const nlohmann::json& v = spec[key];
+  bool ok = v.is_number();
+  if (ok) {
+    double x = v.get<double>();
+    ok = std::isfinite(x) && (loOpen ? x > lo : x >= lo) && x <= hi;
+  }
+  if (!ok) {
+    char range[64];
+    std::snprintf(range, sizeof range, "%s%g, %g]", loOpen ? "(" : "[", lo, hi);
+    return makeError(std::string(key) + ": must be a number in " + range + ", got " + v.dump());
+  }
+  return v.get<double>();
+}
+
+Result<Scene> planes(const nlohmann::json& spec) {
+  if (auto e = checkKeys(spec, {"name", "layers", "order", "coverage"}, "scene \"planes\"")) return *e;
+  PlanesParams p;
+  Result<int64_t> layers = integerField(spec, "layers", 1, kMaxPlaneLayers, p.layers);
+  if (!layers) return makeError(layers.error());
+  p.layers = int(*layers);
+  if (spec.contains("order")) {
+    const nlohmann::json& o = spec["order"];
+    if (o == "back-to-front")
+      p.order = DrawOrder::BackToFront;
+    else if (o == "front-to-back")
+      p.order = DrawOrder::FrontToBack;
+    else
+      return makeError("order: must be \"back-to-front\" or \"front-to-back\", got " + o.dump());
+  }
+  Result<double> coverage = numberField(spec, "coverage", 0.0, true, 1.0, p.coverage);
+  if (!coverage) return makeError(coverage.error());
+  p.coverage = *coverage;
+  return makePlanes(p);
+}
+
+Result<Scene> sky(const nlohmann::json& spec) {
+  if (auto e = checkKeys(spec, {"name", "coverage"}, "scene \"sky\"")) return *e;
+  SkyParams p;
+  Result<double> coverage = numberField(spec, "coverage", 0.0, false, 1.0, p.coverage);
+  if (!coverage) return makeError(coverage.error());
+  p.coverage = *coverage;
+  return makeSky(p);
+}
+
+Result<Scene> gltf(const nlohmann::json& spec) {
+  if (auto e = checkKeys(spec, {"gltf", "max_texture_size"}, "a glTF scene")) return *e;
+  const nlohmann::json& path = spec["gltf"];
+  if (!path.is_string() || path.get<std::string>().empty())
+    return makeError("gltf: must be a non-empty path string, got " + path.dump());
+  GltfOptions options;
+  Result<int64_t> maxSize = integerField(spec, "max_texture_size", 1, kMaxTextureSizeLimit, 0);
+  if (!maxSize) return makeError(maxSize.error());
+  options.maxTextureSize = uint32_t(*maxSize);
+  Result<Scene> scene = loadGltf(path.get<std::string>(), options);
+  if (!scene) return makeError("gltf: " + scene.error());
+  return scene;
+}
+
+}  // namespace
+
+Result<Scene> makeScene(const nlohmann::json& spec) {
+  if (spec.is_string()) {
+    const std::string name = spec.get<std::string>();
+    if (name == "atrium") return makeAtrium();
+    if (name == "planes") return makePlanes({});
+    if (name == "sky") return makeSky({});
+    return makeError("unknown scene " + spec.dump() + ", expected " + kNames);
+  }
+  if (!spec.is_object()) return makeError("must be a scene name or an object, got " + spec.dump());
+  if (spec.contains("gltf")) {
+    if (spec.contains("name"))
+      return makeError("name: cannot be combined with gltf (a glTF scene is named after its file)");
+    return gltf(spec);
+  }
+  if (!spec.contains("name")) return makeError("name: missing, expected " + std::string(kNames));
+  const nlohmann::json& name = spec["name"];
+  if (name == "atrium") {
+    if (auto e = checkKeys(spec, {"name"}, "scene \"atrium\"")) return *e;
+    return makeAtrium();
+  }
+  if (name == "planes") return planes(spec);
+  if (name == "sky") return sky(spec);
+  return makeError("name: unknown scene " + name.dump() + ", expected " + kNames);
+}
+
+}  // namespace tally::scenes

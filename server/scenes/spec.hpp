@@ -1,0 +1,24 @@
+// Scene specs as they arrive in a capture request: a name or an object.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+#include "scenes/scene.hpp"
+
+namespace tally::scenes {
+
+// Builds the scene a spec describes:
+//   "atrium" | "planes" | "sky"
+//   {"name": "atrium"}
+//   {"name": "planes", "layers": 8, "order": "back-to-front", "coverage": 1.0}
+//   {"name": "sky", "coverage": 0.5}
+//   {"gltf": "path/to/scene.gltf", "max_texture_size": 1024}
+// Omitted parameters take their defaults (see procedural.hpp); unknown keys
+// are errors so a typo is never silently ignored. Errors start with the field
+// they concern, relative to the spec ("layers: must be an integer between 1
+// and 1024, got \"x\""); the caller prefixes the spec's own place
+// ("scenes[2]."). A bare-string spec's error names no field.
+Result<Scene> makeScene(const nlohmann::json& spec);
+
+}  // namespace tally::scenes
