@@ -22,6 +22,14 @@ int main(int argc, char** argv) {
   demo->add_option("--shaders", demoArgs.shaderDir, "Folder of <pass>.<stage>.glsl files")->capture_default_str();
   demo->add_option("--mode", demoArgs.mode, "exact | subgroup | sampled:N")->capture_default_str();
 
+  tally::cli::CaptureArgs captureArgs;
+  auto* capture = app.add_subcommand("capture", "Run a capture spec and write the result JSON");
+  capture->add_option("--spec", captureArgs.spec, "Capture spec (JSON file, or - for standard input)")->required();
+  capture->add_option("--out", captureArgs.out, "Result JSON (default: standard output)");
+  capture->add_option("--device", captureArgs.device, "Device index or name substring");
+  capture->add_flag("--quiet", captureArgs.quiet, "No progress lines on standard error");
+  capture->add_flag("--summary", captureArgs.summary, "Print a per-pass, per-resource summary (with --out)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -29,5 +37,6 @@ int main(int argc, char** argv) {
   }
   if (*instrument) return tally::cli::runInstrument(instrumentArgs);
   if (*demo) return tally::cli::runDemo(demoArgs);
+  if (*capture) return tally::cli::runCapture(captureArgs);
   return 2;
 }

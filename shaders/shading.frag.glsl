@@ -22,7 +22,20 @@ layout(set = kSetPassInput, binding = kBindingUvDerivativeTarget) uniform usampl
 // lavapipe has no descriptor indexing at all (not even dynamically uniform
 // indexing) and 32 samplers per stage: the renderer needs a fallback there,
 // e.g. one sampler2DArray per map kind with the material as the layer.
+#ifdef TALLY_MAP_ARRAYS
+// Fallback without descriptor indexing (lavapipe), defined by the renderer:
+// one sampler2DArray per map kind, Material::maps[k] is the layer. The
+// selection stays per pixel and needs no non-uniform descriptor index.
+layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2DArray diffuseMaps;
+layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2DArray ambientMaps;
+layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2DArray specularMaps;
+layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2DArray roughnessMaps;
+layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2DArray normalMaps;
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(maps[kind])), dx, dy)
+#else
 layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[nonuniformEXT(maps[kind])], a.uv, dx, dy)
+#endif
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 
@@ -41,11 +54,11 @@ void main() {
   uint maps[kMapCount] = materials[material].maps;
   vec2 dx = unpackHalf2x16(uvDerivatives.x), dy = unpackHalf2x16(uvDerivatives.y);
 
-  Surface s = surfaceFromMaps(textureGrad(materialMaps[nonuniformEXT(maps[kMapDiffuse])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapAmbient])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapSpecular])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapRoughness])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapNormal])], a.uv, dx, dy),
+  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
+                              SAMPLE_MAP(ambientMaps, kMapAmbient),
+                              SAMPLE_MAP(specularMaps, kMapSpecular),
+                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
+                              SAMPLE_MAP(normalMaps, kMapNormal),
                               a.normal, a.tangent, materials[material].baseColor,
                               materials[material].roughnessFactor);
   outColor = vec4(shade(s, a.position), 1.0);

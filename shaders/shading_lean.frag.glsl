@@ -16,8 +16,21 @@ layout(early_fragment_tests) in;
 
 layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2D visibilityTarget;  // R32_UINT
 
-// See shading.frag: non-uniform indexing, no fallback on lavapipe yet.
+// See shading.frag: non-uniform indexing, or map arrays (TALLY_MAP_ARRAYS).
+#ifdef TALLY_MAP_ARRAYS
+// Fallback without descriptor indexing (lavapipe), defined by the renderer:
+// one sampler2DArray per map kind, Material::maps[k] is the layer. The
+// selection stays per pixel and needs no non-uniform descriptor index.
+layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2DArray diffuseMaps;
+layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2DArray ambientMaps;
+layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2DArray specularMaps;
+layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2DArray roughnessMaps;
+layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2DArray normalMaps;
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(maps[kind])), dx, dy)
+#else
 layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[nonuniformEXT(maps[kind])], a.uv, dx, dy)
+#endif
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 
@@ -38,11 +51,11 @@ void main() {
 
   uint material = draws[drawId].materialIndex;
   uint maps[kMapCount] = materials[material].maps;
-  Surface s = surfaceFromMaps(textureGrad(materialMaps[nonuniformEXT(maps[kMapDiffuse])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapAmbient])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapSpecular])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapRoughness])], a.uv, dx, dy),
-                              textureGrad(materialMaps[nonuniformEXT(maps[kMapNormal])], a.uv, dx, dy),
+  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
+                              SAMPLE_MAP(ambientMaps, kMapAmbient),
+                              SAMPLE_MAP(specularMaps, kMapSpecular),
+                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
+                              SAMPLE_MAP(normalMaps, kMapNormal),
                               a.normal, a.tangent, materials[material].baseColor,
                               materials[material].roughnessFactor);
   outColor = vec4(shade(s, a.position), 1.0);

@@ -29,4 +29,17 @@ struct DemoArgs {
 // Instruments every <pass>.<stage>.glsl under shaderDir and prints each site table.
 int runDemo(const DemoArgs& args);
 
+struct CaptureArgs {
+  std::string spec;    // file, or - for standard input
+  std::string out;     // result JSON; "" or - for standard output
+  std::string device;  // index or name substring
+  bool quiet = false;
+  bool summary = false;  // print the per-pass, per-resource summary table
+};
+
+// Runs one capture and writes the result JSON (docs/result-schema.md);
+// screenshots go beside it in <out>-screenshots/. Bad specs get one line
+// naming the field and exit 1.
+int runCapture(const CaptureArgs& args);
+
 }  // namespace tally::cli

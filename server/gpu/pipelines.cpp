@@ -209,6 +209,17 @@ VkPipeline createGraphicsPipeline(const Context& ctx, const GraphicsPipelineDesc
   depth.depthTestEnable = desc.depthTest;
   depth.depthWriteEnable = desc.depthWrite;
   depth.depthCompareOp = desc.depthCompare;
+  depth.stencilTestEnable = desc.stencilTest;
+  VkStencilOpState stencil = {};
+  stencil.failOp = VK_STENCIL_OP_KEEP;
+  stencil.passOp = desc.stencilPassOp;
+  stencil.depthFailOp = VK_STENCIL_OP_KEEP;
+  stencil.compareOp = desc.stencilCompare;
+  stencil.compareMask = 0xff;
+  stencil.writeMask = desc.stencilWriteMask;
+  stencil.reference = desc.stencilReference;
+  depth.front = stencil;
+  depth.back = stencil;
 
   std::vector<VkPipelineColorBlendAttachmentState> blends(desc.colorAttachmentCount);
   for (auto& b : blends) {

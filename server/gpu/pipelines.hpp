@@ -64,6 +64,12 @@ struct GraphicsPipelineDesc {
   bool depthWrite = false;
   VkCompareOp depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;  // reversed Z
   bool blend = false;  // premultiplied-alpha style src*1 + dst*(1-srcA) when true
+  // Stencil, the same state for front and back faces. Off by default.
+  bool stencilTest = false;
+  VkCompareOp stencilCompare = VK_COMPARE_OP_ALWAYS;
+  VkStencilOp stencilPassOp = VK_STENCIL_OP_KEEP;  // on stencil and depth pass
+  uint32_t stencilReference = 0;
+  uint32_t stencilWriteMask = 0;  // 0: the stencil is only tested
 };
 
 // Viewport and scissor are dynamic state (set them when recording).

@@ -1,0 +1,278 @@
+#include "capture/runner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+
+#include "capture/image.hpp"
+#include "capture/stats.hpp"
+#include "gpu/context.hpp"
+#include "gpu/vk_check.hpp"
+#include "renderers/gpu_scene.hpp"
+#include "renderers/renderer.hpp"
+#include "scenes/cameras.hpp"
+#include "scenes/spec.hpp"
+
+namespace tally::capture {
+namespace {
+
+using nlohmann::json;
+
+std::string sceneName(const json& spec, const scenes::Scene& scene) {
+  if (spec.is_object() && spec.contains("gltf")) {
+    return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
+  }
+  return scene.name;
+}
+
+// Accumulates one (pass, resource, direction) over frames.
+struct Line {
+  std::string pass, resource, source;
+  bool write = false;
+  std::vector<double> counts, bytes;
+};
+
+struct PassTimes {
+  std::vector<double> ms;
+};
+
+// F instrumented frames: counts per frame; F uninstrumented frames: times.
+struct SampleMeasure {
+  std::vector<std::string> passOrder;
+  std::map<std::pair<std::string, std::string>, Line> lines;  // key: pass + "\x1f" + resource + direction
+  std::vector<std::string> lineOrder;
+  std::map<std::string, std::vector<double>> fragmentInvocations, statistic, instrumentedMs, plainMs;
+  std::vector<double> frameMs, instrumentedFrameMs;
+};
+
+void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
+  double total = 0;
+  for (const auto& pass : frame.passes) {
+    if (std::find(m.passOrder.begin(), m.passOrder.end(), pass.name) == m.passOrder.end()) {
+      m.passOrder.push_back(pass.name);
+    }
+    m.fragmentInvocations[pass.name].push_back(double(pass.fragmentInvocations));
+    if (pass.fragmentInvocationsStatistic >= 0) m.statistic[pass.name].push_back(double(pass.fragmentInvocationsStatistic));
+    m.instrumentedMs[pass.name].push_back(pass.gpuMs);
+    total += pass.gpuMs;
+    for (const auto& a : pass.accesses) {
+      auto key = std::make_pair(pass.name, a.resource + (a.write ? "\x1fw" : "\x1fr"));
+      auto [it, inserted] = m.lines.try_emplace(key);
+      if (inserted) {
+        it->second.pass = pass.name;
+        it->second.resource = a.resource;
+        it->second.write = a.write;
+        it->second.source = a.source;
+      }
+      it->second.counts.push_back(double(a.count));
+      it->second.bytes.push_back(double(a.bytes));
+    }
+  }
+  m.instrumentedFrameMs.push_back(total);
+}
+
+void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
+  double total = 0;
+  for (const auto& pass : frame.passes) {
+    m.plainMs[pass.name].push_back(pass.gpuMs);
+    total += pass.gpuMs;
+  }
+  m.frameMs.push_back(total);
+}
+
+json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources, uint32_t frames) {
+  std::map<std::string, const renderers::ResourceInfo*> byName;
+  for (const auto& r : resources) byName[r.name] = &r;
+  json passes = json::array();
+  for (const auto& name : m.passOrder) {
+    Spread plain = spreadOf(m.plainMs.count(name) ? m.plainMs.at(name) : std::vector<double>{});
+    Spread instrumented = spreadOf(m.instrumentedMs.at(name));
+    json pass = {
+        {"name", name},
+        {"gpu_ms", plain.median},
+        {"gpu_ms_spread", toJson(plain)},
+        {"gpu_ms_instrumented", instrumented.median},
+        {"overhead_ratio", plain.median > 0 ? instrumented.median / plain.median : 0.0},
+        {"fragment_invocations", spreadOf(m.fragmentInvocations.at(name)).mean},
+    };
+    if (m.statistic.count(name)) pass["fragment_invocations_statistic"] = spreadOf(m.statistic.at(name)).mean;
+    json lines = json::array();
+    for (const auto& [key, line] : m.lines) {
+      if (line.pass != name) continue;
+      auto info = byName.find(line.resource);
+      Spread count = spreadOf(line.counts), bytes = spreadOf(line.bytes);
+      json r = {
+          {"name", line.resource},
+          {"format", info != byName.end() ? json(info->second->formatName) : json(nullptr)},
+          {"kind", info != byName.end() ? json(std::string(renderers::toString(info->second->kind))) : json(nullptr)},
+          {"access", line.write ? "write" : "read"},
+          {"count", count.mean},   // per frame, averaged over the sample's frames
+          {"bytes", bytes.mean},
+          {"count_spread", toJson(count)},
+          {"source", line.source},
+      };
+      lines.push_back(std::move(r));
+    }
+    pass["resources"] = std::move(lines);
+    passes.push_back(std::move(pass));
+  }
+  Spread frame = spreadOf(m.frameMs), instrumentedFrame = spreadOf(m.instrumentedFrameMs);
+  return {
+      {"frames", frames},
+      {"frame_ms", frame.median},
+      {"frame_ms_spread", toJson(frame)},
+      {"frame_ms_instrumented", instrumentedFrame.median},
+      {"overhead_ratio", frame.median > 0 ? instrumentedFrame.median / frame.median : 0.0},
+      {"passes", std::move(passes)},
+  };
+}
+
+json resourcesJson(const std::vector<renderers::ResourceInfo>& resources) {
+  json out = json::array();
+  uint64_t targets = 0;
+  for (const auto& r : resources) {
+    out.push_back({{"name", r.name},
+                   {"kind", std::string(renderers::toString(r.kind))},
+                   {"format", r.formatName},
+                   {"element_bytes", r.elementBytes},
+                   {"width", r.width},
+                   {"height", r.height},
+                   {"allocation_bytes", r.allocationBytes},
+                   {"usage", r.usage}});
+    bool target = r.kind == renderers::ResourceKind::Attachment || r.kind == renderers::ResourceKind::Depth;
+    if (target) targets += r.allocationBytes;
+  }
+  return {{"list", std::move(out)}, {"render_target_bytes", targets}};
+}
+
+}  // namespace
+
+Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
+  gpu::ContextOptions contextOptions;
+  contextOptions.device = options.device;
+  auto created = gpu::createContext(contextOptions);
+  if (!created) return makeError("device: " + created.error());
+  gpu::Context ctx = std::move(created).value();
+  struct ContextGuard {
+    gpu::Context& ctx;
+    ~ContextGuard() { gpu::destroyContext(ctx); }
+  } guard{ctx};
+
+  json result = {{"device", gpu::describe(ctx)}, {"spec", spec.source}, {"runs", json::array()}};
+  if (!options.screenshotDir.empty()) std::filesystem::create_directories(options.screenshotDir);
+
+  // Load every scene first: a bad file fails the capture before any GPU time is spent.
+  std::vector<scenes::Scene> loaded;
+  for (size_t i = 0; i < spec.scenes.size(); ++i) {
+    auto scene = scenes::makeScene(spec.scenes[i]);
+    if (!scene) return makeError("scenes[" + std::to_string(i) + "]: " + scene.error());
+    loaded.push_back(std::move(scene).value());
+  }
+  std::vector<std::vector<scenes::Camera>> cameras;
+  size_t total = 0;
+  for (const auto& scene : loaded) {
+    cameras.push_back(spec.autoCameras ? scenes::autoCameras(scene) : spec.cameras);
+    total += spec.renderers.size() * spec.resolutions.size() * cameras.back().size();
+  }
+
+  CaptureProgress progress{0, total, ""};
+  for (size_t s = 0; s < loaded.size(); ++s) {
+    renderers::GpuScene gpuScene;
+    auto uploaded = gpuScene.upload(ctx, loaded[s]);
+    if (!uploaded) return makeError("scenes[" + std::to_string(s) + "]: " + uploaded.error());
+    std::string name = sceneName(spec.scenes[s], loaded[s]);
+
+    for (const auto& res : spec.resolutions) {
+      // The reference image per camera: forward, uninstrumented.
+      std::vector<std::vector<uint8_t>> reference;
+      {
+        auto forward = renderers::makeRenderer("forward");
+        if (forward) {
+          renderers::RendererOptions ro{{res.width, res.height}, false, spec.counting, spec.lights};
+          auto ok = (*forward)->setup(ctx, gpuScene, ro);
+          if (ok) {
+            for (const auto& camera : cameras[s]) {
+              (*forward)->renderFrame(camera);
+              reference.push_back((*forward)->finalImage());
+            }
+          }
+          (*forward)->destroy();
+        }
+      }
+
+      for (const auto& rendererName : spec.renderers) {
+        std::string where = rendererName + " " + name + " " + std::to_string(res.width) + "x" + std::to_string(res.height);
+        auto instrumented = renderers::makeRenderer(rendererName);
+        auto plain = renderers::makeRenderer(rendererName);
+        if (!instrumented || !plain) return makeError(where + ": " + (instrumented ? plain.error() : instrumented.error()));
+        renderers::RendererOptions ro{{res.width, res.height}, true, spec.counting, spec.lights};
+        auto ok = (*instrumented)->setup(ctx, gpuScene, ro);
+        if (!ok) return makeError(where + ": " + ok.error());
+        ro.instrumented = false;
+        ok = (*plain)->setup(ctx, gpuScene, ro);
+        if (!ok) return makeError(where + ": " + ok.error());
+
+        json run = {{"renderer", rendererName},
+                    {"scene", name},
+                    {"scene_params", loaded[s].params},
+                    {"width", res.width},
+                    {"height", res.height},
+                    {"counting", spirv::toString(spec.counting)},
+                    {"lights", spec.lights},
+                    {"notes", (*instrumented)->notes()},
+                    {"resources", resourcesJson((*instrumented)->resources())},
+                    {"samples", json::array()}};
+        for (size_t c = 0; c < cameras[s].size(); ++c) {
+          const auto& camera = cameras[s][c];
+          progress.current = where + " camera " + std::to_string(c);
+          if (options.progress) options.progress(progress);
+          SampleMeasure m;
+          for (uint32_t f = 0; f < spec.frames; ++f) addCounts(m, (*instrumented)->renderFrame(camera));
+          for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, (*plain)->renderFrame(camera));
+          std::vector<uint8_t> image = (*plain)->finalImage();
+          json sample = sampleJson(m, (*instrumented)->resources(), spec.frames);
+          sample["camera"] = scenes::toJson(camera);
+          sample["camera"]["index"] = c;
+          // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
+          double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
+          sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
+          sample["sky_fraction_estimate"] = camera.skyFraction;
+          if (c < reference.size()) {
+            auto error = compareImages(image, reference[c], res.width, res.height);
+            if (error) {
+              sample["image_error"] = {{"against", "forward"},
+                                       {"psnr", std::isinf(error->psnr) ? json(nullptr) : json(error->psnr)},
+                                       {"identical", std::isinf(error->psnr)},
+                                       {"max_abs", error->maxAbs},
+                                       {"mean_abs", error->meanAbs}};
+            }
+          }
+          if (!options.screenshotDir.empty()) {
+            std::string file = rendererName + "_" + name + "_" + std::to_string(res.width) + "x" +
+                               std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
+            auto png = encodePng(image, res.width, res.height);
+            std::ofstream out(std::filesystem::path(options.screenshotDir) / file, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+            sample["screenshot"] = file;
+          } else {
+            sample["screenshot"] = nullptr;
+          }
+          run["samples"].push_back(std::move(sample));
+          ++progress.done;
+        }
+        (*instrumented)->destroy();
+        (*plain)->destroy();
+        result["runs"].push_back(std::move(run));
+      }
+    }
+    gpuScene.destroy();
+  }
+  progress.current = "done";
+  if (options.progress) options.progress(progress);
+  return result;
+}
+
+}  // namespace tally::capture

@@ -1,0 +1,144 @@
+#include "capture/spec.hpp"
+
+#include <algorithm>
+
+#include "scenes/cameras.hpp"
+#include "scenes/spec.hpp"
+
+namespace tally::capture {
+namespace {
+
+std::string show(const nlohmann::json& j) {
+  std::string s = j.dump();
+  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
+}
+
+Error fieldError(const std::string& field, const std::string& message) { return makeError(field + ": " + message); }
+
+Result<uint32_t> boundedInt(const nlohmann::json& j, const std::string& field, uint32_t low, uint32_t high) {
+  if (!j.is_number_integer() || j.get<int64_t>() < low || j.get<int64_t>() > high) {
+    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " + std::to_string(high) +
+                                 ", got " + show(j));
+  }
+  return static_cast<uint32_t>(j.get<int64_t>());
+}
+
+}  // namespace
+
+Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
+  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
+  static const std::vector<std::string> kKeys = {"renderers", "scenes",   "resolutions", "cameras",
+                                                 "frames",    "counting", "lights"};
+  for (const auto& [key, value] : j.items()) {
+    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
+      return fieldError(key, "unknown field (expected renderers, scenes, resolutions, cameras, frames, counting, lights)");
+    }
+  }
+  CaptureSpec spec;
+  spec.source = j;
+
+  // renderers
+  if (!j.contains("renderers")) return fieldError("renderers", "required");
+  const auto& renderers = j["renderers"];
+  if (!renderers.is_array() || renderers.empty()) return fieldError("renderers", "must be a non-empty array of names");
+  std::string known;
+  for (const auto& k : knownRenderers) known += (known.empty() ? "" : ", ") + k;
+  for (size_t i = 0; i < renderers.size(); ++i) {
+    std::string field = "renderers[" + std::to_string(i) + "]";
+    if (!renderers[i].is_string()) return fieldError(field, "must be a renderer name, got " + show(renderers[i]));
+    std::string name = renderers[i].get<std::string>();
+    if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
+      return fieldError(field, "unknown renderer '" + name + "' (expected one of " + known + ")");
+    }
+    if (std::find(spec.renderers.begin(), spec.renderers.end(), name) != spec.renderers.end()) {
+      return fieldError(field, "renderer '" + name + "' listed twice");
+    }
+    spec.renderers.push_back(name);
+  }
+
+  // scenes: checked here by building their parameters only; the capture loads them.
+  if (!j.contains("scenes")) {
+    spec.scenes.push_back("atrium");  // the default scene
+  } else {
+    const auto& scenesJson = j["scenes"];
+    if (!scenesJson.is_array() || scenesJson.empty()) return fieldError("scenes", "must be a non-empty array");
+    for (size_t i = 0; i < scenesJson.size(); ++i) {
+      const auto& s = scenesJson[i];
+      std::string field = "scenes[" + std::to_string(i) + "]";
+      if (!s.is_string() && !s.is_object()) {
+        return fieldError(field, "must be a scene name or an object, got " + show(s));
+      }
+      // glTF files are loaded (and their errors reported) when the capture runs.
+      if (!(s.is_object() && s.contains("gltf"))) {
+        auto scene = scenes::makeScene(s);
+        if (!scene) return fieldError(field, scene.error());
+      } else if (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty()) {
+        return fieldError(field + ".gltf", "must be a file path");
+      }
+      spec.scenes.push_back(s);
+    }
+  }
+
+  // resolutions
+  if (!j.contains("resolutions")) return fieldError("resolutions", "required, e.g. [[1280,720]]");
+  const auto& resolutions = j["resolutions"];
+  if (!resolutions.is_array() || resolutions.empty()) {
+    return fieldError("resolutions", "must be a non-empty array of [width, height]");
+  }
+  for (size_t i = 0; i < resolutions.size(); ++i) {
+    std::string field = "resolutions[" + std::to_string(i) + "]";
+    const auto& r = resolutions[i];
+    if (!r.is_array() || r.size() != 2) return fieldError(field, "must be [width, height], got " + show(r));
+    auto w = boundedInt(r[0], field + "[0]", 1, kMaxDimension);
+    if (!w) return makeError(w.error());
+    auto h = boundedInt(r[1], field + "[1]", 1, kMaxDimension);
+    if (!h) return makeError(h.error());
+    if (uint64_t{*w} * *h > kMaxPixels) {
+      return fieldError(field, std::to_string(*w) + "x" + std::to_string(*h) + " is more than the " +
+                                   std::to_string(kMaxPixels) + "-pixel limit (8K)");
+    }
+    spec.resolutions.push_back({*w, *h});
+  }
+
+  // cameras
+  if (j.contains("cameras")) {
+    const auto& cameras = j["cameras"];
+    if (cameras.is_string()) {
+      if (cameras.get<std::string>() != "auto") {
+        return fieldError("cameras", "must be \"auto\" or a list of cameras, got " + show(cameras));
+      }
+    } else {
+      auto list = scenes::camerasFromJson(cameras);
+      if (!list) return makeError("cameras" + (list.error().starts_with("[") ? list.error() : ": " + list.error()));
+      if (list->empty()) return fieldError("cameras", "must not be empty");
+      spec.autoCameras = false;
+      spec.cameras = std::move(list).value();
+    }
+  }
+
+  if (j.contains("frames")) {
+    auto frames = boundedInt(j["frames"], "frames", 1, kMaxFrames);
+    if (!frames) return makeError(frames.error());
+    spec.frames = *frames;
+  }
+  if (j.contains("counting")) {
+    if (!j["counting"].is_string()) return fieldError("counting", "must be a string, got " + show(j["counting"]));
+    auto mode = spirv::parseMode(j["counting"].get<std::string>());
+    if (!mode) return fieldError("counting", mode.error());
+    spec.counting = *mode;
+  }
+  if (j.contains("lights")) {
+    auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
+    if (!lights) return makeError(lights.error());
+    spec.lights = *lights;
+  }
+
+  size_t camerasPerScene = spec.autoCameras ? 10 : spec.cameras.size();
+  if (spec.sampleCount(camerasPerScene) > kMaxMatrix) {
+    return fieldError("spec", "the matrix has " + std::to_string(spec.sampleCount(camerasPerScene)) +
+                                  " samples, more than the limit of " + std::to_string(kMaxMatrix));
+  }
+  return spec;
+}
+
+}  // namespace tally::capture

@@ -1,0 +1,49 @@
+// A capture spec: the matrix renderers x scenes x resolutions x cameras, and
+// how to count. Parsed with errors that name the field.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+#include "scenes/scene.hpp"
+#include "spirv/instrument.hpp"
+
+namespace tally::capture {
+
+// Limits on what one spec may ask for. The service tightens them further.
+inline constexpr uint32_t kMaxDimension = 16384;          // Vulkan's common maxImageDimension2D
+inline constexpr uint64_t kMaxPixels = 7680ull * 4320ull;  // 8K: beyond it a frame's targets pass 1 GiB
+inline constexpr uint32_t kMaxFrames = 1000;
+inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
+inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x cameras)
+
+struct Resolution {
+  uint32_t width = 0;
+  uint32_t height = 0;
+};
+
+struct CaptureSpec {
+  std::vector<std::string> renderers;
+  std::vector<nlohmann::json> scenes;  // each as makeScene() takes it
+  std::vector<Resolution> resolutions;
+  bool autoCameras = true;
+  std::vector<scenes::Camera> cameras;  // when !autoCameras
+  uint32_t frames = kDefaultFrames;
+  spirv::Mode counting;
+  uint32_t lights = 400;  // as in the founding study
+  nlohmann::json source;  // the spec as given, stored with the result
+
+  size_t sampleCount(size_t camerasPerScene) const {
+    return renderers.size() * scenes.size() * resolutions.size() * camerasPerScene;
+  }
+};
+
+// `knownRenderers` is the list to check names against. Errors read
+// "renderers[2]: unknown renderer 'x' (expected one of ...)".
+Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers);
+
+}  // namespace tally::capture

@@ -1,0 +1,71 @@
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+
+#include "capture/runner.hpp"
+#include "capture/spec.hpp"
+#include "capture/summary.hpp"
+#include "commands/commands.hpp"
+#include "gpu/vk_check.hpp"
+#include "renderers/renderer.hpp"
+
+namespace tally::cli {
+
+int runCapture(const CaptureArgs& args) {
+  auto fail = [](const std::string& message) {
+    std::cerr << "tallyd capture: " << message << "\n";
+    return 1;
+  };
+  std::string text;
+  if (args.spec == "-") {
+    text.assign(std::istreambuf_iterator<char>(std::cin), std::istreambuf_iterator<char>());
+  } else {
+    std::ifstream in(args.spec, std::ios::binary);
+    if (!in) return fail(args.spec + ": cannot open for reading");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  auto json = nlohmann::json::parse(text, nullptr, false);
+  if (json.is_discarded()) return fail("spec: not valid JSON");
+  auto spec = capture::parseCaptureSpec(json, renderers::rendererNames());
+  if (!spec) return fail("spec: " + spec.error());
+
+  capture::CaptureOptions options;
+  options.device = args.device;
+  if (!args.out.empty() && args.out != "-") {
+    std::filesystem::path out(args.out);
+    options.screenshotDir = (out.parent_path() / (out.stem().string() + "-screenshots")).string();
+  }
+  options.progress = [&args](const capture::CaptureProgress& p) {
+    if (args.quiet) return;
+    std::cerr << "[" << p.done << "/" << p.total << "] " << p.current << "\n";
+  };
+  Result<nlohmann::json> result = makeError("not run");
+  try {
+    result = capture::runCapture(*spec, options);
+  } catch (const gpu::VulkanError& e) {
+    return fail(std::string("Vulkan error: ") + e.what());
+  } catch (const std::exception& e) {
+    return fail(std::string("capture failed: ") + e.what());
+  }
+  if (!result) return fail(result.error());
+  std::string dump = result->dump(1);
+  if (args.out.empty() || args.out == "-") {
+    std::cout << dump << "\n";
+    return 0;
+  }
+  // Temp file + rename: a reader never sees a half-written result.
+  std::string temp = args.out + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << dump << "\n";
+    if (!out) return fail(args.out + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, args.out, ec);
+  if (ec) return fail(args.out + ": " + ec.message());
+  if (args.summary) std::cout << capture::summarize(*result);
+  return 0;
+}
+
+}  // namespace tally::cli

@@ -1,0 +1,126 @@
+// Deferred shading: the G-buffer pass samples the draw's five maps per
+// fragment that passes the early depth test and writes normal (RGBA16F),
+// diffuse and specular (RGBA8) plus D32_S8 depth/stencil; the lighting pass
+// (full screen, stencil == 1) reads one texel of each per covered pixel,
+// reconstructs position from depth and shades every light.
+#include "renderers/renderers.hpp"
+#include "shared.h"
+
+namespace tally::renderers {
+namespace {
+
+constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+constexpr VkFormat kDiffuseFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kSpecularFormat = VK_FORMAT_R8G8B8A8_UNORM;
+
+class DeferredRenderer final : public RendererBase {
+ public:
+  std::string_view name() const override { return "deferred"; }
+
+ protected:
+  std::vector<std::string> ownPassNames() const override { return {"gbuffer", "lighting"}; }
+
+  Result<bool> setupPasses() override {
+    for (auto& r : scene_->materialMapResources()) resources_.push_back(r);
+    const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+    const gpu::Image* normal = createTarget("gbuffer.normal", kNormalFormat, usage, ResourceKind::Attachment);
+    const gpu::Image* diffuse =
+        createTarget("gbuffer.diffuse", kDiffuseFormat, usage, ResourceKind::Attachment);
+    const gpu::Image* specular =
+        createTarget("gbuffer.specular", kSpecularFormat, usage, ResourceKind::Attachment);
+    const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+    const VkImageLayout shaderRead = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+
+    // G-buffer.
+    {
+      uint32_t p = addPass("gbuffer");
+      VkRenderPass rp = ownRenderPass(createPassRenderPass(
+          *ctx_, {{kNormalFormat}, {kDiffuseFormat}, {kSpecularFormat}},
+          AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
+      VkFramebuffer fb = framebuffer(rp, {normal->view, diffuse->view, specular->view, depth_->view});
+      auto vs = shader(p, "gbuffer.vert.glsl");
+      if (!vs) return makeError(vs.error());
+      auto fs = shader(p, "gbuffer.frag.glsl");
+      if (!fs) return makeError(fs.error());
+      gpu::GraphicsPipelineDesc desc;
+      desc.vertex = *vs;
+      desc.fragment = *fs;
+      desc.layout = pipelineLayout(materialLayout_, VK_NULL_HANDLE);
+      desc.renderPass = rp;
+      desc.colorAttachmentCount = 3;
+      meshVertexInput(desc);
+      geometryState(desc, true);
+      VkPipeline pipe = pipeline(desc);
+      VkPipelineLayout layout = desc.layout;
+      for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+        pass(p).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
+      }
+      pass(p).bindings.outputs[shaders::kOutNormal] = "gbuffer.normal";
+      pass(p).bindings.outputs[shaders::kOutDiffuse] = "gbuffer.diffuse";
+      pass(p).bindings.outputs[shaders::kOutSpecular] = "gbuffer.specular";
+      pass(p).depthWrite = "depth";
+      pass(p).indexFetches = true;
+      pass(p).record = [=, this](VkCommandBuffer cmd) {
+        std::vector<VkClearValue> clears(4);
+        clears[3] = depthClear();
+        beginRenderPass(cmd, p, rp, fb, clears);
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+        bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+        drawScene(cmd, p, layout, true);
+        endRenderPass(cmd, p);
+      };
+    }
+    // Lighting: full screen, stencil == 1 (geometry), depth attached read-only.
+    {
+      uint32_t p = addPass("lighting");
+      using T = VkDescriptorType;
+      const T image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      VkDescriptorSetLayout inputLayout = setLayout({image, image, image, image});
+      VkDescriptorSet input = allocateSet(inputLayout);
+      writeImage(input, shaders::kBindingDepthTarget, depthOnlyView(), targetSampler_, depthReadOnly);
+      writeImage(input, shaders::kBindingNormalTarget, normal->view, targetSampler_, shaderRead);
+      writeImage(input, shaders::kBindingDiffuseTarget, diffuse->view, targetSampler_, shaderRead);
+      writeImage(input, shaders::kBindingSpecularTarget, specular->view, targetSampler_, shaderRead);
+      auto& b = pass(p).bindings;
+      b.bind(shaders::kSetPassInput, shaders::kBindingDepthTarget, "depth");
+      b.elementBytes[{shaders::kSetPassInput, shaders::kBindingDepthTarget}] = 4;  // the D32 depth aspect
+      b.bind(shaders::kSetPassInput, shaders::kBindingNormalTarget, "gbuffer.normal");
+      b.bind(shaders::kSetPassInput, shaders::kBindingDiffuseTarget, "gbuffer.diffuse");
+      b.bind(shaders::kSetPassInput, shaders::kBindingSpecularTarget, "gbuffer.specular");
+      b.outputs[shaders::kOutColor] = "hdr";
+      VkRenderPass rp = ownRenderPass(createPassRenderPass(
+          *ctx_, {{kHdrFormat}},
+          AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
+      VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
+      auto vs = shader(p, "fullscreen.vert.glsl");
+      if (!vs) return makeError(vs.error());
+      auto fs = shader(p, "lighting.frag.glsl");
+      if (!fs) return makeError(fs.error());
+      gpu::GraphicsPipelineDesc desc;
+      desc.vertex = *vs;
+      desc.fragment = *fs;
+      desc.layout = pipelineLayout(VK_NULL_HANDLE, inputLayout);
+      desc.renderPass = rp;
+      desc.stencilTest = true;
+      desc.stencilCompare = VK_COMPARE_OP_EQUAL;
+      desc.stencilReference = kStencilGeometry;
+      VkPipeline pipe = pipeline(desc);
+      VkPipelineLayout layout = desc.layout;
+      pass(p).record = [=, this](VkCommandBuffer cmd) {
+        beginRenderPass(cmd, p, rp, fb, {VkClearValue{}, depthClear()});
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+        bindSets(cmd, layout, VK_NULL_HANDLE, input);
+        drawFullScreen(cmd);
+        endRenderPass(cmd, p);
+      };
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Renderer> makeDeferred() { return std::make_unique<DeferredRenderer>(); }
+
+}  // namespace tally::renderers

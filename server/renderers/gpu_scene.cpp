@@ -1,0 +1,456 @@
+#include "renderers/gpu_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <span>
+
+#include "gpu/vk_check.hpp"
+#include "shared.h"
+
+namespace tally::renderers {
+namespace {
+
+constexpr uint32_t kKinds = scenes::kMapSlotCount;
+
+// The neutral texel of each map kind where a material lacks the map: white
+// diffuse, full ambient, no specular, roughness 1 (G), flat normal.
+constexpr std::array<std::array<uint8_t, 4>, kKinds> kDummyTexels = {{
+    {255, 255, 255, 255},  // diffuse
+    {255, 255, 255, 255},  // ambient (occlusion in R)
+    {0, 0, 0, 255},        // specular
+    {255, 255, 0, 255},    // roughness in G, metalness in B
+    {128, 128, 255, 255},  // normal (0.5, 0.5, 1)
+}};
+
+uint32_t mipLevels(uint32_t width, uint32_t height) {
+  uint32_t levels = 1;
+  while ((width | height) >> levels) ++levels;
+  return levels;
+}
+
+MipImage createMipImage(const gpu::Context& ctx, uint32_t width, uint32_t height, uint32_t levels,
+                        uint32_t layers, VkFormat format, VkImageViewType viewType) {
+  const bool cube = viewType == VK_IMAGE_VIEW_TYPE_CUBE;
+  MipImage result;
+  result.format = format;
+  result.width = width;
+  result.height = height;
+  result.levels = levels;
+  result.layers = layers;
+  VkImageCreateInfo info = {VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  info.flags = cube ? VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT : 0;
+  info.imageType = VK_IMAGE_TYPE_2D;
+  info.format = format;
+  info.extent = {width, height, 1};
+  info.mipLevels = levels;
+  info.arrayLayers = layers;
+  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.tiling = VK_IMAGE_TILING_OPTIMAL;
+  info.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VK_CHECK(vkCreateImage(ctx.device, &info, nullptr, &result.image));
+  VkMemoryRequirements requirements;
+  vkGetImageMemoryRequirements(ctx.device, result.image, &requirements);
+  VkMemoryAllocateInfo allocate = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  allocate.allocationSize = requirements.size;
+  allocate.memoryTypeIndex = gpu::selectMemoryType(ctx.memoryProperties, requirements.memoryTypeBits,
+                                                   VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  VK_CHECK(vkAllocateMemory(ctx.device, &allocate, nullptr, &result.memory));
+  VK_CHECK(vkBindImageMemory(ctx.device, result.image, result.memory, 0));
+  result.allocationBytes = requirements.size;
+  VkImageViewCreateInfo view = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  view.image = result.image;
+  view.viewType = viewType;
+  view.format = format;
+  view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, levels, 0, layers};
+  VK_CHECK(vkCreateImageView(ctx.device, &view, nullptr, &result.view));
+  return result;
+}
+
+void destroyMipImage(const gpu::Context& ctx, MipImage& image) {
+  if (image.view != VK_NULL_HANDLE) vkDestroyImageView(ctx.device, image.view, nullptr);
+  if (image.image != VK_NULL_HANDLE) vkDestroyImage(ctx.device, image.image, nullptr);
+  if (image.memory != VK_NULL_HANDLE) vkFreeMemory(ctx.device, image.memory, nullptr);
+  image = MipImage{};
+}
+
+void barrier(VkCommandBuffer cmd, VkImage image, uint32_t level, uint32_t levelCount, uint32_t layers,
+             VkImageLayout from, VkImageLayout to) {
+  VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+  b.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+  b.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, level, levelCount, 0, layers};
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0,
+                       nullptr, 0, nullptr, 1, &b);
+}
+
+// Uploads level 0 of every layer (tightly packed RGBA8, layer after layer),
+// blits the mip chain down (box filter by linear blits) and leaves the image
+// in SHADER_READ_ONLY_OPTIMAL.
+void uploadWithMips(const gpu::Context& ctx, const MipImage& image, std::span<const uint8_t> texels) {
+  gpu::Buffer staging =
+      gpu::createBuffer(ctx, texels.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, gpu::MemoryUse::Upload);
+  gpu::uploadBuffer(ctx, staging, texels);
+  gpu::submitAndWait(ctx, [&](VkCommandBuffer cmd) {
+    barrier(cmd, image.image, 0, image.levels, image.layers, VK_IMAGE_LAYOUT_UNDEFINED,
+            VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    VkBufferImageCopy copy = {};
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, image.layers};
+    copy.imageExtent = {image.width, image.height, 1};
+    vkCmdCopyBufferToImage(cmd, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+    int32_t w = int32_t(image.width), h = int32_t(image.height);
+    for (uint32_t level = 1; level < image.levels; ++level) {
+      barrier(cmd, image.image, level - 1, 1, image.layers, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+              VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+      VkImageBlit blit = {};
+      blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, image.layers};
+      blit.srcOffsets[1] = {w, h, 1};
+      w = std::max(w / 2, 1);
+      h = std::max(h / 2, 1);
+      blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, 0, image.layers};
+      blit.dstOffsets[1] = {w, h, 1};
+      vkCmdBlitImage(cmd, image.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image.image,
+                     VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_LINEAR);
+      barrier(cmd, image.image, level - 1, 1, image.layers, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+              VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    }
+    barrier(cmd, image.image, image.levels - 1, 1, image.layers, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+            VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  });
+  gpu::destroyBuffer(ctx, staging);
+}
+
+// Nearest-texel resize (only glTF scenes whose maps of one kind differ in size need it).
+std::vector<uint8_t> resizeNearest(const scenes::Texture& t, uint32_t width, uint32_t height) {
+  if (t.width == width && t.height == height) return t.rgba8;
+  std::vector<uint8_t> out(size_t(width) * height * 4);
+  for (uint32_t y = 0; y < height; ++y) {
+    uint32_t sy = uint32_t((uint64_t(y) * 2 + 1) * t.height / (2 * uint64_t(height)));
+    for (uint32_t x = 0; x < width; ++x) {
+      uint32_t sx = uint32_t((uint64_t(x) * 2 + 1) * t.width / (2 * uint64_t(width)));
+      std::memcpy(&out[(size_t(y) * width + x) * 4], &t.rgba8[(size_t(sy) * t.width + sx) * 4], 4);
+    }
+  }
+  return out;
+}
+
+VkFormat kindFormat(uint32_t kind) {
+  return kind == uint32_t(scenes::MapSlot::Diffuse) ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
+}
+
+double halton(uint32_t index, uint32_t base) {
+  double f = 1, r = 0;
+  for (uint32_t i = index; i > 0; i /= base) {
+    f /= base;
+    r += f * (i % base);
+  }
+  return r;
+}
+
+// The sky: a vertical gradient from a warm horizon to a blue zenith, darker below.
+std::array<uint8_t, 4> skyTexel(glm::vec3 d) {
+  d = glm::normalize(d);
+  float up = d.y;
+  glm::vec3 horizon(0.85f, 0.80f, 0.70f), zenith(0.25f, 0.45f, 0.85f), ground(0.30f, 0.28f, 0.25f);
+  glm::vec3 c =
+      up >= 0 ? glm::mix(horizon, zenith, std::sqrt(up)) : glm::mix(horizon, ground, std::sqrt(-up));
+  return {uint8_t(c.r * 255 + 0.5f), uint8_t(c.g * 255 + 0.5f), uint8_t(c.b * 255 + 0.5f), 255};
+}
+
+std::vector<uint8_t> skyTexels() {
+  const uint32_t n = kSkyFaceSize;
+  std::vector<uint8_t> out(size_t(n) * n * 4 * 6);
+  for (uint32_t face = 0; face < 6; ++face) {
+    for (uint32_t y = 0; y < n; ++y) {
+      for (uint32_t x = 0; x < n; ++x) {
+        float u = (x + 0.5f) / n * 2 - 1, v = (y + 0.5f) / n * 2 - 1;
+        glm::vec3 d;  // Vulkan cube face order +X -X +Y -Y +Z -Z (sc, tc per the spec table)
+        switch (face) {
+          case 0: d = {1, -v, -u}; break;
+          case 1: d = {-1, -v, u}; break;
+          case 2: d = {u, 1, v}; break;
+          case 3: d = {u, -1, -v}; break;
+          case 4: d = {u, -v, 1}; break;
+          default: d = {-u, -v, -1}; break;
+        }
+        auto t = skyTexel(d);
+        std::memcpy(&out[((size_t(face) * n + y) * n + x) * 4], t.data(), 4);
+      }
+    }
+  }
+  return out;
+}
+
+template <class T>
+gpu::Buffer storageBuffer(const gpu::Context& ctx, const std::vector<T>& data, VkBufferUsageFlags extra) {
+  VkDeviceSize bytes = std::max<VkDeviceSize>(data.size() * sizeof(T), 16);
+  gpu::Buffer b = gpu::createBuffer(
+      ctx, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | extra,
+      gpu::MemoryUse::DeviceLocal);
+  if (!data.empty()) {
+    gpu::uploadBuffer(ctx, b, {reinterpret_cast<const uint8_t*>(data.data()), data.size() * sizeof(T)});
+  }
+  return b;
+}
+
+uint64_t allocationOf(const gpu::Context& ctx, const gpu::Buffer& b) {
+  VkMemoryRequirements r;
+  vkGetBufferMemoryRequirements(ctx.device, b.buffer, &r);
+  return r.size;
+}
+
+}  // namespace
+
+const char* mapKindName(uint32_t kind) { return scenes::toString(scenes::MapSlot(kind)); }
+
+GpuScene::~GpuScene() { destroy(); }
+
+Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
+  if (scene.meshes.empty() || scene.triangleCount() == 0) return makeError("scene: no triangles");
+  if (scene.meshes.size() > shaders::kMaxDraws) {
+    return makeError("scene: " + std::to_string(scene.meshes.size()) + " meshes, the visibility id holds " +
+                     std::to_string(shaders::kMaxDraws));
+  }
+  for (const auto& m : scene.meshes) {
+    if (m.triangleCount() > shaders::kTriangleIdMask)
+      return makeError("scene: mesh '" + m.name + "' too large");
+  }
+  destroy();
+  ctx_ = &ctx;
+  bounds_ = scene.bounds;
+
+  // Geometry: all meshes in one vertex and one index buffer.
+  std::vector<scenes::Vertex> vertices;
+  std::vector<uint32_t> indices;
+  std::vector<shaders::DrawData> drawData;
+  for (const auto& m : scene.meshes) {
+    GpuDraw d;
+    d.material = std::min<uint32_t>(m.material, uint32_t(std::max<size_t>(scene.materials.size(), 1) - 1));
+    d.firstIndex = uint32_t(indices.size());
+    d.vertexOffset = int32_t(vertices.size());
+    d.indexCount = uint32_t(m.indices.size());
+    draws_.push_back(d);
+    vertices.insert(vertices.end(), m.vertices.begin(), m.vertices.end());
+    indices.insert(indices.end(), m.indices.begin(), m.indices.end());
+    shaders::DrawData dd = {};
+    dd.model = glm::mat4(1.0f);
+    dd.materialIndex = d.material;
+    dd.firstIndex = d.firstIndex;
+    dd.vertexOffset = d.vertexOffset;
+    dd.indexCount = d.indexCount;
+    drawData.push_back(dd);
+  }
+  vertices_ = storageBuffer(ctx, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  indices_ = storageBuffer(ctx, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
+  drawBuffer_ = storageBuffer(ctx, drawData, 0);
+
+  // Per-texture images with mips, and a 1x1 dummy per kind.
+  for (const auto& t : scene.textures) {
+    VkFormat format = t.srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
+    textures_.push_back(createMipImage(ctx, t.width, t.height, mipLevels(t.width, t.height), 1, format,
+                                       VK_IMAGE_VIEW_TYPE_2D));
+    uploadWithMips(ctx, textures_.back(), t.rgba8);
+  }
+  for (uint32_t k = 0; k < kKinds; ++k) {
+    dummies_[k] = createMipImage(ctx, 1, 1, 1, 1, kindFormat(k), VK_IMAGE_VIEW_TYPE_2D);
+    uploadWithMips(ctx, dummies_[k], kDummyTexels[k]);
+    mapBytesPerKind_[k] = dummies_[k].allocationBytes;
+  }
+
+  // Which textures each kind uses, and the layered image per kind (layer 0: the dummy).
+  std::vector<scenes::Material> materials = scene.materials;
+  if (materials.empty()) materials.emplace_back();
+  std::vector<shaders::Material> materialData;
+  std::array<std::vector<int32_t>, kKinds> layersOf;  // texture index per layer (-1: dummy)
+  for (uint32_t k = 0; k < kKinds; ++k) layersOf[k].push_back(-1);
+  std::vector<bool> counted(scene.textures.size(), false);
+  for (const auto& m : materials) {
+    std::array<VkImageView, kKinds> views{};
+    shaders::Material md = {};
+    md.baseColor = m.baseColor;
+    md.roughnessFactor = m.roughness;
+    for (uint32_t k = 0; k < kKinds; ++k) {
+      int32_t t = m.maps[k];
+      if (t >= int32_t(scene.textures.size())) t = -1;
+      views[k] = t < 0 ? dummies_[k].view : textures_[size_t(t)].view;
+      auto& layers = layersOf[k];
+      auto it = std::find(layers.begin(), layers.end(), t);
+      if (it == layers.end()) it = layers.insert(layers.end(), t);
+      md.maps[k] = uint32_t(it - layers.begin());
+      if (t >= 0 && !counted[size_t(t)]) {
+        counted[size_t(t)] = true;
+        mapBytesPerKind_[k] += textures_[size_t(t)].allocationBytes;
+      }
+    }
+    materialMapViews_.push_back(views);
+    materialData.push_back(md);
+  }
+  materialBuffer_ = storageBuffer(ctx, materialData, 0);
+
+  // The descriptor-indexing layout: dummies at 0..4, texture t at 5 + t.
+  if (kKinds + scene.textures.size() <= shaders::kMaxMaterialMaps) {
+    std::vector<std::string> textureKind(scene.textures.size(), "material_maps.unused");
+    std::vector<bool> named(scene.textures.size(), false);
+    std::vector<shaders::Material> indexedData = materialData;
+    for (size_t m = 0; m < materials.size(); ++m) {
+      for (uint32_t k = 0; k < kKinds; ++k) {
+        int32_t t = materials[m].maps[k];
+        if (t >= int32_t(scene.textures.size())) t = -1;
+        indexedData[m].maps[k] = t < 0 ? k : uint32_t(kKinds + size_t(t));
+        if (t >= 0 && !named[size_t(t)]) {  // a texture counts under the first kind that uses it
+          named[size_t(t)] = true;
+          textureKind[size_t(t)] = std::string("material_maps.") + mapKindName(k);
+        }
+      }
+    }
+    for (uint32_t k = 0; k < kKinds; ++k) {
+      indexedViews_.push_back(dummies_[k].view);
+      indexedNames_.push_back(std::string("material_maps.") + mapKindName(k));
+    }
+    for (size_t t = 0; t < scene.textures.size(); ++t) {
+      indexedViews_.push_back(textures_[t].view);
+      indexedNames_.push_back(textureKind[t]);
+    }
+    while (indexedViews_.size() < shaders::kMaxMaterialMaps) {
+      indexedViews_.push_back(dummies_[0].view);
+      indexedNames_.push_back(indexedNames_[0]);
+    }
+    indexedMaterialBuffer_ = storageBuffer(ctx, indexedData, 0);
+  }
+
+  for (uint32_t k = 0; k < kKinds; ++k) {
+    uint32_t w = 1, h = 1;
+    for (int32_t t : layersOf[k]) {
+      if (t < 0) continue;
+      w = std::max(w, scene.textures[size_t(t)].width);
+      h = std::max(h, scene.textures[size_t(t)].height);
+    }
+    uint32_t layers = uint32_t(layersOf[k].size());
+    mapArrays_[k] =
+        createMipImage(ctx, w, h, mipLevels(w, h), layers, kindFormat(k), VK_IMAGE_VIEW_TYPE_2D_ARRAY);
+    std::vector<uint8_t> texels;
+    texels.reserve(size_t(w) * h * 4 * layers);
+    for (int32_t t : layersOf[k]) {
+      if (t < 0) {
+        for (size_t i = 0; i < size_t(w) * h; ++i)
+          texels.insert(texels.end(), kDummyTexels[k].begin(), kDummyTexels[k].end());
+      } else {
+        auto layer = resizeNearest(scene.textures[size_t(t)], w, h);
+        texels.insert(texels.end(), layer.begin(), layer.end());
+      }
+    }
+    uploadWithMips(ctx, mapArrays_[k], texels);
+  }
+
+  // Lights: Halton points inside the bounds, radius a third of the diagonal.
+  std::vector<shaders::PointLight> lights(kSceneLights);
+  glm::vec3 lo = scene.bounds.min, size = scene.bounds.extent();
+  float radius = std::max(scene.bounds.diagonal() / 3.0f, 1.0f);
+  for (uint32_t i = 0; i < kSceneLights; ++i) {
+    glm::vec3 p = lo + size * glm::vec3(halton(i + 1, 2), halton(i + 1, 3), halton(i + 1, 5));
+    lights[i].positionRadius = glm::vec4(p, radius);
+    float hue = float(halton(i + 1, 7));
+    glm::vec3 c = glm::vec3(0.6f + 0.4f * hue, 0.7f, 1.0f - 0.4f * hue);
+    lights[i].color = glm::vec4(c * (radius * radius * 0.1f), 0.0f);
+  }
+  lightBuffer_ = storageBuffer(ctx, lights, 0);
+
+  sky_ = createMipImage(ctx, kSkyFaceSize, kSkyFaceSize, 1, 6, VK_FORMAT_R8G8B8A8_UNORM,
+                        VK_IMAGE_VIEW_TYPE_CUBE);
+  uploadWithMips(ctx, sky_, skyTexels());
+
+  VkSamplerCreateInfo info = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  info.magFilter = VK_FILTER_LINEAR;
+  info.minFilter = VK_FILTER_LINEAR;
+  info.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
+  info.addressModeU = info.addressModeV = info.addressModeW =
+      VK_SAMPLER_ADDRESS_MODE_REPEAT;  // scene.hpp: UVs repeat
+  info.maxLod = VK_LOD_CLAMP_NONE;
+  VK_CHECK(vkCreateSampler(ctx.device, &info, nullptr, &sampler_));
+  info.addressModeU = info.addressModeV = info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  VK_CHECK(vkCreateSampler(ctx.device, &info, nullptr, &skySampler_));
+  return true;
+}
+
+void GpuScene::destroy() {
+  if (ctx_ == nullptr) return;
+  const gpu::Context& ctx = *ctx_;
+  vkDeviceWaitIdle(ctx.device);
+  for (auto* b : {&vertices_, &indices_, &drawBuffer_, &materialBuffer_, &lightBuffer_})
+    gpu::destroyBuffer(ctx, *b);
+  for (auto& t : textures_) destroyMipImage(ctx, t);
+  textures_.clear();
+  for (auto& t : dummies_) destroyMipImage(ctx, t);
+  for (auto& t : mapArrays_) destroyMipImage(ctx, t);
+  destroyMipImage(ctx, sky_);
+  if (sampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, sampler_, nullptr);
+  if (skySampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, skySampler_, nullptr);
+  sampler_ = skySampler_ = VK_NULL_HANDLE;
+  draws_.clear();
+  materialMapViews_.clear();
+  mapBytesPerKind_ = {};
+  ctx_ = nullptr;
+}
+
+std::vector<ResourceInfo> GpuScene::bufferResources() const {
+  auto buffer = [&](const char* name, const gpu::Buffer& b, uint32_t element, const char* usage) {
+    ResourceInfo r;
+    r.name = name;
+    r.kind = ResourceKind::Buffer;
+    r.elementBytes = element;
+    r.allocationBytes = allocationOf(*ctx_, b);
+    r.usage = usage;
+    return r;
+  };
+  return {buffer("vertices", vertices_, sizeof(shaders::Vertex), "vertex|storage"),
+          buffer("indices", indices_, sizeof(uint32_t), "index|storage"),
+          buffer("draws", drawBuffer_, sizeof(shaders::DrawData), "storage"),
+          buffer("materials", materialBuffer_, sizeof(shaders::Material), "storage"),
+          buffer("lights", lightBuffer_, sizeof(shaders::PointLight), "storage")};
+}
+
+static ResourceInfo imageResource(std::string name, VkFormat format, uint32_t w, uint32_t h, uint64_t bytes) {
+  ResourceInfo r;
+  r.name = std::move(name);
+  r.kind = ResourceKind::Texture;
+  r.format = format;
+  r.formatName = format == VK_FORMAT_R8G8B8A8_SRGB ? "R8G8B8A8_SRGB" : "R8G8B8A8_UNORM";
+  r.elementBytes = gpu::formatBytes(format);
+  r.width = w;
+  r.height = h;
+  r.allocationBytes = bytes;
+  r.usage = "sampled";
+  return r;
+}
+
+ResourceInfo GpuScene::skyResource() const {
+  return imageResource("sky", sky_.format, sky_.width, sky_.height, sky_.allocationBytes);
+}
+
+std::vector<ResourceInfo> GpuScene::materialMapResources() const {
+  std::vector<ResourceInfo> out;
+  for (uint32_t k = 0; k < kKinds; ++k) {
+    out.push_back(imageResource(std::string("material_maps.") + mapKindName(k), kindFormat(k), 0, 0,
+                                mapBytesPerKind_[k]));
+  }
+  return out;
+}
+
+std::vector<ResourceInfo> GpuScene::mapArrayResources() const {
+  std::vector<ResourceInfo> out;
+  for (uint32_t k = 0; k < kKinds; ++k) {
+    const auto& a = mapArrays_[k];
+    out.push_back(imageResource(std::string("material_maps.") + mapKindName(k), a.format, a.width, a.height,
+                                a.allocationBytes));
+  }
+  return out;
+}
+
+}  // namespace tally::renderers

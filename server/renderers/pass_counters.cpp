@@ -1,0 +1,93 @@
+#include "renderers/pass_counters.hpp"
+
+#include <algorithm>
+#include <set>
+
+namespace tally::renderers {
+namespace {
+
+const ResourceInfo* findResource(const std::vector<ResourceInfo>& resources, const std::string& name) {
+  for (const auto& r : resources) {
+    if (r.name == name) return &r;
+  }
+  return nullptr;
+}
+
+uint64_t slotValue(const std::vector<uint64_t>& counters, uint32_t slot) {
+  return slot < counters.size() ? counters[slot] : 0;
+}
+
+}  // namespace
+
+void addAccess(std::vector<Access>& accesses, const std::string& resource, bool write, uint64_t count,
+               uint64_t elementBytes, const std::string& source) {
+  auto it = std::find_if(accesses.begin(), accesses.end(), [&](const Access& a) {
+    return a.resource == resource && a.write == write && a.source == source;
+  });
+  if (it == accesses.end()) {
+    Access a;
+    a.resource = resource;
+    a.write = write;
+    a.source = source;
+    accesses.push_back(a);
+    it = accesses.end() - 1;
+  }
+  it->count += count;
+  it->bytes += count * elementBytes;
+}
+
+PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,
+                             const PassBindings& bindings, const std::vector<ResourceInfo>& resources) {
+  PassCounts out;
+  auto bytesOf = [&](const std::string& name, uint32_t fallback) -> uint64_t {
+    const ResourceInfo* r = findResource(resources, name);
+    return r != nullptr && r->elementBytes != 0 ? r->elementBytes : fallback;
+  };
+  // Sites of one (stage, kind, resource, width) share their slots: count each slot range once.
+  std::set<uint32_t> seen;
+  for (const auto& site : sites) {
+    using spirv::SiteKind;
+    if (!seen.insert(site.slot).second) continue;
+    if (site.kind == SiteKind::Invocation) {
+      uint64_t n = slotValue(counters, site.slot);
+      if (site.stage == spirv::Stage::Fragment) out.fragmentInvocations += n;
+      if (site.stage == spirv::Stage::Vertex) out.vertexInvocations += n;
+      continue;
+    }
+    if (site.kind == SiteKind::OutputWrite) {
+      auto it = site.location ? bindings.outputs.find(*site.location) : bindings.outputs.end();
+      std::string name =
+          it != bindings.outputs.end() ? it->second : "output " + std::to_string(site.location.value_or(0));
+      addAccess(out.accesses, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes),
+                "counter");
+      continue;
+    }
+    const bool write = site.kind == SiteKind::BufferWrite || site.kind == SiteKind::ImageWrite ||
+                       site.kind == SiteKind::ImageAtomic;
+    const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
+    if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
+      addAccess(out.accesses, bindings.vertexInputs, false, slotValue(counters, site.slot), site.elementBytes,
+                "counter");
+      continue;
+    }
+    auto it = bindings.bindings.find({site.set, site.binding});
+    std::vector<std::string> names;
+    if (it != bindings.bindings.end()) names = it->second;
+    if (names.empty()) names.push_back(site.resource.empty() ? "unresolved" : site.resource);
+    for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
+      uint64_t n = slotValue(counters, site.slot + i);
+      if (n == 0 && site.slotCount > 1) continue;
+      // A dynamic index: element i; a constant index: that element; else the binding.
+      size_t element = site.slotCount > 1 ? i : site.index.value_or(0);
+      const std::string& name = names.size() > 1 ? names[std::min(element, names.size() - 1)] : names[0];
+      uint64_t bytes = isBuffer ? site.elementBytes : bytesOf(name, site.elementBytes);
+      if (auto o = bindings.elementBytes.find({site.set, site.binding}); o != bindings.elementBytes.end()) {
+        bytes = o->second;
+      }
+      addAccess(out.accesses, name, write, n, bytes, "counter");
+    }
+  }
+  return out;
+}
+
+}  // namespace tally::renderers

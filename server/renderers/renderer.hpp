@@ -1,0 +1,95 @@
+// The renderer interface: what the capture engine drives. Each renderer is one
+// file, declares its passes and resources (with their real formats and
+// allocation sizes), renders frames and reports per-pass, per-resource counts.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+#include "gpu/context.hpp"
+#include "scenes/scene.hpp"
+#include "spirv/instrument.hpp"
+
+namespace tally::renderers {
+
+class GpuScene;
+
+enum class ResourceKind { Texture, Attachment, Depth, Buffer };
+std::string_view toString(ResourceKind kind);  // "texture", "attachment", "depth", "buffer"
+
+// A resource a renderer created. Bytes come from these formats, never from a
+// hard-coded multiplier.
+struct ResourceInfo {
+  std::string name;          // e.g. "gbuffer.normal", "vertices", "material_maps"
+  ResourceKind kind = ResourceKind::Texture;
+  VkFormat format = VK_FORMAT_UNDEFINED;  // VK_FORMAT_UNDEFINED for buffers
+  std::string formatName;    // "R16G16B16A16_SFLOAT"; "" for buffers
+  uint32_t elementBytes = 0;  // bytes per texel (format) or per buffer element
+  uint32_t width = 0, height = 0;  // images; 0 for buffers
+  uint64_t allocationBytes = 0;    // VkMemoryRequirements::size of the real allocation(s)
+  std::string usage;               // e.g. "color_attachment|sampled"
+};
+
+// One line of a pass's traffic: a resource read or written.
+struct Access {
+  std::string resource;  // ResourceInfo::name
+  bool write = false;
+  uint64_t count = 0;    // events (counter totals, or derived: see source)
+  uint64_t bytes = 0;    // count x element size
+  // "counter": the instrumented shaders counted it; "derived": computed from
+  // counted events (depth writes = fragment invocations, index fetches = indices drawn).
+  std::string source = "counter";
+};
+
+struct PassResult {
+  std::string name;        // part of the result format: "gbuffer", "lighting", ...
+  double gpuMs = 0;        // from timestamps around the pass
+  uint64_t fragmentInvocations = 0;           // counted (the fragment shaders' invocation sites)
+  int64_t fragmentInvocationsStatistic = -1;  // pipeline statistics; -1 if not queried
+  std::vector<Access> accesses;
+};
+
+struct FrameResult {
+  std::vector<PassResult> passes;
+};
+
+struct RendererOptions {
+  VkExtent2D extent = {320, 180};
+  bool instrumented = true;  // false: the uninstrumented twin, for timing
+  spirv::Mode counting;      // exact | subgroup | sampled:N
+  uint32_t lights = 400;     // point lights, as in the founding study
+};
+
+class Renderer {
+ public:
+  virtual ~Renderer() = default;
+  virtual std::string_view name() const = 0;
+  // Pass names in execution order (they are part of the result format).
+  virtual std::vector<std::string> passNames() const = 0;
+  // Creates targets, pipelines (instrumented or not) and descriptor sets. A
+  // failure names the reason (an unsupported feature, a scene too large).
+  virtual Result<bool> setup(gpu::Context& ctx, const GpuScene& scene, const RendererOptions& options) = 0;
+  // Every resource the renderer created or reads, after setup.
+  virtual std::vector<ResourceInfo> resources() const = 0;
+  // Records, submits and waits for one frame from `camera`; reads back (and
+  // resets) the counters, timestamps and statistics.
+  virtual FrameResult renderFrame(const scenes::Camera& camera) = 0;
+  // The final image of the last frame, RGBA8, width x height x 4, top row first.
+  virtual std::vector<uint8_t> finalImage() = 0;
+  // What the renderer decided at setup, e.g. {"barycentrics":"extension"}.
+  virtual nlohmann::json notes() const { return nlohmann::json::object(); }
+  virtual void destroy() = 0;
+};
+
+// "forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean".
+std::vector<std::string> rendererNames();
+Result<std::unique_ptr<Renderer>> makeRenderer(std::string_view name);
+
+}  // namespace tally::renderers

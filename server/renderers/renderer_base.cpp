@@ -1,0 +1,674 @@
+#include "renderers/renderer_base.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "gpu/shaders.hpp"
+#include "gpu/vk_check.hpp"
+#include "shared.h"
+
+namespace tally::renderers {
+namespace {
+
+std::string shaderDir() {
+  // The binary may run where the source tree is elsewhere (tests/gpu/).
+  if (const char* dir = std::getenv("TALLY_SHADER_DIR"); dir != nullptr && *dir) return dir;
+  return TALLY_RENDERER_SHADER_DIR;
+}
+
+std::string formatName(VkFormat format) {
+  switch (format) {
+    case VK_FORMAT_R16G16B16A16_SFLOAT: return "R16G16B16A16_SFLOAT";
+    case VK_FORMAT_R8G8B8A8_SRGB: return "R8G8B8A8_SRGB";
+    case VK_FORMAT_R8G8B8A8_UNORM: return "R8G8B8A8_UNORM";
+    case VK_FORMAT_D32_SFLOAT_S8_UINT: return "D32_SFLOAT_S8_UINT";
+    case VK_FORMAT_R32G32_UINT: return "R32G32_UINT";
+    case VK_FORMAT_R32_UINT: return "R32_UINT";
+    default: return "VkFormat " + std::to_string(int(format));
+  }
+}
+
+std::string usageName(VkImageUsageFlags usage) {
+  std::string out;
+  auto add = [&](VkImageUsageFlags bit, const char* name) {
+    if (usage & bit) out += (out.empty() ? "" : "|") + std::string(name);
+  };
+  add(VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, "color_attachment");
+  add(VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth_stencil_attachment");
+  add(VK_IMAGE_USAGE_SAMPLED_BIT, "sampled");
+  add(VK_IMAGE_USAGE_TRANSFER_SRC_BIT, "transfer_src");
+  return out;
+}
+
+// Perspective for Vulkan: depth [0, 1] with far = 1, y flipped (positive-height
+// viewport), vertical field of view (scene.hpp).
+glm::mat4 perspective(float fovYRad, float aspect, float zNear, float zFar) {
+  float f = 1.0f / std::tan(fovYRad / 2);
+  glm::mat4 p(0.0f);
+  p[0][0] = f / aspect;
+  p[1][1] = -f;
+  p[2][2] = zFar / (zNear - zFar);
+  p[2][3] = -1.0f;
+  p[3][2] = zNear * zFar / (zNear - zFar);
+  return p;
+}
+
+}  // namespace
+
+std::string_view toString(ResourceKind kind) {
+  switch (kind) {
+    case ResourceKind::Texture: return "texture";
+    case ResourceKind::Attachment: return "attachment";
+    case ResourceKind::Depth: return "depth";
+    case ResourceKind::Buffer: return "buffer";
+  }
+  return "texture";
+}
+
+VkRenderPass createPassRenderPass(const gpu::Context& ctx, const std::vector<AttachmentSpec>& colors,
+                                  std::optional<AttachmentSpec> depth) {
+  std::vector<VkAttachmentDescription> attachments;
+  std::vector<VkAttachmentReference> colorRefs;
+  for (const auto& c : colors) {
+    VkAttachmentDescription a = {};
+    a.format = c.format;
+    a.samples = VK_SAMPLE_COUNT_1_BIT;
+    a.loadOp = c.clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    a.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    a.initialLayout = c.initial;
+    a.finalLayout = c.final;
+    colorRefs.push_back({uint32_t(attachments.size()), c.layout});
+    attachments.push_back(a);
+  }
+  VkAttachmentReference depthRef = {};
+  if (depth) {
+    VkAttachmentDescription a = {};
+    a.format = depth->format;
+    a.samples = VK_SAMPLE_COUNT_1_BIT;
+    a.loadOp = depth->clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.stencilLoadOp = a.loadOp;
+    a.stencilStoreOp = VK_ATTACHMENT_STORE_OP_STORE;
+    a.initialLayout = depth->initial;
+    a.finalLayout = depth->final;
+    depthRef = {uint32_t(attachments.size()), depth->layout};
+    attachments.push_back(a);
+  }
+  VkSubpassDescription subpass = {};
+  subpass.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  subpass.colorAttachmentCount = uint32_t(colorRefs.size());
+  subpass.pColorAttachments = colorRefs.data();
+  subpass.pDepthStencilAttachment = depth ? &depthRef : nullptr;
+  VkSubpassDependency deps[2] = {};
+  deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
+  deps[0].dstSubpass = 0;
+  deps[1].srcSubpass = 0;
+  deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
+  for (auto& d : deps) {
+    d.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+    d.dstStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+    d.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+    d.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+  }
+  VkRenderPassCreateInfo info = {VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+  info.attachmentCount = uint32_t(attachments.size());
+  info.pAttachments = attachments.data();
+  info.subpassCount = 1;
+  info.pSubpasses = &subpass;
+  info.dependencyCount = 2;
+  info.pDependencies = deps;
+  VkRenderPass rp = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateRenderPass(ctx.device, &info, nullptr, &rp));
+  return rp;
+}
+
+std::vector<std::string> RendererBase::passNames() const {
+  auto names = ownPassNames();
+  names.push_back("tonemap");
+  names.push_back("skybox");
+  return names;
+}
+
+uint32_t RendererBase::addPass(std::string name) {
+  Pass p;
+  p.name = std::move(name);
+  p.bindings = commonBindings();
+  passes_.push_back(std::move(p));
+  return uint32_t(passes_.size() - 1);
+}
+
+PassBindings RendererBase::commonBindings() const {
+  PassBindings b;
+  b.bind(shaders::kSetFrame, shaders::kBindingCamera, "camera");
+  b.bind(shaders::kSetFrame, shaders::kBindingLighting, "lighting");
+  b.bind(shaders::kSetFrame, shaders::kBindingLights, "lights");
+  b.bind(shaders::kSetGeometry, shaders::kBindingDraws, "draws");
+  b.bind(shaders::kSetGeometry, shaders::kBindingMaterials, "materials");
+  b.bind(shaders::kSetGeometry, shaders::kBindingVertices, "vertices");
+  b.bind(shaders::kSetGeometry, shaders::kBindingIndices, "indices");
+  return b;
+}
+
+const gpu::Image* RendererBase::createTarget(const std::string& name, VkFormat format,
+                                             VkImageUsageFlags usage, ResourceKind kind) {
+  targets_.push_back(gpu::createImage(*ctx_, extent_.width, extent_.height, format, usage));
+  const gpu::Image& image = targets_.back();
+  VkMemoryRequirements r;
+  vkGetImageMemoryRequirements(ctx_->device, image.image, &r);
+  ResourceInfo info;
+  info.name = name;
+  info.kind = kind;
+  info.format = format;
+  info.formatName = formatName(format);
+  info.elementBytes = gpu::formatBytes(format);
+  info.width = extent_.width;
+  info.height = extent_.height;
+  info.allocationBytes = r.size;
+  info.usage = usageName(usage);
+  resources_.push_back(info);
+  return &image;
+}
+
+VkImageView RendererBase::depthOnlyView() {
+  if (depthOnlyView_ == VK_NULL_HANDLE) {
+    VkImageViewCreateInfo view = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    view.image = depth_->image;
+    view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    view.format = depth_->format;
+    view.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+    VK_CHECK(vkCreateImageView(ctx_->device, &view, nullptr, &depthOnlyView_));
+  }
+  return depthOnlyView_;
+}
+
+VkFramebuffer RendererBase::framebuffer(VkRenderPass renderPass, const std::vector<VkImageView>& views) {
+  framebuffers_.push_back(gpu::createFramebuffer(*ctx_, renderPass, views, extent_));
+  return framebuffers_.back();
+}
+
+Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
+                                            const std::vector<std::string>& defines) {
+  auto source = gpu::loadShaderSource(*ctx_, shaderDir(), file);
+  if (!source) return makeError(source.error());
+  if (!defines.empty()) {
+    size_t eol = source->source.find('\n');
+    std::string text;
+    for (const auto& d : defines) text += "#define " + d + "\n";
+    source->source.insert(eol == std::string::npos ? source->source.size() : eol + 1, text);
+  }
+  std::vector<uint32_t> words;
+  if (options_.instrumented) {
+    auto instrumentOptions = gpu::instrumentOptionsFor(*ctx_, options_.counting, slotCount_);
+    if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
+      return makeError(file + ": " + why);
+    }
+    auto compiled = gpu::compileAndInstrument(*ctx_, *source, instrumentOptions);
+    if (!compiled) return makeError(file + ": " + compiled.error());
+    counterSet_ = instrumentOptions.set;
+    slotCount_ += compiled->result.slotCount;
+    auto& sites = passes_[passIndex].sites;
+    sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
+    words = std::move(compiled->words);
+  } else {
+    auto compiled = gpu::compileShader(*source);
+    if (!compiled) return makeError(file + ": " + compiled.error());
+    words = std::move(compiled->words);
+  }
+  modules_.push_back(gpu::createShaderModule(*ctx_, words));
+  return modules_.back();
+}
+
+VkDescriptorSetLayout RendererBase::setLayout(const std::vector<VkDescriptorType>& types,
+                                              const std::vector<uint32_t>& counts) {
+  std::vector<VkDescriptorSetLayoutBinding> bindings;
+  for (uint32_t i = 0; i < types.size(); ++i) {
+    VkDescriptorSetLayoutBinding b = {};
+    b.binding = i;
+    b.descriptorType = types[i];
+    b.descriptorCount = i < counts.size() ? counts[i] : 1;
+    b.stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    bindings.push_back(b);
+  }
+  ownedSetLayouts_.push_back(gpu::createDescriptorSetLayout(*ctx_, bindings));
+  return ownedSetLayouts_.back();
+}
+
+VkDescriptorSet RendererBase::allocateSet(VkDescriptorSetLayout layout) {
+  return gpu::allocateDescriptorSet(*ctx_, pool_, layout);
+}
+
+void RendererBase::writeImage(VkDescriptorSet set, uint32_t binding, VkImageView view, VkSampler sampler,
+                              VkImageLayout layout) {
+  gpu::DescriptorWrite w;
+  w.binding = binding;
+  w.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  w.image = {sampler, view, layout};
+  gpu::updateDescriptorSet(*ctx_, set, {&w, 1});
+}
+
+VkPipelineLayout RendererBase::pipelineLayout(VkDescriptorSetLayout material,
+                                              VkDescriptorSetLayout passInput) {
+  std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
+  sets[shaders::kSetFrame] = frameLayout_;
+  sets[shaders::kSetGeometry] = geometryLayout_;
+  if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
+  if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
+  sets[counterSet_] = counterLayout_;
+  pipelineLayouts_.push_back(gpu::createPipelineLayout(
+      *ctx_, sets, sizeof(shaders::DrawPush), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT));
+  return pipelineLayouts_.back();
+}
+
+VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
+  pipelines_.push_back(gpu::createGraphicsPipeline(*ctx_, desc));
+  return pipelines_.back();
+}
+
+void RendererBase::geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth) {
+  desc.depthTest = true;
+  desc.depthWrite = writeDepth;
+  desc.depthCompare = VK_COMPARE_OP_LESS;  // depth [0, 1], far = 1 (shared.h)
+  desc.stencilTest = true;
+  desc.stencilCompare = VK_COMPARE_OP_ALWAYS;
+  desc.stencilPassOp = VK_STENCIL_OP_REPLACE;
+  desc.stencilReference = kStencilGeometry;
+  desc.stencilWriteMask = 0xff;
+}
+
+VkClearValue RendererBase::depthClear() {
+  VkClearValue v = {};
+  v.depthStencil = {1.0f, 0};
+  return v;
+}
+
+void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) {
+  desc.vertexBindings = {{0, sizeof(shaders::Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
+  desc.vertexAttributes = {
+      {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
+      {shaders::kAttribNormal, 0, VK_FORMAT_R32G32B32_SFLOAT, 12},
+      {shaders::kAttribTangent, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 24},
+      {shaders::kAttribUv, 0, VK_FORMAT_R32G32_SFLOAT, 40},
+  };
+}
+
+void RendererBase::bindSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet material,
+                            VkDescriptorSet passInput, VkDescriptorSet geometry) {
+  auto bind = [&](uint32_t index, VkDescriptorSet set) {
+    if (set != VK_NULL_HANDLE) {
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, index, 1, &set, 0, nullptr);
+    }
+  };
+  bind(shaders::kSetFrame, frameSet_);
+  bind(shaders::kSetMaterial, material);
+  bind(shaders::kSetGeometry, geometry != VK_NULL_HANDLE ? geometry : geometrySet_);
+  bind(shaders::kSetPassInput, passInput);
+  bind(counterSet_, counterDescriptorSet_);
+}
+
+VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials) {
+  VkDescriptorSet set = allocateSet(geometryLayout_);
+  const gpu::Buffer* buffers[] = {&scene_->drawBuffer(), &materials, &scene_->vertices(), &scene_->indices()};
+  gpu::DescriptorWrite writes[4];
+  for (uint32_t i = 0; i < 4; ++i) {
+    writes[i].binding = i;
+    writes[i].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].buffer = {buffers[i]->buffer, 0, VK_WHOLE_SIZE};
+  }
+  gpu::updateDescriptorSet(*ctx_, set, writes);
+  return set;
+}
+
+void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout,
+                             bool materialSets) {
+  VkDeviceSize offset = 0;
+  VkBuffer vb = scene_->vertices().buffer;
+  vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+  vkCmdBindIndexBuffer(cmd, scene_->indices().buffer, 0, VK_INDEX_TYPE_UINT32);
+  const auto& draws = scene_->draws();
+  for (uint32_t i = 0; i < draws.size(); ++i) {
+    const GpuDraw& d = draws[i];
+    if (materialSets) {
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, shaders::kSetMaterial, 1,
+                              &materialSets_[d.material], 0, nullptr);
+    }
+    shaders::DrawPush push = {i, d.material};
+    vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push,
+                       &push);
+    vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
+    passes_[passIndex].indicesDrawn += d.indexCount;
+  }
+}
+
+void RendererBase::beginRenderPass(VkCommandBuffer cmd, uint32_t passIndex, VkRenderPass renderPass,
+                                   VkFramebuffer fb, const std::vector<VkClearValue>& clears) {
+  VkRenderPassBeginInfo begin = {VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+  begin.renderPass = renderPass;
+  begin.framebuffer = fb;
+  begin.renderArea = {{0, 0}, extent_};
+  begin.clearValueCount = uint32_t(clears.size());
+  begin.pClearValues = clears.data();
+  vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+  // Inside the render pass: lavapipe crashes when the query brackets it.
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::beginStatistics(cmd, statistics_, passIndex);
+  gpu::setViewportAndScissor(cmd, extent_);
+}
+
+void RendererBase::endRenderPass(VkCommandBuffer cmd, uint32_t passIndex) {
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::endStatistics(cmd, statistics_, passIndex);
+  vkCmdEndRenderPass(cmd);
+}
+
+Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const RendererOptions& options) {
+  destroy();
+  ctx_ = &ctx;
+  scene_ = &scene;
+  options_ = options;
+  options_.lights = std::min(options.lights, shaders::kMaxLights);
+  extent_ = options.extent;
+  if (extent_.width == 0 || extent_.height == 0) return makeError("extent: must be at least 1x1");
+  counterSet_ = gpu::instrumentOptionsFor(ctx, options.counting).set;
+  if (counterSet_ <= shaders::kSetPassInput)
+    return makeError("device: too few descriptor sets for the counters");
+  try {
+    const uint32_t materials = scene.materialCount();
+    VkDescriptorPoolSize sizes[] = {
+        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
+        {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 24}};
+    pool_ = gpu::createDescriptorPool(ctx, materials + 32, sizes);
+    using T = VkDescriptorType;
+    const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    frameLayout_ = setLayout({ubo, ubo, ssbo});
+    geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo});
+    emptyLayout_ = setLayout({});
+    counterLayout_ = setLayout({ssbo});
+    materialLayout_ = setLayout({image, image, image, image, image});
+    mapArrayLayout_ = setLayout({image, image, image, image, image});
+
+    cameraBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Camera), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                      gpu::MemoryUse::Upload);
+    lightingBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Lighting), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                        gpu::MemoryUse::Upload);
+    shaders::Lighting lighting = {};
+    lighting.lightCount = options_.lights;
+    lighting.ambient = 0.15f;
+    lighting.exposure = 1.0f;
+    gpu::uploadBuffer(ctx, lightingBuffer_, {reinterpret_cast<const uint8_t*>(&lighting), sizeof lighting});
+
+    frameSet_ = allocateSet(frameLayout_);
+    geometrySet_ = allocateSet(geometryLayout_);
+    auto bufferWrite = [](uint32_t binding, VkDescriptorType type, const gpu::Buffer& b) {
+      gpu::DescriptorWrite w;
+      w.binding = binding;
+      w.type = type;
+      w.buffer = {b.buffer, 0, VK_WHOLE_SIZE};
+      return w;
+    };
+    gpu::DescriptorWrite frameWrites[] = {bufferWrite(0, ubo, cameraBuffer_),
+                                          bufferWrite(1, ubo, lightingBuffer_),
+                                          bufferWrite(2, ssbo, scene.lightBuffer())};
+    gpu::updateDescriptorSet(ctx, frameSet_, frameWrites);
+    gpu::DescriptorWrite geometryWrites[] = {
+        bufferWrite(0, ssbo, scene.drawBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
+        bufferWrite(2, ssbo, scene.vertices()), bufferWrite(3, ssbo, scene.indices())};
+    gpu::updateDescriptorSet(ctx, geometrySet_, geometryWrites);
+    for (uint32_t m = 0; m < materials; ++m) {
+      VkDescriptorSet set = allocateSet(materialLayout_);
+      for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+        writeImage(set, k, scene.materialMap(m, k), scene.sampler(),
+                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      }
+      materialSets_.push_back(set);
+    }
+    mapArraySet_ = allocateSet(mapArrayLayout_);
+    for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+      writeImage(mapArraySet_, k, scene.mapArray(k), scene.sampler(),
+                 VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    }
+    targetSampler_ = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+
+    // Shared targets and resources.
+    for (auto& r : scene.bufferResources()) resources_.push_back(r);
+    ResourceInfo camera;
+    camera.name = "camera";
+    camera.kind = ResourceKind::Buffer;
+    camera.elementBytes = sizeof(shaders::Camera);
+    camera.allocationBytes = cameraBuffer_.size;
+    camera.usage = "uniform";
+    resources_.push_back(camera);
+    camera.name = "lighting";
+    camera.elementBytes = sizeof(shaders::Lighting);
+    camera.allocationBytes = lightingBuffer_.size;
+    resources_.push_back(camera);
+    resources_.push_back(scene.skyResource());
+    hdr_ = createTarget("hdr", kHdrFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                        ResourceKind::Attachment);
+    final_ = createTarget("final", kFinalFormat,
+                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                          ResourceKind::Attachment);
+    depth_ = createTarget("depth", kDepthFormat,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                          ResourceKind::Depth);
+
+    if (auto ok = setupPasses(); !ok) {
+      std::string why = ok.error();
+      destroy();
+      return makeError(why);
+    }
+    setupTonemapAndSkybox();
+
+    counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                  gpu::MemoryUse::DeviceLocal);
+    counterDescriptorSet_ = allocateSet(counterLayout_);
+    gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
+    gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
+    if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
+    if (ctx.pipelineStatistics) {
+      statistics_ = gpu::createStatisticsQueries(ctx, uint32_t(passes_.size()),
+                                                 VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT);
+    }
+  } catch (const std::exception& e) {
+    destroy();
+    return makeError(std::string(name()) + ": " + e.what());
+  }
+  ready_ = true;
+  return true;
+}
+
+void RendererBase::setupTonemapAndSkybox() {
+  const VkImageLayout readOnlyDepth = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  // Tonemap: full screen, hdr -> final. No depth/stencil: every pixel.
+  {
+    uint32_t p = addPass("tonemap");
+    VkDescriptorSetLayout inputLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER});
+    VkDescriptorSet input = allocateSet(inputLayout);
+    writeImage(input, shaders::kBindingHdrTarget, hdr_->view, targetSampler_,
+               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    pass(p).bindings.bind(shaders::kSetPassInput, shaders::kBindingHdrTarget, "hdr");
+    pass(p).bindings.outputs[shaders::kOutColor] = "final";
+    VkRenderPass rp = ownRenderPass(createPassRenderPass(
+        *ctx_,
+        {{kFinalFormat, false, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+          VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}},
+        std::nullopt));
+    VkFramebuffer fb = framebuffer(rp, {final_->view});
+    gpu::GraphicsPipelineDesc desc;
+    auto vs = shader(p, "fullscreen.vert.glsl");
+    auto fs = shader(p, "tonemap.frag.glsl");
+    if (!vs || !fs) throw std::runtime_error(!vs ? vs.error() : fs.error());
+    desc.vertex = *vs;
+    desc.fragment = *fs;
+    desc.layout = pipelineLayout(VK_NULL_HANDLE, inputLayout);
+    desc.renderPass = rp;
+    VkPipeline pipe = pipeline(desc);
+    VkPipelineLayout layout = desc.layout;
+    pass(p).record = [=, this](VkCommandBuffer cmd) {
+      beginRenderPass(cmd, p, rp, fb, {});
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+      bindSets(cmd, layout, VK_NULL_HANDLE, input);
+      drawFullScreen(cmd);
+      endRenderPass(cmd, p);
+    };
+  }
+  // Skybox: the far plane where the stencil is 0 (no geometry), into final.
+  {
+    uint32_t p = addPass("skybox");
+    VkDescriptorSetLayout skyLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER});
+    VkDescriptorSet sky = allocateSet(skyLayout);
+    writeImage(sky, shaders::kBindingSky, scene_->skyView(), scene_->skySampler(),
+               VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingSky, "sky");
+    pass(p).bindings.outputs[shaders::kOutColor] = "final";
+    VkRenderPass rp = ownRenderPass(createPassRenderPass(
+        *ctx_,
+        {{kFinalFormat, false, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+          VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
+        AttachmentSpec{kDepthFormat, false, readOnlyDepth, readOnlyDepth, readOnlyDepth}));
+    VkFramebuffer fb = framebuffer(rp, {final_->view, depth_->view});
+    gpu::GraphicsPipelineDesc desc;
+    auto vs = shader(p, "skybox.vert.glsl");
+    auto fs = shader(p, "skybox.frag.glsl");
+    if (!vs || !fs) throw std::runtime_error(!vs ? vs.error() : fs.error());
+    desc.vertex = *vs;
+    desc.fragment = *fs;
+    desc.layout = pipelineLayout(skyLayout, VK_NULL_HANDLE);
+    desc.renderPass = rp;
+    desc.stencilTest = true;
+    desc.stencilCompare = VK_COMPARE_OP_EQUAL;
+    desc.stencilReference = 0;
+    VkPipeline pipe = pipeline(desc);
+    VkPipelineLayout layout = desc.layout;
+    pass(p).record = [=, this](VkCommandBuffer cmd) {
+      beginRenderPass(cmd, p, rp, fb, {});
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+      bindSets(cmd, layout, sky, VK_NULL_HANDLE);
+      drawFullScreen(cmd);
+      endRenderPass(cmd, p);
+    };
+  }
+}
+
+void RendererBase::recordAll(VkCommandBuffer cmd) {
+  vkCmdFillBuffer(cmd, counters_.buffer, 0, VK_WHOLE_SIZE, 0);  // counters are per frame
+  VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1,
+                       &barrier, 0, nullptr, 0, nullptr);
+  if (timestamps_.pool != VK_NULL_HANDLE) gpu::resetTimestamps(cmd, timestamps_);
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics_);
+  for (uint32_t i = 0; i < passes_.size(); ++i) {
+    passes_[i].indicesDrawn = 0;
+    if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps_, i);
+    passes_[i].record(cmd);
+    if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassEnd(cmd, timestamps_, i);
+  }
+}
+
+FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
+  FrameResult frame;
+  if (!ready_) return frame;
+  // Camera: near/far from the scene bounds, so the far plane lies beyond
+  // every triangle (the CPU sky estimate assumes unbounded rays).
+  const auto& bounds = scene_->bounds();
+  float diagonal = std::max(bounds.diagonal(), 1e-3f);
+  float zNear = std::clamp(diagonal * 1e-3f, 0.01f, 0.1f);
+  float zFar = (glm::length(camera.eye - bounds.center()) + diagonal * 0.5f) * 1.01f + 1.0f;
+  shaders::Camera c = {};
+  c.view = scenes::viewMatrix(camera);
+  c.proj =
+      perspective(glm::radians(camera.fovDeg), float(extent_.width) / float(extent_.height), zNear, zFar);
+  c.viewProj = c.proj * c.view;
+  c.invViewProj = glm::inverse(c.viewProj);
+  c.position = glm::vec4(camera.eye, 1.0f);
+  c.viewport = glm::vec4(extent_.width, extent_.height, 1.0f / extent_.width, 1.0f / extent_.height);
+  c.depthRange = glm::vec4(zNear, zFar, 0, 0);
+  gpu::uploadBuffer(*ctx_, cameraBuffer_, {reinterpret_cast<const uint8_t*>(&c), sizeof c});
+
+  gpu::submitAndWait(*ctx_, [&](VkCommandBuffer cmd) { recordAll(cmd); });
+
+  std::vector<double> times;
+  if (timestamps_.pool != VK_NULL_HANDLE) times = gpu::readPassTimesMs(*ctx_, timestamps_);
+  std::vector<gpu::PipelineStatistics> stats;
+  if (statistics_.pool != VK_NULL_HANDLE) stats = gpu::readStatistics(*ctx_, statistics_);
+  std::vector<uint64_t> counters;
+  if (options_.instrumented && slotCount_ > 0) {
+    auto bytes = gpu::readBuffer(*ctx_, counters_, 0, VkDeviceSize(slotCount_) * sizeof(uint64_t));
+    counters.resize(slotCount_);
+    std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
+  }
+  const uint32_t depthBytes = gpu::formatBytes(kDepthFormat);
+  for (uint32_t i = 0; i < passes_.size(); ++i) {
+    const Pass& p = passes_[i];
+    PassResult r;
+    r.name = p.name;
+    if (i < times.size()) r.gpuMs = times[i];
+    if (i < stats.size()) r.fragmentInvocationsStatistic = int64_t(stats[i].fragmentShaderInvocations);
+    if (options_.instrumented) {
+      PassCounts counts = attributeCounters(p.sites, counters, p.bindings, resources_);
+      r.fragmentInvocations = counts.fragmentInvocations;
+      r.accesses = std::move(counts.accesses);
+      if (p.indexFetches && p.indicesDrawn > 0) {
+        addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
+      }
+      if (!p.depthWrite.empty()) {
+        addAccess(r.accesses, p.depthWrite, true, r.fragmentInvocations, depthBytes, "derived");
+      }
+    }
+    frame.passes.push_back(std::move(r));
+  }
+  return finishFrame(std::move(frame));
+}
+
+std::vector<uint8_t> RendererBase::finalImage() {
+  if (!ready_) return {};
+  return gpu::readImage(*ctx_, *final_, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+}
+
+void RendererBase::destroy() {
+  if (ctx_ == nullptr) return;
+  const gpu::Context& ctx = *ctx_;
+  vkDeviceWaitIdle(ctx.device);
+  destroyPasses();
+  for (auto p : pipelines_) vkDestroyPipeline(ctx.device, p, nullptr);
+  for (auto l : pipelineLayouts_) vkDestroyPipelineLayout(ctx.device, l, nullptr);
+  for (auto& m : modules_) gpu::destroyShaderModule(ctx, m);
+  for (auto f : framebuffers_) vkDestroyFramebuffer(ctx.device, f, nullptr);
+  for (auto r : renderPasses_) vkDestroyRenderPass(ctx.device, r, nullptr);
+  if (pool_ != VK_NULL_HANDLE) vkDestroyDescriptorPool(ctx.device, pool_, nullptr);
+  for (auto l : ownedSetLayouts_) vkDestroyDescriptorSetLayout(ctx.device, l, nullptr);
+  if (targetSampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, targetSampler_, nullptr);
+  if (depthOnlyView_ != VK_NULL_HANDLE) vkDestroyImageView(ctx.device, depthOnlyView_, nullptr);
+  for (auto& t : targets_) gpu::destroyImage(ctx, t);
+  for (auto* b : {&counters_, &cameraBuffer_, &lightingBuffer_}) gpu::destroyBuffer(ctx, *b);
+  gpu::destroyTimestampQueries(ctx, timestamps_);
+  gpu::destroyStatisticsQueries(ctx, statistics_);
+  pipelines_.clear();
+  pipelineLayouts_.clear();
+  modules_.clear();
+  framebuffers_.clear();
+  renderPasses_.clear();
+  ownedSetLayouts_.clear();
+  targets_.clear();
+  passes_.clear();
+  resources_.clear();
+  materialSets_.clear();
+  pool_ = VK_NULL_HANDLE;
+  targetSampler_ = VK_NULL_HANDLE;
+  depthOnlyView_ = VK_NULL_HANDLE;
+  hdr_ = final_ = depth_ = nullptr;
+  slotCount_ = 0;
+  ready_ = false;
+  ctx_ = nullptr;
+}
+
+}  // namespace tally::renderers

@@ -1,0 +1,15 @@
+// The renderers' factories (one file each) and what they share.
+#pragma once
+
+#include <memory>
+
+#include "renderers/renderer_base.hpp"
+
+namespace tally::renderers {
+
+std::unique_ptr<Renderer> makeForward(bool prepass);
+std::unique_ptr<Renderer> makeDeferred();
+std::unique_ptr<Renderer> makeVisbuffer();
+std::unique_ptr<Renderer> makeLeanVisbuffer();
+
+}  // namespace tally::renderers

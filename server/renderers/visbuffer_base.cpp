@@ -1,0 +1,136 @@
+#include "renderers/visbuffer_base.hpp"
+
+#include "shared.h"
+
+namespace tally::renderers {
+
+bool VisbufferBase::indexedMaps() const {
+  return ctx_ != nullptr && ctx_->descriptorIndexing && scene_ != nullptr &&
+         !scene_->indexedMapViews().empty();
+}
+
+void VisbufferBase::addMapResources() {
+  for (auto& r : indexedMaps() ? scene_->materialMapResources() : scene_->mapArrayResources()) {
+    resources_.push_back(r);
+  }
+}
+
+nlohmann::json VisbufferBase::notes() const {
+  return {{"material_maps", indexedMaps() ? "descriptor_indexing" : "texture_arrays"}};
+}
+
+Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const std::string& fragment,
+                                              const std::vector<Target>& targets) {
+  const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  uint32_t p = addPass("visibility");
+  std::vector<AttachmentSpec> colors;
+  std::vector<VkImageView> views;
+  for (uint32_t i = 0; i < targets.size(); ++i) {
+    colors.push_back({targets[i].image->format});
+    views.push_back(targets[i].image->view);
+    pass(p).bindings.outputs[i] = targets[i].name;  // kOutVisibility = 0, kOutUvDerivatives = 1
+  }
+  views.push_back(depth_->view);
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(
+      *ctx_, colors,
+      AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
+  VkFramebuffer fb = framebuffer(rp, views);
+  auto vs = shader(p, vertex);
+  if (!vs) return makeError(vs.error());
+  auto fs = shader(p, fragment);
+  if (!fs) return makeError(fs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  desc.fragment = *fs;
+  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
+  desc.renderPass = rp;
+  desc.colorAttachmentCount = uint32_t(colors.size());
+  meshVertexInput(desc);
+  geometryState(desc, true);
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  pass(p).depthWrite = "depth";
+  pass(p).indexFetches = true;
+  const size_t colorCount = colors.size();
+  pass(p).record = [=, this](VkCommandBuffer cmd) {
+    std::vector<VkClearValue> clears(colorCount + 1);
+    for (size_t i = 0; i < colorCount; ++i) {
+      for (auto& v : clears[i].color.uint32) v = shaders::kVisibilityClear;
+    }
+    clears[colorCount] = depthClear();
+    beginRenderPass(cmd, p, rp, fb, clears);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    drawScene(cmd, p, layout, false);
+    endRenderPass(cmd, p);
+  };
+  return true;
+}
+
+Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const std::vector<Target>& inputs) {
+  const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  uint32_t p = addPass("shading");
+  std::vector<VkDescriptorType> types(inputs.size(), VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER);
+  VkDescriptorSetLayout inputLayout = setLayout(types);
+  VkDescriptorSet input = allocateSet(inputLayout);
+  auto& b = pass(p).bindings;
+  for (uint32_t i = 0; i < inputs.size(); ++i) {
+    writeImage(input, i, inputs[i].image->view, targetSampler_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    b.bind(shaders::kSetPassInput, i, inputs[i].name);
+  }
+  const bool indexed = indexedMaps();
+  VkDescriptorSetLayout mapsLayout = mapArrayLayout_;
+  VkDescriptorSet maps = mapArraySet_;
+  VkDescriptorSet geometry = VK_NULL_HANDLE;
+  if (indexed) {
+    // materialMaps[kMaxMaterialMaps] at binding 0; element e counts under the
+    // resource of the texture bound there.
+    mapsLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}, {shaders::kMaxMaterialMaps});
+    maps = allocateSet(mapsLayout);
+    const auto& views = scene_->indexedMapViews();
+    std::vector<gpu::DescriptorWrite> writes(views.size());
+    for (uint32_t e = 0; e < views.size(); ++e) {
+      writes[e].binding = shaders::kBindingMaterialMaps;
+      writes[e].arrayElement = e;
+      writes[e].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      writes[e].image = {scene_->sampler(), views[e], VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    }
+    gpu::updateDescriptorSet(*ctx_, maps, writes);
+    b.bindings[{shaders::kSetMaterial, shaders::kBindingMaterialMaps}] = scene_->indexedMapNames();
+    geometry = geometrySetWith(scene_->indexedMaterialBuffer());
+  } else {
+    for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+      b.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
+    }
+  }
+  b.outputs[shaders::kOutColor] = "hdr";
+  VkRenderPass rp = ownRenderPass(
+      createPassRenderPass(*ctx_, {{kHdrFormat}},
+                           AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
+  VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
+  auto vs = shader(p, "fullscreen.vert.glsl");
+  if (!vs) return makeError(vs.error());
+  auto fs = indexed ? shader(p, fragment) : shader(p, fragment, {"TALLY_MAP_ARRAYS"});
+  if (!fs) return makeError(fs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  desc.fragment = *fs;
+  desc.layout = pipelineLayout(mapsLayout, inputLayout);
+  desc.renderPass = rp;
+  desc.stencilTest = true;
+  desc.stencilCompare = VK_COMPARE_OP_EQUAL;
+  desc.stencilReference = kStencilGeometry;
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  pass(p).record = [=, this](VkCommandBuffer cmd) {
+    beginRenderPass(cmd, p, rp, fb, {VkClearValue{}, depthClear()});
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, maps, input, geometry);
+    drawFullScreen(cmd);
+    endRenderPass(cmd, p);
+  };
+  return true;
+}
+
+}  // namespace tally::renderers

@@ -1,0 +1,40 @@
+// The two passes both visibility-buffer renderers share: the visibility
+// pass (ids and whatever else the variant stores, D32_S8 depth, stencil 1 on
+// geometry) and the full-screen shading pass (stencil == 1) that reads the
+// visibility targets, the mesh and all five maps of the pixel's material.
+//
+// Material maps, chosen per device: with descriptor indexing (NVIDIA), the
+// shaders' materialMaps[kMaxMaterialMaps] with nonuniformEXT, element per
+// texture (counts attributed per element to its texture's kind); without it
+// (lavapipe), one sampler2DArray per map kind (shaders compiled with
+// TALLY_MAP_ARRAYS), the layer per pixel from Material::maps, maps of one
+// kind resized to the largest of that kind. Both select per pixel.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "renderers/renderer_base.hpp"
+
+namespace tally::renderers {
+
+class VisbufferBase : public RendererBase {
+ public:
+  nlohmann::json notes() const override;
+
+ protected:
+  bool indexedMaps() const;  // the descriptor-indexing path (needs setup's context and scene)
+  void addMapResources();    // the material map resources of the chosen path
+  struct Target {
+    const gpu::Image* image = nullptr;
+    std::string name;  // ResourceInfo name
+  };
+  std::vector<std::string> ownPassNames() const override { return {"visibility", "shading"}; }
+  // Visibility targets are cleared to shaders::kVisibilityClear.
+  Result<bool> addVisibilityPass(const std::string& vertex, const std::string& fragment,
+                                 const std::vector<Target>& targets);
+  // `inputs` at set 3, bindings 0, 1, ... in order.
+  Result<bool> addShadingPass(const std::string& fragment, const std::vector<Target>& inputs);
+};
+
+}  // namespace tally::renderers

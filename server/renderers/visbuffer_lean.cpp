@@ -1,0 +1,31 @@
+// Lean visibility buffer (Burns & Hunt 2013): pass 1 writes one 32-bit id
+// (R32_UINT) and D32_S8 depth; the shading pass recomputes barycentrics and
+// uv derivatives analytically from the triangle's re-projected vertices.
+#include "renderers/renderers.hpp"
+#include "renderers/visbuffer_base.hpp"
+
+namespace tally::renderers {
+namespace {
+
+constexpr VkFormat kIdFormat = VK_FORMAT_R32_UINT;
+
+class LeanVisbufferRenderer final : public VisbufferBase {
+ public:
+  std::string_view name() const override { return "visbuffer-lean"; }
+
+ protected:
+  Result<bool> setupPasses() override {
+    addMapResources();
+    const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+    Target id{createTarget("visibility.id", kIdFormat, usage, ResourceKind::Attachment), "visibility.id"};
+    auto ok = addVisibilityPass("zprepass.vert.glsl", "visibility_lean.frag.glsl", {id});
+    if (!ok) return ok;
+    return addShadingPass("shading_lean.frag.glsl", {id});
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Renderer> makeLeanVisbuffer() { return std::make_unique<LeanVisbufferRenderer>(); }
+
+}  // namespace tally::renderers

@@ -1,0 +1,89 @@
+// Capture specs: defaults, and a clear error naming the field for bad input.
+#include <gtest/gtest.h>
+
+#include "capture/spec.hpp"
+
+namespace tally::capture {
+namespace {
+
+const std::vector<std::string> kRenderers = {"forward", "deferred", "visbuffer"};
+
+Result<CaptureSpec> parse(const std::string& text) {
+  return parseCaptureSpec(nlohmann::json::parse(text), kRenderers);
+}
+
+TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
+  auto spec = parse(R"({"renderers":["deferred","visbuffer"],"resolutions":[[320,180]]})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  EXPECT_EQ(spec->frames, 20u);
+  EXPECT_EQ(spec->lights, 400u);
+  EXPECT_TRUE(spec->autoCameras);
+  EXPECT_EQ(spec->counting.kind, spirv::CountMode::Exact);
+  ASSERT_EQ(spec->scenes.size(), 1u);
+  EXPECT_EQ(spec->scenes[0], "atrium");
+  EXPECT_EQ(spec->sampleCount(10), 20u);
+}
+
+TEST(CaptureSpec, FullSpec) {
+  auto spec = parse(R"({"renderers":["forward"],"scenes":["atrium",{"name":"planes","layers":4,"order":"front-to-back"},
+    {"gltf":"scenes/sponza/Sponza.gltf"}],"resolutions":[[1280,720],[1920,1080]],
+    "cameras":[{"eye":[0,1,2],"target":[0,1,0],"fov_deg":50}],"frames":5,"counting":"sampled:16","lights":32})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  EXPECT_EQ(spec->scenes.size(), 3u);
+  EXPECT_EQ(spec->resolutions[1].width, 1920u);
+  EXPECT_FALSE(spec->autoCameras);
+  ASSERT_EQ(spec->cameras.size(), 1u);
+  EXPECT_FLOAT_EQ(spec->cameras[0].fovDeg, 50.0f);
+  EXPECT_EQ(spec->counting.sampleRate, 16u);
+  EXPECT_EQ(spec->lights, 32u);
+}
+
+struct BadCase {
+  const char* spec;
+  const char* expected;  // the error must start with this (the field)
+};
+
+class BadSpec : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadSpec, NamesTheField) {
+  auto spec = parse(GetParam().spec);
+  ASSERT_FALSE(spec.ok()) << GetParam().spec;
+  EXPECT_EQ(spec.error().rfind(GetParam().expected, 0), 0u) << spec.error();
+  EXPECT_EQ(spec.error().find('\n'), std::string::npos);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, BadSpec,
+    ::testing::Values(
+        BadCase{R"([1,2])", "spec: must be a JSON object"},
+        BadCase{R"({"resolutions":[[8,8]]})", "renderers: required"},
+        BadCase{R"({"renderers":[],"resolutions":[[8,8]]})", "renderers: must be a non-empty array"},
+        BadCase{R"({"renderers":["fwd"],"resolutions":[[8,8]]})", "renderers[0]: unknown renderer 'fwd'"},
+        BadCase{R"({"renderers":["forward","forward"],"resolutions":[[8,8]]})", "renderers[1]: renderer 'forward' listed twice"},
+        BadCase{R"({"renderers":[3],"resolutions":[[8,8]]})", "renderers[0]: must be a renderer name"},
+        BadCase{R"({"renderers":["forward"]})", "resolutions: required"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[0,8]]})", "resolutions[0][0]: must be an integer between 1 and 16384"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8],[640,"x"]]})", "resolutions[1][1]: must be an integer"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[640]]})", "resolutions[0]: must be [width, height]"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[16384,16384]]})", "resolutions[0]: 16384x16384 is more than"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":["mars"]})", "scenes[0]: "},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"name":"planes","layers":0}]})", "scenes[0]: layers: "},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"gltf":""}]})", "scenes[0].gltf: must be a file path"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":"random"})", "cameras: must be \"auto\""},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":[{"eye":[1,2],"target":[0,0,0]}]})", "cameras[0].eye"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":0})", "frames: must be an integer between 1 and 1000"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"fast"})", "counting: unknown mode 'fast'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"sampled:1"})", "counting: mode 'sampled:1'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"}));
+
+TEST(CaptureSpec, MatrixLimit) {
+  std::string resolutions;
+  for (int i = 1; i <= 600; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[)" + resolutions + "]}");
+  ASSERT_FALSE(spec.ok());
+  EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
+}
+
+}  // namespace
+}  // namespace tally::capture

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The founding study's protocol on the GPU test machine: Sponza at 1280x720
+# and 1920x1080, every renderer, auto cameras, 20 frames. Build first with
+# tests/gpu/build.sh; bring the Vulkan loader's .debs in .gl/ (see run.sh) and
+# a copy of the Sponza folder in .scenes/sponza (git-ignored; ../shared does
+# not travel with the tree).
+#
+#   tests/gpu/protocol.sh [SPEC]     SPEC defaults to tests/gpu/sponza-protocol.json
+#   OUT=dir  where results go (default ./gpu-out): protocol.json, protocol-screenshots/,
+#            protocol-summary.txt, protocol.log (with the wall time of the whole protocol)
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+
+spec_in="${1:-tests/gpu/sponza-protocol.json}"
+out="${OUT:-./gpu-out}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+tallyd="build-gpu/server/tallyd"
+[ -x "$tallyd" ] || { echo "protocol.sh: no $tallyd (run tests/gpu/build.sh)" >&2; exit 2; }
+
+# The Vulkan loader and the NVIDIA ICD, as in run.sh.
+shopt -s nullglob
+for f in .gl/*.deb; do dpkg -x "$f" /; done
+ldconfig
+nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [ -f "$nvidia_icd" ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
+  export VK_DRIVER_FILES="$nvidia_icd"
+fi
+export TALLY_SHADER_DIR="$PWD/shaders"
+
+sponza="$PWD/.scenes/sponza/Sponza.gltf"
+[ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
+sed "s|SPONZA|$sponza|" "$spec_in" > "$out/protocol-spec.json"
+
+start=$(date +%s%N)
+"$tallyd" capture --spec "$out/protocol-spec.json" --out "$out/protocol.json" --summary \
+  > "$out/protocol-summary.txt" 2> "$out/protocol.log"
+status=$?
+end=$(date +%s%N)
+echo "protocol wall time: $(( (end - start) / 1000000 )) ms, exit $status" | tee -a "$out/protocol.log"
+tail -5 "$out/protocol.log"
+head -80 "$out/protocol-summary.txt"
+exit "$status"
