@@ -5,7 +5,8 @@
 # libraries already), so that it needs only libc and the Vulkan loader there.
 # The shaders are copied next to it; run.sh points TALLY_SHADER_DIR at them.
 #
-#   tests/gpu/build.sh            -> build-gpu/tests/integration/{tally_exactness_tests,shaders/}
+#   tests/gpu/build.sh            -> build-gpu/tests/integration/{tally_exactness_tests,shaders/},
+#                                    build-gpu/tests/renderers/tally_renderer_tests, build-gpu/server/tallyd
 #   BUILD_DIR=out tests/gpu/build.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -14,10 +15,10 @@ build="${BUILD_DIR:-build-gpu}"
 cmake -S . -B "$build" -G Ninja \
   -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_EXE_LINKER_FLAGS="-static-libstdc++ -static-libgcc" >/dev/null
-cmake --build "$build" --target tally_exactness_tests -j"$(nproc)"
+cmake --build "$build" --target tally_exactness_tests tally_renderer_tests tallyd -j"$(nproc)"
 
 dir="$build/tests/integration"
-strip "$dir/tally_exactness_tests"
+strip "$dir/tally_exactness_tests" "$build/tests/renderers/tally_renderer_tests" "$build/server/tallyd"
 rm -rf "$dir/shaders"
 cp -r tests/integration/shaders "$dir/shaders"
 echo "built $dir/tally_exactness_tests ($(du -h "$dir/tally_exactness_tests" | cut -f1)); needs: $(
