@@ -27,6 +27,8 @@ if [ -f "$nvidia_icd" ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; t
   export VK_DRIVER_FILES="$nvidia_icd"
 fi
 export TALLY_SHADER_DIR="$PWD/shaders"
+# tinygltf and stb are shared libraries in Debian: build.sh copies them here.
+export LD_LIBRARY_PATH="$PWD/build-gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 
 sponza="$PWD/.scenes/sponza/Sponza.gltf"
 [ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
