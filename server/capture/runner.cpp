@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <optional>
 
@@ -141,11 +143,35 @@ json resourcesJson(const std::vector<renderers::ResourceInfo>& resources) {
                    {"width", r.width},
                    {"height", r.height},
                    {"allocation_bytes", r.allocationBytes},
+                   // What the format alone implies (width x height x element bytes).
+                   {"format_bytes", uint64_t{r.width} * r.height * r.elementBytes},
                    {"usage", r.usage}});
     bool target = r.kind == renderers::ResourceKind::Attachment || r.kind == renderers::ResourceKind::Depth;
     if (target) targets += r.allocationBytes;
   }
   return {{"list", std::move(out)}, {"render_target_bytes", targets}};
+}
+
+// FNV-1a 64 of every shader source the renderers compile, so that a result
+// names exactly which shaders produced it.
+json shaderHashes() {
+  json out = json::object();
+  std::error_code ec;
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(renderers::shaderDirectory(), ec)) {
+    if (entry.is_regular_file()) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  for (const auto& file : files) {
+    std::ifstream in(file, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    uint64_t h = 1469598103934665603ull;
+    for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    out[file.filename().string()] = hex;
+  }
+  return out;
 }
 
 }  // namespace
@@ -161,7 +187,10 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
     ~ContextGuard() { gpu::destroyContext(ctx); }
   } guard{ctx};
 
-  json result = {{"device", gpu::describe(ctx)}, {"spec", spec.source}, {"runs", json::array()}};
+  json result = {{"device", gpu::describe(ctx)},
+                 {"spec", spec.source},
+                 {"shaders", shaderHashes()},
+                 {"runs", json::array()}};
   if (!options.screenshotDir.empty()) std::filesystem::create_directories(options.screenshotDir);
 
   // Load every scene first: a bad file fails the capture before any GPU time is spent.

@@ -88,6 +88,9 @@ class Renderer {
   virtual void destroy() = 0;
 };
 
+// Where the renderers' GLSL is read from: $TALLY_SHADER_DIR, else the source tree's shaders/.
+std::string shaderDirectory();
+
 // "forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean".
 std::vector<std::string> rendererNames();
 Result<std::unique_ptr<Renderer>> makeRenderer(std::string_view name);

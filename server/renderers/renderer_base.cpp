@@ -12,13 +12,14 @@
 #include "shared.h"
 
 namespace tally::renderers {
-namespace {
 
-std::string shaderDir() {
+std::string shaderDirectory() {
   // The binary may run where the source tree is elsewhere (tests/gpu/).
   if (const char* dir = std::getenv("TALLY_SHADER_DIR"); dir != nullptr && *dir) return dir;
   return TALLY_RENDERER_SHADER_DIR;
 }
+
+namespace {
 
 std::string formatName(VkFormat format) {
   switch (format) {
@@ -194,7 +195,7 @@ VkFramebuffer RendererBase::framebuffer(VkRenderPass renderPass, const std::vect
 
 Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
                                             const std::vector<std::string>& defines) {
-  auto source = gpu::loadShaderSource(*ctx_, shaderDir(), file);
+  auto source = gpu::loadShaderSource(*ctx_, shaderDirectory(), file);
   if (!source) return makeError(source.error());
   if (!defines.empty()) {
     size_t eol = source->source.find('\n');

@@ -56,6 +56,8 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
   json result = json::parse(slurp(out));
   ASSERT_TRUE(result.contains("device"));
   EXPECT_TRUE(result["device"].contains("name"));
+  ASSERT_TRUE(result.contains("shaders"));
+  EXPECT_EQ(result["shaders"]["forward.frag.glsl"].get<std::string>().size(), 16u);
   ASSERT_EQ(result["runs"].size(), renderers::rendererNames().size());
   for (const auto& run : result["runs"]) {
     SCOPED_TRACE(run["renderer"].get<std::string>());
@@ -63,7 +65,13 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
     EXPECT_EQ(run["width"], 64);
     EXPECT_EQ(run["height"], 36);
     std::map<std::string, json> resources;
-    for (const auto& r : run["resources"]["list"]) resources[r["name"]] = r;
+    for (const auto& r : run["resources"]["list"]) {
+      resources[r["name"]] = r;
+      if (r["kind"] == "attachment") {
+        EXPECT_EQ(r["format_bytes"].get<uint64_t>(), 64u * 36u * r["element_bytes"].get<uint64_t>());
+        EXPECT_GE(r["allocation_bytes"].get<uint64_t>(), r["format_bytes"].get<uint64_t>());
+      }
+    }
     EXPECT_GT(run["resources"]["render_target_bytes"].get<uint64_t>(), 0u);
     ASSERT_EQ(run["samples"].size(), 1u);
     const auto& sample = run["samples"][0];

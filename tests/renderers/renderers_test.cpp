@@ -234,6 +234,8 @@ TEST(Renderers, SponzaAgreesWithForward) {
   if (FILE* f = std::fopen(path.c_str(), "rb")) {
     std::fclose(f);
   } else {
+    // CI always has ../shared beside the clone: there a missing file is a failure.
+    if (std::getenv("CI") != nullptr) FAIL() << "no Sponza at " << path;
     GTEST_SKIP() << "no Sponza at " << path;
   }
   const VkExtent2D extent = {160, 90};
