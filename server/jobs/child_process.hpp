@@ -1,0 +1,41 @@
+// Runs a capture (or any command) as a child process with a deadline, so that
+// a crash, a hang, a lost device or an out-of-memory kill ends only the child.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/result.hpp"
+
+namespace tally::jobs {
+
+struct ChildOptions {
+  std::vector<std::string> argv;          // argv[0] is the program path
+  std::chrono::milliseconds deadline{0};  // 0: none; then SIGTERM, and SIGKILL after `grace`
+  std::chrono::milliseconds grace{2000};
+  std::string stdoutPath;                 // where the child's stdout goes ("" = /dev/null)
+  // Called with each line the child writes to stderr (progress, errors).
+  std::function<void(const std::string&)> onStderrLine;
+  size_t stderrTailBytes = 4096;          // kept for the failure reason
+};
+
+struct ChildResult {
+  enum class End { Exited, Signaled, TimedOut };
+  End end = End::Exited;
+  int exitCode = -1;   // when Exited
+  int signal = 0;      // when Signaled (or the signal that ended a timed-out child)
+  std::string stderrTail;
+  std::chrono::milliseconds elapsed{0};
+
+  bool ok() const { return end == End::Exited && exitCode == 0; }
+  // "exited with status 3: <last stderr line>", "killed by signal 11 (SIGSEGV)",
+  // "killed by signal 9 (SIGKILL: out of memory?)", "timed out after 30 s".
+  std::string reason() const;
+};
+
+// Fails only if the child cannot be started (the program is missing, fork fails).
+Result<ChildResult> runChild(const ChildOptions& options);
+
+}  // namespace tally::jobs
