@@ -106,15 +106,16 @@ std::string summarize(const nlohmann::json& result, const std::string& baseline)
     if (!totals.count(base)) base = groups[key].front()->at("renderer").get<std::string>();
     const Totals& b = totals[base];
     out += "\n  totals per frame (ratios against " + base + "; image = textures, attachments, depth)\n";
-    out += format("  %-18s %12s %12s %12s %12s %8s %9s %10s %9s\n", "renderer", "image read", "buffer read", "read",
-                  "written", "read x", "written x", "frame ms", "overhead");
+    out += format("  %-18s %12s %8s %12s %8s %12s %9s %10s %9s\n", "renderer", "image read", "x", "buffer read", "x",
+                  "written", "written x", "frame ms", "overhead");
     for (const auto* run : groups[key]) {
       std::string renderer = run->at("renderer");
       const Totals& t = totals[renderer];
-      out += format("  %-18s %12s %12s %12s %12s %8.2f %9.2f %10.3f %8.2fx\n", renderer.c_str(),
-                    human(t.imageRead).c_str(), human(t.bufferRead).c_str(), human(t.read).c_str(),
-                    human(t.written).c_str(), b.read > 0 ? t.read / b.read : 0.0,
-                    b.written > 0 ? t.written / b.written : 0.0, t.ms, t.overhead);
+      auto ratio = [](double value, double reference) { return reference > 0 ? value / reference : 0.0; };
+      out += format("  %-18s %12s %8.2f %12s %8.2f %12s %9.2f %10.3f %8.2fx\n", renderer.c_str(),
+                    human(t.imageRead).c_str(), ratio(t.imageRead, b.imageRead), human(t.bufferRead).c_str(),
+                    ratio(t.bufferRead, b.bufferRead), human(t.written).c_str(), ratio(t.written, b.written), t.ms,
+                    t.overhead);
     }
   }
   return out;
