@@ -1,0 +1,22 @@
+#include "api/builtin_routes.hpp"
+
+#include "protocol.hpp"
+
+namespace tally::api {
+
+void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames) {
+  router.get("/api/health", [](const Request&) {
+    return Response::ok(
+        {{"status", "ok"}, {"version", protocol::kVersion}, {"api_version", protocol::kApiVersion}});
+  });
+  // Parsed once, so a broken document fails at startup rather than per request.
+  auto doc = std::make_shared<const nlohmann::json>(nlohmann::json::parse(openApiDocument()));
+  router.get("/api/openapi.json", [doc](const Request&) { return Response::ok(*doc); });
+  if (!rendererNames.empty()) {
+    router.get("/api/renderers", [names = std::move(rendererNames)](const Request&) {
+      return Response::ok({{"renderers", names}});
+    });
+  }
+}
+
+}  // namespace tally::api

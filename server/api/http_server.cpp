@@ -1,0 +1,354 @@
+#include "api/http_server.hpp"
+
+#include <httplib.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <iostream>
+#include <optional>
+#include <thread>
+#include <variant>
+
+#include "api/auth.hpp"
+#include "api/request_checks.hpp"
+#include "api/static_files.hpp"
+
+namespace tally::api {
+namespace {
+
+using HandlerResponse = httplib::Server::HandlerResponse;
+
+constexpr int kListenBacklog = 128;
+
+bool isBodyMethod(const std::string& m) { return m == "POST" || m == "PUT" || m == "PATCH"; }
+bool isApiPath(std::string_view p) { return p == "/api" || p.rfind("/api/", 0) == 0; }
+
+// Sent with every response, errors included.
+void addSecurityHeaders(httplib::Response& res) {
+  res.set_header("X-Content-Type-Options", "nosniff");
+  res.set_header("X-Frame-Options", "DENY");
+  res.set_header("Referrer-Policy", "no-referrer");
+}
+
+std::string dumpJson(const nlohmann::json& j) {
+  // Invalid UTF-8 from stored data must not throw here.
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+void write(httplib::Response& res, const Response& r, bool api) {
+  res.status = r.status;
+  for (const auto& [k, v] : r.headers) res.set_header(k, v);
+  if (api) res.set_header("Cache-Control", "no-store");
+  if (r.status == 204 || r.status == 304) return;
+  if (r.isRaw()) {
+    res.set_content(r.bytes, r.contentType.c_str());
+  } else {
+    res.set_content(dumpJson(r.json), "application/json");
+  }
+}
+
+// The verdict on a request before its body is read: refused, or let through
+// with what the handler needs.
+struct Admitted {
+  bool api = false;
+  Principal principal = Principal::kCapture;
+};
+using Verdict = std::variant<Response, Admitted>;
+
+Response refuse(int status, const char* code, std::string message, std::string_view field = {}) {
+  return errorResponse(status, code, message, field);
+}
+
+}  // namespace
+
+struct HttpServer::Impl {
+  ServerOptions options;
+  Router router;
+  Auth auth;
+  std::optional<StaticFiles> web;
+  httplib::Server server;
+  int port = 0;
+  socket_t listenSocket = -1;
+  std::atomic<bool> ran{false};
+  std::thread thread;
+
+  void log(std::string_view line) const {
+    if (options.log) {
+      options.log(line);
+    } else {
+      std::cerr << "tallyd: " << line << '\n';
+    }
+  }
+
+  Verdict admit(const httplib::Request& req) const;
+  void handle(const httplib::Request& req, httplib::Response& res) const;
+  void install();
+};
+
+Verdict HttpServer::Impl::admit(const httplib::Request& req) const {
+  // 1. Framing. The library would read chunked and compressed bodies past the
+  //    payload limit, and a body without Content-Length until the peer closes.
+  if (req.has_header("Transfer-Encoding"))
+    return refuse(411, code::kLengthRequired,
+                  "Transfer-Encoding is not accepted; send the body with Content-Length",
+                  "Transfer-Encoding");
+  if (req.has_header("Content-Encoding"))
+    return refuse(415, code::kUnsupportedEncoding,
+                  "Content-Encoding is not accepted; send the body uncompressed", "Content-Encoding");
+  // The library adds REMOTE_ADDR/PORT and LOCAL_ADDR/PORT headers after the
+  // client's, and header lookups return the client's first. Refuse any that
+  // the client sent; only req.remote_addr (from the socket) is used.
+  for (const char* reserved : {"REMOTE_ADDR", "REMOTE_PORT", "LOCAL_ADDR", "LOCAL_PORT"}) {
+    if (req.get_header_value_count(reserved) > 1)
+      return refuse(400, code::kBadHeader, std::string(reserved) + " is a reserved header", reserved);
+  }
+  if (req.get_header_value_count("REMOTE_ADDR") == 1 &&
+      req.get_header_value("REMOTE_ADDR") != req.remote_addr)
+    return refuse(400, code::kBadHeader, "REMOTE_ADDR is a reserved header", "REMOTE_ADDR");
+
+  const size_t lengths = req.get_header_value_count("Content-Length");
+  uint64_t length = 0;
+  if (lengths > 1) return refuse(400, code::kBadHeader, "more than one Content-Length", "Content-Length");
+  if (lengths == 1) {
+    auto parsed = parseContentLength(req.get_header_value("Content-Length"));
+    if (!parsed)
+      return refuse(400, code::kBadHeader, "Content-Length is not a decimal number", "Content-Length");
+    length = *parsed;
+  }
+  if (isBodyMethod(req.method) && lengths == 0)
+    return refuse(411, code::kLengthRequired, req.method + " needs a Content-Length", "Content-Length");
+  if (length > options.maxBodyBytes)
+    return refuse(413, code::kPayloadTooLarge,
+                  "body of " + std::to_string(length) + " bytes exceeds the limit of " +
+                      std::to_string(options.maxBodyBytes),
+                  "Content-Length");
+  if (!isBodyMethod(req.method) && length > 0)
+    return refuse(400, code::kUnexpectedBody, req.method + " takes no body", "Content-Length");
+
+  // 2. The target.
+  if (auto why = checkTarget(req.target, req.path)) return refuse(400, code::kBadPath, *why);
+  for (auto it = req.params.begin(); it != req.params.end(); it = req.params.upper_bound(it->first)) {
+    if (req.params.count(it->first) > 1)
+      return refuse(400, code::kBadQuery, "query parameter '" + it->first + "' given more than once",
+                    it->first);
+  }
+
+  // 3. Who is asking. Without tokens (loopback only) the Host must be a
+  //    loopback name too, so a web page cannot reach us through DNS rebinding.
+  if (!auth.required()) {
+    if (req.has_header("Host") && !isLoopbackHost(req.get_header_value("Host")))
+      return refuse(403, code::kForbiddenHost,
+                    "Host must be a loopback address (localhost, 127.0.0.1, [::1])", "Host");
+  }
+  Admitted admitted;
+  admitted.api = isApiPath(req.path);
+  if (!admitted.api) {
+    if (req.method != "GET" && req.method != "HEAD") {
+      auto r = refuse(405, code::kMethodNotAllowed, req.method + " is not allowed on static files");
+      r.headers.emplace_back("Allow", "GET, HEAD");
+      return r;
+    }
+    return admitted;  // static files are public: they hold no data
+  }
+  if (auth.required()) {
+    const size_t n = req.get_header_value_count("Authorization");
+    if (n > 1) return refuse(400, code::kBadHeader, "more than one Authorization header", "Authorization");
+    std::optional<Principal> who;
+    if (n == 1) who = auth.authenticate(req.get_header_value("Authorization"));
+    if (!who) {
+      auto r = refuse(401, code::kUnauthorized,
+                      n == 0 ? "missing Authorization: Bearer <token>" : "unknown token", "Authorization");
+      r.headers.emplace_back("WWW-Authenticate", "Bearer");
+      return r;
+    }
+    admitted.principal = *who;
+  }
+
+  // 4. The route, before the body is read.
+  auto m = router.match(req.method, req.path);
+  if (m.outcome == Router::Outcome::kNotFound)
+    return refuse(404, code::kNotFound, "no route for " + req.path);
+  if (m.outcome == Router::Outcome::kMethodNotAllowed) {
+    auto r = refuse(405, code::kMethodNotAllowed, req.method + " is not allowed on " + req.path);
+    r.headers.emplace_back("Allow", joinAllowed(m.allowed));
+    return r;
+  }
+  if (!allows(admitted.principal, m.route->need))
+    return refuse(403, code::kForbidden, "this token may read but not capture or delete", "Authorization");
+
+  // 5. Body type and the headers handed to services.
+  if (length > 0 && !isJsonMediaType(req.get_header_value("Content-Type")))
+    return refuse(415, code::kUnsupportedMediaType, "the body must be application/json", "Content-Type");
+  if (req.get_header_value_count("Idempotency-Key") > 1)
+    return refuse(400, code::kBadHeader, "more than one Idempotency-Key", "Idempotency-Key");
+  if (req.has_header("Idempotency-Key") && !isValidIdempotencyKey(req.get_header_value("Idempotency-Key")))
+    return refuse(400, code::kBadHeader, "Idempotency-Key must be 1-200 visible ASCII characters",
+                  "Idempotency-Key");
+  return admitted;
+}
+
+void HttpServer::Impl::handle(const httplib::Request& req, httplib::Response& res) const {
+  // Same verdict as before the body was read (it depends on headers only).
+  Verdict verdict = admit(req);
+  if (auto* refused = std::get_if<Response>(&verdict)) return write(res, *refused, true);
+  const auto& admitted = std::get<Admitted>(verdict);
+
+  if (!admitted.api) {
+    std::optional<StaticFile> file;
+    if (web) file = web->lookup(req.path);
+    if (!file) return write(res, errorResponse(404, code::kNotFound, "no such file: " + req.path), false);
+    res.status = 200;
+    res.set_header("Cache-Control", "no-cache");
+    res.set_content(std::move(file->bytes), file->contentType.c_str());
+    return;
+  }
+
+  Request request;
+  request.method = req.method == "HEAD" ? "GET" : req.method;
+  request.path = req.path;
+  for (const auto& [k, v] : req.params) request.query.emplace(k, v);
+  request.principal = admitted.principal;
+  request.remoteAddr = req.remote_addr;
+  request.idempotencyKey = req.get_header_value("Idempotency-Key");
+  if (!req.body.empty()) {
+    auto body = parseJsonBody(req.body);
+    if (!body) return write(res, errorResponse(400, code::kBadJson, body.error(), "body"), true);
+    request.body = std::move(*body);
+  }
+  write(res, router.dispatch(std::move(request)), true);
+}
+
+void HttpServer::Impl::install() {
+  server.set_default_headers({{"X-Content-Type-Options", "nosniff"},
+                              {"X-Frame-Options", "DENY"},
+                              {"Referrer-Policy", "no-referrer"}});
+  // One request per connection: a request refused before its body was read
+  // leaves that body unread, and it must not be parsed as the next request.
+  server.set_keep_alive_max_count(1);
+  server.set_payload_max_length(options.maxBodyBytes);  // backstop; admit() refuses first
+  server.set_read_timeout(options.readTimeout);
+  server.set_write_timeout(options.writeTimeout);
+  const size_t threads = options.threads == 0 ? 1 : options.threads;
+  server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  // The library's default adds SO_REUSEPORT, which would let a second process
+  // bind our port and take a share of the connections. Keep SO_REUSEADDR only
+  // (restarts while old connections sit in TIME_WAIT).
+  server.set_socket_options([this](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+    listenSocket = sock;
+  });
+
+  server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    Verdict verdict = admit(req);
+    if (auto* refused = std::get_if<Response>(&verdict)) {
+      write(res, *refused, true);
+      return HandlerResponse::Handled;
+    }
+    return HandlerResponse::Unhandled;
+  });
+
+  auto handler = [this](const httplib::Request& req, httplib::Response& res) { handle(req, res); };
+  server.Get(".*", handler);
+  server.Post(".*", handler);
+  server.Put(".*", handler);
+  server.Patch(".*", handler);
+  server.Delete(".*", handler);
+  server.Options(".*", handler);
+
+  // Errors the library raises itself (malformed request line, 414, 416, ...)
+  // get the JSON error body too; our own errors already have one.
+  server.set_error_handler(
+      httplib::Server::HandlerWithResponse([](const httplib::Request&, httplib::Response& res) {
+        if (res.body.empty()) {
+          res.set_content(dumpJson(errorBody(defaultErrorCode(res.status), defaultErrorMessage(res.status))),
+                          "application/json");
+        }
+        return HandlerResponse::Handled;
+      }));
+
+  // Without this the library sends e.what() in an EXCEPTION_WHAT header.
+  server.set_exception_handler(
+      [this](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+        std::string what = "unknown exception";
+        try {
+          if (ep) std::rethrow_exception(ep);
+        } catch (const std::exception& e) {
+          what = e.what();
+        } catch (...) {
+        }
+        log("internal error on " + req.method + " " + req.path + ": " + what);
+        res = httplib::Response();
+        res.version = "HTTP/1.1";
+        addSecurityHeaders(res);
+        res.status = 500;
+        res.set_header("Cache-Control", "no-store");
+        res.set_content(dumpJson(errorBody(code::kInternal, "internal error; see the server log")),
+                        "application/json");
+      });
+}
+
+Result<std::unique_ptr<HttpServer>> HttpServer::create(ServerOptions options, Router router) {
+  // The token rule is checked before anything binds.
+  auto auth = Auth::forBind(options.bindAddress, options.tokenFile);
+  if (!auth) return makeError(auth.error());
+  if (options.port < 0 || options.port > 65535)
+    return makeError("port " + std::to_string(options.port) + " out of range");
+
+  auto impl = std::make_unique<Impl>();
+  if (!options.webRoot.empty()) {
+    auto web = StaticFiles::open(options.webRoot);
+    if (!web) return makeError(web.error());
+    impl->web = std::move(*web);
+  }
+  impl->options = std::move(options);
+  impl->router = std::move(router);
+  impl->auth = std::move(*auth);
+  impl->install();
+
+  const std::string host = impl->options.bindAddress == "localhost" ? "127.0.0.1" : impl->options.bindAddress;
+  if (impl->options.port == 0) {
+    impl->port = impl->server.bind_to_any_port(host);
+    if (impl->port <= 0) return makeError("cannot bind " + host + " on any port");
+  } else {
+    if (!impl->server.bind_to_port(host, impl->options.port))
+      return makeError("cannot bind " + host + ":" + std::to_string(impl->options.port) +
+                       " (in use, or not an address here)");
+    impl->port = impl->options.port;
+  }
+  // The library listens with a backlog of 5; a dashboard opening a dozen
+  // connections at once would see SYNs dropped and retried a second later.
+  if (impl->listenSocket >= 0) ::listen(impl->listenSocket, kListenBacklog);
+  return std::unique_ptr<HttpServer>(new HttpServer(std::move(impl)));
+}
+
+HttpServer::HttpServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+HttpServer::~HttpServer() {
+  stop();
+  if (impl_->thread.joinable()) impl_->thread.join();
+  // The library closes its socket when serving ends, not when it never began.
+  if (!impl_->ran && impl_->listenSocket >= 0) ::close(impl_->listenSocket);
+}
+
+int HttpServer::port() const { return impl_->port; }
+bool HttpServer::tokensRequired() const { return impl_->auth.required(); }
+
+void HttpServer::run() {
+  impl_->ran = true;
+  impl_->server.listen_after_bind();
+}
+
+void HttpServer::start() {
+  if (impl_->thread.joinable()) return;
+  impl_->thread = std::thread([this] { run(); });
+  // stop() only acts on a running server: wait until it is (the socket is
+  // already listening, so clients can connect meanwhile).
+  for (int i = 0; i < 2000 && !impl_->server.is_running(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
+
+void HttpServer::stop() { impl_->server.stop(); }
+
+}  // namespace tally::api
