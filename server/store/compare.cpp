@@ -1,0 +1,179 @@
+// compareRuns and exportRuns: per-frame totals averaged over a run's samples.
+#include <algorithm>
+#include <set>
+
+#include "store/internal.hpp"
+
+namespace tally::store {
+
+using detail::guarded;
+
+namespace {
+
+struct RunTotals {
+  int samples = 0;
+  std::optional<double> frameMs;
+  double totalBytes = 0;
+  // pass name -> (gpu_ms, bytes, fragment invocations), summed over samples
+  struct PassSums {
+    double gpuMs = 0, bytes = 0;
+    std::optional<double> fragments;
+  };
+  std::vector<std::string> passOrder;
+  std::map<std::string, PassSums> passes;
+  std::map<std::pair<std::string, std::string>, std::pair<double, double>>
+      resources;  // (name, access) -> count, bytes
+};
+
+RunTotals totalsOf(sqlite3* db, int64_t runId) {
+  RunTotals t;
+  Statement frame(db, "SELECT COUNT(*), AVG(frame_ms) FROM samples WHERE run_id = ?1");
+  frame.bind(1, runId);
+  frame.step();
+  t.samples = static_cast<int>(frame.getInt(0));
+  t.frameMs = frame.getOptDouble(1);
+  Statement passes(db,
+                   "SELECT p.name, SUM(p.gpu_ms), SUM(p.fragment_invocations), "
+                   "SUM((SELECT TOTAL(c.bytes) FROM counters c WHERE c.pass_id = p.id)) "
+                   "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
+                   "GROUP BY p.name ORDER BY MIN(p.position), p.name");
+  passes.bind(1, runId);
+  while (passes.step()) {
+    std::string name = passes.getText(0);
+    t.passOrder.push_back(name);
+    t.passes[name] = {passes.getDouble(1), passes.getDouble(3), passes.getOptDouble(2)};
+  }
+  Statement resources(db,
+                      "SELECT c.resource, c.access, SUM(c.count), SUM(c.bytes) FROM counters c "
+                      "JOIN passes p ON p.id = c.pass_id JOIN samples s ON s.id = p.sample_id "
+                      "WHERE s.run_id = ?1 GROUP BY c.resource, c.access");
+  resources.bind(1, runId);
+  while (resources.step()) {
+    t.resources[{resources.getText(0), resources.getText(1)}] = {resources.getDouble(2),
+                                                                 resources.getDouble(3)};
+    t.totalBytes += resources.getDouble(3);
+  }
+  return t;
+}
+
+// Values against the first: delta = v - v0, ratio = v / v0 (v0 != 0).
+std::vector<Compared> against(const std::vector<std::optional<double>>& values) {
+  std::vector<Compared> out;
+  for (const auto& v : values) {
+    Compared c;
+    c.value = v;
+    if (v && values[0]) {
+      c.delta = *v - *values[0];
+      if (*values[0] != 0) c.ratio = *v / *values[0];
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::optional<double> average(double sum, int samples) {
+  return samples > 0 ? std::optional<double>(sum / samples) : std::nullopt;
+}
+
+}  // namespace
+
+Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
+  if (runIds.size() < 2 || runIds.size() > 4) {
+    return makeError("runs: compare 2 to 4 runs, got " + std::to_string(runIds.size()));
+  }
+  if (std::set<int64_t>(runIds.begin(), runIds.end()).size() != runIds.size()) {
+    return makeError("runs: each run at most once");
+  }
+  std::lock_guard lock(mutex_);
+  return guarded<Comparison>("compareRuns", [&]() -> Result<Comparison> {
+    Transaction tx(db_, Transaction::Kind::Read);
+    Comparison out;
+    std::vector<RunTotals> totals;
+    for (size_t i = 0; i < runIds.size(); ++i) {
+      Statement query(db_, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+      query.bind(1, runIds[i]);
+      if (!query.step())
+        return makeError("runs[" + std::to_string(i) + "]: run " + std::to_string(runIds[i]) + " not found");
+      out.runs.push_back(detail::readRunRow(query));
+      totals.push_back(totalsOf(db_, runIds[i]));
+    }
+    tx.commit();
+
+    std::vector<std::optional<double>> frame, bytes;
+    for (const auto& t : totals) {
+      frame.push_back(t.frameMs);
+      bytes.push_back(average(t.totalBytes, t.samples));
+    }
+    out.frameMs = against(frame);
+    out.totalBytes = against(bytes);
+
+    std::vector<std::string> passOrder;  // the first run's order, then passes only later runs have
+    for (const auto& t : totals) {
+      for (const auto& name : t.passOrder) {
+        if (std::find(passOrder.begin(), passOrder.end(), name) == passOrder.end()) passOrder.push_back(name);
+      }
+    }
+    for (const auto& name : passOrder) {
+      std::vector<std::optional<double>> gpu, passBytes, fragments;
+      for (const auto& t : totals) {
+        auto it = t.passes.find(name);
+        if (it == t.passes.end()) {
+          gpu.emplace_back();
+          passBytes.emplace_back();
+          fragments.emplace_back();
+          continue;
+        }
+        gpu.push_back(average(it->second.gpuMs, t.samples));
+        passBytes.push_back(average(it->second.bytes, t.samples));
+        fragments.push_back(it->second.fragments ? average(*it->second.fragments, t.samples) : std::nullopt);
+      }
+      out.passes.push_back(PassComparison{name, against(gpu), against(passBytes), against(fragments)});
+    }
+
+    std::set<std::pair<std::string, std::string>> keys;
+    for (const auto& t : totals) {
+      for (const auto& [key, sums] : t.resources) keys.insert(key);
+    }
+    for (const auto& key : keys) {
+      std::vector<std::optional<double>> count, resourceBytes;
+      for (const auto& t : totals) {
+        auto it = t.resources.find(key);
+        count.push_back(it == t.resources.end() ? std::nullopt : average(it->second.first, t.samples));
+        resourceBytes.push_back(it == t.resources.end() ? std::nullopt
+                                                        : average(it->second.second, t.samples));
+      }
+      out.resources.push_back(
+          ResourceComparison{key.first, key.second, against(count), against(resourceBytes)});
+    }
+    return out;
+  });
+}
+
+Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
+  if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
+  std::lock_guard lock(mutex_);
+  return guarded<std::vector<ExportRow>>("exportRuns", [&]() -> Result<std::vector<ExportRow>> {
+    std::string sql =
+        "SELECT r.id, r.renderer, sc.name, r.width, r.height, d.name, p.name, c.resource, c.access, "
+        "SUM(c.count) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id), "
+        "SUM(c.bytes) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id) "
+        "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
+        "JOIN samples s ON s.run_id = r.id JOIN passes p ON p.sample_id = s.id JOIN counters c ON c.pass_id "
+        "= p.id "
+        "WHERE 1" +
+        detail::runFilterSql(filter) +
+        " GROUP BY r.id, p.name, c.resource, c.access ORDER BY r.id, MIN(p.position), c.resource, c.access";
+    Statement query(db_, sql);
+    detail::bindRunFilter(query, filter, 1);
+    std::vector<ExportRow> rows;
+    while (query.step()) {
+      rows.push_back(ExportRow{query.getInt(0), query.getText(1), query.getText(2),
+                               static_cast<int>(query.getInt(3)), static_cast<int>(query.getInt(4)),
+                               query.getText(5), query.getText(6), query.getText(7), query.getText(8),
+                               query.getDouble(9), query.getDouble(10)});
+    }
+    return rows;
+  });
+}
+
+}  // namespace tally::store

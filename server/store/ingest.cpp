@@ -1,0 +1,378 @@
+// ingestCapture: one capture result (docs/result-schema.md) -> rows, in one
+// write transaction. Bad input throws IngestError naming the JSON path; the
+// transaction then rolls back, so nothing of the job is half-written.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "store/internal.hpp"
+
+namespace tally::store {
+
+using nlohmann::json;
+
+namespace {
+
+struct IngestError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+[[noreturn]] void bad(const std::string& path, const std::string& what) {
+  throw IngestError(path + ": " + what);
+}
+
+const json* find(const json& object, const char* key) {
+  auto it = object.find(key);
+  return it == object.end() || it->is_null() ? nullptr : &*it;
+}
+
+double number(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) bad(path + "." + key, "missing");
+  if (!value->is_number()) bad(path + "." + key, "must be a number, got " + value->dump());
+  double x = value->get<double>();
+  if (!std::isfinite(x)) bad(path + "." + key, "must be finite");
+  return x;
+}
+
+std::optional<double> optNumber(const json& object, const char* key, const std::string& path) {
+  if (!find(object, key)) return std::nullopt;
+  return number(object, key, path);
+}
+
+int64_t integer(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) bad(path + "." + key, "missing");
+  if (!value->is_number_integer()) bad(path + "." + key, "must be an integer, got " + value->dump());
+  if (value->is_number_unsigned() && value->get<uint64_t>() > uint64_t(INT64_MAX))
+    bad(path + "." + key, "too large");
+  return value->get<int64_t>();
+}
+
+std::optional<int64_t> optInteger(const json& object, const char* key, const std::string& path) {
+  if (!find(object, key)) return std::nullopt;
+  return integer(object, key, path);
+}
+
+std::string text(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) bad(path + "." + key, "missing");
+  if (!value->is_string()) bad(path + "." + key, "must be a string, got " + value->dump());
+  return value->get<std::string>();
+}
+
+std::optional<std::string> optText(const json& object, const char* key, const std::string& path) {
+  if (!find(object, key)) return std::nullopt;
+  return text(object, key, path);
+}
+
+const json& array(const json& object, const char* key, const std::string& path) {
+  static const json kEmpty = json::array();
+  const json* value = find(object, key);
+  if (!value) return kEmpty;
+  if (!value->is_array()) bad(path + "." + key, "must be an array");
+  return *value;
+}
+
+json optObject(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) return json::object();
+  if (!value->is_object()) bad(path + "." + key, "must be an object");
+  return *value;
+}
+
+// Width and height from a PNG's IHDR chunk (the signature and IHDR come first).
+std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::string& path) {
+  static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (png.size() < 24 || !std::equal(kSignature, kSignature + 8, png.begin()) || png[12] != 'I' ||
+      png[13] != 'H' || png[14] != 'D' || png[15] != 'R') {
+    bad(path, "not a PNG image");
+  }
+  auto be32 = [&](size_t at) {
+    return int64_t{png[at]} << 24 | int64_t{png[at + 1]} << 16 | int64_t{png[at + 2]} << 8 |
+           int64_t{png[at + 3]};
+  };
+  return {be32(16), be32(20)};
+}
+
+// The prepared statements of one ingest, reused across rows.
+struct Inserter {
+  explicit Inserter(sqlite3* connection)
+      : db(connection),
+        device(db,
+               "INSERT INTO devices (fingerprint, name, vendor, driver, api_version, features, info) "
+               "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7) ON CONFLICT (fingerprint) DO UPDATE SET info = "
+               "excluded.info "
+               "RETURNING id"),
+        scene(db,
+              "INSERT INTO scenes (name, params) VALUES (?1, ?2) "
+              "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id"),
+        run(db,
+            "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
+            "render_target_bytes, notes, shaders) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
+        resource(
+            db,
+            "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
+            "allocation_bytes, format_bytes, usage) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
+        screenshot(db, "INSERT INTO screenshots (name, png, width, height) VALUES (?1, ?2, ?3, ?4)"),
+        sample(
+            db,
+            "INSERT INTO samples (run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, "
+            "frame_ms, frame_ms_spread, frame_ms_instrumented, overhead_ratio, image_against, "
+            "image_identical, "
+            "psnr, max_abs, mean_abs, screenshot_id) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)"),
+        pass(db,
+             "INSERT INTO passes (sample_id, position, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, "
+             "overhead_ratio, fragment_invocations, fragment_invocations_statistic) "
+             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)"),
+        counter(db,
+                "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
+                "count_spread, source) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"),
+        sampleBytes(
+            db,
+            "UPDATE samples SET bytes = (SELECT TOTAL(c.bytes) FROM counters c JOIN passes p ON p.id = "
+            "c.pass_id WHERE p.sample_id = ?1) WHERE id = ?1") {}
+  sqlite3* db;
+  Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes;
+  int64_t lastId() const { return sqlite3_last_insert_rowid(db); }
+};
+
+int64_t returnedId(Statement& statement) {
+  if (!statement.step()) throw IngestError("no id returned");
+  int64_t id = statement.getInt(0);
+  statement.run();
+  return id;
+}
+
+int64_t insertDevice(Inserter& in, const json& result) {
+  const json* device = find(result, "device");
+  if (!device || !device->is_object()) bad("device", "missing or not an object");
+  std::string name = text(*device, "name", "device");
+  std::string vendor = optText(*device, "vendorID", "device").value_or("");
+  std::string deviceId = optText(*device, "deviceID", "device").value_or("");
+  std::string driver = optText(*device, "driverInfo", "device").value_or("");
+  std::string api = optText(*device, "apiVersion", "device").value_or("");
+  // Unit separators keep the fields apart whatever they contain.
+  std::string fingerprint = name + '\x1f' + vendor + '\x1f' + deviceId + '\x1f' + driver + '\x1f' + api;
+  in.device.reset();
+  in.device.bind(1, fingerprint)
+      .bind(2, name)
+      .bind(3, vendor)
+      .bind(4, driver)
+      .bind(5, api)
+      .bind(6, optObject(*device, "features", "device"))
+      .bind(7, *device);
+  return returnedId(in.device);
+}
+
+std::optional<json> optJson(const json& object, const char* key) {
+  const json* value = find(object, key);
+  return value ? std::optional<json>(*value) : std::nullopt;
+}
+
+void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::string& path) {
+  const json& counters = array(pass, "resources", path);
+  for (size_t c = 0; c < counters.size(); ++c) {
+    std::string at = path + ".resources[" + std::to_string(c) + "]";
+    const json& counter = counters[c];
+    if (!counter.is_object()) bad(at, "must be an object");
+    std::string access = text(counter, "access", at);
+    if (access != "read" && access != "write")
+      bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
+    in.counter.reset();
+    in.counter.bind(1, passId)
+        .bind(2, static_cast<int64_t>(c))
+        .bind(3, text(counter, "name", at))
+        .bind(4, optText(counter, "kind", at))
+        .bind(5, optText(counter, "format", at))
+        .bind(6, access)
+        .bind(7, number(counter, "count", at))
+        .bind(8, number(counter, "bytes", at))
+        .bind(9, optJson(counter, "count_spread"))
+        .bind(10, text(counter, "source", at));
+    in.counter.run();
+  }
+}
+
+void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std::string& path) {
+  const json& passes = array(sample, "passes", path);
+  for (size_t p = 0; p < passes.size(); ++p) {
+    std::string at = path + ".passes[" + std::to_string(p) + "]";
+    const json& pass = passes[p];
+    if (!pass.is_object()) bad(at, "must be an object");
+    in.pass.reset();
+    in.pass.bind(1, sampleId)
+        .bind(2, static_cast<int64_t>(p))
+        .bind(3, text(pass, "name", at))
+        .bind(4, number(pass, "gpu_ms", at))
+        .bind(5, optJson(pass, "gpu_ms_spread"))
+        .bind(6, optNumber(pass, "gpu_ms_instrumented", at))
+        .bind(7, optNumber(pass, "overhead_ratio", at))
+        .bind(8, optNumber(pass, "fragment_invocations", at))
+        .bind(9, optNumber(pass, "fragment_invocations_statistic", at));
+    in.pass.run();
+    insertCounters(in, in.lastId(), pass, at);
+  }
+}
+
+std::optional<int64_t> insertScreenshot(Inserter& in, const json& sample, const std::string& path,
+                                        const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  auto name = optText(sample, "screenshot", path);
+  if (!name) return std::nullopt;
+  auto it = screenshots.find(*name);
+  if (it == screenshots.end())
+    bad(path + ".screenshot", "'" + *name + "' is not among the screenshots given");
+  auto [width, height] = pngSize(it->second, path + ".screenshot");
+  in.screenshot.reset();
+  in.screenshot.bind(1, *name).bind(2, std::span<const uint8_t>(it->second)).bind(3, width).bind(4, height);
+  in.screenshot.run();
+  return in.lastId();
+}
+
+void insertSamples(Inserter& in, int64_t runId, const json& run, const std::string& path,
+                   const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  const json& samples = array(run, "samples", path);
+  for (size_t s = 0; s < samples.size(); ++s) {
+    std::string at = path + ".samples[" + std::to_string(s) + "]";
+    const json& sample = samples[s];
+    if (!sample.is_object()) bad(at, "must be an object");
+    const json* camera = find(sample, "camera");
+    if (!camera || !camera->is_object()) bad(at + ".camera", "missing or not an object");
+    int64_t cameraIndex = optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
+    std::optional<double> sky = optNumber(sample, "sky_fraction", at);
+    if (sky && *sky < 0) sky.reset();  // -1: the renderer has no skybox pass
+    std::optional<std::string> against;
+    std::optional<int64_t> identical;
+    std::optional<double> psnr, maxAbs, meanAbs;
+    if (const json* error = find(sample, "image_error")) {
+      std::string errorPath = at + ".image_error";
+      if (!error->is_object()) bad(errorPath, "must be an object");
+      against = optText(*error, "against", errorPath).value_or("forward");
+      const json* same = find(*error, "identical");
+      if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
+      psnr = optNumber(*error, "psnr", errorPath);
+      identical = same ? int64_t{same->get<bool>()} : int64_t{!psnr};
+      maxAbs = number(*error, "max_abs", errorPath);
+      meanAbs = number(*error, "mean_abs", errorPath);
+    }
+    auto screenshotId = insertScreenshot(in, sample, at, screenshots);
+    auto frames = optInteger(sample, "frames", at);
+    in.sample.reset();
+    in.sample.bind(1, runId)
+        .bind(2, cameraIndex)
+        .bind(3, *camera)
+        .bind(4, sky)
+        .bind(5, optNumber(sample, "sky_fraction_estimate", at))
+        .bind(6, frames)
+        .bind(7, number(sample, "frame_ms", at))
+        .bind(8, optJson(sample, "frame_ms_spread"))
+        .bind(9, optNumber(sample, "frame_ms_instrumented", at))
+        .bind(10, optNumber(sample, "overhead_ratio", at))
+        .bind(11, against)
+        .bind(12, identical)
+        .bind(13, psnr)
+        .bind(14, maxAbs)
+        .bind(15, meanAbs)
+        .bind(16, screenshotId);
+    try {
+      in.sample.run();
+    } catch (const SqliteError& e) {
+      bad(at, e.what());  // e.g. a camera index repeated within the run
+    }
+    int64_t sampleId = in.lastId();
+    insertPasses(in, sampleId, sample, at);
+    in.sampleBytes.reset();
+    in.sampleBytes.bind(1, sampleId).run();
+  }
+}
+
+void insertResources(Inserter& in, int64_t runId, const json& list, const std::string& path) {
+  for (size_t r = 0; r < list.size(); ++r) {
+    std::string at = path + "[" + std::to_string(r) + "]";
+    const json& resource = list[r];
+    if (!resource.is_object()) bad(at, "must be an object");
+    in.resource.reset();
+    in.resource.bind(1, runId)
+        .bind(2, static_cast<int64_t>(r))
+        .bind(3, text(resource, "name", at))
+        .bind(4, text(resource, "kind", at))
+        .bind(5, optText(resource, "format", at))
+        .bind(6, optInteger(resource, "element_bytes", at))
+        .bind(7, optInteger(resource, "width", at))
+        .bind(8, optInteger(resource, "height", at))
+        .bind(9, optInteger(resource, "allocation_bytes", at))
+        .bind(10, optInteger(resource, "format_bytes", at))
+        .bind(11, optText(resource, "usage", at));
+    in.resource.run();
+  }
+}
+
+int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& shaders, const json& run,
+                  const std::string& path, const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  if (!run.is_object()) bad(path, "must be an object");
+  in.scene.reset();
+  in.scene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
+  int64_t sceneId = returnedId(in.scene);
+  int64_t width = integer(run, "width", path);
+  int64_t height = integer(run, "height", path);
+  if (width < 1 || width > 16384) bad(path + ".width", "must be between 1 and 16384");
+  if (height < 1 || height > 16384) bad(path + ".height", "must be between 1 and 16384");
+  int64_t lights = optInteger(run, "lights", path).value_or(0);
+  if (lights < 0) bad(path + ".lights", "must not be negative");
+  json resources = optObject(run, "resources", path);
+  in.run.reset();
+  in.run.bind(1, jobId)
+      .bind(2, deviceId)
+      .bind(3, text(run, "renderer", path))
+      .bind(4, sceneId)
+      .bind(5, width)
+      .bind(6, height)
+      .bind(7, optText(run, "counting", path).value_or("exact"))
+      .bind(8, lights)
+      .bind(9, optInteger(resources, "render_target_bytes", path + ".resources"))
+      .bind(10, optObject(run, "notes", path))
+      .bind(11, shaders);
+  in.run.run();
+  int64_t runId = in.lastId();
+  insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");
+  insertSamples(in, runId, run, path, screenshots);
+  return runId;
+}
+
+}  // namespace
+
+Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
+                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  if (!result.is_object()) return makeError("result: must be a JSON object");
+  std::lock_guard lock(mutex_);
+  std::lock_guard writer(detail::writeMutex());
+  return detail::guarded<int64_t>("ingesting the capture result", [&]() -> Result<int64_t> {
+    Transaction tx(db_, Transaction::Kind::Write);
+    Statement job(db_, "SELECT 1 FROM jobs WHERE id = ?1");
+    job.bind(1, jobId);
+    if (!job.step()) return makeError("job " + std::to_string(jobId) + " not found");
+    // Idempotency: a job's result replaces whatever was ingested for it before
+    // (its screenshots first, then its runs, which cascade to samples,
+    // passes, counters and resources).
+    Statement dropShots(db_,
+                        "DELETE FROM screenshots WHERE id IN (SELECT s.screenshot_id FROM samples s "
+                        "JOIN runs r ON r.id = s.run_id WHERE r.job_id = ?1)");
+    dropShots.bind(1, jobId).run();
+    Statement dropRuns(db_, "DELETE FROM runs WHERE job_id = ?1");
+    dropRuns.bind(1, jobId).run();
+
+    Inserter in(db_);
+    int64_t deviceId = insertDevice(in, result);
+    json shaders = optObject(result, "shaders", "result");
+    const json* runs = find(result, "runs");
+    if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
+    for (size_t r = 0; r < runs->size(); ++r) {
+      insertRun(in, jobId, deviceId, shaders, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
+    }
+    tx.commit();
+    return static_cast<int64_t>(runs->size());
+  });
+}
+
+}  // namespace tally::store

@@ -1,0 +1,48 @@
+// Shared by the store's .cpp files; not part of its interface.
+#pragma once
+
+#include <exception>
+#include <mutex>
+#include <string>
+
+#include "common/result.hpp"
+#include "store/sqlite.hpp"
+#include "store/store.hpp"
+
+namespace tally::store::detail {
+
+// One writer per process: every write transaction holds this.
+std::mutex& writeMutex();
+
+// Runs body, turning exceptions (SqliteError, JSON errors, bad input) into an Error.
+template <class T, class F>
+Result<T> guarded(const char* what, F&& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    return makeError(std::string(what) + ": " + e.what());
+  }
+}
+
+// Checks a Page's limit (1..1000) and cursor; the id to continue below, if any.
+Result<std::optional<int64_t>> checkPage(const Page& page);
+
+// Job rows: kJobColumns in this order, read by readJob.
+inline constexpr const char* kJobColumns =
+    "id, status, spec, progress_done, progress_total, progress_current, error, attempts, idempotency_key, "
+    "created_at, started_at, finished_at, worker_pid";
+Job readJob(const Statement& row);
+
+// Run rows: kRunSelect (+ WHERE ...) read by readRunRow.
+extern const char* const kRunSelect;
+RunRow readRunRow(const Statement& row);
+
+// "WHERE"-less clause list for a RunFilter (" AND ..." each, positional "?"),
+// and binding its values from parameter index `first`; returns the next index.
+std::string runFilterSql(const RunFilter& filter);
+int bindRunFilter(Statement& statement, const RunFilter& filter, int first);
+
+// Current UTC time as SQLite writes it in DEFAULTs.
+inline constexpr const char* kNowSql = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
+
+}  // namespace tally::store::detail

@@ -1,0 +1,260 @@
+// Read queries: runs (filtered, cursor-paginated), samples with passes and
+// counters, screenshots. Multi-statement reads run in one read transaction,
+// so a concurrent re-ingest is seen entirely or not at all.
+#include "store/internal.hpp"
+
+namespace tally::store {
+
+using detail::guarded;
+using nlohmann::json;
+
+namespace detail {
+
+const char* const kRunSelect =
+    "SELECT r.id, r.job_id, r.device_id, d.name, r.renderer, sc.name, sc.params, r.width, r.height, "
+    "r.counting, "
+    "r.lights, r.render_target_bytes, r.notes, r.created_at, "
+    "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT AVG(s.frame_ms) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT AVG(s.bytes) FROM samples s WHERE s.run_id = r.id) "
+    "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
+
+RunRow readRunRow(const Statement& row) {
+  RunRow run;
+  run.id = row.getInt(0);
+  run.jobId = row.getInt(1);
+  run.deviceId = row.getInt(2);
+  run.deviceName = row.getText(3);
+  run.renderer = row.getText(4);
+  run.scene = row.getText(5);
+  run.sceneParams = row.getJson(6);
+  run.width = static_cast<int>(row.getInt(7));
+  run.height = static_cast<int>(row.getInt(8));
+  run.counting = row.getText(9);
+  run.lights = static_cast<int>(row.getInt(10));
+  run.renderTargetBytes = row.getOptInt(11);
+  run.notes = row.getJson(12);
+  run.createdAt = row.getText(13);
+  run.sampleCount = static_cast<int>(row.getInt(14));
+  run.meanFrameMs = row.getOptDouble(15);
+  run.meanBytes = row.getOptDouble(16);
+  return run;
+}
+
+// Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
+std::string runFilterSql(const RunFilter& f) {
+  std::string sql;
+  if (f.renderer) sql += " AND r.renderer = ?";
+  if (f.scene) sql += " AND r.scene_id IN (SELECT id FROM scenes WHERE name = ?)";
+  if (f.width) sql += " AND r.width = ?";
+  if (f.height) sql += " AND r.height = ?";
+  if (f.deviceId) sql += " AND r.device_id = ?";
+  if (f.deviceName) sql += " AND r.device_id IN (SELECT id FROM devices WHERE name = ?)";
+  if (f.jobId) sql += " AND r.job_id = ?";
+  if (!f.runIds.empty()) {
+    sql += " AND r.id IN (?";
+    for (size_t i = 1; i < f.runIds.size(); ++i) sql += ", ?";  // placeholders only
+    sql += ")";
+  }
+  return sql;
+}
+
+int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
+  int i = first;
+  if (f.renderer) statement.bind(i++, *f.renderer);
+  if (f.scene) statement.bind(i++, *f.scene);
+  if (f.width) statement.bind(i++, *f.width);
+  if (f.height) statement.bind(i++, *f.height);
+  if (f.deviceId) statement.bind(i++, *f.deviceId);
+  if (f.deviceName) statement.bind(i++, *f.deviceName);
+  if (f.jobId) statement.bind(i++, *f.jobId);
+  for (int64_t id : f.runIds) statement.bind(i++, id);
+  return i;
+}
+
+}  // namespace detail
+
+namespace {
+
+const char* const kSampleColumns =
+    "id, run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, frame_ms, "
+    "frame_ms_spread, "
+    "frame_ms_instrumented, overhead_ratio, bytes, image_against, image_identical, psnr, max_abs, mean_abs, "
+    "screenshot_id IS NOT NULL";
+
+SampleRow readSampleRow(const Statement& row) {
+  SampleRow s;
+  s.id = row.getInt(0);
+  s.runId = row.getInt(1);
+  s.cameraIndex = static_cast<int>(row.getInt(2));
+  s.camera = row.getJson(3);
+  s.skyFraction = row.getOptDouble(4);
+  s.skyFractionEstimate = row.getOptDouble(5);
+  if (auto frames = row.getOptInt(6)) s.frames = static_cast<int>(*frames);
+  s.frameMs = row.getDouble(7);
+  s.frameMsSpread = row.getJson(8);
+  s.frameMsInstrumented = row.getOptDouble(9);
+  s.overheadRatio = row.getOptDouble(10);
+  s.bytes = row.getDouble(11);
+  if (auto against = row.getOptText(12)) {
+    ImageError e;
+    e.against = *against;
+    e.identical = row.getInt(13) != 0;
+    e.psnr = row.getOptDouble(14);
+    e.maxAbs = row.getDouble(15);
+    e.meanAbs = row.getDouble(16);
+    s.imageError = e;
+  }
+  s.hasScreenshot = row.getInt(17) != 0;
+  return s;
+}
+
+std::optional<RunRow> findRunRow(sqlite3* db, int64_t runId) {
+  Statement query(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+  query.bind(1, runId);
+  if (!query.step()) return std::nullopt;
+  return detail::readRunRow(query);
+}
+
+}  // namespace
+
+Result<RunPage> Store::listRuns(const RunFilter& filter, const Page& page) {
+  auto checked = detail::checkPage(page);
+  if (!checked) return makeError(checked.error());
+  std::optional<int64_t> after = *checked;
+  if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
+  std::lock_guard lock(mutex_);
+  return guarded<RunPage>("listRuns", [&]() -> Result<RunPage> {
+    std::string sql = std::string(detail::kRunSelect) + " WHERE 1" + detail::runFilterSql(filter);
+    if (after) sql += " AND r.id < ?";
+    sql += " ORDER BY r.id DESC LIMIT ?";
+    Statement query(db_, sql);
+    int next = detail::bindRunFilter(query, filter, 1);
+    if (after) query.bind(next++, *after);
+    query.bind(next, page.limit + 1);  // one more tells whether another page follows
+    RunPage out;
+    while (query.step()) {
+      if (static_cast<int>(out.runs.size()) == page.limit) {
+        out.nextCursor = encodeCursor(out.runs.back().id);
+        break;
+      }
+      out.runs.push_back(detail::readRunRow(query));
+    }
+    return out;
+  });
+}
+
+Result<std::vector<Device>> Store::listDevices() {
+  std::lock_guard lock(mutex_);
+  return guarded<std::vector<Device>>("listDevices", [&]() -> Result<std::vector<Device>> {
+    Statement query(db_,
+                    "SELECT id, name, vendor, driver, api_version, features, info FROM devices ORDER BY id");
+    std::vector<Device> devices;
+    while (query.step()) {
+      devices.push_back(Device{query.getInt(0), query.getText(1), query.getText(2), query.getText(3),
+                               query.getText(4), query.getJson(5), query.getJson(6)});
+    }
+    return devices;
+  });
+}
+
+Result<std::optional<Run>> Store::getRun(int64_t runId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::optional<Run>>("getRun", [&]() -> Result<std::optional<Run>> {
+    Transaction tx(db_, Transaction::Kind::Read);
+    auto row = findRunRow(db_, runId);
+    if (!row) return std::optional<Run>();
+    Run run;
+    run.row = std::move(*row);
+    Statement device(db_,
+                     "SELECT d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info, r.shaders "
+                     "FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
+    device.bind(1, runId);
+    if (device.step()) {
+      run.device = Device{device.getInt(0),  device.getText(1), device.getText(2), device.getText(3),
+                          device.getText(4), device.getJson(5), device.getJson(6)};
+      run.shaders = device.getJson(7);
+    }
+    Statement resources(
+        db_,
+        "SELECT name, kind, format, element_bytes, width, height, allocation_bytes, format_bytes, "
+        "usage FROM run_resources WHERE run_id = ?1 ORDER BY position");
+    resources.bind(1, runId);
+    while (resources.step()) {
+      run.resources.push_back(RunResource{resources.getText(0), resources.getText(1), resources.getOptText(2),
+                                          resources.getOptInt(3), resources.getOptInt(4),
+                                          resources.getOptInt(5), resources.getOptInt(6),
+                                          resources.getOptInt(7), resources.getOptText(8)});
+    }
+    tx.commit();
+    return std::optional<Run>(std::move(run));
+  });
+}
+
+Result<std::vector<SampleRow>> Store::listSamples(int64_t runId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::vector<SampleRow>>("listSamples", [&]() -> Result<std::vector<SampleRow>> {
+    Statement query(db_, std::string("SELECT ") + kSampleColumns +
+                             " FROM samples WHERE run_id = ?1 ORDER BY camera_index");
+    query.bind(1, runId);
+    std::vector<SampleRow> rows;
+    while (query.step()) rows.push_back(readSampleRow(query));
+    return rows;
+  });
+}
+
+Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::optional<Sample>>("getSample", [&]() -> Result<std::optional<Sample>> {
+    Transaction tx(db_, Transaction::Kind::Read);
+    Statement query(db_, std::string("SELECT ") + kSampleColumns + " FROM samples WHERE id = ?1");
+    query.bind(1, sampleId);
+    if (!query.step()) return std::optional<Sample>();
+    Sample sample;
+    sample.row = readSampleRow(query);
+    Statement passes(db_,
+                     "SELECT id, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, overhead_ratio, "
+                     "fragment_invocations, fragment_invocations_statistic FROM passes WHERE sample_id = ?1 "
+                     "ORDER BY position");
+    passes.bind(1, sampleId);
+    std::map<int64_t, size_t> byId;
+    while (passes.step()) {
+      byId[passes.getInt(0)] = sample.passes.size();
+      sample.passes.push_back(Pass{passes.getText(1),
+                                   passes.getDouble(2),
+                                   passes.getJson(3),
+                                   passes.getOptDouble(4),
+                                   passes.getOptDouble(5),
+                                   passes.getOptDouble(6),
+                                   passes.getOptDouble(7),
+                                   {}});
+    }
+    Statement counters(
+        db_,
+        "SELECT c.pass_id, c.resource, c.kind, c.format, c.access, c.count, c.bytes, c.count_spread, "
+        "c.source FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = ?1 "
+        "ORDER BY p.position, c.position");
+    counters.bind(1, sampleId);
+    while (counters.step()) {
+      sample.passes[byId.at(counters.getInt(0))].counters.push_back(
+          Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
+                  counters.getDouble(5), counters.getDouble(6), counters.getJson(7), counters.getText(8)});
+    }
+    tx.commit();
+    return std::optional<Sample>(std::move(sample));
+  });
+}
+
+Result<std::optional<std::vector<uint8_t>>> Store::getScreenshot(int64_t sampleId) {
+  std::lock_guard lock(mutex_);
+  using Png = std::optional<std::vector<uint8_t>>;
+  return guarded<Png>("getScreenshot", [&]() -> Result<Png> {
+    Statement query(
+        db_, "SELECT sh.png FROM samples s JOIN screenshots sh ON sh.id = s.screenshot_id WHERE s.id = ?1");
+    query.bind(1, sampleId);
+    if (!query.step()) return Png();
+    return Png(query.getBlob(0));
+  });
+}
+
+}  // namespace tally::store

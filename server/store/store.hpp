@@ -1,0 +1,312 @@
+// Tally's SQLite store: capture jobs (a persistent queue), ingested capture
+// results, and the queries the service layer turns into JSON.
+//
+// Connections and threads. A Store is one SQLite connection; its calls are
+// serialised by a mutex, so sharing one between threads is safe but slow.
+// The daemon opens:
+//   - one writer:  Store::open(path)            migrates, then takes writes;
+//   - one reader per thread (HTTP workers):  Store::open(path, {.readOnly = true})
+//     after the writer has migrated. Readers never block the writer (WAL) and
+//     read a consistent snapshot per call; busy_timeout covers the moments
+//     (WAL recovery, checkpoints) when SQLite briefly makes them wait.
+// All write transactions in the process are additionally serialised by one
+// process-wide mutex (one writer), and use BEGIN IMMEDIATE, so two processes
+// on one file wait on busy_timeout instead of failing.
+//
+// Errors come back as tally::Result with a one-line reason; "not found" is an
+// empty optional, not an error.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+
+struct sqlite3;
+
+namespace tally::store {
+
+// ---- jobs -------------------------------------------------------------------
+
+enum class JobStatus { Queued, Running, Done, Failed, Cancelled };
+const char* toString(JobStatus status);  // "queued", "running", ...
+std::optional<JobStatus> parseJobStatus(std::string_view name);
+
+struct Job {
+  int64_t id = 0;
+  JobStatus status = JobStatus::Queued;
+  nlohmann::json spec;
+  int64_t progressDone = 0;
+  int64_t progressTotal = 0;
+  std::optional<std::string> progressCurrent;  // e.g. "deferred atrium 320x180 camera 3"
+  std::optional<std::string> error;
+  int attempts = 0;  // times claimed by a worker
+  std::optional<std::string> idempotencyKey;
+  std::string createdAt;                 // UTC ISO-8601, e.g. 2026-11-21T06:30:00.123Z
+  std::optional<std::string> startedAt;  // last claim
+  std::optional<std::string> finishedAt;
+  std::optional<int64_t> workerPid;
+};
+
+struct CreatedJob {
+  Job job;
+  bool created = false;   // false: the idempotency key was seen before; job is that job
+  bool conflict = false;  // the key was seen before with a different spec (job is the old one)
+};
+
+struct JobPage {
+  std::vector<Job> jobs;   // newest first (descending id)
+  std::string nextCursor;  // empty when this was the last page
+};
+
+struct Recovery {
+  std::vector<int64_t> requeued;  // running -> queued
+  std::vector<int64_t> failed;    // running -> failed: "interrupted N times"
+};
+
+// ---- runs, samples ------------------------------------------------------------
+
+struct Device {
+  int64_t id = 0;
+  std::string name, vendor, driver, apiVersion;
+  nlohmann::json features;  // the result's device.features
+  nlohmann::json info;      // the whole device object
+};
+
+struct RunFilter {
+  std::optional<std::string> renderer;
+  std::optional<std::string> scene;  // scene name
+  std::optional<int> width;
+  std::optional<int> height;
+  std::optional<int64_t> deviceId;
+  std::optional<std::string> deviceName;  // exact device name
+  std::optional<int64_t> jobId;
+  std::vector<int64_t> runIds;  // any of these runs (at most 1000); empty: any run
+};
+
+struct Page {
+  int limit = 100;     // 1..1000
+  std::string cursor;  // empty: first page; else a nextCursor from the previous page
+};
+
+struct RunRow {
+  int64_t id = 0;
+  int64_t jobId = 0;
+  int64_t deviceId = 0;
+  std::string deviceName;
+  std::string renderer;
+  std::string scene;
+  nlohmann::json sceneParams;
+  int width = 0, height = 0;
+  std::string counting;
+  int lights = 0;
+  std::optional<int64_t> renderTargetBytes;
+  nlohmann::json notes;
+  std::string createdAt;
+  int sampleCount = 0;
+  std::optional<double> meanFrameMs;  // over the run's samples
+  std::optional<double> meanBytes;    // all counters per frame, over the run's samples
+};
+
+struct RunPage {
+  std::vector<RunRow> runs;  // newest first (descending id)
+  std::string nextCursor;    // empty when this was the last page
+};
+
+struct RunResource {
+  std::string name, kind;
+  std::optional<std::string> format;
+  std::optional<int64_t> elementBytes, width, height, allocationBytes, formatBytes;
+  std::optional<std::string> usage;
+};
+
+struct Run {
+  RunRow row;
+  Device device;
+  std::vector<RunResource> resources;  // in the result's order
+  nlohmann::json shaders;              // shader source hashes of the capture
+};
+
+struct ImageError {
+  std::string against;
+  bool identical = false;
+  std::optional<double> psnr;  // absent when identical
+  double maxAbs = 0, meanAbs = 0;
+};
+
+struct SampleRow {
+  int64_t id = 0;
+  int64_t runId = 0;
+  int cameraIndex = 0;
+  nlohmann::json camera;
+  std::optional<double> skyFraction;  // absent when the renderer has no skybox pass
+  std::optional<double> skyFractionEstimate;
+  std::optional<int> frames;
+  double frameMs = 0;
+  nlohmann::json frameMsSpread;  // null when absent
+  std::optional<double> frameMsInstrumented;
+  std::optional<double> overheadRatio;
+  double bytes = 0;  // all counters of the sample, per frame
+  std::optional<ImageError> imageError;
+  bool hasScreenshot = false;
+};
+
+struct Counter {
+  std::string resource;
+  std::optional<std::string> kind, format;
+  std::string access;  // read | write
+  double count = 0;    // per frame
+  double bytes = 0;    // per frame
+  nlohmann::json countSpread;
+  std::string source;  // counter | derived
+};
+
+struct Pass {
+  std::string name;
+  double gpuMs = 0;
+  nlohmann::json gpuMsSpread;
+  std::optional<double> gpuMsInstrumented;
+  std::optional<double> overheadRatio;
+  std::optional<double> fragmentInvocations;
+  std::optional<double> fragmentInvocationsStatistic;
+  std::vector<Counter> counters;  // in the result's order
+};
+
+struct Sample {
+  SampleRow row;
+  std::vector<Pass> passes;  // in frame order
+};
+
+// ---- compare, export ----------------------------------------------------------
+
+// One quantity for one run, against the first run of the comparison.
+struct Compared {
+  std::optional<double> value;  // absent when the run does not have this pass/resource
+  std::optional<double> delta;  // value - first's value (both present)
+  std::optional<double> ratio;  // value / first's value (both present, first non-zero)
+};
+
+// Values are per frame, averaged over the run's samples (a sample without the
+// pass/resource counts as 0); one entry per compared run, in the order asked.
+struct PassComparison {
+  std::string pass;
+  std::vector<Compared> gpuMs;
+  std::vector<Compared> bytes;  // all of the pass's counters
+  std::vector<Compared> fragmentInvocations;
+};
+
+struct ResourceComparison {
+  std::string resource;
+  std::string access;  // read | write
+  std::vector<Compared> count;
+  std::vector<Compared> bytes;  // summed over passes
+};
+
+struct Comparison {
+  std::vector<RunRow> runs;
+  std::vector<Compared> frameMs;
+  std::vector<Compared> totalBytes;
+  std::vector<PassComparison> passes;         // first run's frame order, then others' new passes
+  std::vector<ResourceComparison> resources;  // by resource name, then access
+};
+
+// One row per run x pass x resource x access; count and bytes per frame,
+// averaged over the run's samples.
+struct ExportRow {
+  int64_t runId = 0;
+  std::string renderer, scene;
+  int width = 0, height = 0;
+  std::string device, pass, resource, access;
+  double count = 0, bytes = 0;
+};
+
+// ---- the store ----------------------------------------------------------------
+
+class Store {
+ public:
+  struct Options {
+    bool readOnly = false;     // a reader: no migrations, no writes (PRAGMA query_only)
+    int busyTimeoutMs = 5000;  // how long to wait on another connection's lock
+  };
+
+  // Opens (creating when writable) and migrates. Refuses a database whose
+  // schema is newer than this binary's, naming both versions.
+  static Result<std::unique_ptr<Store>> open(const std::string& path, Options options);
+  static Result<std::unique_ptr<Store>> open(const std::string& path) { return open(path, Options{}); }
+  ~Store();
+  Store(const Store&) = delete;
+  Store& operator=(const Store&) = delete;
+
+  int schemaVersion() const { return schemaVersion_; }
+
+  // Jobs (the persistent queue; the worker drives the transitions).
+  // A repeated idempotency key returns the existing job (created = false).
+  Result<CreatedJob> createJob(const nlohmann::json& spec, std::optional<std::string> idempotencyKey = {});
+  // Oldest queued job -> running, attempts + 1, started_at, worker_pid; empty when none.
+  Result<std::optional<Job>> claimNextJob(int64_t workerPid = 0);
+  // False when the job is no longer running (cancelled meanwhile): stop working on it.
+  Result<bool> updateProgress(int64_t jobId, int64_t done, int64_t total,
+                              std::optional<std::string> current = {});
+  // running -> done | failed (with error). False when the job was not running
+  // (e.g. cancelled meanwhile: it stays cancelled).
+  Result<bool> finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error = {});
+  // queued | running -> cancelled; a finished job is returned unchanged. Empty: no such job.
+  Result<std::optional<Job>> cancelJob(int64_t jobId);
+  Result<std::optional<Job>> getJob(int64_t jobId);
+  // Newest first, cursor-paginated like listRuns; status empty: every status.
+  Result<JobPage> listJobs(std::optional<JobStatus> status, const Page& page);
+  // Start-up recovery: every running job goes back to queued when attempts <
+  // maxAttempts, else to failed with "interrupted N times".
+  Result<Recovery> requeueInterrupted(int maxAttempts);
+
+  // Stores a whole capture result (docs/result-schema.md) for a job, in one
+  // transaction: all of it or none of it. Idempotent: the job's previously
+  // ingested runs (and their screenshots) are replaced, so ingesting the same
+  // result twice stores it once. screenshots maps a sample's "screenshot" file
+  // name to its PNG bytes; a named screenshot missing from the map, or not a
+  // PNG, is an error. Does not change the job's status. Returns the number of
+  // runs stored.
+  Result<int64_t> ingestCapture(int64_t jobId, const nlohmann::json& result,
+                                const std::map<std::string, std::vector<uint8_t>>& screenshots);
+
+  // Queries.
+  // Every device a capture was ingested from, by id.
+  Result<std::vector<Device>> listDevices();
+  Result<RunPage> listRuns(const RunFilter& filter, const Page& page);
+  Result<std::optional<Run>> getRun(int64_t runId);
+  // Empty vector for an unknown run or one without samples.
+  Result<std::vector<SampleRow>> listSamples(int64_t runId);
+  Result<std::optional<Sample>> getSample(int64_t sampleId);
+  // Empty: no such sample, or it has no screenshot.
+  Result<std::optional<std::vector<uint8_t>>> getScreenshot(int64_t sampleId);
+  // 2..4 distinct existing run ids; deltas and ratios against the first.
+  Result<Comparison> compareRuns(const std::vector<int64_t>& runIds);
+  // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
+  Result<std::vector<ExportRow>> exportRuns(const RunFilter& filter);
+
+  // PRAGMA integrity_check's first line ("ok" when healthy).
+  Result<std::string> integrityCheck();
+
+  // The raw connection, for tests and tools; not for concurrent use.
+  sqlite3* handle() { return db_; }
+
+ private:
+  Store(sqlite3* db, int version) : db_(db), schemaVersion_(version) {}
+  sqlite3* db_;
+  int schemaVersion_;
+  std::mutex mutex_;  // one call at a time on this connection
+};
+
+// Cursor encoding for listRuns and listJobs ("r" + last id in hex; opaque to clients).
+std::string encodeCursor(int64_t lastId);
+std::optional<int64_t> decodeCursor(std::string_view cursor);
+
+}  // namespace tally::store

@@ -1,0 +1,273 @@
+// ingestCapture: read back what went in, idempotency, atomicity.
+#include "store_fixture.hpp"
+
+namespace tally::store::testing {
+namespace {
+
+class Ingest : public StoreTest {
+ protected:
+  int64_t rowsOfJob(int64_t jobId) {
+    std::string job = std::to_string(jobId);
+    return scalar(*store_, "SELECT COUNT(*) FROM runs WHERE job_id = " + job) +
+           scalar(*store_,
+                  "SELECT COUNT(*) FROM samples s JOIN runs r ON r.id = s.run_id WHERE r.job_id = " + job) +
+           scalar(*store_,
+                  "SELECT COUNT(*) FROM passes p JOIN samples s ON s.id = p.sample_id "
+                  "JOIN runs r ON r.id = s.run_id WHERE r.job_id = " +
+                      job);
+  }
+};
+
+TEST_F(Ingest, ReadsBackWhatWentIn) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  EXPECT_EQ(ingest(jobId, c), 2);
+
+  auto page = store_->listRuns({.jobId = jobId}, {});
+  ASSERT_TRUE(page) << page.error();
+  ASSERT_EQ(page->runs.size(), 2u);
+  EXPECT_TRUE(page->nextCursor.empty());
+  // Newest first: deferred was stored after forward.
+  const json& runs = c.result["runs"];
+  for (size_t i = 0; i < 2; ++i) {
+    const RunRow& row = page->runs[1 - i];
+    const json& in = runs[i];
+    EXPECT_EQ(row.jobId, jobId);
+    EXPECT_EQ(row.renderer, in["renderer"]);
+    EXPECT_EQ(row.scene, "atrium");
+    EXPECT_EQ(row.sceneParams, in["scene_params"]);
+    EXPECT_EQ(row.width, 320);
+    EXPECT_EQ(row.height, 180);
+    EXPECT_EQ(row.counting, "exact");
+    EXPECT_EQ(row.lights, 400);
+    EXPECT_EQ(row.notes, in["notes"]);
+    EXPECT_EQ(row.renderTargetBytes, in["resources"]["render_target_bytes"].get<int64_t>());
+    EXPECT_EQ(row.deviceName, c.result["device"]["name"]);
+    EXPECT_EQ(row.sampleCount, 2);
+    double meanFrame =
+        (in["samples"][0]["frame_ms"].get<double>() + in["samples"][1]["frame_ms"].get<double>()) / 2;
+    ASSERT_TRUE(row.meanFrameMs);
+    EXPECT_DOUBLE_EQ(*row.meanFrameMs, meanFrame);
+    EXPECT_FALSE(row.createdAt.empty());
+
+    auto full = store_->getRun(row.id);
+    ASSERT_TRUE(full && full->has_value()) << (full ? "" : full.error());
+    const tally::store::Run& run = **full;
+    EXPECT_EQ(run.device.name, c.result["device"]["name"]);
+    EXPECT_EQ(run.device.vendor, "0x10005");
+    EXPECT_EQ(run.device.driver, "Mesa 22.3.6");
+    EXPECT_EQ(run.device.apiVersion, "1.3.230");
+    EXPECT_EQ(run.device.features, c.result["device"]["features"]);
+    EXPECT_EQ(run.device.info, c.result["device"]);
+    EXPECT_EQ(run.shaders, c.result["shaders"]);
+    ASSERT_EQ(run.resources.size(), 2u);
+    EXPECT_EQ(run.resources[0].name, "gbuffer.normal");
+    EXPECT_EQ(run.resources[0].format, "R16G16B16A16_SFLOAT");
+    EXPECT_EQ(run.resources[0].elementBytes, 8);
+    EXPECT_EQ(run.resources[0].allocationBytes, 320 * 180 * 8 + 2048);
+    EXPECT_EQ(run.resources[0].formatBytes, 320 * 180 * 8);
+    EXPECT_EQ(run.resources[0].usage, "color_attachment|sampled");
+    EXPECT_EQ(run.resources[1].kind, "depth");
+
+    auto samples = store_->listSamples(row.id);
+    ASSERT_TRUE(samples);
+    ASSERT_EQ(samples->size(), 2u);
+    for (size_t s = 0; s < 2; ++s) {
+      const json& inSample = in["samples"][s];
+      auto got = store_->getSample((*samples)[s].id);
+      ASSERT_TRUE(got && got->has_value());
+      const Sample& sample = **got;
+      EXPECT_EQ(sample.row.runId, row.id);
+      EXPECT_EQ(sample.row.cameraIndex, static_cast<int>(s));
+      EXPECT_EQ(sample.row.camera, inSample["camera"]);
+      EXPECT_EQ(sample.row.frames, 20);
+      EXPECT_EQ(sample.row.frameMs, inSample["frame_ms"].get<double>());
+      EXPECT_EQ(sample.row.frameMsSpread, inSample["frame_ms_spread"]);
+      EXPECT_EQ(sample.row.frameMsInstrumented, inSample["frame_ms_instrumented"].get<double>());
+      EXPECT_EQ(sample.row.overheadRatio, 1.1);
+      EXPECT_EQ(sample.row.skyFractionEstimate, inSample["sky_fraction_estimate"].get<double>());
+      if (inSample["sky_fraction"].get<double>() < 0) {
+        EXPECT_FALSE(sample.row.skyFraction);
+      } else {
+        EXPECT_EQ(sample.row.skyFraction, inSample["sky_fraction"].get<double>());
+      }
+      ASSERT_TRUE(sample.row.imageError);
+      EXPECT_EQ(sample.row.imageError->against, "forward");
+      EXPECT_EQ(sample.row.imageError->identical, inSample["image_error"]["identical"].get<bool>());
+      if (inSample["image_error"]["psnr"].is_null()) {
+        EXPECT_FALSE(sample.row.imageError->psnr);
+      } else {
+        EXPECT_EQ(sample.row.imageError->psnr, inSample["image_error"]["psnr"].get<double>());
+      }
+      EXPECT_EQ(sample.row.imageError->maxAbs, inSample["image_error"]["max_abs"].get<double>());
+      EXPECT_EQ(sample.row.imageError->meanAbs, inSample["image_error"]["mean_abs"].get<double>());
+      EXPECT_TRUE(sample.row.hasScreenshot);
+
+      ASSERT_EQ(sample.passes.size(), 4u);
+      for (size_t p = 0; p < 4; ++p) {
+        const json& inPass = inSample["passes"][p];
+        const Pass& pass = sample.passes[p];
+        EXPECT_EQ(pass.name, inPass["name"]);
+        EXPECT_EQ(pass.gpuMs, inPass["gpu_ms"].get<double>());
+        EXPECT_EQ(pass.gpuMsSpread, inPass["gpu_ms_spread"]);
+        EXPECT_EQ(pass.gpuMsInstrumented, inPass["gpu_ms_instrumented"].get<double>());
+        EXPECT_EQ(pass.overheadRatio, 1.1);
+        EXPECT_EQ(pass.fragmentInvocations, inPass["fragment_invocations"].get<double>());
+        EXPECT_EQ(pass.fragmentInvocationsStatistic, inPass["fragment_invocations_statistic"].get<double>());
+        ASSERT_EQ(pass.counters.size(), 3u);
+        for (size_t k = 0; k < 3; ++k) {
+          const json& inCounter = inPass["resources"][k];
+          const Counter& counter = pass.counters[k];
+          EXPECT_EQ(counter.resource, inCounter["name"]);
+          EXPECT_EQ(counter.kind, inCounter["kind"].get<std::string>());
+          EXPECT_EQ(counter.format, inCounter["format"].get<std::string>());
+          EXPECT_EQ(counter.access, inCounter["access"]);
+          EXPECT_EQ(counter.count, inCounter["count"].get<double>());
+          EXPECT_EQ(counter.bytes, inCounter["bytes"].get<double>());
+          EXPECT_EQ(counter.countSpread, inCounter["count_spread"]);
+          EXPECT_EQ(counter.source, inCounter["source"]);
+        }
+      }
+      auto png = store_->getScreenshot(sample.row.id);
+      ASSERT_TRUE(png && png->has_value());
+      EXPECT_EQ(**png, c.screenshots.at(inSample["screenshot"].get<std::string>()));
+    }
+  }
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM screenshots WHERE width = 320 AND height = 180"), 4);
+}
+
+TEST_F(Ingest, MissingThingsAreEmptyNotErrors) {
+  auto run = store_->getRun(424242);
+  ASSERT_TRUE(run);
+  EXPECT_FALSE(run->has_value());
+  auto sample = store_->getSample(424242);
+  ASSERT_TRUE(sample);
+  EXPECT_FALSE(sample->has_value());
+  auto png = store_->getScreenshot(424242);
+  ASSERT_TRUE(png);
+  EXPECT_FALSE(png->has_value());
+  auto samples = store_->listSamples(424242);
+  ASSERT_TRUE(samples);
+  EXPECT_TRUE(samples->empty());
+}
+
+TEST_F(Ingest, SampleWithoutScreenshotOrImageError) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  c.result["runs"][1]["samples"][1]["screenshot"] = nullptr;
+  c.result["runs"][1]["samples"][1].erase("image_error");
+  ingest(jobId, c);
+  auto page = store_->listRuns({.renderer = "deferred", .jobId = jobId}, {});
+  ASSERT_TRUE(page && page->runs.size() == 1);
+  auto samples = store_->listSamples(page->runs[0].id);
+  ASSERT_TRUE(samples && samples->size() == 2);
+  EXPECT_FALSE((*samples)[1].hasScreenshot);
+  EXPECT_FALSE((*samples)[1].imageError);
+  auto png = store_->getScreenshot((*samples)[1].id);
+  ASSERT_TRUE(png);
+  EXPECT_FALSE(png->has_value());
+}
+
+TEST_F(Ingest, IngestingTwiceStoresOnce) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  ingest(jobId, c);
+  auto counts = [&] {
+    return std::vector<int64_t>{scalar(*store_, "SELECT COUNT(*) FROM runs"),
+                                scalar(*store_, "SELECT COUNT(*) FROM samples"),
+                                scalar(*store_, "SELECT COUNT(*) FROM passes"),
+                                scalar(*store_, "SELECT COUNT(*) FROM counters"),
+                                scalar(*store_, "SELECT COUNT(*) FROM run_resources"),
+                                scalar(*store_, "SELECT COUNT(*) FROM screenshots"),
+                                scalar(*store_, "SELECT COUNT(*) FROM devices"),
+                                scalar(*store_, "SELECT COUNT(*) FROM scenes")};
+  };
+  auto once = counts();
+  EXPECT_EQ(once, (std::vector<int64_t>{2, 4, 16, 48, 4, 4, 1, 1}));
+  ingest(jobId, c);
+  EXPECT_EQ(counts(), once);
+  // Another job with the same device and scene reuses both rows.
+  ingest(newJob(), realisticCapture(1));
+  EXPECT_EQ(counts(), (std::vector<int64_t>{4, 8, 32, 96, 8, 8, 1, 1}));
+}
+
+TEST_F(Ingest, FailureMidwayLeavesNothing) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  // The last sample is malformed: everything before it must be rolled back.
+  c.result["runs"][1]["samples"][1]["passes"][3]["resources"][2].erase("bytes");
+  auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[1].samples[1].passes[3].resources[2].bytes: missing"),
+            std::string::npos)
+      << stored.error();
+  EXPECT_EQ(rowsOfJob(jobId), 0);
+  for (const char* table :
+       {"runs", "samples", "passes", "counters", "run_resources", "screenshots", "devices", "scenes"}) {
+    EXPECT_EQ(scalar(*store_, std::string("SELECT COUNT(*) FROM ") + table), 0) << table;
+  }
+}
+
+TEST_F(Ingest, FailedReingestKeepsThePreviousResult) {
+  int64_t jobId = newJob();
+  ingest(jobId, realisticCapture());
+  int64_t before = rowsOfJob(jobId);
+  Capture bad = realisticCapture(7);
+  // A constraint SQLite enforces, not the parser: a camera index twice in a run.
+  bad.result["runs"][1]["samples"][1]["camera"]["index"] = 0;
+  auto stored = store_->ingestCapture(jobId, bad.result, bad.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[1].samples[1]"), std::string::npos) << stored.error();
+  EXPECT_EQ(rowsOfJob(jobId), before);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM screenshots"), 4);
+  // The stored values are the first capture's (seed 0), not the failed one's.
+  EXPECT_EQ(scalar(*store_, "SELECT MAX(count) FROM counters"), (0 * 1000 + 100 + 10 + 3) * 4);
+}
+
+struct BadInput {
+  const char* name;
+  std::function<void(Capture&)> spoil;
+  const char* error;
+};
+
+TEST_F(Ingest, BadInputNamesTheField) {
+  const std::vector<BadInput> cases = {
+      {"no runs", [](Capture& c) { c.result.erase("runs"); }, "runs: missing"},
+      {"no device", [](Capture& c) { c.result.erase("device"); }, "device: missing"},
+      {"width text", [](Capture& c) { c.result["runs"][0]["width"] = "wide"; },
+       "runs[0].width: must be an integer"},
+      {"width zero", [](Capture& c) { c.result["runs"][1]["width"] = 0; }, "runs[1].width: must be between"},
+      {"access",
+       [](Capture& c) { c.result["runs"][0]["samples"][0]["passes"][1]["resources"][0]["access"] = "both"; },
+       "runs[0].samples[0].passes[1].resources[0].access: must be \"read\" or \"write\""},
+      {"gpu_ms", [](Capture& c) { c.result["runs"][0]["samples"][1]["passes"][2]["gpu_ms"] = "fast"; },
+       "runs[0].samples[1].passes[2].gpu_ms: must be a number"},
+      {"screenshot missing",
+       [](Capture& c) {
+         c.screenshots.erase(c.result["runs"][1]["samples"][0]["screenshot"].get<std::string>());
+       },
+       "runs[1].samples[0].screenshot: 'deferred_atrium_320x180_cam0.png' is not among"},
+      {"screenshot not png",
+       [](Capture& c) {
+         c.screenshots[c.result["runs"][0]["samples"][1]["screenshot"].get<std::string>()] = {1, 2, 3};
+       },
+       "runs[0].samples[1].screenshot: not a PNG"},
+      {"camera", [](Capture& c) { c.result["runs"][0]["samples"][0].erase("camera"); },
+       "runs[0].samples[0].camera"},
+  };
+  int64_t jobId = newJob();
+  for (const auto& test : cases) {
+    Capture c = realisticCapture();
+    test.spoil(c);
+    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    ASSERT_FALSE(stored) << test.name;
+    EXPECT_NE(stored.error().find(test.error), std::string::npos) << test.name << ": " << stored.error();
+    EXPECT_EQ(rowsOfJob(jobId), 0) << test.name;
+  }
+  auto unknownJob = store_->ingestCapture(9999, realisticCapture().result, realisticCapture().screenshots);
+  ASSERT_FALSE(unknownJob);
+  EXPECT_NE(unknownJob.error().find("job 9999 not found"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace tally::store::testing

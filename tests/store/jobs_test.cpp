@@ -1,0 +1,243 @@
+// The job queue: idempotency keys, claim/progress/finish/cancel, recovery.
+#include <set>
+#include <thread>
+
+#include "store_fixture.hpp"
+
+namespace tally::store::testing {
+namespace {
+
+using Jobs = StoreTest;
+
+const json kSpec = {{"renderers", {"forward", "deferred"}}, {"resolutions", {{320, 180}}}};
+
+TEST_F(Jobs, CreateWithIdempotencyKey) {
+  auto first = store_->createJob(kSpec, "abc");
+  ASSERT_TRUE(first) << first.error();
+  EXPECT_TRUE(first->created);
+  EXPECT_FALSE(first->conflict);
+  EXPECT_EQ(first->job.status, JobStatus::Queued);
+  EXPECT_EQ(first->job.spec, kSpec);
+  EXPECT_EQ(first->job.attempts, 0);
+  EXPECT_EQ(first->job.idempotencyKey, "abc");
+  EXPECT_FALSE(first->job.createdAt.empty());
+  EXPECT_FALSE(first->job.startedAt);
+
+  auto again = store_->createJob(kSpec, "abc");
+  ASSERT_TRUE(again);
+  EXPECT_FALSE(again->created);
+  EXPECT_FALSE(again->conflict);
+  EXPECT_EQ(again->job.id, first->job.id);
+
+  auto other = store_->createJob({{"renderers", {"visbuffer"}}}, "abc");
+  ASSERT_TRUE(other);
+  EXPECT_FALSE(other->created);
+  EXPECT_TRUE(other->conflict);
+  EXPECT_EQ(other->job.id, first->job.id);
+  EXPECT_EQ(other->job.spec, kSpec);
+
+  auto noKey1 = store_->createJob(kSpec);
+  auto noKey2 = store_->createJob(kSpec);
+  ASSERT_TRUE(noKey1 && noKey2);
+  EXPECT_NE(noKey1->job.id, noKey2->job.id);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM jobs"), 3);
+
+  EXPECT_FALSE(store_->createJob(kSpec, ""));
+  EXPECT_FALSE(store_->createJob(kSpec, std::string(256, 'k')));
+}
+
+TEST_F(Jobs, Lifecycle) {
+  int64_t a = newJob(), b = newJob();
+  auto claimed = store_->claimNextJob(4242);
+  ASSERT_TRUE(claimed && claimed->has_value());
+  EXPECT_EQ((*claimed)->id, a);  // oldest first
+  EXPECT_EQ((*claimed)->status, JobStatus::Running);
+  EXPECT_EQ((*claimed)->attempts, 1);
+  EXPECT_EQ((*claimed)->workerPid, 4242);
+  EXPECT_TRUE((*claimed)->startedAt);
+
+  auto progress = store_->updateProgress(a, 3, 10, "forward atrium 320x180 camera 3");
+  ASSERT_TRUE(progress && *progress);
+  auto job = store_->getJob(a);
+  ASSERT_TRUE(job && job->has_value());
+  EXPECT_EQ((*job)->progressDone, 3);
+  EXPECT_EQ((*job)->progressTotal, 10);
+  EXPECT_EQ((*job)->progressCurrent, "forward atrium 320x180 camera 3");
+  EXPECT_FALSE(store_->updateProgress(a, -1, 10));
+
+  auto finished = store_->finishJob(a, JobStatus::Done);
+  ASSERT_TRUE(finished && *finished);
+  job = store_->getJob(a);
+  EXPECT_EQ((*job)->status, JobStatus::Done);
+  EXPECT_TRUE((*job)->finishedAt);
+  EXPECT_FALSE((*job)->error);
+  EXPECT_FALSE(*store_->updateProgress(a, 4, 10));         // no longer running
+  EXPECT_FALSE(*store_->finishJob(a, JobStatus::Failed));  // stays done
+  EXPECT_FALSE(store_->finishJob(a, JobStatus::Queued));   // not a finishing status
+
+  claimed = store_->claimNextJob();
+  ASSERT_TRUE(claimed && claimed->has_value());
+  EXPECT_EQ((*claimed)->id, b);
+  EXPECT_FALSE((*claimed)->workerPid);
+  ASSERT_TRUE(*store_->finishJob(b, JobStatus::Failed, "device lost"));
+  job = store_->getJob(b);
+  EXPECT_EQ((*job)->status, JobStatus::Failed);
+  EXPECT_EQ((*job)->error, "device lost");
+
+  claimed = store_->claimNextJob();
+  ASSERT_TRUE(claimed);
+  EXPECT_FALSE(claimed->has_value());  // queue empty
+
+  auto missing = store_->getJob(12345);
+  ASSERT_TRUE(missing);
+  EXPECT_FALSE(missing->has_value());
+}
+
+TEST_F(Jobs, Cancel) {
+  int64_t running = newJob(), queued = newJob(), done = newJob();
+  ASSERT_EQ((**store_->claimNextJob()).id, running);
+
+  auto q = store_->cancelJob(queued);
+  ASSERT_TRUE(q && q->has_value());
+  EXPECT_EQ((*q)->status, JobStatus::Cancelled);
+  EXPECT_TRUE((*q)->finishedAt);
+
+  auto r = store_->cancelJob(running);
+  ASSERT_TRUE(r && r->has_value());
+  EXPECT_EQ((*r)->status, JobStatus::Cancelled);
+  EXPECT_FALSE(*store_->updateProgress(running, 1, 2));        // the worker learns it was cancelled
+  EXPECT_FALSE(*store_->finishJob(running, JobStatus::Done));  // and cannot undo it
+  EXPECT_EQ((*store_->getJob(running))->status, JobStatus::Cancelled);
+
+  ASSERT_EQ((**store_->claimNextJob()).id, done);  // cancelled jobs are never claimed
+  ASSERT_TRUE(*store_->finishJob(done, JobStatus::Done));
+  auto d = store_->cancelJob(done);
+  ASSERT_TRUE(d && d->has_value());
+  EXPECT_EQ((*d)->status, JobStatus::Done);  // finished jobs stay as they are
+
+  auto none = store_->cancelJob(999);
+  ASSERT_TRUE(none);
+  EXPECT_FALSE(none->has_value());
+}
+
+TEST_F(Jobs, ListByStatusNewestFirst) {
+  std::vector<int64_t> ids;
+  for (int i = 0; i < 5; ++i) ids.push_back(newJob());
+  ASSERT_TRUE(store_->claimNextJob());  // ids[0] running
+  auto all = store_->listJobs({}, {});
+  ASSERT_TRUE(all) << all.error();
+  ASSERT_EQ(all->jobs.size(), 5u);
+  EXPECT_EQ(all->jobs.front().id, ids[4]);
+  EXPECT_TRUE(all->nextCursor.empty());
+  auto queued = store_->listJobs(JobStatus::Queued, {});
+  ASSERT_TRUE(queued);
+  EXPECT_EQ(queued->jobs.size(), 4u);
+  auto running = store_->listJobs(JobStatus::Running, {});
+  ASSERT_TRUE(running && running->jobs.size() == 1);
+  EXPECT_EQ(running->jobs.front().id, ids[0]);
+  // Pages of 2: ids 4 3 | 2 1 | 0.
+  std::vector<int64_t> seen;
+  Page page{.limit = 2};
+  for (int pages = 0; pages < 10; ++pages) {
+    auto got = store_->listJobs({}, page);
+    ASSERT_TRUE(got) << got.error();
+    for (const auto& job : got->jobs) seen.push_back(job.id);
+    if (got->nextCursor.empty()) break;
+    page.cursor = got->nextCursor;
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{ids[4], ids[3], ids[2], ids[1], ids[0]}));
+  EXPECT_FALSE(store_->listJobs({}, {.limit = 0}));
+  EXPECT_FALSE(store_->listJobs({}, {.limit = 1001}));
+  EXPECT_FALSE(store_->listJobs({}, {.limit = 10, .cursor = "bogus"}));
+  EXPECT_EQ(parseJobStatus("cancelled"), JobStatus::Cancelled);
+  EXPECT_FALSE(parseJobStatus("paused"));
+}
+
+TEST_F(Jobs, RequeueInterrupted) {
+  // Simulates three daemon crashes: each time every queued job is claimed,
+  // then start-up recovery runs with at most 3 attempts.
+  int64_t a = newJob(), b = newJob(), late = 0;
+  for (int crash = 1; crash <= 3; ++crash) {
+    if (crash == 3) late = newJob();
+    while (true) {
+      auto job = store_->claimNextJob(1000 + crash);
+      ASSERT_TRUE(job);
+      if (!job->has_value()) break;
+    }
+    auto recovery = store_->requeueInterrupted(3);
+    ASSERT_TRUE(recovery) << recovery.error();
+    if (crash < 3) {
+      EXPECT_EQ(recovery->requeued, (std::vector<int64_t>{a, b}));
+      EXPECT_TRUE(recovery->failed.empty());
+    } else {
+      EXPECT_EQ(recovery->requeued, std::vector<int64_t>{late});
+      EXPECT_EQ(recovery->failed, (std::vector<int64_t>{a, b}));
+    }
+  }
+  for (int64_t id : {a, b}) {
+    auto job = *store_->getJob(id);
+    EXPECT_EQ(job->status, JobStatus::Failed);
+    EXPECT_EQ(job->error, "interrupted 3 times");
+    EXPECT_EQ(job->attempts, 3);
+    EXPECT_TRUE(job->finishedAt);
+    EXPECT_FALSE(job->workerPid);
+  }
+  auto job = *store_->getJob(late);
+  EXPECT_EQ(job->status, JobStatus::Queued);
+  EXPECT_EQ(job->attempts, 1);
+  auto nothing = store_->requeueInterrupted(3);  // nothing running: a no-op
+  ASSERT_TRUE(nothing);
+  EXPECT_TRUE(nothing->requeued.empty() && nothing->failed.empty());
+}
+
+TEST_F(Jobs, RequeueKeepsJobsUnderTheLimit) {
+  int64_t a = newJob(), b = newJob();
+  ASSERT_TRUE(store_->claimNextJob(100));
+  ASSERT_TRUE(store_->updateProgress(a, 5, 10));
+  auto recovery = store_->requeueInterrupted(3);
+  ASSERT_TRUE(recovery);
+  EXPECT_EQ(recovery->requeued, std::vector<int64_t>{a});
+  EXPECT_TRUE(recovery->failed.empty());
+  auto job = *store_->getJob(a);
+  EXPECT_EQ(job->status, JobStatus::Queued);
+  EXPECT_EQ(job->attempts, 1);
+  EXPECT_EQ(job->progressDone, 0);
+  EXPECT_FALSE(job->workerPid);
+  EXPECT_EQ((*store_->getJob(b))->status, JobStatus::Queued);
+  // Requeued jobs keep their place: `a` is claimed again before `b`.
+  EXPECT_EQ((**store_->claimNextJob()).id, a);
+  EXPECT_EQ((*store_->getJob(a))->attempts, 2);
+  EXPECT_FALSE(store_->requeueInterrupted(0));
+}
+
+TEST_F(Jobs, ConcurrentClaimsTakeEachJobOnce) {
+  constexpr int kJobs = 40;
+  for (int i = 0; i < kJobs; ++i) newJob();
+  std::vector<std::vector<int64_t>> claimed(4);
+  std::vector<std::thread> workers;
+  for (size_t w = 0; w < claimed.size(); ++w) {
+    workers.emplace_back([&, w] {
+      auto store = Store::open(db_.path());
+      ASSERT_TRUE(store) << store.error();
+      while (true) {
+        auto job = (*store)->claimNextJob(static_cast<int64_t>(w + 1));
+        ASSERT_TRUE(job) << job.error();
+        if (!job->has_value()) break;
+        claimed[w].push_back((*job)->id);
+      }
+    });
+  }
+  for (auto& t : workers) t.join();
+  std::set<int64_t> all;
+  size_t total = 0;
+  for (const auto& ids : claimed) {
+    all.insert(ids.begin(), ids.end());
+    total += ids.size();
+  }
+  EXPECT_EQ(total, static_cast<size_t>(kJobs));
+  EXPECT_EQ(all.size(), static_cast<size_t>(kJobs));
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM jobs WHERE status = 'running' AND attempts = 1"), kJobs);
+}
+
+}  // namespace
+}  // namespace tally::store::testing

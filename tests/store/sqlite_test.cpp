@@ -1,0 +1,81 @@
+// The Statement/Transaction wrapper: binding by index and name, getters,
+// errors, rollback by default.
+#include "store/sqlite.hpp"
+
+#include <gtest/gtest.h>
+
+namespace tally::store {
+namespace {
+
+struct Db {
+  Db() { EXPECT_EQ(sqlite3_open(":memory:", &db), SQLITE_OK); }
+  ~Db() { sqlite3_close(db); }
+  sqlite3* db = nullptr;
+};
+
+TEST(Statement, BindsAndReadsEveryType) {
+  Db d;
+  exec(d.db, "CREATE TABLE t (i INTEGER, r REAL, s TEXT, b BLOB, j TEXT, n TEXT)");
+  Statement insert(d.db, "INSERT INTO t VALUES (:i, :r, :s, :b, :j, :n)");
+  const std::vector<uint8_t> blob = {0, 1, 2, 255};
+  insert.bind(":i", int64_t{1} << 40)
+      .bind(":r", 0.1)
+      .bind(":s", std::string("it's \"quoted\"; DROP TABLE t; --"))
+      .bind(":b", std::span<const uint8_t>(blob))
+      .bind(":j", nlohmann::json{{"a", {1, 2}}})
+      .bind(":n", std::optional<std::string>());
+  insert.run();
+  Statement select(d.db, "SELECT i, r, s, b, j, n FROM t WHERE s LIKE ?1");
+  select.bind(1, "it's%");
+  ASSERT_TRUE(select.step());
+  EXPECT_EQ(select.getInt(0), int64_t{1} << 40);
+  EXPECT_EQ(select.getDouble(1), 0.1);
+  EXPECT_EQ(select.getText(2), "it's \"quoted\"; DROP TABLE t; --");
+  EXPECT_EQ(select.getBlob(3), blob);
+  EXPECT_EQ(select.getJson(4), (nlohmann::json{{"a", {1, 2}}}));
+  EXPECT_TRUE(select.isNull(5));
+  EXPECT_FALSE(select.getOptText(5));
+  EXPECT_EQ(select.getOptInt(0), int64_t{1} << 40);
+  EXPECT_TRUE(select.getJson(5).is_null());
+  EXPECT_FALSE(select.step());
+  // Reset and run again with other values.
+  select.reset();
+  select.bind(1, "nothing%");
+  EXPECT_FALSE(select.step());
+}
+
+TEST(Statement, ErrorsThrowWithTheReason) {
+  Db d;
+  EXPECT_THROW(Statement(d.db, "SELEKT 1"), SqliteError);
+  exec(d.db, "CREATE TABLE t (x INTEGER NOT NULL)");
+  Statement insert(d.db, "INSERT INTO t VALUES (?1)");
+  EXPECT_THROW(insert.bind(":missing", 1), SqliteError);
+  insert.bind(1, nullptr);
+  try {
+    insert.run();
+    FAIL() << "NOT NULL not enforced";
+  } catch (const SqliteError& e) {
+    EXPECT_EQ(e.code() & 0xff, SQLITE_CONSTRAINT);
+    EXPECT_NE(std::string(e.what()).find("NOT NULL"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Transaction, RollsBackUnlessCommitted) {
+  Db d;
+  exec(d.db, "CREATE TABLE t (x)");
+  {
+    Transaction tx(d.db, Transaction::Kind::Write);
+    exec(d.db, "INSERT INTO t VALUES (1)");
+  }
+  {
+    Transaction tx(d.db, Transaction::Kind::Write);
+    exec(d.db, "INSERT INTO t VALUES (2)");
+    tx.commit();
+  }
+  Statement count(d.db, "SELECT group_concat(x) FROM t");
+  ASSERT_TRUE(count.step());
+  EXPECT_EQ(count.getText(0), "2");
+}
+
+}  // namespace
+}  // namespace tally::store

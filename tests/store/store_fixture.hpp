@@ -1,0 +1,251 @@
+// Shared by the store tests: temporary databases and capture results built as
+// docs/result-schema.md describes them.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "store/store.hpp"
+
+namespace tally::store::testing {
+
+using nlohmann::json;
+
+// A database file in the temporary directory, removed (with -wal, -shm) afterwards.
+class TempDb {
+ public:
+  TempDb() {
+    static std::atomic<int> counter{0};
+    path_ = (std::filesystem::temp_directory_path() /
+             ("tally_store_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ".db"))
+                .string();
+    removeFiles();
+  }
+  ~TempDb() { removeFiles(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  void removeFiles() {
+    for (const char* suffix : {"", "-wal", "-shm", "-journal"}) std::filesystem::remove(path_ + suffix);
+  }
+  std::string path_;
+};
+
+inline std::unique_ptr<Store> openStore(const std::string& path, Store::Options options = {}) {
+  auto store = Store::open(path, options);
+  if (!store) ADD_FAILURE() << store.error();
+  return store ? std::move(store).value() : nullptr;
+}
+
+// Runs a one-value query on the raw connection (test-only SQL, no values).
+inline int64_t scalar(Store& store, const std::string& sql) {
+  sqlite3_stmt* statement = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(store.handle(), sql.c_str(), -1, &statement, nullptr), SQLITE_OK) << sql;
+  int64_t value = -1;
+  if (sqlite3_step(statement) == SQLITE_ROW) value = sqlite3_column_int64(statement, 0);
+  sqlite3_finalize(statement);
+  return value;
+}
+
+// A minimal PNG: signature, IHDR (width, height), IEND. Enough for the store.
+inline std::vector<uint8_t> fakePng(uint32_t width, uint32_t height, uint8_t tag = 0) {
+  std::vector<uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R'};
+  for (uint32_t v : {width, height}) {
+    for (int shift = 24; shift >= 0; shift -= 8) png.push_back(static_cast<uint8_t>(v >> shift));
+  }
+  png.insert(png.end(),
+             {8, 6, 0, 0, 0, tag, tag, tag, tag, 0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82});
+  return png;
+}
+
+inline json device(const std::string& name = "llvmpipe (LLVM 15.0.6, 256 bits)") {
+  return {{"index", 0},
+          {"name", name},
+          {"type", "cpu"},
+          {"vendorID", "0x10005"},
+          {"deviceID", "0x0000"},
+          {"apiVersion", "1.3.230"},
+          {"driverInfo", "Mesa 22.3.6"},
+          {"subgroupSize", 8},
+          {"features", {{"int64Atomics", true}, {"fragmentBarycentric", false}}}};
+}
+
+inline json spread(double median) {
+  return {{"median", median},    {"q1", median * 0.98}, {"q3", median * 1.02}, {"iqr", median * 0.04},
+          {"min", median * 0.9}, {"max", median * 1.1}, {"mean", median},      {"n", 20}};
+}
+
+inline json makeCounter(const std::string& name, const std::string& access, double count, double bytes,
+                        const std::string& source = "counter") {
+  return {{"name", name},
+          {"format", "R8G8B8A8_UNORM"},
+          {"kind", "texture"},
+          {"access", access},
+          {"count", count},
+          {"bytes", bytes},
+          {"count_spread", spread(count)},
+          {"source", source}};
+}
+
+inline json makePass(const std::string& name, double gpuMs, double fragments, std::vector<json> counters) {
+  return {{"name", name},
+          {"gpu_ms", gpuMs},
+          {"gpu_ms_spread", spread(gpuMs)},
+          {"gpu_ms_instrumented", gpuMs * 1.1},
+          {"overhead_ratio", 1.1},
+          {"fragment_invocations", fragments},
+          {"fragment_invocations_statistic", fragments + 8},
+          {"resources", std::move(counters)}};
+}
+
+inline json makeSample(int index, double frameMs, std::vector<json> passes,
+                       const std::string& screenshot = "") {
+  json s = {
+      {"camera",
+       {{"eye", {1.0, 2.0, 3.0}},
+        {"target", {0.0, 0.0, 0.0}},
+        {"fov_deg", 60},
+        {"label", "cam"},
+        {"index", index}}},
+      {"sky_fraction", 0.25 * index},
+      {"sky_fraction_estimate", 0.25 * index + 0.01},
+      {"image_error",
+       {{"against", "forward"}, {"psnr", 41.5}, {"identical", false}, {"max_abs", 12}, {"mean_abs", 0.4}}},
+      {"frames", 20},
+      {"frame_ms", frameMs},
+      {"frame_ms_spread", spread(frameMs)},
+      {"frame_ms_instrumented", frameMs * 1.1},
+      {"overhead_ratio", 1.1},
+      {"passes", std::move(passes)}};
+  s["screenshot"] = screenshot.empty() ? json(nullptr) : json(screenshot);
+  return s;
+}
+
+inline json makeRun(const std::string& renderer, const std::string& scene, int width, int height,
+                    std::vector<json> samples) {
+  return {{"renderer", renderer},
+          {"scene", scene},
+          {"scene_params", {{"seed", 1}}},
+          {"width", width},
+          {"height", height},
+          {"counting", "exact"},
+          {"lights", 400},
+          {"notes", {{"barycentrics", "extension"}}},
+          {"resources",
+           {{"render_target_bytes", int64_t{width} * height * 12},
+            {"list",
+             {{{"name", "gbuffer.normal"},
+               {"kind", "attachment"},
+               {"format", "R16G16B16A16_SFLOAT"},
+               {"element_bytes", 8},
+               {"width", width},
+               {"height", height},
+               {"allocation_bytes", int64_t{width} * height * 8 + 2048},
+               {"format_bytes", int64_t{width} * height * 8},
+               {"usage", "color_attachment|sampled"}},
+              {{"name", "depth"},
+               {"kind", "depth"},
+               {"format", "D32_SFLOAT_S8_UINT"},
+               {"element_bytes", 5},
+               {"width", width},
+               {"height", height},
+               {"allocation_bytes", int64_t{width} * height * 8},
+               {"format_bytes", int64_t{width} * height * 5},
+               {"usage", "depth_stencil_attachment"}}}}}},
+          {"samples", std::move(samples)}};
+}
+
+inline json makeCapture(std::vector<json> runs,
+                        const std::string& deviceName = "llvmpipe (LLVM 15.0.6, 256 bits)") {
+  return {{"device", device(deviceName)},
+          {"spec", {{"renderers", {"forward", "deferred"}}, {"resolutions", {{320, 180}}}}},
+          {"shaders", {{"forward.frag.glsl", "9c1d00aa"}, {"deferred.frag.glsl", "77aa0011"}}},
+          {"runs", std::move(runs)}};
+}
+
+struct Capture {
+  json result;
+  std::map<std::string, std::vector<uint8_t>> screenshots;
+};
+
+// 2 runs (forward, deferred) x 2 samples x 4 passes x 3 counters each, with
+// screenshots; `seed` shifts every value so captures differ.
+inline Capture realisticCapture(int seed = 0, const std::string& scene = "atrium", int width = 320,
+                                int height = 180,
+                                const std::string& deviceName = "llvmpipe (LLVM 15.0.6, 256 bits)") {
+  Capture c;
+  std::vector<json> runs;
+  const std::vector<std::pair<std::string, std::vector<std::string>>> renderers = {
+      {"forward", {"depth", "opaque", "skybox", "post"}},
+      {"deferred", {"gbuffer", "lighting", "skybox", "post"}}};
+  for (size_t r = 0; r < renderers.size(); ++r) {
+    std::vector<json> samples;
+    for (int s = 0; s < 2; ++s) {
+      std::vector<json> passes;
+      double frame = 0;
+      for (size_t p = 0; p < 4; ++p) {
+        double base = seed * 1000 + r * 100 + s * 10 + p;
+        double gpu = 0.25 + 0.125 * static_cast<double>(p) + 0.0625 * s + 0.5 * static_cast<double>(r);
+        frame += gpu;
+        passes.push_back(makePass(renderers[r].second[p], gpu, 57600 + base,
+                                  {makeCounter("material_maps.diffuse", "read", base * 4, base * 16),
+                                   makeCounter("gbuffer.normal", "write", base * 2, base * 16),
+                                   makeCounter("depth", "write", base, base * 5, "derived")}));
+      }
+      std::string shot = renderers[r].first + "_" + scene + "_" + std::to_string(width) + "x" +
+                         std::to_string(height) + "_cam" + std::to_string(s) + ".png";
+      samples.push_back(makeSample(s, frame, std::move(passes), shot));
+      c.screenshots[shot] = fakePng(width, height, static_cast<uint8_t>(seed + r * 2 + s));
+    }
+    runs.push_back(makeRun(renderers[r].first, scene, width, height, std::move(samples)));
+  }
+  // The forward run is the reference: identical images, no sky on camera 0.
+  runs[0]["samples"][0]["image_error"] = {
+      {"against", "forward"}, {"psnr", nullptr}, {"identical", true}, {"max_abs", 0}, {"mean_abs", 0}};
+  runs[0]["samples"][0]["sky_fraction"] = -1.0;
+  c.result = makeCapture(std::move(runs), deviceName);
+  return c;
+}
+
+// A store on a fresh temporary file; checks integrity after every test.
+class StoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    store_ = openStore(db_.path());
+    ASSERT_NE(store_, nullptr);
+  }
+  void TearDown() override {
+    if (!store_) return;
+    auto integrity = store_->integrityCheck();
+    ASSERT_TRUE(integrity) << integrity.error();
+    EXPECT_EQ(*integrity, "ok");
+    auto fk = scalar(*store_, "SELECT COUNT(*) FROM pragma_foreign_key_check");
+    EXPECT_EQ(fk, 0);
+  }
+  int64_t newJob(const std::string& key = "") {
+    auto job =
+        store_->createJob({{"renderers", {"forward"}}}, key.empty() ? std::nullopt : std::optional(key));
+    EXPECT_TRUE(job) << job.error();
+    return job ? job->job.id : 0;
+  }
+  int64_t ingest(int64_t jobId, const Capture& c) {
+    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    EXPECT_TRUE(stored) << stored.error();
+    return stored ? *stored : -1;
+  }
+
+  TempDb db_;
+  std::unique_ptr<Store> store_;
+};
+
+}  // namespace tally::store::testing
