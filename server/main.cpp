@@ -30,6 +30,18 @@ int main(int argc, char** argv) {
   capture->add_flag("--quiet", captureArgs.quiet, "No progress lines on standard error");
   capture->add_flag("--summary", captureArgs.summary, "Print a per-pass, per-resource summary (with --out)");
 
+  tally::cli::ServeArgs serveArgs;
+  auto* serve = app.add_subcommand("serve", "Serve the REST API and dashboard; run queued captures");
+  serve->add_option("--db", serveArgs.db, "SQLite database file")->required();
+  serve->add_option("--bind", serveArgs.bind, "Address to listen on")->capture_default_str();
+  serve->add_option("--port", serveArgs.port, "Port (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
+  serve->add_option("--token-file", serveArgs.tokenFile, "Token file (required off loopback)");
+  serve->add_option("--device", serveArgs.device, "Device index or name substring for captures");
+  serve->add_option("--web", serveArgs.web, "Dashboard folder");
+  serve->add_option("--scenes", serveArgs.scenes, "Folder glTF scenes may be loaded from (repeatable)");
+  serve->add_option("--job-deadline", serveArgs.jobDeadlineSeconds, "Seconds a capture job may run")
+      ->capture_default_str()->check(CLI::Range(1, 7 * 24 * 3600));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -38,5 +50,6 @@ int main(int argc, char** argv) {
   if (*instrument) return tally::cli::runInstrument(instrumentArgs);
   if (*demo) return tally::cli::runDemo(demoArgs);
   if (*capture) return tally::cli::runCapture(captureArgs);
+  if (*serve) return tally::cli::runServe(serveArgs);
   return 2;
 }

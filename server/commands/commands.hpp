@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace tally::cli {
 
@@ -41,5 +42,20 @@ struct CaptureArgs {
 // screenshots go beside it in <out>-screenshots/. Bad specs get one line
 // naming the field and exit 1.
 int runCapture(const CaptureArgs& args);
+
+struct ServeArgs {
+  std::string db;                   // SQLite file (created and migrated)
+  std::string bind = "127.0.0.1";
+  int port = 8080;                  // 0: an ephemeral port (printed)
+  std::string tokenFile;            // required for a non-loopback bind
+  std::string device;               // passed to each capture as --device
+  std::string web;                  // dashboard files; empty: none
+  std::vector<std::string> scenes;  // folders glTF scenes may come from
+  int jobDeadlineSeconds = 1800;    // per capture job
+};
+
+// Serves the REST API (and the dashboard) until SIGINT/SIGTERM; runs queued
+// captures one at a time in child processes. Prints "http://ADDR:PORT/".
+int runServe(const ServeArgs& args);
 
 }  // namespace tally::cli

@@ -93,6 +93,13 @@ Result<ChildResult> runChild(const ChildOptions& options) {
       kill(-pid, SIGKILL);
     }
   };
+  bool stopped = false;
+  auto checkStop = [&] {
+    if (!stopped && options.shouldStop && options.shouldStop()) {
+      stopped = true;
+      kill(-pid, SIGKILL);
+    }
+  };
   bool open = true;
   while (open) {
     int timeoutMs = 200;
@@ -117,6 +124,7 @@ Result<ChildResult> runChild(const ChildOptions& options) {
       }
     }
     enforceDeadline();
+    checkStop();
   }
   close(errPipe[0]);
   // The pipe closes when the child (and whatever inherited it) exits; a child
@@ -127,6 +135,7 @@ Result<ChildResult> runChild(const ChildOptions& options) {
     if (done == pid) break;
     if (done < 0 && errno != EINTR) return makeError(std::string("waitpid: ") + std::strerror(errno));
     enforceDeadline();
+    checkStop();
     usleep(20000);
   }
   if (!pending.empty() && options.onStderrLine) options.onStderrLine(pending);

@@ -19,6 +19,9 @@ struct ChildOptions {
   // Called with each line the child writes to stderr (progress, errors).
   std::function<void(const std::string&)> onStderrLine;
   size_t stderrTailBytes = 4096;          // kept for the failure reason
+  // Polled about every 200 ms; true kills the child's process group (SIGKILL),
+  // e.g. when its job was cancelled. Empty: never.
+  std::function<bool()> shouldStop;
 };
 
 struct ChildResult {

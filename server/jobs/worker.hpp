@@ -1,0 +1,70 @@
+// Worker: the one thread that runs capture jobs. It owns the writer Store's
+// job transitions: claims the oldest queued job, runs `tallyd capture` on it
+// in a child process (so a crash, hang, lost device or OOM ends only that
+// job), reports progress, ingests the result and finishes the job.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <filesystem>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "common/result.hpp"
+#include "store/store.hpp"
+
+namespace tally::jobs {
+
+struct WorkerOptions {
+  std::string tallydPath;  // the executable run as `tallyd capture ...`
+  std::string device;      // passed as --device when not empty
+  std::chrono::milliseconds deadline{std::chrono::minutes(30)};  // per job
+  int maxAttempts = 3;              // a job interrupted this often fails on restart
+  std::filesystem::path tempRoot;   // empty: std::filesystem::temp_directory_path()
+  std::chrono::milliseconds idlePoll{500};  // queue poll when not woken
+  std::function<void(std::string_view)> log;  // default: stderr
+};
+
+// "[3/12] deferred atrium 320x180 camera 2" -> done 3, total 12, current.
+struct ProgressLine {
+  int64_t done = 0, total = 0;
+  std::string current;
+};
+std::optional<ProgressLine> parseProgressLine(const std::string& line);
+
+class Worker {
+ public:
+  Worker(store::Store& writer, WorkerOptions options);
+  ~Worker();  // stop()
+  Worker(const Worker&) = delete;
+  Worker& operator=(const Worker&) = delete;
+
+  // Start-up recovery (requeueInterrupted(maxAttempts)); call before start().
+  Result<store::Recovery> recover();
+  void start();
+  // Stops after the current step; a running child is killed and its job left
+  // running, so the next start's recovery retries it.
+  void stop();
+  // A job was queued: look now instead of at the next poll.
+  void wake();
+
+ private:
+  void loop();
+  void runJob(const store::Job& job);
+  void log(const std::string& line) const;
+
+  store::Store& store_;
+  WorkerOptions options_;
+  std::thread thread_;
+  std::atomic<bool> stopping_{false};
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  bool woken_ = false;
+};
+
+}  // namespace tally::jobs

@@ -1,0 +1,627 @@
+#include "service/service.hpp"
+
+#include <cctype>
+#include <cstdio>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+#include "capture/spec.hpp"
+
+namespace tally::service {
+namespace fs = std::filesystem;
+using api::Request;
+using api::Response;
+using nlohmann::json;
+
+namespace {
+
+// A bad request, thrown by the validators and answered as 400 (or `status`).
+struct RequestError : std::runtime_error {
+  RequestError(int s, std::string c, std::string m, std::string f = {})
+      : std::runtime_error(m), status(s), code(std::move(c)), field(std::move(f)) {}
+  int status;
+  std::string code, field;
+};
+
+[[noreturn]] void invalid(const std::string& field, const std::string& message) {
+  throw RequestError(400, api::code::kInvalidField, field + ": " + message, field);
+}
+
+// A store failure: logged, answered 500 without detail.
+struct StoreError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+template <class T>
+T check(Result<T> r) {
+  if (!r) throw StoreError(r.error());
+  return std::move(r).value();
+}
+
+// ---- query parameters -----------------------------------------------------------
+
+std::optional<int64_t> queryInt(const Request& req, const std::string& key, int64_t low, int64_t high) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return std::nullopt;
+  int64_t n = 0;
+  size_t used = 0;
+  try {
+    n = std::stoll(*v, &used, 10);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (v->empty() || used != v->size() || !(std::isdigit(static_cast<unsigned char>((*v)[0])) || (*v)[0] == '-') ||
+      n < low || n > high) {
+    invalid(key, "must be an integer between " + std::to_string(low) + " and " + std::to_string(high));
+  }
+  return n;
+}
+
+std::optional<std::string> queryString(const Request& req, const std::string& key, size_t maxLength = 256) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return std::nullopt;
+  if (v->empty() || v->size() > maxLength) {
+    invalid(key, "must be 1 to " + std::to_string(maxLength) + " characters");
+  }
+  return *v;
+}
+
+int64_t pathId(const Request& req) {
+  const std::string& v = req.param("id");
+  int64_t n = 0;
+  size_t used = 0;
+  try {
+    n = std::stoll(v, &used, 10);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (v.empty() || used != v.size() || !std::isdigit(static_cast<unsigned char>(v[0])) || n < 1) {
+    invalid("id", "must be a positive integer");
+  }
+  return n;
+}
+
+store::Page queryPage(const Request& req) {
+  store::Page page;
+  page.limit = static_cast<int>(queryInt(req, "limit", 1, 1000).value_or(100));
+  if (auto c = queryString(req, "cursor", 64)) {
+    if (!store::decodeCursor(*c)) invalid("cursor", "not a cursor from a previous page");
+    page.cursor = *c;
+  }
+  return page;
+}
+
+void allowOnly(const Request& req, const std::set<std::string>& keys) {
+  for (const auto& [key, value] : req.query) {
+    if (!keys.count(key)) {
+      std::string known;
+      for (const auto& k : keys) known += (known.empty() ? "" : ", ") + k;
+      invalid(key, "unknown query parameter (expected " + (known.empty() ? std::string("none") : known) + ")");
+    }
+  }
+}
+
+store::RunFilter queryFilter(const Request& req) {
+  store::RunFilter f;
+  f.renderer = queryString(req, "renderer");
+  f.scene = queryString(req, "scene");
+  if (auto w = queryInt(req, "width", 1, capture::kMaxDimension)) f.width = static_cast<int>(*w);
+  if (auto h = queryInt(req, "height", 1, capture::kMaxDimension)) f.height = static_cast<int>(*h);
+  if (const std::string* d = req.queryValue("device")) {
+    // A device id, or its exact name.
+    bool numeric = !d->empty() && d->find_first_not_of("0123456789") == std::string::npos;
+    if (numeric) {
+      f.deviceId = queryInt(req, "device", 1, INT64_MAX);
+    } else {
+      f.deviceName = queryString(req, "device");
+    }
+  }
+  f.jobId = queryInt(req, "capture", 1, INT64_MAX);
+  return f;
+}
+
+// ---- JSON ------------------------------------------------------------------------
+
+template <class T>
+json opt(const std::optional<T>& v) {
+  return v ? json(*v) : json(nullptr);
+}
+
+json jobJson(const store::Job& j) {
+  return {{"id", j.id},
+          {"status", store::toString(j.status)},
+          {"spec", j.spec},
+          {"progress", {{"done", j.progressDone}, {"total", j.progressTotal}, {"current", opt(j.progressCurrent)}}},
+          {"error", opt(j.error)},
+          {"attempts", j.attempts},
+          {"created_at", j.createdAt},
+          {"started_at", opt(j.startedAt)},
+          {"finished_at", opt(j.finishedAt)}};
+}
+
+json runRowJson(const store::RunRow& r) {
+  return {{"id", r.id},
+          {"capture", r.jobId},
+          {"device_id", r.deviceId},
+          {"device", r.deviceName},
+          {"renderer", r.renderer},
+          {"scene", r.scene},
+          {"scene_params", r.sceneParams},
+          {"width", r.width},
+          {"height", r.height},
+          {"counting", r.counting},
+          {"lights", r.lights},
+          {"render_target_bytes", opt(r.renderTargetBytes)},
+          {"notes", r.notes},
+          {"created_at", r.createdAt},
+          {"sample_count", r.sampleCount},
+          {"mean_frame_ms", opt(r.meanFrameMs)},
+          {"mean_bytes", opt(r.meanBytes)}};
+}
+
+json deviceJson(const store::Device& d) {
+  return {{"id", d.id},           {"name", d.name},         {"vendor", d.vendor}, {"driver", d.driver},
+          {"api_version", d.apiVersion}, {"features", d.features}, {"info", d.info}};
+}
+
+json sampleRowJson(const store::SampleRow& s) {
+  json j = {{"id", s.id},
+            {"run", s.runId},
+            {"camera_index", s.cameraIndex},
+            {"camera", s.camera},
+            {"sky_fraction", opt(s.skyFraction)},
+            {"sky_fraction_estimate", opt(s.skyFractionEstimate)},
+            {"frames", opt(s.frames)},
+            {"frame_ms", s.frameMs},
+            {"frame_ms_spread", s.frameMsSpread},
+            {"frame_ms_instrumented", opt(s.frameMsInstrumented)},
+            {"overhead_ratio", opt(s.overheadRatio)},
+            {"bytes", s.bytes},
+            {"image_error", nullptr},
+            {"screenshot", s.hasScreenshot ? json("/api/samples/" + std::to_string(s.id) + "/screenshot.png")
+                                           : json(nullptr)}};
+  if (s.imageError) {
+    j["image_error"] = {{"against", s.imageError->against},
+                        {"identical", s.imageError->identical},
+                        {"psnr", opt(s.imageError->psnr)},
+                        {"max_abs", s.imageError->maxAbs},
+                        {"mean_abs", s.imageError->meanAbs}};
+  }
+  return j;
+}
+
+json passJson(const store::Pass& p) {
+  json resources = json::array();
+  for (const auto& c : p.counters) {
+    resources.push_back({{"name", c.resource},
+                         {"kind", opt(c.kind)},
+                         {"format", opt(c.format)},
+                         {"access", c.access},
+                         {"count", c.count},
+                         {"bytes", c.bytes},
+                         {"count_spread", c.countSpread},
+                         {"source", c.source}});
+  }
+  return {{"name", p.name},
+          {"gpu_ms", p.gpuMs},
+          {"gpu_ms_spread", p.gpuMsSpread},
+          {"gpu_ms_instrumented", opt(p.gpuMsInstrumented)},
+          {"overhead_ratio", opt(p.overheadRatio)},
+          {"fragment_invocations", opt(p.fragmentInvocations)},
+          {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
+          {"resources", resources}};
+}
+
+json comparedJson(const std::vector<store::Compared>& values) {
+  json out = json::array();
+  for (const auto& c : values) out.push_back({{"value", opt(c.value)}, {"delta", opt(c.delta)}, {"ratio", opt(c.ratio)}});
+  return out;
+}
+
+json comparisonJson(const store::Comparison& c) {
+  json runs = json::array(), passes = json::array(), resources = json::array();
+  for (const auto& r : c.runs) runs.push_back(runRowJson(r));
+  for (const auto& p : c.passes) {
+    passes.push_back({{"pass", p.pass},
+                      {"gpu_ms", comparedJson(p.gpuMs)},
+                      {"bytes", comparedJson(p.bytes)},
+                      {"fragment_invocations", comparedJson(p.fragmentInvocations)}});
+  }
+  for (const auto& r : c.resources) {
+    resources.push_back({{"resource", r.resource},
+                         {"access", r.access},
+                         {"count", comparedJson(r.count)},
+                         {"bytes", comparedJson(r.bytes)}});
+  }
+  return {{"runs", runs},
+          {"frame_ms", comparedJson(c.frameMs)},
+          {"total_bytes", comparedJson(c.totalBytes)},
+          {"passes", passes},
+          {"resources", resources}};
+}
+
+// ---- the reader ---------------------------------------------------------------------
+
+store::Store& reader(const ServiceContext& ctx) {
+  thread_local std::string path;
+  thread_local std::unique_ptr<store::Store> store;
+  if (!store || path != ctx.dbPath) {
+    store.reset();
+    auto opened = store::Store::open(ctx.dbPath, {.readOnly = true});
+    if (!opened) throw StoreError("cannot open a reader: " + opened.error());
+    store = std::move(opened).value();
+    path = ctx.dbPath;
+  }
+  return *store;
+}
+
+// ---- capture specs -------------------------------------------------------------------
+
+// "scenes[0]: layers: must be ..." -> "scenes[0]".
+std::string fieldOf(const std::string& message) {
+  size_t colon = message.find(": ");
+  return colon == std::string::npos ? std::string("spec") : message.substr(0, colon);
+}
+
+bool under(const fs::path& file, const fs::path& folder) {
+  auto f = file.begin(), d = folder.begin();
+  for (; d != folder.end(); ++d, ++f) {
+    if (d->empty()) continue;  // a trailing separator
+    if (f == file.end() || *f != *d) return false;
+  }
+  return true;
+}
+
+// Resolves a glTF path against the scene folders: relative paths are looked
+// up in each folder, absolute ones must lie in one; symlinks are followed
+// before the check, so a link cannot escape. Returns the canonical path.
+std::string resolveGltf(const ServiceOptions& options, const std::string& given, const std::string& field) {
+  if (options.sceneFolders.empty()) invalid(field, "glTF scenes are not enabled (the daemon has no --scenes folder)");
+  if (given.size() > 4096 || given.find('\0') != std::string::npos) invalid(field, "not a valid path");
+  fs::path p(given);
+  for (const auto& part : p) {
+    if (part == "..") invalid(field, "must not contain '..'");
+  }
+  std::error_code ec;
+  for (const auto& folder : options.sceneFolders) {
+    fs::path root = fs::canonical(folder, ec);
+    if (ec) continue;
+    fs::path candidate = p.is_absolute() ? p : root / p;
+    fs::path real = fs::canonical(candidate, ec);
+    if (ec) continue;
+    if (!under(real, root)) {
+      if (p.is_absolute()) continue;
+      invalid(field, "resolves outside the scene folders");
+    }
+    if (!fs::is_regular_file(real, ec)) invalid(field, "not a file");
+    auto ext = real.extension().string();
+    if (ext != ".gltf" && ext != ".glb") invalid(field, "must be a .gltf or .glb file");
+    return real.string();
+  }
+  invalid(field, "no such file under the scene folders");
+}
+
+json validateSpec(const ServiceContext& ctx, const json& body) {
+  if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
+  auto parsed = capture::parseCaptureSpec(body, ctx.rendererNames);
+  if (!parsed) {
+    throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
+  }
+  const auto& spec = *parsed;
+  const auto& options = ctx.options;
+  for (size_t i = 0; i < spec.resolutions.size(); ++i) {
+    uint64_t pixels = uint64_t(spec.resolutions[i].width) * spec.resolutions[i].height;
+    if (pixels > options.maxPixels) {
+      invalid("resolutions[" + std::to_string(i) + "]",
+              "at most " + std::to_string(options.maxPixels) + " pixels on this server, got " + std::to_string(pixels));
+    }
+  }
+  if (spec.frames > options.maxFrames) {
+    invalid("frames", "at most " + std::to_string(options.maxFrames) + " on this server");
+  }
+  size_t cameras = spec.autoCameras ? 10 : spec.cameras.size();
+  if (spec.sampleCount(cameras) > options.maxMatrix) {
+    invalid("spec", "the matrix (renderers x scenes x resolutions x cameras) has " +
+                        std::to_string(spec.sampleCount(cameras)) + " samples; at most " +
+                        std::to_string(options.maxMatrix) + " on this server");
+  }
+  json stored = body;
+  if (stored.contains("scenes")) {
+    for (size_t i = 0; i < stored["scenes"].size(); ++i) {
+      json& s = stored["scenes"][i];
+      if (s.is_object() && s.contains("gltf")) {
+        std::string field = "scenes[" + std::to_string(i) + "].gltf";
+        s["gltf"] = resolveGltf(options, s["gltf"].get<std::string>(), field);
+      }
+    }
+  }
+  return stored;
+}
+
+// ---- handlers ------------------------------------------------------------------------
+
+Response wrap(ServiceContext& ctx, const std::function<Response()>& handler) {
+  try {
+    return handler();
+  } catch (const RequestError& e) {
+    return api::errorResponse(e.status, e.code, e.what(), e.field);
+  } catch (const std::exception& e) {
+    std::string line = std::string("service: ") + e.what();
+    if (ctx.log) {
+      ctx.log(line);
+    } else {
+      std::fprintf(stderr, "%s\n", line.c_str());
+    }
+    return api::errorResponse(500, api::code::kInternal, "internal error");
+  }
+}
+
+Response postCapture(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  json spec = validateSpec(ctx, req.body);
+  std::optional<std::string> key;
+  if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
+  auto created = check(ctx.writer->createJob(spec, key));
+  if (created.conflict) {
+    throw RequestError(409, api::code::kConflict,
+                       "Idempotency-Key was used before with a different spec (capture " +
+                           std::to_string(created.job.id) + ")",
+                       "Idempotency-Key");
+  }
+  if (created.created && ctx.onJobQueued) ctx.onJobQueued();
+  Response r = Response::ok({{"id", created.job.id}, {"status", store::toString(created.job.status)}}, 202);
+  r.headers.emplace_back("Location", "/api/captures/" + std::to_string(created.job.id));
+  return r;
+}
+
+Response listCaptures(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"status", "limit", "cursor"});
+  std::optional<store::JobStatus> status;
+  if (auto s = queryString(req, "status", 32)) {
+    status = store::parseJobStatus(*s);
+    if (!status) invalid("status", "must be queued, running, done, failed or cancelled");
+  }
+  auto page = check(reader(ctx).listJobs(status, queryPage(req)));
+  json jobs = json::array();
+  for (const auto& j : page.jobs) jobs.push_back(jobJson(j));
+  return Response::ok({{"captures", jobs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
+}
+
+Response getCapture(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto job = check(reader(ctx).getJob(id));
+  if (!job) return api::notFound("no capture " + std::to_string(id));
+  return Response::ok(jobJson(*job));
+}
+
+Response cancelCapture(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto before = check(ctx.writer->getJob(id));
+  if (!before) return api::notFound("no capture " + std::to_string(id));
+  auto finished = [](store::JobStatus s) { return s != store::JobStatus::Queued && s != store::JobStatus::Running; };
+  auto job = finished(before->status) ? before : check(ctx.writer->cancelJob(id));
+  if (!job) return api::notFound("no capture " + std::to_string(id));
+  // Finished before (a second cancel included) or meanwhile: nothing to cancel.
+  if (finished(before->status) || job->status != store::JobStatus::Cancelled) {
+    return api::conflict("capture " + std::to_string(id) + " has already finished (" + store::toString(job->status) +
+                         ")");
+  }
+  return Response::ok(jobJson(*job));
+}
+
+Response listRuns(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "limit", "cursor"});
+  auto filter = queryFilter(req);
+  auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
+  json runs = json::array();
+  for (const auto& r : page.runs) runs.push_back(runRowJson(r));
+  return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
+}
+
+Response getRun(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto run = check(reader(ctx).getRun(id));
+  if (!run) return api::notFound("no run " + std::to_string(id));
+  json j = runRowJson(run->row);
+  j["device_info"] = deviceJson(run->device);
+  json resources = json::array();
+  for (const auto& r : run->resources) {
+    resources.push_back({{"name", r.name},
+                         {"kind", r.kind},
+                         {"format", opt(r.format)},
+                         {"element_bytes", opt(r.elementBytes)},
+                         {"width", opt(r.width)},
+                         {"height", opt(r.height)},
+                         {"allocation_bytes", opt(r.allocationBytes)},
+                         {"format_bytes", opt(r.formatBytes)},
+                         {"usage", opt(r.usage)}});
+  }
+  j["resources"] = resources;
+  j["shaders"] = run->shaders;
+  return Response::ok(j);
+}
+
+Response listSamples(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto& store = reader(ctx);
+  if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
+  json samples = json::array();
+  for (const auto& s : check(store.listSamples(id))) samples.push_back(sampleRowJson(s));
+  return Response::ok({{"samples", samples}});
+}
+
+Response getSample(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto sample = check(reader(ctx).getSample(id));
+  if (!sample) return api::notFound("no sample " + std::to_string(id));
+  json j = sampleRowJson(sample->row);
+  json passes = json::array();
+  for (const auto& p : sample->passes) passes.push_back(passJson(p));
+  j["passes"] = passes;
+  return Response::ok(j);
+}
+
+Response getScreenshot(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto png = check(reader(ctx).getScreenshot(id));
+  if (!png) return api::notFound("no screenshot for sample " + std::to_string(id));
+  return Response::raw(std::string(png->begin(), png->end()), "image/png");
+}
+
+Response compare(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"runs"});
+  const std::string* list = req.queryValue("runs");
+  if (!list) invalid("runs", "required: 2 to 4 run ids, comma-separated");
+  std::vector<int64_t> ids;
+  std::stringstream in(*list);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    size_t used = 0;
+    int64_t n = 0;
+    try {
+      n = std::stoll(item, &used, 10);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || !std::isdigit(static_cast<unsigned char>(item[0])) || n < 1) {
+      invalid("runs", "must be 2 to 4 run ids, comma-separated");
+    }
+    for (int64_t seen : ids) {
+      if (seen == n) invalid("runs", "run " + item + " is listed twice");
+    }
+    ids.push_back(n);
+    if (ids.size() > 4) break;
+  }
+  if (!list->empty() && list->back() == ',') invalid("runs", "must be 2 to 4 run ids, comma-separated");
+  if (ids.size() < 2 || ids.size() > 4) invalid("runs", "must be 2 to 4 run ids, comma-separated");
+  auto& store = reader(ctx);
+  for (int64_t id : ids) {
+    if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
+  }
+  return Response::ok(comparisonJson(check(store.compareRuns(ids))));
+}
+
+Response exportRuns(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture"});
+  std::string format = queryString(req, "format", 8).value_or("json");
+  if (format != "csv" && format != "json") invalid("format", "must be csv or json");
+  auto rows = check(reader(ctx).exportRuns(queryFilter(req)));
+  if (format == "json") {
+    json out = json::array();
+    for (const auto& r : rows) {
+      out.push_back({{"run", r.runId},
+                     {"renderer", r.renderer},
+                     {"scene", r.scene},
+                     {"width", r.width},
+                     {"height", r.height},
+                     {"device", r.device},
+                     {"pass", r.pass},
+                     {"resource", r.resource},
+                     {"access", r.access},
+                     {"count", r.count},
+                     {"bytes", r.bytes}});
+    }
+    return Response::ok({{"rows", out}});
+  }
+  std::string csv = "run,renderer,scene,width,height,device,pass,resource,access,count,bytes\r\n";
+  auto num = [](double v) {
+    json j = v;  // shortest round-trip text
+    return j.dump();
+  };
+  for (const auto& r : rows) {
+    csv += std::to_string(r.runId) + "," + csvCell(r.renderer) + "," + csvCell(r.scene) + "," +
+           std::to_string(r.width) + "," + std::to_string(r.height) + "," + csvCell(r.device) + "," +
+           csvCell(r.pass) + "," + csvCell(r.resource) + "," + csvCell(r.access) + "," + num(r.count) + "," +
+           num(r.bytes) + "\r\n";
+  }
+  Response resp = Response::raw(std::move(csv), "text/csv; charset=utf-8");
+  resp.headers.emplace_back("Content-Disposition", "attachment; filename=\"tally-export.csv\"");
+  return resp;
+}
+
+Response listDevices(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  json devices = json::array();
+  for (const auto& d : check(reader(ctx).listDevices())) devices.push_back(deviceJson(d));
+  return Response::ok({{"devices", devices}});
+}
+
+Response listScenes(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  json procedural = json::array({
+      {{"name", "atrium"}, {"parameters", json::object()}},
+      {{"name", "planes"},
+       {"parameters",
+        {{"layers", {{"type", "integer"}, {"default", 8}, {"min", 1}, {"max", 1024}}},
+         {"order", {{"type", "string"}, {"default", "back-to-front"}, {"values", {"back-to-front", "front-to-back"}}}},
+         {"coverage", {{"type", "number"}, {"default", 1.0}, {"min_exclusive", 0.0}, {"max", 1.0}}}}}},
+      {{"name", "sky"}, {"parameters", {{"coverage", {{"type", "number"}, {"default", 0.5}, {"min", 0.0}, {"max", 1.0}}}}}},
+  });
+  constexpr size_t kMaxFiles = 1000;  // per folder: a listing, not a crawl
+  json folders = json::array();
+  for (const auto& folder : ctx.options.sceneFolders) {
+    std::error_code ec;
+    fs::path root = fs::canonical(folder, ec);
+    json files = json::array();
+    if (!ec) {
+      fs::recursive_directory_iterator it(root, fs::directory_options::skip_permission_denied, ec), end;
+      for (; !ec && it != end && files.size() < kMaxFiles; it.increment(ec)) {
+        if (it.depth() > 8) {
+          it.disable_recursion_pending();
+          continue;
+        }
+        auto ext = it->path().extension().string();
+        if ((ext == ".gltf" || ext == ".glb") && it->is_regular_file(ec)) {
+          files.push_back(fs::relative(it->path(), root, ec).string());
+        }
+      }
+    }
+    folders.push_back({{"folder", folder.string()}, {"files", files}});
+  }
+  return Response::ok({{"procedural", procedural}, {"gltf", folders}});
+}
+
+}  // namespace
+
+std::string csvCell(const std::string& value) {
+  std::string v = value;
+  // A leading = + - @ would run as a formula in a spreadsheet.
+  if (!v.empty() && (v[0] == '=' || v[0] == '+' || v[0] == '-' || v[0] == '@')) v = "'" + v;
+  if (v.find_first_of(",\"\r\n") == std::string::npos) return v;
+  std::string out = "\"";
+  for (char c : v) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
+  auto route = [&ctx](Response (*fn)(ServiceContext&, const Request&)) {
+    return [&ctx, fn](const Request& req) { return wrap(ctx, [&] { return fn(ctx, req); }); };
+  };
+  router.post("/api/captures", route(postCapture));
+  router.get("/api/captures", route(listCaptures));
+  router.get("/api/captures/{id}", route(getCapture));
+  router.del("/api/captures/{id}", route(cancelCapture));
+  router.get("/api/runs", route(listRuns));
+  router.get("/api/runs/{id}", route(getRun));
+  router.get("/api/runs/{id}/samples", route(listSamples));
+  router.get("/api/samples/{id}", route(getSample));
+  router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
+  router.get("/api/compare", route(compare));
+  router.get("/api/export", route(exportRuns));
+  router.get("/api/devices", route(listDevices));
+  router.get("/api/scenes", route(listScenes));
+}
+
+}  // namespace tally::service

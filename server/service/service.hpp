@@ -1,0 +1,42 @@
+// Tally's service layer: capture jobs, runs, samples, comparison and export
+// as JSON routes. Handlers see api::Request/Response only (never HTTP) and
+// the SQLite store: writes (create/cancel a job) through the one writer,
+// reads through a read-only Store per thread, opened lazily.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "api/router.hpp"
+#include "store/store.hpp"
+
+namespace tally::service {
+
+struct ServiceOptions {
+  uint64_t maxPixels = 3840ull * 2160ull;  // per resolution: 4K; larger belongs to `tallyd capture`
+  uint32_t maxFrames = 200;                // per sample
+  uint64_t maxMatrix = 1000;               // samples per job ("auto" cameras count 10 per scene)
+  std::vector<std::filesystem::path> sceneFolders;  // glTF files are allowed only under these
+};
+
+struct ServiceContext {
+  store::Store* writer = nullptr;  // job creation and cancellation
+  std::string dbPath;              // readers open this, read-only
+  std::vector<std::string> rendererNames;
+  ServiceOptions options;
+  std::function<void()> onJobQueued;  // wakes the worker; may be empty
+  std::function<void(std::string_view)> log;  // internal errors; default stderr
+};
+
+// POST/GET /api/captures, GET/DELETE /api/captures/{id}, /api/runs...,
+// /api/samples..., /api/compare, /api/export, /api/devices, /api/scenes.
+// (GET /api/renderers is a builtin route.) `context` must outlive the router.
+void addServiceRoutes(api::Router& router, ServiceContext& context);
+
+// Exposed for tests: "a,b" -> CSV-quoted cell.
+std::string csvCell(const std::string& value);
+
+}  // namespace tally::service

@@ -1,0 +1,530 @@
+// `tallyd serve` end to end: a real daemon (child process) on 127.0.0.1 with
+// an ephemeral port and a temp database. One tiny capture on lavapipe feeds
+// the query tests; a table of bad requests; kill -9 during a job and restart.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "store/store.hpp"
+
+extern char** environ;
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+struct Reply {
+  int status = 0;
+  std::string body, contentType;
+  json j() const { return json::parse(body, nullptr, false); }
+};
+
+// A `tallyd serve` child; its stdout (the address line) goes to a file.
+class Daemon {
+ public:
+  Daemon(fs::path dir, fs::path db, std::vector<std::string> extra = {})
+      : dir_(std::move(dir)), db_(std::move(db)), extra_(std::move(extra)) {}
+  ~Daemon() { stop(SIGKILL); }
+
+  bool start() {
+    fs::path out = dir_ / ("serve-" + std::to_string(++starts_) + ".out");
+    std::vector<std::string> args = {TALLYD_PATH, "serve", "--db", db_.string(), "--port", "0"};
+    args.insert(args.end(), extra_.begin(), extra_.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    // Temp files of the worker (and thus its capture children's command lines) live under dir_.
+    std::vector<std::string> env;
+    for (char** e = environ; *e; ++e) {
+      if (std::string(*e).rfind("TMPDIR=", 0) != 0) env.push_back(*e);
+    }
+    env.push_back("TMPDIR=" + tmp().string());
+    fs::create_directories(tmp());
+    std::vector<char*> envp;
+    for (auto& e : env) envp.push_back(e.data());
+    envp.push_back(nullptr);
+    int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    if (rc != 0) return false;
+    auto deadline = std::chrono::steady_clock::now() + 30s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      std::ifstream in(out);
+      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      size_t at = text.find("http://127.0.0.1:");
+      if (at != std::string::npos && text.find("/\n", at) != std::string::npos) {
+        port_ = std::atoi(text.c_str() + at + 17);
+        return port_ > 0;
+      }
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = 0;
+        return false;
+      }
+      std::this_thread::sleep_for(50ms);
+    }
+    return false;
+  }
+
+  // Returns the exit status (or 128 + signal).
+  int stop(int sig = SIGTERM) {
+    if (pid_ <= 0) return -1;
+    kill(pid_, sig);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = 0;
+    killOrphans();
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
+  // Capture children outlive a daemon killed with -9 (own process group): end them.
+  void killOrphans() {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator("/proc", ec)) {
+      std::string name = entry.path().filename().string();
+      if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+      std::ifstream in(entry.path() / "cmdline");
+      std::string cmd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (cmd.find(tmp().string() + "/tally-job-") != std::string::npos) kill(std::stoi(name), SIGKILL);
+    }
+  }
+
+  Reply request(const std::string& method, const std::string& path, const std::string& body = {},
+                const std::string& idempotencyKey = {}) {
+    httplib::Client client("127.0.0.1", port_);
+    client.set_read_timeout(10, 0);
+    httplib::Headers headers;
+    if (!idempotencyKey.empty()) headers.emplace("Idempotency-Key", idempotencyKey);
+    httplib::Result res = method == "GET"    ? client.Get(path.c_str(), headers)
+                          : method == "POST" ? client.Post(path.c_str(), headers, body, "application/json")
+                                             : client.Delete(path.c_str(), headers);
+    Reply r;
+    if (!res) return r;
+    r.status = res->status;
+    r.body = res->body;
+    r.contentType = res->get_header_value("Content-Type");
+    return r;
+  }
+
+  // Polls until the capture is done, failed or cancelled.
+  json waitFinished(int64_t id, std::chrono::seconds timeout = 120s) {
+    auto deadline = std::chrono::steady_clock::now() + timeout;
+    json job;
+    while (std::chrono::steady_clock::now() < deadline) {
+      Reply r = request("GET", "/api/captures/" + std::to_string(id));
+      job = r.j();
+      if (r.status == 200) {
+        std::string s = job.value("status", "");
+        if (s == "done" || s == "failed" || s == "cancelled") return job;
+      }
+      std::this_thread::sleep_for(200ms);
+    }
+    return job;
+  }
+
+  fs::path tmp() const { return dir_ / "tmp"; }
+  int port() const { return port_; }
+
+ private:
+  fs::path dir_, db_;
+  std::vector<std::string> extra_;
+  pid_t pid_ = 0;
+  int port_ = 0;
+  int starts_ = 0;
+};
+
+fs::path makeTempDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / (name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+json tinySpec() {
+  return {{"renderers", {"forward", "deferred"}},
+          {"scenes", {{{"name", "planes"}, {"layers", 2}}}},
+          {"resolutions", {{64, 36}}},
+          {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}}},
+          {"frames", 2},
+          {"lights", 4}};
+}
+
+// Runs `tallyd capture` directly: the reference the stored sample must match.
+json captureDirectly(const fs::path& dir, const json& spec) {
+  fs::path specPath = dir / "direct-spec.json", out = dir / "direct-result.json";
+  std::ofstream(specPath) << spec.dump();
+  std::string cmd = std::string(TALLYD_PATH) + " capture --quiet --spec " + specPath.string() + " --out " + out.string();
+  if (std::system(cmd.c_str()) != 0) return nullptr;
+  std::ifstream in(out);
+  return json::parse(in, nullptr, false);
+}
+
+class ServiceTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = makeTempDir("tally-service-test");
+    fs::create_directories(dir_ / "scenes");
+    std::ofstream(dir_ / "scenes" / "a.gltf") << "{}";
+    fs::create_symlink("/etc/hostname", dir_ / "scenes" / "escape.gltf");
+    daemon_ = new Daemon(dir_, dir_ / "tally.db", {"--scenes", (dir_ / "scenes").string()});
+    ASSERT_TRUE(daemon_->start()) << "tallyd serve did not start";
+  }
+  static void TearDownTestSuite() {
+    if (daemon_) {
+      EXPECT_EQ(daemon_->stop(SIGTERM), 0) << "SIGTERM should stop the daemon cleanly";
+    }
+    delete daemon_;
+    daemon_ = nullptr;
+    fs::remove_all(dir_);
+  }
+  static inline fs::path dir_;
+  static inline Daemon* daemon_ = nullptr;
+};
+
+TEST_F(ServiceTest, CaptureQueryCompareExport) {
+  Daemon& d = *daemon_;
+  json spec = tinySpec();
+  // The reference capture runs beside the daemon's.
+  json reference;
+  std::thread direct([&] { reference = captureDirectly(dir_, spec); });
+
+  Reply posted = d.request("POST", "/api/captures", spec.dump(), "key-1");
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t id = posted.j()["id"];
+  EXPECT_EQ(posted.j()["status"], "queued");
+  // The same key and spec: the same job.
+  Reply again = d.request("POST", "/api/captures", spec.dump(), "key-1");
+  EXPECT_EQ(again.status, 202);
+  EXPECT_EQ(again.j()["id"], id);
+  // The same key, another spec: a conflict.
+  json other = spec;
+  other["frames"] = 3;
+  Reply conflict = d.request("POST", "/api/captures", other.dump(), "key-1");
+  EXPECT_EQ(conflict.status, 409) << conflict.body;
+  EXPECT_EQ(conflict.j()["error"]["code"], "conflict");
+
+  json job = d.waitFinished(id);
+  direct.join();
+  ASSERT_EQ(job.value("status", ""), "done") << job.dump();
+  EXPECT_EQ(job["attempts"], 1);
+  EXPECT_EQ(job["progress"]["done"], job["progress"]["total"]);
+  EXPECT_TRUE(job["finished_at"].is_string());
+  // Finished: cancelling is a conflict.
+  EXPECT_EQ(d.request("DELETE", "/api/captures/" + std::to_string(id)).status, 409);
+
+  Reply captures = d.request("GET", "/api/captures?limit=10");
+  ASSERT_EQ(captures.status, 200);
+  EXPECT_EQ(captures.j()["captures"].size(), 1u);
+
+  Reply runs = d.request("GET", "/api/runs?capture=" + std::to_string(id));
+  ASSERT_EQ(runs.status, 200) << runs.body;
+  ASSERT_EQ(runs.j()["runs"].size(), 2u);
+  EXPECT_EQ(d.request("GET", "/api/runs?renderer=forward&width=64&height=36").j()["runs"].size(), 1u);
+  std::map<std::string, int64_t> runIds;
+  json runList = runs.j();
+  for (const auto& r : runList["runs"]) runIds[r["renderer"].get<std::string>()] = r["id"].get<int64_t>();
+  ASSERT_EQ(runIds.size(), 2u);
+
+  Reply run = d.request("GET", "/api/runs/" + std::to_string(runIds["deferred"]));
+  ASSERT_EQ(run.status, 200);
+  EXPECT_FALSE(run.j()["resources"].empty());
+
+  Reply samples = d.request("GET", "/api/runs/" + std::to_string(runIds["deferred"]) + "/samples");
+  ASSERT_EQ(samples.status, 200);
+  ASSERT_EQ(samples.j()["samples"].size(), 1u);
+  int64_t sampleId = samples.j()["samples"][0]["id"];
+
+  Reply sample = d.request("GET", "/api/samples/" + std::to_string(sampleId));
+  ASSERT_EQ(sample.status, 200);
+  json passes = sample.j()["passes"];
+  ASSERT_FALSE(passes.empty());
+  // Counts equal the capture result's (exact counting is deterministic).
+  ASSERT_TRUE(reference.is_object()) << "the direct capture failed";
+  json refSample;
+  for (const auto& r : reference["runs"]) {
+    if (r["renderer"] == "deferred") refSample = r["samples"][0];
+  }
+  ASSERT_TRUE(refSample.is_object());
+  ASSERT_EQ(passes.size(), refSample["passes"].size());
+  size_t compared = 0;
+  for (size_t p = 0; p < passes.size(); ++p) {
+    const auto& got = passes[p];
+    const auto& want = refSample["passes"][p];
+    EXPECT_EQ(got["name"], want["name"]);
+    ASSERT_EQ(got["resources"].size(), want["resources"].size()) << got["name"];
+    for (size_t r = 0; r < got["resources"].size(); ++r) {
+      EXPECT_EQ(got["resources"][r]["name"], want["resources"][r]["name"]);
+      EXPECT_EQ(got["resources"][r]["access"], want["resources"][r]["access"]);
+      EXPECT_DOUBLE_EQ(got["resources"][r]["count"].get<double>(), want["resources"][r]["count"].get<double>())
+          << got["name"] << " " << got["resources"][r]["name"];
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 0u);
+
+  Reply png = d.request("GET", "/api/samples/" + std::to_string(sampleId) + "/screenshot.png");
+  ASSERT_EQ(png.status, 200);
+  EXPECT_EQ(png.contentType, "image/png");
+  ASSERT_GE(png.body.size(), 8u);
+  EXPECT_EQ(png.body.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+
+  Reply cmp = d.request("GET", "/api/compare?runs=" + std::to_string(runIds["forward"]) + "," +
+                                   std::to_string(runIds["deferred"]));
+  ASSERT_EQ(cmp.status, 200) << cmp.body;
+  ASSERT_EQ(cmp.j()["frame_ms"].size(), 2u);
+  EXPECT_TRUE(cmp.j()["frame_ms"][1]["ratio"].is_number()) << cmp.j()["frame_ms"].dump();
+  EXPECT_TRUE(cmp.j()["total_bytes"][1]["ratio"].is_number());
+  EXPECT_FALSE(cmp.j()["passes"].empty());
+
+  Reply csv = d.request("GET", "/api/export?format=csv&capture=" + std::to_string(id));
+  ASSERT_EQ(csv.status, 200);
+  EXPECT_EQ(csv.contentType.rfind("text/csv", 0), 0u);
+  std::istringstream lines(csv.body);
+  std::string header, row;
+  std::getline(lines, header);
+  EXPECT_EQ(header, "run,renderer,scene,width,height,device,pass,resource,access,count,bytes\r");
+  int rows = 0;
+  while (std::getline(lines, row)) rows += row.empty() ? 0 : 1;
+  EXPECT_GT(rows, 0);
+  Reply exported = d.request("GET", "/api/export?format=json");
+  ASSERT_EQ(exported.status, 200);
+  EXPECT_EQ(static_cast<int>(exported.j()["rows"].size()), rows);
+
+  Reply devices = d.request("GET", "/api/devices");
+  ASSERT_EQ(devices.status, 200);
+  EXPECT_EQ(devices.j()["devices"].size(), 1u);
+  Reply scenes = d.request("GET", "/api/scenes");
+  ASSERT_EQ(scenes.status, 200);
+  EXPECT_EQ(scenes.j()["procedural"].size(), 3u);
+  EXPECT_EQ(scenes.j()["gltf"][0]["files"].size(), 2u);  // a.gltf and the link (listed, refused on use)
+  EXPECT_EQ(d.request("GET", "/api/renderers").status, 200);
+}
+
+TEST_F(ServiceTest, CancelARunningCaptureKillsItsChild) {
+  Daemon& d = *daemon_;
+  json spec = tinySpec();
+  spec["cameras"] = "auto";  // 2 x 3 x 10 = 60 samples: still running when cancelled
+  spec["resolutions"] = {{64, 36}, {96, 54}, {128, 72}};
+  spec["frames"] = 8;
+  Reply posted = d.request("POST", "/api/captures", spec.dump());
+  ASSERT_EQ(posted.status, 202);
+  int64_t id = posted.j()["id"];
+  auto deadline = std::chrono::steady_clock::now() + 30s;
+  json job;
+  while (std::chrono::steady_clock::now() < deadline) {
+    job = d.request("GET", "/api/captures/" + std::to_string(id)).j();
+    if (job.value("status", "") != "queued" && job["progress"]["done"].get<int64_t>() > 0) break;
+    std::this_thread::sleep_for(20ms);
+  }
+  ASSERT_EQ(job.value("status", ""), "running") << job.dump();
+  Reply cancelled = d.request("DELETE", "/api/captures/" + std::to_string(id));
+  ASSERT_EQ(cancelled.status, 200) << cancelled.body;
+  EXPECT_EQ(cancelled.j()["status"], "cancelled");
+  // The child is killed within a couple of polls, and nothing is ingested.
+  bool childGone = false;
+  for (int i = 0; i < 50 && !childGone; ++i) {
+    std::this_thread::sleep_for(100ms);
+    childGone = true;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator("/proc", ec)) {
+      std::ifstream in(entry.path() / "cmdline");
+      std::string cmd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (cmd.find(d.tmp().string() + "/tally-job-" + std::to_string(id) + "-") != std::string::npos) childGone = false;
+    }
+  }
+  EXPECT_TRUE(childGone);
+  EXPECT_EQ(d.waitFinished(id)["status"], "cancelled");
+  EXPECT_EQ(d.request("GET", "/api/runs?capture=" + std::to_string(id)).j()["runs"].size(), 0u);
+  // Cancelling again: it has finished (as cancelled).
+  EXPECT_EQ(d.request("DELETE", "/api/captures/" + std::to_string(id)).status, 409);
+}
+
+// A capture that fails in the child (a glTF file that is not a scene) fails
+// only its own job, with the child's reason; the daemon keeps serving.
+TEST_F(ServiceTest, AFailingCaptureFailsOnlyItsJob) {
+  Daemon& d = *daemon_;
+  json spec = tinySpec();
+  spec["scenes"] = {{{"gltf", "a.gltf"}}};
+  Reply posted = d.request("POST", "/api/captures", spec.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t id = posted.j()["id"];
+  json job = d.waitFinished(id);
+  EXPECT_EQ(job.value("status", ""), "failed") << job.dump();
+  ASSERT_TRUE(job["error"].is_string());
+  EXPECT_NE(job["error"].get<std::string>().find("capture exited with status"), std::string::npos) << job["error"];
+  // Stored with the canonical path under the scene folder.
+  EXPECT_EQ(job["spec"]["scenes"][0]["gltf"], fs::canonical(dir_ / "scenes" / "a.gltf").string());
+  EXPECT_EQ(d.request("GET", "/api/health").status, 200);
+  Reply runs = d.request("GET", "/api/runs?capture=" + std::to_string(id));
+  EXPECT_EQ(runs.j()["runs"].size(), 0u);
+}
+
+struct BadRequest {
+  std::string name, method, path;
+  json body;  // POST: the spec
+  int status;
+  std::string code, field;  // field empty: not checked
+};
+
+TEST_F(ServiceTest, BadRequestsNameTheField) {
+  Daemon& d = *daemon_;
+  auto with = [](const char* key, json value) {
+    json s = tinySpec();
+    s[key] = std::move(value);
+    return s;
+  };
+  json manyResolutions = json::array();
+  for (int i = 0; i < 60; ++i) manyResolutions.push_back({64 + i, 36});
+  json huge = with("resolutions", manyResolutions);
+  huge["cameras"] = "auto";  // 2 x 1 x 60 x 10 = 1200 samples
+  std::string outside = (dir_ / "tally.db").string();
+
+  const std::vector<BadRequest> table = {
+      {"renderers not an array", "POST", "/api/captures", with("renderers", "forward"), 400, "invalid_field", "renderers"},
+      {"renderer not a string", "POST", "/api/captures", with("renderers", {1}), 400, "invalid_field", "renderers[0]"},
+      {"unknown renderer", "POST", "/api/captures", with("renderers", {"warp"}), 400, "invalid_field", "renderers[0]"},
+      {"unknown scene", "POST", "/api/captures", with("scenes", {"nowhere"}), 400, "invalid_field", "scenes[0]"},
+      {"zero width", "POST", "/api/captures", with("resolutions", {{0, 36}}), 400, "invalid_field", "resolutions[0][0]"},
+      {"negative height", "POST", "/api/captures", with("resolutions", {{64, -1}}), 400, "invalid_field",
+       "resolutions[0][1]"},
+      {"huge width", "POST", "/api/captures", with("resolutions", {{100000, 36}}), 400, "invalid_field",
+       "resolutions[0][0]"},
+      {"beyond the server's pixel cap", "POST", "/api/captures", with("resolutions", {{7680, 4320}}), 400,
+       "invalid_field", "resolutions[0]"},
+      {"resolution not a pair", "POST", "/api/captures", with("resolutions", {"64x36"}), 400, "invalid_field", ""},
+      {"huge matrix", "POST", "/api/captures", huge, 400, "invalid_field", "spec"},
+      {"degenerate camera", "POST", "/api/captures",
+       with("cameras", {{{"eye", {1, 2, 3}}, {"target", {1, 2, 3}}}}), 400, "invalid_field", "cameras[0].target"},
+      {"frames 0", "POST", "/api/captures", with("frames", 0), 400, "invalid_field", "frames"},
+      {"frames a string", "POST", "/api/captures", with("frames", "2"), 400, "invalid_field", "frames"},
+      {"frames over the server's cap", "POST", "/api/captures", with("frames", 1000), 400, "invalid_field", "frames"},
+      {"lights negative", "POST", "/api/captures", with("lights", -1), 400, "invalid_field", "lights"},
+      {"unknown spec field", "POST", "/api/captures", with("color", "red"), 400, "invalid_field", "color"},
+      {"gltf outside the scene folders", "POST", "/api/captures", with("scenes", {{{"gltf", outside}}}), 400,
+       "invalid_field", "scenes[0].gltf"},
+      {"gltf with ..", "POST", "/api/captures", with("scenes", {{{"gltf", "../tally.db"}}}), 400, "invalid_field",
+       "scenes[0].gltf"},
+      {"gltf symlink escape", "POST", "/api/captures", with("scenes", {{{"gltf", "escape.gltf"}}}), 400,
+       "invalid_field", "scenes[0].gltf"},
+      {"gltf missing", "POST", "/api/captures", with("scenes", {{{"gltf", "missing.gltf"}}}), 400, "invalid_field",
+       "scenes[0].gltf"},
+      {"runs limit 0", "GET", "/api/runs?limit=0", nullptr, 400, "invalid_field", "limit"},
+      {"runs limit not a number", "GET", "/api/runs?limit=ten", nullptr, 400, "invalid_field", "limit"},
+      {"runs limit too large", "GET", "/api/runs?limit=1001", nullptr, 400, "invalid_field", "limit"},
+      {"runs bad cursor", "GET", "/api/runs?cursor=zzz", nullptr, 400, "invalid_field", "cursor"},
+      {"runs bad width", "GET", "/api/runs?width=-3", nullptr, 400, "invalid_field", "width"},
+      {"runs unknown parameter", "GET", "/api/runs?colour=red", nullptr, 400, "invalid_field", "colour"},
+      {"captures bad status", "GET", "/api/captures?status=sleeping", nullptr, 400, "invalid_field", "status"},
+      {"unknown run", "GET", "/api/runs/987654", nullptr, 404, "not_found", ""},
+      {"run id not a number", "GET", "/api/runs/abc", nullptr, 400, "invalid_field", "id"},
+      {"samples of an unknown run", "GET", "/api/runs/987654/samples", nullptr, 404, "not_found", ""},
+      {"unknown sample", "GET", "/api/samples/987654", nullptr, 404, "not_found", ""},
+      {"unknown screenshot", "GET", "/api/samples/987654/screenshot.png", nullptr, 404, "not_found", ""},
+      {"unknown capture", "GET", "/api/captures/987654", nullptr, 404, "not_found", ""},
+      {"cancel an unknown capture", "DELETE", "/api/captures/987654", nullptr, 404, "not_found", ""},
+      {"compare one run", "GET", "/api/compare?runs=1", nullptr, 400, "invalid_field", "runs"},
+      {"compare five runs", "GET", "/api/compare?runs=1,2,3,4,5", nullptr, 400, "invalid_field", "runs"},
+      {"compare a run twice", "GET", "/api/compare?runs=1,1", nullptr, 400, "invalid_field", "runs"},
+      {"compare without runs", "GET", "/api/compare", nullptr, 400, "invalid_field", "runs"},
+      {"compare unknown runs", "GET", "/api/compare?runs=987654,987655", nullptr, 404, "not_found", ""},
+      {"export as xml", "GET", "/api/export?format=xml", nullptr, 400, "invalid_field", "format"},
+  };
+  ASSERT_GE(table.size(), 20u);
+  for (const auto& c : table) {
+    SCOPED_TRACE(c.name);
+    Reply r = d.request(c.method, c.path, c.body.is_null() ? std::string() : c.body.dump());
+    EXPECT_EQ(r.status, c.status) << r.body;
+    json j = r.j();
+    ASSERT_TRUE(j.is_object() && j.contains("error")) << r.body;
+    EXPECT_EQ(j["error"]["code"], c.code) << r.body;
+    EXPECT_TRUE(j["error"]["message"].is_string());
+    if (!c.field.empty()) {
+      EXPECT_EQ(j["error"].value("field", ""), c.field) << r.body;
+    }
+  }
+  EXPECT_EQ(d.request("GET", "/api/health").status, 200);
+  // Nothing was queued by the bad specs.
+  json captures = d.request("GET", "/api/captures").j();
+  for (const auto& job : captures["captures"]) {
+    EXPECT_NE(job["spec"].value("frames", 0), 1000);
+  }
+}
+
+TEST(ServiceRecovery, KillDuringAJobThenRestart) {
+  fs::path dir = makeTempDir("tally-service-recovery");
+  fs::path db = dir / "tally.db";
+  int64_t id = 0;
+  {
+    Daemon d(dir, db);
+    ASSERT_TRUE(d.start());
+    json spec = tinySpec();
+    spec["cameras"] = "auto";  // 2 x 3 x 10 = 60 samples of 8 frames: long enough to be caught running
+    spec["resolutions"] = {{64, 36}, {96, 54}, {128, 72}};
+    spec["frames"] = 8;
+    Reply posted = d.request("POST", "/api/captures", spec.dump());
+    ASSERT_EQ(posted.status, 202) << posted.body;
+    id = posted.j()["id"];
+    auto deadline = std::chrono::steady_clock::now() + 30s;
+    std::string status;
+    while (std::chrono::steady_clock::now() < deadline) {
+      json job = d.request("GET", "/api/captures/" + std::to_string(id)).j();
+      status = job.value("status", "");
+      // Mid-capture: the child has reported progress.
+      if (status != "queued" && (status != "running" || job["progress"]["done"].get<int64_t>() > 0)) break;
+      std::this_thread::sleep_for(20ms);
+    }
+    EXPECT_EQ(status, "running");
+    EXPECT_EQ(d.stop(SIGKILL), 128 + SIGKILL);
+  }
+  {
+    // No daemon: the job is still marked running, nothing was lost.
+    auto store = tally::store::Store::open(db.string(), {.readOnly = true});
+    ASSERT_TRUE(store) << store.error();
+    auto job = (*store)->getJob(id);
+    ASSERT_TRUE(job && job->has_value());
+    EXPECT_TRUE((*job)->status == tally::store::JobStatus::Running || (*job)->status == tally::store::JobStatus::Done);
+  }
+  Daemon d(dir, db);
+  ASSERT_TRUE(d.start());
+  json job = d.waitFinished(id);
+  std::string status = job.value("status", "");
+  ASSERT_TRUE(status == "done" || status == "failed") << job.dump();
+  if (status == "failed") {
+    EXPECT_TRUE(job["error"].is_string() && !job["error"].get<std::string>().empty());
+  }
+  EXPECT_GE(job["attempts"].get<int>(), 1);
+  EXPECT_EQ(d.stop(SIGTERM), 0);
+
+  auto store = tally::store::Store::open(db.string());
+  ASSERT_TRUE(store) << store.error();
+  auto integrity = (*store)->integrityCheck();
+  ASSERT_TRUE(integrity);
+  EXPECT_EQ(*integrity, "ok");
+  // No half-written runs: every run belongs to a finished-done job and has its samples.
+  auto runs = (*store)->listRuns({}, {});
+  ASSERT_TRUE(runs);
+  for (const auto& r : runs->runs) {
+    EXPECT_EQ(r.jobId, id);
+    EXPECT_EQ(r.sampleCount, 10);
+  }
+  EXPECT_EQ(runs->runs.size(), status == "done" ? 6u : 0u);
+  fs::remove_all(dir);
+}
+
+}  // namespace
