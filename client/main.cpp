@@ -1,23 +1,134 @@
-// tally: the command-line client of a tallyd service.
+// tally: the command-line client of a tallyd service. Parses flags and calls
+// into tally_client (commands.hpp); everything else lives there.
+#include <unistd.h>
+
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
+#include "commands.hpp"
 #include "protocol.hpp"
 
+namespace {
+
+using namespace tally::client;
+
+void addFilters(CLI::App* sub, RunFilters& f) {
+  sub->add_option("--renderer", f.renderer, "Only this renderer (e.g. deferred)");
+  sub->add_option("--scene", f.scene, "Only this scene (e.g. atrium)");
+  sub->add_option("--width", f.width, "Only this width in pixels")->check(CLI::PositiveNumber);
+  sub->add_option("--height", f.height, "Only this height in pixels")->check(CLI::PositiveNumber);
+  sub->add_option("--device", f.device, "Only this device (name or index)");
+  sub->add_option("--capture", f.capture, "Only runs of this capture id");
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"tally: client for a tallyd capture service"};
-  bool version = false;
+  CLI::App app{
+      "tally: client for a tallyd capture service.\n"
+      "The server comes from --server, else $TALLY_SERVER, else " +
+      defaultServer() +
+      "; a token from $TALLY_TOKEN is sent as a bearer token.\n"
+      "Exit status: 0 success, 1 failure (reason on stderr), 2 usage error."};
+  app.footer("Example:\n  tally --server http://127.0.0.1:8377 runs --renderer deferred");
+  app.require_subcommand(0, 1);
+  app.fallthrough();  // global flags may follow the subcommand: tally runs --json
+
+  std::string server;
+  bool jsonOut = false, version = false;
+  int timeoutS = 60;
+  app.add_option("--server", server, "tallyd base URL, e.g. http://127.0.0.1:8377");
+  app.add_flag("--json", jsonOut, "Print the server's JSON instead of tables");
+  app.add_option("--timeout", timeoutS, "Seconds to wait for a response")->check(CLI::PositiveNumber);
   app.add_flag("--version", version, "Print the client and API versions");
+
+  CaptureArgs capture;
+  auto* cap =
+      app.add_subcommand("capture", "Submit a capture spec and follow its progress until it finishes");
+  cap->add_option("--spec", capture.spec, "Capture spec JSON file, or - for stdin (docs/result-schema.md)")
+      ->required();
+  cap->add_flag("--no-wait", capture.noWait, "Print the capture id and exit without waiting");
+  cap->add_option("--idempotency-key", capture.idempotencyKey,
+                  "A key that makes resubmitting the same capture return the first one");
+  cap->add_option("--interval", capture.intervalS, "Seconds between status polls")
+      ->check(CLI::Range(0.01, 3600.0));
+  cap->footer(
+      "Exit status: 0 when the capture is done, 1 when it failed or was cancelled.\n"
+      "Example:\n  tally capture --spec atrium.json\n  echo '{\"renderers\":[\"forward\"],"
+      "\"resolutions\":[[320,180]]}' | tally capture --spec - --no-wait");
+
+  std::string statusId;
+  auto* status = app.add_subcommand("status", "Show one capture job, or list them");
+  status->add_option("ID", statusId, "Capture id (omit for the list)");
+  status->footer("Example:\n  tally status\n  tally status 7");
+
+  std::string cancelId;
+  auto* cancel =
+      app.add_subcommand("cancel", "Cancel a queued or running capture (a finished one is deleted)");
+  cancel->add_option("ID", cancelId, "Capture id")->required();
+  cancel->footer("Example:\n  tally cancel 7");
+
+  RunsArgs runs;
+  auto* runsCmd =
+      app.add_subcommand("runs", "List runs (renderer x scene x resolution on a device), newest first");
+  addFilters(runsCmd, runs.filters);
+  runsCmd->add_option("--limit", runs.limit, "Page size (1..1000)")->check(CLI::Range(1, 1000));
+  runsCmd->add_flag("--all", runs.all, "Fetch every page");
+  runsCmd->footer(
+      "Example:\n  tally runs --renderer visbuffer --scene atrium --width 1920 --height 1080 --all");
+
+  std::string showId;
+  auto* show = app.add_subcommand("show", "Show a run and its samples (one per camera)");
+  show->add_option("RUN", showId, "Run id")->required();
+  show->footer("Example:\n  tally show 12");
+
+  std::vector<std::string> compareIds;
+  auto* compare =
+      app.add_subcommand("compare", "Compare 2 to 4 runs per pass and per resource, against the first");
+  compare->add_option("RUN", compareIds, "Run ids (2 to 4); deltas and ratios are against the first")
+      ->required()
+      ->expected(2, 4);
+  compare->footer("Example:\n  tally compare 12 15");
+
+  ExportArgs exportArgs;
+  auto* exportCmd =
+      app.add_subcommand("export", "Export runs as CSV or JSON, exactly as the server writes it");
+  exportCmd->add_option("--format", exportArgs.format, "csv or json")->check(CLI::IsMember({"csv", "json"}));
+  addFilters(exportCmd, exportArgs.filters);
+  exportCmd->add_option("--runs", exportArgs.filters.runs, "Comma-separated run ids");
+  exportCmd->add_option("-o,--output", exportArgs.output,
+                        "Write to this file (atomically) instead of stdout");
+  exportCmd->footer("Example:\n  tally export --format csv --scene atrium -o atrium.csv");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e) == 0 ? 0 : 2;  // --help is 0; usage errors 2
   }
   if (version) {
     std::cout << "tally " << tally::protocol::kVersion << " (API v" << tally::protocol::kApiVersion << ")\n";
     return 0;
   }
+  if (app.get_subcommands().empty()) {
+    std::cout << app.help();
+    return 0;
+  }
+
+  ClientOptions options;
+  options.server = resolveServer(server);
+  options.token = tokenFromEnv();
+  options.readTimeoutS = timeoutS;
+  ApiClient api(options);
+  Io io{std::cout, std::cerr, jsonOut, ::isatty(STDERR_FILENO) != 0};
+
+  if (cap->parsed()) return runCapture(api, capture, io);
+  if (status->parsed()) return runStatus(api, statusId, io);
+  if (cancel->parsed()) return runCancel(api, cancelId, io);
+  if (runsCmd->parsed()) return runRuns(api, runs, io);
+  if (show->parsed()) return runShow(api, showId, io);
+  if (compare->parsed()) return runCompare(api, compareIds, io);
+  if (exportCmd->parsed()) return runExport(api, exportArgs, io);
   std::cout << app.help();
   return 0;
 }

@@ -46,7 +46,7 @@ int runCapture(const CaptureArgs& args);
 struct ServeArgs {
   std::string db;                   // SQLite file (created and migrated)
   std::string bind = "127.0.0.1";
-  int port = 8080;                  // 0: an ephemeral port (printed)
+  int port = 8377;                  // protocol::kDefaultPort; 0: an ephemeral port (printed)
   std::string tokenFile;            // required for a non-loopback bind
   std::string device;               // passed to each capture as --device
   std::string web;                  // dashboard files; empty: none

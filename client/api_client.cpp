@@ -1,0 +1,383 @@
+#include "api_client.hpp"
+
+#include <cstdlib>
+
+#include <httplib.h>
+
+namespace tally::client {
+
+namespace {
+
+std::string trimSlash(std::string s) {
+  while (!s.empty() && s.back() == '/') s.pop_back();
+  return s;
+}
+
+std::string describe(httplib::Error error) {
+  switch (error) {
+    case httplib::Error::Connection: return "connection refused";
+    case httplib::Error::ConnectionTimeout: return "connection timed out";
+    case httplib::Error::Read: return "no response (read failed or timed out)";
+    case httplib::Error::Write: return "request could not be sent";
+    case httplib::Error::SSLConnection: return "TLS connection failed";
+    case httplib::Error::SSLServerVerification: return "TLS certificate not trusted";
+    default: return httplib::to_string(error);
+  }
+}
+
+// Query string from (key, value) pairs, values percent-encoded.
+std::string query(const std::vector<std::pair<std::string, std::string>>& params) {
+  std::string out;
+  for (const auto& [key, value] : params) {
+    out += out.empty() ? "?" : "&";
+    out += key + "=" + httplib::detail::encode_query_param(value);
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, std::string>> filterParams(const RunFilters& f) {
+  std::vector<std::pair<std::string, std::string>> p;
+  if (f.renderer) p.emplace_back("renderer", *f.renderer);
+  if (f.scene) p.emplace_back("scene", *f.scene);
+  if (f.width) p.emplace_back("width", std::to_string(*f.width));
+  if (f.height) p.emplace_back("height", std::to_string(*f.height));
+  if (f.device) p.emplace_back("device", *f.device);
+  if (f.capture) p.emplace_back("capture", *f.capture);
+  if (f.runs) p.emplace_back("runs", *f.runs);
+  return p;
+}
+
+std::string pathId(const std::string& id) { return httplib::detail::encode_query_param(id); }
+
+const json* field(const json& j, const char* name) {
+  if (!j.is_object()) return nullptr;
+  auto it = j.find(name);
+  return it == j.end() || it->is_null() ? nullptr : &*it;
+}
+std::string str(const json& j, const char* name) {
+  const json* v = field(j, name);
+  return v ? idString(*v) : "";
+}
+std::optional<double> num(const json& j, const char* name) {
+  const json* v = field(j, name);
+  if (v && v->is_number()) return v->get<double>();
+  return std::nullopt;
+}
+std::optional<int64_t> integer(const json& j, const char* name) {
+  const json* v = field(j, name);
+  if (v && v->is_number()) return static_cast<int64_t>(v->get<double>());
+  return std::nullopt;
+}
+std::vector<json> array(const json& j, const char* name) {
+  const json* v = field(j, name);
+  if (!v || !v->is_array()) return {};
+  return std::vector<json>(v->begin(), v->end());
+}
+// The run's aggregate, top level or under "summary".
+std::optional<double> runNum(const json& run, std::initializer_list<const char*> names) {
+  for (const char* n : names) {
+    if (auto v = num(run, n)) return v;
+    if (const json* s = field(run, "summary"))
+      if (auto v = num(*s, n)) return v;
+  }
+  return std::nullopt;
+}
+
+ComparedView compared(const json& v) {
+  ComparedView c;
+  if (v.is_number()) {
+    c.value = v.get<double>();
+  } else if (v.is_object()) {
+    c.value = num(v, "value");
+    c.delta = num(v, "delta");
+    c.ratio = num(v, "ratio");
+  }
+  return c;
+}
+
+std::vector<ComparedView> comparedList(const json& j, const char* name) {
+  std::vector<ComparedView> out;
+  for (const auto& v : array(j, name)) out.push_back(compared(v));
+  // Fill deltas and ratios the server left out.
+  for (auto& c : out) {
+    if (out.empty() || !out[0].value || !c.value) continue;
+    if (!c.delta) c.delta = *c.value - *out[0].value;
+    if (!c.ratio && *out[0].value != 0) c.ratio = *c.value / *out[0].value;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string resolveServer(const std::string& flag) {
+  if (!flag.empty()) return trimSlash(flag);
+  const char* env = std::getenv(kServerEnv);
+  if (env && *env) return trimSlash(env);
+  return defaultServer();
+}
+
+std::string tokenFromEnv() {
+  const char* env = std::getenv(kTokenEnv);
+  return env ? env : "";
+}
+
+ApiClient::ApiClient(ClientOptions options) : server_(trimSlash(options.server)), token_(options.token) {
+  if (server_.find("://") == std::string::npos) server_ = "http://" + server_;
+  http_ = std::make_unique<httplib::Client>(server_);
+  http_->set_connection_timeout(options.connectTimeoutS, 0);
+  http_->set_read_timeout(options.readTimeoutS, 0);
+  http_->set_write_timeout(options.readTimeoutS, 0);
+  http_->set_keep_alive(false);
+  if (!token_.empty()) http_->set_bearer_token_auth(token_);
+}
+
+ApiClient::~ApiClient() = default;
+
+Result<ApiClient::Raw> ApiClient::send(const std::string& method, const std::string& path,
+                                       const std::string& body, const std::string& idempotencyKey) {
+  if (!http_->is_valid())
+    return makeError("invalid --server URL '" + server_ + "' (expected http://HOST:PORT)");
+  httplib::Headers headers;
+  if (!idempotencyKey.empty()) headers.emplace("Idempotency-Key", idempotencyKey);
+  httplib::Result res{nullptr, httplib::Error::Unknown};
+  if (method == "GET") {
+    res = http_->Get(path, headers);
+  } else if (method == "POST") {
+    res = http_->Post(path, headers, body, "application/json");
+  } else if (method == "DELETE") {
+    res = http_->Delete(path, headers);
+  } else {
+    return makeError("unsupported method " + method);
+  }
+  if (!res) {
+    return makeError("cannot reach tallyd at " + server_ + ": " + describe(res.error()) +
+                     " (is `tallyd serve` running?)");
+  }
+  if (res->status >= 400) return makeError(formatHttpError(res->status, res->body));
+  return Raw{res->status, res->body};
+}
+
+Result<json> ApiClient::sendJson(const std::string& method, const std::string& path, const std::string& body,
+                                 const std::string& idempotencyKey) {
+  auto raw = send(method, path, body, idempotencyKey);
+  if (!raw) return makeError(raw.error());
+  if (raw->body.empty()) return json::object();
+  json parsed = json::parse(raw->body, nullptr, false);
+  if (parsed.is_discarded()) {
+    return makeError("tallyd at " + server_ + " sent a response that is not JSON (HTTP " +
+                     std::to_string(raw->status) + ")");
+  }
+  return parsed;
+}
+
+Result<json> ApiClient::health() { return sendJson("GET", "/api/health"); }
+
+Result<json> ApiClient::submitCapture(const json& spec, const std::string& idempotencyKey) {
+  return sendJson("POST", "/api/captures", spec.dump(), idempotencyKey);
+}
+Result<json> ApiClient::getCapture(const std::string& id) {
+  return sendJson("GET", "/api/captures/" + pathId(id));
+}
+Result<json> ApiClient::listCaptures() { return sendJson("GET", "/api/captures"); }
+Result<json> ApiClient::cancelCapture(const std::string& id) {
+  return sendJson("DELETE", "/api/captures/" + pathId(id));
+}
+
+Result<json> ApiClient::listRuns(const RunFilters& filters, std::optional<int> limit,
+                                 const std::string& cursor) {
+  auto params = filterParams(filters);
+  if (limit) params.emplace_back("limit", std::to_string(*limit));
+  if (!cursor.empty()) params.emplace_back("cursor", cursor);
+  return sendJson("GET", "/api/runs" + query(params));
+}
+
+Result<json> ApiClient::listAllRuns(const RunFilters& filters, std::optional<int> limit) {
+  json all = {{"runs", json::array()}};
+  std::string cursor;
+  for (int page = 0; page < 100000; ++page) {  // a server that loops its cursor must not hang us forever
+    auto res = listRuns(filters, limit, cursor);
+    if (!res) return res;
+    for (auto& run : runList(*res)) all["runs"].push_back(std::move(run));
+    std::string next = nextCursor(*res);
+    if (next.empty() || next == cursor) break;
+    cursor = next;
+  }
+  return all;
+}
+
+Result<json> ApiClient::getRun(const std::string& id) { return sendJson("GET", "/api/runs/" + pathId(id)); }
+Result<json> ApiClient::getRunSamples(const std::string& id) {
+  return sendJson("GET", "/api/runs/" + pathId(id) + "/samples");
+}
+Result<json> ApiClient::getSample(const std::string& id) {
+  return sendJson("GET", "/api/samples/" + pathId(id));
+}
+
+Result<json> ApiClient::compare(const std::vector<std::string>& runIds) {
+  std::string ids;
+  for (const auto& id : runIds) ids += (ids.empty() ? "" : ",") + id;
+  return sendJson("GET", "/api/compare" + query({{"runs", ids}}));
+}
+
+Result<std::string> ApiClient::exportRuns(const std::string& format, const RunFilters& filters) {
+  auto params = filterParams(filters);
+  params.insert(params.begin(), {"format", format});
+  auto raw = send("GET", "/api/export" + query(params));
+  if (!raw) return makeError(raw.error());
+  return raw->body;
+}
+
+std::string formatHttpError(int status, const std::string& body) {
+  json parsed = json::parse(body, nullptr, false);
+  const json* error = parsed.is_discarded() ? nullptr : field(parsed, "error");
+  if (error && error->is_object()) {
+    std::string code = str(*error, "code"), fieldName = str(*error, "field"),
+                message = str(*error, "message");
+    std::string head = "error (" + std::to_string(status);
+    if (!code.empty()) head += " " + code;
+    if (!fieldName.empty()) head += ", field " + fieldName;
+    return head + "): " + (message.empty() ? "(no message)" : message);
+  }
+  std::string line = body.substr(0, body.find('\n'));
+  if (line.size() > 200) line = line.substr(0, 200) + "...";
+  return "error (" + std::to_string(status) +
+         "): " + (line.empty() ? "HTTP " + std::to_string(status) : line);
+}
+
+// ---- the wire mapping ---------------------------------------------------------
+
+std::string idString(const json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_number_integer()) return std::to_string(value.get<int64_t>());
+  if (value.is_number_unsigned()) return std::to_string(value.get<uint64_t>());
+  if (value.is_null()) return "";
+  return value.dump();
+}
+
+JobView jobView(const json& job) {
+  JobView v;
+  v.id = str(job, "id");
+  v.status = str(job, "status");
+  v.error = str(job, "error");
+  v.createdAt = str(job, "created_at");
+  if (auto a = integer(job, "attempts")) v.attempts = static_cast<int>(*a);
+  if (const json* p = field(job, "progress")) {
+    if (p->is_number()) {
+      v.fraction = p->get<double>();
+    } else if (p->is_object()) {
+      v.done = integer(*p, "done");
+      v.total = integer(*p, "total");
+      v.current = str(*p, "current");
+    }
+  }
+  if (v.done && v.total && *v.total > 0)
+    v.fraction = static_cast<double>(*v.done) / static_cast<double>(*v.total);
+  for (const auto& r : array(job, "runs")) v.runs.push_back(idString(r));
+  return v;
+}
+
+std::vector<json> jobList(const json& page) { return array(page, "captures"); }
+
+RunView runView(const json& run) {
+  RunView v;
+  v.id = str(run, "id");
+  v.capture = str(run, "capture");
+  if (v.capture.empty()) v.capture = str(run, "job_id");
+  v.renderer = str(run, "renderer");
+  v.scene = str(run, "scene");
+  if (const json* d = field(run, "device"); d && d->is_object()) {
+    v.device = str(*d, "name");
+  } else {
+    v.device = str(run, "device");
+  }
+  v.counting = str(run, "counting");
+  v.createdAt = str(run, "created_at");
+  v.width = integer(run, "width");
+  v.height = integer(run, "height");
+  v.lights = integer(run, "lights");
+  v.renderTargetBytes = integer(run, "render_target_bytes");
+  if (auto s = runNum(run, {"samples", "sample_count"})) v.samples = static_cast<int64_t>(*s);
+  v.frameMs = runNum(run, {"frame_ms", "mean_frame_ms"});
+  v.bytes = runNum(run, {"bytes", "mean_bytes"});
+  return v;
+}
+
+std::vector<json> runList(const json& page) { return array(page, "runs"); }
+std::string nextCursor(const json& page) { return str(page, "next_cursor"); }
+
+SampleView sampleView(const json& sample) {
+  SampleView v;
+  v.id = str(sample, "id");
+  if (const json* c = field(sample, "camera")) {
+    if (c->is_object()) {  // the result's camera: {"eye","target","fov_deg","label","index"}
+      // Labels run long ("mostly sky: eye at (...) of bounds, ..."): keep the part before ':'.
+      std::string index = str(*c, "index"), label = str(*c, "label");
+      if (auto colon = label.find(':'); colon != std::string::npos) label = label.substr(0, colon);
+      if (label.rfind("eye at", 0) == 0) label.clear();
+      v.camera = index.empty() ? label : label.empty() ? index : index + " " + label;
+    } else {
+      v.camera = idString(*c);
+    }
+  }
+  if (v.camera.empty()) v.camera = str(sample, "camera_index");
+  v.skyFraction = num(sample, "sky_fraction");
+  v.frameMs = num(sample, "frame_ms");
+  v.overhead = num(sample, "overhead_ratio");
+  v.bytes = num(sample, "bytes");
+  v.bytesRead = num(sample, "bytes_read");
+  v.bytesWritten = num(sample, "bytes_written");
+  if (const json* e = field(sample, "image_error"); e && e->is_object()) {
+    v.psnr = num(*e, "psnr");
+    v.against = str(*e, "against");
+    if (const json* i = field(*e, "identical"); i && i->is_boolean()) v.identical = i->get<bool>();
+  }
+  return v;
+}
+
+std::vector<json> sampleList(const json& page) {
+  if (page.is_array()) return std::vector<json>(page.begin(), page.end());
+  return array(page, "samples");
+}
+
+std::pair<double, double> sampleReadWrite(const json& sample) {
+  double read = 0, written = 0;
+  for (const auto& pass : array(sample, "passes")) {
+    // "counters" in the store's terms, "resources" in the capture result's.
+    auto counters = array(pass, "counters");
+    if (counters.empty()) counters = array(pass, "resources");
+    for (const auto& c : counters) {
+      double bytes = num(c, "bytes").value_or(0);
+      (str(c, "access") == "write" ? written : read) += bytes;
+    }
+  }
+  return {read, written};
+}
+
+CompareView compareView(const json& comparison) {
+  CompareView v;
+  for (const auto& run : array(comparison, "runs")) v.runs.push_back(runView(run));
+  auto add = [&](std::string pass, std::string resource, std::string metric,
+                 std::vector<ComparedView> values) {
+    if (!values.empty())
+      v.rows.push_back({std::move(pass), std::move(resource), std::move(metric), std::move(values)});
+  };
+  add("(frame)", "", "ms", comparedList(comparison, "frame_ms"));
+  add("(frame)", "(all)", "bytes", comparedList(comparison, "total_bytes"));
+  for (const auto& p : array(comparison, "passes")) {
+    std::string name = str(p, "pass");
+    if (name.empty()) name = str(p, "name");
+    add(name, "", "ms", comparedList(p, "gpu_ms"));
+    add(name, "(all)", "bytes", comparedList(p, "bytes"));
+    add(name, "", "invocations", comparedList(p, "fragment_invocations"));
+  }
+  for (const auto& r : array(comparison, "resources")) {
+    std::string name = str(r, "resource");
+    if (name.empty()) name = str(r, "name");
+    std::string access = str(r, "access");
+    std::string label = access.empty() ? name : name + " (" + access + ")";
+    add("(all passes)", label, "bytes", comparedList(r, "bytes"));
+  }
+  return v;
+}
+
+}  // namespace tally::client

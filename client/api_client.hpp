@@ -1,0 +1,146 @@
+// ApiClient: tallyd's REST API over cpp-httplib, returning JSON or a one-line
+// reason. Every wire field name the client reads lives in api_client.cpp (the
+// *View helpers), so aligning with the server is a change in one place.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/result.hpp"
+#include "protocol.hpp"
+
+namespace httplib {
+class Client;
+}
+
+namespace tally::client {
+
+using nlohmann::json;
+
+// http://127.0.0.1:<protocol::kDefaultPort>
+inline std::string defaultServer() { return "http://127.0.0.1:" + std::to_string(protocol::kDefaultPort); }
+inline constexpr const char* kServerEnv = "TALLY_SERVER";  // overrides defaultServer()
+inline constexpr const char* kTokenEnv = "TALLY_TOKEN";    // sent as Authorization: Bearer
+
+struct ClientOptions {
+  std::string server = defaultServer();  // http://host[:port]
+  std::string token;                     // empty: no Authorization header
+  int connectTimeoutS = 5;
+  int readTimeoutS = 60;  // exports of many runs take a while
+};
+
+// --server when given, else $TALLY_SERVER, else defaultServer().
+std::string resolveServer(const std::string& flag);
+// $TALLY_TOKEN or empty.
+std::string tokenFromEnv();
+
+// Filters shared by /api/runs and /api/export; unset ones are not sent.
+struct RunFilters {
+  std::optional<std::string> renderer, scene, device, capture, runs;
+  std::optional<int> width, height;
+};
+
+class ApiClient {
+ public:
+  explicit ApiClient(ClientOptions options);
+  ~ApiClient();
+  ApiClient(const ApiClient&) = delete;
+  ApiClient& operator=(const ApiClient&) = delete;
+
+  const std::string& server() const { return server_; }
+
+  Result<json> health();
+  Result<json> submitCapture(const json& spec, const std::string& idempotencyKey = "");
+  Result<json> getCapture(const std::string& id);
+  Result<json> listCaptures();
+  Result<json> cancelCapture(const std::string& id);  // {} on 204
+  // One page; cursor empty for the first.
+  Result<json> listRuns(const RunFilters& filters, std::optional<int> limit, const std::string& cursor = "");
+  // Follows next_cursor to the end; {"runs":[...every page's runs...]}.
+  Result<json> listAllRuns(const RunFilters& filters, std::optional<int> limit);
+  Result<json> getRun(const std::string& id);
+  Result<json> getRunSamples(const std::string& id);
+  Result<json> getSample(const std::string& id);
+  Result<json> compare(const std::vector<std::string>& runIds);
+  // The export body, verbatim.
+  Result<std::string> exportRuns(const std::string& format, const RunFilters& filters);
+
+ private:
+  struct Raw {
+    int status = 0;
+    std::string body;
+  };
+  Result<Raw> send(const std::string& method, const std::string& path, const std::string& body = "",
+                   const std::string& idempotencyKey = "");
+  Result<json> sendJson(const std::string& method, const std::string& path, const std::string& body = "",
+                        const std::string& idempotencyKey = "");
+
+  std::string server_;
+  std::string token_;
+  std::unique_ptr<httplib::Client> http_;
+};
+
+// "error (400 invalid_field, field resolutions[0][0]): message", or for a body
+// that is not the API's error object "error (502): <first line of the body>".
+std::string formatHttpError(int status, const std::string& body);
+
+// ---- the wire mapping: every response field the client reads -----------------
+
+// An id that may arrive as a number or a string.
+std::string idString(const json& value);
+
+struct JobView {
+  std::string id, status, error, current, createdAt;
+  std::optional<int64_t> done, total;  // progress counts when the server gives them
+  std::optional<double> fraction;      // 0..1, from counts or a bare number
+  std::optional<int> attempts;
+  std::vector<std::string> runs;
+  bool finished() const {
+    return status == protocol::kJobDone || status == protocol::kJobFailed ||
+           status == protocol::kJobCancelled;
+  }
+};
+JobView jobView(const json& job);
+std::vector<json> jobList(const json& page);  // the "captures" array
+
+struct RunView {
+  std::string id, capture, renderer, scene, device, counting, createdAt;
+  std::optional<int64_t> width, height, samples, lights, renderTargetBytes;
+  std::optional<double> frameMs, bytes;  // means over the run's samples
+};
+RunView runView(const json& run);
+std::vector<json> runList(const json& page);  // the "runs" array
+std::string nextCursor(const json& page);     // empty at the end
+
+struct SampleView {
+  std::string id, camera;  // camera: label or index
+  std::optional<double> skyFraction, frameMs, overhead, psnr, bytes, bytesRead, bytesWritten;
+  bool identical = false;  // image equal to the reference renderer's
+  std::string against;     // reference renderer of image_error
+};
+SampleView sampleView(const json& sample);
+std::vector<json> sampleList(const json& page);  // the "samples" array
+// Bytes read and written per frame over a full sample's passes and counters.
+std::pair<double, double> sampleReadWrite(const json& sample);
+
+// One compared quantity for one run (against the first run).
+struct ComparedView {
+  std::optional<double> value, delta, ratio;
+};
+struct CompareRow {
+  std::string pass, resource, metric;  // metric: "ms", "bytes", "count", "invocations"
+  std::vector<ComparedView> values;    // one per run
+};
+struct CompareView {
+  std::vector<RunView> runs;
+  std::vector<CompareRow> rows;
+};
+CompareView compareView(const json& comparison);
+
+}  // namespace tally::client

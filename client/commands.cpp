@@ -1,0 +1,365 @@
+#include "commands.hpp"
+
+#include <unistd.h>
+
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "tables.hpp"
+
+namespace tally::client {
+
+namespace {
+
+using Align = Table::Align;
+
+// Polls in a row that may fail to connect before `tally capture` gives up
+// (30 at the default 1 s interval: long enough for tallyd to restart).
+constexpr int kMaxUnreachablePolls = 30;
+
+int fail(Io& io, const std::string& message) {
+  io.err << "tally: " << message << '\n';
+  return 1;
+}
+
+void printJson(Io& io, const json& j) { io.out << j.dump(2) << '\n'; }
+
+std::string size(const RunView& r) {
+  if (!r.width || !r.height) return kMissing;
+  return std::to_string(*r.width) + "x" + std::to_string(*r.height);
+}
+
+std::string orMissing(const std::string& s) { return s.empty() ? kMissing : s; }
+
+std::string progressCell(const JobView& j) {
+  if (j.done && j.total) return std::to_string(*j.done) + "/" + std::to_string(*j.total);
+  return j.fraction ? percent(j.fraction) : kMissing;
+}
+
+Result<json> readSpec(const std::string& source) {
+  std::string text;
+  if (source == "-") {
+    std::stringstream s;
+    s << std::cin.rdbuf();
+    text = s.str();
+  } else {
+    std::ifstream in(source, std::ios::binary);
+    if (!in) return makeError("cannot read spec " + source);
+    std::stringstream s;
+    s << in.rdbuf();
+    text = s.str();
+  }
+  std::string name = source == "-" ? "stdin" : source;
+  try {
+    json spec = json::parse(text);
+    if (!spec.is_object()) return makeError("spec " + name + ": must be a JSON object");
+    return spec;
+  } catch (const json::parse_error& e) {
+    return makeError("spec " + name + ": not valid JSON: " + e.what());
+  }
+}
+
+void drawProgress(Io& io, const JobView& j, std::string& last) {
+  std::string line = progressLine(j.fraction, j.done, j.total, j.current);
+  if (j.status == protocol::kJobQueued) line += " (queued)";
+  if (line == last) return;
+  last = line;
+  if (io.progressTty) {
+    io.err << '\r' << line << "\033[K" << std::flush;
+  } else {
+    io.err << line << '\n' << std::flush;
+  }
+}
+
+}  // namespace
+
+int runCapture(ApiClient& api, const CaptureArgs& args, Io& io) {
+  auto spec = readSpec(args.spec);
+  if (!spec) return fail(io, spec.error());
+  auto created = api.submitCapture(*spec, args.idempotencyKey);
+  if (!created) return fail(io, created.error());
+  JobView job = jobView(*created);
+  if (job.id.empty()) return fail(io, "tallyd accepted the capture but sent no id");
+  if (args.noWait) {
+    if (io.json) {
+      printJson(io, *created);
+    } else {
+      io.out << job.id << '\n';
+    }
+    return 0;
+  }
+  io.err << "capture " << job.id << " queued\n";
+  std::string last;
+  json current = *created;
+  int unreachable = 0;  // consecutive polls that could not reach tallyd
+  while (!job.finished()) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(args.intervalS));
+    auto polled = api.getCapture(job.id);
+    if (!polled) {
+      // The job is stored (202), so a restarting daemon is waited for a while.
+      bool transient = polled.error().rfind("cannot reach", 0) == 0;
+      if (transient && ++unreachable < kMaxUnreachablePolls) continue;
+      if (io.progressTty && !last.empty()) io.err << '\n';
+      return fail(io, polled.error());
+    }
+    unreachable = 0;
+    current = *polled;
+    job = jobView(current);
+    drawProgress(io, job, last);
+  }
+  if (io.progressTty && !last.empty()) io.err << '\n';
+  if (io.json) printJson(io, current);
+  if (job.status == protocol::kJobDone) {
+    if (!io.json) {
+      io.out << "capture " << job.id << " done";
+      if (!job.runs.empty()) {
+        io.out << ": runs";
+        for (const auto& r : job.runs) io.out << ' ' << r;
+      } else {
+        io.out << " (see `tally runs --capture " << job.id << "`)";
+      }
+      io.out << '\n';
+    }
+    return 0;
+  }
+  if (job.status == protocol::kJobFailed)
+    return fail(io, "capture " + job.id + " failed: " + orMissing(job.error));
+  return fail(io, "capture " + job.id + " " + job.status);
+}
+
+int runStatus(ApiClient& api, const std::string& id, Io& io) {
+  if (!id.empty()) {
+    auto res = api.getCapture(id);
+    if (!res) return fail(io, res.error());
+    if (io.json) {
+      printJson(io, *res);
+      return 0;
+    }
+    JobView j = jobView(*res);
+    Table t({{"FIELD"}, {"VALUE"}});
+    t.addRow({"id", j.id});
+    t.addRow({"status", j.status});
+    t.addRow({"progress", progressCell(j)});
+    if (!j.current.empty()) t.addRow({"current", j.current});
+    if (j.attempts) t.addRow({"attempts", std::to_string(*j.attempts)});
+    if (!j.createdAt.empty()) t.addRow({"created", j.createdAt});
+    if (!j.error.empty()) t.addRow({"error", j.error});
+    if (!j.runs.empty()) {
+      std::string runs;
+      for (const auto& r : j.runs) runs += (runs.empty() ? "" : " ") + r;
+      t.addRow({"runs", runs});
+    }
+    t.print(io.out);
+    return 0;
+  }
+  auto res = api.listCaptures();
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t({{"ID", Align::Right},
+           {"STATUS"},
+           {"PROGRESS", Align::Right},
+           {"ATTEMPTS", Align::Right},
+           {"CREATED"},
+           {"ERROR"}});
+  for (const auto& job : jobList(*res)) {
+    JobView j = jobView(job);
+    t.addRow({j.id, j.status, progressCell(j), j.attempts ? std::to_string(*j.attempts) : kMissing,
+              orMissing(j.createdAt), j.error});
+  }
+  t.print(io.out);
+  return 0;
+}
+
+int runCancel(ApiClient& api, const std::string& id, Io& io) {
+  auto res = api.cancelCapture(id);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+  } else {
+    io.out << "capture " << id << " cancelled or deleted\n";
+  }
+  return 0;
+}
+
+int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
+  auto res = args.all ? api.listAllRuns(args.filters, args.limit) : api.listRuns(args.filters, args.limit);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t({{"ID", Align::Right},
+           {"CAPTURE", Align::Right},
+           {"RENDERER"},
+           {"SCENE"},
+           {"SIZE", Align::Right},
+           {"DEVICE"},
+           {"SAMPLES", Align::Right},
+           {"FRAME MS", Align::Right},
+           {"BYTES/FRAME", Align::Right}});
+  for (const auto& run : runList(*res)) {
+    RunView r = runView(run);
+    t.addRow({r.id, orMissing(r.capture), r.renderer, r.scene, size(r), orMissing(r.device),
+              r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3), humanBytes(r.bytes)});
+  }
+  t.print(io.out);
+  std::string next = nextCursor(*res);
+  if (!args.all && !next.empty()) io.err << "more runs: add --all, or --limit N\n";
+  return 0;
+}
+
+int runShow(ApiClient& api, const std::string& runId, Io& io) {
+  auto run = api.getRun(runId);
+  if (!run) return fail(io, run.error());
+  auto samples = api.getRunSamples(runId);
+  if (!samples) return fail(io, samples.error());
+  if (io.json) {
+    printJson(io, json{{"run", *run}, {"samples", *samples}});
+    return 0;
+  }
+  RunView r = runView(*run);
+  io.out << "run " << r.id << ": " << r.renderer << " on " << r.scene << " at " << size(r) << '\n';
+  io.out << "device: " << orMissing(r.device) << "   capture: " << orMissing(r.capture);
+  if (!r.counting.empty()) io.out << "   counting: " << r.counting;
+  if (r.lights) io.out << "   lights: " << *r.lights;
+  if (r.renderTargetBytes)
+    io.out << "   render targets: " << humanBytes(static_cast<double>(*r.renderTargetBytes));
+  io.out << "\n\n";
+
+  Table t({{"CAMERA"},
+           {"SKY", Align::Right},
+           {"FRAME MS", Align::Right},
+           {"OVERHEAD", Align::Right},
+           {"IMAGE ERROR", Align::Right},
+           {"READ/FRAME", Align::Right},
+           {"WRITTEN/FRAME", Align::Right}});
+  for (const auto& sample : sampleList(*samples)) {
+    SampleView s = sampleView(sample);
+    std::optional<double> read = s.bytesRead, written = s.bytesWritten;
+    if ((!read || !written) && !s.id.empty()) {
+      // The sample list carries totals only; the split comes from the sample's counters.
+      auto full = api.getSample(s.id);
+      if (!full) return fail(io, full.error());
+      auto [r2, w2] = sampleReadWrite(*full);
+      read = r2;
+      written = w2;
+    }
+    std::string image = s.identical ? "identical" : s.psnr ? fixed(s.psnr, 1) + " dB" : kMissing;
+    if (!s.against.empty() && image != kMissing) image += " vs " + s.against;
+    t.addRow({orMissing(s.camera), percent(s.skyFraction), fixed(s.frameMs, 3), ratio(s.overhead), image,
+              humanBytes(read), humanBytes(written)});
+  }
+  t.print(io.out);
+  return 0;
+}
+
+int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
+  auto res = api.compare(runIds);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  CompareView c = compareView(*res);
+  std::vector<std::string> names;
+  for (size_t i = 0; i < runIds.size(); ++i) {
+    std::string id = i < c.runs.size() && !c.runs[i].id.empty() ? c.runs[i].id : runIds[i];
+    names.push_back("#" + id);
+    if (i < c.runs.size()) {
+      const RunView& r = c.runs[i];
+      io.out << "#" << id << ": " << r.renderer << " " << r.scene << " " << size(r) << " on "
+             << orMissing(r.device) << '\n';
+    }
+  }
+  io.out << '\n';
+  std::vector<Table::Column> columns = {{"PASS"}, {"RESOURCE"}, {"METRIC"}};
+  for (const auto& n : names) columns.push_back({n, Align::Right});
+  for (size_t i = 1; i < names.size(); ++i) {
+    columns.push_back({"delta" + names[i], Align::Right});
+    columns.push_back({"ratio" + names[i], Align::Right});
+  }
+  Table t(columns);
+  for (const auto& row : c.rows) {
+    auto value = [&](std::optional<double> v) {
+      if (row.metric == "bytes") return humanBytes(v);
+      if (row.metric == "ms") return fixed(v, 3);
+      return fixed(v, 0);
+    };
+    auto delta = [&](std::optional<double> v) {
+      if (row.metric == "bytes") return signedBytes(v);
+      return signedFixed(v, row.metric == "ms" ? 3 : 0);
+    };
+    std::vector<std::string> cells = {row.pass, row.resource, row.metric};
+    for (size_t i = 0; i < names.size(); ++i)
+      cells.push_back(value(i < row.values.size() ? row.values[i].value : std::nullopt));
+    for (size_t i = 1; i < names.size(); ++i) {
+      bool has = i < row.values.size();
+      cells.push_back(delta(has ? row.values[i].delta : std::nullopt));
+      cells.push_back(ratio(has ? row.values[i].ratio : std::nullopt));
+    }
+    t.addRow(cells);
+  }
+  t.print(io.out);
+  return 0;
+}
+
+Result<bool> writeFileAtomically(const std::string& path, const std::string& data) {
+  namespace fs = std::filesystem;
+  fs::path target(path);
+  fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::string pattern = (dir / ("." + target.filename().string() + ".tmp.XXXXXX")).string();
+  std::vector<char> name(pattern.begin(), pattern.end());
+  name.push_back('\0');
+  int fd = ::mkstemp(name.data());
+  if (fd < 0) return makeError("cannot create a temporary file beside " + path + ": " + std::strerror(errno));
+  size_t written = 0;
+  while (written < data.size()) {
+    ssize_t n = ::write(fd, data.data() + written, data.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      std::string reason = std::strerror(errno);
+      ::close(fd);
+      ::unlink(name.data());
+      return makeError("cannot write " + path + ": " + reason);
+    }
+    written += static_cast<size_t>(n);
+  }
+  ::fchmod(fd, 0644);
+  if (::fsync(fd) != 0 || ::close(fd) != 0) {
+    ::unlink(name.data());
+    return makeError("cannot write " + path + ": " + std::strerror(errno));
+  }
+  if (::rename(name.data(), path.c_str()) != 0) {
+    std::string reason = std::strerror(errno);
+    ::unlink(name.data());
+    return makeError("cannot rename to " + path + ": " + reason);
+  }
+  return true;
+}
+
+int runExport(ApiClient& api, const ExportArgs& args, Io& io) {
+  auto body = api.exportRuns(args.format, args.filters);
+  if (!body) return fail(io, body.error());
+  if (args.output.empty() || args.output == "-") {
+    io.out << *body << std::flush;
+    return 0;
+  }
+  auto written = writeFileAtomically(args.output, *body);
+  if (!written) return fail(io, written.error());
+  io.err << "wrote " << args.output << " (" << humanBytes(static_cast<double>(body->size())) << ")\n";
+  return 0;
+}
+
+}  // namespace tally::client

@@ -1,0 +1,53 @@
+// The tally subcommands, one function each: they take parsed options, call
+// tallyd through ApiClient and print. Return the process exit code
+// (0 success, 1 failure with a one-line reason on err).
+#pragma once
+
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "api_client.hpp"
+
+namespace tally::client {
+
+struct Io {
+  std::ostream& out;
+  std::ostream& err;
+  bool json = false;         // --json: print the server's JSON instead of tables
+  bool progressTty = false;  // redraw the progress bar in place (stderr is a terminal)
+};
+
+struct CaptureArgs {
+  std::string spec;  // a file, or "-" for stdin
+  bool noWait = false;
+  std::string idempotencyKey;
+  double intervalS = 1.0;  // between status polls
+};
+int runCapture(ApiClient& api, const CaptureArgs& args, Io& io);
+
+// One job when id is set, else the job list.
+int runStatus(ApiClient& api, const std::string& id, Io& io);
+int runCancel(ApiClient& api, const std::string& id, Io& io);
+
+struct RunsArgs {
+  RunFilters filters;
+  std::optional<int> limit;
+  bool all = false;  // follow next_cursor to the end
+};
+int runRuns(ApiClient& api, const RunsArgs& args, Io& io);
+int runShow(ApiClient& api, const std::string& runId, Io& io);
+int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io);
+
+struct ExportArgs {
+  std::string format = "csv";
+  RunFilters filters;
+  std::string output;  // empty: stdout; else written atomically (temp file + rename)
+};
+int runExport(ApiClient& api, const ExportArgs& args, Io& io);
+
+// Writes data to path via a temporary file in the same folder and rename().
+Result<bool> writeFileAtomically(const std::string& path, const std::string& data);
+
+}  // namespace tally::client

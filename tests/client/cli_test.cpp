@@ -1,0 +1,248 @@
+// The tally binary as a subprocess against the fake tallyd: tables, --json,
+// errors and exit codes, capture waiting, export files.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "fake_tallyd.hpp"
+
+namespace tally::client {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::FakeTallyd;
+
+struct Outcome {
+  int rc = -1;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class TallyCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("tally_cli_test_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs tally with args (already shell-quoted where needed); TALLY_* from the
+  // test environment are cleared so only the flags count.
+  Outcome tally(const std::string& args, const std::string& stdinFile = "") {
+    std::string cmd = "env -u TALLY_SERVER -u TALLY_TOKEN '" + std::string(TALLY_BIN) + "' " + args + " >'" +
+                      (dir_ / "out").string() + "' 2>'" + (dir_ / "err").string() + "'";
+    if (!stdinFile.empty()) cmd += " <'" + stdinFile + "'";
+    int status = std::system(cmd.c_str());
+    Outcome r;
+    r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir_ / "out");
+    r.err = slurp(dir_ / "err");
+    if (std::getenv("TALLY_TEST_PRINT")) std::cout << "$ tally " << args << "\n" << r.out << r.err;
+    return r;
+  }
+  std::string writeSpec(const std::string& text) {
+    auto p = dir_ / "spec.json";
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  fs::path dir_;
+};
+
+TEST_F(TallyCli, VersionAndHelp) {
+  Outcome v = tally("--version");
+  EXPECT_EQ(v.rc, 0);
+  EXPECT_NE(v.out.find("API v1"), std::string::npos);
+  for (const char* sub : {"capture", "status", "runs", "show", "compare", "export", "cancel"}) {
+    Outcome h = tally(std::string(sub) + " --help");
+    EXPECT_EQ(h.rc, 0) << sub;
+    EXPECT_NE(h.out.find("Example:"), std::string::npos) << sub;
+  }
+}
+
+TEST_F(TallyCli, RunsTableShowsValues) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " runs --renderer deferred");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("RENDERER"), std::string::npos);
+  EXPECT_NE(r.out.find("visbuffer"), std::string::npos);
+  EXPECT_NE(r.out.find("320x180"), std::string::npos);
+  EXPECT_NE(r.out.find("1.834"), std::string::npos);
+  EXPECT_NE(r.out.find("3.00 MiB"), std::string::npos);
+  EXPECT_EQ(r.out.find("forward"), std::string::npos);  // second page not fetched
+  EXPECT_NE(r.err.find("--all"), std::string::npos);
+  EXPECT_EQ(fake.lastRunsQuery().find("renderer")->second, "deferred");
+
+  Outcome all = tally("runs --all --server " + fake.url());
+  ASSERT_EQ(all.rc, 0) << all.err;
+  EXPECT_NE(all.out.find("forward"), std::string::npos);
+  EXPECT_NE(all.out.find("640x180"), std::string::npos);
+}
+
+TEST_F(TallyCli, JsonPrintsServerJson) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " --json runs --all");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  json j = json::parse(r.out);
+  ASSERT_EQ(j["runs"].size(), 3u);
+  EXPECT_EQ(j["runs"][0]["extra_field"], json({1, 2}));
+
+  Outcome s = tally("status 8 --json --server " + fake.url());
+  ASSERT_EQ(s.rc, 0) << s.err;
+  EXPECT_EQ(json::parse(s.out)["id"], 8);
+}
+
+TEST_F(TallyCli, StatusOneAndList) {
+  FakeTallyd fake;
+  Outcome list = tally("--server " + fake.url() + " status");
+  ASSERT_EQ(list.rc, 0) << list.err;
+  EXPECT_NE(list.out.find("out of memory"), std::string::npos);
+  EXPECT_NE(list.out.find("12/40"), std::string::npos);
+  Outcome one = tally("--server " + fake.url() + " status 7");
+  ASSERT_EQ(one.rc, 0) << one.err;
+  EXPECT_NE(one.out.find("queued"), std::string::npos);
+  EXPECT_NE(one.out.find("0/40"), std::string::npos);
+}
+
+TEST_F(TallyCli, ShowRunAndSamples) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " show 12");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("run 12: deferred on atrium at 320x180"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("31.0%"), std::string::npos);
+  EXPECT_NE(r.out.find("1.830"), std::string::npos);
+  EXPECT_NE(r.out.find("1.10x"), std::string::npos);
+  EXPECT_NE(r.out.find("41.2 dB vs forward"), std::string::npos);
+  EXPECT_NE(r.out.find("identical"), std::string::npos);
+  EXPECT_NE(r.out.find("1 half sky"), std::string::npos);
+  EXPECT_NE(r.out.find("1.00 MiB"), std::string::npos);  // read: 2 KiB + 1 MiB
+  EXPECT_NE(r.out.find("1.00 KiB"), std::string::npos);  // written
+}
+
+TEST_F(TallyCli, CompareTable) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " compare 12 15");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("#12"), std::string::npos);
+  EXPECT_NE(r.out.find("ratio#15"), std::string::npos);
+  EXPECT_NE(r.out.find("gbuffer"), std::string::npos);
+  EXPECT_NE(r.out.find("0.75x"), std::string::npos);
+  EXPECT_NE(r.out.find("-2.00 MiB"), std::string::npos);
+  EXPECT_NE(r.out.find("gbuffer.normal (write)"), std::string::npos);
+
+  Outcome one = tally("--server " + fake.url() + " compare 12");
+  EXPECT_EQ(one.rc, 2);  // usage error
+  Outcome five = tally("--server " + fake.url() + " compare 1 2 3 4 5");
+  EXPECT_EQ(five.rc, 2);
+}
+
+TEST_F(TallyCli, ServerErrorGivesMessageAndExit1) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " compare 12 99");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(r.err, "tally: error (400 invalid_field, field runs[1]): run 99 not found\n");
+  EXPECT_EQ(r.out, "");
+  Outcome missing = tally("--server " + fake.url() + " show 404");
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_EQ(missing.err, "tally: error (404 not_found): run 404 not found\n");
+}
+
+TEST_F(TallyCli, RefusedConnection) {
+  std::string url = "http://127.0.0.1:" + std::to_string(test::deadPort());
+  Outcome r = tally("--server " + url + " runs");
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_EQ(r.err,
+            "tally: cannot reach tallyd at " + url + ": connection refused (is `tallyd serve` running?)\n");
+}
+
+TEST_F(TallyCli, ServerFromEnvironment) {
+  FakeTallyd fake;
+  std::string cmd =
+      "TALLY_SERVER=" + fake.url() + " '" + std::string(TALLY_BIN) + "' status 8 >/dev/null 2>&1";
+  int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+TEST_F(TallyCli, TokenFromEnvironment) {
+  FakeTallyd fake;
+  std::string cmd = "TALLY_TOKEN=t0ken '" + std::string(TALLY_BIN) + "' --server " + fake.url() +
+                    " capture --no-wait --spec '" + writeSpec(R"({"renderers":["forward"]})") +
+                    "' >/dev/null 2>&1";
+  int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(fake.lastAuthorization(), "Bearer t0ken");
+}
+
+TEST_F(TallyCli, ExportWritesFile) {
+  FakeTallyd fake;
+  auto out = dir_ / "runs.csv";
+  Outcome r = tally("--server " + fake.url() + " export --format csv --capture 7 -o '" + out.string() + "'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(slurp(out), "run_id,renderer,bytes\n12,deferred,3145728\n");
+  EXPECT_EQ(r.out, "");
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir_))
+    files += e.path().filename().string().find(".tmp.") != std::string::npos;
+  EXPECT_EQ(files, 0);  // no temporary left behind
+
+  Outcome stdoutJson = tally("--server " + fake.url() + " export --format json");
+  ASSERT_EQ(stdoutJson.rc, 0) << stdoutJson.err;
+  EXPECT_EQ(stdoutJson.out, R"({"rows":[{"run_id":12,"renderer":"deferred"}]})");
+}
+
+TEST_F(TallyCli, CaptureWaitsUntilDone) {
+  FakeTallyd fake;
+  std::string spec = writeSpec(R"({"renderers":["deferred"],"resolutions":[[320,180]]})");
+  Outcome r =
+      tally("--server " + fake.url() + " capture --spec '" + spec + "' --interval 0.02 --idempotency-key k1");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.err.find("] 12/40 deferred atrium 320x180 camera 3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("[####################] 40/40"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("capture 7 done: runs 12 15"), std::string::npos) << r.out;
+  EXPECT_EQ(fake.lastIdempotencyKey(), "k1");
+}
+
+TEST_F(TallyCli, CaptureFromStdinFails) {
+  FakeTallyd fake;
+  std::string spec = writeSpec(R"({"renderers":["deferred"],"resolutions":[[320,180]],"fail":true})");
+  Outcome r = tally("--server " + fake.url() + " capture --spec - --interval 0.02", spec);
+  EXPECT_EQ(r.rc, 1);
+  EXPECT_NE(r.err.find("tally: capture 8 failed: device lost during deferred atrium 320x180 camera 1"),
+            std::string::npos)
+      << r.err;
+}
+
+TEST_F(TallyCli, CaptureNoWaitAndBadSpec) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " capture --no-wait --spec '" +
+                    writeSpec(R"({"renderers":["forward"]})") + "'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out, "7\n");
+
+  Outcome invalid = tally("--server " + fake.url() + " capture --spec '" +
+                          writeSpec(R"({"renderers":["forward"],"resolutions":[[0,180]]})") + "'");
+  EXPECT_EQ(invalid.rc, 1);
+  EXPECT_NE(invalid.err.find("error (400 invalid_field, field resolutions[0][0])"), std::string::npos);
+
+  Outcome notJson = tally("--server " + fake.url() + " capture --spec '" + writeSpec("{oops") + "'");
+  EXPECT_EQ(notJson.rc, 1);
+  EXPECT_NE(notJson.err.find("not valid JSON"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace tally::client

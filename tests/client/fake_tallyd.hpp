@@ -1,0 +1,278 @@
+// A fake tallyd for the client tests: an in-process httplib::Server on
+// 127.0.0.1 (ephemeral port) serving canned JSON for every route the client
+// calls. Capture 7 goes queued -> running -> running -> done over successive
+// polls; capture 8 fails; run 404 and compare of run 99 give API errors.
+#pragma once
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+namespace tally::client::test {
+
+using nlohmann::json;
+
+inline json apiError(const std::string& code, const std::string& message, const std::string& field = "") {
+  json e = {{"code", code}, {"message", message}};
+  if (!field.empty()) e["field"] = field;
+  return {{"error", e}};
+}
+
+inline json runJson(int id, const std::string& renderer, int width) {
+  return {{"id", id},
+          {"capture", 7},
+          {"renderer", renderer},
+          {"scene", "atrium"},
+          {"width", width},
+          {"height", 180},
+          {"device", "llvmpipe (LLVM 15.0.6, 256 bits)"},
+          {"counting", "exact"},
+          {"lights", 400},
+          {"sample_count", 2},
+          {"mean_frame_ms", 1.834},
+          {"mean_bytes", 3145728.0},
+          {"render_target_bytes", 1048576},
+          {"extra_field", {1, 2}}};
+}
+
+class FakeTallyd {
+ public:
+  // port 0: an ephemeral port; else that port (to stand in for a restarted daemon).
+  explicit FakeTallyd(int port = 0) {
+    auto reply = [](httplib::Response& res, const json& body, int status = 200) {
+      res.status = status;
+      res.set_content(body.dump(), "application/json");
+    };
+    server_.Post("/api/captures", [this, reply](const httplib::Request& req, httplib::Response& res) {
+      std::lock_guard lock(mutex_);
+      lastSpec_ = req.body;
+      lastIdempotencyKey_ = req.get_header_value("Idempotency-Key");
+      lastAuthorization_ = req.get_header_value("Authorization");
+      json spec = json::parse(req.body, nullptr, false);
+      if (spec.is_discarded() || !spec.contains("renderers")) {
+        return reply(res, apiError("invalid_field", "renderers: required", "renderers"), 400);
+      }
+      if (spec.contains("resolutions") && spec["resolutions"].dump() == "[[0,180]]") {
+        return reply(
+            res,
+            apiError("invalid_field", "must be an integer between 1 and 16384, got 0", "resolutions[0][0]"),
+            400);
+      }
+      int id = spec.value("fail", false) ? 8 : 7;
+      reply(res, {{"id", id}, {"status", "queued"}}, 202);
+    });
+    server_.Get(R"(/api/captures/(\d+))", [this, reply](const httplib::Request& req, httplib::Response& res) {
+      int id = std::stoi(req.matches[1]);
+      int poll = 0;
+      {
+        std::lock_guard lock(mutex_);
+        poll = polls_[id]++;
+      }
+      if (id == 7) {
+        static const char* const kStates[] = {"queued", "running", "running", "done"};
+        std::string status = kStates[std::min(poll, 3)];
+        json job = {{"id", 7},
+                    {"status", status},
+                    {"attempts", status == "queued" ? 0 : 1},
+                    {"created_at", "2026-11-21T06:30:00.000Z"}};
+        int done = std::min(poll, 3) == 3 ? 40 : (poll == 2 ? 12 : 0);
+        job["progress"] = {{"done", done}, {"total", 40}, {"current", "deferred atrium 320x180 camera 3"}};
+        if (status == "done") job["runs"] = {12, 15};
+        return reply(res, job);
+      }
+      if (id == 8) {
+        json job = {{"id", 8},
+                    {"status", poll == 0 ? "running" : "failed"},
+                    {"attempts", 1},
+                    {"progress", {{"done", 1}, {"total", 4}}}};
+        if (poll > 0) job["error"] = "device lost during deferred atrium 320x180 camera 1";
+        return reply(res, job);
+      }
+      reply(res, apiError("not_found", "capture " + std::to_string(id) + " not found"), 404);
+    });
+    server_.Get("/api/captures", [reply](const httplib::Request&, httplib::Response& res) {
+      reply(res, {{"captures",
+                   {{{"id", 8},
+                     {"status", "failed"},
+                     {"attempts", 2},
+                     {"error", "out of memory"},
+                     {"progress", {{"done", 1}, {"total", 4}}},
+                     {"created_at", "2026-11-21T06:31:00Z"}},
+                    {{"id", 7},
+                     {"status", "running"},
+                     {"attempts", 1},
+                     {"progress", {{"done", 12}, {"total", 40}}},
+                     {"created_at", "2026-11-21T06:30:00Z"}}}},
+                  {"next_cursor", nullptr}});
+    });
+    server_.Delete(R"(/api/captures/(\d+))",
+                   [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
+    server_.Get("/api/runs", [this, reply](const httplib::Request& req, httplib::Response& res) {
+      {
+        std::lock_guard lock(mutex_);
+        lastRunsQuery_ = req.params;
+      }
+      std::string cursor = req.get_param_value("cursor");
+      if (cursor.empty())
+        return reply(res, {{"runs", {runJson(15, "visbuffer", 320), runJson(12, "deferred", 320)}},
+                           {"next_cursor", "r9"}});
+      if (cursor == "r9")
+        return reply(res, {{"runs", {runJson(9, "forward", 640)}}, {"next_cursor", nullptr}});
+      reply(res, apiError("bad_query", "cursor: not a cursor", "cursor"), 400);
+    });
+    server_.Get(R"(/api/runs/(\d+))", [reply](const httplib::Request& req, httplib::Response& res) {
+      int id = std::stoi(req.matches[1]);
+      if (id == 404) return reply(res, apiError("not_found", "run 404 not found"), 404);
+      reply(res, runJson(id, "deferred", 320));
+    });
+    server_.Get(R"(/api/runs/(\d+)/samples)", [reply](const httplib::Request&, httplib::Response& res) {
+      reply(res, {{"samples",
+                   {{{"id", 101},
+                     {"camera", 0},
+                     {"sky_fraction", 0.31},
+                     {"frame_ms", 1.83},
+                     {"overhead_ratio", 1.1},
+                     {"bytes", 3072.0},
+                     {"image_error", {{"against", "forward"}, {"psnr", 41.25}, {"identical", false}}}},
+                    {{"id", 102},
+                     {"camera", {{"eye", {0, 1, 2}}, {"label", "half sky"}, {"index", 1}}},
+                     {"sky_fraction", 0.5},
+                     {"frame_ms", 2.5},
+                     {"overhead_ratio", 1.02},
+                     {"bytes", 2048.0},
+                     {"image_error", {{"against", "forward"}, {"psnr", nullptr}, {"identical", true}}}}}}});
+    });
+    server_.Get(R"(/api/samples/(\d+))", [reply](const httplib::Request& req, httplib::Response& res) {
+      int id = std::stoi(req.matches[1]);
+      double scale = id == 101 ? 1.0 : 0.5;
+      reply(res, {{"id", id},
+                  {"passes",
+                   {{{"name", "gbuffer"},
+                     {"counters",
+                      {{{"resource", "material_maps.diffuse"}, {"access", "read"}, {"bytes", 2048 * scale}},
+                       {{"resource", "gbuffer.normal"}, {"access", "write"}, {"bytes", 1024 * scale}}}}},
+                    // the server's shape: "resources" with "name"; the first pass: "counters"
+                    {{"name", "lighting"},
+                     {"resources",
+                      {{{"name", "gbuffer.normal"}, {"access", "read"}, {"bytes", 1048576 * scale}}}}}}}});
+    });
+    server_.Get("/api/compare", [reply](const httplib::Request& req, httplib::Response& res) {
+      std::string runs = req.get_param_value("runs");
+      if (runs.find("99") != std::string::npos)
+        return reply(res, apiError("invalid_field", "run 99 not found", "runs[1]"), 400);
+      auto c = [](double v0, double v1) {
+        return json::array({{{"value", v0}, {"delta", 0.0}, {"ratio", 1.0}},
+                            {{"value", v1}, {"delta", v1 - v0}, {"ratio", v1 / v0}}});
+      };
+      reply(res, {{"runs", {runJson(12, "deferred", 320), runJson(15, "visbuffer", 320)}},
+                  {"frame_ms", c(2.0, 1.5)},
+                  {"total_bytes", c(4194304, 2097152)},
+                  {"passes",
+                   {{{"pass", "gbuffer"},
+                     {"gpu_ms", c(0.8, 0.4)},
+                     {"bytes", c(2097152, 1048576)},
+                     {"fragment_invocations", c(61234, 57600)}}}},
+                  {"resources",
+                   {{{"resource", "gbuffer.normal"},
+                     {"access", "write"},
+                     {"count", c(57600, 0)},
+                     {"bytes", json::array({{{"value", 460800.0}}, {{"value", nullptr}}})}}}}});
+    });
+    server_.Get("/api/export", [this](const httplib::Request& req, httplib::Response& res) {
+      {
+        std::lock_guard lock(mutex_);
+        lastExportQuery_ = req.params;
+      }
+      if (req.get_param_value("format") == "csv") {
+        res.set_content("run_id,renderer,bytes\n12,deferred,3145728\n", "text/csv");
+      } else {
+        res.set_content(R"({"rows":[{"run_id":12,"renderer":"deferred"}]})", "application/json");
+      }
+    });
+    server_.Get("/api/health", [reply](const httplib::Request&, httplib::Response& res) {
+      reply(res, {{"status", "ok"}, {"version", "0.1.0"}, {"api_version", 1}});
+    });
+    server_.Get("/api/broken", [](const httplib::Request&, httplib::Response& res) {
+      res.status = 502;
+      res.set_content("<html>bad gateway</html>\n", "text/html");
+    });
+
+    if (port == 0) {
+      port_ = server_.bind_to_any_port("127.0.0.1");
+    } else {
+      for (int i = 0; i < 200 && !server_.bind_to_port("127.0.0.1", port); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      port_ = port;
+    }
+    thread_ = std::thread([this] { server_.listen_after_bind(); });
+    for (int i = 0; i < 500 && !server_.is_running(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ~FakeTallyd() {
+    server_.stop();
+    thread_.join();
+  }
+
+  int port() const { return port_; }
+  std::string url() const { return "http://127.0.0.1:" + std::to_string(port_); }
+
+  std::string lastSpec() {
+    std::lock_guard lock(mutex_);
+    return lastSpec_;
+  }
+  int polls(int captureId) {
+    std::lock_guard lock(mutex_);
+    return polls_[captureId];
+  }
+  std::string lastIdempotencyKey() {
+    std::lock_guard lock(mutex_);
+    return lastIdempotencyKey_;
+  }
+  std::string lastAuthorization() {
+    std::lock_guard lock(mutex_);
+    return lastAuthorization_;
+  }
+  httplib::Params lastRunsQuery() {
+    std::lock_guard lock(mutex_);
+    return lastRunsQuery_;
+  }
+  httplib::Params lastExportQuery() {
+    std::lock_guard lock(mutex_);
+    return lastExportQuery_;
+  }
+
+ private:
+  httplib::Server server_;
+  std::thread thread_;
+  int port_ = 0;
+  std::mutex mutex_;
+  std::map<int, int> polls_;  // GETs per capture id
+  std::string lastSpec_, lastIdempotencyKey_, lastAuthorization_;
+  httplib::Params lastRunsQuery_, lastExportQuery_;
+};
+
+// A loopback port with nothing listening: bound, then closed.
+inline int deadPort() {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof(addr);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr));
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  ::close(fd);
+  return ntohs(addr.sin_port);
+}
+
+}  // namespace tally::client::test
