@@ -477,10 +477,11 @@ Response getScreenshot(ServiceContext& ctx, const Request& req) {
   return Response::raw(std::string(png->begin(), png->end()), "image/png");
 }
 
-Response compare(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"runs"});
+// ?runs=a,b,...: distinct positive run ids, between `least` and `most` of them.
+std::vector<int64_t> runIdList(const Request& req, size_t least, size_t most) {
+  std::string expected = "must be " + std::to_string(least) + " to " + std::to_string(most) + " run ids, comma-separated";
   const std::string* list = req.queryValue("runs");
-  if (!list) invalid("runs", "required: 2 to 4 run ids, comma-separated");
+  if (!list) invalid("runs", "required: " + std::to_string(least) + " to " + std::to_string(most) + " run ids, comma-separated");
   std::vector<int64_t> ids;
   std::stringstream in(*list);
   std::string item;
@@ -493,16 +494,22 @@ Response compare(ServiceContext& ctx, const Request& req) {
       used = 0;
     }
     if (item.empty() || used != item.size() || !std::isdigit(static_cast<unsigned char>(item[0])) || n < 1) {
-      invalid("runs", "must be 2 to 4 run ids, comma-separated");
+      invalid("runs", expected);
     }
     for (int64_t seen : ids) {
       if (seen == n) invalid("runs", "run " + item + " is listed twice");
     }
     ids.push_back(n);
-    if (ids.size() > 4) break;
+    if (ids.size() > most) break;
   }
-  if (!list->empty() && list->back() == ',') invalid("runs", "must be 2 to 4 run ids, comma-separated");
-  if (ids.size() < 2 || ids.size() > 4) invalid("runs", "must be 2 to 4 run ids, comma-separated");
+  if (!list->empty() && list->back() == ',') invalid("runs", expected);
+  if (ids.size() < least || ids.size() > most) invalid("runs", expected);
+  return ids;
+}
+
+Response compare(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"runs"});
+  std::vector<int64_t> ids = runIdList(req, 2, 4);
   auto& store = reader(ctx);
   for (int64_t id : ids) {
     if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
@@ -511,10 +518,12 @@ Response compare(ServiceContext& ctx, const Request& req) {
 }
 
 Response exportRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture"});
+  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture", "runs"});
   std::string format = queryString(req, "format", 8).value_or("json");
   if (format != "csv" && format != "json") invalid("format", "must be csv or json");
-  auto rows = check(reader(ctx).exportRuns(queryFilter(req)));
+  store::RunFilter filter = queryFilter(req);
+  if (req.queryValue("runs")) filter.runIds = runIdList(req, 1, 1000);  // the store's limit
+  auto rows = check(reader(ctx).exportRuns(filter));
   if (format == "json") {
     json out = json::array();
     for (const auto& r : rows) {

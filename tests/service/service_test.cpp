@@ -305,6 +305,12 @@ TEST_F(ServiceTest, CaptureQueryCompareExport) {
   Reply exported = d.request("GET", "/api/export?format=json");
   ASSERT_EQ(exported.status, 200);
   EXPECT_EQ(static_cast<int>(exported.j()["rows"].size()), rows);
+  // runs= narrows the export to those runs: only forward's rows, and fewer than all.
+  Reply one = d.request("GET", "/api/export?format=json&runs=" + std::to_string(runIds["forward"]));
+  ASSERT_EQ(one.status, 200) << one.body;
+  ASSERT_FALSE(one.j()["rows"].empty());
+  EXPECT_LT(static_cast<int>(one.j()["rows"].size()), rows);
+  for (const auto& r : one.j()["rows"]) EXPECT_EQ(r["renderer"], "forward");
 
   Reply devices = d.request("GET", "/api/devices");
   ASSERT_EQ(devices.status, 200);
@@ -444,6 +450,7 @@ TEST_F(ServiceTest, BadRequestsNameTheField) {
       {"compare without runs", "GET", "/api/compare", nullptr, 400, "invalid_field", "runs"},
       {"compare unknown runs", "GET", "/api/compare?runs=987654,987655", nullptr, 404, "not_found", ""},
       {"export as xml", "GET", "/api/export?format=xml", nullptr, 400, "invalid_field", "format"},
+      {"export runs not ids", "GET", "/api/export?runs=1,x", nullptr, 400, "invalid_field", "runs"},
   };
   ASSERT_GE(table.size(), 20u);
   for (const auto& c : table) {
