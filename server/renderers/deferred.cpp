@@ -102,9 +102,7 @@ class DeferredRenderer final : public RendererBase {
       desc.fragment = *fs;
       desc.layout = pipelineLayout(VK_NULL_HANDLE, inputLayout);
       desc.renderPass = rp;
-      desc.stencilTest = true;
-      desc.stencilCompare = VK_COMPARE_OP_EQUAL;
-      desc.stencilReference = kStencilGeometry;
+      geometryPixelsOnly(desc);
       VkPipeline pipe = pipeline(desc);
       VkPipelineLayout layout = desc.layout;
       pass(p).record = [=, this](VkCommandBuffer cmd) {

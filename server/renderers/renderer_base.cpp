@@ -288,6 +288,12 @@ VkClearValue RendererBase::depthClear() {
   return v;
 }
 
+void RendererBase::geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc) {
+  desc.stencilTest = true;
+  desc.stencilCompare = VK_COMPARE_OP_EQUAL;
+  desc.stencilReference = kStencilGeometry;
+}
+
 void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) {
   desc.vertexBindings = {{0, sizeof(shaders::Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
   desc.vertexAttributes = {

@@ -114,6 +114,9 @@ class RendererBase : public Renderer {
   // Geometry passes: depth LESS (written when writeDepth), stencil set to
   // kStencilGeometry on every fragment that passes.
   static void geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth);
+  // Full-screen shading passes: only pixels the geometry passes marked with
+  // kStencilGeometry are shaded (sky pixels are masked out).
+  static void geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc);
   static VkClearValue depthClear();  // depth 1 (far), stencil 0
   // After the base has attributed a frame: renderer-specific derived lines.
   virtual FrameResult finishFrame(FrameResult frame) { return frame; }

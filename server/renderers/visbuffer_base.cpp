@@ -118,9 +118,7 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
   desc.fragment = *fs;
   desc.layout = pipelineLayout(mapsLayout, inputLayout);
   desc.renderPass = rp;
-  desc.stencilTest = true;
-  desc.stencilCompare = VK_COMPARE_OP_EQUAL;
-  desc.stencilReference = kStencilGeometry;
+  geometryPixelsOnly(desc);
   VkPipeline pipe = pipeline(desc);
   VkPipelineLayout layout = desc.layout;
   pass(p).record = [=, this](VkCommandBuffer cmd) {
