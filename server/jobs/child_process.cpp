@@ -6,11 +6,10 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace tally::jobs {
 namespace {
@@ -20,6 +19,56 @@ std::string lastLine(const std::string& text) {
   if (end == std::string::npos) return {};
   size_t start = text.find_last_of('\n', end);
   return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+}
+
+// fork + exec rather than posix_spawn, for the one thing posix_spawn cannot
+// do: PR_SET_PDEATHSIG. A daemon killed with -9 runs no cleanup, and its
+// capture child would otherwise render on to its deadline, holding the GPU
+// while the restarted daemon retries the same job. Between fork and exec the
+// child calls only async-signal-safe functions (the daemon is multithreaded).
+// An exec failure comes back as an errno through a close-on-exec pipe.
+Result<pid_t> spawnChild(const std::vector<char*>& argv, const std::string& stdoutPath, int stderrFd) {
+  int execPipe[2];
+  if (pipe2(execPipe, O_CLOEXEC) != 0) return makeError(std::string("pipe: ") + std::strerror(errno));
+  const pid_t parent = getpid();
+  pid_t pid = fork();
+  if (pid < 0) {
+    int e = errno;
+    close(execPipe[0]);
+    close(execPipe[1]);
+    return makeError(std::string("fork: ") + std::strerror(e));
+  }
+  if (pid == 0) {
+    // Its own process group, so that a deadline kills the child's children too.
+    setpgid(0, 0);
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(127);  // the daemon died before prctl took effect
+    int in = open("/dev/null", O_RDONLY);
+    int out = open(stdoutPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int e = 0;
+    if (in < 0 || out < 0 || dup2(in, STDIN_FILENO) < 0 || dup2(out, STDOUT_FILENO) < 0 ||
+        dup2(stderrFd, STDERR_FILENO) < 0) {
+      e = errno;
+    } else {
+      execv(argv[0], argv.data());
+      e = errno;
+    }
+    ssize_t ignored = write(execPipe[1], &e, sizeof e);
+    (void)ignored;
+    _exit(127);
+  }
+  close(execPipe[1]);
+  int childErrno = 0;
+  ssize_t n;
+  do {
+    n = read(execPipe[0], &childErrno, sizeof childErrno);
+  } while (n < 0 && errno == EINTR);
+  close(execPipe[0]);
+  if (n == static_cast<ssize_t>(sizeof childErrno)) {
+    waitpid(pid, nullptr, 0);
+    return makeError(std::strerror(childErrno));
+  }
+  return pid;
 }
 
 }  // namespace
@@ -49,31 +98,18 @@ Result<ChildResult> runChild(const ChildOptions& options) {
   int errPipe[2];
   if (pipe2(errPipe, O_CLOEXEC) != 0) return makeError(std::string("pipe: ") + std::strerror(errno));
 
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  std::string out = options.stdoutPath.empty() ? "/dev/null" : options.stdoutPath;
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_adddup2(&actions, errPipe[1], STDERR_FILENO);
-  // Its own process group, so that a deadline kills the child's children too.
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attributes, 0);
-
   std::vector<char*> argv;
   for (const auto& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  pid_t pid = 0;
+  std::string out = options.stdoutPath.empty() ? "/dev/null" : options.stdoutPath;
   auto start = std::chrono::steady_clock::now();
-  int spawned = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attributes);
+  auto spawned = spawnChild(argv, out, errPipe[1]);
   close(errPipe[1]);
-  if (spawned != 0) {
+  if (!spawned) {
     close(errPipe[0]);
-    return makeError("cannot start " + options.argv[0] + ": " + std::strerror(spawned));
+    return makeError("cannot start " + options.argv[0] + ": " + spawned.error());
   }
+  pid_t pid = *spawned;
 
   ChildResult result;
   std::string pending;

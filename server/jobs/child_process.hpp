@@ -39,6 +39,9 @@ struct ChildResult {
 };
 
 // Fails only if the child cannot be started (the program is missing, fork fails).
+// The child is killed (SIGKILL) when the thread that called runChild ends,
+// even by kill -9 of the whole process: call it from a thread that lives at
+// least as long as the child should.
 Result<ChildResult> runChild(const ChildOptions& options);
 
 }  // namespace tally::jobs

@@ -5,7 +5,12 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <thread>
+#include <vector>
 
 #include "jobs/child_process.hpp"
 
@@ -90,6 +95,75 @@ TEST(ChildProcess, MissingProgramIsAnErrorNotACrash) {
   auto r = runChild(options);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().find("cannot start /nonexistent/tallyd"), std::string::npos) << r.error();
+}
+
+// The state letter of /proc/PID/stat, or 0 when there is no such process.
+char processState(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  size_t paren = stat.rfind(')');
+  return paren == std::string::npos || paren + 2 >= stat.size() ? 0 : stat[paren + 2];
+}
+
+// The children of `parent`, from /proc/*/stat.
+std::vector<pid_t> childrenOf(pid_t parent) {
+  std::vector<pid_t> kids;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc", ec)) {
+    std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(entry.path() / "stat");
+    std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    size_t paren = stat.rfind(')');
+    if (paren == std::string::npos) continue;
+    std::istringstream rest(stat.substr(paren + 2));
+    char state;
+    pid_t ppid = 0;
+    rest >> state >> ppid;
+    if (ppid == parent) kids.push_back(std::stoi(name));
+  }
+  return kids;
+}
+
+// A daemon killed with -9 runs no cleanup: its capture child must not render
+// on to its deadline. A forked "daemon" runs a long child, then dies by SIGKILL;
+// the child goes with it.
+TEST(ChildProcess, ChildDiesWithAParentKilledByNine) {
+  pid_t daemon = fork();
+  ASSERT_GE(daemon, 0);
+  if (daemon == 0) {
+    ChildOptions options;
+    options.argv = {"/bin/sleep", "30"};
+    options.deadline = 60s;
+    auto r = runChild(options);
+    _exit(r.ok() ? 0 : 1);
+  }
+  std::vector<pid_t> kids;
+  for (int i = 0; i < 200 && kids.empty(); ++i) {
+    std::this_thread::sleep_for(10ms);
+    kids = childrenOf(daemon);
+  }
+  ASSERT_EQ(kids.size(), 1u) << "the child did not start";
+  pid_t child = kids[0];
+  // Wait for the exec, so that the check is on sleep itself.
+  std::string comm;
+  for (int i = 0; i < 200 && comm != "sleep\n"; ++i) {
+    std::ifstream in("/proc/" + std::to_string(child) + "/comm");
+    comm.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (comm != "sleep\n") std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_EQ(comm, "sleep\n");
+  ASSERT_EQ(kill(daemon, SIGKILL), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(daemon, &status, 0), daemon);
+  // Gone, or a zombie waiting for whoever adopted it: either way it stopped running.
+  char state = processState(child);
+  for (int i = 0; i < 300 && state != 0 && state != 'Z'; ++i) {
+    std::this_thread::sleep_for(10ms);
+    state = processState(child);
+  }
+  EXPECT_TRUE(state == 0 || state == 'Z') << "the orphaned child is still running, state " << state;
+  if (state != 0 && state != 'Z') kill(child, SIGKILL);
 }
 
 }  // namespace
