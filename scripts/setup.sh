@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages Tally builds and runs with, if any are missing.
 # Idempotent: does nothing (and needs no network) when all are present.
+# Also vendors the dashboard's npm packages (below).
 set -euo pipefail
 
 packages=(
@@ -9,7 +10,10 @@ packages=(
   glslang-dev glslang-tools spirv-tools spirv-headers
   libglm-dev libcpp-httplib-dev nlohmann-json3-dev libsqlite3-dev libstb-dev
   libtinygltf-dev libcli11-dev libgtest-dev
+  chromium
 )
+# The dashboard's npm packages need node and npm; take Debian's only when there are none.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -18,12 +22,25 @@ for p in "${packages[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=()
+  if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+  "${sudo_cmd[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-echo "setup: installing ${missing[*]}"
-sudo_cmd=()
-if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
-"${sudo_cmd[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# The web dashboard's chart library and the browser tests' Playwright, from
+# npm as tests/web/package-lock.json pins them (npm ci only when the lock file
+# changed); Chart.js is copied into web/vendor/ (git-ignored): no CDN.
+cd "$(dirname "$0")/.."
+if [ ! -f tests/web/node_modules/.package-lock.json ] ||
+   [ tests/web/package-lock.json -nt tests/web/node_modules/.package-lock.json ]; then
+  echo "setup: npm ci in tests/web"
+  (cd tests/web && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+fi
+chart=tests/web/node_modules/chart.js/dist/chart.umd.min.js
+if ! cmp -s "$chart" web/vendor/chart.umd.min.js; then
+  mkdir -p web/vendor
+  cp "$chart" web/vendor/chart.umd.min.js
+fi

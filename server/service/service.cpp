@@ -104,6 +104,23 @@ void allowOnly(const Request& req, const std::set<std::string>& keys) {
   }
 }
 
+// A creation-time bound: a prefix of the stored UTC ISO-8601 form
+// 2026-11-21T06:30:00.123Z at a field boundary (a date, minutes, seconds,
+// milliseconds, or all of it), so that text comparison orders it correctly.
+std::optional<std::string> queryTime(const Request& req, const std::string& key) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return std::nullopt;
+  static const std::string kPattern = "0000-00-00T00:00:00.000Z";  // '0': a digit
+  bool boundary = v->size() == 10 || v->size() == 16 || v->size() == 19 || v->size() == 23 || v->size() == 24;
+  bool matches = boundary;
+  for (size_t i = 0; matches && i < v->size(); ++i) {
+    char c = (*v)[i];
+    matches = kPattern[i] == '0' ? std::isdigit(static_cast<unsigned char>(c)) != 0 : c == kPattern[i];
+  }
+  if (!matches) invalid(key, "must be a UTC date or time: 2026-11-21, 2026-11-21T06:30 or 2026-11-21T06:30:00.123Z");
+  return *v;
+}
+
 store::RunFilter queryFilter(const Request& req) {
   store::RunFilter f;
   f.renderer = queryString(req, "renderer");
@@ -120,6 +137,8 @@ store::RunFilter queryFilter(const Request& req) {
     }
   }
   f.jobId = queryInt(req, "capture", 1, INT64_MAX);
+  f.createdSince = queryTime(req, "since");
+  f.createdUntil = queryTime(req, "until");
   return f;
 }
 
@@ -159,7 +178,14 @@ json runRowJson(const store::RunRow& r) {
           {"created_at", r.createdAt},
           {"sample_count", r.sampleCount},
           {"mean_frame_ms", opt(r.meanFrameMs)},
-          {"mean_bytes", opt(r.meanBytes)}};
+          {"mean_bytes", opt(r.meanBytes)},
+          {"mean_frame_ms_instrumented", opt(r.meanFrameMsInstrumented)},
+          {"mean_overhead_ratio", opt(r.meanOverheadRatio)},
+          {"image_error", r.imageCompared == 0 ? json(nullptr)
+                                                : json{{"samples", r.imageCompared},
+                                                       {"identical", r.imageIdentical},
+                                                       {"mean_psnr", opt(r.meanPsnr)},
+                                                       {"min_psnr", opt(r.minPsnr)}}}};
 }
 
 json deviceJson(const store::Device& d) {
@@ -180,6 +206,8 @@ json sampleRowJson(const store::SampleRow& s) {
             {"frame_ms_instrumented", opt(s.frameMsInstrumented)},
             {"overhead_ratio", opt(s.overheadRatio)},
             {"bytes", s.bytes},
+            {"bytes_read", s.bytesRead},
+            {"bytes_written", s.bytesWritten},
             {"image_error", nullptr},
             {"screenshot", s.hasScreenshot ? json("/api/samples/" + std::to_string(s.id) + "/screenshot.png")
                                            : json(nullptr)}};
@@ -415,7 +443,7 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
 }
 
 Response listRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "limit", "cursor"});
+  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until", "limit", "cursor"});
   auto filter = queryFilter(req);
   auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
   json runs = json::array();
@@ -444,6 +472,9 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   }
   j["resources"] = resources;
   j["shaders"] = run->shaders;
+  json passes = json::array();
+  for (const auto& p : check(reader(ctx).runPasses(id))) passes.push_back(passJson(p));
+  j["passes"] = passes;
   return Response::ok(j);
 }
 
@@ -518,7 +549,7 @@ Response compare(ServiceContext& ctx, const Request& req) {
 }
 
 Response exportRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture", "runs"});
+  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture", "since", "until", "runs"});
   std::string format = queryString(req, "format", 8).value_or("json");
   if (format != "csv" && format != "json") invalid("format", "must be csv or json");
   store::RunFilter filter = queryFilter(req);

@@ -1,4 +1,4 @@
-// compareRuns and exportRuns: per-frame totals averaged over a run's samples.
+// compareRuns, runPasses and exportRuns: per-frame totals averaged over a run's samples.
 #include <algorithm>
 #include <set>
 
@@ -145,6 +145,48 @@ Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
       out.resources.push_back(
           ResourceComparison{key.first, key.second, against(count), against(resourceBytes)});
     }
+    return out;
+  });
+}
+
+Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::vector<Pass>>("runPasses", [&]() -> Result<std::vector<Pass>> {
+    Transaction tx(db_, Transaction::Kind::Read);
+    Statement count(db_, "SELECT COUNT(*) FROM samples WHERE run_id = ?1");
+    count.bind(1, runId);
+    count.step();
+    int samples = static_cast<int>(count.getInt(0));
+    std::vector<Pass> out;
+    if (samples == 0) return out;
+    auto mean = [samples](std::optional<double> sum) { return sum ? std::optional(*sum / samples) : sum; };
+
+    Statement passes(db_,
+                     "SELECT p.name, SUM(p.gpu_ms), SUM(p.gpu_ms_instrumented), AVG(p.overhead_ratio), "
+                     "SUM(p.fragment_invocations), SUM(p.fragment_invocations_statistic) "
+                     "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
+                     "GROUP BY p.name ORDER BY MIN(p.position), p.name");
+    passes.bind(1, runId);
+    std::map<std::string, size_t> byName;
+    while (passes.step()) {
+      byName[passes.getText(0)] = out.size();
+      out.push_back(Pass{passes.getText(0), passes.getDouble(1) / samples, nullptr,
+                         mean(passes.getOptDouble(2)), passes.getOptDouble(3), mean(passes.getOptDouble(4)),
+                         mean(passes.getOptDouble(5)), {}});
+    }
+    Statement counters(db_,
+                       "SELECT p.name, c.resource, c.kind, c.format, c.access, SUM(c.count), SUM(c.bytes), "
+                       "c.source FROM counters c JOIN passes p ON p.id = c.pass_id "
+                       "JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
+                       "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
+    counters.bind(1, runId);
+    while (counters.step()) {
+      out[byName.at(counters.getText(0))].counters.push_back(
+          Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
+                  counters.getDouble(5) / samples, counters.getDouble(6) / samples, nullptr,
+                  counters.getText(7)});
+    }
+    tx.commit();
     return out;
   });
 }

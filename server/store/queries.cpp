@@ -16,7 +16,13 @@ const char* const kRunSelect =
     "r.lights, r.render_target_bytes, r.notes, r.created_at, "
     "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id), "
     "(SELECT AVG(s.frame_ms) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.bytes) FROM samples s WHERE s.run_id = r.id) "
+    "(SELECT AVG(s.bytes) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT AVG(s.frame_ms_instrumented) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT AVG(s.overhead_ratio) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT COUNT(s.image_against) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id AND s.image_identical = 1), "
+    "(SELECT AVG(s.psnr) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id) "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -38,6 +44,12 @@ RunRow readRunRow(const Statement& row) {
   run.sampleCount = static_cast<int>(row.getInt(14));
   run.meanFrameMs = row.getOptDouble(15);
   run.meanBytes = row.getOptDouble(16);
+  run.meanFrameMsInstrumented = row.getOptDouble(17);
+  run.meanOverheadRatio = row.getOptDouble(18);
+  run.imageCompared = static_cast<int>(row.getInt(19));
+  run.imageIdentical = static_cast<int>(row.getInt(20));
+  run.meanPsnr = row.getOptDouble(21);
+  run.minPsnr = row.getOptDouble(22);
   return run;
 }
 
@@ -56,6 +68,8 @@ std::string runFilterSql(const RunFilter& f) {
     for (size_t i = 1; i < f.runIds.size(); ++i) sql += ", ?";  // placeholders only
     sql += ")";
   }
+  if (f.createdSince) sql += " AND r.created_at >= ?";
+  if (f.createdUntil) sql += " AND substr(r.created_at, 1, ?) <= ?";
   return sql;
 }
 
@@ -69,6 +83,11 @@ int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
   if (f.deviceName) statement.bind(i++, *f.deviceName);
   if (f.jobId) statement.bind(i++, *f.jobId);
   for (int64_t id : f.runIds) statement.bind(i++, id);
+  if (f.createdSince) statement.bind(i++, *f.createdSince);
+  if (f.createdUntil) {
+    statement.bind(i++, static_cast<int64_t>(f.createdUntil->size()));
+    statement.bind(i++, *f.createdUntil);
+  }
   return i;
 }
 
@@ -80,7 +99,11 @@ const char* const kSampleColumns =
     "id, run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, frame_ms, "
     "frame_ms_spread, "
     "frame_ms_instrumented, overhead_ratio, bytes, image_against, image_identical, psnr, max_abs, mean_abs, "
-    "screenshot_id IS NOT NULL";
+    "screenshot_id IS NOT NULL, "
+    "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
+    "WHERE p.sample_id = samples.id AND c.access = 'read'), "
+    "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
+    "WHERE p.sample_id = samples.id AND c.access = 'write')";
 
 SampleRow readSampleRow(const Statement& row) {
   SampleRow s;
@@ -106,6 +129,8 @@ SampleRow readSampleRow(const Statement& row) {
     s.imageError = e;
   }
   s.hasScreenshot = row.getInt(17) != 0;
+  s.bytesRead = row.getDouble(18);
+  s.bytesWritten = row.getDouble(19);
   return s;
 }
 
@@ -125,9 +150,14 @@ Result<RunPage> Store::listRuns(const RunFilter& filter, const Page& page) {
   if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
   std::lock_guard lock(mutex_);
   return guarded<RunPage>("listRuns", [&]() -> Result<RunPage> {
-    std::string sql = std::string(detail::kRunSelect) + " WHERE 1" + detail::runFilterSql(filter);
+    // The page's ids first, then the summary columns of those runs only. A
+    // filter that the index cannot return in id order (a device or scene
+    // name matching several ids) makes SQLite sort, and it computes every
+    // result column, the per-run sample aggregates included, before it sorts.
+    std::string sql = std::string(detail::kRunSelect) + " WHERE r.id IN (SELECT r.id FROM runs r WHERE 1" +
+                      detail::runFilterSql(filter);
     if (after) sql += " AND r.id < ?";
-    sql += " ORDER BY r.id DESC LIMIT ?";
+    sql += " ORDER BY r.id DESC LIMIT ?) ORDER BY r.id DESC";
     Statement query(db_, sql);
     int next = detail::bindRunFilter(query, filter, 1);
     if (after) query.bind(next++, *after);

@@ -90,6 +90,12 @@ struct RunFilter {
   std::optional<std::string> deviceName;  // exact device name
   std::optional<int64_t> jobId;
   std::vector<int64_t> runIds;  // any of these runs (at most 1000); empty: any run
+  // Creation time bounds, as prefixes of the stored UTC ISO-8601 text
+  // ("2026-11-21", "2026-11-21T06:30"): since is compared with created_at,
+  // until with created_at cut to its length, so both ends are inclusive at the
+  // precision given (until=2026-11-21 keeps the whole day).
+  std::optional<std::string> createdSince;
+  std::optional<std::string> createdUntil;
 };
 
 struct Page {
@@ -114,6 +120,15 @@ struct RunRow {
   int sampleCount = 0;
   std::optional<double> meanFrameMs;  // over the run's samples
   std::optional<double> meanBytes;    // all counters per frame, over the run's samples
+  std::optional<double> meanFrameMsInstrumented;  // a counted frame, over the samples
+  std::optional<double> meanOverheadRatio;        // instrumented / uninstrumented frame time, over the samples
+  // Image error against the reference (forward) over the samples compared:
+  // how many were compared and how many were identical; PSNR (dB) over those
+  // that differ, absent when none differs.
+  int imageCompared = 0;
+  int imageIdentical = 0;
+  std::optional<double> meanPsnr;
+  std::optional<double> minPsnr;
 };
 
 struct RunPage {
@@ -155,6 +170,7 @@ struct SampleRow {
   std::optional<double> frameMsInstrumented;
   std::optional<double> overheadRatio;
   double bytes = 0;  // all counters of the sample, per frame
+  double bytesRead = 0, bytesWritten = 0;  // its read and write counters, per frame
   std::optional<ImageError> imageError;
   bool hasScreenshot = false;
 };
@@ -285,6 +301,11 @@ class Store {
   // Empty vector for an unknown run or one without samples.
   Result<std::vector<SampleRow>> listSamples(int64_t runId);
   Result<std::optional<Sample>> getSample(int64_t sampleId);
+  // A run's passes and per-resource counters, per frame, averaged over its
+  // samples as compareRuns does (a sample without a pass or counter counts as
+  // 0; overhead ratios are the mean of the samples that have one); spreads
+  // are null. Empty for an unknown run or one without samples.
+  Result<std::vector<Pass>> runPasses(int64_t runId);
   // Empty: no such sample, or it has no screenshot.
   Result<std::optional<std::vector<uint8_t>>> getScreenshot(int64_t sampleId);
   // 2..4 distinct existing run ids; deltas and ratios against the first.

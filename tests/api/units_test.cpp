@@ -271,7 +271,7 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   std::set<std::string> runFilters;
   for (auto& p : embedded["paths"]["/api/runs"]["get"]["parameters"]) runFilters.insert(p["name"]);
   EXPECT_EQ(runFilters, (std::set<std::string>{"renderer", "scene", "width", "height", "device", "capture",
-                                               "limit", "cursor"}));
+                                               "since", "until", "limit", "cursor"}));
 }
 
 }  // namespace

@@ -55,6 +55,35 @@ TEST_F(Queries, PaginationWalksEveryRunOnce) {
   EXPECT_TRUE(second->nextCursor.empty());
 }
 
+// A scene name with two parameter sets is two scene ids, whose runs
+// interleave: the index gives each id's runs in order but not both together,
+// so the page is sorted before LIMIT. Pages stay newest first, each run once.
+TEST_F(Queries, NameOfSeveralIdsPagesNewestFirst) {
+  for (int i = 0; i < 4; ++i) {
+    Capture capture = realisticCapture(i);
+    for (json& run : capture.result["runs"]) run["scene_params"] = {{"seed", i % 2}};
+    ingest(newJob(), capture);
+  }
+  ASSERT_EQ(scalar(*store_, "SELECT COUNT(*) FROM scenes WHERE name = 'atrium'"), 2);
+  for (int limit : {1, 3, 1000}) {
+    std::vector<int64_t> seen;
+    Page page{.limit = limit};
+    for (int pages = 0; pages < 100; ++pages) {
+      auto got = store_->listRuns({.scene = "atrium"}, page);
+      ASSERT_TRUE(got) << got.error();
+      for (const auto& run : got->runs) {
+        seen.push_back(run.id);
+        EXPECT_EQ(run.sampleCount, 2) << "run " << run.id;
+      }
+      if (got->nextCursor.empty()) break;
+      page.cursor = got->nextCursor;
+    }
+    EXPECT_EQ(seen.size(), 8u) << "limit " << limit;
+    EXPECT_EQ(std::set<int64_t>(seen.begin(), seen.end()).size(), 8u) << "limit " << limit;
+    EXPECT_TRUE(std::is_sorted(seen.rbegin(), seen.rend())) << "limit " << limit;
+  }
+}
+
 TEST_F(Queries, BadPagesAreRefused) {
   EXPECT_FALSE(store_->listRuns({}, {.limit = 0}));
   EXPECT_FALSE(store_->listRuns({}, {.limit = 1001}));
@@ -255,6 +284,100 @@ TEST_F(Queries, CompareAgainstTheFirstRun) {
   EXPECT_EQ((*rows)[2].pass, "skybox");
   EXPECT_EQ((*rows)[3].pass, "gbuffer");
   EXPECT_EQ((*rows)[3].runId, deferred);
+}
+
+// The run and sample summaries the dashboard reads: a run's passes averaged
+// over its samples, its means and image error, a sample's read/written split.
+TEST_F(Queries, RunSummaries) {
+  Capture c = compareFixture();
+  json& forwardSamples = c.result["runs"][0]["samples"];
+  forwardSamples[0]["image_error"] = {
+      {"against", "forward"}, {"psnr", nullptr}, {"identical", true}, {"max_abs", 0}, {"mean_abs", 0}};
+  forwardSamples[1]["image_error"]["psnr"] = 30.0;
+  int64_t jobId = newJob();
+  ingest(jobId, c);
+  auto runs = store_->listRuns({.jobId = jobId}, {});
+  ASSERT_TRUE(runs && runs->runs.size() == 2);
+  const RunRow& forward = runs->runs[1];
+  const RunRow& deferred = runs->runs[0];
+
+  // Frame 1.2 and 3.4 ms, instrumented x1.1 each; overhead 1.1 on both samples.
+  EXPECT_CLOSE(*forward.meanFrameMsInstrumented, (1.2 + 3.4) * 1.1 / 2);
+  EXPECT_CLOSE(*forward.meanOverheadRatio, 1.1);
+  EXPECT_EQ(forward.imageCompared, 2);
+  EXPECT_EQ(forward.imageIdentical, 1);
+  EXPECT_CLOSE(*forward.meanPsnr, 30.0);  // over the sample that differs
+  EXPECT_CLOSE(*forward.minPsnr, 30.0);
+  EXPECT_EQ(deferred.imageIdentical, 0);
+  EXPECT_CLOSE(*deferred.meanPsnr, 41.5);
+
+  // Samples: read tex + sky, written fb.
+  auto samples = store_->listSamples(forward.id);
+  ASSERT_TRUE(samples && samples->size() == 2);
+  EXPECT_CLOSE((*samples)[0].bytesRead, 400 + 40);
+  EXPECT_CLOSE((*samples)[0].bytesWritten, 200);
+  EXPECT_CLOSE((*samples)[1].bytesRead, 1200 + 120);
+  EXPECT_CLOSE((*samples)[1].bytesWritten, 600);
+  auto sample = store_->getSample((*samples)[1].id);
+  ASSERT_TRUE(sample && *sample);
+  EXPECT_CLOSE((*sample)->row.bytesRead + (*sample)->row.bytesWritten, (*sample)->row.bytes);
+
+  // Passes in frame order, averaged over the two samples.
+  auto passes = store_->runPasses(forward.id);
+  ASSERT_TRUE(passes) << passes.error();
+  ASSERT_EQ(passes->size(), 2u);
+  const Pass& opaque = (*passes)[0];
+  EXPECT_EQ(opaque.name, "opaque");
+  EXPECT_CLOSE(opaque.gpuMs, 2.0);                  // (1 + 3) / 2
+  EXPECT_CLOSE(*opaque.gpuMsInstrumented, 2.2);     // (1.1 + 3.3) / 2
+  EXPECT_CLOSE(*opaque.overheadRatio, 1.1);
+  EXPECT_CLOSE(*opaque.fragmentInvocations, 100);   // (50 + 150) / 2
+  EXPECT_CLOSE(*opaque.fragmentInvocationsStatistic, 108);
+  EXPECT_TRUE(opaque.gpuMsSpread.is_null());
+  ASSERT_EQ(opaque.counters.size(), 2u);
+  EXPECT_EQ(opaque.counters[0].resource, "tex");
+  EXPECT_EQ(opaque.counters[0].access, "read");
+  EXPECT_EQ(*opaque.counters[0].format, "R8G8B8A8_UNORM");
+  EXPECT_CLOSE(opaque.counters[0].count, 200);
+  EXPECT_CLOSE(opaque.counters[0].bytes, 800);
+  EXPECT_EQ(opaque.counters[1].resource, "fb");
+  EXPECT_CLOSE(opaque.counters[1].bytes, 400);
+  EXPECT_EQ((*passes)[1].name, "skybox");
+  EXPECT_CLOSE((*passes)[1].gpuMs, 0.3);
+  EXPECT_CLOSE((*passes)[1].counters[0].bytes, 80);
+  auto none = store_->runPasses(forward.id + 1000);
+  ASSERT_TRUE(none);
+  EXPECT_TRUE(none->empty());
+}
+
+TEST_F(Queries, CreatedBetween) {
+  int64_t jobId = newJob();
+  ingest(jobId, realisticCapture());
+  auto all = store_->listRuns({.jobId = jobId}, {});
+  ASSERT_TRUE(all && all->runs.size() == 2);
+  const std::string created = all->runs[0].createdAt;  // 2026-11-21T06:30:00.123Z
+  ASSERT_EQ(created.size(), 24u);
+  auto count = [&](std::optional<std::string> since, std::optional<std::string> until) {
+    RunFilter f{.jobId = jobId};
+    f.createdSince = since;
+    f.createdUntil = until;
+    auto page = store_->listRuns(f, {});
+    EXPECT_TRUE(page) << page.error();
+    auto rows = store_->exportRuns(f);  // the same filter
+    EXPECT_TRUE(rows) << rows.error();
+    return page ? page->runs.size() : 0u;
+  };
+  EXPECT_EQ(count("2000-01-01", std::nullopt), 2u);
+  EXPECT_EQ(count(std::nullopt, "2000-01-01"), 0u);
+  EXPECT_EQ(count("9999-12-31", std::nullopt), 0u);
+  // until is inclusive at its precision: the day, the minute, the very time.
+  for (size_t length : {10u, 16u, 19u, 24u}) {
+    std::string prefix = created.substr(0, length);
+    size_t expected = 0;
+    for (const auto& r : all->runs) expected += r.createdAt.compare(0, length, prefix) == 0 ? 1 : 0;
+    EXPECT_GE(expected, 1u);
+    EXPECT_EQ(count(prefix, prefix), expected) << prefix;
+  }
 }
 
 TEST_F(Queries, Devices) {

@@ -1,0 +1,427 @@
+// Browser tests of the dashboard (web/), with Playwright driving Debian's
+// Chromium against a real `tallyd serve` filled by real captures (tiny
+// resolutions, 2 frames) through POST /api/captures. The charts must draw the
+// API's numbers (read back from the Chart.js objects and the tables beside
+// them), the compare view must show the API's ratios, the capture form must
+// start a capture and see it finish, bad input must show the server's error,
+// and no page may log a console error. Every view is saved as a PNG, wide
+// (1280x800) and narrow (400x800), into $TALLY_SCREENSHOTS.
+//
+// Environment (tests/web/run.sh sets it): TALLYD, TALLY_WEB_ROOT,
+// TALLY_SCREENSHOTS, CHROMIUM.
+import assert from 'node:assert/strict';
+import { mkdirSync } from 'node:fs';
+import { join } from 'node:path';
+import { after, before, describe, test } from 'node:test';
+
+import { chromium } from 'playwright-core';
+
+import { Daemon } from './daemon.mjs';
+
+const env = process.env;
+const kViewports = { wide: { width: 1280, height: 800 }, narrow: { width: 400, height: 800 } };
+const kViewMs = 30_000;      // a view is drawn within this (lavapipe machines are slow and shared)
+const kCaptureMs = 180_000;  // a tiny capture finishes within this
+
+// Within a relative 1e-9: sums of the same numbers in another order.
+function assertClose(actual, expected, what) {
+  assert.ok(typeof actual === 'number' && typeof expected === 'number', `${what}: ${actual} vs ${expected}`);
+  assert.ok(Math.abs(actual - expected) <= 1e-9 * Math.max(1, Math.abs(expected)), `${what}: ${actual} != ${expected}`);
+}
+
+const mean = (values) => values.reduce((a, b) => a + b, 0) / values.length;
+
+let daemon;
+let browser;
+const data = {};  // what the captures produced, from the API
+
+// A fresh page at `hash`, recording its console errors and uncaught exceptions.
+async function open(hash, viewport = kViewports.wide) {
+  const context = await browser.newContext({ viewport });
+  const page = await context.newPage();
+  const errors = [];
+  page.on('console', (m) => { if (m.type() === 'error') errors.push({ text: m.text(), url: m.location().url }); });
+  page.on('pageerror', (e) => errors.push({ text: `uncaught: ${e.message}`, url: '' }));
+  const requests = [];
+  page.on('request', (r) => requests.push(new URL(r.url())));
+  await page.goto(`${daemon.url}/${hash}`);
+  await ready(page);
+  return { page, errors, requests, close: () => context.close() };
+}
+
+// The view has finished drawing (app.js clears aria-busy) without an error panel.
+async function ready(page) {
+  await page.waitForFunction(() => {
+    const view = document.getElementById('view');
+    return view && !view.hasAttribute('aria-busy') && view.querySelector('.page');
+  }, null, { timeout: kViewMs });
+  const failure = await page.locator('#view .panel.error').allTextContents();
+  assert.deepEqual(failure, [], 'the view shows an error');
+}
+
+// Runs action (which navigates within the app) and waits for the next view.
+async function go(page, action) {
+  const before = Number(await page.locator('#view').getAttribute('data-rendered'));
+  await action();
+  await page.waitForFunction((n) => Number(document.getElementById('view').dataset.rendered) > n, before, { timeout: kViewMs });
+  await ready(page);
+}
+
+async function chart(page, id) {
+  return page.evaluate((chartId) => {
+    const canvas = document.querySelector(`[data-chart="${chartId}"] canvas`);
+    const c = canvas && window.Chart.getChart(canvas);
+    if (!c) return null;
+    return { labels: c.data.labels, datasets: c.data.datasets.map((d) => ({ label: d.label, data: d.data })) };
+  }, id);
+}
+
+async function screenshot(page, name) {
+  await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, `${name}.png`), fullPage: true });
+}
+
+const runOf = (renderer, width, counting = 'exact') =>
+  data.runs.find((r) => r.renderer === renderer && r.width === width && r.counting === counting);
+
+before(async () => {
+  for (const key of ['TALLYD', 'TALLY_WEB_ROOT', 'TALLY_SCREENSHOTS', 'CHROMIUM']) assert.ok(env[key], `${key} is not set`);
+  mkdirSync(env.TALLY_SCREENSHOTS, { recursive: true });
+  daemon = await new Daemon(env.TALLYD, env.TALLY_WEB_ROOT).start();
+  // Four renderers at two resolutions (the scaling chart needs two), then two
+  // counting modes next to exact for the speed/accuracy view. 10 cameras each.
+  await daemon.capture({ renderers: ['forward', 'deferred', 'visbuffer', 'visbuffer-lean'], scenes: ['atrium'], resolutions: [[64, 36], [128, 72]], frames: 2 }, kCaptureMs);
+  for (const counting of ['subgroup', 'sampled:4']) {
+    await daemon.capture({ renderers: ['deferred', 'visbuffer'], resolutions: [[128, 72]], frames: 2, counting }, kCaptureMs);
+  }
+  data.runs = (await daemon.get('/runs?limit=1000')).runs;
+  assert.equal(data.runs.length, 12);
+  browser = await chromium.launch({ executablePath: env.CHROMIUM });
+});
+
+after(async () => {
+  await browser?.close();
+  await daemon?.stop();
+});
+
+describe('dashboard', () => {
+  test('every view loads, wide and narrow, without console errors or sideways scrolling', async () => {
+    const deferred = runOf('deferred', 128);
+    const views = {
+      runs: '#/runs',
+      run: `#/runs/${deferred.id}`,
+      compare: `#/compare?runs=${deferred.id},${runOf('visbuffer', 128).id},${runOf('visbuffer-lean', 128).id}`,
+      'accuracy-counting': '#/accuracy?error=counting&cost=overhead',
+      'accuracy-image': '#/accuracy?error=image&cost=frame',
+      capture: '#/capture',
+    };
+    for (const [name, hash] of Object.entries(views)) {
+      for (const [size, viewport] of Object.entries(kViewports)) {
+        const { page, errors, close } = await open(hash, viewport);
+        assert.ok(await page.locator('#view h1').count() === 1, `${name}: a heading`);
+        const overflow = await page.evaluate(() => document.documentElement.scrollWidth - document.documentElement.clientWidth);
+        assert.ok(overflow <= 0, `${name} ${size}: the page is ${overflow}px wider than the window`);
+        if (name === 'run') {
+          // Lazy screenshots load once scrolled to; wait for each to show.
+          for (const img of await page.locator('.gallery img').all()) await img.scrollIntoViewIfNeeded();
+          await page.waitForFunction(() => [...document.querySelectorAll('.gallery img')].every((i) => i.complete && i.naturalWidth > 0), null, { timeout: kViewMs });
+        }
+        await screenshot(page, `${name}-${size}`);
+        assert.deepEqual(errors, [], `${name} ${size}: console errors`);
+        await close();
+      }
+    }
+  });
+
+  test('runs view: the API\'s runs, a page at a time, filtered, sorted, linked', async () => {
+    const { page, errors, requests, close } = await open('#/runs');
+    const ids = () => page.locator('tbody tr[data-run-id]').evaluateAll((rows) => rows.map((r) => Number(r.dataset.runId)));
+    assert.deepEqual(await ids(), data.runs.map((r) => r.id), 'newest first, as the API lists them');
+
+    // One page of runs, and no samples: the view stays fast with thousands of runs.
+    const lists = requests.filter((u) => u.pathname === '/api/runs');
+    assert.ok(lists.length >= 1);
+    for (const u of lists) assert.equal(u.searchParams.get('limit'), '100');
+    assert.equal(requests.filter((u) => u.pathname.startsWith('/api/samples') || u.pathname.endsWith('/samples')).length, 0);
+
+    // Each row links to its run.
+    const first = data.runs[0];
+    assert.equal(await page.locator(`tr[data-run-id="${first.id}"] a`).first().getAttribute('href'), `#/runs/${first.id}`);
+
+    // Sorting by bytes per frame: ascending, then descending.
+    const byBytes = [...data.runs].sort((a, b) => a.mean_bytes - b.mean_bytes || b.id - a.id).map((r) => r.id);
+    await page.click('button.sort[data-sort="mean_bytes"]');
+    assert.deepEqual(await ids(), byBytes);
+    await page.click('button.sort[data-sort="mean_bytes"]');
+    assert.deepEqual(await ids(), [...data.runs].sort((a, b) => b.mean_bytes - a.mean_bytes || b.id - a.id).map((r) => r.id));
+
+    // Renderer filter: the server's answer for renderer=deferred.
+    await go(page, () => page.selectOption('select[name="renderer"]', 'deferred'));
+    const deferred = (await daemon.get('/runs?renderer=deferred&limit=1000')).runs.map((r) => r.id);
+    assert.ok(deferred.length >= 2);
+    assert.deepEqual(await ids(), deferred);
+
+    // Resolution filter, with the renderer kept.
+    await page.fill('input[name="resolution"]', '64x36');
+    await go(page, () => page.click('form.filters button[type="submit"]'));
+    assert.deepEqual(await ids(), (await daemon.get('/runs?renderer=deferred&width=64&height=36')).runs.map((r) => r.id));
+
+    // Dates: every run is from the day of its capture; nothing before it.
+    const day = first.created_at.slice(0, 10);
+    await go(page, () => page.goto(`${daemon.url}/#/runs?since=${day}&until=${day}`));
+    assert.deepEqual(await ids(), data.runs.map((r) => r.id));
+    const before = new Date(Date.parse(day) - 86_400_000).toISOString().slice(0, 10);
+    await go(page, () => page.fill('input[name="until"]', before));  // a date applies when it changes
+    assert.deepEqual(await ids(), []);
+    assert.match(await page.locator('#view').textContent(), /No runs match/);
+
+    // Device filter, from the device list.
+    await go(page, () => page.goto(`${daemon.url}/#/runs`));
+    await go(page, () => page.selectOption('select[name="device"]', String(first.device_id)));
+    assert.deepEqual(await ids(), data.runs.filter((r) => r.device_id === first.device_id).map((r) => r.id));
+
+    // A row's link opens its run.
+    await go(page, () => page.click(`tr[data-run-id="${first.id}"] a`));
+    assert.match(await page.locator('h1').textContent(), new RegExp(`Run #${first.id}:`));
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('run view: the charts draw the API\'s per-pass, per-resource and per-camera numbers', async () => {
+    const id = runOf('deferred', 128).id;
+    const run = await daemon.get(`/runs/${id}`);
+    const { samples } = await daemon.get(`/runs/${id}/samples`);
+    assert.equal(samples.length, 10);
+
+    // The API's own consistency: a run's passes are its samples' averages, and
+    // a sample's bytes_read/bytes_written sum its counters.
+    const details = await Promise.all(samples.map((s) => daemon.get(`/samples/${s.id}`)));
+    for (const [i, s] of samples.entries()) {
+      const counters = details[i].passes.flatMap((p) => p.resources);
+      assertClose(s.bytes_read, counters.filter((c) => c.access === 'read').reduce((a, c) => a + c.bytes, 0), `sample ${s.id} read`);
+      assertClose(s.bytes_written, counters.filter((c) => c.access === 'write').reduce((a, c) => a + c.bytes, 0), `sample ${s.id} written`);
+      assertClose(s.bytes_read + s.bytes_written, s.bytes, `sample ${s.id} total`);
+    }
+    for (const [k, pass] of run.passes.entries()) {
+      assertClose(pass.gpu_ms, mean(details.map((d) => d.passes[k].gpu_ms)), `${pass.name} gpu_ms`);
+      for (const r of pass.resources) {
+        const per = details.map((d) => d.passes[k].resources.filter((c) => c.name === r.name && c.access === r.access && c.source === r.source).reduce((a, c) => a + c.bytes, 0));
+        assertClose(r.bytes, mean(per), `${pass.name} ${r.name} ${r.access}`);
+      }
+    }
+
+    const { page, errors, close } = await open(`#/runs/${id}`);
+    for (const access of ['read', 'write']) {
+      const c = await chart(page, `pass-resource-${access}`);
+      assert.deepEqual(c.labels, run.passes.map((p) => p.name));
+      const names = [...new Set(run.passes.flatMap((p) => p.resources.filter((r) => r.access === access).map((r) => r.name)))];
+      assert.deepEqual(c.datasets.map((d) => d.label).sort(), [...names].sort(), `${access}: one stack segment per resource`);
+      for (const d of c.datasets) {
+        run.passes.forEach((p, i) => {
+          const mine = p.resources.filter((r) => r.name === d.label && r.access === access);
+          if (mine.length === 0) assert.equal(d.data[i], null, `${p.name} ${d.label}`);
+          else assertClose(d.data[i], mine.reduce((a, r) => a + r.bytes, 0), `${p.name} ${d.label} ${access}`);
+        });
+      }
+    }
+    const perSample = await chart(page, 'per-sample');
+    assert.deepEqual(perSample.datasets[0].data, samples.map((s) => s.bytes_read));
+    assert.deepEqual(perSample.datasets[1].data, samples.map((s) => s.bytes_written));
+    // The table beside the chart carries the same numbers.
+    const cells = await page.locator('[data-chart-table="per-sample"] tbody tr').evaluateAll((rows) => rows.map((r) => [...r.querySelectorAll('td')].map((td) => Number(td.dataset.value))));
+    assert.deepEqual(cells, samples.map((s) => [s.bytes_read, s.bytes_written]));
+
+    const time = await chart(page, 'pass-time');
+    assert.deepEqual(time.datasets[0].data, run.passes.map((p) => p.gpu_ms));
+    assert.deepEqual(time.datasets[1].data, run.passes.map((p) => p.gpu_ms_instrumented));
+
+    // Tiles: overhead ratio and image error against forward, as the API gives them.
+    assert.equal((await page.locator('[data-tile="overhead"] .value').textContent()), `×${run.mean_overhead_ratio.toFixed(3)}`);
+    assert.equal((await page.locator('[data-tile="image-error"] .value').textContent()), `${run.image_error.mean_psnr.toFixed(1)} dB`);
+    assert.equal((await page.locator('[data-tile="frame-ms"] .value').textContent()), `${run.mean_frame_ms.toFixed(run.mean_frame_ms < 10 ? 3 : 2)} ms`);
+
+    // Gallery: one screenshot per camera, at the run's resolution, with its sky fraction.
+    const shots = page.locator('.gallery figure');
+    assert.equal(await shots.count(), samples.length);
+    for (const [i, s] of samples.entries()) {
+      const shot = shots.nth(i);
+      await shot.scrollIntoViewIfNeeded();
+      assert.equal(Number(await shot.getAttribute('data-sample')), s.id);
+      assert.match(await shot.textContent(), new RegExp(`Camera ${s.camera_index}`));
+      assert.ok((await shot.textContent()).includes(`sky ${(100 * s.sky_fraction).toFixed(1)} %`) || s.sky_fraction < 0.01, `camera ${s.camera_index} sky fraction`);
+    }
+    await page.waitForFunction(() => [...document.querySelectorAll('.gallery img')].every((i) => i.complete && i.naturalWidth > 0), null, { timeout: kViewMs });
+    const sizes = await page.locator('.gallery img').evaluateAll((imgs) => imgs.map((i) => [i.naturalWidth, i.naturalHeight]));
+    for (const size of sizes) assert.deepEqual(size, [run.width, run.height]);
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('compare view: totals, ratios and per-resource figures are the API\'s; scaling and images', async () => {
+    const runs = [runOf('deferred', 128), runOf('visbuffer', 128), runOf('visbuffer-lean', 128)];
+    const ids = runs.map((r) => r.id);
+    const c = await daemon.get(`/compare?runs=${ids.join(',')}`);
+    const { page, errors, close } = await open(`#/compare?runs=${ids.join(',')}`);
+
+    // The ratio of total bytes per frame against the first run: the API's, and
+    // the runs' own totals divided.
+    const totalCells = page.locator('[data-table="totals"] tr[data-row="total_bytes"] td');
+    assert.equal(await totalCells.count(), 3);
+    for (let i = 1; i < 3; ++i) {
+      const ratio = Number(await totalCells.nth(i).getAttribute('data-ratio'));
+      assert.equal(ratio, c.total_bytes[i].ratio);
+      assertClose(ratio, runs[i].mean_bytes / runs[0].mean_bytes, `ratio of run ${ids[i]}`);
+      assert.ok((await totalCells.nth(i).textContent()).includes(`×${ratio.toFixed(3)}`));
+      const frameRatio = Number(await page.locator('[data-table="totals"] tr[data-row="frame_ms"] td').nth(i).getAttribute('data-ratio'));
+      assertClose(frameRatio, runs[i].mean_frame_ms / runs[0].mean_frame_ms, `frame time ratio of run ${ids[i]}`);
+    }
+
+    const resources = await chart(page, 'compare-resources');
+    assert.deepEqual(resources.labels, c.resources.map((r) => `${r.resource} (${r.access})`));
+    resources.datasets.forEach((d, i) => assert.deepEqual(d.data, c.resources.map((r) => r.bytes[i].value)));
+    const passes = await chart(page, 'compare-pass-ms');
+    passes.datasets.forEach((d, i) => assert.deepEqual(d.data, c.passes.map((p) => p.gpu_ms[i].value)));
+    const frame = await chart(page, 'compare-frame-ms');
+    assert.deepEqual(frame.datasets[0].data, c.frame_ms.map((v) => v.value));
+
+    // Scaling: per renderer, bytes per frame at each pixel count (64x36 and 128x72).
+    const scaling = await chart(page, 'scaling-bytes');
+    assert.deepEqual(scaling.datasets.map((d) => d.label), ['deferred', 'visbuffer', 'visbuffer-lean']);
+    for (const d of scaling.datasets) {
+      const expected = [runOf(d.label, 64), runOf(d.label, 128)].map((r) => ({ x: r.width * r.height, y: r.mean_bytes, run: r.id }));
+      assert.deepEqual(d.data, expected);
+    }
+
+    // Images: A against itself differs nowhere; against forward, the mean
+    // absolute difference is the capture's own image error for that camera.
+    await page.waitForSelector('[data-image="diff"]', { timeout: kViewMs });
+    await page.selectOption('select[name="b"]', String(ids[0]));
+    await page.waitForSelector('[data-image="diff"][data-max-abs="0"]', { timeout: kViewMs });
+    const withForward = await open(`#/compare?runs=${runOf('forward', 128).id},${ids[0]}`);
+    const viewer = withForward.page;
+    await viewer.waitForSelector('[data-image="diff"]', { timeout: kViewMs });
+    await viewer.selectOption('select[name="camera"]', '2');
+    const diff = viewer.locator('[data-image="diff"][data-camera="2"]');
+    await diff.waitFor({ timeout: kViewMs });
+    const { samples } = await daemon.get(`/runs/${ids[0]}/samples`);
+    const sample = samples.find((s) => s.camera_index === 2);
+    const meanAbs = Number(await diff.getAttribute('data-mean-abs'));
+    assertClose(meanAbs, sample.image_error.mean_abs, 'mean absolute difference against forward');
+    await screenshot(viewer, 'compare-images-wide');
+    assert.deepEqual(withForward.errors, []);
+    await withForward.close();
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('speed vs accuracy: one point per run, error against exact, the Pareto front', async () => {
+    const { page, errors, close } = await open('#/accuracy?error=counting&cost=overhead');
+    const c = await chart(page, 'accuracy');
+    const plotted = c.datasets.filter((d) => d.label !== 'Pareto front').flatMap((d) => d.data.map((p) => ({ ...p, mode: d.label })));
+
+    // Expected: deferred and visbuffer at 128x72 in three modes each.
+    const expected = [];
+    for (const renderer of ['deferred', 'visbuffer']) {
+      const exact = runOf(renderer, 128);
+      for (const mode of ['exact', 'subgroup', 'sampled:4']) {
+        const r = runOf(renderer, 128, mode);
+        expected.push({ x: Math.abs(r.mean_bytes - exact.mean_bytes) / exact.mean_bytes, y: r.mean_overhead_ratio, run: r.id, mode });
+      }
+    }
+    const byRun = (a, b) => a.run - b.run;
+    assert.deepEqual(plotted.sort(byRun), expected.sort(byRun));
+
+    // The front: no point beats a front point on both axes, and every other
+    // point is beaten (or matched) by one on the front.
+    const rows = await page.locator('[data-chart-table="accuracy"] tbody tr').evaluateAll((trs) => trs.map((t) => ({ run: Number(t.dataset.run), front: t.dataset.front === 'true' })));
+    const front = new Set(rows.filter((r) => r.front).map((r) => r.run));
+    assert.ok(front.size >= 1);
+    const beats = (a, b) => a.x <= b.x && a.y <= b.y && (a.x < b.x || a.y < b.y);
+    for (const p of expected) {
+      if (front.has(p.run)) assert.ok(!expected.some((q) => beats(q, p)), `run ${p.run} is on the front but beaten`);
+      else assert.ok(expected.some((q) => front.has(q.run) && (beats(q, p) || (q.x === p.x && q.y === p.y))), `run ${p.run} is off the front but unbeaten`);
+    }
+    const line = c.datasets.find((d) => d.label === 'Pareto front');
+    assert.deepEqual(new Set(line.data.map((p) => p.run)), front);
+
+    // Image error: one point per run compared against forward, at its mean
+    // PSNR; the cost chosen before (overhead ratio) stays.
+    await go(page, () => page.selectOption('select[name="error"]', 'image'));
+    const image = await chart(page, 'accuracy');
+    const points = image.datasets.filter((d) => d.label !== 'Pareto front').flatMap((d) => d.data);
+    const compared = data.runs.filter((r) => r.image_error);
+    assert.equal(points.length, compared.length);
+    for (const r of compared.filter((run) => run.image_error.mean_psnr !== null)) {
+      const p = points.find((q) => q.run === r.id);
+      assert.equal(p.x, r.image_error.mean_psnr);
+      assert.equal(p.y, r.mean_overhead_ratio);
+    }
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('capture form: starts a capture and follows it to the end', async () => {
+    const { page, errors, close } = await open('#/capture');
+    for (const box of await page.locator('input[name="renderers"]').all()) {
+      if ((await box.getAttribute('value')) !== 'forward') await box.uncheck();
+    }
+    await page.fill('input[name="resolutions"]', '64x36');
+    await page.fill('input[name="frames"]', '1');
+    // Record every status the progress panel shows.
+    await page.evaluate(() => {
+      window.seenStatuses = [];
+      new MutationObserver(() => {
+        const s = document.querySelector('.progress-box [data-status]')?.dataset.status;
+        if (s && window.seenStatuses.at(-1) !== s) window.seenStatuses.push(s);
+      }).observe(document.querySelector('.progress-box'), { childList: true, subtree: true });
+    });
+    await page.click('form.capture-form button[type="submit"]');
+    const panel = page.locator('.progress-box [data-status="done"]');
+    await panel.waitFor({ timeout: kCaptureMs });
+    const id = Number(await panel.getAttribute('data-capture'));
+    const job = await daemon.get(`/captures/${id}`);
+    assert.equal(job.status, 'done');
+    assert.deepEqual(job.spec.renderers, ['forward']);
+    assert.deepEqual(job.spec.resolutions, [[64, 36]]);
+    const statuses = await page.evaluate(() => window.seenStatuses);
+    assert.equal(statuses.at(-1), 'done');
+    for (const s of statuses) assert.ok(['queued', 'running', 'done'].includes(s), `status ${s}`);
+    assert.equal(Number(await panel.locator('progress').getAttribute('value')), job.progress.total);
+    // The job list catches up, and the capture's runs are a click away.
+    await page.locator(`table.jobs tr[data-capture="${id}"][data-status="done"]`).waitFor({ timeout: kViewMs });
+    await go(page, () => page.click('.progress-box a'));
+    const runs = (await daemon.get(`/runs?capture=${id}`)).runs;
+    assert.equal(runs.length, 1);
+    assert.deepEqual(await page.locator('tbody tr[data-run-id]').evaluateAll((rows) => rows.map((r) => Number(r.dataset.runId))), runs.map((r) => r.id));
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('capture form: bad input shows the server\'s error message and field', async () => {
+    const { page, errors, close } = await open('#/capture');
+    const before = (await daemon.get('/captures?limit=1000')).captures.length;
+    const renderers = await page.locator('input[name="renderers"]:checked').evaluateAll((boxes) => boxes.map((b) => b.value));
+    const spec = { renderers, scenes: ['atrium'], cameras: 'auto', counting: 'exact', lights: 400 };
+    const cases = [
+      { fill: { resolutions: '64x0', frames: '2' }, spec: { ...spec, resolutions: [[64, 0]], frames: 2 }, input: 'resolutions' },
+      { fill: { resolutions: '64x36', frames: '5000' }, spec: { ...spec, resolutions: [[64, 36]], frames: 5000 }, input: 'frames' },
+    ];
+    for (const k of cases) {
+      const expected = await daemon.api('/captures', { method: 'POST', body: k.spec });
+      assert.equal(expected.status, 400);
+      for (const [name, value] of Object.entries(k.fill)) await page.fill(`input[name="${name}"]`, value);
+      await page.click('form.capture-form button[type="submit"]');
+      const panel = page.locator('.form-error .panel.error');
+      await panel.waitFor({ timeout: kViewMs });
+      await page.waitForFunction((message) => document.querySelector('.form-error .message')?.textContent === message, expected.body.error.message, { timeout: kViewMs });
+      assert.equal(await panel.getAttribute('data-code'), expected.body.error.code);
+      assert.equal(await panel.locator('.field-name').textContent(), expected.body.error.field);
+      assert.equal(await page.locator(`input[name="${k.input}"]`).getAttribute('aria-invalid'), 'true');
+    }
+    await screenshot(page, 'capture-error-wide');
+    assert.equal((await daemon.get('/captures?limit=1000')).captures.length, before, 'a refused spec stores no job');
+    // The only console lines: Chromium's own notes of the two 400 answers to
+    // POST /api/captures. The page itself logs nothing.
+    assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), [['/api/captures', true], ['/api/captures', true]]);
+    await close();
+  });
+});

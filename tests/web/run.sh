@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Runs the dashboard's browser tests (dashboard.test.mjs) with node's test
+# runner. ctest calls it as: run.sh TALLYD WEB_ROOT SCREENSHOT_DIR.
+# Without node, Chromium or the npm packages (scripts/setup.sh installs them)
+# it skips (exit 77), except under CI=true, where a missing tool is a failure.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+export TALLYD="$1" TALLY_WEB_ROOT="$2" TALLY_SCREENSHOTS="$3"
+export CHROMIUM="${CHROMIUM:-/usr/bin/chromium}"
+
+missing=()
+command -v node >/dev/null || missing+=("node")
+[ -x "$CHROMIUM" ] || missing+=("chromium ($CHROMIUM)")
+[ -d "$here/node_modules/playwright-core" ] || missing+=("playwright-core (npm ci in tests/web)")
+[ -f "$TALLY_WEB_ROOT/vendor/chart.umd.min.js" ] || missing+=("web/vendor/chart.umd.min.js (scripts/setup.sh)")
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "browser tests: missing ${missing[*]}; run scripts/setup.sh" >&2
+  if [ "${CI:-}" = "true" ]; then exit 1; fi
+  exit 77
+fi
+
+cd "$here"
+exec node --test --test-reporter=spec dashboard.test.mjs

@@ -1,0 +1,131 @@
+// Charts over the vendored Chart.js (web/vendor/chart.umd.min.js, copied from
+// npm by scripts/setup.sh; loaded by index.html as the global `Chart`).
+//
+// Every chart is a <figure data-chart="ID"> holding the canvas and, beside it,
+// a table of the very numbers drawn (data-value carries the raw number), for
+// screen readers and for anyone who wants the figures rather than the
+// picture. Chart.getChart(canvas) gives the chart object itself.
+import { h } from './dom.js';
+
+const { Chart } = window;
+
+Chart.defaults.animation = false;  // redraws are instant, and screenshots show the final state
+Chart.defaults.font.family = getComputedStyle(document.documentElement).getPropertyValue('--font').trim() || 'system-ui';
+Chart.defaults.color = '#333';
+Chart.defaults.maintainAspectRatio = false;  // the .chart-box sets the height
+
+// n well-separated colours; the same index gets the same colour in every chart.
+export function color(i, alpha = 1) {
+  const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most
+  return `hsla(${hue.toFixed(1)}, 62%, ${i % 2 ? 42 : 55}%, ${alpha})`;
+}
+
+// A figure with an empty canvas and a data table; draw with drawChart once it
+// is in the document (Chart.js measures its parent).
+function figure(id, title, caption, dataTable) {
+  return h('figure', { class: 'chart', dataset: { chart: id } },
+    h('figcaption', {}, h('strong', {}, title), caption ? h('span', { class: 'caption' }, ' ', caption) : null),
+    h('div', { class: 'chart-box' }, h('canvas', { role: 'img', 'aria-label': title })),
+    h('details', { class: 'chart-data' }, h('summary', {}, 'Data'), dataTable));
+}
+
+// A table with one row per label and one column per dataset.
+function seriesTable(id, labels, datasets, format, labelHeader) {
+  return h('div', { class: 'table-wrap' },
+    h('table', { dataset: { chartTable: id } },
+      h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, labelHeader), datasets.map((d) => h('th', { scope: 'col' }, d.label)))),
+      h('tbody', {}, labels.map((label, i) => h('tr', {},
+        h('th', { scope: 'row' }, String(label)),
+        datasets.map((d) => {
+          const v = d.data[i];
+          return h('td', { class: 'num', dataset: { value: v === null || v === undefined ? '' : String(v) } }, v === null || v === undefined ? '–' : format(v));
+        }))))));
+}
+
+// A "log scale" switch for a chart's value axis: one buffer (the lights, say)
+// can be a hundred times the rest, which a linear axis flattens to nothing.
+function logSwitch(fig, getChart, axis, format) {
+  const box = h('input', { type: 'checkbox', name: 'log' });
+  const decade = (v) => Math.abs(Math.log10(v) - Math.round(Math.log10(v))) < 1e-9;
+  box.addEventListener('change', () => {
+    const scale = getChart().options.scales[axis];
+    scale.type = box.checked ? 'logarithmic' : 'linear';
+    // A log axis ticks 1-9 per decade: label the decades only.
+    scale.ticks.callback = box.checked ? (v) => (decade(v) ? format(v) : '') : (v) => format(v);
+    getChart().update();
+  });
+  fig.querySelector('figcaption').append(' ', h('label', { class: 'log-switch' }, box, ' log scale'));
+}
+
+// Bar chart. spec: {id, title, caption, labels, datasets: [{label, data, ...Chart.js dataset options}],
+// format (value -> text), stacked, horizontal, logSwitch, labelHeader, axes (extra Chart.js scales), yTitle}.
+// Appends the figure to parent and returns the Chart. A click on a legend
+// entry hides that series and rescales (Chart.js's own behaviour).
+export function barChart(parent, spec) {
+  const { id, title, caption, labels, datasets, format, stacked = false, horizontal = false } = spec;
+  const fig = figure(id, title, caption, seriesTable(id, labels, datasets, format, spec.labelHeader || ''));
+  parent.append(fig);
+  let chart = null;
+  if (spec.logSwitch) logSwitch(fig, () => chart, horizontal ? 'x' : 'y', format);
+  const valueAxis = horizontal ? 'x' : 'y';
+  const categoryAxis = horizontal ? 'y' : 'x';
+  const scales = {
+    [categoryAxis]: { stacked },
+    [valueAxis]: {
+      stacked,
+      beginAtZero: true,
+      ticks: { callback: (v) => format(v) },
+      title: spec.yTitle ? { display: true, text: spec.yTitle } : undefined,
+    },
+    ...(spec.axes || {}),
+  };
+  chart = new Chart(fig.querySelector('canvas'), {
+    type: 'bar',
+    data: {
+      labels,
+      datasets: datasets.map((d, i) => ({ backgroundColor: color(i), ...d })),
+    },
+    options: {
+      indexAxis: categoryAxis,
+      scales,
+      plugins: {
+        legend: { display: datasets.length > 1, position: 'bottom', labels: { boxWidth: 12 } },
+        tooltip: { callbacks: { label: (c) => `${c.dataset.label}: ${format(c.raw)}` } },
+      },
+    },
+  });
+  return chart;
+}
+
+// Scatter/line chart over numeric x. spec: {id, title, caption, datasets:
+// [{label, data: [{x, y, ...}], showLine, ...}], x: {title, format, type,
+// reverse}, y: {title, format, type}, table (a node: the data table to show),
+// tooltip (context -> text)}.
+export function xyChart(parent, spec) {
+  const fig = figure(spec.id, spec.title, spec.caption, spec.table);
+  parent.append(fig);
+  const axis = (a) => ({
+    type: a.type || 'linear',
+    reverse: Boolean(a.reverse),
+    title: { display: true, text: a.title },
+    ticks: { callback: (v) => a.format(v) },
+  });
+  return new Chart(fig.querySelector('canvas'), {
+    type: 'scatter',
+    data: {
+      datasets: spec.datasets.map((d, i) => ({ backgroundColor: color(i), borderColor: color(i), pointRadius: 4, ...d })),
+    },
+    options: {
+      scales: { x: axis(spec.x), y: axis(spec.y) },
+      plugins: {
+        legend: { position: 'bottom', labels: { boxWidth: 12 } },
+        tooltip: { callbacks: { label: spec.tooltip || ((c) => `${c.dataset.label}: ${spec.x.format(c.raw.x)}, ${spec.y.format(c.raw.y)}`) } },
+      },
+    },
+  });
+}
+
+// Destroys the charts under root (a view being left), freeing their listeners.
+export function destroyCharts(root) {
+  for (const canvas of root.querySelectorAll('canvas')) Chart.getChart(canvas)?.destroy();
+}

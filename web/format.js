@@ -1,0 +1,51 @@
+// Number and label formatting shared by the views. Values keep their unit in
+// the text ("1.25 MiB", "3.40 ms"); tables that tests read also carry the raw
+// number in a data-value attribute.
+
+export function bytes(n) {
+  if (n === null || n === undefined) return '–';
+  const units = ['B', 'KiB', 'MiB', 'GiB', 'TiB'];
+  let v = Math.abs(n);
+  let u = 0;
+  while (v >= 1024 && u < units.length - 1) {
+    v /= 1024;
+    ++u;
+  }
+  const text = u === 0 ? String(Math.round(v)) : v.toFixed(v < 10 ? 2 : v < 100 ? 1 : 0);
+  return `${n < 0 ? '−' : ''}${text} ${units[u]}`;
+}
+
+export const ms = (n) => (n === null || n === undefined ? '–' : `${n.toFixed(n < 10 ? 3 : 2)} ms`);
+export const ratio = (n) => (n === null || n === undefined ? '–' : `×${n.toFixed(3)}`);
+// Percentages keep two significant digits below 1 % (0.052 %), one decimal above.
+export function percent(n) {
+  if (n === null || n === undefined) return '–';
+  const p = 100 * n;
+  const digits = p === 0 ? 1 : Math.max(1, Math.min(6, 1 - Math.floor(Math.log10(Math.abs(p)))));
+  return `${p.toFixed(digits)} %`;
+}
+export const psnr = (n) => (n === null || n === undefined ? '–' : `${n.toFixed(1)} dB`);
+export const count = (n) => (n === null || n === undefined ? '–' : Math.round(n).toLocaleString('en-US'));
+
+// A signed difference in the value's own format: "+1.20 MiB", "−0.40 ms".
+export function delta(n, fmt) {
+  if (n === null || n === undefined) return '–';
+  const text = fmt(Math.abs(n)).replace(/^−/, '');
+  return n === 0 ? text : `${n > 0 ? '+' : '−'}${text}`;
+}
+
+export const resolution = (run) => `${run.width}×${run.height}`;
+
+// "2026-11-21 06:30" from the API's UTC timestamps (shown in UTC, as stored).
+export const date = (iso) => (iso ? iso.slice(0, 16).replace('T', ' ') : '–');
+
+// "deferred · atrium · 320×180 (#12)": how a run is named in legends.
+export const runLabel = (run) => `${run.renderer} · ${run.scene} · ${resolution(run)}${run.counting !== 'exact' ? ` · ${run.counting}` : ''} (#${run.id})`;
+
+// The run's image error against forward in a few words.
+export function imageError(run) {
+  const e = run.image_error;
+  if (!e) return '–';
+  if (e.identical === e.samples) return 'identical';
+  return psnr(e.mean_psnr);
+}

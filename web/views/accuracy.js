@@ -1,0 +1,146 @@
+// Speed against accuracy (#/accuracy?error=counting|image&cost=frame|overhead):
+// one point per run, with the Pareto front (no other point is both cheaper and
+// more accurate) drawn over them.
+//   counting error: a run counted with "subgroup" or "sampled:N" against the
+//     newest "exact" run of the same renderer, scene, resolution, device and
+//     light count: |bytes - exact bytes| / exact bytes, per frame. Cost: the
+//     counted frame's time, or the overhead ratio of counting.
+//   image error: a run's mean PSNR against forward over its cameras (higher
+//     is better, so that axis runs right to left). Cost: the uninstrumented
+//     frame time, or the overhead ratio.
+// Needs only the run rows (/api/runs, up to 10 pages of 1000), no samples.
+import { getAll, queryString } from '../api.js';
+import { xyChart } from '../charts.js';
+import { h } from '../dom.js';
+import * as fmt from '../format.js';
+
+const kCosts = {
+  frame: { label: 'frame time', format: fmt.ms, counting: (r) => r.mean_frame_ms_instrumented, image: (r) => r.mean_frame_ms },
+  overhead: { label: 'overhead ratio of counting', format: (v) => fmt.ratio(v), counting: (r) => r.mean_overhead_ratio, image: (r) => r.mean_overhead_ratio },
+};
+
+const partnerKey = (r) => [r.renderer, r.scene, JSON.stringify(r.scene_params), r.width, r.height, r.device_id, r.lights].join('|');
+
+// Counting error of every run that has an exact partner, and that partner
+// itself (error 0) when another mode was measured against it.
+function countingPoints(runs, cost) {
+  const exact = new Map();  // key -> newest exact run (the list is newest first)
+  for (const r of runs) {
+    if (r.counting === 'exact' && !exact.has(partnerKey(r))) exact.set(partnerKey(r), r);
+  }
+  const measured = new Set();  // exact runs some other mode is measured against
+  const points = [];
+  for (const r of runs) {
+    const reference = exact.get(partnerKey(r));
+    if (r.counting === 'exact' || !reference || !reference.mean_bytes || r.mean_bytes === null || cost(r) === null) continue;
+    measured.add(reference);
+    points.push({ run: r, group: r.counting, error: Math.abs(r.mean_bytes - reference.mean_bytes) / reference.mean_bytes, cost: cost(r) });
+  }
+  for (const r of measured) {
+    if (cost(r) !== null) points.push({ run: r, group: 'exact', error: 0, cost: cost(r) });
+  }
+  return points;
+}
+
+// Image error (mean PSNR) of every run compared against forward; runs whose
+// every image is identical are drawn at `identicalAt` dB.
+function imagePoints(runs, cost) {
+  const compared = runs.filter((r) => r.image_error && cost(r) !== null);
+  const finite = compared.map((r) => r.image_error.mean_psnr).filter((v) => v !== null);
+  const identicalAt = Math.ceil((finite.length ? Math.max(...finite) : 50) + 10);
+  const points = compared.map((r) => {
+    const identical = r.image_error.mean_psnr === null;
+    return { run: r, group: r.renderer, error: identical ? identicalAt : r.image_error.mean_psnr, identical, cost: cost(r) };
+  });
+  return { points, identicalAt };
+}
+
+// Points no other point beats on both axes. better(a, b): a's error is lower
+// (or PSNR higher); ties in error keep the cheaper point only.
+function paretoFront(points, lowerErrorIsBetter) {
+  const sign = lowerErrorIsBetter ? 1 : -1;
+  const sorted = [...points].sort((a, b) => sign * (a.error - b.error) || a.cost - b.cost);
+  const front = [];
+  for (const p of sorted) {
+    if (front.length === 0 || p.cost < front[front.length - 1].cost) front.push(p);
+  }
+  return new Set(front);
+}
+
+function controls(query, onApply) {
+  const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
+  const select = (name, options) => h('select', { name }, options.map(([value, text]) => h('option', { value, selected: (query.get(name) || options[0][0]) === value }, text)));
+  const text = (name, placeholder) => h('input', { name, value: query.get(name) || '', placeholder, size: 12 });
+  const form = h('form', { class: 'filters', 'aria-label': 'Speed against accuracy' },
+    field('Error', select('error', [['counting', 'counting error of a mode'], ['image', 'image error against forward']])),
+    field('Cost', select('cost', [['frame', 'frame time'], ['overhead', 'overhead ratio']])),
+    field('Renderer', text('renderer', 'any')),
+    field('Scene', text('scene', 'any')),
+    field('Resolution', h('input', { name: 'resolution', value: query.get('resolution') || '', placeholder: 'e.g. 320x180', pattern: '\\s*\\d+\\s*[x×]\\s*\\d+\\s*', size: 10 })),
+    h('div', { class: 'field buttons' }, h('button', { type: 'submit' }, 'Apply')));
+  form.addEventListener('submit', (e) => {
+    e.preventDefault();
+    if (form.reportValidity()) onApply(Object.fromEntries([...new FormData(form)].map(([k, v]) => [k, v.trim()])));
+  });
+  form.addEventListener('change', (e) => { if (e.target.tagName === 'SELECT') form.requestSubmit(); });
+  return form;
+}
+
+function pointTable(points, front, errorLabel, errorText, costFormat) {
+  return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Points', dataset: { chartTable: 'accuracy' } },
+    h('thead', {}, h('tr', {}, ['Run', 'Renderer', 'Scene', 'Resolution', 'Counting', errorLabel, 'Cost', 'Pareto front'].map((t) => h('th', { scope: 'col' }, t)))),
+    h('tbody', {}, points.map((p) => h('tr', { dataset: { run: p.run.id, error: p.identical ? 'identical' : p.error, cost: p.cost, front: front.has(p) } },
+      h('td', {}, h('a', { href: `#/runs/${p.run.id}` }, `#${p.run.id}`)),
+      h('td', {}, p.run.renderer), h('td', {}, p.run.scene), h('td', {}, fmt.resolution(p.run)), h('td', {}, p.run.counting),
+      h('td', { class: 'num' }, errorText(p)), h('td', { class: 'num' }, costFormat(p.cost)),
+      h('td', {}, front.has(p) ? 'yes' : ''))))));
+}
+
+export async function render(page, { query, signal }) {
+  const errorKind = query.get('error') === 'image' ? 'image' : 'counting';
+  const cost = kCosts[query.get('cost')] || kCosts.frame;
+  const res = /^(\d+)\s*[x×]\s*(\d+)$/.exec(query.get('resolution') || '');
+  const filters = { renderer: query.get('renderer'), scene: query.get('scene'), width: res?.[1], height: res?.[2] };
+  page.append(h('h1', {}, 'Speed against accuracy'),
+    controls(query, (values) => { location.hash = '#/accuracy' + queryString(values); }));
+
+  const { items: runs, complete } = await getAll('/runs' + queryString(filters), 'runs', { signal });
+  let points;
+  let x;
+  let errorText;
+  let caption;
+  if (errorKind === 'counting') {
+    points = countingPoints(runs, cost.counting);
+    x = { title: 'counting error of total bytes (vs exact)', format: (v) => fmt.percent(v) };
+    errorText = (p) => fmt.percent(p.error);
+    caption = 'each counting mode against the exact run of the same renderer, scene, resolution and device';
+  } else {
+    const image = imagePoints(runs, cost.image);
+    points = image.points;
+    x = { title: 'mean PSNR against forward (dB; better to the left)', format: (v) => fmt.psnr(v), reverse: true };
+    errorText = (p) => (p.identical ? 'identical' : fmt.psnr(p.error));
+    caption = `one point per run; runs whose images are all identical to forward's are drawn at ${image.identicalAt} dB`;
+  }
+  const front = paretoFront(points, errorKind === 'counting');
+  if (!complete) page.append(h('p', { class: 'panel' }, 'Only the newest 10,000 runs are shown: narrow the filters.'));
+  if (points.length === 0) {
+    page.append(h('p', { class: 'panel' }, errorKind === 'counting'
+      ? 'No run here was captured with a counting mode other than exact next to an exact run. Capture the same configuration with "counting": "subgroup" or "sampled:N".'
+      : 'No run here has an image error (they are compared against forward captured alongside).'));
+    return;
+  }
+  const groups = [...new Set(points.map((p) => p.group))];
+  const frontLine = [...front].sort((a, b) => a.error - b.error);
+  const datasets = [
+    { label: 'Pareto front', data: frontLine.map((p) => ({ x: p.error, y: p.cost, run: p.run.id })), showLine: true, borderColor: '#111', backgroundColor: 'rgba(0,0,0,0)', pointRadius: 8, pointBorderWidth: 2, borderWidth: 1.5, order: 0 },
+    ...groups.map((g) => ({ label: g, data: points.filter((p) => p.group === g).map((p) => ({ x: p.error, y: p.cost, run: p.run.id })), order: 1 })),
+  ];
+  const table = pointTable(points, front, errorKind === 'counting' ? 'Counting error' : 'PSNR vs forward', errorText, cost.format);
+  xyChart(page, {
+    id: 'accuracy', title: `${cost.label} against ${errorKind === 'counting' ? 'counting error' : 'image error'}`, caption,
+    x, y: { title: cost.label, format: cost.format }, datasets, table,
+    tooltip: (c) => `run #${c.raw.run} (${c.dataset.label}): ${x.format(c.raw.x)}, ${cost.format(c.raw.y)}`,
+  });
+  page.querySelector('[data-chart="accuracy"] .chart-box').classList.add('tall');
+  page.append(h('p', { class: 'muted' }, `${points.length} points from ${runs.length} runs; ${front.size} on the Pareto front (outlined).`));
+}

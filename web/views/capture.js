@@ -1,0 +1,212 @@
+// New capture (#/capture): a form that builds a capture spec
+// (docs/result-schema.md) and POSTs it; the server validates it, and its error
+// (message and field) is shown beside the field it names. A started capture's
+// progress is polled until it finishes; below, the list of captures with their
+// status and errors.
+import { ApiError, get, request } from '../api.js';
+import { h } from '../dom.js';
+import * as fmt from '../format.js';
+
+const kPollMs = 500;      // progress of the capture just started
+const kListPollMs = 2000;  // the job list, while any job is queued or running
+const kFinished = ['done', 'failed', 'cancelled'];
+
+// "320x180, 640x360" -> [[320, 180], [640, 360]]. A token that is not WxH goes
+// to the server as it is, so that the server's message names it.
+function parseResolutions(text) {
+  return text.split(/[\s,;]+/).filter(Boolean).map((token) => {
+    const m = /^(\d+)[x×](\d+)$/.exec(token);
+    return m ? [Number(m[1]), Number(m[2])] : token;
+  });
+}
+
+// A number when the text is one; else the text, for the server to refuse by name.
+const numberOr = (text) => (text.trim() !== '' && Number.isFinite(Number(text)) ? Number(text) : text);
+
+function specOf(form) {
+  const data = new FormData(form);
+  const counting = data.get('counting') === 'sampled' ? `sampled:${data.get('sample_n').trim()}` : data.get('counting');
+  return {
+    renderers: data.getAll('renderers'),
+    scenes: [...data.getAll('scenes'), ...data.getAll('gltf').map((path) => ({ gltf: path }))],
+    resolutions: parseResolutions(data.get('resolutions')),
+    cameras: 'auto',
+    frames: numberOr(data.get('frames')),
+    counting,
+    lights: numberOr(data.get('lights')),
+  };
+}
+
+function captureForm(renderers, scenes, onSubmit) {
+  const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
+  const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
+  const samplingN = h('input', { name: 'sample_n', value: '4', size: 4, 'aria-label': 'Sampling tile size N' });
+  const counting = h('select', { name: 'counting' }, ['exact', 'subgroup', 'sampled'].map((m) => h('option', { value: m }, m === 'sampled' ? 'sampled:N' : m)));
+  const gltf = scenes.gltf.flatMap((folder) => folder.files);
+  const form = h('form', { class: 'capture-form', novalidate: true, 'aria-label': 'New capture' },
+    h('fieldset', { dataset: { field: 'renderers' } }, h('legend', {}, 'Renderers'),
+      h('div', { class: 'choices' }, renderers.map((r) => choice('renderers', r, true)))),
+    h('fieldset', { dataset: { field: 'scenes' } }, h('legend', {}, 'Scenes'),
+      h('div', { class: 'choices' },
+        scenes.procedural.map((s) => choice('scenes', s.name, s.name === 'atrium')),
+        gltf.map((path) => choice('gltf', path, false)))),
+    h('div', { class: 'form-grid' },
+      field('Resolutions', h('input', { name: 'resolutions', value: '320x180', required: true }), 'WxH, comma-separated'),
+      field('Frames per sample', h('input', { name: 'frames', value: '20', inputmode: 'numeric' }), 'each counted and timed'),
+      field('Counting', counting),
+      h('label', { class: 'field', dataset: { field: 'counting' } }, h('span', {}, 'N (sampled only)'), samplingN),
+      field('Lights', h('input', { name: 'lights', value: '400', inputmode: 'numeric' }), '0 to 400'),
+      h('div', { class: 'field' }, h('span', {}, 'Cameras'), h('span', {}, 'auto: 10 per scene'))),
+    h('button', { type: 'submit' }, 'Start capture'),
+    h('div', { class: 'form-error', role: 'alert' }));
+  form.addEventListener('submit', (e) => {
+    e.preventDefault();
+    onSubmit(specOf(form));
+  });
+  return form;
+}
+
+// The server's error, shown at the top of the form and beside the field it names
+// ("resolutions[0][1]" belongs to the resolutions input).
+function showError(form, error) {
+  clearError(form);
+  const field = error.field || '';
+  const top = field.split(/[.[]/)[0];
+  const box = form.querySelector('.form-error');
+  box.replaceChildren(h('div', { class: 'panel error', dataset: { code: error.code || '', field } },
+    h('strong', {}, 'The server refused this capture: '), h('span', { class: 'message' }, error.message),
+    field ? h('div', {}, 'Field: ', h('code', { class: 'field-name' }, field)) : null));
+  const holder = form.querySelector(`[data-field="${CSS.escape(top)}"]`);
+  if (holder) {
+    holder.querySelector('input, select')?.setAttribute('aria-invalid', 'true');
+    holder.append(h('span', { class: 'field-error' }, error.message));
+  }
+}
+
+function clearError(form) {
+  form.querySelector('.form-error').replaceChildren();
+  for (const el of form.querySelectorAll('.field-error')) el.remove();
+  for (const el of form.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
+}
+
+// Waits ms, or less when the view is left.
+function sleep(ms, signal) {
+  return new Promise((resolve) => {
+    const done = () => {
+      clearTimeout(timer);
+      signal.removeEventListener('abort', done);
+      resolve();
+    };
+    const timer = setTimeout(done, ms);
+    signal.addEventListener('abort', done);
+  });
+}
+
+const kWatchMs = 2 * 3600 * 1000;  // stop polling after two hours: reload to watch again
+
+// Calls fn every `ms` until it returns true, the view is left, or kWatchMs pass.
+async function poll(fn, ms, signal) {
+  const until = Date.now() + kWatchMs;
+  while (!signal.aborted && Date.now() < until) {
+    if (await fn()) return;
+    await sleep(ms, signal);
+  }
+}
+
+const progressText = (job) => `${job.progress.done} / ${job.progress.total}${job.progress.current ? `: ${job.progress.current}` : ''}`;
+
+function progressPanel(job) {
+  const done = job.status === 'done';
+  return h('div', { class: 'panel', dataset: { capture: job.id, status: job.status }, role: 'status' },
+    h('div', {}, h('strong', {}, `Capture #${job.id}: `), h('span', { class: `job-status status-${job.status}` }, job.status)),
+    h('progress', { max: Math.max(job.progress.total, 1), value: job.progress.done }),
+    h('div', { class: 'muted' }, progressText(job)),
+    job.error ? h('div', { class: 'error' }, job.error) : null,
+    done ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
+}
+
+function summary(spec) {
+  const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
+  const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
+  return `${(spec.renderers || []).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
+}
+
+function jobTable(jobs, onCancel) {
+  return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Captures', class: 'jobs' },
+    h('thead', {}, h('tr', {}, ['Capture', 'Status', 'Progress', 'Spec', 'Created (UTC)', 'Finished', 'Error', ''].map((t) => h('th', { scope: 'col' }, t)))),
+    h('tbody', {}, jobs.map((j) => h('tr', { dataset: { capture: j.id, status: j.status } },
+      h('td', {}, `#${j.id}`),
+      h('td', { class: `status-${j.status}` }, j.status),
+      h('td', {}, progressText(j)),
+      h('td', {}, summary(j.spec)),
+      h('td', {}, fmt.date(j.created_at)),
+      h('td', {}, fmt.date(j.finished_at)),
+      h('td', { class: 'error', style: 'white-space: normal; min-width: 12rem' }, j.error || ''),
+      h('td', {}, kFinished.includes(j.status)
+        ? (j.status === 'done' ? h('a', { href: `#/runs?capture=${j.id}` }, 'runs') : '')
+        : h('button', { type: 'button', class: 'secondary', onclick: () => onCancel(j.id) }, 'Cancel')))))));
+}
+
+export async function render(page, { signal }) {
+  const [renderers, scenes, first] = await Promise.all([get('/renderers', signal), get('/scenes', signal), get('/captures?limit=25', signal)]);
+  const progress = h('div', { class: 'progress-box' });
+  const list = h('div', {});
+  const listStatus = h('p', { class: 'muted', role: 'status' });
+
+  const drawList = (jobs) => list.replaceChildren(jobs.length ? jobTable(jobs, cancel) : h('p', { class: 'muted' }, 'No captures yet.'));
+  let listPolling = false;
+  async function refreshList() {
+    const { captures } = await get('/captures?limit=25', signal);
+    drawList(captures);
+    return captures.every((j) => kFinished.includes(j.status));
+  }
+  // Polls the list while any capture is unfinished; one loop at a time.
+  function watchList() {
+    if (listPolling) return;
+    listPolling = true;
+    poll(refreshList, kListPollMs, signal)
+      .catch((error) => { if (!signal.aborted) listStatus.textContent = `Could not refresh the list: ${error.message}`; })
+      .finally(() => { listPolling = false; });
+  }
+
+  async function cancel(id) {
+    try {
+      await request(`/captures/${id}`, { method: 'DELETE', signal });
+    } catch (error) {
+      if (!signal.aborted) listStatus.textContent = `Capture #${id}: ${error.message}`;
+    }
+    watchList();
+  }
+
+  async function start(spec) {
+    clearError(form);
+    button.disabled = true;
+    let created;
+    try {
+      created = await request('/captures', { method: 'POST', body: spec, signal });
+    } catch (error) {
+      if (signal.aborted) return;
+      if (error instanceof ApiError && error.status < 500) showError(form, error);
+      else progress.replaceChildren(h('div', { class: 'panel error', role: 'alert' }, error.message));
+      return;
+    } finally {
+      button.disabled = false;
+    }
+    watchList();
+    try {
+      await poll(async () => {
+        const job = await get(`/captures/${created.id}`, signal);
+        progress.replaceChildren(progressPanel(job));
+        return kFinished.includes(job.status);
+      }, kPollMs, signal);
+    } catch (error) {
+      if (!signal.aborted) progress.replaceChildren(h('div', { class: 'panel error', role: 'alert' }, `Capture #${created.id}: ${error.message}`));
+    }
+  }
+
+  const form = captureForm(renderers.renderers, scenes, (spec) => start(spec));
+  const button = form.querySelector('button[type="submit"]');
+  page.append(h('h1', {}, 'New capture'), form, progress, h('h2', {}, 'Captures'), listStatus, list);
+  drawList(first.captures);
+  if (!first.captures.every((j) => kFinished.includes(j.status))) watchList();
+}

@@ -1,0 +1,251 @@
+// Compare 2 to 4 runs (#/compare?runs=a,b,c): totals and per-resource and
+// per-pass traffic side by side with deltas and ratios against the first run
+// (all from /api/compare), how bytes and frame time scale with the pixel
+// count for each run's renderer (the founding study's total figure), and an
+// A/B/difference viewer of one camera's screenshots.
+import { get, imageSource, queryString } from '../api.js';
+import { barChart, xyChart } from '../charts.js';
+import { h } from '../dom.js';
+import * as fmt from '../format.js';
+
+// "value (Δ delta, ×ratio)" cells for one quantity of every run; the first run is the reference.
+function comparedCells(values, format) {
+  return values.map((c, i) => h('td', { class: 'num', dataset: { value: c.value ?? '', delta: c.delta ?? '', ratio: c.ratio ?? '' } },
+    h('div', {}, c.value === null ? '–' : format(c.value)),
+    i === 0 || c.value === null ? null : h('div', { class: `muted ${c.delta < 0 ? 'better' : c.delta > 0 ? 'worse' : ''}` },
+      `${fmt.delta(c.delta, format)} · ${fmt.ratio(c.ratio)}`)));
+}
+
+function comparedTable(runs, rows, label) {
+  return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': label, dataset: { table: label } },
+    h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, ''), runs.map((r, i) => h('th', { scope: 'col', class: 'num' }, `${i === 0 ? 'reference: ' : ''}${r.renderer} #${r.id}`)))),
+    h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format))))));
+}
+
+// Bytes read and written per frame for each run, from the per-resource rows.
+function byAccess(comparison, access) {
+  return comparison.runs.map((_, i) => comparison.resources
+    .filter((r) => r.access === access)
+    .reduce((sum, r) => sum + (r.bytes[i].value ?? 0), 0));
+}
+
+function against(values) {
+  return values.map((v) => ({ value: v, delta: v - values[0], ratio: values[0] ? v / values[0] : null }));
+}
+
+function totals(page, c) {
+  const rows = [
+    { key: 'total_bytes', label: 'Bytes per frame', values: c.total_bytes, format: fmt.bytes },
+    { key: 'read_bytes', label: 'read', values: against(byAccess(c, 'read')), format: fmt.bytes },
+    { key: 'written_bytes', label: 'written', values: against(byAccess(c, 'write')), format: fmt.bytes },
+    { key: 'frame_ms', label: 'Frame time', values: c.frame_ms, format: fmt.ms },
+  ];
+  page.append(h('h2', {}, 'Totals'), comparedTable(c.runs, rows, 'totals'));
+  const box = h('div', { class: 'charts' });
+  page.append(box);
+  const labels = c.runs.map((r) => `${r.renderer} #${r.id}`);
+  barChart(box, {
+    id: 'compare-bytes', title: 'Bytes per frame', labels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
+    datasets: [{ label: 'read', data: byAccess(c, 'read') }, { label: 'written', data: byAccess(c, 'write') }],
+  });
+  barChart(box, {
+    id: 'compare-frame-ms', title: 'Frame time', labels, labelHeader: 'Run', format: fmt.ms,
+    datasets: [{ label: 'frame time', data: c.frame_ms.map((v) => v.value) }],
+  });
+}
+
+function perResource(page, c) {
+  const labels = c.resources.map((r) => `${r.resource} (${r.access})`);
+  page.append(h('h2', {}, 'Per resource'));
+  const fig = h('div', {});
+  page.append(fig);
+  barChart(fig, {
+    id: 'compare-resources', title: 'Bytes per frame by resource', caption: 'summed over passes',
+    labels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
+    datasets: c.runs.map((r, i) => ({ label: `${r.renderer} #${r.id}`, data: c.resources.map((res) => res.bytes[i].value) })),
+  });
+  fig.querySelector('.chart-box').style.height = `${Math.max(330, 18 * labels.length * Math.min(c.runs.length, 3))}px`;
+  page.append(h('details', {}, h('summary', {}, 'Per resource: values, deltas and ratios'),
+    comparedTable(c.runs, c.resources.map((r) => ({ key: `${r.resource}|${r.access}`, label: `${r.resource} (${r.access})`, values: r.bytes, format: fmt.bytes })), 'resources')));
+}
+
+function perPass(page, c) {
+  const labels = c.passes.map((p) => p.pass);
+  page.append(h('h2', {}, 'Per pass'));
+  const box = h('div', { class: 'charts' });
+  page.append(box);
+  const series = (key) => c.runs.map((r, i) => ({ label: `${r.renderer} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
+  barChart(box, { id: 'compare-pass-bytes', title: 'Bytes per frame by pass', labels, labelHeader: 'Pass', logSwitch: true, format: fmt.bytes, datasets: series('bytes') });
+  barChart(box, { id: 'compare-pass-ms', title: 'GPU time by pass', labels, labelHeader: 'Pass', format: fmt.ms, datasets: series('gpu_ms') });
+  page.append(h('details', {}, h('summary', {}, 'Per pass: values, deltas and ratios'),
+    comparedTable(c.runs, c.passes.flatMap((p) => [
+      { key: `${p.pass}|bytes`, label: `${p.pass} bytes`, values: p.bytes, format: fmt.bytes },
+      { key: `${p.pass}|gpu_ms`, label: `${p.pass} time`, values: p.gpu_ms, format: fmt.ms },
+    ]), 'passes')));
+}
+
+// For each compared run's renderer: the newest run at every resolution with
+// the same scene, device, counting mode and light count.
+async function scalingSeries(runs, signal) {
+  const byKey = new Map();  // one series per renderer, counting mode, scene, device, lights
+  for (const run of runs) {
+    const key = `${run.renderer}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}`;
+    if (!byKey.has(key)) byKey.set(key, run);
+  }
+  return Promise.all([...byKey.values()].map(async (run) => {
+    const { runs: found } = await get('/runs' + queryString({ renderer: run.renderer, scene: run.scene, device: run.device_id, limit: 1000 }), signal);
+    const newest = new Map();  // "WxH" -> run; the list is newest first
+    for (const r of found) {
+      if (r.counting !== run.counting || r.lights !== run.lights || JSON.stringify(r.scene_params) !== JSON.stringify(run.scene_params)) continue;
+      if (!newest.has(fmt.resolution(r))) newest.set(fmt.resolution(r), r);
+    }
+    const points = [...newest.values()].sort((a, b) => a.width * a.height - b.width * b.height);
+    return { label: `${run.renderer}${run.counting !== 'exact' ? ` (${run.counting})` : ''}`, points };
+  }));
+}
+
+async function scaling(page, c, signal) {
+  page.append(h('h2', {}, 'Scaling with resolution'));
+  const series = await scalingSeries(c.runs, signal);
+  const rows = series.flatMap((s) => s.points.map((r) => ({ s, r })));
+  const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Scaling', dataset: { chartTable: 'scaling' } },
+    h('thead', {}, h('tr', {}, ['Renderer', 'Resolution', 'Pixels', 'Bytes per frame', 'Frame time', 'Run'].map((t) => h('th', { scope: 'col' }, t)))),
+    h('tbody', {}, rows.map(({ s, r }) => h('tr', {},
+      h('td', {}, s.label), h('td', {}, fmt.resolution(r)), h('td', { class: 'num' }, fmt.count(r.width * r.height)),
+      h('td', { class: 'num', dataset: { value: r.mean_bytes } }, fmt.bytes(r.mean_bytes)),
+      h('td', { class: 'num', dataset: { value: r.mean_frame_ms } }, fmt.ms(r.mean_frame_ms)),
+      h('td', {}, h('a', { href: `#/runs/${r.id}` }, `#${r.id}`)))))));
+  const box = h('div', { class: 'charts' });
+  page.append(box);
+  const pixels = { title: 'pixels', format: (v) => fmt.count(v) };
+  const datasets = (value) => series.map((s) => ({ label: s.label, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
+  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: datasets('mean_bytes'), table });
+  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: datasets('mean_frame_ms'), table: table.cloneNode(true) });
+}
+
+// ---- A/B/difference viewer --------------------------------------------------------
+
+function loadImage(src) {
+  return new Promise((resolve, reject) => {
+    const img = new Image();
+    img.onload = () => resolve(img);
+    img.onerror = () => reject(new Error('screenshot did not load'));
+    img.src = src;
+  });
+}
+
+function pixelsOf(img) {
+  const canvas = document.createElement('canvas');
+  canvas.width = img.naturalWidth;
+  canvas.height = img.naturalHeight;
+  const ctx = canvas.getContext('2d', { willReadFrequently: true });
+  ctx.drawImage(img, 0, 0);
+  return ctx.getImageData(0, 0, canvas.width, canvas.height);
+}
+
+// |A - B| per channel, times gain; with the mean and largest absolute
+// difference over RGB (8-bit levels), as the capture's image error counts them.
+function difference(a, b, gain) {
+  const out = new ImageData(a.width, a.height);
+  let sum = 0;
+  let max = 0;
+  for (let i = 0; i < a.data.length; i += 4) {
+    for (let ch = 0; ch < 3; ++ch) {
+      const d = Math.abs(a.data[i + ch] - b.data[i + ch]);
+      sum += d;
+      max = Math.max(max, d);
+      out.data[i + ch] = Math.min(255, d * gain);
+    }
+    out.data[i + 3] = 255;
+  }
+  return { image: out, meanAbs: sum / (3 * a.width * a.height), maxAbs: max };
+}
+
+function canvasOf(imageData) {
+  const canvas = h('canvas', { width: imageData.width, height: imageData.height });
+  canvas.getContext('2d').putImageData(imageData, 0, 0);
+  return canvas;
+}
+
+function imageViewer(page, runs, signal) {
+  page.append(h('h2', {}, 'Images: A, B and their difference'));
+  const samplesOf = new Map();  // run id -> its samples, fetched once
+  const samples = async (id) => {
+    if (!samplesOf.has(id)) samplesOf.set(id, (await get(`/runs/${id}/samples`, signal)).samples);
+    return samplesOf.get(id);
+  };
+  const runSelect = (name, chosen) => h('select', { name }, runs.map((r) => h('option', { value: r.id, selected: r.id === chosen }, fmt.runLabel(r))));
+  const a = runSelect('a', runs[0].id);
+  const b = runSelect('b', runs[1].id);
+  const camera = h('select', { name: 'camera' });
+  const gain = h('select', { name: 'gain' }, [1, 4, 16, 64].map((g) => h('option', { value: g, selected: g === 16 }, `×${g}`)));
+  const out = h('div', { class: 'viewer' });
+  const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
+  page.append(h('form', { class: 'filters', 'aria-label': 'Image viewer' }, field('A', a), field('B', b), field('Camera', camera), field('Difference gain', gain)), out);
+
+  let drawn = 0;  // the latest draw wins when choices change quickly
+  async function draw() {
+    const ticket = ++drawn;
+    const [sa, sb] = await Promise.all([samples(Number(a.value)), samples(Number(b.value))]);
+    const common = sa.map((s) => s.camera_index).filter((i) => sb.some((s) => s.camera_index === i));
+    const keep = common.includes(Number(camera.value)) ? Number(camera.value) : common[0];
+    camera.replaceChildren(...common.map((i) => h('option', { value: i, selected: i === keep }, `camera ${i}`)));
+    if (common.length === 0) {
+      out.replaceChildren(h('p', { class: 'panel' }, 'These runs share no camera.'));
+      return;
+    }
+    const pa = sa.find((s) => s.camera_index === keep);
+    const pb = sb.find((s) => s.camera_index === keep);
+    if (!pa.screenshot || !pb.screenshot) {
+      out.replaceChildren(h('p', { class: 'panel' }, 'A screenshot is missing for this camera.'));
+      return;
+    }
+    const [ia, ib] = await Promise.all([pa, pb].map(async (s) => loadImage(await imageSource(s.screenshot, signal))));
+    if (ticket !== drawn || signal.aborted) return;
+    const da = pixelsOf(ia);
+    const db = pixelsOf(ib);
+    const note = JSON.stringify(pa.camera.eye) === JSON.stringify(pb.camera.eye) && JSON.stringify(pa.camera.target) === JSON.stringify(pb.camera.target)
+      ? null : h('p', { class: 'error' }, 'The two runs placed this camera differently.');
+    if (da.width !== db.width || da.height !== db.height) {
+      out.replaceChildren(h('p', { class: 'panel' }, `Different resolutions (${da.width}×${da.height} and ${db.width}×${db.height}): no difference image.`));
+      return;
+    }
+    const diff = difference(da, db, Number(gain.value));
+    out.replaceChildren(note || '',
+      h('div', { class: 'images' },
+        h('figure', { dataset: { image: 'a' } }, canvasOf(da), h('figcaption', {}, `A: ${fmt.runLabel(runs.find((r) => r.id === Number(a.value)))}`)),
+        h('figure', { dataset: { image: 'b' } }, canvasOf(db), h('figcaption', {}, `B: ${fmt.runLabel(runs.find((r) => r.id === Number(b.value)))}`)),
+        h('figure', { dataset: { image: 'diff', camera: keep, a: a.value, b: b.value, meanAbs: diff.meanAbs, maxAbs: diff.maxAbs } }, canvasOf(diff.image),
+          h('figcaption', {}, `|A − B| ×${gain.value}: mean ${diff.meanAbs.toFixed(3)}, max ${diff.maxAbs} (8-bit levels)`))));
+  }
+  const redraw = () => draw().catch((error) => {
+    if (!signal.aborted) out.replaceChildren(h('p', { class: 'panel error', role: 'alert' }, error.message));
+  });
+  for (const control of [a, b, camera, gain]) control.addEventListener('change', redraw);
+  return redraw();
+}
+
+function chooser() {
+  return h('div', { class: 'panel' },
+    h('p', {}, 'Pick 2 to 4 runs in the ', h('a', { href: '#/runs' }, 'runs browser'), ' (tick them, then "Compare selected"), for example deferred, visbuffer and visbuffer-lean on one scene and resolution.'));
+}
+
+export async function render(page, { query, signal }) {
+  page.append(h('h1', {}, 'Compare runs'));
+  const ids = (query.get('runs') || '').split(',').filter(Boolean);
+  if (ids.length === 0) {
+    page.append(chooser());
+    return;
+  }
+  const c = await get('/compare' + queryString({ runs: ids.join(',') }), signal);
+  page.append(h('ul', { class: 'meta' }, c.runs.map((r, i) => h('li', {},
+    `${i === 0 ? 'reference ' : ''}`, h('a', { href: `#/runs/${r.id}` }, fmt.runLabel(r)), ` on ${r.device}`))),
+  h('p', {}, h('a', { href: `#/runs?select=${ids.join(',')}` }, 'Change the selection')));
+  totals(page, c);
+  perResource(page, c);
+  perPass(page, c);
+  // Both need more requests: fetch them side by side, each into its own section.
+  const [scalingSection, imageSection] = [h('section'), h('section')];
+  page.append(scalingSection, imageSection);
+  await Promise.all([scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
+}

@@ -1,0 +1,186 @@
+// One run: what it is, its traffic per pass and resource (the founding
+// study's per-resource figure), per camera (its per-sample figure), frame time
+// per pass with the cost of counting, and the screenshots with sky fraction
+// and image error against forward. Two requests: the run (with its passes
+// averaged over the samples) and its samples.
+import { get, imageSource } from '../api.js';
+import { barChart, color } from '../charts.js';
+import { h, table } from '../dom.js';
+import * as fmt from '../format.js';
+
+const tile = (label, value, key) => h('div', { class: 'tile', dataset: { tile: key } },
+  h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
+
+// bytes[pass][resource] for one access, and the resources in first-seen order.
+function trafficBy(passes, access) {
+  const resources = [];
+  const byPass = passes.map((p) => {
+    const sums = {};
+    for (const r of p.resources) {
+      if (r.access !== access) continue;
+      if (!resources.includes(r.name)) resources.push(r.name);
+      sums[r.name] = (sums[r.name] || 0) + r.bytes;
+    }
+    return sums;
+  });
+  return { resources, byPass };
+}
+
+function passResourceCharts(parent, run) {
+  const labels = run.passes.map((p) => p.name);
+  const all = [...new Set(run.passes.flatMap((p) => p.resources.map((r) => r.name)))];  // one colour per resource
+  const box = h('div', { class: 'charts' });
+  parent.append(box);
+  for (const [access, title] of [['read', 'Bytes read per frame'], ['write', 'Bytes written per frame']]) {
+    const { resources, byPass } = trafficBy(run.passes, access);
+    barChart(box, {
+      id: `pass-resource-${access}`,
+      title,
+      caption: 'per pass, stacked by resource; averaged over the samples. Click a resource to hide it.',
+      labels,
+      labelHeader: 'Pass',
+      stacked: true,
+      format: fmt.bytes,
+      datasets: resources.map((name) => ({
+        label: name,
+        data: byPass.map((sums) => (name in sums ? sums[name] : null)),
+        backgroundColor: color(all.indexOf(name)),
+      })),
+    });
+  }
+}
+
+function cameraLabel(s) {
+  return s.sky_fraction === null ? `cam ${s.camera_index}` : `cam ${s.camera_index} (${Math.round(100 * s.sky_fraction)}% sky)`;
+}
+
+function perSampleChart(parent, samples) {
+  barChart(parent, {
+    id: 'per-sample',
+    title: 'Bytes per frame, per camera',
+    caption: 'read on the left axis, written on the right',
+    labels: samples.map(cameraLabel),
+    labelHeader: 'Camera',
+    format: fmt.bytes,
+    datasets: [
+      { label: 'read', data: samples.map((s) => s.bytes_read), yAxisID: 'y' },
+      { label: 'written', data: samples.map((s) => s.bytes_written), yAxisID: 'y2' },
+    ],
+    yTitle: 'read',
+    axes: { y2: { position: 'right', beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: 'written' }, ticks: { callback: (v) => fmt.bytes(v) } } },
+  });
+}
+
+function passTimeChart(parent, run) {
+  barChart(parent, {
+    id: 'pass-time',
+    title: 'GPU time per pass',
+    caption: 'uninstrumented and counted frames; median per sample, averaged over the samples',
+    labels: run.passes.map((p) => p.name),
+    labelHeader: 'Pass',
+    format: fmt.ms,
+    horizontal: true,
+    datasets: [
+      { label: 'uninstrumented', data: run.passes.map((p) => p.gpu_ms) },
+      { label: 'counted', data: run.passes.map((p) => p.gpu_ms_instrumented) },
+    ],
+  });
+}
+
+function passTable(run) {
+  return table([
+    { label: 'Pass', value: (p) => p.name },
+    { label: 'GPU time', className: 'num', value: (p) => fmt.ms(p.gpu_ms) },
+    { label: 'Counted', className: 'num', value: (p) => fmt.ms(p.gpu_ms_instrumented) },
+    { label: 'Overhead', className: 'num', value: (p) => fmt.ratio(p.overhead_ratio) },
+    { label: 'Fragment invocations', className: 'num', value: (p) => fmt.count(p.fragment_invocations) },
+    { label: 'Bytes', className: 'num', value: (p) => fmt.bytes(p.resources.reduce((sum, r) => sum + r.bytes, 0)) },
+  ], run.passes, { 'aria-label': 'Passes', dataset: { table: 'passes' } });
+}
+
+function imageErrorText(s) {
+  const e = s.image_error;
+  if (!e) return 'not compared';
+  return e.identical ? `identical to ${e.against}` : `${fmt.psnr(e.psnr)} vs ${e.against}`;
+}
+
+function gallery(run, samples, signal) {
+  return h('div', { class: 'gallery' }, samples.map((s) => {
+    const img = h('img', { alt: `Camera ${s.camera_index}`, loading: 'lazy', width: run.width, height: run.height });
+    if (s.screenshot) {
+      imageSource(s.screenshot, signal).then((src) => { img.src = src; }, () => { img.alt = 'screenshot not available'; });
+    }
+    return h('figure', { class: 'shot', dataset: { sample: s.id } }, img,
+      h('figcaption', {},
+        h('strong', {}, `Camera ${s.camera_index}`), s.camera.label ? h('div', { class: 'muted' }, s.camera.label) : null,
+        h('div', {}, `sky ${fmt.percent(s.sky_fraction)} · ${fmt.ms(s.frame_ms)}`),
+        h('div', {}, imageErrorText(s))));
+  }));
+}
+
+function sampleTable(samples) {
+  return table([
+    { label: 'Camera', value: (s) => String(s.camera_index) },
+    { label: 'Sky', className: 'num', value: (s) => fmt.percent(s.sky_fraction) },
+    { label: 'Frame time', className: 'num', value: (s) => fmt.ms(s.frame_ms) },
+    { label: 'IQR', className: 'num', value: (s) => fmt.ms(s.frame_ms_spread ? s.frame_ms_spread.iqr : null) },
+    { label: 'Overhead', className: 'num', value: (s) => fmt.ratio(s.overhead_ratio) },
+    { label: 'Read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
+    { label: 'Written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
+    { label: 'Image vs forward', className: 'num', value: imageErrorText },
+  ], samples, { 'aria-label': 'Samples', dataset: { table: 'samples' } });
+}
+
+function resourceTable(run) {
+  return table([
+    { label: 'Resource', value: (r) => r.name },
+    { label: 'Kind', value: (r) => r.kind },
+    { label: 'Format', value: (r) => r.format || '–' },
+    { label: 'Size', className: 'num', value: (r) => (r.width ? `${r.width}×${r.height}` : '–') },
+    { label: 'Format bytes', className: 'num', value: (r) => fmt.bytes(r.format_bytes) },
+    { label: 'Allocated', className: 'num', value: (r) => fmt.bytes(r.allocation_bytes) },
+    { label: 'Usage', value: (r) => r.usage || '–' },
+  ], run.resources, { 'aria-label': 'Resources' });
+}
+
+export async function render(page, { params, signal }) {
+  const [run, { samples }] = await Promise.all([get(`/runs/${params.id}`, signal), get(`/runs/${params.id}/samples`, signal)]);
+  const read = samples.reduce((sum, s) => sum + s.bytes_read, 0) / (samples.length || 1);
+  const written = samples.reduce((sum, s) => sum + s.bytes_written, 0) / (samples.length || 1);
+  const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
+
+  page.append(
+    h('h1', {}, `Run #${run.id}: ${run.renderer} · ${run.scene} · ${fmt.resolution(run)}`),
+    h('ul', { class: 'meta' },
+      h('li', {}, run.device),
+      h('li', {}, `counting ${run.counting}`),
+      h('li', {}, `${run.lights} lights`),
+      h('li', {}, `${run.sample_count} samples`),
+      h('li', {}, `${fmt.date(run.created_at)} UTC`),
+      h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
+      h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution'))),
+    h('div', { class: 'tiles' },
+      tile('Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
+      tile('Counted frame', fmt.ms(run.mean_frame_ms_instrumented), 'frame-ms-instrumented'),
+      tile('Overhead of counting', fmt.ratio(run.mean_overhead_ratio), 'overhead'),
+      tile('Image error vs forward', fmt.imageError(run), 'image-error'),
+      tile('Read per frame', fmt.bytes(read), 'read'),
+      tile('Written per frame', fmt.bytes(written), 'written'),
+      tile('Render targets', fmt.bytes(run.render_target_bytes), 'render-targets')));
+
+  page.append(h('h2', {}, 'Traffic per pass and resource'));
+  passResourceCharts(page, run);
+
+  page.append(h('h2', {}, 'Per camera'));
+  perSampleChart(page, samples);
+
+  page.append(h('h2', {}, 'Frame time per pass'));
+  const timing = h('div', { class: 'charts' });
+  page.append(timing);
+  passTimeChart(timing, run);
+  timing.append(h('div', {}, passTable(run)));
+
+  page.append(h('h2', {}, 'Screenshots'), gallery(run, samples, signal));
+  page.append(h('h2', {}, 'Samples'), sampleTable(samples));
+  page.append(h('details', {}, h('summary', {}, h('h2', { class: 'inline' }, 'Resources')), resourceTable(run)));
+}

@@ -1,0 +1,166 @@
+// Runs browser. The filters (renderer, scene, resolution, device, dates,
+// capture) live in the URL and go to the server as /api/runs query
+// parameters; rows arrive a page at a time (the store may hold thousands), and
+// a header click sorts the rows loaded so far. Ticking 2 to 4 rows opens them
+// in the compare view.
+import { get, queryString } from '../api.js';
+import { h } from '../dom.js';
+import * as fmt from '../format.js';
+
+const kPageSize = 100;
+
+// Sortable columns: key -> how a run sorts and shows.
+const kColumns = [
+  { key: 'id', label: 'Run', sort: (r) => r.id, cell: (r) => h('a', { href: `#/runs/${r.id}` }, `#${r.id}`) },
+  { key: 'created_at', label: 'Date (UTC)', sort: (r) => r.created_at, cell: (r) => fmt.date(r.created_at) },
+  { key: 'renderer', label: 'Renderer', sort: (r) => r.renderer, cell: (r) => r.renderer },
+  { key: 'scene', label: 'Scene', sort: (r) => r.scene, cell: (r) => r.scene },
+  { key: 'resolution', label: 'Resolution', sort: (r) => r.width * r.height, cell: fmt.resolution, num: true },
+  { key: 'device', label: 'Device', sort: (r) => r.device, cell: (r) => h('span', { class: 'clip', title: r.device }, r.device) },
+  { key: 'counting', label: 'Counting', sort: (r) => r.counting, cell: (r) => r.counting },
+  { key: 'sample_count', label: 'Samples', sort: (r) => r.sample_count, cell: (r) => String(r.sample_count), num: true },
+  { key: 'mean_frame_ms', label: 'Frame time', sort: (r) => r.mean_frame_ms, cell: (r) => fmt.ms(r.mean_frame_ms), num: true },
+  { key: 'mean_overhead_ratio', label: 'Overhead', sort: (r) => r.mean_overhead_ratio, cell: (r) => fmt.ratio(r.mean_overhead_ratio), num: true },
+  { key: 'mean_bytes', label: 'Bytes / frame', sort: (r) => r.mean_bytes, cell: (r) => fmt.bytes(r.mean_bytes), num: true },
+  { key: 'psnr', label: 'PSNR', sort: psnrKey, cell: fmt.imageError, num: true },
+];
+
+// Identical images rank above any PSNR; runs never compared rank last.
+function psnrKey(run) {
+  const e = run.image_error;
+  if (!e) return null;
+  return e.identical === e.samples ? Infinity : e.mean_psnr;
+}
+
+function compareRows(column, direction) {
+  return (a, b) => {
+    const x = column.sort(a);
+    const y = column.sort(b);
+    if (x === y) return b.id - a.id;
+    if (x === null || x === undefined) return 1;  // missing values last, either way
+    if (y === null || y === undefined) return -1;
+    return (x < y ? -1 : 1) * direction;
+  };
+}
+
+// The API query for the filters in the URL: "resolution=320x180" becomes width and height.
+function apiFilters(query) {
+  const f = {};
+  for (const key of ['renderer', 'scene', 'device', 'since', 'until', 'capture']) f[key] = query.get(key);
+  const res = /^(\d+)\s*[x×]\s*(\d+)$/.exec(query.get('resolution') || '');
+  if (res) [f.width, f.height] = [res[1], res[2]];
+  return f;
+}
+
+function filterForm(query, { renderers, scenes, devices }, onApply) {
+  const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
+  const select = (name, options) => h('select', { name },
+    h('option', { value: '' }, 'any'),
+    options.map(([value, text]) => h('option', { value, selected: query.get(name) === String(value) }, text)));
+  const form = h('form', { class: 'filters', 'aria-label': 'Filter runs' },
+    field('Renderer', select('renderer', renderers.map((r) => [r, r]))),
+    field('Scene', h('input', { name: 'scene', list: 'scene-names', value: query.get('scene') || '', placeholder: 'any' })),
+    h('datalist', { id: 'scene-names' }, scenes.map((s) => h('option', { value: s }))),
+    field('Resolution', h('input', { name: 'resolution', value: query.get('resolution') || '', placeholder: 'e.g. 320x180', pattern: '\\s*\\d+\\s*[x×]\\s*\\d+\\s*', size: 10 })),
+    field('Device', select('device', devices.map((d) => [d.id, d.name]))),
+    field('From', h('input', { type: 'date', name: 'since', value: query.get('since') || '' })),
+    field('To', h('input', { type: 'date', name: 'until', value: query.get('until') || '' })),
+    query.get('capture') ? h('input', { type: 'hidden', name: 'capture', value: query.get('capture') }) : null,
+    h('div', { class: 'field buttons' }, h('button', { type: 'submit' }, 'Apply'), h('a', { href: '#/runs', class: 'button secondary' }, 'Clear')));
+  form.addEventListener('submit', (e) => {
+    e.preventDefault();
+    if (!form.reportValidity()) return;
+    onApply(Object.fromEntries([...new FormData(form)].map(([k, v]) => [k, v.trim()])));
+  });
+  form.addEventListener('change', (e) => {
+    if (e.target.tagName === 'SELECT' || e.target.type === 'date') form.requestSubmit();
+  });
+  return form;
+}
+
+export async function render(page, { query, signal }) {
+  const filters = apiFilters(query);
+  const [renderers, scenes, devices, first] = await Promise.all([
+    get('/renderers', signal),
+    get('/scenes', signal),
+    get('/devices', signal),
+    get('/runs' + queryString({ ...filters, limit: kPageSize }), signal),
+  ]);
+  const sceneNames = [...scenes.procedural.map((s) => s.name), ...scenes.gltf.flatMap((f) => f.files)];
+
+  const rows = [...first.runs];
+  let cursor = first.next_cursor;
+  let sort = { key: 'id', direction: -1 };  // as the server sends them: newest first
+  const selected = (query.get('select') || '').split(',').filter(Boolean).map(Number);
+
+  const tbody = h('tbody');
+  const thead = h('thead');
+  const status = h('p', { class: 'muted', role: 'status' });
+  const more = h('button', { type: 'button', class: 'secondary' }, `Load ${kPageSize} more`);
+  const compareButton = h('button', { type: 'button', onclick: () => { location.hash = `#/compare?runs=${selected.join(',')}`; } });
+
+  function drawHead() {
+    thead.replaceChildren(h('tr', {},
+      h('th', { scope: 'col' }, h('span', { class: 'visually-hidden' }, 'Select')),
+      kColumns.map((c) => h('th', { scope: 'col', class: c.num ? 'num' : null, 'aria-sort': sort.key === c.key ? (sort.direction > 0 ? 'ascending' : 'descending') : 'none' },
+        h('button', { type: 'button', class: 'sort', dataset: { sort: c.key }, onclick: () => sortBy(c.key) }, c.label)))));
+  }
+
+  function drawRows() {
+    const column = kColumns.find((c) => c.key === sort.key);
+    rows.sort(compareRows(column, sort.direction));
+    tbody.replaceChildren(...rows.map((r) => h('tr', { dataset: { runId: r.id } },
+      h('td', {}, h('input', { type: 'checkbox', 'aria-label': `Select run ${r.id}`, checked: selected.includes(r.id), onchange: (e) => toggle(r.id, e.target.checked) })),
+      kColumns.map((c) => h('td', { class: c.num ? 'num' : null }, c.cell(r))))));
+    status.textContent = `${rows.length} run${rows.length === 1 ? '' : 's'} loaded${cursor ? ', more on the server' : ''}. Sorting applies to the loaded runs; PSNR is the image error against forward.`;
+    more.hidden = !cursor;
+    drawSelection();
+  }
+
+  function drawSelection() {
+    compareButton.textContent = `Compare selected (${selected.length})`;
+    compareButton.disabled = selected.length < 2 || selected.length > 4;
+    compareButton.title = 'Tick 2 to 4 runs';
+  }
+
+  function toggle(id, on) {
+    const at = selected.indexOf(id);
+    if (on && at < 0) selected.push(id);
+    if (!on && at >= 0) selected.splice(at, 1);
+    drawSelection();
+  }
+
+  function sortBy(key) {
+    sort = { key, direction: sort.key === key ? -sort.direction : (key === 'id' || key === 'created_at' ? -1 : 1) };
+    drawHead();
+    drawRows();
+  }
+
+  more.addEventListener('click', async () => {
+    more.disabled = true;
+    try {
+      const next = await get('/runs' + queryString({ ...filters, limit: kPageSize, cursor }), signal);
+      rows.push(...next.runs);
+      cursor = next.next_cursor;
+      drawRows();
+    } catch (error) {
+      if (!signal.aborted) status.textContent = `Could not load more runs: ${error.message}`;
+    } finally {
+      more.disabled = false;
+    }
+  });
+
+  const apply = (values) => {
+    location.hash = '#/runs' + queryString(values);
+  };
+  page.append(
+    h('h1', {}, 'Runs'),
+    filterForm(query, { renderers: renderers.renderers, scenes: sceneNames, devices: devices.devices }, apply),
+    h('div', { class: 'toolbar' }, compareButton, status),
+    rows.length
+      ? h('div', { class: 'table-wrap' }, h('table', { class: 'runs', 'aria-label': 'Runs' }, thead, tbody))
+      : h('p', { class: 'panel' }, 'No runs match. ', h('a', { href: '#/capture' }, 'Start a capture'), '.'),
+    more);
+  drawHead();
+  drawRows();
+}
