@@ -188,7 +188,7 @@ int runCancel(ApiClient& api, const std::string& id, Io& io) {
   if (io.json) {
     printJson(io, *res);
   } else {
-    io.out << "capture " << id << " cancelled or deleted\n";
+    io.out << "capture " << id << " cancelled\n";
   }
   return 0;
 }

@@ -18,7 +18,7 @@ void addFilters(CLI::App* sub, RunFilters& f) {
   sub->add_option("--scene", f.scene, "Only this scene (e.g. atrium)");
   sub->add_option("--width", f.width, "Only this width in pixels")->check(CLI::PositiveNumber);
   sub->add_option("--height", f.height, "Only this height in pixels")->check(CLI::PositiveNumber);
-  sub->add_option("--device", f.device, "Only this device (name or index)");
+  sub->add_option("--device", f.device, "Only this device (its exact name, or its id)");
   sub->add_option("--capture", f.capture, "Only runs of this capture id");
 }
 
@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
   status->footer("Example:\n  tally status\n  tally status 7");
 
   std::string cancelId;
-  auto* cancel =
-      app.add_subcommand("cancel", "Cancel a queued or running capture (a finished one is deleted)");
+  auto* cancel = app.add_subcommand(
+      "cancel", "Cancel a queued or running capture (a finished one is left as it is: exit status 1)");
   cancel->add_option("ID", cancelId, "Capture id")->required();
   cancel->footer("Example:\n  tally cancel 7");
 

@@ -2,9 +2,6 @@
 // an ephemeral port and a temp database. One tiny capture on lavapipe feeds
 // the query tests; a table of bad requests; kill -9 during a job and restart.
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -15,155 +12,12 @@
 #include <thread>
 
 #include <gtest/gtest.h>
-#include <httplib.h>
-#include <nlohmann/json.hpp>
 
+#include "daemon.hpp"
 #include "store/store.hpp"
 
-extern char** environ;
-
 namespace {
-namespace fs = std::filesystem;
-using nlohmann::json;
-using namespace std::chrono_literals;
-
-struct Reply {
-  int status = 0;
-  std::string body, contentType;
-  json j() const { return json::parse(body, nullptr, false); }
-};
-
-// A `tallyd serve` child; its stdout (the address line) goes to a file.
-class Daemon {
- public:
-  Daemon(fs::path dir, fs::path db, std::vector<std::string> extra = {})
-      : dir_(std::move(dir)), db_(std::move(db)), extra_(std::move(extra)) {}
-  ~Daemon() { stop(SIGKILL); }
-
-  bool start() {
-    fs::path out = dir_ / ("serve-" + std::to_string(++starts_) + ".out");
-    std::vector<std::string> args = {TALLYD_PATH, "serve", "--db", db_.string(), "--port", "0"};
-    args.insert(args.end(), extra_.begin(), extra_.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    // Temp files of the worker (and thus its capture children's command lines) live under dir_.
-    std::vector<std::string> env;
-    for (char** e = environ; *e; ++e) {
-      if (std::string(*e).rfind("TMPDIR=", 0) != 0) env.push_back(*e);
-    }
-    env.push_back("TMPDIR=" + tmp().string());
-    fs::create_directories(tmp());
-    std::vector<char*> envp;
-    for (auto& e : env) envp.push_back(e.data());
-    envp.push_back(nullptr);
-    int rc = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) return false;
-    auto deadline = std::chrono::steady_clock::now() + 30s;
-    while (std::chrono::steady_clock::now() < deadline) {
-      std::ifstream in(out);
-      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      size_t at = text.find("http://127.0.0.1:");
-      if (at != std::string::npos && text.find("/\n", at) != std::string::npos) {
-        port_ = std::atoi(text.c_str() + at + 17);
-        return port_ > 0;
-      }
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = 0;
-        return false;
-      }
-      std::this_thread::sleep_for(50ms);
-    }
-    return false;
-  }
-
-  // Returns the exit status (or 128 + signal).
-  int stop(int sig = SIGTERM) {
-    if (pid_ <= 0) return -1;
-    kill(pid_, sig);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = 0;
-    killOrphans();
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-
-  // Capture children outlive a daemon killed with -9 (own process group): end them.
-  void killOrphans() {
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator("/proc", ec)) {
-      std::string name = entry.path().filename().string();
-      if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-      std::ifstream in(entry.path() / "cmdline");
-      std::string cmd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (cmd.find(tmp().string() + "/tally-job-") != std::string::npos) kill(std::stoi(name), SIGKILL);
-    }
-  }
-
-  Reply request(const std::string& method, const std::string& path, const std::string& body = {},
-                const std::string& idempotencyKey = {}) {
-    httplib::Client client("127.0.0.1", port_);
-    client.set_read_timeout(10, 0);
-    httplib::Headers headers;
-    if (!idempotencyKey.empty()) headers.emplace("Idempotency-Key", idempotencyKey);
-    httplib::Result res = method == "GET"    ? client.Get(path.c_str(), headers)
-                          : method == "POST" ? client.Post(path.c_str(), headers, body, "application/json")
-                                             : client.Delete(path.c_str(), headers);
-    Reply r;
-    if (!res) return r;
-    r.status = res->status;
-    r.body = res->body;
-    r.contentType = res->get_header_value("Content-Type");
-    return r;
-  }
-
-  // Polls until the capture is done, failed or cancelled.
-  json waitFinished(int64_t id, std::chrono::seconds timeout = 120s) {
-    auto deadline = std::chrono::steady_clock::now() + timeout;
-    json job;
-    while (std::chrono::steady_clock::now() < deadline) {
-      Reply r = request("GET", "/api/captures/" + std::to_string(id));
-      job = r.j();
-      if (r.status == 200) {
-        std::string s = job.value("status", "");
-        if (s == "done" || s == "failed" || s == "cancelled") return job;
-      }
-      std::this_thread::sleep_for(200ms);
-    }
-    return job;
-  }
-
-  fs::path tmp() const { return dir_ / "tmp"; }
-  int port() const { return port_; }
-
- private:
-  fs::path dir_, db_;
-  std::vector<std::string> extra_;
-  pid_t pid_ = 0;
-  int port_ = 0;
-  int starts_ = 0;
-};
-
-fs::path makeTempDir(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / (name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-json tinySpec() {
-  return {{"renderers", {"forward", "deferred"}},
-          {"scenes", {{{"name", "planes"}, {"layers", 2}}}},
-          {"resolutions", {{64, 36}}},
-          {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}}},
-          {"frames", 2},
-          {"lights", 4}};
-}
+using namespace tally::service::test;
 
 // Runs `tallyd capture` directly: the reference the stored sample must match.
 json captureDirectly(const fs::path& dir, const json& spec) {
@@ -324,20 +178,10 @@ TEST_F(ServiceTest, CaptureQueryCompareExport) {
 
 TEST_F(ServiceTest, CancelARunningCaptureKillsItsChild) {
   Daemon& d = *daemon_;
-  json spec = tinySpec();
-  spec["cameras"] = "auto";  // 2 x 3 x 10 = 60 samples: still running when cancelled
-  spec["resolutions"] = {{64, 36}, {96, 54}, {128, 72}};
-  spec["frames"] = 8;
-  Reply posted = d.request("POST", "/api/captures", spec.dump());
+  Reply posted = d.request("POST", "/api/captures", longSpec().dump());  // still running when cancelled
   ASSERT_EQ(posted.status, 202);
   int64_t id = posted.j()["id"];
-  auto deadline = std::chrono::steady_clock::now() + 30s;
-  json job;
-  while (std::chrono::steady_clock::now() < deadline) {
-    job = d.request("GET", "/api/captures/" + std::to_string(id)).j();
-    if (job.value("status", "") != "queued" && job["progress"]["done"].get<int64_t>() > 0) break;
-    std::this_thread::sleep_for(20ms);
-  }
+  json job = d.waitProgress(id);
   ASSERT_EQ(job.value("status", ""), "running") << job.dump();
   Reply cancelled = d.request("DELETE", "/api/captures/" + std::to_string(id));
   ASSERT_EQ(cancelled.status, 200) << cancelled.body;
@@ -480,24 +324,15 @@ TEST(ServiceRecovery, KillDuringAJobThenRestart) {
   {
     Daemon d(dir, db);
     ASSERT_TRUE(d.start());
-    json spec = tinySpec();
-    spec["cameras"] = "auto";  // 2 x 3 x 10 = 60 samples of 8 frames: long enough to be caught running
-    spec["resolutions"] = {{64, 36}, {96, 54}, {128, 72}};
-    spec["frames"] = 8;
-    Reply posted = d.request("POST", "/api/captures", spec.dump());
+    Reply posted = d.request("POST", "/api/captures", longSpec().dump());
     ASSERT_EQ(posted.status, 202) << posted.body;
     id = posted.j()["id"];
-    auto deadline = std::chrono::steady_clock::now() + 30s;
-    std::string status;
-    while (std::chrono::steady_clock::now() < deadline) {
-      json job = d.request("GET", "/api/captures/" + std::to_string(id)).j();
-      status = job.value("status", "");
-      // Mid-capture: the child has reported progress.
-      if (status != "queued" && (status != "running" || job["progress"]["done"].get<int64_t>() > 0)) break;
-      std::this_thread::sleep_for(20ms);
-    }
-    EXPECT_EQ(status, "running");
+    // Mid-capture: the child has reported progress.
+    EXPECT_EQ(d.waitProgress(id).value("status", ""), "running");
+    ASSERT_EQ(d.runningJobChildren().size(), 1u) << "the capture child should be running";
     EXPECT_EQ(d.stop(SIGKILL), 128 + SIGKILL);
+    // The orphaned child goes with its daemon instead of rendering on to its deadline.
+    EXPECT_TRUE(d.waitNoJobChildren()) << "a capture child outlived its daemon";
   }
   {
     // No daemon: the job is still marked running, nothing was lost.
@@ -528,9 +363,9 @@ TEST(ServiceRecovery, KillDuringAJobThenRestart) {
   ASSERT_TRUE(runs);
   for (const auto& r : runs->runs) {
     EXPECT_EQ(r.jobId, id);
-    EXPECT_EQ(r.sampleCount, 10);
+    EXPECT_EQ(r.sampleCount, kLongSpecSamplesPerRun);
   }
-  EXPECT_EQ(runs->runs.size(), status == "done" ? 6u : 0u);
+  EXPECT_EQ(runs->runs.size(), status == "done" ? size_t{kLongSpecRuns} : 0u);
   fs::remove_all(dir);
 }
 

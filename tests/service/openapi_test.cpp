@@ -1,0 +1,146 @@
+// /api/openapi.json describes what the daemon really answers: every route it
+// serves is documented, and every response of a real daemon (after a real
+// capture on lavapipe) matches its documented schema field by field, with no
+// undocumented field, for successes and errors alike.
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "../api/openapi_schema.hpp"
+#include "daemon.hpp"
+
+namespace tally::service::test {
+namespace {
+
+class OpenApiTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = makeTempDir("tally-openapi-test");
+    fs::create_directories(dir_ / "scenes");
+    daemon_ = new Daemon(dir_, dir_ / "tally.db", {"--scenes", (dir_ / "scenes").string()});
+    ASSERT_TRUE(daemon_->start()) << "tallyd serve did not start";
+    Reply doc = daemon_->request("GET", "/api/openapi.json");
+    ASSERT_EQ(doc.status, 200);
+    document_ = new json(doc.j());
+    ASSERT_TRUE(document_->is_object());
+    Reply posted = daemon_->request("POST", "/api/captures", tinySpec().dump());
+    ASSERT_EQ(posted.status, 202) << posted.body;
+    accepted_ = new json(posted.j());
+    captureId_ = (*accepted_)["id"];
+    ASSERT_EQ(daemon_->waitFinished(captureId_).value("status", ""), "done");
+  }
+  static void TearDownTestSuite() {
+    delete daemon_;
+    delete document_;
+    delete accepted_;
+    daemon_ = nullptr;
+    fs::remove_all(dir_);
+  }
+
+  // The response to METHOD PATH must have STATUS and match the schema documented
+  // for TEMPLATE (the path as the document names it).
+  static json expect(const std::string& method, const std::string& path, const std::string& templ, int status) {
+    Reply r = daemon_->request(method, path);
+    EXPECT_EQ(r.status, status) << method << " " << path << ": " << r.body;
+    json body = r.j();
+    expectMatches(body, method, templ, status);
+    return body;
+  }
+
+  static void expectMatches(const json& body, const std::string& method, const std::string& templ, int status) {
+    std::string lower = method;
+    for (auto& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    testing::OpenApiChecker checker(*document_);
+    json schema;
+    try {
+      if (status < 400) {
+        schema = checker.responseSchema(templ, lower, std::to_string(status));
+      } else {
+        // Errors refer to the shared Error response.
+        const json& response = document_->at("paths").at(templ).at(lower).at("responses").at(std::to_string(status));
+        ASSERT_EQ(response.value("$ref", ""), "#/components/responses/Error") << templ << " " << status;
+        schema = document_->at("components").at("responses").at("Error").at("content").at("application/json").at("schema");
+      }
+    } catch (const json::exception& e) {
+      ADD_FAILURE() << method << " " << templ << " " << status << " is not documented: " << e.what();
+      return;
+    }
+    for (const auto& problem : checker.check(body, schema)) {
+      ADD_FAILURE() << method << " " << templ << " " << status << ": " << problem;
+    }
+  }
+
+  static inline fs::path dir_;
+  static inline Daemon* daemon_ = nullptr;
+  static inline json* document_ = nullptr;
+  static inline json* accepted_ = nullptr;
+  static inline int64_t captureId_ = 0;
+};
+
+TEST_F(OpenApiTest, EveryRouteIsDocumented) {
+  // The routes of server/service and server/api/builtin_routes, as served.
+  const std::set<std::string> served = {
+      "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
+      "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
+      "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
+      "/api/compare",      "/api/export"};
+  std::set<std::string> documented;
+  for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
+  EXPECT_EQ(documented, served);
+  // Undocumented paths are not served: the document is not describing a wish.
+  for (const auto& path : documented) {
+    std::string concrete = path;
+    if (size_t at = concrete.find("{id}"); at != std::string::npos) concrete.replace(at, 4, "1");
+    EXPECT_NE(daemon_->request("GET", concrete).status, 0) << path;
+  }
+}
+
+TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
+  expectMatches(*accepted_, "POST", "/api/captures", 202);
+  expect("GET", "/api/health", "/api/health", 200);
+  expect("GET", "/api/renderers", "/api/renderers", 200);
+  expect("GET", "/api/scenes", "/api/scenes", 200);
+  json devices = expect("GET", "/api/devices", "/api/devices", 200);
+  EXPECT_EQ(devices["devices"].size(), 1u);
+  json captures = expect("GET", "/api/captures", "/api/captures", 200);
+  EXPECT_FALSE(captures["captures"].empty());
+  expect("GET", "/api/captures/" + std::to_string(captureId_), "/api/captures/{id}", 200);
+
+  json runs = expect("GET", "/api/runs?capture=" + std::to_string(captureId_), "/api/runs", 200);
+  ASSERT_EQ(runs["runs"].size(), 2u);
+  std::string a = std::to_string(runs["runs"][0]["id"].get<int64_t>());
+  std::string b = std::to_string(runs["runs"][1]["id"].get<int64_t>());
+  expect("GET", "/api/runs/" + a, "/api/runs/{id}", 200);
+  json samples = expect("GET", "/api/runs/" + a + "/samples", "/api/runs/{id}/samples", 200);
+  ASSERT_FALSE(samples["samples"].empty());
+  json sample = expect("GET", "/api/samples/" + std::to_string(samples["samples"][0]["id"].get<int64_t>()),
+                       "/api/samples/{id}", 200);
+  EXPECT_FALSE(sample["passes"].empty());
+  expect("GET", "/api/compare?runs=" + a + "," + b, "/api/compare", 200);
+  json exported = expect("GET", "/api/export?format=json&capture=" + std::to_string(captureId_), "/api/export", 200);
+  EXPECT_FALSE(exported["rows"].empty());
+  // Both renderers' samples, so both the reference (no image error) and a compared one are checked.
+  expect("GET", "/api/runs/" + b + "/samples", "/api/runs/{id}/samples", 200);
+}
+
+TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {
+  expect("GET", "/api/runs/987654", "/api/runs/{id}", 404);
+  expect("GET", "/api/runs?limit=0", "/api/runs", 400);
+  expect("GET", "/api/compare?runs=1", "/api/compare", 400);
+  expect("DELETE", "/api/captures/" + std::to_string(captureId_), "/api/captures/{id}", 409);
+  Reply bad = daemon_->request("POST", "/api/captures", "{\"frames\": ");
+  EXPECT_EQ(bad.status, 400);
+  expectMatches(bad.j(), "POST", "/api/captures", 400);
+}
+
+TEST_F(OpenApiTest, CancelAnswersTheDocumentedJob) {
+  json spec = longSpec();
+  Reply posted = daemon_->request("POST", "/api/captures", spec.dump());
+  ASSERT_EQ(posted.status, 202);
+  json cancelled = expect("DELETE", "/api/captures/" + std::to_string(posted.j()["id"].get<int64_t>()),
+                          "/api/captures/{id}", 200);
+  EXPECT_EQ(cancelled["status"], "cancelled");
+}
+
+}  // namespace
+}  // namespace tally::service::test
