@@ -214,14 +214,8 @@ GpuScene::~GpuScene() { destroy(); }
 
 Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   if (scene.meshes.empty() || scene.triangleCount() == 0) return makeError("scene: no triangles");
-  if (scene.meshes.size() > shaders::kMaxDraws) {
-    return makeError("scene: " + std::to_string(scene.meshes.size()) + " meshes, the visibility id holds " +
-                     std::to_string(shaders::kMaxDraws));
-  }
-  for (const auto& m : scene.meshes) {
-    if (m.triangleCount() > shaders::kTriangleIdMask)
-      return makeError("scene: mesh '" + m.name + "' too large");
-  }
+  // The visibility id's draw and triangle limits are the visibility buffers'
+  // alone: they refuse such a scene at setup (visbuffer_base.hpp).
   destroy();
   ctx_ = &ctx;
   bounds_ = scene.bounds;

@@ -52,8 +52,8 @@ class GpuScene {
   GpuScene(const GpuScene&) = delete;
   GpuScene& operator=(const GpuScene&) = delete;
 
-  // Uploads `scene`. Fails (with the reason) on a scene the renderers cannot
-  // draw: no triangles, more than shaders::kMaxDraws meshes.
+  // Uploads `scene`. Fails (with the reason) on a scene no renderer can
+  // draw: no triangles.
   Result<bool> upload(gpu::Context& ctx, const scenes::Scene& scene);
   void destroy();
 

@@ -4,6 +4,30 @@
 
 namespace tally::renderers {
 
+std::string visibilityIdOverflow(const std::vector<GpuDraw>& draws) {
+  if (draws.size() > shaders::kMaxDraws) {
+    return "the scene has " + std::to_string(draws.size()) + " draws; the visibility id holds at most " +
+           std::to_string(shaders::kMaxDraws) + " (" + std::to_string(shaders::kDrawIdBits) + " bits of draw id)";
+  }
+  for (size_t i = 0; i < draws.size(); ++i) {
+    const uint64_t triangles = draws[i].indexCount / 3;
+    if (triangles > shaders::kTriangleIdMask) {
+      return "draw " + std::to_string(i) + " has " + std::to_string(triangles) +
+             " triangles; the visibility id holds at most " + std::to_string(shaders::kTriangleIdMask) +
+             " per draw (" + std::to_string(shaders::kTriangleIdBits) +
+             " bits of triangle id, the all-ones id being the clear value)";
+    }
+  }
+  return "";
+}
+
+Result<bool> VisbufferBase::checkIdCapacity() const {
+  if (std::string why = visibilityIdOverflow(scene_->draws()); !why.empty()) {
+    return makeError(std::string(name()) + ": " + why);
+  }
+  return true;
+}
+
 bool VisbufferBase::indexedMaps() const {
   return ctx_ != nullptr && ctx_->descriptorIndexing && scene_ != nullptr &&
          !scene_->indexedMapViews().empty();

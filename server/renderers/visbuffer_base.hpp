@@ -18,12 +18,22 @@
 
 namespace tally::renderers {
 
+// The visibility id packs the draw and the triangle within it into 32 bits
+// (shared.h): at most shaders::kMaxDraws (512) draws of at most
+// shaders::kTriangleIdMask (8,388,607) triangles each; the all-ones id is the
+// clear value. Beyond that ids would alias and the shading pass would fetch
+// the wrong triangle, so a scene that does not fit is refused, never drawn.
+// Empty when `draws` fits, else the limit and the scene's count.
+std::string visibilityIdOverflow(const std::vector<GpuDraw>& draws);
+
 class VisbufferBase : public RendererBase {
  public:
   nlohmann::json notes() const override;
 
  protected:
   bool indexedMaps() const;  // the descriptor-indexing path (needs setup's context and scene)
+  // Fails with visibilityIdOverflow's reason when the scene does not fit the id.
+  Result<bool> checkIdCapacity() const;
   void addMapResources();    // the material map resources of the chosen path
   struct Target {
     const gpu::Image* image = nullptr;

@@ -15,6 +15,7 @@ class LeanVisbufferRenderer final : public VisbufferBase {
 
  protected:
   Result<bool> setupPasses() override {
+    if (auto fits = checkIdCapacity(); !fits) return fits;
     addMapResources();
     const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
     Target id{createTarget("visibility.id", kIdFormat, usage, ResourceKind::Attachment), "visibility.id"};

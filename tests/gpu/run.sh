@@ -11,7 +11,8 @@
 #
 #   tests/gpu/run.sh [BINARY_DIR]     BINARY_DIR defaults to build-gpu/tests/integration
 #   OUT=dir  where results go (default ./gpu-out): exactness.json (gtest),
-#            exactness_stats.json (statistics and timings), exactness.log
+#            exactness_stats.json (statistics and timings), exactness.log,
+#            analytic.json and analytic.log (the renderers' analytic counts)
 #   Extra arguments after BINARY_DIR go to the test binary (e.g. --gtest_filter=...).
 set -uo pipefail
 cd "$(dirname "$0")/../.."
@@ -66,5 +67,22 @@ else
   echo "run.sh: the tests wrote no exactness_stats.json" >&2
 fi
 rm -rf "$work"
+
+# The renderers' analytic counts and the visibility-id capacity check, with
+# the statistic beside every pass's count (asserted equal on NVIDIA). They
+# read the renderers' shaders from the tree and need the libraries build.sh
+# copied to build-gpu/lib.
+renderer_tests="$bin_dir/../renderers/tally_renderer_tests"
+if [ -x "$renderer_tests" ]; then
+  TALLY_SHADER_DIR="$PWD/shaders" \
+  LD_LIBRARY_PATH="$bin_dir/../../lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" \
+    "$renderer_tests" --gtest_filter='*AnalyticCounts*:VisibilityIdCapacity.*' \
+    --gtest_output="json:$out/analytic.json" 2>&1 | tee "$out/analytic.log"
+  renderer_status=${PIPESTATUS[0]}
+  [ "$status" -eq 0 ] && status=$renderer_status
+else
+  echo "run.sh: no $renderer_tests (build it with tests/gpu/build.sh)" >&2
+  status=2
+fi
 echo "run.sh: tests exited with $status; results in $out"
 exit "$status"
