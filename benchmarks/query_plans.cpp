@@ -1,0 +1,169 @@
+#include "query_plans.hpp"
+
+#include <sqlite3.h>
+
+#include <atomic>
+#include <cctype>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <set>
+
+namespace tally::bench {
+namespace {
+
+struct Trace {
+  std::atomic<uint64_t> statements{0}, nanoseconds{0}, fullScanSteps{0}, vmSteps{0};
+  std::atomic<bool> recording{false};
+  std::mutex mutex;  // guards seen and sqls
+  std::set<std::string> seen;
+  std::vector<std::string> sqls;  // in the order first run
+};
+
+Trace& trace() {
+  static Trace t;
+  return t;
+}
+
+int onStatementEnd(unsigned type, void*, void* statement, void* nanoseconds) {
+  if (type != SQLITE_TRACE_PROFILE) return 0;
+  auto* stmt = static_cast<sqlite3_stmt*>(statement);
+  Trace& t = trace();
+  t.statements += 1;
+  t.nanoseconds += *static_cast<sqlite3_uint64*>(nanoseconds);
+  t.fullScanSteps += static_cast<uint64_t>(sqlite3_stmt_status(stmt, SQLITE_STMTSTATUS_FULLSCAN_STEP, 1));
+  t.vmSteps += static_cast<uint64_t>(sqlite3_stmt_status(stmt, SQLITE_STMTSTATUS_VM_STEP, 1));
+  if (t.recording) {
+    std::lock_guard lock(t.mutex);
+    if (t.seen.insert(sqlite3_sql(stmt)).second) t.sqls.push_back(sqlite3_sql(stmt));
+  }
+  return 0;
+}
+
+int traceConnection(sqlite3* db, const char**, const sqlite3_api_routines*) {
+  sqlite3_trace_v2(db, SQLITE_TRACE_PROFILE, onStatementEnd, nullptr);
+  return SQLITE_OK;
+}
+
+bool isSelect(const std::string& sql) {
+  size_t start = sql.find_first_not_of(" \t\r\n");
+  if (start == std::string::npos) return false;
+  std::string head = sql.substr(start, 6);
+  for (char& c : head) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return head == "SELECT" || head.rfind("WITH", 0) == 0;
+}
+
+// Table names by the names a plan uses for them (their aliases, and
+// themselves). An alias given to two tables in one statement keeps the last.
+std::map<std::string, std::string> tablesByAlias(const std::string& sql) {
+  static const std::regex kSource(R"(\b(?:FROM|JOIN)\s+([A-Za-z_]\w*)(?:\s+(?:AS\s+)?([A-Za-z_]\w*))?)",
+                                  std::regex::icase);
+  static const std::set<std::string> kKeywords = {"WHERE",   "JOIN",  "ON",    "LEFT",  "INNER",
+                                                  "CROSS",   "GROUP", "ORDER", "LIMIT", "USING",
+                                                  "NATURAL", "AND",   "OR",    "UNION"};
+  std::map<std::string, std::string> out;
+  for (std::sregex_iterator it(sql.begin(), sql.end(), kSource), end; it != end; ++it) {
+    std::string table = (*it)[1], alias = (*it)[2];
+    out[table] = table;
+    std::string upper = alias;
+    for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    if (!alias.empty() && !kKeywords.count(upper)) out[alias] = table;
+  }
+  return out;
+}
+
+std::vector<std::string> problemsOf(const std::string& detail,
+                                    const std::map<std::string, std::string>& tables) {
+  static const std::set<std::string> kLarge = {"samples", "passes", "counters", "run_resources",
+                                               "screenshots"};
+  std::vector<std::string> out;
+  if (detail.rfind("SCAN ", 0) == 0) {
+    std::string name = detail.substr(5, detail.find(' ', 5) - 5);
+    auto it = tables.find(name);
+    std::string table = it == tables.end() ? name : it->second;
+    if (kLarge.count(table)) out.push_back("scans " + table + ": " + detail);
+  }
+  if (detail.find("AUTOMATIC") != std::string::npos) out.push_back("automatic index: " + detail);
+  return out;
+}
+
+Result<PlannedStatement> explainOne(sqlite3* db, const std::string& sql) {
+  PlannedStatement planned{sql, {}, {}};
+  sqlite3_stmt* stmt = nullptr;
+  std::string query = "EXPLAIN QUERY PLAN " + sql;
+  if (sqlite3_prepare_v2(db, query.c_str(), -1, &stmt, nullptr) != SQLITE_OK) {
+    std::string message = sqlite3_errmsg(db);
+    sqlite3_finalize(stmt);
+    return makeError("EXPLAIN QUERY PLAN: " + message + ": " + sql);
+  }
+  auto tables = tablesByAlias(sql);
+  std::map<int, int> depth;  // plan node id -> depth; a node's parent comes before it
+  bool sortsAll = false, correlated = false;
+  while (sqlite3_step(stmt) == SQLITE_ROW) {
+    int id = sqlite3_column_int(stmt, 0);
+    int parent = sqlite3_column_int(stmt, 1);
+    std::string detail = reinterpret_cast<const char*>(sqlite3_column_text(stmt, 3));
+    depth[id] = depth.count(parent) ? depth[parent] + 1 : 0;
+    planned.plan.push_back(std::string(2 * static_cast<size_t>(depth[id]), ' ') + detail);
+    for (auto& problem : problemsOf(detail, tables)) planned.problems.push_back(std::move(problem));
+    if (depth[id] == 0) {
+      sortsAll = sortsAll || detail == "USE TEMP B-TREE FOR ORDER BY";
+      correlated = correlated || detail.rfind("CORRELATED SCALAR SUBQUERY", 0) == 0;
+    }
+  }
+  sqlite3_finalize(stmt);
+  // SQLite computes every result column before it sorts, so the subqueries
+  // run for each selected row, however few rows LIMIT then keeps.
+  if (sortsAll && correlated) {
+    planned.problems.push_back("sorts every selected row with its correlated subqueries before LIMIT");
+  }
+  return planned;
+}
+
+}  // namespace
+
+void installStatementTrace() { sqlite3_auto_extension(reinterpret_cast<void (*)()>(traceConnection)); }
+
+StatementTotals statementTotals() {
+  const Trace& t = trace();
+  return {t.statements, t.nanoseconds, t.fullScanSteps, t.vmSteps};
+}
+
+void startRecording() {
+  Trace& t = trace();
+  std::lock_guard lock(t.mutex);
+  t.seen.clear();
+  t.sqls.clear();
+  t.recording = true;
+}
+
+std::vector<std::string> stopRecording() {
+  Trace& t = trace();
+  t.recording = false;
+  std::lock_guard lock(t.mutex);
+  return t.sqls;
+}
+
+Result<std::vector<PlannedStatement>> explain(const std::string& dbPath,
+                                              const std::vector<std::string>& sqls) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(dbPath.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
+    std::string message = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
+    return makeError(dbPath + ": " + message);
+  }
+  std::vector<PlannedStatement> out;
+  for (const auto& sql : sqls) {
+    if (!isSelect(sql)) continue;  // BEGIN, COMMIT, PRAGMA
+    auto planned = explainOne(db, sql);
+    if (!planned) {
+      sqlite3_close(db);
+      return makeError(planned.error());
+    }
+    out.push_back(std::move(*planned));
+  }
+  sqlite3_close(db);
+  return out;
+}
+
+}  // namespace tally::bench
