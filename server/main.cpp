@@ -30,6 +30,11 @@ int main(int argc, char** argv) {
   capture->add_flag("--quiet", captureArgs.quiet, "No progress lines on standard error");
   capture->add_flag("--summary", captureArgs.summary, "Print a per-pass, per-resource summary (with --out)");
 
+  tally::cli::AccuracyArgs accuracyArgs;
+  auto* accuracy = app.add_subcommand("accuracy", "Counting error and overhead of each mode against exact, from a result");
+  accuracy->add_option("--result", accuracyArgs.result, "Capture result JSON (tallyd capture --out)")->required();
+  accuracy->add_flag("--json", accuracyArgs.json, "JSON rows instead of the table");
+
   tally::cli::ServeArgs serveArgs;
   auto* serve = app.add_subcommand("serve", "Serve the REST API and dashboard; run queued captures");
   serve->add_option("--db", serveArgs.db, "SQLite database file")->required();
@@ -50,6 +55,7 @@ int main(int argc, char** argv) {
   if (*instrument) return tally::cli::runInstrument(instrumentArgs);
   if (*demo) return tally::cli::runDemo(demoArgs);
   if (*capture) return tally::cli::runCapture(captureArgs);
+  if (*accuracy) return tally::cli::runAccuracy(accuracyArgs);
   if (*serve) return tally::cli::runServe(serveArgs);
   return 2;
 }

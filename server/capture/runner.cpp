@@ -174,6 +174,75 @@ json shaderHashes() {
   return out;
 }
 
+// One run: a renderer instrumented in one counting mode, each sample's
+// instrumented frames timed against the same number of `plain` frames.
+Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers::Renderer& plain,
+                    const std::string& rendererName, const spirv::Mode& mode, const std::string& where0,
+                    const std::string& name, const scenes::Scene& scene, const Resolution& res,
+                    const std::vector<scenes::Camera>& cameras, const std::vector<std::vector<uint8_t>>& reference,
+                    const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress) {
+  std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
+  auto made = renderers::makeRenderer(rendererName);
+  if (!made) return makeError(where + ": " + made.error());
+  auto& instrumented = *made;
+  renderers::RendererOptions ro{{res.width, res.height}, true, mode, spec.lights};
+  auto ok = instrumented->setup(ctx, gpuScene, ro);
+  if (!ok) return makeError(where + ": " + ok.error());
+  json run = {{"renderer", rendererName},
+              {"scene", name},
+              {"scene_params", scene.params},
+              {"width", res.width},
+              {"height", res.height},
+              {"counting", spirv::toString(mode)},
+              {"lights", spec.lights},
+              {"notes", instrumented->notes()},
+              {"resources", resourcesJson(instrumented->resources())},
+              {"samples", json::array()}};
+  for (size_t c = 0; c < cameras.size(); ++c) {
+    const auto& camera = cameras[c];
+    progress.current = where + " camera " + std::to_string(c);
+    if (options.progress) options.progress(progress);
+    SampleMeasure m;
+    for (uint32_t f = 0; f < spec.frames; ++f) addCounts(m, instrumented->renderFrame(camera));
+    for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, plain.renderFrame(camera));
+    std::vector<uint8_t> image = plain.finalImage();
+    json sample = sampleJson(m, instrumented->resources(), spec.frames);
+    sample["camera"] = scenes::toJson(camera);
+    sample["camera"]["index"] = c;
+    // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
+    double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
+    sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
+    sample["sky_fraction_estimate"] = camera.skyFraction;
+    if (c < reference.size()) {
+      auto error = compareImages(image, reference[c], res.width, res.height);
+      if (error) {
+        sample["image_error"] = {{"against", "forward"},
+                                 {"psnr", std::isinf(error->psnr) ? json(nullptr) : json(error->psnr)},
+                                 {"identical", std::isinf(error->psnr)},
+                                 {"max_abs", error->maxAbs},
+                                 {"mean_abs", error->meanAbs}};
+      }
+    }
+    if (!options.screenshotDir.empty()) {
+      // The image is uninstrumented: one screenshot per renderer, whatever the modes.
+      std::string file = rendererName + "_" + name + "_" + std::to_string(res.width) + "x" +
+                         std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
+      if (&mode == &spec.modes.front()) {
+        auto png = encodePng(image, res.width, res.height);
+        std::ofstream out(std::filesystem::path(options.screenshotDir) / file, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+      }
+      sample["screenshot"] = file;
+    } else {
+      sample["screenshot"] = nullptr;
+    }
+    run["samples"].push_back(std::move(sample));
+    ++progress.done;
+  }
+  instrumented->destroy();
+  return run;
+}
+
 }  // namespace
 
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
@@ -204,7 +273,7 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
   size_t total = 0;
   for (const auto& scene : loaded) {
     cameras.push_back(spec.autoCameras ? scenes::autoCameras(scene) : spec.cameras);
-    total += spec.renderers.size() * spec.resolutions.size() * cameras.back().size();
+    total += spec.renderers.size() * spec.resolutions.size() * spec.modes.size() * cameras.back().size();
   }
 
   CaptureProgress progress{0, total, ""};
@@ -220,7 +289,7 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
       {
         auto forward = renderers::makeRenderer("forward");
         if (forward) {
-          renderers::RendererOptions ro{{res.width, res.height}, false, spec.counting, spec.lights};
+          renderers::RendererOptions ro{{res.width, res.height}, false, spec.modes.front(), spec.lights};
           auto ok = (*forward)->setup(ctx, gpuScene, ro);
           if (ok) {
             for (const auto& camera : cameras[s]) {
@@ -234,67 +303,22 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
 
       for (const auto& rendererName : spec.renderers) {
         std::string where = rendererName + " " + name + " " + std::to_string(res.width) + "x" + std::to_string(res.height);
-        auto instrumented = renderers::makeRenderer(rendererName);
+        // One uninstrumented renderer per renderer, timed again beside every mode's run.
         auto plain = renderers::makeRenderer(rendererName);
-        if (!instrumented || !plain) return makeError(where + ": " + (instrumented ? plain.error() : instrumented.error()));
-        renderers::RendererOptions ro{{res.width, res.height}, true, spec.counting, spec.lights};
-        auto ok = (*instrumented)->setup(ctx, gpuScene, ro);
+        if (!plain) return makeError(where + ": " + plain.error());
+        renderers::RendererOptions plainOptions{{res.width, res.height}, false, spec.modes.front(), spec.lights};
+        auto ok = (*plain)->setup(ctx, gpuScene, plainOptions);
         if (!ok) return makeError(where + ": " + ok.error());
-        ro.instrumented = false;
-        ok = (*plain)->setup(ctx, gpuScene, ro);
-        if (!ok) return makeError(where + ": " + ok.error());
-
-        json run = {{"renderer", rendererName},
-                    {"scene", name},
-                    {"scene_params", loaded[s].params},
-                    {"width", res.width},
-                    {"height", res.height},
-                    {"counting", spirv::toString(spec.counting)},
-                    {"lights", spec.lights},
-                    {"notes", (*instrumented)->notes()},
-                    {"resources", resourcesJson((*instrumented)->resources())},
-                    {"samples", json::array()}};
-        for (size_t c = 0; c < cameras[s].size(); ++c) {
-          const auto& camera = cameras[s][c];
-          progress.current = where + " camera " + std::to_string(c);
-          if (options.progress) options.progress(progress);
-          SampleMeasure m;
-          for (uint32_t f = 0; f < spec.frames; ++f) addCounts(m, (*instrumented)->renderFrame(camera));
-          for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, (*plain)->renderFrame(camera));
-          std::vector<uint8_t> image = (*plain)->finalImage();
-          json sample = sampleJson(m, (*instrumented)->resources(), spec.frames);
-          sample["camera"] = scenes::toJson(camera);
-          sample["camera"]["index"] = c;
-          // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
-          double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
-          sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
-          sample["sky_fraction_estimate"] = camera.skyFraction;
-          if (c < reference.size()) {
-            auto error = compareImages(image, reference[c], res.width, res.height);
-            if (error) {
-              sample["image_error"] = {{"against", "forward"},
-                                       {"psnr", std::isinf(error->psnr) ? json(nullptr) : json(error->psnr)},
-                                       {"identical", std::isinf(error->psnr)},
-                                       {"max_abs", error->maxAbs},
-                                       {"mean_abs", error->meanAbs}};
-            }
+        for (const auto& mode : spec.modes) {
+          auto done = runOne(ctx, gpuScene, **plain, rendererName, mode, where, name, loaded[s], res, cameras[s],
+                             reference, spec, options, progress);
+          if (!done) {
+            (*plain)->destroy();
+            return makeError(done.error());
           }
-          if (!options.screenshotDir.empty()) {
-            std::string file = rendererName + "_" + name + "_" + std::to_string(res.width) + "x" +
-                               std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
-            auto png = encodePng(image, res.width, res.height);
-            std::ofstream out(std::filesystem::path(options.screenshotDir) / file, std::ios::binary);
-            out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-            sample["screenshot"] = file;
-          } else {
-            sample["screenshot"] = nullptr;
-          }
-          run["samples"].push_back(std::move(sample));
-          ++progress.done;
+          result["runs"].push_back(std::move(done).value());
         }
-        (*instrumented)->destroy();
         (*plain)->destroy();
-        result["runs"].push_back(std::move(run));
       }
     }
     gpuScene.destroy();

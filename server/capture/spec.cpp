@@ -122,10 +122,26 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     spec.frames = *frames;
   }
   if (j.contains("counting")) {
-    if (!j["counting"].is_string()) return fieldError("counting", "must be a string, got " + show(j["counting"]));
-    auto mode = spirv::parseMode(j["counting"].get<std::string>());
-    if (!mode) return fieldError("counting", mode.error());
-    spec.counting = *mode;
+    // A string (one mode) or a non-empty array of distinct modes.
+    const auto& counting = j["counting"];
+    if (!counting.is_string() && !(counting.is_array() && !counting.empty())) {
+      return fieldError("counting", "must be a mode or a non-empty array of modes, got " + show(counting));
+    }
+    bool single = counting.is_string();
+    spec.modes.clear();
+    for (size_t i = 0; i < (single ? 1 : counting.size()); ++i) {
+      const auto& entry = single ? counting : counting[i];
+      std::string field = single ? "counting" : "counting[" + std::to_string(i) + "]";
+      if (!entry.is_string()) return fieldError(field, "must be a string, got " + show(entry));
+      auto mode = spirv::parseMode(entry.get<std::string>());
+      if (!mode) return fieldError(field, mode.error());
+      for (const auto& seen : spec.modes) {
+        if (spirv::toString(seen) == spirv::toString(*mode)) {
+          return fieldError(field, "mode '" + spirv::toString(*mode) + "' listed twice");
+        }
+      }
+      spec.modes.push_back(*mode);
+    }
   }
   if (j.contains("lights")) {
     auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights

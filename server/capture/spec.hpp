@@ -1,5 +1,5 @@
-// A capture spec: the matrix renderers x scenes x resolutions x cameras, and
-// how to count. Parsed with errors that name the field.
+// A capture spec: the matrix renderers x scenes x resolutions x counting
+// modes x cameras. Parsed with errors that name the field.
 #pragma once
 
 #include <cstdint>
@@ -19,7 +19,7 @@ inline constexpr uint32_t kMaxDimension = 16384;          // Vulkan's common max
 inline constexpr uint64_t kMaxPixels = 7680ull * 4320ull;  // 8K: beyond it a frame's targets pass 1 GiB
 inline constexpr uint32_t kMaxFrames = 1000;
 inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
-inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x cameras)
+inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x modes x cameras)
 
 struct Resolution {
   uint32_t width = 0;
@@ -33,12 +33,14 @@ struct CaptureSpec {
   bool autoCameras = true;
   std::vector<scenes::Camera> cameras;  // when !autoCameras
   uint32_t frames = kDefaultFrames;
-  spirv::Mode counting;
+  // One run per mode: "counting" is a mode or an array of modes. The
+  // uninstrumented baseline is not a mode: every run times it (frame_ms).
+  std::vector<spirv::Mode> modes = {spirv::Mode{}};
   uint32_t lights = 400;  // as in the founding study
   nlohmann::json source;  // the spec as given, stored with the result
 
   size_t sampleCount(size_t camerasPerScene) const {
-    return renderers.size() * scenes.size() * resolutions.size() * camerasPerScene;
+    return renderers.size() * scenes.size() * resolutions.size() * modes.size() * camerasPerScene;
   }
 };
 

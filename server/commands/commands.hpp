@@ -43,6 +43,16 @@ struct CaptureArgs {
 // naming the field and exit 1.
 int runCapture(const CaptureArgs& args);
 
+struct AccuracyArgs {
+  std::string result;  // a capture result file
+  bool json = false;   // JSON rows instead of the table
+};
+
+// Prints, for every run of a capture result counted in a mode other than
+// exact, its overhead ratio and counting errors against the exact run of the
+// same frames (docs/accuracy.md). Uninstrumented time is every run's baseline.
+int runAccuracy(const AccuracyArgs& args);
+
 struct ServeArgs {
   std::string db;                   // SQLite file (created and migrated)
   std::string bind = "127.0.0.1";

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "capture/spec.hpp"
+#include "service/accuracy.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -451,6 +452,12 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
   return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
 }
 
+// Non-exact runs against their exact reference (service/accuracy.hpp).
+Response accuracy(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until"});
+  return Response::ok(check(accuracyRows(reader(ctx), queryFilter(req))));
+}
+
 Response getRun(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
@@ -659,6 +666,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/samples/{id}", route(getSample));
   router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
   router.get("/api/compare", route(compare));
+  router.get("/api/accuracy", route(accuracy));
   router.get("/api/export", route(exportRuns));
   router.get("/api/devices", route(listDevices));
   router.get("/api/scenes", route(listScenes));

@@ -18,7 +18,8 @@ TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
   EXPECT_EQ(spec->frames, 20u);
   EXPECT_EQ(spec->lights, 400u);
   EXPECT_TRUE(spec->autoCameras);
-  EXPECT_EQ(spec->counting.kind, spirv::CountMode::Exact);
+  ASSERT_EQ(spec->modes.size(), 1u);
+  EXPECT_EQ(spec->modes[0].kind, spirv::CountMode::Exact);
   ASSERT_EQ(spec->scenes.size(), 1u);
   EXPECT_EQ(spec->scenes[0], "atrium");
   EXPECT_EQ(spec->sampleCount(10), 20u);
@@ -34,8 +35,19 @@ TEST(CaptureSpec, FullSpec) {
   EXPECT_FALSE(spec->autoCameras);
   ASSERT_EQ(spec->cameras.size(), 1u);
   EXPECT_FLOAT_EQ(spec->cameras[0].fovDeg, 50.0f);
-  EXPECT_EQ(spec->counting.sampleRate, 16u);
+  ASSERT_EQ(spec->modes.size(), 1u);
+  EXPECT_EQ(spec->modes[0].sampleRate, 16u);
   EXPECT_EQ(spec->lights, 32u);
+}
+
+TEST(CaptureSpec, CountingModesAreAMatrixDimension) {
+  auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[[32,18]],
+    "counting":["exact","subgroup","sampled:4","sampled:64"]})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  ASSERT_EQ(spec->modes.size(), 4u);
+  EXPECT_EQ(spec->modes[1].kind, spirv::CountMode::Subgroup);
+  EXPECT_EQ(spec->modes[3].sampleRate, 64u);
+  EXPECT_EQ(spec->sampleCount(10), 2u * 4u * 10u);
 }
 
 struct BadCase {
@@ -74,6 +86,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":0})", "frames: must be an integer between 1 and 1000"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"fast"})", "counting: unknown mode 'fast'"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"sampled:1"})", "counting: mode 'sampled:1'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact","subgroup","fast"]})", "counting[2]: unknown mode 'fast'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact",4]})", "counting[1]: must be a string"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["sampled:4","sampled:4"]})", "counting[1]: mode 'sampled:4' listed twice"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":[]})", "counting: must be a mode or a non-empty array"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})", "counting: must be a mode or a non-empty array"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"}));
 
@@ -81,6 +98,15 @@ TEST(CaptureSpec, MatrixLimit) {
   std::string resolutions;
   for (int i = 1; i <= 600; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
   auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[)" + resolutions + "]}");
+  ASSERT_FALSE(spec.ok());
+  EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
+}
+
+TEST(CaptureSpec, MatrixLimitCountsModes) {
+  std::string resolutions;
+  for (int i = 1; i <= 300; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec = parse(R"({"renderers":["forward"],"counting":["exact","subgroup","sampled:4","sampled:16"],"resolutions":[)" +
+                    resolutions + "]}");
   ASSERT_FALSE(spec.ok());
   EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
 }

@@ -83,7 +83,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
-      "/api/compare",      "/api/export"};
+      "/api/compare",      "/api/export",       "/api/accuracy"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
   EXPECT_EQ(documented, served);
@@ -121,6 +121,25 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   EXPECT_FALSE(exported["rows"].empty());
   // Both renderers' samples, so both the reference (no image error) and a compared one are checked.
   expect("GET", "/api/runs/" + b + "/samples", "/api/runs/{id}/samples", 200);
+
+  // /api/accuracy needs a run in another mode: one with a reference, one without.
+  json modes = tinySpec();
+  modes["renderers"] = {"forward"};
+  modes["counting"] = {"exact", "sampled:4"};
+  Reply posted = daemon_->request("POST", "/api/captures", modes.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t modesId = posted.j()["id"];
+  ASSERT_EQ(daemon_->waitFinished(modesId).value("status", ""), "done");
+  modes["counting"] = "subgroup";
+  modes["resolutions"] = {{32, 18}};
+  posted = daemon_->request("POST", "/api/captures", modes.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  ASSERT_EQ(daemon_->waitFinished(posted.j()["id"]).value("status", ""), "done");
+  json accuracy = expect("GET", "/api/accuracy", "/api/accuracy", 200);
+  ASSERT_EQ(accuracy["rows"].size(), 2u) << accuracy.dump();
+  EXPECT_FALSE(accuracy["rows"][0]["reference"].is_null());
+  EXPECT_TRUE(accuracy["rows"][1]["reference"].is_null());
+  expect("GET", "/api/accuracy?limit=3", "/api/accuracy", 400);
 }
 
 TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {

@@ -318,17 +318,44 @@ describe('dashboard', () => {
     const c = await chart(page, 'accuracy');
     const plotted = c.datasets.filter((d) => d.label !== 'Pareto front').flatMap((d) => d.data.map((p) => ({ ...p, mode: d.label })));
 
-    // Expected: deferred and visbuffer at 128x72 in three modes each.
-    const expected = [];
-    for (const renderer of ['deferred', 'visbuffer']) {
-      const exact = runOf(renderer, 128);
-      for (const mode of ['exact', 'subgroup', 'sampled:4']) {
-        const r = runOf(renderer, 128, mode);
-        expected.push({ x: Math.abs(r.mean_bytes - exact.mean_bytes) / exact.mean_bytes, y: r.mean_overhead_ratio, run: r.id, mode });
+    // Expected: the API's rows (deferred and visbuffer at 128x72 in subgroup
+    // and sampled:4), each against the exact run of its renderer, which is
+    // drawn at error 0 with its own overhead ratio.
+    const { rows: accuracyRows } = await daemon.get('/accuracy');
+    assert.equal(accuracyRows.length, 4);
+    const expectedOf = (field) => {
+      const points = [];
+      for (const row of accuracyRows) {
+        const exact = runOf(row.renderer, 128);
+        assert.equal(row.reference, exact.id, `run ${row.run}: the exact run of the same frames`);
+        assert.equal(row.run, runOf(row.renderer, 128, row.counting).id);
+        points.push({ x: row[field], y: row.overhead_ratio, run: row.run, mode: row.counting });
+        if (!points.some((p) => p.run === exact.id)) points.push({ x: 0, y: row.reference_overhead_ratio, run: exact.id, mode: 'exact' });
       }
+      return points;
+    };
+    for (const row of accuracyRows) {
+      // The error of the totals is what comparing the runs' mean bytes gives.
+      const r = runOf(row.renderer, 128, row.counting);
+      const exact = runOf(row.renderer, 128);
+      assertClose(row.total_error, Math.abs(r.mean_bytes - exact.mean_bytes) / exact.mean_bytes, `run ${row.run} total error`);
+      // Subgroup counting is exact on lavapipe: no line differs.
+      if (row.counting === 'subgroup') assert.equal(row.l1_error, 0, `run ${row.run} subgroup L1 error`);
+      assert.ok(row.total_error <= row.l1_error + 1e-12, `run ${row.run}: totals cancel, lines do not`);
     }
+    const expected = expectedOf('l1_error');
     const byRun = (a, b) => a.run - b.run;
     assert.deepEqual(plotted.sort(byRun), expected.sort(byRun));
+
+    // The other measures: the same points at the API's other figures.
+    for (const [metric, field] of [['total', 'total_error'], ['worst', 'worst_error']]) {
+      await go(page, () => page.selectOption('select[name="metric"]', metric));
+      const other = await chart(page, 'accuracy');
+      const points = other.datasets.filter((d) => d.label !== 'Pareto front').flatMap((d) => d.data.map((p) => ({ ...p, mode: d.label })));
+      assert.deepEqual(points.sort(byRun), expectedOf(field).sort(byRun), `${metric}: the API's ${field}`);
+    }
+    await go(page, () => page.selectOption('select[name="metric"]', 'l1'));
+    await chart(page, 'accuracy');
 
     // The front: no point beats a front point on both axes, and every other
     // point is beaten (or matched) by one on the front.

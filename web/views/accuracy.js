@@ -1,15 +1,18 @@
-// Speed against accuracy (#/accuracy?error=counting|image&cost=frame|overhead):
+// Speed against accuracy (#/accuracy?error=counting|image&metric=l1|total|worst&cost=frame|overhead):
 // one point per run, with the Pareto front (no other point is both cheaper and
 // more accurate) drawn over them.
-//   counting error: a run counted with "subgroup" or "sampled:N" against the
-//     newest "exact" run of the same renderer, scene, resolution, device and
-//     light count: |bytes - exact bytes| / exact bytes, per frame. Cost: the
-//     counted frame's time, or the overhead ratio of counting.
+//   counting error: from /api/accuracy, which compares every run counted with
+//     "subgroup" or "sampled:N" with the exact run of the same frames
+//     (docs/accuracy.md): the L1 error over pass x resource x access lines
+//     (errors cannot cancel), the error of the total bytes, or the worst
+//     line's error. The exact runs measured against are drawn at error 0.
+//     Cost: the counted frame's time, or the overhead ratio of counting.
 //   image error: a run's mean PSNR against forward over its cameras (higher
 //     is better, so that axis runs right to left). Cost: the uninstrumented
 //     frame time, or the overhead ratio.
-// Needs only the run rows (/api/runs, up to 10 pages of 1000), no samples.
-import { getAll, queryString } from '../api.js';
+// Needs the run rows (/api/runs, up to 10 pages of 1000) and, for counting
+// error, the accuracy rows; no samples.
+import { get, getAll, queryString } from '../api.js';
 import { xyChart } from '../charts.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
@@ -19,27 +22,32 @@ const kCosts = {
   overhead: { label: 'overhead ratio of counting', format: (v) => fmt.ratio(v), counting: (r) => r.mean_overhead_ratio, image: (r) => r.mean_overhead_ratio },
 };
 
-const partnerKey = (r) => [r.renderer, r.scene, JSON.stringify(r.scene_params), r.width, r.height, r.device_id, r.lights].join('|');
+// Counting-error measures of an /api/accuracy row.
+const kMetrics = {
+  l1: { label: 'L1 error over resources', field: 'l1_error' },
+  total: { label: 'error of the total bytes', field: 'total_error' },
+  worst: { label: 'worst resource error', field: 'worst_error' },
+};
 
-// Counting error of every run that has an exact partner, and that partner
-// itself (error 0) when another mode was measured against it.
-function countingPoints(runs, cost) {
-  const exact = new Map();  // key -> newest exact run (the list is newest first)
-  for (const r of runs) {
-    if (r.counting === 'exact' && !exact.has(partnerKey(r))) exact.set(partnerKey(r), r);
-  }
-  const measured = new Set();  // exact runs some other mode is measured against
+// One point per accuracy row with a reference, and one per exact reference
+// (error 0). Overhead ratios come from the rows (medians over samples); frame
+// times from the run rows.
+function countingPoints(rows, runs, metric, costName) {
+  const byId = new Map(runs.map((r) => [r.id, r]));
+  const runOf = (id, row, counting) => byId.get(id) || { id, renderer: row.renderer, scene: row.scene, width: row.width, height: row.height, counting };
+  const frameCost = (id) => byId.get(id)?.mean_frame_ms_instrumented ?? null;
   const points = [];
-  for (const r of runs) {
-    const reference = exact.get(partnerKey(r));
-    if (r.counting === 'exact' || !reference || !reference.mean_bytes || r.mean_bytes === null || cost(r) === null) continue;
-    measured.add(reference);
-    points.push({ run: r, group: r.counting, error: Math.abs(r.mean_bytes - reference.mean_bytes) / reference.mean_bytes, cost: cost(r) });
+  const references = new Map();  // exact run id -> point
+  for (const row of rows) {
+    if (row.reference === null) continue;
+    const cost = costName === 'overhead' ? row.overhead_ratio : frameCost(row.run);
+    if (cost !== null) points.push({ run: runOf(row.run, row, row.counting), group: row.counting, error: row[metric.field], worst: row.worst_resource, cost });
+    const refCost = costName === 'overhead' ? row.reference_overhead_ratio : frameCost(row.reference);
+    if (!references.has(row.reference) && refCost !== null) {
+      references.set(row.reference, { run: runOf(row.reference, row, 'exact'), group: 'exact', error: 0, worst: null, cost: refCost });
+    }
   }
-  for (const r of measured) {
-    if (cost(r) !== null) points.push({ run: r, group: 'exact', error: 0, cost: cost(r) });
-  }
-  return points;
+  return [...points, ...references.values()];
 }
 
 // Image error (mean PSNR) of every run compared against forward; runs whose
@@ -73,6 +81,7 @@ function controls(query, onApply) {
   const text = (name, placeholder) => h('input', { name, value: query.get(name) || '', placeholder, size: 12 });
   const form = h('form', { class: 'filters', 'aria-label': 'Speed against accuracy' },
     field('Error', select('error', [['counting', 'counting error of a mode'], ['image', 'image error against forward']])),
+    field('Counting error', select('metric', [['l1', 'L1 over resources'], ['total', 'total bytes'], ['worst', 'worst resource']])),
     field('Cost', select('cost', [['frame', 'frame time'], ['overhead', 'overhead ratio']])),
     field('Renderer', text('renderer', 'any')),
     field('Scene', text('scene', 'any')),
@@ -98,22 +107,27 @@ function pointTable(points, front, errorLabel, errorText, costFormat) {
 
 export async function render(page, { query, signal }) {
   const errorKind = query.get('error') === 'image' ? 'image' : 'counting';
-  const cost = kCosts[query.get('cost')] || kCosts.frame;
+  const costName = kCosts[query.get('cost')] ? query.get('cost') : 'frame';
+  const cost = kCosts[costName];
+  const metric = kMetrics[query.get('metric')] || kMetrics.l1;
   const res = /^(\d+)\s*[x×]\s*(\d+)$/.exec(query.get('resolution') || '');
   const filters = { renderer: query.get('renderer'), scene: query.get('scene'), width: res?.[1], height: res?.[2] };
   page.append(h('h1', {}, 'Speed against accuracy'),
     controls(query, (values) => { location.hash = '#/accuracy' + queryString(values); }));
 
   const { items: runs, complete } = await getAll('/runs' + queryString(filters), 'runs', { signal });
+  let unreferenced = 0;
   let points;
   let x;
   let errorText;
   let caption;
   if (errorKind === 'counting') {
-    points = countingPoints(runs, cost.counting);
-    x = { title: 'counting error of total bytes (vs exact)', format: (v) => fmt.percent(v) };
-    errorText = (p) => fmt.percent(p.error);
-    caption = 'each counting mode against the exact run of the same renderer, scene, resolution and device';
+    const accuracy = await get('/accuracy' + queryString(filters), signal);
+    unreferenced = accuracy.rows.filter((r) => r.reference === null).length;
+    points = countingPoints(accuracy.rows, runs, metric, costName);
+    x = { title: `counting error: ${metric.label} (vs exact)`, format: (v) => fmt.percent(v) };
+    errorText = (p) => fmt.percent(p.error) + (metric.field === 'worst_error' && p.worst ? ` (${p.worst})` : '');
+    caption = 'each counting mode against the exact run of the same frames (renderer, scene, resolution, device, lights, cameras); exact runs at 0';
   } else {
     const image = imagePoints(runs, cost.image);
     points = image.points;
@@ -123,6 +137,7 @@ export async function render(page, { query, signal }) {
   }
   const front = paretoFront(points, errorKind === 'counting');
   if (!complete) page.append(h('p', { class: 'panel' }, 'Only the newest 10,000 runs are shown: narrow the filters.'));
+  if (unreferenced > 0) page.append(h('p', { class: 'muted', dataset: { unreferenced } }, `${unreferenced} run(s) in another mode have no exact run of the same frames and are not drawn.`));
   if (points.length === 0) {
     page.append(h('p', { class: 'panel' }, errorKind === 'counting'
       ? 'No run here was captured with a counting mode other than exact next to an exact run. Capture the same configuration with "counting": "subgroup" or "sampled:N".'
@@ -135,7 +150,7 @@ export async function render(page, { query, signal }) {
     { label: 'Pareto front', data: frontLine.map((p) => ({ x: p.error, y: p.cost, run: p.run.id })), showLine: true, borderColor: '#111', backgroundColor: 'rgba(0,0,0,0)', pointRadius: 8, pointBorderWidth: 2, borderWidth: 1.5, order: 0 },
     ...groups.map((g) => ({ label: g, data: points.filter((p) => p.group === g).map((p) => ({ x: p.error, y: p.cost, run: p.run.id })), order: 1 })),
   ];
-  const table = pointTable(points, front, errorKind === 'counting' ? 'Counting error' : 'PSNR vs forward', errorText, cost.format);
+  const table = pointTable(points, front, errorKind === 'counting' ? `Counting error (${metric.label})` : 'PSNR vs forward', errorText, cost.format);
   xyChart(page, {
     id: 'accuracy', title: `${cost.label} against ${errorKind === 'counting' ? 'counting error' : 'image error'}`, caption,
     x, y: { title: cost.label, format: cost.format }, datasets, table,

@@ -1,0 +1,183 @@
+#include "service/accuracy.hpp"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include "capture/accuracy.hpp"
+
+namespace tally::service {
+namespace {
+
+using nlohmann::json;
+
+// Every run the filter selects, oldest first; false in `complete` when more
+// than kAccuracyMaxRuns matched.
+Result<std::vector<store::RunRow>> allRuns(store::Store& store, const store::RunFilter& filter, bool& complete) {
+  std::vector<store::RunRow> rows;
+  store::Page page{1000, ""};
+  complete = false;
+  for (int pages = 0; pages < kAccuracyMaxRuns / 1000; ++pages) {
+    auto got = store.listRuns(filter, page);
+    if (!got) return makeError(got.error());
+    rows.insert(rows.end(), got->runs.begin(), got->runs.end());
+    if (got->nextCursor.empty()) {
+      complete = true;
+      break;
+    }
+    page.cursor = got->nextCursor;
+  }
+  std::reverse(rows.begin(), rows.end());
+  return rows;
+}
+
+capture::RunCounts metadata(const store::RunRow& r) {
+  capture::RunCounts c;
+  c.id = std::to_string(r.id);
+  c.renderer = r.renderer;
+  c.scene = r.scene;
+  c.sceneParams = r.sceneParams.dump();
+  c.device = std::to_string(r.deviceId);
+  c.counting = r.counting;
+  c.width = r.width;
+  c.height = r.height;
+  c.lights = r.lights;
+  c.group = std::to_string(r.jobId);
+  return c;
+}
+
+// The run's samples with their per-line bytes, as runCountsFromResult reads them.
+Result<bool> loadSamples(store::Store& store, int64_t runId, capture::RunCounts& run) {
+  auto samples = store.listSamples(runId);
+  if (!samples) return makeError(samples.error());
+  for (const auto& row : *samples) {
+    auto sample = store.getSample(row.id);
+    if (!sample) return makeError(sample.error());
+    if (!*sample) continue;
+    capture::SampleCounts counts;
+    json camera = row.camera.is_object() ? row.camera : json::object();
+    camera.erase("index");
+    camera.erase("label");
+    counts.camera = camera.dump();
+    counts.frameMs = row.frameMs;
+    counts.frameMsInstrumented = row.frameMsInstrumented.value_or(0.0);
+    for (const auto& pass : (*sample)->passes) {
+      for (const auto& c : pass.counters) counts.bytes[pass.name + "/" + c.resource + " " + c.access] += c.bytes;
+    }
+    run.samples.push_back(std::move(counts));
+  }
+  return true;
+}
+
+}  // namespace
+
+Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
+  bool complete = false;
+  auto selected = allRuns(store, filter, complete);
+  if (!selected) return makeError(selected.error());
+
+  // Candidates for references: every exact run of the same renderer and
+  // scene (any capture, any time), whatever else the filter says.
+  std::vector<capture::RunCounts> pool;
+  std::map<int64_t, size_t> index;  // run id -> position in pool
+  std::vector<int64_t> rowIds;
+  std::set<std::string> queried;  // renderer, scene, resolution, device already looked up
+  for (const auto& r : *selected) {
+    if (r.counting == "exact") continue;
+    rowIds.push_back(r.id);
+    if (!index.count(r.id)) {
+      index[r.id] = pool.size();
+      pool.push_back(metadata(r));
+    }
+    std::string key = r.renderer + "\x1f" + r.scene + "\x1f" + std::to_string(r.width) + "x" +
+                      std::to_string(r.height) + "\x1f" + std::to_string(r.deviceId);
+    if (!queried.insert(key).second) continue;
+    store::RunFilter same;
+    same.renderer = r.renderer;
+    same.scene = r.scene;
+    same.width = r.width;
+    same.height = r.height;
+    same.deviceId = r.deviceId;
+    bool all = false;
+    auto exact = allRuns(store, same, all);
+    if (!exact) return makeError(exact.error());
+    for (const auto& e : *exact) {
+      if (e.counting == "exact" && !index.count(e.id)) {
+        index[e.id] = pool.size();
+        pool.push_back(metadata(e));
+      }
+    }
+  }
+  // Samples for the runs compared only: the pool's exact runs that could match
+  // (same parameters and sample count) and the rows themselves.
+  std::vector<bool> needed(pool.size(), false);
+  for (int64_t id : rowIds) {
+    const auto& run = pool[index[id]];
+    needed[index[id]] = true;
+    for (size_t i = 0; i < pool.size(); ++i) {
+      const auto& e = pool[i];
+      if (e.counting == "exact" && e.renderer == run.renderer && e.scene == run.scene &&
+          e.sceneParams == run.sceneParams && e.lights == run.lights) {
+        needed[i] = true;
+      }
+    }
+  }
+  for (size_t i = 0; i < pool.size(); ++i) {
+    if (!needed[i]) continue;
+    auto ok = loadSamples(store, std::stoll(pool[i].id), pool[i]);
+    if (!ok) return makeError(ok.error());
+  }
+  // findReference takes the last match as the newest: order by id.
+  std::vector<capture::RunCounts> sorted = pool;
+  std::sort(sorted.begin(), sorted.end(),
+            [](const auto& a, const auto& b) { return std::stoll(a.id) < std::stoll(b.id); });
+
+  std::map<int64_t, const store::RunRow*> rowsById;
+  for (const auto& r : *selected) rowsById[r.id] = &r;
+  json rows = json::array();
+  for (int64_t id : rowIds) {
+    const auto& run = pool[index[id]];
+    const store::RunRow& r = *rowsById[id];
+    json j = {{"run", r.id},
+              {"capture", r.jobId},
+              {"renderer", r.renderer},
+              {"scene", r.scene},
+              {"width", r.width},
+              {"height", r.height},
+              {"device", r.deviceName},
+              {"lights", r.lights},
+              {"counting", r.counting},
+              {"created_at", r.createdAt},
+              {"sample_count", static_cast<int64_t>(run.samples.size())}};
+    std::string why;
+    auto ref = capture::findReference(run, sorted, &why);
+    std::optional<capture::RunAccuracy> accuracy;
+    if (ref) {
+      auto a = capture::compareToExact(run, sorted[*ref]);
+      if (a) {
+        accuracy = std::move(a).value();
+      } else {
+        why = a.error();
+      }
+    }
+    if (!accuracy) {
+      j["reference"] = nullptr;
+      j["reason"] = why;
+      for (const char* k : {"overhead_ratio", "reference_overhead_ratio", "total_error", "l1_error", "worst_error",
+                            "worst_resource", "worst_sample"}) {
+        j[k] = nullptr;
+      }
+    } else {
+      j["reference"] = std::stoll(sorted[*ref].id);
+      j["reason"] = nullptr;
+      j["overhead_ratio"] = accuracy->overheadRatio;
+      j["reference_overhead_ratio"] = accuracy->referenceOverheadRatio;
+      j.update(capture::toJson(accuracy->errors));
+      j["worst_sample"] = static_cast<int64_t>(accuracy->worstSample);
+    }
+    rows.push_back(std::move(j));
+  }
+  return json{{"rows", std::move(rows)}, {"truncated", !complete}};
+}
+
+}  // namespace tally::service

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Counting modes, speed against accuracy: every renderer in every counting mode
+# (exact, subgroup, sampled:4, sampled:16, sampled:64) on atrium and on Sponza,
+# at 1280x720, 4 cameras, 10 frames; then `tallyd accuracy` on each result
+# (overhead ratio against the uninstrumented frames of the same run, counting
+# error against the exact run). Build first with tests/gpu/build.sh; bring the
+# Vulkan loader's .debs in .gl/ (see run.sh) and a copy of the Sponza folder in
+# .scenes/sponza (as protocol.sh). docs/accuracy.md reports the figures.
+#
+#   tests/gpu/accuracy.sh
+#   OUT=dir                where results go (default ./gpu-out): accuracy-<scene>.json (result),
+#                          accuracy-<scene>.txt and .accuracy.json (tallyd accuracy), accuracy-<scene>.log,
+#                          accuracy.log (wall times)
+#   TALLYD=path            tallyd to run (default build-gpu/server/tallyd)
+#   ACCURACY_SCENES="atrium sponza"   which specs to run (tests/gpu/accuracy-<scene>.json)
+#   ACCURACY_RESOLUTION=WxH           replaces 1280x720, e.g. 160x90 for a check on lavapipe
+#   ACCURACY_FRAMES=N                 replaces the 10 frames per sample
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+
+out="${OUT:-./gpu-out}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+tallyd="${TALLYD:-build-gpu/server/tallyd}"
+[ -x "$tallyd" ] || { echo "accuracy.sh: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; exit 2; }
+scenes="${ACCURACY_SCENES:-atrium sponza}"
+resolution="${ACCURACY_RESOLUTION:-1280x720}"
+case "$resolution" in
+  [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
+  *) echo "accuracy.sh: ACCURACY_RESOLUTION must be WxH, got '$resolution'" >&2; exit 2 ;;
+esac
+frames="${ACCURACY_FRAMES:-10}"
+
+# The Vulkan loader and the NVIDIA ICD, as in run.sh (nothing to do on a
+# machine that has its own loader).
+shopt -s nullglob
+debs=(.gl/*.deb)
+if [ ${#debs[@]} -gt 0 ]; then
+  for f in "${debs[@]}"; do dpkg -x "$f" /; done
+  ldconfig
+fi
+nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [ -f "$nvidia_icd" ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
+  export VK_DRIVER_FILES="$nvidia_icd"
+fi
+export TALLY_SHADER_DIR="$PWD/shaders"
+# tinygltf and stb are shared libraries in Debian: build.sh copies them here.
+[ -d "$PWD/build-gpu/lib" ] && export LD_LIBRARY_PATH="$PWD/build-gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+
+sponza="$PWD/.scenes/sponza/Sponza.gltf"
+[ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
+
+status=0
+for scene in $scenes; do
+  spec_in="tests/gpu/accuracy-$scene.json"
+  [ -f "$spec_in" ] || { echo "accuracy.sh: no $spec_in" >&2; status=2; continue; }
+  spec="$out/accuracy-$scene-spec.json"
+  sed -e "s|SPONZA|$sponza|" \
+      -e "s|\[1280, 720\]|[$width, $height]|" \
+      -e "s|\"frames\": 10|\"frames\": $frames|" "$spec_in" > "$spec"
+  start=$(date +%s%N)
+  "$tallyd" capture --spec "$spec" --out "$out/accuracy-$scene.json" 2> "$out/accuracy-$scene.log"
+  rc=$?
+  end=$(date +%s%N)
+  echo "accuracy $scene ${width}x${height}: capture wall time $(( (end - start) / 1000000 )) ms, exit $rc" \
+    | tee -a "$out/accuracy.log"
+  if [ "$rc" -ne 0 ]; then
+    tail -5 "$out/accuracy-$scene.log"
+    status=$rc
+    continue
+  fi
+  "$tallyd" accuracy --result "$out/accuracy-$scene.json" > "$out/accuracy-$scene.txt" || status=1
+  "$tallyd" accuracy --result "$out/accuracy-$scene.json" --json > "$out/accuracy-$scene.accuracy.json" || status=1
+  cat "$out/accuracy-$scene.txt"
+done
+exit "$status"
