@@ -21,8 +21,12 @@ dir="$build/tests/integration"
 strip "$dir/tally_exactness_tests" "$build/tests/renderers/tally_renderer_tests" "$build/server/tallyd"
 rm -rf "$dir/shaders"
 cp -r tests/integration/shaders "$dir/shaders"
-# tinygltf and stb are shared libraries in Debian; the GPU machine has neither.
+# tinygltf, stb, cpp-httplib, SQLite (and what they pull in: OpenSSL, zlib,
+# brotli) are shared libraries in Debian; the GPU machine has none of them.
+# It has libc and, once run.sh unpacks it, the Vulkan loader.
 mkdir -p "$build/lib"
-for lib in $(ldd "$build/server/tallyd" | awk '/=>/ {print $3}' | grep -E 'tinygltf|stb|stdc++'); do cp -L "$lib" "$build/lib/"; done
+for lib in $(ldd "$build/server/tallyd" | awk '/=>/ {print $3}' | grep -vE '/(libc|libm|libvulkan|ld-linux[^/]*)\.so'); do
+  cp -L "$lib" "$build/lib/"
+done
 echo "built $dir/tally_exactness_tests ($(du -h "$dir/tally_exactness_tests" | cut -f1)); needs: $(
   ldd "$dir/tally_exactness_tests" | awk '/=>/ {print $1}' | tr '\n' ' ')"
