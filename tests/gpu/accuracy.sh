@@ -31,24 +31,11 @@ case "$resolution" in
 esac
 frames="${ACCURACY_FRAMES:-10}"
 
-# The Vulkan loader and the NVIDIA ICD, as in run.sh (nothing to do on a
-# machine that has its own loader).
-shopt -s nullglob
-debs=(.gl/*.deb)
-if [ ${#debs[@]} -gt 0 ]; then
-  for f in "${debs[@]}"; do dpkg -x "$f" /; done
-  ldconfig
-fi
-nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-if [ -f "$nvidia_icd" ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
-  export VK_DRIVER_FILES="$nvidia_icd"
-fi
+# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+. tests/gpu/env.sh
+tally_gpu_env || exit 2
 export TALLY_SHADER_DIR="$PWD/shaders"
-# tinygltf and stb are shared libraries in Debian: build.sh copies them here.
-[ -d "$PWD/build-gpu/lib" ] && export LD_LIBRARY_PATH="$PWD/build-gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-
-sponza="$PWD/.scenes/sponza/Sponza.gltf"
-[ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
+sponza="$(tally_sponza_path)"
 
 status=0
 for scene in $scenes; do

@@ -18,20 +18,11 @@ out="$(cd "$out" && pwd)"
 tallyd="build-gpu/server/tallyd"
 [ -x "$tallyd" ] || { echo "protocol.sh: no $tallyd (run tests/gpu/build.sh)" >&2; exit 2; }
 
-# The Vulkan loader and the NVIDIA ICD, as in run.sh.
-shopt -s nullglob
-for f in .gl/*.deb; do dpkg -x "$f" /; done
-ldconfig
-nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-if [ -f "$nvidia_icd" ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
-  export VK_DRIVER_FILES="$nvidia_icd"
-fi
+# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+. tests/gpu/env.sh
+tally_gpu_env || exit 2
 export TALLY_SHADER_DIR="$PWD/shaders"
-# tinygltf and stb are shared libraries in Debian: build.sh copies them here.
-export LD_LIBRARY_PATH="$PWD/build-gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-
-sponza="$PWD/.scenes/sponza/Sponza.gltf"
-[ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
+sponza="$(tally_sponza_path)"
 sed "s|SPONZA|$sponza|" "$spec_in" > "$out/protocol-spec.json"
 
 start=$(date +%s%N)

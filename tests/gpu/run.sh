@@ -29,26 +29,9 @@ fi
 bin_dir="$(cd "$bin_dir" && pwd)"
 binary="$bin_dir/tally_exactness_tests"
 
-# The Vulkan loader: unpacked from the Debian packages brought along.
-shopt -s nullglob
-debs=(.gl/*.deb)
-if [ ${#debs[@]} -gt 0 ]; then
-  for f in "${debs[@]}"; do dpkg -x "$f" /; done
-  ldconfig
-elif ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
-  echo "run.sh: no Vulkan loader installed and no .gl/*.deb to unpack" >&2
-  exit 2
-fi
-
-# The NVIDIA ICD lives outside the loader's search path on that machine.
-nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-icd_found=false
-for d in /etc/vulkan/icd.d /usr/share/vulkan/icd.d /usr/local/share/vulkan/icd.d; do
-  if compgen -G "$d/*.json" >/dev/null; then icd_found=true; fi
-done
-if [ -f "$nvidia_icd" ] && [ "$icd_found" = false ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
-  export VK_DRIVER_FILES="$nvidia_icd"
-fi
+# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+. tests/gpu/env.sh
+tally_gpu_env || exit 2
 
 # Shaders travel next to the binary (build.sh copies them).
 if [ -z "${TALLY_SHADER_DIR:-}" ] && [ -d "$bin_dir/shaders" ]; then

@@ -1,0 +1,40 @@
+# Sourced by the GPU scripts (run.sh, protocol.sh, accuracy.sh), from the
+# repository root: makes Vulkan work on the GPU test machine, which has the
+# NVIDIA driver but not the Vulkan loader, and finds what build.sh built.
+#
+#   tally_gpu_env      unpacks the loader's Debian packages from .gl/ (see
+#                      run.sh), points the loader at the NVIDIA ICD when it
+#                      would not find it, and puts build-gpu/lib (the shared
+#                      libraries build.sh copies) on LD_LIBRARY_PATH. Fails
+#                      when no loader can be had.
+#   tally_sponza_path  the Sponza glTF: the copy in .scenes/sponza (the GPU
+#                      machine has no ../shared), else ../shared's.
+
+tally_gpu_env() {
+  local debs f d icd_found=false
+  local nvidia_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+  shopt -s nullglob
+  debs=(.gl/*.deb)
+  if [ ${#debs[@]} -gt 0 ]; then
+    for f in "${debs[@]}"; do dpkg -x "$f" /; done
+    ldconfig
+  elif ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
+    echo "no Vulkan loader installed and no .gl/*.deb to unpack" >&2
+    return 2
+  fi
+  for d in /etc/vulkan/icd.d /usr/share/vulkan/icd.d /usr/local/share/vulkan/icd.d; do
+    if compgen -G "$d/*.json" >/dev/null; then icd_found=true; fi
+  done
+  if [ -f "$nvidia_icd" ] && [ "$icd_found" = false ] && [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ]; then
+    export VK_DRIVER_FILES="$nvidia_icd"
+  fi
+  if [ -d "$PWD/build-gpu/lib" ]; then
+    export LD_LIBRARY_PATH="$PWD/build-gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  fi
+}
+
+tally_sponza_path() {
+  local sponza="$PWD/.scenes/sponza/Sponza.gltf"
+  [ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
+  echo "$sponza"
+}
