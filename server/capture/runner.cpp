@@ -9,9 +9,11 @@
 #include <map>
 #include <optional>
 
+#include "capture/headroom.hpp"
 #include "capture/image.hpp"
 #include "capture/stats.hpp"
 #include "gpu/context.hpp"
+#include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
@@ -198,12 +200,17 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
               {"notes", instrumented->notes()},
               {"resources", resourcesJson(instrumented->resources())},
               {"samples", json::array()}};
+  CounterHeadroom headroom;
   for (size_t c = 0; c < cameras.size(); ++c) {
     const auto& camera = cameras[c];
     progress.current = where + " camera " + std::to_string(c);
     if (options.progress) options.progress(progress);
     SampleMeasure m;
-    for (uint32_t f = 0; f < spec.frames; ++f) addCounts(m, instrumented->renderFrame(camera));
+    for (uint32_t f = 0; f < spec.frames; ++f) {
+      const renderers::FrameResult frame = instrumented->renderFrame(camera);
+      headroom.note(frame);
+      addCounts(m, frame);
+    }
     for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, plain.renderFrame(camera));
     std::vector<uint8_t> image = plain.finalImage();
     json sample = sampleJson(m, instrumented->resources(), spec.frames);
@@ -240,6 +247,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     ++progress.done;
   }
   instrumented->destroy();
+  // Counters are zeroed every frame (RendererBase::recordAll): one frame accumulates.
+  run["counter_headroom"] = toJson(headroom, gpu::instrumentOptionsFor(ctx, mode).width, 1);
   return run;
 }
 

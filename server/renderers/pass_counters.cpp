@@ -45,6 +45,12 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
   };
   // Sites of one (stage, kind, resource, width) share their slots: count each slot range once.
   std::set<uint32_t> seen;
+  auto noteSlot = [&](uint64_t n, const std::string& name) {
+    if (n > out.maxSlotCount) {
+      out.maxSlotCount = n;
+      out.maxSlotResource = name;
+    }
+  };
   for (const auto& site : sites) {
     using spirv::SiteKind;
     if (!seen.insert(site.slot).second) continue;
@@ -52,6 +58,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       uint64_t n = slotValue(counters, site.slot);
       if (site.stage == spirv::Stage::Fragment) out.fragmentInvocations += n;
       if (site.stage == spirv::Stage::Vertex) out.vertexInvocations += n;
+      noteSlot(n, std::string(spirv::toString(site.stage)) + " invocations");
       continue;
     }
     if (site.kind == SiteKind::OutputWrite) {
@@ -60,6 +67,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
           it != bindings.outputs.end() ? it->second : "output " + std::to_string(site.location.value_or(0));
       addAccess(out.accesses, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes),
                 "counter");
+      noteSlot(slotValue(counters, site.slot), name);
       continue;
     }
     const bool write = site.kind == SiteKind::BufferWrite || site.kind == SiteKind::ImageWrite ||
@@ -68,6 +76,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
     if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
       addAccess(out.accesses, bindings.vertexInputs, false, slotValue(counters, site.slot), site.elementBytes,
                 "counter");
+      noteSlot(slotValue(counters, site.slot), bindings.vertexInputs);
       continue;
     }
     auto it = bindings.bindings.find({site.set, site.binding});
@@ -85,6 +94,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
         bytes = o->second;
       }
       addAccess(out.accesses, name, write, n, bytes, "counter");
+      noteSlot(n, name);
     }
   }
   return out;

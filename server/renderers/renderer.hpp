@@ -54,6 +54,8 @@ struct PassResult {
   uint64_t fragmentInvocations = 0;           // counted (the fragment shaders' invocation sites)
   int64_t fragmentInvocationsStatistic = -1;  // pipeline statistics; -1 if not queried
   std::vector<Access> accesses;
+  uint64_t maxSlotCount = 0;    // the largest single counter slot this frame (0 uninstrumented)
+  std::string maxSlotResource;  // what that slot counts
 };
 
 struct FrameResult {

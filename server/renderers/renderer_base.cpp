@@ -624,6 +624,8 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       PassCounts counts = attributeCounters(p.sites, counters, p.bindings, resources_);
       r.fragmentInvocations = counts.fragmentInvocations;
       r.accesses = std::move(counts.accesses);
+      r.maxSlotCount = counts.maxSlotCount;
+      r.maxSlotResource = std::move(counts.maxSlotResource);
       if (p.indexFetches && p.indicesDrawn > 0) {
         addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
       }

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <stdexcept>
 
 #include "gpu/vk_check.hpp"
 #include "gpu_fixture.hpp"
@@ -137,8 +138,21 @@ std::vector<uint64_t> readCounters(const gpu::Context& ctx, const gpu::Buffer& b
   return counters;
 }
 
-void zeroCountersCmd(VkCommandBuffer cmd, const gpu::Buffer& buffer) {
-  vkCmdFillBuffer(cmd, buffer.buffer, 0, VK_WHOLE_SIZE, 0);
+// Zeroes the counters, or writes `initial` (little-endian 64-bit slots, the
+// rest 0) into the first `slots` of them.
+void resetCountersCmd(VkCommandBuffer cmd, const gpu::Buffer& buffer, uint32_t slots,
+                      const std::vector<uint64_t>& initial) {
+  if (initial.empty()) {
+    vkCmdFillBuffer(cmd, buffer.buffer, 0, VK_WHOLE_SIZE, 0);
+  } else {
+    // vkCmdUpdateBuffer takes at most 65536 bytes: 8192 slots, more than these passes use.
+    std::vector<uint8_t> bytes(size_t(std::max(slots, 1u)) * sizeof(uint64_t), 0);
+    for (size_t i = 0; i < std::min<size_t>(initial.size(), slots); ++i) {
+      for (size_t b = 0; b < 8; ++b) bytes[i * 8 + b] = uint8_t(initial[i] >> (8 * b));
+    }
+    if (bytes.size() > 65536) throw std::runtime_error("initial counters: more than 8192 slots");
+    vkCmdUpdateBuffer(cmd, buffer.buffer, 0, bytes.size(), bytes.data());
+  }
   VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
   barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
@@ -281,7 +295,7 @@ Result<PassRun> FragmentPass::run(const RunOptions& options) {
   for (uint32_t s = 0; s < std::max(options.submissions, 1u); ++s) {
     const auto start = std::chrono::steady_clock::now();
     gpu::submitAndWait(ctx_, [&](VkCommandBuffer cmd) {
-      zeroCountersCmd(cmd, counters.buffer);
+      resetCountersCmd(cmd, counters.buffer, modules->slotCount, options.initialCounters);
       if (timestamps.pool != VK_NULL_HANDLE) gpu::resetTimestamps(cmd, timestamps);
       if (statistics.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics);
       if (timestamps.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps, 0);
@@ -452,7 +466,7 @@ Result<PassRun> ComputePass::run(const RunOptions& options) {
       VkClearColorValue black = {};
       VkImageSubresourceRange range = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
       vkCmdClearColorImage(cmd, outputImage_.image, VK_IMAGE_LAYOUT_GENERAL, &black, 1, &range);
-      zeroCountersCmd(cmd, counters.buffer);
+      resetCountersCmd(cmd, counters.buffer, modules->slotCount, options.initialCounters);
       if (timestamps.pool != VK_NULL_HANDLE) gpu::resetTimestamps(cmd, timestamps);
       if (statistics.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics);
       if (timestamps.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps, 0);

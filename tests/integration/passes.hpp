@@ -29,6 +29,10 @@ struct RunOptions {
   std::optional<spirv::Mode> mode;  // nullopt: uninstrumented
   spirv::CounterWidth width = spirv::CounterWidth::Int64;
   uint32_t submissions = 1;  // each zeroes the counters; counters and statistics are from the last
+  // Where each submission starts the counters instead of zero: slot i starts
+  // at initialCounters[i] (slots past the end at 0). Lets a test put a counter
+  // next to 2^32 without running 4 billion atomics first.
+  std::vector<uint64_t> initialCounters;
 };
 
 struct PassRun {

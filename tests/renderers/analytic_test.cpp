@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "analytic.hpp"
+#include "capture/headroom.hpp"
 #include "render_fixture.hpp"
 
 namespace tally::renderers {
@@ -178,6 +179,45 @@ std::string paramName(const ::testing::TestParamInfo<Param>& info) {
 INSTANTIATE_TEST_SUITE_P(Renderers, AnalyticCounts,
                          ::testing::Combine(::testing::ValuesIn(kExtents), ::testing::ValuesIn(specs())),
                          paramName);
+
+// The counter headroom of a frame (docs/measurement.md, "Counter overflow"):
+// the largest slot is the largest predicted count, the lights buffer read by
+// every forward fragment of four back-to-front planes (layers x covered x
+// lights), and the 32-bit wrap factor is 2^32 over it (one frame accumulates).
+TEST(CounterHeadroom, LargestSlotIsThePredictedLargestCount) {
+  const VkExtent2D extent = {157, 91};
+  const nlohmann::json spec = planes(4, "back-to-front", 1.0);
+  const analytic::Geometry g = analytic::geometryOf(spec, extent);
+  ASSERT_FALSE(g.rows.ambiguous);
+  Rendered r = render("forward", spec, extent);
+  ASSERT_TRUE(r.ok) << r.error;
+  analytic::DeviceTraits device;
+  device.lights = kTestLights;
+  uint64_t largest = 0;
+  std::string largestName;
+  for (const auto& p : analytic::predict("forward", g, device)) {
+    for (const auto& t : p.terms) {
+      if (t.source != "counter" || t.perVertex != 0) continue;  // vertex counts: far below (a few quads)
+      if (t.count(p.fragments, 0) > largest) {
+        largest = t.count(p.fragments, 0);
+        largestName = p.name + "/" + t.resource;
+      }
+    }
+  }
+  EXPECT_EQ(largestName, "forward/lights");
+  EXPECT_EQ(largest, uint64_t(g.layers) * g.covered * kTestLights);
+
+  tally::capture::CounterHeadroom headroom;
+  headroom.note(r.frame);
+  EXPECT_EQ(headroom.maxSlotCount, largest);
+  EXPECT_EQ(headroom.maxSlot, largestName);
+  const auto json = tally::capture::toJson(headroom, spirv::CounterWidth::Int64, 1);
+  EXPECT_DOUBLE_EQ(json["wrap_factor_32bit"].get<double>(), 4294967296.0 / double(largest));
+  EXPECT_EQ(json["max_slot_count_per_frame"].get<uint64_t>(), largest);
+  std::printf("forward, 4 planes at 157x91, %u lights: largest slot %s = %" PRIu64
+              " per frame; a 32-bit counter would wrap at %.0fx the resolution x overshading\n",
+              kTestLights, largestName.c_str(), largest, json["wrap_factor_32bit"].get<double>());
+}
 
 }  // namespace
 }  // namespace tally::renderers
