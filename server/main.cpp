@@ -35,6 +35,11 @@ int main(int argc, char** argv) {
   accuracy->add_option("--result", accuracyArgs.result, "Capture result JSON (tallyd capture --out)")->required();
   accuracy->add_flag("--json", accuracyArgs.json, "JSON rows instead of the table");
 
+  tally::cli::RepeatsArgs repeatsArgs;
+  auto* repeats = app.add_subcommand("repeats", "Agreement of repeated captures of one spec, from their results");
+  repeats->add_option("--result", repeatsArgs.results, "Capture result JSON (repeat for each capture)")->required();
+  repeats->add_flag("--json", repeatsArgs.json, "JSON groups instead of the table");
+
   tally::cli::ServeArgs serveArgs;
   auto* serve = app.add_subcommand("serve", "Serve the REST API and dashboard; run queued captures");
   serve->add_option("--db", serveArgs.db, "SQLite database file")->required();
@@ -56,6 +61,7 @@ int main(int argc, char** argv) {
   if (*demo) return tally::cli::runDemo(demoArgs);
   if (*capture) return tally::cli::runCapture(captureArgs);
   if (*accuracy) return tally::cli::runAccuracy(accuracyArgs);
+  if (*repeats) return tally::cli::runRepeats(repeatsArgs);
   if (*serve) return tally::cli::runServe(serveArgs);
   return 2;
 }

@@ -14,6 +14,44 @@ Chart.defaults.font.family = getComputedStyle(document.documentElement).getPrope
 Chart.defaults.color = '#333';
 Chart.defaults.maintainAspectRatio = false;  // the .chart-box sets the height
 
+// IQR whiskers: a bar dataset may carry `whiskers: [[q1, q3] | null, ...]`
+// beside its data; each pair is drawn as an error bar over its bar, in the
+// value axis's units (the API's q1 and q3, as given).
+const whiskerPlugin = {
+  id: 'tallyWhiskers',
+  afterDatasetsDraw(chart) {
+    const { ctx } = chart;
+    const horizontal = chart.options.indexAxis === 'y';
+    chart.data.datasets.forEach((d, di) => {
+      const meta = chart.getDatasetMeta(di);
+      if (!d.whiskers || meta.hidden) return;
+      const scale = chart.scales[horizontal ? meta.xAxisID : meta.yAxisID];
+      ctx.save();
+      ctx.strokeStyle = '#111';
+      ctx.lineWidth = 1.5;
+      meta.data.forEach((bar, i) => {
+        const w = d.whiskers[i];
+        if (!w) return;
+        const a = scale.getPixelForValue(w[0]), b = scale.getPixelForValue(w[1]);
+        const cap = Math.min(6, (horizontal ? bar.height : bar.width) / 4 || 6);
+        ctx.beginPath();
+        if (horizontal) {
+          ctx.moveTo(a, bar.y); ctx.lineTo(b, bar.y);
+          ctx.moveTo(a, bar.y - cap); ctx.lineTo(a, bar.y + cap);
+          ctx.moveTo(b, bar.y - cap); ctx.lineTo(b, bar.y + cap);
+        } else {
+          ctx.moveTo(bar.x, a); ctx.lineTo(bar.x, b);
+          ctx.moveTo(bar.x - cap, a); ctx.lineTo(bar.x + cap, a);
+          ctx.moveTo(bar.x - cap, b); ctx.lineTo(bar.x + cap, b);
+        }
+        ctx.stroke();
+      });
+      ctx.restore();
+    });
+  },
+};
+Chart.register(whiskerPlugin);
+
 // n well-separated colours; the same index gets the same colour in every chart.
 export function color(i, alpha = 1) {
   const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most
@@ -38,7 +76,10 @@ function seriesTable(id, labels, datasets, format, labelHeader) {
         h('th', { scope: 'row' }, String(label)),
         datasets.map((d) => {
           const v = d.data[i];
-          return h('td', { class: 'num', dataset: { value: v === null || v === undefined ? '' : String(v) } }, v === null || v === undefined ? '–' : format(v));
+          const w = d.whiskers ? d.whiskers[i] : null;
+          const text = v === null || v === undefined ? '–' : format(v) + (w ? ` (IQR ${format(w[0])}–${format(w[1])})` : '');
+          return h('td', { class: 'num', dataset: { value: v === null || v === undefined ? '' : String(v),
+            ...(w ? { q1: String(w[0]), q3: String(w[1]) } : {}) } }, text);
         }))))));
 }
 

@@ -53,6 +53,18 @@ struct AccuracyArgs {
 // same frames (docs/accuracy.md). Uninstrumented time is every run's baseline.
 int runAccuracy(const AccuracyArgs& args);
 
+struct RepeatsArgs {
+  std::vector<std::string> results;  // capture result files, one per capture
+  bool json = false;                 // JSON groups instead of the table
+};
+
+// Groups the runs of several capture results by configuration and prints, for
+// every group of two or more, the across-capture median, IQR and range of
+// frame time and total bytes, the within-run noise, whether every run lies in
+// the band (docs/measurement.md, "Repeatability") and whether the counts are
+// identical.
+int runRepeats(const RepeatsArgs& args);
+
 struct ServeArgs {
   std::string db;                   // SQLite file (created and migrated)
   std::string bind = "127.0.0.1";

@@ -10,6 +10,7 @@
 
 #include "capture/spec.hpp"
 #include "service/accuracy.hpp"
+#include "service/repeats.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -458,6 +459,12 @@ Response accuracy(ServiceContext& ctx, const Request& req) {
   return Response::ok(check(accuracyRows(reader(ctx), queryFilter(req))));
 }
 
+// Groups of identical-configuration runs and their agreement (service/repeats.hpp).
+Response repeats(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until"});
+  return Response::ok(check(repeatGroups(reader(ctx), queryFilter(req))));
+}
+
 Response getRun(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
@@ -667,6 +674,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
   router.get("/api/compare", route(compare));
   router.get("/api/accuracy", route(accuracy));
+  router.get("/api/repeats", route(repeats));
   router.get("/api/export", route(exportRuns));
   router.get("/api/devices", route(listDevices));
   router.get("/api/scenes", route(listScenes));

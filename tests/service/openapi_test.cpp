@@ -83,7 +83,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
-      "/api/compare",      "/api/export",       "/api/accuracy"};
+      "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
   EXPECT_EQ(documented, served);
@@ -140,6 +140,16 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   EXPECT_FALSE(accuracy["rows"][0]["reference"].is_null());
   EXPECT_TRUE(accuracy["rows"][1]["reference"].is_null());
   expect("GET", "/api/accuracy?limit=3", "/api/accuracy", 400);
+
+  // /api/repeats needs a repeat: the first modes capture again (exact and sampled:4).
+  modes["counting"] = {"exact", "sampled:4"};
+  modes["resolutions"] = tinySpec()["resolutions"];
+  posted = daemon_->request("POST", "/api/captures", modes.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  ASSERT_EQ(daemon_->waitFinished(posted.j()["id"]).value("status", ""), "done");
+  json repeats = expect("GET", "/api/repeats", "/api/repeats", 200);
+  EXPECT_GE(repeats["groups"].size(), 2u) << repeats.dump();
+  expect("GET", "/api/repeats?limit=3", "/api/repeats", 400);
 }
 
 TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {

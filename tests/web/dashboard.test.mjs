@@ -72,7 +72,7 @@ async function chart(page, id) {
     const canvas = document.querySelector(`[data-chart="${chartId}"] canvas`);
     const c = canvas && window.Chart.getChart(canvas);
     if (!c) return null;
-    return { labels: c.data.labels, datasets: c.data.datasets.map((d) => ({ label: d.label, data: d.data })) };
+    return { labels: c.data.labels, datasets: c.data.datasets.map((d) => ({ label: d.label, data: d.data, whiskers: d.whiskers || null })) };
   }, id);
 }
 
@@ -233,6 +233,21 @@ describe('dashboard', () => {
     const time = await chart(page, 'pass-time');
     assert.deepEqual(time.datasets[0].data, run.passes.map((p) => p.gpu_ms));
     assert.deepEqual(time.datasets[1].data, run.passes.map((p) => p.gpu_ms_instrumented));
+    // Whiskers: each pass's IQR over frames, q1 and q3 of the samples' gpu_ms_spread averaged like the bar.
+    run.passes.forEach((p, k) => {
+      const w = time.datasets[0].whiskers[k];
+      assert.ok(w, `${p.name} has a whisker`);
+      assertClose(w[0], mean(details.map((d) => d.passes[k].gpu_ms_spread.q1)), `${p.name} q1`);
+      assertClose(w[1], mean(details.map((d) => d.passes[k].gpu_ms_spread.q3)), `${p.name} q3`);
+      assert.ok(w[0] <= w[1], `${p.name} q1 <= q3`);
+    });
+    // Per camera: the frame time bar is the API's median, its whisker exactly the API's q1 and q3.
+    const sampleTime = await chart(page, 'sample-time');
+    assert.deepEqual(sampleTime.datasets[0].data, samples.map((s) => s.frame_ms));
+    assert.deepEqual(sampleTime.datasets[0].whiskers, samples.map((s) => [s.frame_ms_spread.q1, s.frame_ms_spread.q3]));
+    for (const s of samples) assert.equal(s.frame_ms_spread.median, s.frame_ms, `sample ${s.id}: frame_ms is the median`);
+    const iqrCells = await page.locator('[data-chart-table="sample-time"] tbody td').evaluateAll((tds) => tds.map((td) => [Number(td.dataset.q1), Number(td.dataset.q3)]));
+    assert.deepEqual(iqrCells, samples.map((s) => [s.frame_ms_spread.q1, s.frame_ms_spread.q3]));
 
     // Tiles: overhead ratio and image error against forward, as the API gives them.
     assert.equal((await page.locator('[data-tile="overhead"] .value').textContent()), `×${run.mean_overhead_ratio.toFixed(3)}`);

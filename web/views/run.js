@@ -1,8 +1,9 @@
 // One run: what it is, its traffic per pass and resource (the founding
 // study's per-resource figure), per camera (its per-sample figure), frame time
 // per pass with the cost of counting, and the screenshots with sky fraction
-// and image error against forward. Two requests: the run (with its passes
-// averaged over the samples) and its samples.
+// and image error against forward. Time figures carry their IQR over frames
+// (whiskers, table columns). Requests: the run (with its passes averaged over
+// the samples), its samples, and each sample (its passes' spreads).
 import { get, imageSource } from '../api.js';
 import { barChart, color } from '../charts.js';
 import { h, table } from '../dom.js';
@@ -71,26 +72,55 @@ function perSampleChart(parent, samples) {
   });
 }
 
-function passTimeChart(parent, run) {
+// Per pass, the IQR over frames of its uninstrumented time, averaged over the
+// samples like the bar itself: [mean q1, mean q3], or null without spreads.
+function passIqr(run, details) {
+  return run.passes.map((p) => {
+    const spreads = details.map((d) => (d.passes.find((x) => x.name === p.name) || {}).gpu_ms_spread).filter((x) => x);
+    if (!spreads.length) return null;
+    const mean = (key) => spreads.reduce((sum, x) => sum + x[key], 0) / spreads.length;
+    return [mean('q1'), mean('q3')];
+  });
+}
+
+function frameTimeChart(parent, samples) {
+  barChart(parent, {
+    id: 'sample-time',
+    title: 'Frame time per camera',
+    caption: 'uninstrumented; median over the frames, whiskers the IQR (q1 to q3)',
+    labels: samples.map(cameraLabel),
+    labelHeader: 'Camera',
+    format: fmt.ms,
+    datasets: [{
+      label: 'frame time',
+      data: samples.map((s) => s.frame_ms),
+      whiskers: samples.map((s) => (s.frame_ms_spread ? [s.frame_ms_spread.q1, s.frame_ms_spread.q3] : null)),
+    }],
+  });
+}
+
+function passTimeChart(parent, run, iqr) {
   barChart(parent, {
     id: 'pass-time',
     title: 'GPU time per pass',
-    caption: 'uninstrumented and counted frames; median per sample, averaged over the samples',
+    caption: 'uninstrumented and counted frames; median per sample, averaged over the samples; whiskers: the uninstrumented IQR over frames (q1 to q3, averaged over the samples)',
     labels: run.passes.map((p) => p.name),
     labelHeader: 'Pass',
     format: fmt.ms,
     horizontal: true,
     datasets: [
-      { label: 'uninstrumented', data: run.passes.map((p) => p.gpu_ms) },
+      { label: 'uninstrumented', data: run.passes.map((p) => p.gpu_ms), whiskers: iqr },
       { label: 'counted', data: run.passes.map((p) => p.gpu_ms_instrumented) },
     ],
   });
 }
 
-function passTable(run) {
+function passTable(run, iqr) {
+  const at = (p) => iqr[run.passes.indexOf(p)];
   return table([
     { label: 'Pass', value: (p) => p.name },
     { label: 'GPU time', className: 'num', value: (p) => fmt.ms(p.gpu_ms) },
+    { label: 'IQR (q1–q3)', className: 'num', value: (p) => (at(p) ? `${fmt.ms(at(p)[0])}–${fmt.ms(at(p)[1])}` : '–') },
     { label: 'Counted', className: 'num', value: (p) => fmt.ms(p.gpu_ms_instrumented) },
     { label: 'Overhead', className: 'num', value: (p) => fmt.ratio(p.overhead_ratio) },
     { label: 'Fragment invocations', className: 'num', value: (p) => fmt.count(p.fragment_invocations) },
@@ -124,6 +154,7 @@ function sampleTable(samples) {
     { label: 'Sky', className: 'num', value: (s) => fmt.percent(s.sky_fraction) },
     { label: 'Frame time', className: 'num', value: (s) => fmt.ms(s.frame_ms) },
     { label: 'IQR', className: 'num', value: (s) => fmt.ms(s.frame_ms_spread ? s.frame_ms_spread.iqr : null) },
+    { label: 'q1–q3', className: 'num', value: (s) => (s.frame_ms_spread ? `${fmt.ms(s.frame_ms_spread.q1)}–${fmt.ms(s.frame_ms_spread.q3)}` : '–') },
     { label: 'Overhead', className: 'num', value: (s) => fmt.ratio(s.overhead_ratio) },
     { label: 'Read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
     { label: 'Written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
@@ -145,6 +176,9 @@ function resourceTable(run) {
 
 export async function render(page, { params, signal }) {
   const [run, { samples }] = await Promise.all([get(`/runs/${params.id}`, signal), get(`/runs/${params.id}/samples`, signal)]);
+  // Per-pass spreads live with each sample: one request per camera.
+  const details = await Promise.all(samples.map((s) => get(`/samples/${s.id}`, signal)));
+  const iqr = passIqr(run, details);
   const read = samples.reduce((sum, s) => sum + s.bytes_read, 0) / (samples.length || 1);
   const written = samples.reduce((sum, s) => sum + s.bytes_written, 0) / (samples.length || 1);
   const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
@@ -173,12 +207,13 @@ export async function render(page, { params, signal }) {
 
   page.append(h('h2', {}, 'Per camera'));
   perSampleChart(page, samples);
+  frameTimeChart(page, samples);
 
   page.append(h('h2', {}, 'Frame time per pass'));
   const timing = h('div', { class: 'charts' });
   page.append(timing);
-  passTimeChart(timing, run);
-  timing.append(h('div', {}, passTable(run)));
+  passTimeChart(timing, run, iqr);
+  timing.append(h('div', {}, passTable(run, iqr)));
 
   page.append(h('h2', {}, 'Screenshots'), gallery(run, samples, signal));
   page.append(h('h2', {}, 'Samples'), sampleTable(samples));

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Repeatability: the same atrium spec (four renderers, 4 cameras, 20 frames,
+# 1280x720, exact counting) captured several times with `tallyd capture`, one
+# process per capture; then `tallyd repeats` on the results: per renderer, each
+# capture's median frame time, the across-capture median and IQR, the
+# within-run noise (median per-sample IQR over the frames), whether every
+# capture lies in the band docs/measurement.md ("Repeatability") defines, and
+# whether the counts are identical. Build first with tests/gpu/build.sh; bring
+# the Vulkan loader's .debs in .gl/ (see run.sh). docs/accuracy.md reports the
+# figures.
+#
+#   tests/gpu/repeats.sh
+#   OUT=dir                   where results go (default ./gpu-out): repeats-<i>.json (results),
+#                             repeats.txt and repeats.json (tallyd repeats), repeats.log (wall times)
+#   TALLYD=path               tallyd to run (default build-gpu/server/tallyd)
+#   REPEATS=N                 captures (default 3)
+#   REPEATS_RESOLUTION=WxH    replaces 1280x720, e.g. 64x36 for a check on lavapipe
+#   REPEATS_FRAMES=N          replaces the 20 frames per sample
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+
+out="${OUT:-./gpu-out}"
+mkdir -p "$out"
+out="$(cd "$out" && pwd)"
+tallyd="${TALLYD:-build-gpu/server/tallyd}"
+[ -x "$tallyd" ] || { echo "repeats.sh: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; exit 2; }
+repeats="${REPEATS:-3}"
+resolution="${REPEATS_RESOLUTION:-1280x720}"
+case "$resolution" in
+  [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
+  *) echo "repeats.sh: REPEATS_RESOLUTION must be WxH, got '$resolution'" >&2; exit 2 ;;
+esac
+frames="${REPEATS_FRAMES:-20}"
+
+# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+. tests/gpu/env.sh
+tally_gpu_env || exit 2
+export TALLY_SHADER_DIR="$PWD/shaders"
+
+spec="$out/repeats-spec.json"
+sed -e "s|\[1280, 720\]|[$width, $height]|" -e "s|\"frames\": 20|\"frames\": $frames|" \
+    tests/gpu/repeats-atrium.json > "$spec"
+results=()
+for i in $(seq 1 "$repeats"); do
+  start=$(date +%s%N)
+  "$tallyd" capture --spec "$spec" --out "$out/repeats-$i.json" 2> "$out/repeats-$i.log"
+  rc=$?
+  end=$(date +%s%N)
+  echo "repeats $i/$repeats atrium ${width}x${height}: capture wall time $(( (end - start) / 1000000 )) ms, exit $rc" \
+    | tee -a "$out/repeats.log"
+  if [ "$rc" -ne 0 ]; then
+    tail -5 "$out/repeats-$i.log"
+    exit "$rc"
+  fi
+  results+=(--result "$out/repeats-$i.json")
+done
+"$tallyd" repeats "${results[@]}" > "$out/repeats.txt" || exit 1
+"$tallyd" repeats "${results[@]}" --json > "$out/repeats.json" || exit 1
+cat "$out/repeats.txt"
