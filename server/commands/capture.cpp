@@ -6,6 +6,7 @@
 #include "capture/runner.hpp"
 #include "capture/spec.hpp"
 #include "capture/summary.hpp"
+#include "capture/sweep.hpp"
 #include "commands/commands.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/renderer.hpp"
@@ -27,8 +28,17 @@ int runCapture(const CaptureArgs& args) {
   }
   auto json = nlohmann::json::parse(text, nullptr, false);
   if (json.is_discarded()) return fail("spec: not valid JSON");
-  auto spec = capture::parseCaptureSpec(json, renderers::rendererNames());
-  if (!spec) return fail("spec: " + spec.error());
+  // A spec with "sweep" is a stability sweep (capture/sweep.hpp), not a capture matrix.
+  const bool sweep = capture::isSweepSpec(json);
+  Result<capture::SweepSpec> sweepSpec = makeError("not a sweep");
+  Result<capture::CaptureSpec> spec = makeError("not a capture matrix");
+  if (sweep) {
+    sweepSpec = capture::parseSweepSpec(json, renderers::rendererNames());
+    if (!sweepSpec) return fail("spec: " + sweepSpec.error());
+  } else {
+    spec = capture::parseCaptureSpec(json, renderers::rendererNames());
+    if (!spec) return fail("spec: " + spec.error());
+  }
 
   capture::CaptureOptions options;
   options.device = args.device;
@@ -42,7 +52,7 @@ int runCapture(const CaptureArgs& args) {
   };
   Result<nlohmann::json> result = makeError("not run");
   try {
-    result = capture::runCapture(*spec, options);
+    result = sweep ? capture::runSweep(*sweepSpec, options) : capture::runCapture(*spec, options);
   } catch (const gpu::VulkanError& e) {
     return fail(std::string("Vulkan error: ") + e.what());
   } catch (const std::exception& e) {
@@ -64,7 +74,7 @@ int runCapture(const CaptureArgs& args) {
   std::error_code ec;
   std::filesystem::rename(temp, args.out, ec);
   if (ec) return fail(args.out + ": " + ec.message());
-  if (args.summary) std::cout << capture::summarize(*result);
+  if (args.summary && !sweep) std::cout << capture::summarize(*result);
   return 0;
 }
 

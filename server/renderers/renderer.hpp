@@ -62,11 +62,18 @@ struct FrameResult {
   std::vector<PassResult> passes;
 };
 
+// A fixed depth range for the projection (metres).
+struct DepthRange {
+  float zNear = 0.0f;  // > 0
+  float zFar = 0.0f;   // > zNear
+};
+
 struct RendererOptions {
   VkExtent2D extent = {320, 180};
   bool instrumented = true;  // false: the uninstrumented twin, for timing
   spirv::Mode counting;      // exact | subgroup | sampled:N
   uint32_t lights = 400;     // point lights, as in the founding study
+  DepthRange depthRange;     // unset (zeros): near/far from the scene bounds (projection.hpp)
 };
 
 class Renderer {
@@ -85,6 +92,9 @@ class Renderer {
   virtual FrameResult renderFrame(const scenes::Camera& camera) = 0;
   // The final image of the last frame, RGBA8, width x height x 4, top row first.
   virtual std::vector<uint8_t> finalImage() = 0;
+  // The depth aspect of the depth/stencil target after the last frame,
+  // width x height floats, top row first; empty where there is none.
+  virtual std::vector<float> depthImage() { return {}; }
   // What the renderer decided at setup, e.g. {"barycentrics":"extension"}.
   virtual nlohmann::json notes() const { return nlohmann::json::object(); }
   virtual void destroy() = 0;

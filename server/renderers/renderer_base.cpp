@@ -9,6 +9,7 @@
 
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
+#include "renderers/projection.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -43,19 +44,6 @@ std::string usageName(VkImageUsageFlags usage) {
   add(VK_IMAGE_USAGE_SAMPLED_BIT, "sampled");
   add(VK_IMAGE_USAGE_TRANSFER_SRC_BIT, "transfer_src");
   return out;
-}
-
-// Perspective for Vulkan: depth [0, 1] with far = 1, y flipped (positive-height
-// viewport), vertical field of view (scene.hpp).
-glm::mat4 perspective(float fovYRad, float aspect, float zNear, float zFar) {
-  float f = 1.0f / std::tan(fovYRad / 2);
-  glm::mat4 p(0.0f);
-  p[0][0] = f / aspect;
-  p[1][1] = -f;
-  p[2][2] = zFar / (zNear - zFar);
-  p[2][3] = -1.0f;
-  p[3][2] = zNear * zFar / (zNear - zFar);
-  return p;
 }
 
 }  // namespace
@@ -461,7 +449,8 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                           ResourceKind::Attachment);
     depth_ = createTarget("depth", kDepthFormat,
-                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                              VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  // depthImage() reads it back
                           ResourceKind::Depth);
 
     if (auto ok = setupPasses(); !ok) {
@@ -584,21 +573,11 @@ void RendererBase::recordAll(VkCommandBuffer cmd) {
 FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
   FrameResult frame;
   if (!ready_) return frame;
-  // Camera: near/far from the scene bounds, so the far plane lies beyond
-  // every triangle (the CPU sky estimate assumes unbounded rays).
-  const auto& bounds = scene_->bounds();
-  float diagonal = std::max(bounds.diagonal(), 1e-3f);
-  float zNear = std::clamp(diagonal * 1e-3f, 0.01f, 0.1f);
-  float zFar = (glm::length(camera.eye - bounds.center()) + diagonal * 0.5f) * 1.01f + 1.0f;
-  shaders::Camera c = {};
-  c.view = scenes::viewMatrix(camera);
-  c.proj =
-      perspective(glm::radians(camera.fovDeg), float(extent_.width) / float(extent_.height), zNear, zFar);
-  c.viewProj = c.proj * c.view;
-  c.invViewProj = glm::inverse(c.viewProj);
-  c.position = glm::vec4(camera.eye, 1.0f);
-  c.viewport = glm::vec4(extent_.width, extent_.height, 1.0f / extent_.width, 1.0f / extent_.height);
-  c.depthRange = glm::vec4(zNear, zFar, 0, 0);
+  // Near/far from the scene bounds unless the options fix them (sweeps).
+  DepthRange range = options_.depthRange.zFar > options_.depthRange.zNear && options_.depthRange.zNear > 0
+                         ? options_.depthRange
+                         : depthRangeFor(scene_->bounds(), camera);
+  shaders::Camera c = cameraUniform(camera, extent_, range);
   gpu::uploadBuffer(*ctx_, cameraBuffer_, {reinterpret_cast<const uint8_t*>(&c), sizeof c});
 
   gpu::submitAndWait(*ctx_, [&](VkCommandBuffer cmd) { recordAll(cmd); });
@@ -641,6 +620,16 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
 std::vector<uint8_t> RendererBase::finalImage() {
   if (!ready_) return {};
   return gpu::readImage(*ctx_, *final_, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+}
+
+std::vector<float> RendererBase::depthImage() {
+  if (!ready_) return {};
+  // After the skybox pass the depth target is read-only depth/stencil.
+  std::vector<uint8_t> bytes =
+      gpu::readImage(*ctx_, *depth_, VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL);
+  std::vector<float> out(bytes.size() / sizeof(float));
+  std::memcpy(out.data(), bytes.data(), out.size() * sizeof(float));
+  return out;
 }
 
 void RendererBase::destroy() {

@@ -46,6 +46,7 @@ class RendererBase : public Renderer {
   std::vector<ResourceInfo> resources() const override { return resources_; }
   FrameResult renderFrame(const scenes::Camera& camera) final;
   std::vector<uint8_t> finalImage() override;
+  std::vector<float> depthImage() override;
   void destroy() override;
   std::vector<std::string> passNames() const override;
 
