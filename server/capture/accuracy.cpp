@@ -55,11 +55,6 @@ double medianRatio(const RunCounts& run) {
   return ratios.empty() ? 0.0 : spreadOf(ratios).median;
 }
 
-std::string text(const json& j, const char* key) {
-  if (!j.contains(key) || j[key].is_null()) return "";
-  return j[key].is_string() ? j[key].get<std::string>() : j[key].dump();
-}
-
 }  // namespace
 
 bool sameFrames(const RunCounts& a, const RunCounts& b) {
@@ -117,37 +112,20 @@ std::optional<size_t> findReference(const RunCounts& run, const std::vector<RunC
 }
 
 Result<std::vector<RunCounts>> runCountsFromResult(const json& result) {
-  if (!result.is_object() || !result.contains("runs") || !result["runs"].is_array()) {
-    return makeError("not a capture result: no \"runs\" array");
-  }
-  std::string device = result.contains("device") && result["device"].is_object() ? text(result["device"], "name") : "";
+  auto runs = resultRuns(result);
+  if (!runs) return makeError(runs.error());
   std::vector<RunCounts> out;
-  for (size_t i = 0; i < result["runs"].size(); ++i) {
-    const auto& r = result["runs"][i];
-    std::string where = "runs[" + std::to_string(i) + "]";
-    if (!r.is_object() || !r.contains("samples") || !r["samples"].is_array()) return makeError(where + ": no samples");
+  for (const auto& [config, r] : *runs) {
     RunCounts run;
-    run.id = std::to_string(i);
-    run.renderer = text(r, "renderer");
-    run.scene = text(r, "scene");
-    run.sceneParams = r.contains("scene_params") ? r["scene_params"].dump() : "";
-    run.device = device;
-    run.counting = r.contains("counting") ? text(r, "counting") : "exact";
-    run.width = r.value("width", 0);
-    run.height = r.value("height", 0);
-    run.lights = r.value("lights", 0);
-    for (const auto& s : r["samples"]) {
+    static_cast<RunConfig&>(run) = config;
+    for (const auto& s : (*r)["samples"]) {
       SampleCounts sample;
-      json camera = s.value("camera", json::object());
-      camera.erase("index");
-      camera.erase("label");
-      sample.camera = camera.dump();
+      sample.camera = cameraKey(s.value("camera", json::object()));
       sample.frameMs = s.value("frame_ms", 0.0);
       sample.frameMsInstrumented = s.value("frame_ms_instrumented", 0.0);
       for (const auto& pass : s.value("passes", json::array())) {
         for (const auto& line : pass.value("resources", json::array())) {
-          std::string key = pass.value("name", "") + "/" + line.value("name", "") + " " + line.value("access", "");
-          sample.bytes[key] += line.value("bytes", 0.0);
+          sample.bytes[lineKey(pass, line)] += line.value("bytes", 0.0);
         }
       }
       run.samples.push_back(std::move(sample));

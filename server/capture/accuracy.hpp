@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "capture/run_config.hpp"
 #include "common/result.hpp"
 
 namespace tally::capture {
@@ -25,10 +26,7 @@ struct SampleCounts {
 };
 
 // What a run is, for finding its exact reference, and its samples.
-struct RunCounts {
-  std::string id;  // the run's id or position, echoed back
-  std::string renderer, scene, sceneParams, device, counting;
-  int width = 0, height = 0, lights = 0;
+struct RunCounts : RunConfig {
   std::string group;  // the capture (job) it came from; a reference from the same one is preferred
   std::vector<SampleCounts> samples;
 };

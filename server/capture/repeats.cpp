@@ -14,16 +14,6 @@ std::string number(double v) {
   return buf;
 }
 
-std::string text(const json& j, const char* key) {
-  return j.contains(key) && j[key].is_string() ? j[key].get<std::string>() : std::string();
-}
-
-double iqrOf(const json& spread) {
-  if (!spread.is_object()) return 0;
-  if (spread.contains("iqr") && spread["iqr"].is_number()) return spread["iqr"].get<double>();
-  return spread.value("q3", 0.0) - spread.value("q1", 0.0);
-}
-
 }  // namespace
 
 std::string configurationKey(const RepeatRun& run) {
@@ -127,39 +117,23 @@ std::vector<RepeatGroup> repeatGroups(const std::vector<RepeatRun>& runs) {
 }
 
 Result<std::vector<RepeatRun>> repeatRunsFromResult(const json& result, const std::string& name) {
-  if (!result.is_object() || !result.contains("runs") || !result["runs"].is_array()) {
-    return makeError("not a capture result: no \"runs\" array");
-  }
-  std::string device = result.contains("device") && result["device"].is_object() ? text(result["device"], "name") : "";
+  auto runs = resultRuns(result);
+  if (!runs) return makeError(runs.error());
   std::vector<RepeatRun> out;
-  for (size_t i = 0; i < result["runs"].size(); ++i) {
-    const auto& r = result["runs"][i];
-    std::string where = "runs[" + std::to_string(i) + "]";
-    if (!r.is_object() || !r.contains("samples") || !r["samples"].is_array()) return makeError(where + ": no samples");
+  for (const auto& [config, r] : *runs) {
     RepeatRun run;
-    run.id = name + "#" + std::to_string(i);
-    run.renderer = text(r, "renderer");
-    run.scene = text(r, "scene");
-    run.sceneParams = r.contains("scene_params") ? r["scene_params"].dump() : "";
-    run.device = device;
-    run.counting = r.contains("counting") ? text(r, "counting") : "exact";
-    run.width = r.value("width", 0);
-    run.height = r.value("height", 0);
-    run.lights = r.value("lights", 0);
-    for (const auto& s : r["samples"]) {
+    static_cast<RunConfig&>(run) = config;
+    run.id = name + "#" + config.id;
+    for (const auto& s : (*r)["samples"]) {
       RepeatSample sample;
-      json camera = s.value("camera", json::object());
-      camera.erase("index");
-      camera.erase("label");
-      sample.camera = camera.dump();
+      sample.camera = cameraKey(s.value("camera", json::object()));
       sample.frames = s.value("frames", 0);
       sample.frameMs = s.value("frame_ms", 0.0);
       sample.frameMsIqr = iqrOf(s.value("frame_ms_spread", json()));
       for (const auto& pass : s.value("passes", json::array())) {
         for (const auto& line : pass.value("resources", json::array())) {
-          std::string key = pass.value("name", "") + "/" + line.value("name", "") + " " + line.value("access", "");
           double count = line.value("count", 0.0), bytes = line.value("bytes", 0.0);
-          sample.counts[key] += count;
+          sample.counts[lineKey(pass, line)] += count;
           sample.bytes += bytes;
           if (count > 0) sample.bytesIqr += iqrOf(line.value("count_spread", json())) * bytes / count;
         }

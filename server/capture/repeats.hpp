@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "capture/run_config.hpp"
 #include "capture/stats.hpp"
 #include "common/result.hpp"
 
@@ -30,10 +31,7 @@ struct RepeatSample {
   std::map<std::string, double> counts;  // "pass/resource access" -> count per frame
 };
 
-struct RepeatRun {
-  std::string id;  // echoed back
-  std::string renderer, scene, sceneParams, device, counting;
-  int width = 0, height = 0, lights = 0;
+struct RepeatRun : RunConfig {
   std::vector<RepeatSample> samples;
 };
 

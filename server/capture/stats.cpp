@@ -33,4 +33,10 @@ nlohmann::json toJson(const Spread& s) {
           {"min", s.min},       {"max", s.max}, {"mean", s.mean}, {"n", s.n}};
 }
 
+double iqrOf(const nlohmann::json& spread) {
+  if (!spread.is_object()) return 0;
+  if (spread.contains("iqr") && spread["iqr"].is_number()) return spread["iqr"].get<double>();
+  return spread.value("q3", 0.0) - spread.value("q1", 0.0);
+}
+
 }  // namespace tally::capture

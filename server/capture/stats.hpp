@@ -22,4 +22,7 @@ struct Spread {
 Spread spreadOf(std::vector<double> values);
 nlohmann::json toJson(const Spread& s);
 
+// The IQR of a stored spread (toJson's object): 0 when there is none.
+double iqrOf(const nlohmann::json& spread);
+
 }  // namespace tally::capture

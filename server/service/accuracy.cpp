@@ -5,43 +5,16 @@
 #include <set>
 
 #include "capture/accuracy.hpp"
+#include "service/run_rows.hpp"
 
 namespace tally::service {
 namespace {
 
 using nlohmann::json;
 
-// Every run the filter selects, oldest first; false in `complete` when more
-// than kAccuracyMaxRuns matched.
-Result<std::vector<store::RunRow>> allRuns(store::Store& store, const store::RunFilter& filter, bool& complete) {
-  std::vector<store::RunRow> rows;
-  store::Page page{1000, ""};
-  complete = false;
-  for (int pages = 0; pages < kAccuracyMaxRuns / 1000; ++pages) {
-    auto got = store.listRuns(filter, page);
-    if (!got) return makeError(got.error());
-    rows.insert(rows.end(), got->runs.begin(), got->runs.end());
-    if (got->nextCursor.empty()) {
-      complete = true;
-      break;
-    }
-    page.cursor = got->nextCursor;
-  }
-  std::reverse(rows.begin(), rows.end());
-  return rows;
-}
-
 capture::RunCounts metadata(const store::RunRow& r) {
   capture::RunCounts c;
-  c.id = std::to_string(r.id);
-  c.renderer = r.renderer;
-  c.scene = r.scene;
-  c.sceneParams = r.sceneParams.dump();
-  c.device = std::to_string(r.deviceId);
-  c.counting = r.counting;
-  c.width = r.width;
-  c.height = r.height;
-  c.lights = r.lights;
+  static_cast<capture::RunConfig&>(c) = runConfigOf(r);
   c.group = std::to_string(r.jobId);
   return c;
 }
@@ -55,14 +28,11 @@ Result<bool> loadSamples(store::Store& store, int64_t runId, capture::RunCounts&
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
     capture::SampleCounts counts;
-    json camera = row.camera.is_object() ? row.camera : json::object();
-    camera.erase("index");
-    camera.erase("label");
-    counts.camera = camera.dump();
+    counts.camera = capture::cameraKey(row.camera);
     counts.frameMs = row.frameMs;
     counts.frameMsInstrumented = row.frameMsInstrumented.value_or(0.0);
     for (const auto& pass : (*sample)->passes) {
-      for (const auto& c : pass.counters) counts.bytes[pass.name + "/" + c.resource + " " + c.access] += c.bytes;
+      for (const auto& c : pass.counters) counts.bytes[lineKey(pass.name, c)] += c.bytes;
     }
     run.samples.push_back(std::move(counts));
   }
@@ -73,7 +43,7 @@ Result<bool> loadSamples(store::Store& store, int64_t runId, capture::RunCounts&
 
 Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
   bool complete = false;
-  auto selected = allRuns(store, filter, complete);
+  auto selected = selectRuns(store, filter, kAccuracyMaxRuns, complete);
   if (!selected) return makeError(selected.error());
 
   // Candidates for references: every exact run of the same renderer and
@@ -99,7 +69,7 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
     same.height = r.height;
     same.deviceId = r.deviceId;
     bool all = false;
-    auto exact = allRuns(store, same, all);
+    auto exact = selectRuns(store, same, kAccuracyMaxRuns, all);
     if (!exact) return makeError(exact.error());
     for (const auto& e : *exact) {
       if (e.counting == "exact" && !index.count(e.id)) {

@@ -4,30 +4,18 @@
 #include <map>
 
 #include "capture/repeats.hpp"
+#include "capture/stats.hpp"
+#include "service/run_rows.hpp"
 
 namespace tally::service {
 namespace {
 
 using nlohmann::json;
 
-double iqrOf(const json& spread) {
-  if (!spread.is_object()) return 0;
-  if (spread.contains("iqr") && spread["iqr"].is_number()) return spread["iqr"].get<double>();
-  return spread.value("q3", 0.0) - spread.value("q1", 0.0);
-}
-
 // The run's configuration and its samples, as repeatRunsFromResult reads a result.
 Result<capture::RepeatRun> load(store::Store& store, const store::RunRow& r) {
   capture::RepeatRun run;
-  run.id = std::to_string(r.id);
-  run.renderer = r.renderer;
-  run.scene = r.scene;
-  run.sceneParams = r.sceneParams.dump();
-  run.device = std::to_string(r.deviceId);
-  run.counting = r.counting;
-  run.width = r.width;
-  run.height = r.height;
-  run.lights = r.lights;
+  static_cast<capture::RunConfig&>(run) = runConfigOf(r);
   auto samples = store.listSamples(r.id);
   if (!samples) return makeError(samples.error());
   for (const auto& row : *samples) {
@@ -35,18 +23,15 @@ Result<capture::RepeatRun> load(store::Store& store, const store::RunRow& r) {
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
     capture::RepeatSample s;
-    json camera = row.camera.is_object() ? row.camera : json::object();
-    camera.erase("index");
-    camera.erase("label");
-    s.camera = camera.dump();
+    s.camera = capture::cameraKey(row.camera);
     s.frames = row.frames.value_or(0);
     s.frameMs = row.frameMs;
-    s.frameMsIqr = iqrOf(row.frameMsSpread);
+    s.frameMsIqr = capture::iqrOf(row.frameMsSpread);
     s.bytes = row.bytes;
     for (const auto& pass : (*sample)->passes) {
       for (const auto& c : pass.counters) {
-        s.counts[pass.name + "/" + c.resource + " " + c.access] += c.count;
-        if (c.count > 0) s.bytesIqr += iqrOf(c.countSpread) * c.bytes / c.count;
+        s.counts[lineKey(pass.name, c)] += c.count;
+        if (c.count > 0) s.bytesIqr += capture::iqrOf(c.countSpread) * c.bytes / c.count;
       }
     }
     run.samples.push_back(std::move(s));
@@ -57,20 +42,10 @@ Result<capture::RepeatRun> load(store::Store& store, const store::RunRow& r) {
 }  // namespace
 
 Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
-  std::vector<store::RunRow> rows;
-  store::Page page{1000, ""};
   bool complete = false;
-  for (int pages = 0; pages < kRepeatsMaxRuns / 1000; ++pages) {
-    auto got = store.listRuns(filter, page);
-    if (!got) return makeError(got.error());
-    rows.insert(rows.end(), got->runs.begin(), got->runs.end());
-    if (got->nextCursor.empty()) {
-      complete = true;
-      break;
-    }
-    page.cursor = got->nextCursor;
-  }
-  std::reverse(rows.begin(), rows.end());  // oldest first
+  auto selected = selectRuns(store, filter, kRepeatsMaxRuns, complete);  // oldest first
+  if (!selected) return makeError(selected.error());
+  const std::vector<store::RunRow>& rows = *selected;
 
   // Samples only for runs that share their cheap keys with another run.
   std::map<std::string, int> seen;

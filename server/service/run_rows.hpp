@@ -1,0 +1,25 @@
+// Stored runs as the accuracy and repeatability routes read them: every run a
+// filter selects (bounded), and a run's configuration in the form the shared
+// computations (capture/accuracy, capture/repeats) compare.
+#pragma once
+
+#include <vector>
+
+#include "capture/run_config.hpp"
+#include "common/result.hpp"
+#include "store/store.hpp"
+
+namespace tally::service {
+
+// Every run the filter selects, oldest first, at most maxRuns (a multiple of
+// 1000, the page size); `complete` is false when more matched.
+Result<std::vector<store::RunRow>> selectRuns(store::Store& store, const store::RunFilter& filter, int maxRuns,
+                                              bool& complete);
+
+// The run's configuration; its device is the device id (names may repeat).
+capture::RunConfig runConfigOf(const store::RunRow& row);
+
+// One stored counter line: "pass/resource access", as capture::lineKey names a result's.
+std::string lineKey(const std::string& pass, const store::Counter& counter);
+
+}  // namespace tally::service
