@@ -39,15 +39,10 @@ class DeferredRenderer final : public RendererBase {
           *ctx_, {{kNormalFormat}, {kDiffuseFormat}, {kSpecularFormat}},
           AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
       VkFramebuffer fb = framebuffer(rp, {normal->view, diffuse->view, specular->view, depth_->view});
-      auto vs = shader(p, "gbuffer.vert.glsl");
-      if (!vs) return makeError(vs.error());
-      auto fs = shader(p, "gbuffer.frag.glsl");
-      if (!fs) return makeError(fs.error());
-      gpu::GraphicsPipelineDesc desc;
-      desc.vertex = *vs;
-      desc.fragment = *fs;
-      desc.layout = pipelineLayout(materialLayout_, VK_NULL_HANDLE);
-      desc.renderPass = rp;
+      auto shaders = shaderPipeline(p, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
+                                    pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
+      if (!shaders) return makeError(shaders.error());
+      gpu::GraphicsPipelineDesc desc = *shaders;
       desc.colorAttachmentCount = 3;
       meshVertexInput(desc);
       geometryState(desc, true);
@@ -93,15 +88,10 @@ class DeferredRenderer final : public RendererBase {
           *ctx_, {{kHdrFormat}},
           AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
       VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-      auto vs = shader(p, "fullscreen.vert.glsl");
-      if (!vs) return makeError(vs.error());
-      auto fs = shader(p, "lighting.frag.glsl");
-      if (!fs) return makeError(fs.error());
-      gpu::GraphicsPipelineDesc desc;
-      desc.vertex = *vs;
-      desc.fragment = *fs;
-      desc.layout = pipelineLayout(VK_NULL_HANDLE, inputLayout);
-      desc.renderPass = rp;
+      auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "lighting.frag.glsl",
+                                    pipelineLayout(VK_NULL_HANDLE, inputLayout), rp);
+      if (!shaders) return makeError(shaders.error());
+      gpu::GraphicsPipelineDesc desc = *shaders;
       geometryPixelsOnly(desc);
       VkPipeline pipe = pipeline(desc);
       VkPipelineLayout layout = desc.layout;

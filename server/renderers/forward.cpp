@@ -67,15 +67,10 @@ class ForwardRenderer final : public RendererBase {
     if (prepass_) depth = {kDepthFormat, false, depthAttachment, depthAttachment, depthReadOnly};
     VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, {{kHdrFormat}}, depth));
     VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-    auto vs = shader(p, "forward.vert.glsl");
-    if (!vs) return makeError(vs.error());
-    auto fs = shader(p, "forward.frag.glsl");
-    if (!fs) return makeError(fs.error());
-    gpu::GraphicsPipelineDesc desc;
-    desc.vertex = *vs;
-    desc.fragment = *fs;
-    desc.layout = pipelineLayout(materialLayout_, VK_NULL_HANDLE);
-    desc.renderPass = rp;
+    auto shaders = shaderPipeline(p, "forward.vert.glsl", "forward.frag.glsl",
+                                  pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
+    if (!shaders) return makeError(shaders.error());
+    gpu::GraphicsPipelineDesc desc = *shaders;
     meshVertexInput(desc);
     geometryState(desc, !prepass_);
     if (prepass_) desc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)

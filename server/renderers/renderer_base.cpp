@@ -181,6 +181,22 @@ VkFramebuffer RendererBase::framebuffer(VkRenderPass renderPass, const std::vect
   return framebuffers_.back();
 }
 
+Result<gpu::GraphicsPipelineDesc> RendererBase::shaderPipeline(uint32_t passIndex, const std::string& vertex,
+                                                               const std::string& fragment, VkPipelineLayout layout,
+                                                               VkRenderPass renderPass,
+                                                               const std::vector<std::string>& fragmentDefines) {
+  auto vs = shader(passIndex, vertex);
+  if (!vs) return makeError(vs.error());
+  auto fs = shader(passIndex, fragment, fragmentDefines);
+  if (!fs) return makeError(fs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  desc.fragment = *fs;
+  desc.layout = layout;
+  desc.renderPass = renderPass;
+  return desc;
+}
+
 Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
                                             const std::vector<std::string>& defines) {
   auto source = gpu::loadShaderSource(*ctx_, shaderDirectory(), file);
@@ -497,14 +513,10 @@ void RendererBase::setupTonemapAndSkybox() {
           VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}},
         std::nullopt));
     VkFramebuffer fb = framebuffer(rp, {final_->view});
-    gpu::GraphicsPipelineDesc desc;
-    auto vs = shader(p, "fullscreen.vert.glsl");
-    auto fs = shader(p, "tonemap.frag.glsl");
-    if (!vs || !fs) throw std::runtime_error(!vs ? vs.error() : fs.error());
-    desc.vertex = *vs;
-    desc.fragment = *fs;
-    desc.layout = pipelineLayout(VK_NULL_HANDLE, inputLayout);
-    desc.renderPass = rp;
+    auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "tonemap.frag.glsl",
+                                  pipelineLayout(VK_NULL_HANDLE, inputLayout), rp);
+    if (!shaders) throw std::runtime_error(shaders.error());
+    gpu::GraphicsPipelineDesc desc = *shaders;
     VkPipeline pipe = pipeline(desc);
     VkPipelineLayout layout = desc.layout;
     pass(p).record = [=, this](VkCommandBuffer cmd) {
@@ -530,14 +542,10 @@ void RendererBase::setupTonemapAndSkybox() {
           VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
         AttachmentSpec{kDepthFormat, false, readOnlyDepth, readOnlyDepth, readOnlyDepth}));
     VkFramebuffer fb = framebuffer(rp, {final_->view, depth_->view});
-    gpu::GraphicsPipelineDesc desc;
-    auto vs = shader(p, "skybox.vert.glsl");
-    auto fs = shader(p, "skybox.frag.glsl");
-    if (!vs || !fs) throw std::runtime_error(!vs ? vs.error() : fs.error());
-    desc.vertex = *vs;
-    desc.fragment = *fs;
-    desc.layout = pipelineLayout(skyLayout, VK_NULL_HANDLE);
-    desc.renderPass = rp;
+    auto shaders = shaderPipeline(p, "skybox.vert.glsl", "skybox.frag.glsl", pipelineLayout(skyLayout, VK_NULL_HANDLE),
+                                  rp);
+    if (!shaders) throw std::runtime_error(shaders.error());
+    gpu::GraphicsPipelineDesc desc = *shaders;
     desc.stencilTest = true;
     desc.stencilCompare = VK_COMPARE_OP_EQUAL;
     desc.stencilReference = 0;

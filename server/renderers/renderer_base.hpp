@@ -86,6 +86,13 @@ class RendererBase : public Renderer {
   // unless options.instrumented is false; the sites go to pass `passIndex`.
   Result<VkShaderModule> shader(uint32_t passIndex, const std::string& file,
                                 const std::vector<std::string>& defines = {});
+  // The pass's vertex and fragment shaders (each through shader()) in a
+  // pipeline description for `layout` and `renderPass`; the caller adds the
+  // fixed-function state.
+  Result<gpu::GraphicsPipelineDesc> shaderPipeline(uint32_t passIndex, const std::string& vertex,
+                                                   const std::string& fragment, VkPipelineLayout layout,
+                                                   VkRenderPass renderPass,
+                                                   const std::vector<std::string>& fragmentDefines = {});
   // Sets 0 frame, 1 `material` (or empty), 2 geometry, 3 `passInput` (or
   // empty), empty up to the counter set; push constants DrawPush.
   VkPipelineLayout pipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput);

@@ -60,15 +60,9 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
       *ctx_, colors,
       AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
   VkFramebuffer fb = framebuffer(rp, views);
-  auto vs = shader(p, vertex);
-  if (!vs) return makeError(vs.error());
-  auto fs = shader(p, fragment);
-  if (!fs) return makeError(fs.error());
-  gpu::GraphicsPipelineDesc desc;
-  desc.vertex = *vs;
-  desc.fragment = *fs;
-  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
-  desc.renderPass = rp;
+  auto shaders = shaderPipeline(p, vertex, fragment, pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE), rp);
+  if (!shaders) return makeError(shaders.error());
+  gpu::GraphicsPipelineDesc desc = *shaders;
   desc.colorAttachmentCount = uint32_t(colors.size());
   meshVertexInput(desc);
   geometryState(desc, true);
@@ -133,15 +127,10 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
       createPassRenderPass(*ctx_, {{kHdrFormat}},
                            AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
   VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-  auto vs = shader(p, "fullscreen.vert.glsl");
-  if (!vs) return makeError(vs.error());
-  auto fs = indexed ? shader(p, fragment) : shader(p, fragment, {"TALLY_MAP_ARRAYS"});
-  if (!fs) return makeError(fs.error());
-  gpu::GraphicsPipelineDesc desc;
-  desc.vertex = *vs;
-  desc.fragment = *fs;
-  desc.layout = pipelineLayout(mapsLayout, inputLayout);
-  desc.renderPass = rp;
+  auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(mapsLayout, inputLayout), rp,
+                                indexed ? std::vector<std::string>{} : std::vector<std::string>{"TALLY_MAP_ARRAYS"});
+  if (!shaders) return makeError(shaders.error());
+  gpu::GraphicsPipelineDesc desc = *shaders;
   geometryPixelsOnly(desc);
   VkPipeline pipe = pipeline(desc);
   VkPipelineLayout layout = desc.layout;
