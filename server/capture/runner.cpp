@@ -254,9 +254,9 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
 
 }  // namespace
 
-Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
+Result<json> withDevice(const std::string& device, const std::function<Result<json>(gpu::Context&)>& work) {
   gpu::ContextOptions contextOptions;
-  contextOptions.device = options.device;
+  contextOptions.device = device;
   auto created = gpu::createContext(contextOptions);
   if (!created) return makeError("device: " + created.error());
   gpu::Context ctx = std::move(created).value();
@@ -264,6 +264,12 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
     gpu::Context& ctx;
     ~ContextGuard() { gpu::destroyContext(ctx); }
   } guard{ctx};
+  return work(ctx);
+}
+
+namespace {
+
+Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const CaptureOptions& options) {
 
   json result = {{"device", gpu::describe(ctx)},
                  {"spec", spec.source},
@@ -335,6 +341,12 @@ Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) 
   progress.current = "done";
   if (options.progress) options.progress(progress);
   return result;
+}
+
+}  // namespace
+
+Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
+  return withDevice(options.device, [&](gpu::Context& ctx) { return captureOn(ctx, spec, options); });
 }
 
 }  // namespace tally::capture

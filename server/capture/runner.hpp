@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "capture/spec.hpp"
+#include "gpu/context.hpp"
 #include "common/result.hpp"
 
 namespace tally::capture {
@@ -27,5 +28,10 @@ struct CaptureOptions {
 // Fails with a reason naming the sample on errors that end the capture (no
 // device, a scene that does not load, a renderer the device cannot run).
 Result<nlohmann::json> runCapture(const CaptureSpec& spec, const CaptureOptions& options);
+
+// Opens the device (as gpu::ContextOptions::device), runs `work` on it and
+// closes it again, whatever `work` returns. Fails first if there is no such device.
+Result<nlohmann::json> withDevice(const std::string& device,
+                                  const std::function<Result<nlohmann::json>(gpu::Context&)>& work);
 
 }  // namespace tally::capture

@@ -23,16 +23,9 @@ Result<SweepSpec> parseSweepSpec(const nlohmann::json& spec, const std::vector<s
 }
 
 Result<nlohmann::json> runSweep(const SweepSpec& spec, const CaptureOptions& options) {
-  gpu::ContextOptions contextOptions;
-  contextOptions.device = options.device;
-  auto created = gpu::createContext(contextOptions);
-  if (!created) return makeError("device: " + created.error());
-  gpu::Context ctx = std::move(created).value();
-  struct ContextGuard {
-    gpu::Context& ctx;
-    ~ContextGuard() { gpu::destroyContext(ctx); }
-  } guard{ctx};
-  return std::visit([&](const auto& s) { return runDepthSweep(ctx, s, options); }, spec);
+  return withDevice(options.device, [&](gpu::Context& ctx) {
+    return std::visit([&](const auto& s) { return runDepthSweep(ctx, s, options); }, spec);
+  });
 }
 
 }  // namespace tally::capture
