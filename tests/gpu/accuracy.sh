@@ -18,23 +18,11 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
-out="${OUT:-./gpu-out}"
-mkdir -p "$out"
-out="$(cd "$out" && pwd)"
-tallyd="${TALLYD:-build-gpu/server/tallyd}"
-[ -x "$tallyd" ] || { echo "accuracy.sh: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; exit 2; }
-scenes="${ACCURACY_SCENES:-atrium sponza}"
-resolution="${ACCURACY_RESOLUTION:-1280x720}"
-case "$resolution" in
-  [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
-  *) echo "accuracy.sh: ACCURACY_RESOLUTION must be WxH, got '$resolution'" >&2; exit 2 ;;
-esac
-frames="${ACCURACY_FRAMES:-10}"
-
-# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+# $out, $tallyd, $width and $height; Vulkan on the GPU machine (env.sh).
 . tests/gpu/env.sh
-tally_gpu_env || exit 2
-export TALLY_SHADER_DIR="$PWD/shaders"
+tally_gpu_script accuracy.sh ACCURACY_RESOLUTION || exit 2
+scenes="${ACCURACY_SCENES:-atrium sponza}"
+frames="${ACCURACY_FRAMES:-10}"
 sponza="$(tally_sponza_path)"
 
 status=0

@@ -38,3 +38,24 @@ tally_sponza_path() {
   [ -f "$sponza" ] || sponza="$PWD/../shared/scenes/sponza/Sponza.gltf"
   echo "$sponza"
 }
+
+# The common start of a script that runs tallyd on the GPU: sets `out` (the
+# absolute $OUT folder, made), `tallyd` ($TALLYD or build-gpu's, which must
+# exist), `width` and `height` (from RESOLUTION_VAR, a WxH environment variable
+# defaulting to 1280x720), then tally_gpu_env and the shader folder.
+#   tally_gpu_script NAME RESOLUTION_VAR
+tally_gpu_script() {
+  local name="$1" var="$2" resolution
+  out="${OUT:-./gpu-out}"
+  mkdir -p "$out"
+  out="$(cd "$out" && pwd)"
+  tallyd="${TALLYD:-build-gpu/server/tallyd}"
+  [ -x "$tallyd" ] || { echo "$name: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; return 2; }
+  resolution="${!var:-1280x720}"
+  case "$resolution" in
+    [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
+    *) echo "$name: $var must be WxH, got '$resolution'" >&2; return 2 ;;
+  esac
+  tally_gpu_env || return 2
+  export TALLY_SHADER_DIR="$PWD/shaders"
+}

@@ -19,23 +19,11 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
-out="${OUT:-./gpu-out}"
-mkdir -p "$out"
-out="$(cd "$out" && pwd)"
-tallyd="${TALLYD:-build-gpu/server/tallyd}"
-[ -x "$tallyd" ] || { echo "repeats.sh: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; exit 2; }
-repeats="${REPEATS:-3}"
-resolution="${REPEATS_RESOLUTION:-1280x720}"
-case "$resolution" in
-  [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
-  *) echo "repeats.sh: REPEATS_RESOLUTION must be WxH, got '$resolution'" >&2; exit 2 ;;
-esac
-frames="${REPEATS_FRAMES:-20}"
-
-# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+# $out, $tallyd, $width and $height; Vulkan on the GPU machine (env.sh).
 . tests/gpu/env.sh
-tally_gpu_env || exit 2
-export TALLY_SHADER_DIR="$PWD/shaders"
+tally_gpu_script repeats.sh REPEATS_RESOLUTION || exit 2
+repeats="${REPEATS:-3}"
+frames="${REPEATS_FRAMES:-20}"
 
 spec="$out/repeats-spec.json"
 sed -e "s|\[1280, 720\]|[$width, $height]|" -e "s|\"frames\": 20|\"frames\": $frames|" \

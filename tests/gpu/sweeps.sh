@@ -14,21 +14,9 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
-out="${OUT:-./gpu-out}"
-mkdir -p "$out"
-out="$(cd "$out" && pwd)"
-tallyd="${TALLYD:-build-gpu/server/tallyd}"
-[ -x "$tallyd" ] || { echo "sweeps.sh: no $tallyd (run tests/gpu/build.sh, or set TALLYD)" >&2; exit 2; }
-resolution="${SWEEP_RESOLUTION:-1280x720}"
-case "$resolution" in
-  [0-9]*x[0-9]*) width="${resolution%x*}"; height="${resolution#*x}" ;;
-  *) echo "sweeps.sh: SWEEP_RESOLUTION must be WxH, got '$resolution'" >&2; exit 2 ;;
-esac
-
-# The Vulkan loader, the NVIDIA ICD and build-gpu/lib (env.sh).
+# $out, $tallyd, $width and $height; Vulkan on the GPU machine (env.sh).
 . tests/gpu/env.sh
-tally_gpu_env || exit 2
-export TALLY_SHADER_DIR="$PWD/shaders"
+tally_gpu_script sweeps.sh SWEEP_RESOLUTION || exit 2
 
 spec="$out/sweep-depth-spec.json"
 sed -e "s|\[1280, 720\]|[$width, $height]|" tests/gpu/sweeps-depth.json > "$spec"
