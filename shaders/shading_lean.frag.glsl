@@ -17,6 +17,15 @@ layout(early_fragment_tests) in;
 layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2D visibilityTarget;  // R32_UINT
 
 // See shading.frag: non-uniform indexing, or map arrays (TALLY_MAP_ARRAYS).
+// Material selection (RendererOptions::materialSelection), defined by the
+// renderer; by default the per-pixel selection above. TALLY_SELECT_UNIFORM:
+// the index without nonuniformEXT, as the founding study wrote it (undefined
+// unless dynamically uniform: what the driver does is what is measured).
+// TALLY_SELECT_FIRST_LANE: every lane takes the first active lane's index or
+// layer, a model of a driver that scalarises the index.
+#ifdef TALLY_SELECT_FIRST_LANE
+#extension GL_KHR_shader_subgroup_ballot : require
+#endif
 #ifdef TALLY_MAP_ARRAYS
 // Fallback without descriptor indexing (lavapipe), defined by the renderer:
 // one sampler2DArray per map kind, Material::maps[k] is the layer. The
@@ -26,10 +35,20 @@ layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2DArray ambient
 layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2DArray specularMaps;
 layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2DArray roughnessMaps;
 layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2DArray normalMaps;
+#ifdef TALLY_SELECT_FIRST_LANE
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(subgroupBroadcastFirst(maps[kind]))), dx, dy)
+#else
 #define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(maps[kind])), dx, dy)
+#endif
 #else
 layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
+#if defined(TALLY_SELECT_FIRST_LANE)
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[subgroupBroadcastFirst(maps[kind])], a.uv, dx, dy)
+#elif defined(TALLY_SELECT_UNIFORM)
+#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[maps[kind]], a.uv, dx, dy)
+#else
 #define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[nonuniformEXT(maps[kind])], a.uv, dx, dy)
+#endif
 #endif
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR

@@ -10,6 +10,7 @@
 #define TALLY_DRAWS
 #define TALLY_MESH
 #include "common.h"
+#include "visibility_encoding.h"
 
 layout(early_fragment_tests) in;
 
@@ -17,8 +18,8 @@ layout(push_constant) uniform PushBlock { DrawPush push; };
 
 layout(location = 0) in vec2 inUv;
 
-layout(location = kOutVisibility) out uvec2 outVisibility;        // R32G32_UINT: id, barycentrics
-layout(location = kOutUvDerivatives) out uvec2 outUvDerivatives;  // R32G32_UINT: half2 dFdx, dFdy
+layout(location = kOutVisibility) out VisibilityTexel outVisibility;           // id, barycentrics
+layout(location = kOutUvDerivatives) out UvDerivativeTexel outUvDerivatives;  // dFdx(uv), dFdy(uv)
 
 void main() {
   uint triangle = uint(gl_PrimitiveID);
@@ -28,6 +29,6 @@ void main() {
                                         clipFromObject * vec4(toVec3(vertices[v.y].position), 1.0),
                                         clipFromObject * vec4(toVec3(vertices[v.z].position), 1.0),
                                         gl_FragCoord.xy);
-  outVisibility = uvec2(packVisibilityId(push.drawIndex, triangle), packUnorm2x16(b.lambda.yz));
-  outUvDerivatives = uvec2(packHalf2x16(dFdx(inUv)), packHalf2x16(dFdy(inUv)));
+  outVisibility = encodeVisibility(packVisibilityId(push.drawIndex, triangle), b.lambda.yz);
+  outUvDerivatives = encodeUvDerivatives(dFdx(inUv), dFdy(inUv));
 }

@@ -15,6 +15,9 @@
 #include <nlohmann/json.hpp>
 
 #include "capture/depth_sweep.hpp"
+#include "capture/edges_sweep.hpp"
+#include "capture/id_sweep.hpp"
+#include "capture/precision_sweep.hpp"
 #include "capture/runner.hpp"
 #include "common/result.hpp"
 
@@ -22,9 +25,10 @@ namespace tally::capture {
 
 // One alternative per sweep kind; later sweeps (barycentric precision,
 // material edges, id capacity) add theirs.
-using SweepSpec = std::variant<DepthSweepSpec>;
+using SweepSpec = std::variant<DepthSweepSpec, IdSweepSpec, EdgesSweepSpec, PrecisionSweepSpec>;
 
-std::vector<std::string> sweepNames();  // "depth-reconstruction"
+// "depth-reconstruction", "id-capacity", "material-edges", "visbuffer-precision"
+std::vector<std::string> sweepNames();
 
 bool isSweepSpec(const nlohmann::json& spec);  // an object with "sweep"
 

@@ -127,6 +127,56 @@ void uploadWithMips(const gpu::Context& ctx, const MipImage& image, std::span<co
   gpu::destroyBuffer(ctx, staging);
 }
 
+// Replaces levels 1.. of `layer` with a texture's own (scenes::Texture::mips,
+// checked by explicitMipsError) after uploadWithMips; leaves the image in
+// SHADER_READ_ONLY_OPTIMAL.
+void uploadExplicitMips(const gpu::Context& ctx, const MipImage& image, uint32_t layer,
+                        const std::vector<std::vector<uint8_t>>& mips) {
+  std::vector<uint8_t> texels;
+  std::vector<VkBufferImageCopy> copies;
+  for (uint32_t i = 0; i < mips.size(); ++i) {
+    const uint32_t level = i + 1;
+    VkBufferImageCopy copy = {};
+    copy.bufferOffset = texels.size();
+    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, layer, 1};
+    copy.imageExtent = {std::max(image.width >> level, 1u), std::max(image.height >> level, 1u), 1};
+    copies.push_back(copy);
+    texels.insert(texels.end(), mips[i].begin(), mips[i].end());
+  }
+  gpu::Buffer staging =
+      gpu::createBuffer(ctx, texels.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, gpu::MemoryUse::Upload);
+  gpu::uploadBuffer(ctx, staging, texels);
+  gpu::submitAndWait(ctx, [&](VkCommandBuffer cmd) {
+    barrier(cmd, image.image, 1, image.levels - 1, image.layers, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+            VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    vkCmdCopyBufferToImage(cmd, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                           uint32_t(copies.size()), copies.data());
+    barrier(cmd, image.image, 1, image.levels - 1, image.layers, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+            VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+  });
+  gpu::destroyBuffer(ctx, staging);
+}
+
+// Why a texture's explicit mips do not fit its size ("" when they do or it has none).
+std::string explicitMipsError(const scenes::Texture& t) {
+  if (t.mips.empty()) return "";
+  const uint32_t levels = mipLevels(t.width, t.height);
+  if (t.mips.size() != levels - 1) {
+    return "texture '" + t.name + "': mips has " + std::to_string(t.mips.size()) + " levels, a " +
+           std::to_string(t.width) + "x" + std::to_string(t.height) + " texture has " +
+           std::to_string(levels - 1) + " below level 0";
+  }
+  for (uint32_t level = 1; level < levels; ++level) {
+    const size_t bytes = size_t(std::max(t.width >> level, 1u)) * std::max(t.height >> level, 1u) * 4;
+    if (t.mips[level - 1].size() != bytes) {
+      return "texture '" + t.name + "': mips[" + std::to_string(level - 1) + "] (level " +
+             std::to_string(level) + ") has " + std::to_string(t.mips[level - 1].size()) + " bytes, expected " +
+             std::to_string(bytes);
+    }
+  }
+  return "";
+}
+
 // Nearest-texel resize (only glTF scenes whose maps of one kind differ in size need it).
 std::vector<uint8_t> resizeNearest(const scenes::Texture& t, uint32_t width, uint32_t height) {
   if (t.width == width && t.height == height) return t.rgba8;
@@ -214,6 +264,9 @@ GpuScene::~GpuScene() { destroy(); }
 
 Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   if (scene.meshes.empty() || scene.triangleCount() == 0) return makeError("scene: no triangles");
+  for (const auto& t : scene.textures) {
+    if (std::string why = explicitMipsError(t); !why.empty()) return makeError(why);
+  }
   // The visibility id's draw and triangle limits are the visibility buffers'
   // alone: they refuse such a scene at setup (visbuffer_base.hpp).
   destroy();
@@ -251,6 +304,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     textures_.push_back(createMipImage(ctx, t.width, t.height, mipLevels(t.width, t.height), 1, format,
                                        VK_IMAGE_VIEW_TYPE_2D));
     uploadWithMips(ctx, textures_.back(), t.rgba8);
+    if (!t.mips.empty()) uploadExplicitMips(ctx, textures_.back(), 0, t.mips);
   }
   for (uint32_t k = 0; k < kKinds; ++k) {
     dummies_[k] = createMipImage(ctx, 1, 1, 1, 1, kindFormat(k), VK_IMAGE_VIEW_TYPE_2D);
@@ -341,6 +395,15 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
       }
     }
     uploadWithMips(ctx, mapArrays_[k], texels);
+    // A layer keeps its texture's own levels where it was not resized.
+    for (uint32_t layer = 0; layer < layers; ++layer) {
+      const int32_t t = layersOf[k][layer];
+      if (t < 0) continue;
+      const scenes::Texture& texture = scene.textures[size_t(t)];
+      if (!texture.mips.empty() && texture.width == w && texture.height == h) {
+        uploadExplicitMips(ctx, mapArrays_[k], layer, texture.mips);
+      }
+    }
   }
 
   // Lights: Halton points inside the bounds, radius a third of the diagonal.

@@ -4,6 +4,50 @@
 
 namespace tally::renderers {
 
+std::string_view toString(MaterialSelection selection) {
+  switch (selection) {
+    case MaterialSelection::NonUniform: return "nonuniform";
+    case MaterialSelection::Uniform: return "uniform";
+    case MaterialSelection::FirstLane: return "first-lane";
+  }
+  return "nonuniform";
+}
+
+std::optional<MaterialSelection> parseMaterialSelection(std::string_view name) {
+  for (auto s : {MaterialSelection::NonUniform, MaterialSelection::Uniform, MaterialSelection::FirstLane}) {
+    if (name == toString(s)) return s;
+  }
+  return std::nullopt;
+}
+
+std::string_view toString(BarycentricEncoding encoding) {
+  return encoding == BarycentricEncoding::Float32 ? "float32" : "unorm16";
+}
+
+std::string_view toString(UvDerivativeEncoding encoding) {
+  switch (encoding) {
+    case UvDerivativeEncoding::Half: return "half";
+    case UvDerivativeEncoding::Unorm16Clamped: return "unorm16-clamped";
+    case UvDerivativeEncoding::Float32: return "float32";
+  }
+  return "half";
+}
+
+std::optional<BarycentricEncoding> parseBarycentricEncoding(std::string_view name) {
+  for (auto e : {BarycentricEncoding::Unorm16, BarycentricEncoding::Float32}) {
+    if (name == toString(e)) return e;
+  }
+  return std::nullopt;
+}
+
+std::optional<UvDerivativeEncoding> parseUvDerivativeEncoding(std::string_view name) {
+  for (auto e :
+       {UvDerivativeEncoding::Half, UvDerivativeEncoding::Unorm16Clamped, UvDerivativeEncoding::Float32}) {
+    if (name == toString(e)) return e;
+  }
+  return std::nullopt;
+}
+
 std::vector<std::string> rendererNames() {
   return {"forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean"};
 }

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,12 +69,62 @@ struct DepthRange {
   float zFar = 0.0f;   // > zNear
 };
 
+// How the visibility-buffer shading passes pick a pixel's material maps
+// (the material is known only per pixel there; docs/measurement.md, "Sweep:
+// material edges"). Renderers that bind maps per draw ignore it.
+enum class MaterialSelection {
+  // The nonuniformEXT index (descriptor indexing), or the per-pixel layer
+  // (map arrays): correct per pixel.
+  NonUniform,
+  // The same index without nonuniformEXT, as the founding study wrote it:
+  // undefined unless the index is dynamically uniform, so what is measured is
+  // the driver's behaviour. Needs the descriptor-indexing path.
+  Uniform,
+  // subgroupBroadcastFirst(index): every lane takes the first active lane's
+  // maps, a model of a driver that scalarises a non-uniform index. Needs
+  // subgroup ballot in fragment shaders; both map paths.
+  FirstLane,
+};
+std::string_view toString(MaterialSelection selection);  // "nonuniform", "uniform", "first-lane"
+// Empty for an unknown name.
+std::optional<MaterialSelection> parseMaterialSelection(std::string_view name);
+
+// What the fat visibility buffer ("visbuffer") stores per pixel
+// (docs/measurement.md, "Sweep: barycentric and derivative precision"). The
+// defaults are the renderer's own packing: two R32G32_UINT targets. Other
+// renderers ignore it.
+enum class BarycentricEncoding {
+  Unorm16,  // packUnorm2x16(b1, b2) beside the id: R32G32_UINT
+  // The float bits of b1, b2 beside the id: R32G32B32_UINT where the device
+  // renders to it, else R32G32B32A32_UINT.
+  Float32,
+};
+enum class UvDerivativeEncoding {
+  Half,            // packHalf2x16(dFdx(uv)), packHalf2x16(dFdy(uv)): R32G32_UINT
+  // packUnorm2x16 of each, as the founding study stored them: components
+  // clamped to [0, 1] (negative ones become 0), then 16-bit steps of 1/65535.
+  Unorm16Clamped,
+  Float32,         // the float bits of dFdx(uv), dFdy(uv): R32G32B32A32_UINT
+};
+struct VisibilityEncoding {
+  BarycentricEncoding barycentrics = BarycentricEncoding::Unorm16;
+  UvDerivativeEncoding uvDerivatives = UvDerivativeEncoding::Half;
+  bool operator==(const VisibilityEncoding&) const = default;
+};
+std::string_view toString(BarycentricEncoding encoding);   // "unorm16", "float32"
+std::string_view toString(UvDerivativeEncoding encoding);  // "half", "unorm16-clamped", "float32"
+// Empty for an unknown name.
+std::optional<BarycentricEncoding> parseBarycentricEncoding(std::string_view name);
+std::optional<UvDerivativeEncoding> parseUvDerivativeEncoding(std::string_view name);
+
 struct RendererOptions {
   VkExtent2D extent = {320, 180};
   bool instrumented = true;  // false: the uninstrumented twin, for timing
   spirv::Mode counting;      // exact | subgroup | sampled:N
   uint32_t lights = 400;     // point lights, as in the founding study
   DepthRange depthRange;     // unset (zeros): near/far from the scene bounds (projection.hpp)
+  MaterialSelection materialSelection = MaterialSelection::NonUniform;  // visibility-buffer shading passes
+  VisibilityEncoding visibility;  // the fat visibility buffer's barycentrics and uv derivatives
 };
 
 class Renderer {
@@ -95,6 +146,15 @@ class Renderer {
   // The depth aspect of the depth/stencil target after the last frame,
   // width x height floats, top row first; empty where there is none.
   virtual std::vector<float> depthImage() { return {}; }
+  // The texels of the target named `resourceName` (its ResourceInfo name)
+  // after the last frame, width x height x the format's bytes, top row first;
+  // empty where there is no such target or it was not created readable
+  // (transfer_src usage: "final", "depth", the visibility ids and the fat
+  // visibility buffer's uv derivatives).
+  virtual std::vector<uint8_t> targetBytes(std::string_view resourceName) {
+    (void)resourceName;
+    return {};
+  }
   // What the renderer decided at setup, e.g. {"barycentrics":"extension"}.
   virtual nlohmann::json notes() const { return nlohmann::json::object(); }
   virtual void destroy() = 0;

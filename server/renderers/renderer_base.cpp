@@ -30,6 +30,8 @@ std::string formatName(VkFormat format) {
     case VK_FORMAT_D32_SFLOAT_S8_UINT: return "D32_SFLOAT_S8_UINT";
     case VK_FORMAT_R32G32_UINT: return "R32G32_UINT";
     case VK_FORMAT_R32_UINT: return "R32_UINT";
+    case VK_FORMAT_R32G32B32_UINT: return "R32G32B32_UINT";
+    case VK_FORMAT_R32G32B32A32_UINT: return "R32G32B32A32_UINT";
     default: return "VkFormat " + std::to_string(int(format));
   }
 }
@@ -147,6 +149,7 @@ PassBindings RendererBase::commonBindings() const {
 const gpu::Image* RendererBase::createTarget(const std::string& name, VkFormat format,
                                              VkImageUsageFlags usage, ResourceKind kind) {
   targets_.push_back(gpu::createImage(*ctx_, extent_.width, extent_.height, format, usage));
+  targetNames_.push_back({name, usage});
   const gpu::Image& image = targets_.back();
   VkMemoryRequirements r;
   vkGetImageMemoryRequirements(ctx_->device, image.image, &r);
@@ -640,6 +643,22 @@ std::vector<float> RendererBase::depthImage() {
   return out;
 }
 
+std::vector<uint8_t> RendererBase::targetBytes(std::string_view resourceName) {
+  if (!ready_) return {};
+  for (size_t i = 0; i < targets_.size(); ++i) {
+    if (targetNames_[i].name != resourceName) continue;
+    if ((targetNames_[i].usage & VK_IMAGE_USAGE_TRANSFER_SRC_BIT) == 0) return {};
+    // Where the last frame leaves each target: "final" after the skybox pass,
+    // "depth" read-only, every other target sampled by a later pass
+    // (AttachmentSpec::final).
+    VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    if (&targets_[i] == final_) layout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+    if (&targets_[i] == depth_) layout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+    return gpu::readImage(*ctx_, targets_[i], layout);
+  }
+  return {};
+}
+
 void RendererBase::destroy() {
   if (ctx_ == nullptr) return;
   const gpu::Context& ctx = *ctx_;
@@ -665,6 +684,7 @@ void RendererBase::destroy() {
   renderPasses_.clear();
   ownedSetLayouts_.clear();
   targets_.clear();
+  targetNames_.clear();
   passes_.clear();
   resources_.clear();
   materialSets_.clear();

@@ -47,6 +47,7 @@ class RendererBase : public Renderer {
   FrameResult renderFrame(const scenes::Camera& camera) final;
   std::vector<uint8_t> finalImage() override;
   std::vector<float> depthImage() override;
+  std::vector<uint8_t> targetBytes(std::string_view resourceName) override;
   void destroy() override;
   std::vector<std::string> passNames() const override;
 
@@ -169,6 +170,11 @@ class RendererBase : public Renderer {
   gpu::TimestampQueries timestamps_;
   gpu::StatisticsQueries statistics_;
   std::deque<gpu::Image> targets_;
+  struct TargetName {
+    std::string name;
+    VkImageUsageFlags usage = 0;
+  };
+  std::vector<TargetName> targetNames_;  // parallel to targets_
   bool ready_ = false;
 
  protected:

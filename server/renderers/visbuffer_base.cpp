@@ -39,12 +39,37 @@ void VisbufferBase::addMapResources() {
   }
 }
 
+std::string materialSelectionUnsupported(const gpu::Context& ctx, MaterialSelection selection) {
+  const std::string name = "material selection '" + std::string(toString(selection)) + "'";
+  if (selection == MaterialSelection::Uniform && !ctx.descriptorIndexing) {
+    return name + " needs descriptor indexing (shaderSampledImageArrayNonUniformIndexing), which this device lacks";
+  }
+  if (selection == MaterialSelection::FirstLane) {
+    // The context keeps only what subgroup counting needs; ask again.
+    VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 props = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    props.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties2(ctx.physicalDevice, &props);
+    const bool fragment = (subgroup.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) != 0;
+    const bool ballot = (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_BALLOT_BIT) != 0;
+    if (!fragment || !ballot) {
+      return name + " needs subgroup ballot in fragment shaders (subgroupBroadcastFirst), which this device " +
+             "lacks (VkPhysicalDeviceSubgroupProperties: " +
+             (fragment ? "" : "supportedStages without FRAGMENT") + (!fragment && !ballot ? ", " : "") +
+             (ballot ? "" : "supportedOperations without BALLOT") + ")";
+    }
+  }
+  return "";
+}
+
 nlohmann::json VisbufferBase::notes() const {
-  return {{"material_maps", indexedMaps() ? "descriptor_indexing" : "texture_arrays"}};
+  return {{"material_maps", indexedMaps() ? "descriptor_indexing" : "texture_arrays"},
+          {"material_selection", toString(options_.materialSelection)}};
 }
 
 Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const std::string& fragment,
-                                              const std::vector<Target>& targets) {
+                                              const std::vector<Target>& targets,
+                                              const std::vector<std::string>& defines) {
   const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   uint32_t p = addPass("visibility");
@@ -60,7 +85,8 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
       *ctx_, colors,
       AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
   VkFramebuffer fb = framebuffer(rp, views);
-  auto shaders = shaderPipeline(p, vertex, fragment, pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE), rp);
+  auto shaders =
+      shaderPipeline(p, vertex, fragment, pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE), rp, defines);
   if (!shaders) return makeError(shaders.error());
   gpu::GraphicsPipelineDesc desc = *shaders;
   desc.colorAttachmentCount = uint32_t(colors.size());
@@ -86,7 +112,8 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
   return true;
 }
 
-Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const std::vector<Target>& inputs) {
+Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const std::vector<Target>& inputs,
+                                           const std::vector<std::string>& encodingDefines) {
   const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   uint32_t p = addPass("shading");
   std::vector<VkDescriptorType> types(inputs.size(), VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER);
@@ -98,6 +125,22 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
     b.bind(shaders::kSetPassInput, i, inputs[i].name);
   }
   const bool indexed = indexedMaps();
+  std::vector<std::string> defines = encodingDefines;
+  if (!indexed) defines.push_back("TALLY_MAP_ARRAYS");
+  const MaterialSelection selection = options_.materialSelection;
+  if (std::string why = materialSelectionUnsupported(*ctx_, selection); !why.empty()) {
+    return makeError(std::string(name()) + ": " + why);
+  }
+  if (selection == MaterialSelection::Uniform) {
+    // Map arrays select by layer: there is no descriptor index to leave non-uniform.
+    if (!indexed) {
+      return makeError(std::string(name()) + ": material selection 'uniform' needs the descriptor-indexing " +
+                       "path, and the scene's maps do not fit materialMaps[" +
+                       std::to_string(shaders::kMaxMaterialMaps) + "]");
+    }
+    defines.push_back("TALLY_SELECT_UNIFORM");
+  }
+  if (selection == MaterialSelection::FirstLane) defines.push_back("TALLY_SELECT_FIRST_LANE");
   VkDescriptorSetLayout mapsLayout = mapArrayLayout_;
   VkDescriptorSet maps = mapArraySet_;
   VkDescriptorSet geometry = VK_NULL_HANDLE;
@@ -127,8 +170,8 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
       createPassRenderPass(*ctx_, {{kHdrFormat}},
                            AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
   VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-  auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(mapsLayout, inputLayout), rp,
-                                indexed ? std::vector<std::string>{} : std::vector<std::string>{"TALLY_MAP_ARRAYS"});
+  auto shaders =
+      shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(mapsLayout, inputLayout), rp, defines);
   if (!shaders) return makeError(shaders.error());
   gpu::GraphicsPipelineDesc desc = *shaders;
   geometryPixelsOnly(desc);

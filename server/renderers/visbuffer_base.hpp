@@ -8,7 +8,9 @@
 // texture (counts attributed per element to its texture's kind); without it
 // (lavapipe), one sampler2DArray per map kind (shaders compiled with
 // TALLY_MAP_ARRAYS), the layer per pixel from Material::maps, maps of one
-// kind resized to the largest of that kind. Both select per pixel.
+// kind resized to the largest of that kind. Both select per pixel, unless
+// RendererOptions::materialSelection asks for the founding study's uniform
+// index or the first-lane model (shading.frag's SAMPLE_MAP).
 #pragma once
 
 #include <string>
@@ -26,6 +28,11 @@ namespace tally::renderers {
 // Empty when `draws` fits, else the limit and the scene's count.
 std::string visibilityIdOverflow(const std::vector<GpuDraw>& draws);
 
+// Why `selection` cannot run on this device ("" when it can): "uniform" needs
+// descriptor indexing, "first-lane" subgroup ballot in fragment shaders.
+// Setup fails with this reason, prefixed with the renderer's name.
+std::string materialSelectionUnsupported(const gpu::Context& ctx, MaterialSelection selection);
+
 class VisbufferBase : public RendererBase {
  public:
   nlohmann::json notes() const override;
@@ -40,11 +47,14 @@ class VisbufferBase : public RendererBase {
     std::string name;  // ResourceInfo name
   };
   std::vector<std::string> ownPassNames() const override { return {"visibility", "shading"}; }
-  // Visibility targets are cleared to shaders::kVisibilityClear.
+  // Visibility targets are cleared to shaders::kVisibilityClear. `defines`
+  // go to the fragment shader (the variant's encoding).
   Result<bool> addVisibilityPass(const std::string& vertex, const std::string& fragment,
-                                 const std::vector<Target>& targets);
-  // `inputs` at set 3, bindings 0, 1, ... in order.
-  Result<bool> addShadingPass(const std::string& fragment, const std::vector<Target>& inputs);
+                                 const std::vector<Target>& targets, const std::vector<std::string>& defines = {});
+  // `inputs` at set 3, bindings 0, 1, ... in order; `defines` as above, beside
+  // those of the map path and material selection.
+  Result<bool> addShadingPass(const std::string& fragment, const std::vector<Target>& inputs,
+                              const std::vector<std::string>& defines = {});
 };
 
 }  // namespace tally::renderers

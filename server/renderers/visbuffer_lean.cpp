@@ -18,7 +18,10 @@ class LeanVisbufferRenderer final : public VisbufferBase {
     if (auto fits = checkIdCapacity(); !fits) return fits;
     addMapResources();
     const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-    Target id{createTarget("visibility.id", kIdFormat, usage, ResourceKind::Attachment), "visibility.id"};
+    // The ids are readable (targetBytes) so they can be checked against the geometry.
+    Target id{createTarget("visibility.id", kIdFormat, usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                           ResourceKind::Attachment),
+              "visibility.id"};
     auto ok = addVisibilityPass("zprepass.vert.glsl", "visibility_lean.frag.glsl", {id});
     if (!ok) return ok;
     return addShadingPass("shading_lean.frag.glsl", {id});

@@ -86,13 +86,17 @@ struct Material {
   int32_t map(MapSlot slot) const { return maps[static_cast<size_t>(slot)]; }
 };
 
-// Level 0 only: the GPU side generates the mip chain.
+// Level 0; the GPU side generates the mip chain unless `mips` gives it.
 struct Texture {
   std::string name;
   uint32_t width = 0;
   uint32_t height = 0;
   bool srgb = false;
   std::vector<uint8_t> rgba8;  // width * height * 4 bytes, rows top to bottom
+  // Levels 1, 2, ... down to 1x1 (each max(1, previous / 2) per side), RGBA8
+  // as rgba8: a texture whose levels must differ from box-filtered ones
+  // (the precision sweep sees the mip level in the image). Empty: generated.
+  std::vector<std::vector<uint8_t>> mips;
 };
 
 struct Camera {
