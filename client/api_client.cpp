@@ -1,5 +1,6 @@
 #include "api_client.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 
 #include <httplib.h>
@@ -44,6 +45,14 @@ std::vector<std::pair<std::string, std::string>> filterParams(const RunFilters& 
   if (f.device) p.emplace_back("device", *f.device);
   if (f.capture) p.emplace_back("capture", *f.capture);
   if (f.runs) p.emplace_back("runs", *f.runs);
+  return p;
+}
+
+std::vector<std::pair<std::string, std::string>> sweepParams(const SweepFilters& f) {
+  std::vector<std::pair<std::string, std::string>> p;
+  if (f.name) p.emplace_back("name", *f.name);
+  if (f.device) p.emplace_back("device", *f.device);
+  if (f.capture) p.emplace_back("capture", *f.capture);
   return p;
 }
 
@@ -219,6 +228,30 @@ Result<json> ApiClient::compare(const std::vector<std::string>& runIds) {
   return sendJson("GET", "/api/compare" + query({{"runs", ids}}));
 }
 
+Result<json> ApiClient::listSweeps(const SweepFilters& filters, std::optional<int> limit,
+                                   const std::string& cursor) {
+  auto params = sweepParams(filters);
+  if (limit) params.emplace_back("limit", std::to_string(*limit));
+  if (!cursor.empty()) params.emplace_back("cursor", cursor);
+  return sendJson("GET", "/api/sweeps" + query(params));
+}
+
+Result<json> ApiClient::listAllSweeps(const SweepFilters& filters, std::optional<int> limit) {
+  json all = {{"sweeps", json::array()}};
+  std::string cursor;
+  for (int page = 0; page < 100000; ++page) {  // as listAllRuns: a looping cursor must not hang us
+    auto res = listSweeps(filters, limit, cursor);
+    if (!res) return res;
+    for (auto& sweep : sweepList(*res)) all["sweeps"].push_back(std::move(sweep));
+    std::string next = nextCursor(*res);
+    if (next.empty() || next == cursor) break;
+    cursor = next;
+  }
+  return all;
+}
+
+Result<json> ApiClient::getSweep(const std::string& id) { return sendJson("GET", "/api/sweeps/" + pathId(id)); }
+
 Result<std::string> ApiClient::exportRuns(const std::string& format, const RunFilters& filters) {
   auto params = filterParams(filters);
   params.insert(params.begin(), {"format", format});
@@ -273,6 +306,7 @@ JobView jobView(const json& job) {
   if (v.done && v.total && *v.total > 0)
     v.fraction = static_cast<double>(*v.done) / static_cast<double>(*v.total);
   for (const auto& r : array(job, "runs")) v.runs.push_back(idString(r));
+  for (const auto& r : array(job, "sweeps")) v.sweeps.push_back(idString(r));
   return v;
 }
 
@@ -351,6 +385,94 @@ std::pair<double, double> sampleReadWrite(const json& sample) {
     }
   }
   return {read, written};
+}
+
+SweepView sweepView(const json& sweep) {
+  SweepView v;
+  v.id = str(sweep, "id");
+  v.capture = str(sweep, "job_id");
+  v.name = str(sweep, "name");
+  if (const json* d = field(sweep, "device"); d && d->is_object()) {
+    v.device = str(*d, "name");
+  } else {
+    v.device = str(sweep, "device");
+  }
+  v.createdAt = str(sweep, "created_at");
+  v.points = integer(sweep, "point_count");
+  for (const auto& p : array(sweep, "parameters")) v.parameters.push_back(idString(p));
+  v.threshold = sweep.is_object() ? sweep.value("threshold", json()) : json();
+  v.failsAt = sweep.is_object() ? sweep.value("fails_at", json()) : json();
+  return v;
+}
+
+std::vector<json> sweepList(const json& page) { return array(page, "sweeps"); }
+
+json pointValue(const json& point, const std::string& dotted) {
+  const json* at = &point;
+  size_t start = 0;
+  while (true) {
+    size_t dot = dotted.find('.', start);
+    at = field(*at, dotted.substr(start, dot == std::string::npos ? std::string::npos : dot - start).c_str());
+    if (!at) return nullptr;
+    if (dot == std::string::npos) return *at;
+    start = dot + 1;
+  }
+}
+
+namespace {
+
+// "0.01", "1000", "1e-05": a value as a short cell (%.6g for numbers).
+std::string shortValue(const json& v) {
+  if (v.is_number_float()) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v.get<double>());
+    return buf;
+  }
+  return idString(v);
+}
+
+void addGroups(std::vector<FailsAtRow>& rows, const std::string& swept, const json& groups) {
+  if (!groups.is_array()) {
+    // The whole axis holds, or a bare value for one group.
+    rows.push_back({swept, "", groups.is_null() ? "" : shortValue(groups)});
+    return;
+  }
+  for (const auto& g : groups) {
+    FailsAtRow row{swept, "", ""};
+    if (g.is_object()) {
+      for (const auto& [key, value] : g.items()) {
+        if (key == swept) {
+          row.value = value.is_null() ? "" : shortValue(value);
+        } else {
+          row.group += (row.group.empty() ? "" : " ") + key + "=" + shortValue(value);
+        }
+      }
+    } else {
+      row.value = g.is_null() ? "" : shortValue(g);
+    }
+    rows.push_back(std::move(row));
+  }
+}
+
+}  // namespace
+
+std::vector<FailsAtRow> failsAtRows(const json& failsAt, const std::vector<std::string>& parameters) {
+  std::vector<FailsAtRow> rows;
+  if (failsAt.is_object()) {
+    for (const auto& [swept, groups] : failsAt.items()) addGroups(rows, swept, groups);
+  } else if (failsAt.is_array()) {
+    std::string swept;
+    for (auto p = parameters.rbegin(); p != parameters.rend() && swept.empty(); ++p) {
+      bool all = !failsAt.empty();
+      for (const auto& g : failsAt) {
+        const json* v = g.is_object() && g.contains(*p) ? &g[*p] : nullptr;
+        all = all && v && (v->is_number() || v->is_null());
+      }
+      if (all) swept = *p;
+    }
+    addGroups(rows, swept, failsAt);
+  }
+  return rows;
 }
 
 CompareView compareView(const json& comparison) {

@@ -46,6 +46,11 @@ struct RunFilters {
   std::optional<int> width, height;
 };
 
+// Filters of /api/sweeps; unset ones are not sent.
+struct SweepFilters {
+  std::optional<std::string> name, device, capture;
+};
+
 class ApiClient {
  public:
   explicit ApiClient(ClientOptions options);
@@ -68,6 +73,11 @@ class ApiClient {
   Result<json> getRunSamples(const std::string& id);
   Result<json> getSample(const std::string& id);
   Result<json> compare(const std::vector<std::string>& runIds);
+  // One page of sweeps; cursor empty for the first.
+  Result<json> listSweeps(const SweepFilters& filters, std::optional<int> limit, const std::string& cursor = "");
+  // Follows next_cursor to the end; {"sweeps":[...every page's sweeps...]}.
+  Result<json> listAllSweeps(const SweepFilters& filters, std::optional<int> limit);
+  Result<json> getSweep(const std::string& id);
   // The export body, verbatim.
   Result<std::string> exportRuns(const std::string& format, const RunFilters& filters);
 
@@ -101,6 +111,7 @@ struct JobView {
   std::optional<double> fraction;      // 0..1, from counts or a bare number
   std::optional<int> attempts;
   std::vector<std::string> runs;
+  std::vector<std::string> sweeps;  // the sweep a finished sweep job stored
   bool finished() const {
     return status == protocol::kJobDone || status == protocol::kJobFailed ||
            status == protocol::kJobCancelled;
@@ -142,5 +153,27 @@ struct CompareView {
   std::vector<CompareRow> rows;
 };
 CompareView compareView(const json& comparison);
+
+struct SweepView {
+  std::string id, capture, name, device, createdAt;
+  std::optional<int64_t> points;
+  std::vector<std::string> parameters;
+  json threshold, failsAt;  // as the server gives them; failsAt null: nothing fails
+};
+SweepView sweepView(const json& sweep);
+std::vector<json> sweepList(const json& page);  // the "sweeps" array
+
+// One row of a sweep's fails_at: the swept parameter, the values that hold
+// the group's other parameters fixed (key=value, space-separated), and the
+// value where it fails (empty: the group holds over the range). fails_at is
+// {param: [groups] | null} or one [groups] list; in a list, the swept
+// parameter is the last of `parameters` that every group carries as a number
+// or null.
+struct FailsAtRow {
+  std::string swept, group, value;
+};
+std::vector<FailsAtRow> failsAtRows(const json& failsAt, const std::vector<std::string>& parameters);
+// A point's value at a dotted path ("error.max_relative"), or null.
+json pointValue(const json& point, const std::string& dotted);
 
 }  // namespace tally::client

@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -121,7 +122,11 @@ int runCapture(ApiClient& api, const CaptureArgs& args, Io& io) {
   if (job.status == protocol::kJobDone) {
     if (!io.json) {
       io.out << "capture " << job.id << " done";
-      if (!job.runs.empty()) {
+      if (!job.sweeps.empty()) {
+        io.out << ": sweep";
+        for (const auto& id : job.sweeps) io.out << ' ' << id;
+        io.out << " (see `tally sweep " << job.sweeps.front() << "`)";
+      } else if (!job.runs.empty()) {
         io.out << ": runs";
         for (const auto& r : job.runs) io.out << ' ' << r;
       } else {
@@ -157,6 +162,11 @@ int runStatus(ApiClient& api, const std::string& id, Io& io) {
       std::string runs;
       for (const auto& r : j.runs) runs += (runs.empty() ? "" : " ") + r;
       t.addRow({"runs", runs});
+    }
+    if (!j.sweeps.empty()) {
+      std::string sweeps;
+      for (const auto& s : j.sweeps) sweeps += (sweeps.empty() ? "" : " ") + s;
+      t.addRow({"sweep", sweeps});
     }
     t.print(io.out);
     return 0;
@@ -312,6 +322,118 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
     t.addRow(cells);
   }
   t.print(io.out);
+  return 0;
+}
+
+namespace {
+
+// {"relative": 0.001} -> "relative 0.001"; several keys joined by ", ".
+std::string thresholdText(const json& threshold) {
+  if (!threshold.is_object()) return threshold.is_null() ? kMissing : threshold.dump();
+  std::string text;
+  for (const auto& [key, value] : threshold.items()) {
+    text += (text.empty() ? "" : ", ") + key + " " + (value.is_number() ? fixedOrSci(value.get<double>()) : value.dump());
+  }
+  return text.empty() ? kMissing : text;
+}
+
+// The list's one-cell summary of fails_at: per swept parameter, how many of
+// its groups fail ("distance 1/1, far_over_near 1/2"), or "holds".
+std::string failsSummary(const SweepView& s) {
+  if (s.failsAt.is_null()) return "holds";
+  std::vector<std::pair<std::string, std::pair<int, int>>> counts;  // swept -> failing, groups
+  for (const auto& row : failsAtRows(s.failsAt, s.parameters)) {
+    auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) { return c.first == row.swept; });
+    if (it == counts.end()) it = counts.insert(counts.end(), {row.swept, {0, 0}});
+    it->second.first += row.value.empty() ? 0 : 1;
+    it->second.second += 1;
+  }
+  std::string text;
+  for (const auto& [swept, n] : counts) {
+    text += (text.empty() ? "" : ", ") + (swept.empty() ? std::string("groups") : swept) + " " +
+            std::to_string(n.first) + "/" + std::to_string(n.second);
+  }
+  return text;
+}
+
+}  // namespace
+
+int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io) {
+  auto res = args.all ? api.listAllSweeps(args.filters, args.limit) : api.listSweeps(args.filters, args.limit);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t({{"ID", Align::Right},
+           {"CAPTURE", Align::Right},
+           {"NAME"},
+           {"CREATED"},
+           {"DEVICE"},
+           {"POINTS", Align::Right},
+           {"THRESHOLD"},
+           {"FAILING GROUPS"}});
+  for (const auto& sweep : sweepList(*res)) {
+    SweepView s = sweepView(sweep);
+    t.addRow({s.id, orMissing(s.capture), s.name, orMissing(s.createdAt), orMissing(s.device),
+              s.points ? std::to_string(*s.points) : kMissing, thresholdText(s.threshold), failsSummary(s)});
+  }
+  t.print(io.out);
+  std::string next = nextCursor(*res);
+  if (!args.all && !next.empty()) io.err << "more sweeps: add --all, or --limit N\n";
+  return 0;
+}
+
+int runSweep(ApiClient& api, const std::string& sweepId, Io& io) {
+  auto res = api.getSweep(sweepId);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  SweepView s = sweepView(*res);
+  const json result = res->is_object() ? res->value("result", json::object()) : json::object();
+  io.out << "sweep " << s.id << ": " << s.name << "   capture: " << orMissing(s.capture) << '\n';
+  io.out << "device: " << orMissing(s.device) << "   created: " << orMissing(s.createdAt)
+         << "   points: " << (s.points ? std::to_string(*s.points) : kMissing)
+         << "   threshold: " << thresholdText(s.threshold) << "\n\n";
+
+  if (s.failsAt.is_null()) {
+    io.out << "fails at: nowhere; every point holds over the range\n\n";
+  } else {
+    Table fails({{"SWEPT"}, {"GROUP"}, {"FAILS AT", Align::Right}});
+    for (const auto& row : failsAtRows(s.failsAt, s.parameters)) {
+      fails.addRow({orMissing(row.swept), row.group.empty() ? kMissing : row.group,
+                    row.value.empty() ? "holds over the range" : row.value});
+    }
+    fails.print(io.out);
+    io.out << '\n';
+  }
+
+  // Points: the parameters, then every value the plots draw.
+  std::vector<std::string> columns = s.parameters;
+  if (result.contains("plots") && result["plots"].is_array()) {
+    for (const auto& plot : result["plots"]) {
+      for (const char* axis : {"x", "y"}) {
+        std::string path = plot.is_object() && plot.contains(axis) ? idString(plot[axis]) : "";
+        if (!path.empty() && std::find(columns.begin(), columns.end(), path) == columns.end()) columns.push_back(path);
+      }
+    }
+  }
+  std::vector<Table::Column> header;
+  for (size_t i = 0; i < columns.size(); ++i) header.push_back({columns[i], Align::Right});
+  Table points(header);
+  if (result.contains("points") && result["points"].is_array()) {
+    for (const auto& point : result["points"]) {
+      std::vector<std::string> cells;
+      for (const auto& c : columns) {
+        json v = pointValue(point, c);
+        cells.push_back(v.is_null() ? kMissing : v.is_number() ? fixedOrSci(v.get<double>()) : idString(v));
+      }
+      points.addRow(cells);
+    }
+  }
+  points.print(io.out);
   return 0;
 }
 

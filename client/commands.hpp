@@ -40,6 +40,15 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io);
 int runShow(ApiClient& api, const std::string& runId, Io& io);
 int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io);
 
+struct SweepsArgs {
+  SweepFilters filters;
+  std::optional<int> limit;
+  bool all = false;  // follow next_cursor to the end
+};
+int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io);
+// Its threshold, where it fails (fails_at) and its points.
+int runSweep(ApiClient& api, const std::string& sweepId, Io& io);
+
 struct ExportArgs {
   std::string format = "csv";
   RunFilters filters;

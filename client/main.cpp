@@ -46,7 +46,9 @@ int main(int argc, char** argv) {
   CaptureArgs capture;
   auto* cap =
       app.add_subcommand("capture", "Submit a capture spec and follow its progress until it finishes");
-  cap->add_option("--spec", capture.spec, "Capture spec JSON file, or - for stdin (docs/result-schema.md)")
+  cap->add_option("--spec", capture.spec,
+                  "Capture spec JSON file, or - for stdin (docs/result-schema.md); a spec with \"sweep\" runs a "
+                  "stability sweep")
       ->required();
   cap->add_flag("--no-wait", capture.noWait, "Print the capture id and exit without waiting");
   cap->add_option("--idempotency-key", capture.idempotencyKey,
@@ -91,6 +93,25 @@ int main(int argc, char** argv) {
       ->expected(2, 4);
   compare->footer("Example:\n  tally compare 12 15");
 
+  SweepsArgs sweeps;
+  auto* sweepsCmd = app.add_subcommand("sweeps", "List stability sweeps, newest first, with where they fail");
+  sweepsCmd->add_option("--name", sweeps.filters.name, "Only this sweep (e.g. depth-reconstruction)");
+  sweepsCmd->add_option("--device", sweeps.filters.device, "Only this device (its exact name, or its id)");
+  sweepsCmd->add_option("--capture", sweeps.filters.capture, "Only the sweep of this capture id");
+  sweepsCmd->add_option("--limit", sweeps.limit, "Page size (1..1000)")->check(CLI::Range(1, 1000));
+  sweepsCmd->add_flag("--all", sweeps.all, "Fetch every page");
+  sweepsCmd->footer(
+      "FAILING GROUPS: per swept parameter, the groups of points whose error reaches the threshold, of all.\n"
+      "Example:\n  tally sweeps --name depth-reconstruction");
+
+  std::string sweepId;
+  auto* sweepCmd =
+      app.add_subcommand("sweep", "Show a stability sweep: its threshold, where it fails, and its points");
+  sweepCmd->add_option("SWEEP", sweepId, "Sweep id")->required();
+  sweepCmd->footer(
+      "Submit a sweep with `tally capture --spec SPEC` (a spec with \"sweep\", docs/result-schema.md).\n"
+      "Example:\n  tally sweep 3\n  tally sweep 3 --json");
+
   ExportArgs exportArgs;
   auto* exportCmd =
       app.add_subcommand("export", "Export runs as CSV or JSON, exactly as the server writes it");
@@ -128,6 +149,8 @@ int main(int argc, char** argv) {
   if (runsCmd->parsed()) return runRuns(api, runs, io);
   if (show->parsed()) return runShow(api, showId, io);
   if (compare->parsed()) return runCompare(api, compareIds, io);
+  if (sweepsCmd->parsed()) return runSweeps(api, sweeps, io);
+  if (sweepCmd->parsed()) return runSweep(api, sweepId, io);
   if (exportCmd->parsed()) return runExport(api, exportArgs, io);
   std::cout << app.help();
   return 0;

@@ -69,6 +69,8 @@ std::string fixed(std::optional<double> value, int decimals) {
   return buf;
 }
 
+std::string fixedOrSci(double value) { return format("%.6g", value); }
+
 std::string percent(std::optional<double> fraction) {
   return fraction ? fixed(*fraction * 100, 1) + "%" : kMissing;
 }

@@ -35,6 +35,8 @@ std::string humanBytes(double bytes);
 std::string humanBytes(std::optional<double> bytes);
 // Fixed decimals, e.g. fixed(1.834, 2) -> "1.83"; kMissing when empty.
 std::string fixed(std::optional<double> value, int decimals);
+// Six significant digits, "%.6g": 0.001 -> "0.001", 1e-05 -> "1e-05", 300 -> "300".
+std::string fixedOrSci(double value);
 // 0.31 -> "31.0%".
 std::string percent(std::optional<double> fraction);
 // 1.1 -> "1.10x".

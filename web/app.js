@@ -11,6 +11,8 @@ import * as capture from './views/capture.js';
 import * as compare from './views/compare.js';
 import * as run from './views/run.js';
 import * as runs from './views/runs.js';
+import * as sweep from './views/sweep.js';
+import * as sweeps from './views/sweeps.js';
 
 // pattern -> view; ":id" captures one path segment.
 const kRoutes = [
@@ -18,6 +20,8 @@ const kRoutes = [
   ['/runs/:id', run, 'runs'],
   ['/compare', compare, 'compare'],
   ['/accuracy', accuracy, 'accuracy'],
+  ['/sweeps', sweeps, 'sweeps'],
+  ['/sweeps/:id', sweep, 'sweeps'],
   ['/capture', capture, 'capture'],
 ];
 

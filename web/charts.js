@@ -52,6 +52,32 @@ const whiskerPlugin = {
 };
 Chart.register(whiskerPlugin);
 
+// Threshold lines: a dataset flagged `threshold: true` (two points at its
+// value, for the legend and the data table) is drawn as a dashed horizontal
+// line across the whole plot area, however narrow the x range of its points.
+const thresholdPlugin = {
+  id: 'tallyThreshold',
+  afterDatasetsDraw(chart) {
+    const { ctx, chartArea } = chart;
+    chart.data.datasets.forEach((d, di) => {
+      const meta = chart.getDatasetMeta(di);
+      if (!d.threshold || meta.hidden || !d.data.length) return;
+      const y = chart.scales[meta.yAxisID].getPixelForValue(d.data[0].y);
+      if (!(y >= chartArea.top && y <= chartArea.bottom)) return;
+      ctx.save();
+      ctx.strokeStyle = d.borderColor;
+      ctx.lineWidth = 2;
+      ctx.setLineDash(d.borderDash || [6, 4]);
+      ctx.beginPath();
+      ctx.moveTo(chartArea.left, y);
+      ctx.lineTo(chartArea.right, y);
+      ctx.stroke();
+      ctx.restore();
+    });
+  },
+};
+Chart.register(thresholdPlugin);
+
 // n well-separated colours; the same index gets the same colour in every chart.
 export function color(i, alpha = 1) {
   const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most

@@ -405,6 +405,29 @@ Result<json> runDepthSweep(gpu::Context& ctx, const DepthSweepSpec& spec, const 
   result["predicted_fails_at"] = pDistance.is_null() && pRatio.is_null()
                                      ? json(nullptr)
                                      : json{{"distance", pDistance}, {"far_over_near", pRatio}};
+  // The charts of the dashboard (docs/result-schema.md, "Sweep results"): the
+  // measured error the threshold applies to, against each swept axis, one line
+  // per group that fails_at states a value for. Both axes span decades.
+  const std::string errorPath = spec.relativeThreshold ? "error.max_relative" : "error.max_abs";
+  const std::string errorLabel = spec.relativeThreshold ? "max error / distance from the eye" : "max error (m)";
+  result["plots"] = json::array({
+      {{"title", "Position error against distance"},
+       {"x", "distance"},
+       {"x_log", true},
+       {"y", errorPath},
+       {"y_log", true},
+       {"y_label", errorLabel},
+       {"series", {"near", "far"}},
+       {"threshold", spec.threshold}},
+      {{"title", "Position error against far / near"},
+       {"x", "far_over_near"},
+       {"x_log", true},
+       {"y", errorPath},
+       {"y_log", true},
+       {"y_label", errorLabel},
+       {"series", {"distance", fixedEnd}},
+       {"threshold", spec.threshold}},
+  });
   return result;
 }
 

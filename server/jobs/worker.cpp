@@ -171,6 +171,24 @@ void Worker::runJob(const store::Job& job) {
   auto result = nlohmann::json::parse(text->begin(), text->end(), nullptr, false);
   if (result.is_discarded() || !result.is_object()) return fail("the capture's result is not valid JSON");
 
+  // A spec with "sweep" ran a stability sweep (capture::isSweepSpec): its
+  // result is one sweeps row, not runs.
+  if (job.spec.is_object() && job.spec.contains("sweep")) {
+    if (!result.contains("sweep") || result["sweep"] != job.spec["sweep"]) {
+      return fail("the sweep's result names sweep " + result.value("sweep", nlohmann::json()).dump() +
+                  ", the spec " + job.spec["sweep"].dump());
+    }
+    auto sweep = store_.ingestSweep(job.id, result);
+    if (!sweep) return fail("cannot store the sweep: " + sweep.error());
+    auto finished = store_.finishJob(job.id, store::JobStatus::Done);
+    if (!finished) {
+      log(name + ": cannot finish: " + finished.error());
+    } else {
+      log(name + ": done, sweep " + std::to_string(*sweep));
+    }
+    return;
+  }
+
   std::map<std::string, std::vector<uint8_t>> screenshots;
   fs::path shotDir = dir / (outPath.stem().string() + "-screenshots");
   try {

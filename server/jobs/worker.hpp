@@ -1,7 +1,8 @@
 // Worker: the one thread that runs capture jobs. It owns the writer Store's
 // job transitions: claims the oldest queued job, runs `tallyd capture` on it
 // in a child process (so a crash, hang, lost device or OOM ends only that
-// job), reports progress, ingests the result and finishes the job.
+// job), reports progress, ingests the result (its runs, or for a sweep spec
+// the sweep) and finishes the job.
 #pragma once
 
 #include <atomic>

@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "capture/spec.hpp"
+#include "capture/sweep.hpp"
 #include "service/accuracy.hpp"
 #include "service/repeats.hpp"
 
@@ -195,6 +196,18 @@ json deviceJson(const store::Device& d) {
           {"api_version", d.apiVersion}, {"features", d.features}, {"info", d.info}};
 }
 
+json sweepRowJson(const store::SweepRow& s) {
+  return {{"id", s.id},
+          {"job_id", s.jobId},
+          {"name", s.name},
+          {"created_at", s.createdAt},
+          {"device", deviceJson(s.device)},
+          {"parameters", s.parameters},
+          {"threshold", s.threshold},
+          {"fails_at", s.failsAt},
+          {"point_count", s.pointCount}};
+}
+
 json sampleRowJson(const store::SampleRow& s) {
   json j = {{"id", s.id},
             {"run", s.runId},
@@ -336,6 +349,13 @@ std::string resolveGltf(const ServiceOptions& options, const std::string& given,
 
 json validateSpec(const ServiceContext& ctx, const json& body) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
+  // A stability sweep ({"sweep": NAME, ...}) is checked by its own parser; its
+  // limits on points and resolution are the sweep's (capture/sweep.hpp).
+  if (capture::isSweepSpec(body)) {
+    auto sweep = capture::parseSweepSpec(body, ctx.rendererNames);
+    if (!sweep) throw RequestError(400, api::code::kInvalidField, sweep.error(), fieldOf(sweep.error()));
+    return body;
+  }
   auto parsed = capture::parseCaptureSpec(body, ctx.rendererNames);
   if (!parsed) {
     throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
@@ -423,9 +443,12 @@ Response listCaptures(ServiceContext& ctx, const Request& req) {
 Response getCapture(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto job = check(reader(ctx).getJob(id));
+  auto& store = reader(ctx);
+  auto job = check(store.getJob(id));
   if (!job) return api::notFound("no capture " + std::to_string(id));
-  return Response::ok(jobJson(*job));
+  json j = jobJson(*job);
+  j["sweeps"] = check(store.jobSweepIds(id));  // a finished sweep job's sweep
+  return Response::ok(j);
 }
 
 Response cancelCapture(ServiceContext& ctx, const Request& req) {
@@ -486,9 +509,38 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   }
   j["resources"] = resources;
   j["shaders"] = run->shaders;
+  j["counter_headroom"] = run->counterHeadroom;
   json passes = json::array();
   for (const auto& p : check(reader(ctx).runPasses(id))) passes.push_back(passJson(p));
   j["passes"] = passes;
+  return Response::ok(j);
+}
+
+Response listSweeps(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"name", "device", "capture", "since", "until", "limit", "cursor"});
+  // The same device, capture and time filters as /api/runs.
+  store::RunFilter common = queryFilter(req);
+  store::SweepFilter filter;
+  filter.name = queryString(req, "name");
+  filter.deviceId = common.deviceId;
+  filter.deviceName = common.deviceName;
+  filter.jobId = common.jobId;
+  filter.createdSince = common.createdSince;
+  filter.createdUntil = common.createdUntil;
+  auto page = check(reader(ctx).listSweeps(filter, queryPage(req)));
+  json sweeps = json::array();
+  for (const auto& s : page.sweeps) sweeps.push_back(sweepRowJson(s));
+  return Response::ok(
+      {{"sweeps", sweeps}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
+}
+
+Response getSweep(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto sweep = check(reader(ctx).getSweep(id));
+  if (!sweep) return api::notFound("no sweep " + std::to_string(id));
+  json j = sweepRowJson(sweep->row);
+  j["result"] = sweep->result;
   return Response::ok(j);
 }
 
@@ -670,6 +722,8 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/runs", route(listRuns));
   router.get("/api/runs/{id}", route(getRun));
   router.get("/api/runs/{id}/samples", route(listSamples));
+  router.get("/api/sweeps", route(listSweeps));
+  router.get("/api/sweeps/{id}", route(getSweep));
   router.get("/api/samples/{id}", route(getSample));
   router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
   router.get("/api/compare", route(compare));

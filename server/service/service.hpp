@@ -32,7 +32,8 @@ struct ServiceContext {
 };
 
 // POST/GET /api/captures, GET/DELETE /api/captures/{id}, /api/runs...,
-// /api/samples..., /api/compare, /api/export, /api/devices, /api/scenes.
+// /api/sweeps..., /api/samples..., /api/compare, /api/export, /api/devices,
+// /api/scenes.
 // (GET /api/renderers is a builtin route.) `context` must outlive the router.
 void addServiceRoutes(api::Router& router, ServiceContext& context);
 

@@ -1,5 +1,6 @@
-// ingestCapture: one capture result (docs/result-schema.md) -> rows, in one
-// write transaction. Bad input throws IngestError naming the JSON path; the
+// ingestCapture: one capture result (docs/result-schema.md) -> rows, and
+// ingestSweep: one sweep result -> a sweeps row; each in one write
+// transaction. Bad input throws IngestError naming the JSON path; the
 // transaction then rolls back, so nothing of the job is half-written.
 #include <algorithm>
 #include <cmath>
@@ -109,7 +110,8 @@ struct Inserter {
               "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id"),
         run(db,
             "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
-            "render_target_bytes, notes, shaders) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
+            "render_target_bytes, notes, shaders, counter_headroom) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)"),
         resource(
             db,
             "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
@@ -321,6 +323,11 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
   int64_t lights = optInteger(run, "lights", path).value_or(0);
   if (lights < 0) bad(path + ".lights", "must not be negative");
   json resources = optObject(run, "resources", path);
+  std::optional<json> headroom;  // absent in results from before it was measured
+  if (const json* h = find(run, "counter_headroom")) {
+    if (!h->is_object()) bad(path + ".counter_headroom", "must be an object");
+    headroom = *h;
+  }
   in.run.reset();
   in.run.bind(1, jobId)
       .bind(2, deviceId)
@@ -332,7 +339,8 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(8, lights)
       .bind(9, optInteger(resources, "render_target_bytes", path + ".resources"))
       .bind(10, optObject(run, "notes", path))
-      .bind(11, shaders);
+      .bind(11, shaders)
+      .bind(12, headroom);
   in.run.run();
   int64_t runId = in.lastId();
   insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");
@@ -340,7 +348,137 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
   return runId;
 }
 
+// ---- sweeps ---------------------------------------------------------------------
+
+// The value at a dotted path into a point ("error.max_relative"), or null.
+const json* atPath(const json& point, const std::string& dotted) {
+  const json* at = &point;
+  size_t start = 0;
+  while (true) {
+    size_t dot = dotted.find('.', start);
+    std::string key = dotted.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+    if (!at->is_object()) return nullptr;
+    at = find(*at, key.c_str());
+    if (!at) return nullptr;
+    if (dot == std::string::npos) return at;
+    start = dot + 1;
+  }
+}
+
+std::vector<std::string> textList(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value || !value->is_array()) bad(path.empty() ? key : path + "." + key, "missing or not an array");
+  std::vector<std::string> out;
+  for (size_t i = 0; i < value->size(); ++i) {
+    std::string at = (path.empty() ? std::string(key) : path + "." + key) + "[" + std::to_string(i) + "]";
+    if (!(*value)[i].is_string() || (*value)[i].get<std::string>().empty()) bad(at, "must be a non-empty string");
+    out.push_back((*value)[i].get<std::string>());
+  }
+  return out;
+}
+
+bool flag(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) bad(path + "." + key, "missing");
+  if (!value->is_boolean()) bad(path + "." + key, "must be true or false");
+  return value->get<bool>();
+}
+
+// A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
+// sweeps list and the dashboard's charts rely on, whatever the sweep.
+void checkSweep(const json& result) {
+  const json* name = find(result, "sweep");
+  if (!name || !name->is_string() || name->get<std::string>().empty()) bad("sweep", "missing or not a sweep name");
+  std::vector<std::string> parameters = textList(result, "parameters", "");
+  if (parameters.empty()) bad("parameters", "must name at least one parameter");
+  const json* threshold = find(result, "threshold");
+  if (!threshold || !threshold->is_object()) bad("threshold", "missing or not an object");
+  if (!result.contains("fails_at")) bad("fails_at", "missing (null when no point reaches the threshold)");
+  const json& failsAt = result["fails_at"];
+  if (!failsAt.is_null() && !failsAt.is_object() && !failsAt.is_array()) bad("fails_at", "must be an object, an array or null");
+  const json* points = find(result, "points");
+  if (!points || !points->is_array() || points->empty()) bad("points", "missing, empty or not an array");
+
+  // Every plot names fields of the points; every point must have them.
+  struct Plot {
+    std::string x, y;
+    std::vector<std::string> series;
+  };
+  std::vector<Plot> plots;
+  const json* plotList = find(result, "plots");
+  if (!plotList || !plotList->is_array()) bad("plots", "missing or not an array");
+  for (size_t i = 0; i < plotList->size(); ++i) {
+    std::string at = "plots[" + std::to_string(i) + "]";
+    const json& plot = (*plotList)[i];
+    if (!plot.is_object()) bad(at, "must be an object");
+    text(plot, "title", at);
+    text(plot, "y_label", at);
+    flag(plot, "x_log", at);
+    flag(plot, "y_log", at);
+    if (!plot.contains("threshold")) bad(at + ".threshold", "missing (a number, or null for none)");
+    optNumber(plot, "threshold", at);
+    plots.push_back(Plot{text(plot, "x", at), text(plot, "y", at), textList(plot, "series", at)});
+  }
+  for (size_t i = 0; i < points->size(); ++i) {
+    std::string at = "points[" + std::to_string(i) + "]";
+    const json& point = (*points)[i];
+    if (!point.is_object()) bad(at, "must be an object");
+    // A parameter is a number (distance) or a name (a renderer, a variant).
+    for (const auto& parameter : parameters) {
+      const json* value = find(point, parameter.c_str());
+      if (!value) bad(at + "." + parameter, "missing (every point carries every parameter)");
+      if (!value->is_number() && !value->is_string() && !value->is_boolean()) {
+        bad(at + "." + parameter, "must be a number or a name, got " + value->dump());
+      }
+    }
+    for (size_t k = 0; k < plots.size(); ++k) {
+      std::string named = " (named by plots[" + std::to_string(k) + "])";
+      for (const std::string* field : {&plots[k].x, &plots[k].y}) {
+        const json* value = atPath(point, *field);
+        if (!value) bad(at + "." + *field, "missing" + named);
+        if (!value->is_number()) bad(at + "." + *field, "must be a number" + named + ", got " + value->dump());
+      }
+      for (const auto& field : plots[k].series) {
+        if (!atPath(point, field)) bad(at + "." + field, "missing" + named);
+      }
+    }
+  }
+}
+
 }  // namespace
+
+Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
+  if (!result.is_object()) return makeError("result: must be a JSON object");
+  std::lock_guard lock(mutex_);
+  std::lock_guard writer(detail::writeMutex());
+  return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
+    checkSweep(result);
+    Transaction tx(db_, Transaction::Kind::Write);
+    Statement job(db_, "SELECT 1 FROM jobs WHERE id = ?1");
+    job.bind(1, jobId);
+    if (!job.step()) return makeError("job " + std::to_string(jobId) + " not found");
+    // Idempotency, as for captures: the job's result replaces its earlier one.
+    Statement drop(db_, "DELETE FROM sweeps WHERE job_id = ?1");
+    drop.bind(1, jobId).run();
+    Inserter in(db_);
+    int64_t deviceId = insertDevice(in, result);
+    const json& failsAt = result["fails_at"];
+    Statement insert(db_,
+                     "INSERT INTO sweeps (job_id, device_id, name, parameters, threshold, fails_at, point_count, "
+                     "result) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) RETURNING id");
+    insert.bind(1, jobId)
+        .bind(2, deviceId)
+        .bind(3, result["sweep"].get<std::string>())
+        .bind(4, result["parameters"])
+        .bind(5, result["threshold"])
+        .bind(6, failsAt.is_null() ? std::optional<json>() : std::optional<json>(failsAt))
+        .bind(7, static_cast<int64_t>(result["points"].size()))
+        .bind(8, result);
+    int64_t id = returnedId(insert);
+    tx.commit();
+    return id;
+  });
+}
 
 Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
                                      const std::map<std::string, std::vector<uint8_t>>& screenshots) {

@@ -197,13 +197,14 @@ Result<std::optional<Run>> Store::getRun(int64_t runId) {
     Run run;
     run.row = std::move(*row);
     Statement device(db_,
-                     "SELECT d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info, r.shaders "
-                     "FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
+                     "SELECT d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info, r.shaders, "
+                     "r.counter_headroom FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
     device.bind(1, runId);
     if (device.step()) {
       run.device = Device{device.getInt(0),  device.getText(1), device.getText(2), device.getText(3),
                           device.getText(4), device.getJson(5), device.getJson(6)};
       run.shaders = device.getJson(7);
+      run.counterHeadroom = device.getJson(8);
     }
     Statement resources(
         db_,

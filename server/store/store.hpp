@@ -148,6 +148,7 @@ struct Run {
   Device device;
   std::vector<RunResource> resources;  // in the result's order
   nlohmann::json shaders;              // shader source hashes of the capture
+  nlohmann::json counterHeadroom;      // the result's counter_headroom; null when not stored
 };
 
 struct ImageError {
@@ -199,6 +200,40 @@ struct Pass {
 struct Sample {
   SampleRow row;
   std::vector<Pass> passes;  // in frame order
+};
+
+// ---- sweeps --------------------------------------------------------------------
+
+struct SweepFilter {
+  std::optional<std::string> name;  // the sweep's name, e.g. "depth-reconstruction"
+  std::optional<int64_t> deviceId;
+  std::optional<std::string> deviceName;  // exact device name
+  std::optional<int64_t> jobId;
+  // As RunFilter's: prefixes of the stored UTC ISO-8601 text, both inclusive.
+  std::optional<std::string> createdSince;
+  std::optional<std::string> createdUntil;
+};
+
+struct SweepRow {
+  int64_t id = 0;
+  int64_t jobId = 0;
+  Device device;
+  std::string name;
+  nlohmann::json parameters;  // array of axis names
+  nlohmann::json threshold;   // as the result gave it
+  nlohmann::json failsAt;     // null when no point reaches the threshold
+  int64_t pointCount = 0;
+  std::string createdAt;
+};
+
+struct SweepPage {
+  std::vector<SweepRow> sweeps;  // newest first (descending id)
+  std::string nextCursor;        // empty when this was the last page
+};
+
+struct Sweep {
+  SweepRow row;
+  nlohmann::json result;  // the whole result, as ingested
 };
 
 // ---- compare, export ----------------------------------------------------------
@@ -293,6 +328,15 @@ class Store {
   Result<int64_t> ingestCapture(int64_t jobId, const nlohmann::json& result,
                                 const std::map<std::string, std::vector<uint8_t>>& screenshots);
 
+  // Stores a whole sweep result (docs/result-schema.md, "Sweep results") for
+  // a job, in one transaction, after checking its frame: sweep, device,
+  // parameters, points (each carrying every parameter and every field its
+  // plots name), threshold, fails_at, plots. Bad input is an error naming the
+  // field, and nothing is stored. Idempotent like ingestCapture: the job's
+  // previous sweep is replaced. Does not change the job's status. Returns the
+  // sweep's id.
+  Result<int64_t> ingestSweep(int64_t jobId, const nlohmann::json& result);
+
   // Queries.
   // Every device a capture was ingested from, by id.
   Result<std::vector<Device>> listDevices();
@@ -310,6 +354,11 @@ class Store {
   Result<std::optional<std::vector<uint8_t>>> getScreenshot(int64_t sampleId);
   // 2..4 distinct existing run ids; deltas and ratios against the first.
   Result<Comparison> compareRuns(const std::vector<int64_t>& runIds);
+  // Sweeps, newest first, cursor-paginated like listRuns.
+  Result<SweepPage> listSweeps(const SweepFilter& filter, const Page& page);
+  Result<std::optional<Sweep>> getSweep(int64_t sweepId);
+  // The sweeps a job stored (one for a finished sweep job, none otherwise), by id.
+  Result<std::vector<int64_t>> jobSweepIds(int64_t jobId);
   // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
   Result<std::vector<ExportRow>> exportRuns(const RunFilter& filter);
 
@@ -326,7 +375,7 @@ class Store {
   std::mutex mutex_;  // one call at a time on this connection
 };
 
-// Cursor encoding for listRuns and listJobs ("r" + last id in hex; opaque to clients).
+// Cursor encoding for listRuns, listSweeps and listJobs ("r" + last id in hex; opaque to clients).
 std::string encodeCursor(int64_t lastId);
 std::optional<int64_t> decodeCursor(std::string_view cursor);
 

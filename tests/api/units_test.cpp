@@ -262,7 +262,7 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   for (const char* path :
        {"/api/captures", "/api/captures/{id}", "/api/runs", "/api/runs/{id}", "/api/runs/{id}/samples",
         "/api/samples/{id}", "/api/samples/{id}/screenshot.png", "/api/compare", "/api/export", "/api/health",
-        "/api/devices", "/api/renderers", "/api/scenes", "/api/openapi.json"}) {
+        "/api/devices", "/api/renderers", "/api/scenes", "/api/openapi.json", "/api/sweeps", "/api/sweeps/{id}"}) {
     EXPECT_TRUE(embedded["paths"].contains(path)) << path;
   }
   EXPECT_TRUE(embedded["paths"]["/api/captures"].contains("post"));

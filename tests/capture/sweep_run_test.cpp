@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -116,6 +118,72 @@ TEST(DepthSweep, FailsWhereThePredictionCrossesTheThreshold) {
   EXPECT_NEAR(ratio[0]["far_over_near"].get<double>(), 1e5, 1e-6);
   EXPECT_EQ(ratio[1]["distance"], 300.0);
   EXPECT_NEAR(ratio[1]["far_over_near"].get<double>(), 1e3, 1e-9);
+}
+
+// The value at a dotted path into a point ("error.max_relative"), or null.
+json at(const json& point, const std::string& dotted) {
+  json v = point;
+  std::stringstream parts(dotted);
+  for (std::string key; std::getline(parts, key, '.');) {
+    if (!v.is_object() || !v.contains(key)) return nullptr;
+    v = v[key];
+  }
+  return v;
+}
+
+// The plots (docs/result-schema.md, "Sweep results"): each names fields every
+// point has, and its lines are exactly the groups fails_at states a value for
+// (points that differ only in the plot's x), whichever end the spec fixed.
+TEST(DepthSweep, PlotsDrawTheFailsAtGroups) {
+  json byFar = depthSpec(1e-4);
+  json byRatio = depthSpec(0.5);
+  byRatio.erase("far");
+  byRatio["far_over_near"] = {1e3, 1e5};
+  byRatio["near"] = {1.0, 2.0};
+  byRatio["threshold"] = {{"absolute", 0.01}};
+  byRatio["resolution"] = {32, 18};
+  for (const json& spec : {byFar, byRatio}) {
+    json result = sweep(spec);
+    ASSERT_FALSE(result.is_null());
+    const bool relative = spec["threshold"].contains("relative");
+    const std::string fixedEnd = spec.contains("far") ? "far" : "near";
+    const double threshold = relative ? spec["threshold"]["relative"].get<double>() : 0.01;
+    ASSERT_EQ(result["plots"].size(), 2u);
+    const json expected[] = {{{"x", "distance"}, {"series", {"near", "far"}}},
+                             {{"x", "far_over_near"}, {"series", {"distance", fixedEnd}}}};
+    for (size_t k = 0; k < 2; ++k) {
+      const json& plot = result["plots"][k];
+      SCOPED_TRACE(plot.dump());
+      EXPECT_EQ(plot["x"], expected[k]["x"]);
+      EXPECT_EQ(plot["series"], expected[k]["series"]);
+      EXPECT_EQ(plot["y"], relative ? "error.max_relative" : "error.max_abs");
+      EXPECT_EQ(plot["x_log"], true);
+      EXPECT_EQ(plot["y_log"], true);
+      EXPECT_EQ(plot["threshold"], threshold);
+      EXPECT_TRUE(plot["title"].is_string() && plot["y_label"].is_string());
+      // Lines: one per distinct series value; within one, x never repeats.
+      std::map<std::vector<double>, std::set<double>> lines;
+      for (const auto& p : result["points"]) {
+        ASSERT_TRUE(at(p, plot["y"]).is_number()) << p.dump();
+        std::vector<double> key;
+        for (const auto& field : plot["series"]) key.push_back(at(p, field).get<double>());
+        EXPECT_TRUE(lines[key].insert(at(p, plot["x"]).get<double>()).second) << "x repeats in a line";
+      }
+      // fails_at's groups for this axis, where something fails, are the same lines.
+      const json& groups = result["fails_at"].is_null() ? json() : result["fails_at"][plot["x"].get<std::string>()];
+      if (groups.is_array()) {
+        std::set<std::vector<double>> stated;
+        for (const auto& g : groups) {
+          std::vector<double> key;
+          for (const auto& field : plot["series"]) key.push_back(g[field.get<std::string>()].get<double>());
+          stated.insert(key);
+        }
+        std::set<std::vector<double>> drawn;
+        for (const auto& [key, unused] : lines) drawn.insert(key);
+        EXPECT_EQ(stated, drawn);
+      }
+    }
+  }
 }
 
 class SweepCommand : public ::testing::Test {

@@ -160,6 +160,39 @@ TEST(ApiClient, ToleratesStringIdsAndNumericProgress) {
   EXPECT_DOUBLE_EQ(*r.frameMs, 2.5);
 }
 
+// fails_at comes keyed by the swept parameter, or as one list of groups
+// (a sweep of one axis); either way one row per group, with the value where
+// it fails or none where it holds.
+TEST(ApiClient, FailsAtRowsPerGroup) {
+  json byAxis = {{"distance", {{{"near", 0.01}, {"far", 1000}, {"distance", 300}}}},
+                 {"far_over_near", {{{"distance", 3}, {"far", 1000}, {"far_over_near", nullptr}}}},
+                 {"near", nullptr}};
+  auto rows = failsAtRows(byAxis, {"near", "far", "distance"});
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].swept, "distance");
+  EXPECT_EQ(rows[0].group, "far=1000 near=0.01");
+  EXPECT_EQ(rows[0].value, "300");
+  EXPECT_EQ(rows[1].swept, "far_over_near");
+  EXPECT_EQ(rows[1].group, "distance=3 far=1000");
+  EXPECT_EQ(rows[1].value, "");  // holds
+  EXPECT_EQ(rows[2].swept, "near");  // no group of this axis fails
+  EXPECT_EQ(rows[2].value, "");
+
+  // A list: the swept parameter is the last parameter every group has as a number or null.
+  json list = {{{"selection", "first_lane"}, {"cell_size", 8}}, {{"selection", "uniform"}, {"cell_size", nullptr}}};
+  rows = failsAtRows(list, {"selection", "cell_size"});
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].swept, "cell_size");
+  EXPECT_EQ(rows[0].group, "selection=first_lane");
+  EXPECT_EQ(rows[0].value, "8");
+  EXPECT_EQ(rows[1].group, "selection=uniform");
+  EXPECT_EQ(rows[1].value, "");
+  EXPECT_TRUE(failsAtRows(nullptr, {"near"}).empty());
+
+  EXPECT_EQ(pointValue({{"error", {{"max_relative", 2e-5}}}}, "error.max_relative"), 2e-5);
+  EXPECT_TRUE(pointValue({{"error", 1}}, "error.max_relative").is_null());
+}
+
 TEST(Tables, AlignsColumns) {
   Table t({{"ID", Table::Align::Right}, {"NAME"}});
   t.addRow({"7", "deferred"});

@@ -736,4 +736,101 @@ TEST(CliHelp, EverySubcommandListsItsOptions) {
   fs::remove_all(dir);
 }
 
+// A sweep spec through `tally capture`; `tally sweeps` and `tally sweep` show
+// what the database holds. Where it fails is recomputed here from the stored
+// points (per group of points that differ only in the swept value, the
+// smallest failing value), not read from the stored fails_at.
+TEST_F(CliFlow, SweepThroughCaptureThenSweepsAndSweep) {
+  const double threshold = 1e-3;  // between the 3 m and 300 m errors (tests/service/sweeps_test.cpp)
+  json spec = {{"sweep", "depth-reconstruction"}, {"near", {0.01}}, {"far", {1000}}, {"distances", {3, 300}},
+               {"resolution", {32, 18}}, {"threshold", {{"relative", threshold}}}};
+  Outcome cap = tally({"capture", "--spec", writeSpec(spec), "--interval", "0.1"});
+  ASSERT_EQ(cap.rc, 0) << cap.out << cap.err;
+  Db db(this->db());
+  ASSERT_TRUE(db.ok());
+  json row = db.row(
+      "SELECT s.id, s.job_id, s.name, s.created_at, d.name, s.point_count, s.result FROM sweeps s "
+      "JOIN devices d ON d.id = s.device_id");
+  ASSERT_TRUE(row.is_array()) << "no sweep stored: " << cap.err;
+  const std::string id = row[0].dump(), job = row[1].dump();
+  const json result = json::parse(row[6].get<std::string>());
+  EXPECT_EQ(cap.out, "capture " + job + " done: sweep " + id + " (see `tally sweep " + id + "`)\n");
+
+  // Per swept axis: the groups (the other two of near/far/distance fixed) and
+  // the smallest value of the axis whose error reaches the threshold.
+  std::map<std::string, std::map<std::string, std::optional<double>>> expected;  // axis -> group -> value
+  for (const auto& [axis, others] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {"distance", {"far", "near"}}, {"far_over_near", {"distance", "far"}}}) {
+    for (const auto& p : result["points"]) {
+      std::string group;
+      for (const auto& o : others) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%.6g", p[o].get<double>());  // as the client prints a value
+        group += (group.empty() ? "" : " ") + o + "=" + value;
+      }
+      auto& value = expected[axis][group];
+      double x = p[axis].get<double>();
+      if (p["error"]["max_relative"].get<double>() >= threshold && (!value || x < *value)) value = x;
+    }
+  }
+  ASSERT_EQ(expected["distance"].size(), 1u);
+  ASSERT_EQ(expected["far_over_near"].size(), 2u);
+
+  // The list: one row, its failing groups counted per axis.
+  Outcome list = tally({"sweeps"});
+  ASSERT_EQ(list.rc, 0) << list.err;
+  auto listed = rowsStartingWith(list.out, id);
+  ASSERT_EQ(listed.size(), 1u) << list.out;
+  auto failing = [&](const std::string& axis) {
+    int n = 0;
+    for (const auto& [group, value] : expected[axis]) n += value ? 1 : 0;
+    return axis + " " + std::to_string(n) + "/" + std::to_string(expected[axis].size());
+  };
+  EXPECT_EQ(listed[0], (std::vector<std::string>{id, job, row[2], row[3], row[4], row[5].dump(), "relative 0.001",
+                                                 failing("distance") + ", " + failing("far_over_near")}))
+      << list.out;
+  EXPECT_EQ(rowsStartingWith(tally({"sweeps", "--name", "material-edges"}).out, id).size(), 0u);
+  json listedJson = tallyJson({"sweeps", "--json"});
+  ASSERT_EQ(listedJson["sweeps"].size(), 1u);
+  EXPECT_EQ(listedJson["sweeps"][0]["id"].dump(), id);
+
+  // One sweep: fails_at group by group, then the points.
+  Outcome one = tally({"sweep", id});
+  ASSERT_EQ(one.rc, 0) << one.err;
+  for (const auto& [axis, groups] : expected) {
+    auto shown = rowsStartingWith(one.out, axis);
+    ASSERT_EQ(shown.size(), groups.size()) << one.out;
+    for (const auto& cellsOfRow : shown) {
+      ASSERT_EQ(cellsOfRow.size(), 3u) << one.out;
+      ASSERT_TRUE(groups.count(cellsOfRow[1])) << cellsOfRow[1] << " in\n" << one.out;
+      const auto& value = groups.at(cellsOfRow[1]);
+      if (!value) {
+        EXPECT_EQ(cellsOfRow[2], "holds over the range");
+      } else {
+        EXPECT_NEAR(std::stod(cellsOfRow[2]), *value, 1e-5 * *value) << one.out;  // "%.6g"
+      }
+    }
+  }
+  auto header = rowsStartingWith(one.out, "near");
+  ASSERT_EQ(header.size(), 1u) << one.out;
+  EXPECT_EQ(header[0], (std::vector<std::string>{"near", "far", "distance", "error.max_relative", "far_over_near"}));
+  std::vector<std::vector<std::string>> points = rowsStartingWith(one.out, "0.01");
+  ASSERT_EQ(points.size(), result["points"].size()) << one.out;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const json& p = result["points"][i];
+    std::vector<double> want = {p["near"].get<double>(), p["far"].get<double>(), p["distance"].get<double>(),
+                                p["error"]["max_relative"].get<double>(), p["far_over_near"].get<double>()};
+    ASSERT_EQ(points[i].size(), want.size());
+    for (size_t k = 0; k < want.size(); ++k) EXPECT_NEAR(std::stod(points[i][k]), want[k], 1e-5 * want[k]);
+  }
+  json raw = tallyJson({"sweep", id, "--json"});
+  EXPECT_EQ(raw["result"], result);
+  EXPECT_EQ(raw["job_id"].dump(), job);
+
+  Outcome missing = tally({"sweep", "987654"});
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_NE(missing.err.find("404"), std::string::npos) << missing.err;
+  EXPECT_NE(missing.err.find("no sweep 987654"), std::string::npos) << missing.err;
+}
+
 }  // namespace

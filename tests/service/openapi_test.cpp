@@ -83,7 +83,8 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
-      "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats"};
+      "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
+      "/api/sweeps",       "/api/sweeps/{id}"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
   EXPECT_EQ(documented, served);
@@ -150,12 +151,37 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   json repeats = expect("GET", "/api/repeats", "/api/repeats", 200);
   EXPECT_GE(repeats["groups"].size(), 2u) << repeats.dump();
   expect("GET", "/api/repeats?limit=3", "/api/repeats", 400);
+
+  // A stability sweep: its job, the list and the sweep with its whole result
+  // (one failing and one holding point, so fails_at has a value and a null).
+  json sweepSpec = {{"sweep", "depth-reconstruction"}, {"near", {0.01}}, {"far", {1000}},
+                    {"distances", {3, 300}}, {"resolution", {32, 18}}, {"threshold", {{"relative", 1e-3}}}};
+  posted = daemon_->request("POST", "/api/captures", sweepSpec.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  expectMatches(posted.j(), "POST", "/api/captures", 202);
+  int64_t sweepJob = posted.j()["id"];
+  ASSERT_EQ(daemon_->waitFinished(sweepJob).value("status", ""), "done");
+  json job = expect("GET", "/api/captures/" + std::to_string(sweepJob), "/api/captures/{id}", 200);
+  ASSERT_EQ(job["sweeps"].size(), 1u);
+  json sweeps = expect("GET", "/api/sweeps", "/api/sweeps", 200);
+  ASSERT_EQ(sweeps["sweeps"].size(), 1u);
+  EXPECT_FALSE(sweeps["sweeps"][0]["fails_at"].is_null());
+  json sweep = expect("GET", "/api/sweeps/" + std::to_string(job["sweeps"][0].get<int64_t>()), "/api/sweeps/{id}", 200);
+  EXPECT_FALSE(sweep["result"]["plots"].empty());
+  expect("GET", "/api/sweeps?name=depth-reconstruction&limit=1", "/api/sweeps", 200);
+  // The run detail's counter headroom is an object here, documented field by field.
+  EXPECT_TRUE(daemon_->request("GET", "/api/runs/" + a).j()["counter_headroom"].is_object());
 }
 
 TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {
   expect("GET", "/api/runs/987654", "/api/runs/{id}", 404);
   expect("GET", "/api/runs?limit=0", "/api/runs", 400);
   expect("GET", "/api/compare?runs=1", "/api/compare", 400);
+  expect("GET", "/api/sweeps/987654", "/api/sweeps/{id}", 404);
+  expect("GET", "/api/sweeps?limit=0", "/api/sweeps", 400);
+  Reply badSweep = daemon_->request("POST", "/api/captures", R"({"sweep": "nope"})");
+  EXPECT_EQ(badSweep.status, 400);
+  expectMatches(badSweep.j(), "POST", "/api/captures", 400);
   expect("DELETE", "/api/captures/" + std::to_string(captureId_), "/api/captures/{id}", 409);
   Reply bad = daemon_->request("POST", "/api/captures", "{\"frames\": ");
   EXPECT_EQ(bad.status, 400);

@@ -42,7 +42,7 @@ TEST(Migrations, ApplyFromEmpty) {
     ASSERT_NE(store, nullptr);
     EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
     for (const char* table : {"devices", "scenes", "jobs", "runs", "run_resources", "samples", "passes",
-                              "counters", "screenshots"}) {
+                              "counters", "screenshots", "sweeps"}) {
       EXPECT_EQ(
           scalar(*store, std::string("SELECT COUNT(*) FROM sqlite_schema WHERE type = 'table' AND name = '") +
                              table + "'"),
@@ -133,6 +133,66 @@ TEST(Migrations, EachMigrationIsOneTransaction) {
   EXPECT_EQ(sqlite3_column_int(st, 1), 0);  // migration 2's table was rolled back
   sqlite3_finalize(st);
   sqlite3_close(raw);
+}
+
+// A database of the first release (schema 1) with a job, a run, a sample and
+// its passes upgrades to the current schema: every row kept, the new run
+// column NULL, and sweeps can be stored.
+TEST(Migrations, VersionOneWithDataUpgradesKeepingEverything) {
+  TempDb db;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db.path().c_str(), &raw), SQLITE_OK);
+    auto first = migrate(raw, embeddedMigrations().first(1));
+    ASSERT_TRUE(first) << first.error();
+    ASSERT_EQ(*first, 1);
+    const char* rows =
+        "INSERT INTO devices (id, fingerprint, name, vendor, driver, api_version) "
+        "VALUES (1, 'llvmpipe', 'llvmpipe', '0x10005', 'Mesa', '1.3');"
+        "INSERT INTO scenes (id, name, params) VALUES (1, 'atrium', '{}');"
+        "INSERT INTO jobs (id, status, spec, idempotency_key) VALUES (1, 'done', '{\"renderers\":[\"forward\"]}', 'k');"
+        "INSERT INTO runs (id, job_id, device_id, renderer, scene_id, width, height, counting, lights) "
+        "VALUES (1, 1, 1, 'forward', 1, 64, 36, 'exact', 4);"
+        "INSERT INTO samples (id, run_id, camera_index, camera, frame_ms, bytes) VALUES (1, 1, 0, '{}', 1.5, 96);"
+        "INSERT INTO passes (id, sample_id, position, name, gpu_ms) VALUES (1, 1, 0, 'opaque', 1.25);"
+        "INSERT INTO counters (pass_id, position, resource, access, count, bytes, source) "
+        "VALUES (1, 0, 'depth', 'write', 24, 96, 'counter');";
+    ASSERT_EQ(sqlite3_exec(raw, rows, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(raw);
+    sqlite3_close(raw);
+  }
+  ASSERT_EQ(userVersion(db.path()), 1);
+
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
+  EXPECT_GE(latestSchemaVersion(), 2);
+  for (const char* table : {"devices", "scenes", "jobs", "runs", "samples", "passes", "counters"}) {
+    EXPECT_EQ(scalar(*store, std::string("SELECT COUNT(*) FROM ") + table), 1) << table;
+  }
+  auto job = store->getJob(1);
+  ASSERT_TRUE(job && job->has_value());
+  EXPECT_EQ((*job)->status, JobStatus::Done);
+  EXPECT_EQ((*job)->idempotencyKey, "k");
+  auto run = store->getRun(1);
+  ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
+  EXPECT_EQ((*run)->row.renderer, "forward");
+  EXPECT_EQ((*run)->row.sampleCount, 1);
+  ASSERT_TRUE((*run)->row.meanBytes);
+  EXPECT_EQ(*(*run)->row.meanBytes, 96);
+  EXPECT_TRUE((*run)->counterHeadroom.is_null());  // not measured back then
+  auto passes = store->runPasses(1);
+  ASSERT_TRUE(passes);
+  ASSERT_EQ(passes->size(), 1u);
+  EXPECT_EQ((*passes)[0].counters.size(), 1u);
+  EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM sweeps"), 0);
+  // The new column's check holds for new rows.
+  EXPECT_NE(sqlite3_exec(store->handle(), "UPDATE runs SET counter_headroom = 'not json' WHERE id = 1", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pragma_foreign_key_check"), 0);
+  auto integrity = store->integrityCheck();
+  ASSERT_TRUE(integrity);
+  EXPECT_EQ(*integrity, "ok");
 }
 
 TEST(Migrations, ReaderNeedsAMigratedDatabase) {

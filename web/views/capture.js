@@ -2,7 +2,9 @@
 // (docs/result-schema.md) and POSTs it; the server validates it, and its error
 // (message and field) is shown beside the field it names. A started capture's
 // progress is polled until it finishes; below, the list of captures with their
-// status and errors.
+// status and errors. A second form takes a stability sweep spec as JSON
+// ({"sweep": NAME, ...}, docs/result-schema.md "Sweep results"), posted to
+// the same route; a finished sweep links to its view.
 import { ApiError, get, request } from '../api.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
@@ -35,6 +37,40 @@ function specOf(form) {
     counting,
     lights: numberOr(data.get('lights')),
   };
+}
+
+// A small depth-reconstruction sweep: a few seconds on lavapipe.
+const kExampleSweep = {
+  sweep: 'depth-reconstruction',
+  near: [0.01],
+  far: [1000],
+  distances: [3, 30, 300],
+  resolution: [32, 18],
+  threshold: { relative: 0.001 },
+};
+
+function sweepForm(onSubmit) {
+  const text = h('textarea', { name: 'sweep_spec', class: 'spec', rows: 9, spellcheck: 'false', 'aria-label': 'Sweep spec (JSON)' });
+  text.value = JSON.stringify(kExampleSweep, null, 2);
+  const form = h('form', { class: 'sweep-form', novalidate: true, 'aria-label': 'New stability sweep' },
+    h('label', { class: 'field', dataset: { field: 'sweep_spec' } },
+      h('span', {}, 'Sweep spec (JSON): "sweep" names the sweep; the server names any field it refuses'), text),
+    h('button', { type: 'submit' }, 'Start sweep'),
+    h('div', { class: 'form-error', role: 'alert' }));
+  form.addEventListener('submit', (e) => {
+    e.preventDefault();
+    let spec;
+    try {
+      spec = JSON.parse(text.value);
+    } catch (error) {
+      clearError(form);
+      form.querySelector('.form-error').replaceChildren(h('div', { class: 'panel error', dataset: { code: 'bad_json' } },
+        h('strong', {}, 'Not valid JSON: '), h('span', { class: 'message' }, error.message)));
+      return;
+    }
+    onSubmit(spec);
+  });
+  return form;
 }
 
 function captureForm(renderers, scenes, onSubmit) {
@@ -76,9 +112,11 @@ function showError(form, error) {
   box.replaceChildren(h('div', { class: 'panel error', dataset: { code: error.code || '', field } },
     h('strong', {}, 'The server refused this capture: '), h('span', { class: 'message' }, error.message),
     field ? h('div', {}, 'Field: ', h('code', { class: 'field-name' }, field)) : null));
-  const holder = form.querySelector(`[data-field="${CSS.escape(top)}"]`);
+  // The sweep form has one control, the whole spec: any field is in it. (The
+  // error panel carries data-field too: it is not a holder.)
+  const holder = form.querySelector(`[data-field="${CSS.escape(top)}"]:not(.panel)`) || (field ? form.querySelector('[data-field="sweep_spec"]') : null);
   if (holder) {
-    holder.querySelector('input, select')?.setAttribute('aria-invalid', 'true');
+    holder.querySelector('input, select, textarea')?.setAttribute('aria-invalid', 'true');
     holder.append(h('span', { class: 'field-error' }, error.message));
   }
 }
@@ -122,10 +160,12 @@ function progressPanel(job) {
     h('progress', { max: Math.max(job.progress.total, 1), value: job.progress.done }),
     h('div', { class: 'muted' }, progressText(job)),
     job.error ? h('div', { class: 'error' }, job.error) : null,
-    done ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
+    done && job.sweeps && job.sweeps.length ? h('a', { href: `#/sweeps/${job.sweeps[0]}` }, 'See its sweep') : null,
+    done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
 }
 
 function summary(spec) {
+  if (spec.sweep) return `sweep ${spec.sweep}`;
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
   return `${(spec.renderers || []).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
@@ -143,7 +183,7 @@ function jobTable(jobs, onCancel) {
       h('td', {}, fmt.date(j.finished_at)),
       h('td', { class: 'error', style: 'white-space: normal; min-width: 12rem' }, j.error || ''),
       h('td', {}, kFinished.includes(j.status)
-        ? (j.status === 'done' ? h('a', { href: `#/runs?capture=${j.id}` }, 'runs') : '')
+        ? (j.status === 'done' ? (j.spec.sweep ? h('a', { href: `#/sweeps?capture=${j.id}` }, 'sweep') : h('a', { href: `#/runs?capture=${j.id}` }, 'runs')) : '')
         : h('button', { type: 'button', class: 'secondary', onclick: () => onCancel(j.id) }, 'Cancel')))))));
 }
 
@@ -178,7 +218,8 @@ export async function render(page, { signal }) {
     watchList();
   }
 
-  async function start(spec) {
+  async function start(spec, form) {
+    const button = form.querySelector('button[type="submit"]');
     clearError(form);
     button.disabled = true;
     let created;
@@ -204,9 +245,11 @@ export async function render(page, { signal }) {
     }
   }
 
-  const form = captureForm(renderers.renderers, scenes, (spec) => start(spec));
-  const button = form.querySelector('button[type="submit"]');
-  page.append(h('h1', {}, 'New capture'), form, progress, h('h2', {}, 'Captures'), listStatus, list);
+  const form = captureForm(renderers.renderers, scenes, (spec) => start(spec, form));
+  const sweeps = sweepForm((spec) => start(spec, sweeps));
+  page.append(h('h1', {}, 'New capture'), form,
+    h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a stability sweep')), sweeps),
+    progress, h('h2', {}, 'Captures'), listStatus, list);
   drawList(first.captures);
   if (!first.captures.every((j) => kFinished.includes(j.status))) watchList();
 }

@@ -1,7 +1,8 @@
 // One run: what it is, its traffic per pass and resource (the founding
 // study's per-resource figure), per camera (its per-sample figure), frame time
 // per pass with the cost of counting, and the screenshots with sky fraction
-// and image error against forward. Time figures carry their IQR over frames
+// and image error against forward; how far its counters are from wrapping
+// (counter headroom). Time figures carry their IQR over frames
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
 import { get, imageSource } from '../api.js';
@@ -174,6 +175,39 @@ function resourceTable(run) {
   ], run.resources, { 'aria-label': 'Resources' });
 }
 
+// A wrap factor in a few characters: "3.2", "186", "8.0e11".
+function factor(v) {
+  if (v === null || v === undefined) return '–';
+  if (v >= 1e6) return v.toExponential(1).replace('e+', 'e');
+  return v >= 100 ? String(Math.round(v)) : v.toFixed(1);
+}
+
+// How far the run's counters are from wrapping (docs/measurement.md,
+// "Counter overflow"): the largest count one slot reached in a frame, and how
+// many times resolution x overshading could grow before a counter wraps.
+function headroomSection(run) {
+  const hr = run.counter_headroom;
+  if (!hr) {
+    return h('p', { class: 'panel muted', dataset: { headroom: 'none' } },
+      'Not recorded for this run (captured before counter headroom was stored).');
+  }
+  const hTile = (label, value, key, raw) => h('div', { class: 'tile', dataset: { headroom: key, value: String(raw) } },
+    h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
+  const inUse = hr.width === 'int64' ? '64-bit (int64)' : '64-bit (uint32 pair)';
+  const per = hr.frames_accumulated === 1 ? 'per frame' : `over ${hr.frames_accumulated} frames`;
+  return h('div', { class: 'headroom' },
+    h('div', { class: 'tiles' },
+      hTile(`Largest slot count, ${per}`, fmt.count(hr.max_slot_count_per_frame), 'max-slot-count', hr.max_slot_count_per_frame),
+      hTile('Slot', h('span', { class: 'clip', title: hr.max_slot }, hr.max_slot), 'max-slot', hr.max_slot),
+      hTile('32-bit wrap factor', `×${factor(hr.wrap_factor_32bit)}`, 'wrap-32', hr.wrap_factor_32bit),
+      hTile(`${inUse} wrap factor`, `×${factor(hr.wrap_factor)}`, 'wrap', hr.wrap_factor)),
+    hr.wrap_factor_32bit === null
+      ? h('p', { dataset: { headroom: 'sentence' } }, 'Nothing was counted, so no counter comes near wrapping.')
+      : h('p', { dataset: { headroom: 'sentence' } },
+        `32-bit counters would wrap at ${factor(hr.wrap_factor_32bit)}× this resolution × overshading; `,
+        `the ${inUse} counters in use at ${factor(hr.wrap_factor)}×.`));
+}
+
 export async function render(page, { params, signal }) {
   const [run, { samples }] = await Promise.all([get(`/runs/${params.id}`, signal), get(`/runs/${params.id}/samples`, signal)]);
   // Per-pass spreads live with each sample: one request per camera.
@@ -201,6 +235,8 @@ export async function render(page, { params, signal }) {
       tile('Read per frame', fmt.bytes(read), 'read'),
       tile('Written per frame', fmt.bytes(written), 'written'),
       tile('Render targets', fmt.bytes(run.render_target_bytes), 'render-targets')));
+
+  page.append(h('h2', {}, 'Counter headroom'), headroomSection(run));
 
   page.append(h('h2', {}, 'Traffic per pass and resource'));
   passResourceCharts(page, run);
