@@ -1,47 +1,78 @@
 #!/usr/bin/env bash
-# Stability sweeps on the GPU: the depth-reconstruction sweep of
-# tests/gpu/sweeps-depth.json (deferred, near 0.01 / 0.1 / 1 m, far 1000 m,
-# distances 3 to 300 m, threshold 1e-4 relative) at 1280x720, the same points
-# docs/measurement.md ("Sweep: depth reconstruction") reports on lavapipe.
-# Build first with tests/gpu/build.sh; bring the Vulkan loader's .debs in .gl/
-# (see run.sh).
+# Stability sweeps on the GPU: every sweep spec in tests/gpu/specs/ (or the
+# names given), each run by `tallyd capture --spec` as the service's jobs run
+# them. The specs hold the points docs/accuracy.md and docs/measurement.md
+# report. Build first with tests/gpu/build.sh; bring the Vulkan loader's .debs
+# in .gl/ (see run.sh).
 #
-#   tests/gpu/sweeps.sh
-#   OUT=dir                 where results go (default ./gpu-out): sweep-depth.json, sweep-depth.log,
-#                           sweep-depth.txt (a table of the points and fails_at)
+#   tests/gpu/sweeps.sh [NAME...]     NAME: a spec in tests/gpu/specs/ without .json
+#                                     (depth, precision, edges, ids); default all
+#   OUT=dir                 where results go (default ./gpu-out): sweep-NAME.json (the
+#                           result), sweep-NAME.log, sweep-NAME.txt (fails_at and, per
+#                           plot, the points as a table)
 #   TALLYD=path             tallyd to run (default build-gpu/server/tallyd)
-#   SWEEP_RESOLUTION=WxH    replaces 1280x720, e.g. 64x36 for a check on lavapipe
+#   SWEEP_RESOLUTION=WxH    replaces each spec's resolution, e.g. 64x36 for a quick
+#                           check on lavapipe; without it the specs' own are used
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
-# $out, $tallyd, $width and $height; Vulkan on the GPU machine (env.sh).
+# $out, $tallyd; Vulkan on the GPU machine (env.sh).
 . tests/gpu/env.sh
+override="${SWEEP_RESOLUTION:-}"
 tally_gpu_script sweeps.sh SWEEP_RESOLUTION || exit 2
 
-spec="$out/sweep-depth-spec.json"
-sed -e "s|\[1280, 720\]|[$width, $height]|" tests/gpu/sweeps-depth.json > "$spec"
-start=$(date +%s%N)
-"$tallyd" capture --spec "$spec" --out "$out/sweep-depth.json" 2> "$out/sweep-depth.log"
-rc=$?
-end=$(date +%s%N)
-echo "sweep depth-reconstruction ${width}x${height}: wall time $(( (end - start) / 1000000 )) ms, exit $rc"
-if [ "$rc" -ne 0 ]; then
-  tail -5 "$out/sweep-depth.log"
-  exit "$rc"
+names=("$@")
+if [ ${#names[@]} -eq 0 ]; then
+  for f in tests/gpu/specs/*.json; do names+=("$(basename "$f" .json)"); done
 fi
-python3 - "$out/sweep-depth.json" > "$out/sweep-depth.txt" <<'PY'
+
+status=0
+for name in "${names[@]}"; do
+  source_spec="tests/gpu/specs/$name.json"
+  [ -f "$source_spec" ] || { echo "sweeps.sh: no $source_spec" >&2; status=2; continue; }
+  spec="$out/sweep-$name-spec.json"
+  python3 - "$source_spec" "$override" > "$spec" <<'PY'
+import json, sys
+spec = json.load(open(sys.argv[1]))
+if sys.argv[2]:
+    w, h = sys.argv[2].split("x")
+    spec["resolution"] = [int(w), int(h)]
+print(json.dumps(spec))
+PY
+  start=$(date +%s%N)
+  "$tallyd" capture --spec "$spec" --out "$out/sweep-$name.json" 2> "$out/sweep-$name.log"
+  rc=$?
+  end=$(date +%s%N)
+  echo "sweep $name: wall time $(( (end - start) / 1000000 )) ms, exit $rc"
+  if [ "$rc" -ne 0 ]; then
+    tail -5 "$out/sweep-$name.log"
+    status=$rc
+    continue
+  fi
+  # Fails_at, then one table per plot: the x value, the series values and y.
+  python3 - "$out/sweep-$name.json" > "$out/sweep-$name.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-print("device:", r["device"].get("name"))
-print("%-6s %-9s %-9s %-12s %-12s %-12s %s" % ("near", "far/near", "distance", "max_abs_m", "max_rel",
-                                              "predicted", "measured/predicted"))
-for p in r["points"]:
-    print("%-6g %-9g %-9g %-12.3g %-12.3g %-12.3g %.2f" % (p["near"], p["far_over_near"], p["distance"],
-          p["error"]["max_abs"], p["error"]["max_relative"], p["predicted"]["max_relative"],
-          p["error_over_predicted"]))
+def at(p, path):
+    for k in path.split("."):
+        p = p.get(k) if isinstance(p, dict) else None
+    return p
+print("sweep:", r["sweep"], " device:", r["device"].get("name"), " resolution:", r.get("resolution", r["spec"].get("resolution")))
+print("threshold:", json.dumps(r["threshold"]))
 print("fails_at:", json.dumps(r["fails_at"]))
-print("predicted_fails_at:", json.dumps(r["predicted_fails_at"]))
+if "predicted_fails_at" in r:
+    print("predicted_fails_at:", json.dumps(r["predicted_fails_at"]))
+for plot in r.get("plots", []):
+    print()
+    print("## %s  (%s against %s)" % (plot["title"], plot["y"], plot["x"]))
+    cols = plot["series"] + [plot["x"], plot["y"]]
+    print("  ".join("%-14s" % c for c in cols))
+    for p in r["points"]:
+        vals = [at(p, c) for c in cols]
+        print("  ".join("%-14.6g" % v if isinstance(v, (int, float)) and not isinstance(v, bool) else "%-14s" % v for v in vals))
 PY
-status=$?
-cat "$out/sweep-depth.txt"
+  rc=$?
+  cat "$out/sweep-$name.txt"
+  [ "$rc" -eq 0 ] || status=$rc
+done
 exit "$status"

@@ -2,8 +2,10 @@
 // Chromium against a real `tallyd serve` filled by real captures (tiny
 // resolutions, 2 frames) through POST /api/captures. The charts must draw the
 // API's numbers (read back from the Chart.js objects and the tables beside
-// them), the compare view must show the API's ratios, the capture form must
-// start a capture and see it finish, bad input must show the server's error,
+// them), the compare view must show the API's ratios, a stability sweep's
+// view must state its fails_at and chart its points as the API has them, the
+// run view its counter headroom, the capture form must start a capture (and a
+// sweep) and see it finish, bad input must show the server's error,
 // and no page may log a console error. Every view is saved as a PNG, wide
 // (1280x800) and narrow (400x800), into $TALLY_SCREENSHOTS.
 //
@@ -30,6 +32,11 @@ function assertClose(actual, expected, what) {
 }
 
 const mean = (values) => values.reduce((a, b) => a + b, 0) / values.length;
+
+const kSweepSpec = { sweep: 'depth-reconstruction', near: [0.01], far: [1000], distances: [3, 300], resolution: [32, 18], threshold: { relative: 1e-3 } };
+
+// A point's value at a dotted path ("error.max_relative").
+const at = (point, path) => path.split('.').reduce((v, k) => v[k], point);
 
 let daemon;
 let browser;
@@ -93,8 +100,15 @@ before(async () => {
   for (const counting of ['subgroup', 'sampled:4']) {
     await daemon.capture({ renderers: ['deferred', 'visbuffer'], resolutions: [[128, 72]], frames: 2, counting }, kCaptureMs);
   }
+  // A repeated capture of one configuration: the compare view's spread across captures.
+  await daemon.capture({ renderers: ['visbuffer-lean'], scenes: ['atrium'], resolutions: [[128, 72]], frames: 2 }, kCaptureMs);
   data.runs = (await daemon.get('/runs?limit=1000')).runs;
-  assert.equal(data.runs.length, 12);
+  assert.equal(data.runs.length, 13);
+  // One small stability sweep: one point holds (3 m), one fails (300 m), so
+  // fails_at states a value and a hold (tests/service/sweeps_test.cpp).
+  const sweepJob = await daemon.capture(kSweepSpec, kCaptureMs);
+  assert.equal(sweepJob.sweeps.length, 1);
+  data.sweep = await daemon.get(`/sweeps/${sweepJob.sweeps[0]}`);
   browser = await chromium.launch({ executablePath: env.CHROMIUM });
 });
 
@@ -112,6 +126,8 @@ describe('dashboard', () => {
       compare: `#/compare?runs=${deferred.id},${runOf('visbuffer', 128).id},${runOf('visbuffer-lean', 128).id}`,
       'accuracy-counting': '#/accuracy?error=counting&cost=overhead',
       'accuracy-image': '#/accuracy?error=image&cost=frame',
+      sweeps: '#/sweeps',
+      sweep: `#/sweeps/${data.sweep.id}`,
       capture: '#/capture',
     };
     for (const [name, hash] of Object.entries(views)) {
@@ -298,6 +314,22 @@ describe('dashboard', () => {
     const frame = await chart(page, 'compare-frame-ms');
     assert.deepEqual(frame.datasets[0].data, c.frame_ms.map((v) => v.value));
 
+    // Across repeated captures: visbuffer-lean was captured twice with one
+    // configuration, the others once. The table and the chart give the API's
+    // group median and IQR for it, and nothing for the others.
+    const { groups } = await daemon.get(`/repeats?renderer=visbuffer-lean&width=128&height=72`);
+    const group = groups.find((g) => g.runs.includes(ids[2]));
+    assert.ok(group, 'the repeated visbuffer-lean capture forms a group');
+    assert.equal(group.runs.length, 2);
+    const rows = page.locator('[data-table="repeats"] tbody tr');
+    await rows.first().waitFor({ timeout: kViewMs });
+    assert.deepEqual(await rows.evaluateAll((trs) => trs.map((tr) => Number(tr.dataset.captures))), [1, 1, 2]);
+    const leanRow = page.locator(`[data-table="repeats"] tr[data-run="${ids[2]}"]`);
+    for (const key of ['median', 'q1', 'q3']) assert.equal(Number(await leanRow.getAttribute(`data-${key}`)), group.frame_ms[key], key);
+    const repeated = await chart(page, 'compare-repeats-ms');
+    assert.deepEqual(repeated.datasets[0].data, [null, null, group.frame_ms.median]);
+    assert.deepEqual(repeated.datasets[0].whiskers, [null, null, [group.frame_ms.q1, group.frame_ms.q3]]);
+
     // Scaling: per renderer, bytes per frame at each pixel count (64x36 and 128x72).
     const scaling = await chart(page, 'scaling-bytes');
     assert.deepEqual(scaling.datasets.map((d) => d.label), ['deferred', 'visbuffer', 'visbuffer-lean']);
@@ -464,6 +496,127 @@ describe('dashboard', () => {
     // The only console lines: Chromium's own notes of the two 400 answers to
     // POST /api/captures. The page itself logs nothing.
     assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), [['/api/captures', true], ['/api/captures', true]]);
+    await close();
+  });
+
+  test('sweeps: the list is the API\'s, the sweep view states fails_at and charts the points', async () => {
+    const sweep = data.sweep;
+    const result = sweep.result;
+    const { page, errors, close } = await open('#/sweeps');
+    const ids = () => page.locator('table.sweeps tbody tr').evaluateAll((rows) => rows.map((r) => Number(r.dataset.sweepId)));
+    assert.deepEqual(await ids(), (await daemon.get('/sweeps')).sweeps.map((s) => s.id));
+    assert.equal(await page.locator(`tr[data-sweep-id="${sweep.id}"] [data-fails-at]`).getAttribute('data-fails-at'), sweep.fails_at === null ? 'none' : 'some');
+    // The name filter goes to the server.
+    await page.fill('input[name="name"]', 'material-edges');
+    await go(page, () => page.click('form.filters button[type="submit"]'));
+    assert.deepEqual(await ids(), (await daemon.get('/sweeps?name=material-edges')).sweeps.map((s) => s.id));
+    assert.match(await page.locator('#view').textContent(), /No sweeps match/);
+    await go(page, () => page.goto(`${daemon.url}/#/sweeps?name=depth-reconstruction`));
+    assert.deepEqual(await ids(), [sweep.id]);
+    await go(page, () => page.click(`tr[data-sweep-id="${sweep.id}"] a`));
+    assert.match(await page.locator('h1').textContent(), new RegExp(`Sweep #${sweep.id}: depth-reconstruction`));
+
+    // Threshold tile: the API's.
+    assert.equal(Number(await page.locator('[data-tile="threshold-relative"]').getAttribute('data-value')), sweep.threshold.relative);
+
+    // Where it fails: per swept axis and group, recomputed from the points
+    // (the smallest value of the axis whose max relative error reaches the
+    // threshold, the other parameters held), and equal to the API's fails_at.
+    const expected = [];
+    for (const [axis, others] of [['distance', ['near', 'far']], ['far_over_near', ['distance', 'far']]]) {
+      const groups = new Map();
+      for (const p of result.points) {
+        const key = JSON.stringify(others.map((o) => p[o]));
+        if (!groups.has(key)) groups.set(key, null);
+        if (p.error.max_relative >= sweep.threshold.relative && (groups.get(key) === null || p[axis] < groups.get(key))) groups.set(key, p[axis]);
+      }
+      for (const value of groups.values()) expected.push([axis, value]);
+    }
+    const api = Object.entries(sweep.fails_at).flatMap(([axis, groups]) => groups.map((g) => [axis, g[axis]]));
+    const byKey = (a, b) => JSON.stringify(a).localeCompare(JSON.stringify(b));
+    assert.deepEqual([...api].sort(byKey), [...expected].sort(byKey));
+    const shown = await page.locator('[data-table="fails-at"] tbody tr').evaluateAll((trs) => trs.map((tr) => [tr.cells[0].textContent, tr.querySelector('[data-value]').dataset.value]));
+    assert.deepEqual(shown.map(([axis, v]) => [axis, v === '' ? null : Number(v)]), api);
+    assert.ok(expected.some(([, v]) => v === null) && expected.some(([, v]) => v !== null), 'one group holds and one fails');
+    const words = await page.locator('[data-table="fails-at"] tbody').textContent();
+    assert.match(words, /holds over the range/);
+    assert.match(words, /fails at distance 300/);
+
+    // One chart per plot: a line per series combination with the API's points
+    // in x order, the threshold dashed across, log axes as flagged.
+    assert.equal(await page.locator('[data-chart^="sweep-plot-"]').count(), result.plots.length);
+    for (const [k, plot] of result.plots.entries()) {
+      const drawn = await page.evaluate((id) => {
+        const c = window.Chart.getChart(document.querySelector(`[data-chart="${id}"] canvas`));
+        return { x: c.options.scales.x.type, y: c.options.scales.y.type,
+          datasets: c.data.datasets.map((d) => ({ data: d.data, threshold: Boolean(d.threshold), dash: d.borderDash || null })) };
+      }, `sweep-plot-${k}`);
+      assert.equal(drawn.x, plot.x_log ? 'logarithmic' : 'linear');
+      assert.equal(drawn.y, plot.y_log ? 'logarithmic' : 'linear');
+      const lines = new Map();
+      for (const p of result.points) {
+        const key = JSON.stringify(plot.series.map((f) => at(p, f)));
+        if (!lines.has(key)) lines.set(key, []);
+        lines.get(key).push({ x: at(p, plot.x), y: at(p, plot.y) });
+      }
+      const want = [...lines.values()].map((line) => line.sort((a, b) => a.x - b.x));
+      assert.deepEqual(drawn.datasets.filter((d) => !d.threshold).map((d) => d.data), want, plot.title);
+      const threshold = drawn.datasets.filter((d) => d.threshold);
+      assert.equal(threshold.length, 1);
+      const xs = result.points.map((p) => at(p, plot.x));
+      assert.deepEqual(threshold[0].data, [{ x: Math.min(...xs), y: plot.threshold }, { x: Math.max(...xs), y: plot.threshold }]);
+      assert.ok(threshold[0].dash && threshold[0].dash.length > 0, 'the threshold is dashed');
+    }
+    // The points table: one row per point, the values the API gives.
+    const distances = await page.locator('[data-table="points"] tbody tr').evaluateAll((trs) => trs.map((tr) => JSON.parse(tr.cells[2].querySelector('[data-value]').dataset.value)));
+    assert.deepEqual(distances, result.points.map((p) => p.distance));
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('run view: the counter headroom is the API\'s', async () => {
+    const run = await daemon.get(`/runs/${runOf('deferred', 128).id}`);
+    const hr = run.counter_headroom;
+    assert.ok(hr && hr.max_slot_count_per_frame > 0, 'the run has a headroom');
+    const { page, errors, close } = await open(`#/runs/${run.id}`);
+    const value = (key) => page.locator(`[data-headroom="${key}"]`).getAttribute('data-value');
+    assert.equal(Number(await value('max-slot-count')), hr.max_slot_count_per_frame);
+    assert.equal(await value('max-slot'), hr.max_slot);
+    assert.equal(Number(await value('wrap-32')), hr.wrap_factor_32bit);
+    assert.equal(Number(await value('wrap')), hr.wrap_factor);
+    // The factors are 2^bits over the largest slot's count per readback.
+    assert.ok(Math.abs(hr.wrap_factor_32bit - 2 ** 32 / (hr.max_slot_count_per_frame * hr.frames_accumulated)) <= 1e-9 * hr.wrap_factor_32bit);
+    assert.equal(await page.locator('[data-headroom="max-slot-count"] .value').textContent(), hr.max_slot_count_per_frame.toLocaleString('en-US'));
+    assert.match(await page.locator('[data-headroom="sentence"]').textContent(), /^32-bit counters would wrap at [0-9.e]+× this resolution × overshading/);
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('capture form: a sweep spec starts a sweep; a bad one shows the server\'s field', async () => {
+    const { page, errors, close } = await open('#/capture');
+    await page.click('details.sweep-box summary');
+    const bad = { ...kSweepSpec, colour: 'red' };
+    const expected = await daemon.api('/captures', { method: 'POST', body: bad });
+    assert.equal(expected.status, 400);
+    await page.fill('textarea[name="sweep_spec"]', JSON.stringify(bad));
+    await page.click('form.sweep-form button[type="submit"]');
+    const panel = page.locator('form.sweep-form .form-error .panel.error');
+    await panel.waitFor({ timeout: kViewMs });
+    assert.equal(await panel.locator('.message').textContent(), expected.body.error.message);
+    assert.equal(await panel.locator('.field-name').textContent(), 'colour');
+    assert.equal(await page.locator('textarea[name="sweep_spec"]').getAttribute('aria-invalid'), 'true');
+
+    await page.fill('textarea[name="sweep_spec"]', JSON.stringify(kSweepSpec));
+    await page.click('form.sweep-form button[type="submit"]');
+    const done = page.locator('.progress-box [data-status="done"]');
+    await done.waitFor({ timeout: kCaptureMs });
+    const job = await daemon.get(`/captures/${await done.getAttribute('data-capture')}`);
+    assert.deepEqual(job.spec, kSweepSpec);
+    assert.equal(job.sweeps.length, 1);
+    await go(page, () => page.click('.progress-box a'));
+    assert.match(await page.locator('h1').textContent(), new RegExp(`Sweep #${job.sweeps[0]}:`));
+    // The one console line: Chromium's note of the 400 answer to the bad spec.
+    assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), [['/api/captures', true]]);
     await close();
   });
 });

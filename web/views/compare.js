@@ -1,8 +1,9 @@
 // Compare 2 to 4 runs (#/compare?runs=a,b,c): totals and per-resource and
 // per-pass traffic side by side with deltas and ratios against the first run
 // (all from /api/compare), how bytes and frame time scale with the pixel
-// count for each run's renderer (the founding study's total figure), and an
-// A/B/difference viewer of one camera's screenshots.
+// count for each run's renderer (the founding study's total figure), the
+// spread across repeated captures of each run's configuration (/api/repeats),
+// and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
 import { barChart, xyChart } from '../charts.js';
 import { h } from '../dom.js';
@@ -121,6 +122,52 @@ async function scaling(page, c, signal) {
   const datasets = (value) => series.map((s) => ({ label: s.label, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
   xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: datasets('mean_bytes'), table });
   xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: datasets('mean_frame_ms'), table: table.cloneNode(true) });
+}
+
+// ---- Repeated captures ---------------------------------------------------------
+
+// Each compared run's repeat group: the stored runs with its exact configuration
+// (/api/repeats lists groups of two or more), or null when it was captured once.
+async function repeatGroups(runs, signal) {
+  return Promise.all(runs.map(async (run) => {
+    const { groups } = await get('/repeats' + queryString({ renderer: run.renderer, scene: run.scene, device: run.device_id, width: run.width, height: run.height }), signal);
+    return groups.find((g) => g.runs.includes(run.id)) || null;
+  }));
+}
+
+// Across-capture median and IQR of frame time and bytes beside the within-run
+// noise: is a difference between compared runs larger than what repeating one
+// capture gives?
+async function repeats(page, c, signal) {
+  page.append(h('h2', {}, 'Across repeated captures'));
+  const groups = await repeatGroups(c.runs, signal);
+  if (groups.every((g) => g === null)) {
+    page.append(h('p', { class: 'panel', dataset: { repeats: 'none' } },
+      'None of these runs has a repeated capture (same renderer, scene, resolution, device, counting mode, lights and cameras). Capture the same spec again to see the spread across captures.'));
+    return;
+  }
+  const spread = (f, format) => (f ? `${format(f.median)} [${format(f.q1)} – ${format(f.q3)}]` : '–');
+  const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Repeated captures', dataset: { table: 'repeats' } },
+    h('thead', {}, h('tr', {}, ['Run', 'Captures', 'Frame time: median [IQR]', 'Within-run noise (IQR)', 'Agrees', 'Bytes: median [IQR]', 'Counts'].map((t) => h('th', { scope: 'col' }, t)))),
+    h('tbody', {}, c.runs.map((r, i) => {
+      const g = groups[i];
+      return h('tr', { dataset: { run: r.id, captures: g ? g.runs.length : 1, median: g ? g.frame_ms.median : '', q1: g ? g.frame_ms.q1 : '', q3: g ? g.frame_ms.q3 : '' } },
+        h('th', { scope: 'row' }, fmt.runLabel(r)),
+        h('td', { class: 'num' }, g ? String(g.runs.length) : '1'),
+        h('td', { class: 'num' }, g ? spread(g.frame_ms, fmt.ms) : 'captured once'),
+        h('td', { class: 'num' }, g ? fmt.ms(g.frame_ms.noise_iqr) : '–'),
+        h('td', {}, g ? (g.frame_ms.agrees ? 'yes' : 'no: outside the noise band') : '–'),
+        h('td', { class: 'num' }, g ? spread(g.bytes, fmt.bytes) : '–'),
+        h('td', {}, g ? (g.counts.identical ? 'identical' : `differ: ${g.counts.first_difference}`) : '–'));
+    }))));
+  const box = h('div', { class: 'charts' });
+  page.append(box);
+  barChart(box, {
+    id: 'compare-repeats-ms', title: 'Frame time across repeated captures', caption: 'median of the captures, whiskers q1–q3; runs captured once have no bar',
+    labels: c.runs.map((r) => `${r.renderer} #${r.id}`), labelHeader: 'Run', format: fmt.ms,
+    datasets: [{ label: 'median over captures', data: groups.map((g) => (g ? g.frame_ms.median : null)), whiskers: groups.map((g) => (g ? [g.frame_ms.q1, g.frame_ms.q3] : null)) }],
+  });
+  page.append(table);
 }
 
 // ---- A/B/difference viewer --------------------------------------------------------
@@ -245,7 +292,7 @@ export async function render(page, { query, signal }) {
   perResource(page, c);
   perPass(page, c);
   // Both need more requests: fetch them side by side, each into its own section.
-  const [scalingSection, imageSection] = [h('section'), h('section')];
-  page.append(scalingSection, imageSection);
-  await Promise.all([scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
+  const [repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section')];
+  page.append(repeatSection, scalingSection, imageSection);
+  await Promise.all([repeats(repeatSection, c, signal), scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
 }
