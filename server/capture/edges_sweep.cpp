@@ -12,6 +12,7 @@
 
 #include "capture/depth_sweep.hpp"  // kMaxSweepAxis
 #include "capture/image.hpp"
+#include "capture/sweep_fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/visbuffer_base.hpp"
 #include "scenes/mesh_builder.hpp"
@@ -38,14 +39,9 @@ constexpr int kWrongTolerance = 0;
 // Wrong pixels outside the subgroup mask listed by position, at most this many.
 constexpr size_t kListedOutside = 16;
 
-std::string show(const json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+using sweep_fields::fieldError;
+using sweep_fields::show;
 
-Error fieldError(const std::string& field, const std::string& message) {
-  return makeError(field + ": " + message);
-}
 
 // (i + k j) mod n for cell (i, j), cells of `cellSize` from the image's top-left corner.
 uint32_t cellMaterial(int64_t i, int64_t j, uint32_t materials) {
@@ -151,25 +147,9 @@ Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std:
   }
 
   if (j.contains("resolution")) {
-    const auto& r = j["resolution"];
-    auto dim = [&](size_t i) -> Result<uint32_t> {
-      std::string f = "resolution[" + std::to_string(i) + "]";
-      if (!r[i].is_number_integer() || r[i].get<int64_t>() < 1 || r[i].get<int64_t>() > kMaxDimension) {
-        return fieldError(
-            f, "must be an integer between 1 and " + std::to_string(kMaxDimension) + ", got " + show(r[i]));
-      }
-      return uint32_t(r[i].get<int64_t>());
-    };
-    if (!r.is_array() || r.size() != 2)
-      return fieldError("resolution", "must be [width, height], got " + show(r));
-    auto w = dim(0);
-    if (!w) return makeError(w.error());
-    auto h = dim(1);
-    if (!h) return makeError(h.error());
-    if (uint64_t{*w} * *h > kMaxPixels) {
-      return fieldError("resolution", "more than the " + std::to_string(kMaxPixels) + "-pixel limit (8K)");
-    }
-    spec.resolution = {*w, *h};
+    auto r = sweep_fields::resolution(j["resolution"]);
+    if (!r) return makeError(r.error());
+    spec.resolution = *r;
   }
 
   // Whole pixels: cell edges then fall on pixel edges, half a pixel from every

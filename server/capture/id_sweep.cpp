@@ -7,6 +7,7 @@
 #include <map>
 
 #include "capture/image.hpp"
+#include "capture/sweep_fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/textures.hpp"
@@ -30,14 +31,9 @@ constexpr renderers::DepthRange kDepthRange = {0.5f, 8.0f};
 constexpr double kEdgeMargin = 1e-3;  // pixels: a centre nearer an edge is ambiguous
 constexpr size_t kExamples = 3;       // wrong pixels listed per point
 
-std::string show(const json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+using sweep_fields::fieldError;
+using sweep_fields::show;
 
-Error fieldError(const std::string& field, const std::string& message) {
-  return makeError(field + ": " + message);
-}
 
 std::string joined(const std::vector<std::string>& names) {
   std::string out;
@@ -139,24 +135,9 @@ Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::strin
   }
 
   if (j.contains("resolution")) {
-    const auto& r = j["resolution"];
-    if (!r.is_array() || r.size() != 2)
-      return fieldError("resolution", "must be [width, height], got " + show(r));
-    const uint32_t least[2] = {kIdTileWidth, kIdTileHeight};
-    uint32_t dims[2] = {0, 0};
-    for (size_t i = 0; i < 2; ++i) {
-      std::string f = "resolution[" + std::to_string(i) + "]";
-      if (!r[i].is_number_integer() || r[i].get<int64_t>() < least[i] ||
-          r[i].get<int64_t>() > kMaxDimension) {
-        return fieldError(f, "must be an integer from " + std::to_string(least[i]) + " (one tile) to " +
-                                 std::to_string(kMaxDimension) + ", got " + show(r[i]));
-      }
-      dims[i] = uint32_t(r[i].get<int64_t>());
-    }
-    if (uint64_t{dims[0]} * dims[1] > kMaxPixels) {
-      return fieldError("resolution", "more than the " + std::to_string(kMaxPixels) + "-pixel limit (8K)");
-    }
-    spec.resolution = {dims[0], dims[1]};
+    auto r = sweep_fields::resolution(j["resolution"], Resolution{kIdTileWidth, kIdTileHeight});
+    if (!r) return makeError(r.error());
+    spec.resolution = *r;
   }
 
   if (j.contains("threshold")) {

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "capture/image.hpp"
+#include "capture/sweep_fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "scenes/mesh_builder.hpp"
 #include "shared.h"
@@ -23,20 +24,11 @@ using renderers::VisibilityEncoding;
 
 constexpr double kUnorm16Steps = 65535.0;
 
-std::string show(const json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+using sweep_fields::fieldError;
+using sweep_fields::num;
+using sweep_fields::show;
 
-Error fieldError(const std::string& field, const std::string& message) {
-  return makeError(field + ": " + message);
-}
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
 
 // A non-empty array of distinct positive finite numbers.
 Result<std::vector<double>> positiveList(const json& j, const std::string& field) {
@@ -347,25 +339,9 @@ Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
     spec.uvRotationDeg = *v;
   }
   if (j.contains("resolution")) {
-    const auto& r = j["resolution"];
-    auto dim = [&](size_t i) -> Result<uint32_t> {
-      std::string f = "resolution[" + std::to_string(i) + "]";
-      if (!r[i].is_number_integer() || r[i].get<int64_t>() < 1 || r[i].get<int64_t>() > kMaxDimension) {
-        return fieldError(
-            f, "must be an integer between 1 and " + std::to_string(kMaxDimension) + ", got " + show(r[i]));
-      }
-      return uint32_t(r[i].get<int64_t>());
-    };
-    if (!r.is_array() || r.size() != 2)
-      return fieldError("resolution", "must be [width, height], got " + show(r));
-    auto w = dim(0);
-    if (!w) return makeError(w.error());
-    auto h = dim(1);
-    if (!h) return makeError(h.error());
-    if (uint64_t{*w} * *h > kMaxPixels) {
-      return fieldError("resolution", "more than the " + std::to_string(kMaxPixels) + "-pixel limit (8K)");
-    }
-    spec.resolution = {*w, *h};
+    auto r = sweep_fields::resolution(j["resolution"]);
+    if (!r) return makeError(r.error());
+    spec.resolution = *r;
   }
   if (j.contains("fov_deg")) {
     auto v = numberIn(j["fov_deg"], "fov_deg", 1.0, 170.0, false);

@@ -91,7 +91,7 @@ TEST(EdgesSweepSpec, BadSpecsNameTheField) {
   startsWith(with("materials", 2.5), "materials: must be an integer");
   startsWith(with("same_texture", "yes"), "same_texture: must be true or false");
   startsWith(with("resolution", {96}), "resolution: must be [width, height]");
-  startsWith(with("resolution", {96, 0}), "resolution[1]: must be an integer between 1 and");
+  startsWith(with("resolution", {96, 0}), "resolution[1]: must be an integer from 1 to");
   startsWith(with("cell_sizes", json::array()), "cell_sizes: must be an array of 1 to");
   startsWith(with("cell_sizes", {4, 0}), "cell_sizes[1]: must be a whole number of pixels from 1 to");
   startsWith(with("cell_sizes", {1.5}), "cell_sizes[0]: must be a whole number of pixels");
