@@ -6,7 +6,7 @@ namespace tally::capture {
 
 std::vector<std::string> sweepNames() {
   return {std::string(kDepthSweepName), std::string(kIdSweepName), std::string(kEdgesSweepName),
-          std::string(kPrecisionSweepName)};
+          std::string(kPrecisionSweepName), std::string(kCounterSweepName)};
 }
 
 bool isSweepSpec(const nlohmann::json& spec) { return spec.is_object() && spec.contains("sweep"); }
@@ -37,6 +37,11 @@ Result<SweepSpec> parseSweepSpec(const nlohmann::json& spec, const std::vector<s
     if (!precision) return makeError(precision.error());
     return SweepSpec(std::move(precision).value());
   }
+  if (name.get<std::string>() == kCounterSweepName) {
+    auto counter = parseCounterSweepSpec(spec, knownRenderers);
+    if (!counter) return makeError(counter.error());
+    return SweepSpec(std::move(counter).value());
+  }
   return makeError("sweep: unknown sweep '" + name.get<std::string>() + "' (expected one of " + known + ")");
 }
 
@@ -55,6 +60,10 @@ Result<nlohmann::json> runSweepKind(gpu::Context& ctx, const EdgesSweepSpec& spe
 Result<nlohmann::json> runSweepKind(gpu::Context& ctx, const PrecisionSweepSpec& spec,
                                     const CaptureOptions& options) {
   return runPrecisionSweep(ctx, spec, options);
+}
+
+Result<nlohmann::json> runSweepKind(gpu::Context& ctx, const CounterSweepSpec& spec, const CaptureOptions& options) {
+  return runCounterSweep(ctx, spec, options);
 }
 
 }  // namespace

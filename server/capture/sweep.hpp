@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "capture/counter_sweep.hpp"
 #include "capture/depth_sweep.hpp"
 #include "capture/edges_sweep.hpp"
 #include "capture/id_sweep.hpp"
@@ -23,11 +24,10 @@
 
 namespace tally::capture {
 
-// One alternative per sweep kind; later sweeps (barycentric precision,
-// material edges, id capacity) add theirs.
-using SweepSpec = std::variant<DepthSweepSpec, IdSweepSpec, EdgesSweepSpec, PrecisionSweepSpec>;
+// One alternative per sweep kind.
+using SweepSpec = std::variant<DepthSweepSpec, IdSweepSpec, EdgesSweepSpec, PrecisionSweepSpec, CounterSweepSpec>;
 
-// "depth-reconstruction", "id-capacity", "material-edges", "visbuffer-precision"
+// "depth-reconstruction", "id-capacity", "material-edges", "visbuffer-precision", "counter-headroom"
 std::vector<std::string> sweepNames();
 
 bool isSweepSpec(const nlohmann::json& spec);  // an object with "sweep"
