@@ -39,6 +39,7 @@ std::string query(const std::vector<std::pair<std::string, std::string>>& params
 std::vector<std::pair<std::string, std::string>> filterParams(const RunFilters& f) {
   std::vector<std::pair<std::string, std::string>> p;
   if (f.renderer) p.emplace_back("renderer", *f.renderer);
+  if (f.variant) p.emplace_back("variant", *f.variant);
   if (f.scene) p.emplace_back("scene", *f.scene);
   if (f.width) p.emplace_back("width", std::to_string(*f.width));
   if (f.height) p.emplace_back("height", std::to_string(*f.height));
@@ -318,6 +319,9 @@ RunView runView(const json& run) {
   v.capture = str(run, "capture");
   if (v.capture.empty()) v.capture = str(run, "job_id");
   v.renderer = str(run, "renderer");
+  v.variant = str(run, "variant");
+  if (v.variant.empty()) v.variant = v.renderer;
+  if (const json* o = field(run, "options"); o && o->is_object()) v.options = *o;
   v.scene = str(run, "scene");
   if (const json* d = field(run, "device"); d && d->is_object()) {
     v.device = str(*d, "name");
@@ -364,6 +368,12 @@ SampleView sampleView(const json& sample) {
     v.psnr = num(*e, "psnr");
     v.against = str(*e, "against");
     if (const json* i = field(*e, "identical"); i && i->is_boolean()) v.identical = i->get<bool>();
+  }
+  if (const json* e = field(sample, "variant_error"); e && e->is_object()) {
+    v.hasVariantError = true;
+    v.variantPsnr = num(*e, "psnr");
+    v.variantAgainst = str(*e, "against");
+    if (const json* i = field(*e, "identical"); i && i->is_boolean()) v.variantIdentical = i->get<bool>();
   }
   return v;
 }

@@ -43,6 +43,7 @@ std::string tokenFromEnv();
 // Filters shared by /api/runs and /api/export; unset ones are not sent.
 struct RunFilters {
   std::optional<std::string> renderer, scene, device, capture, runs;
+  std::optional<std::string> variant;  // exact variant label
   std::optional<int> width, height;
 };
 
@@ -122,6 +123,10 @@ std::vector<json> jobList(const json& page);  // the "captures" array
 
 struct RunView {
   std::string id, capture, renderer, scene, device, counting, createdAt;
+  // The variant label ("visbuffer barycentrics=float32"; the renderer for a
+  // run without options or from a server before variants) and its options.
+  std::string variant;
+  nlohmann::json options = nlohmann::json::object();
   std::optional<int64_t> width, height, samples, lights, renderTargetBytes;
   std::optional<double> frameMs, bytes;  // means over the run's samples
 };
@@ -134,6 +139,11 @@ struct SampleView {
   std::optional<double> skyFraction, frameMs, overhead, psnr, bytes, bytesRead, bytesWritten;
   bool identical = false;  // image equal to the reference renderer's
   std::string against;     // reference renderer of image_error
+  // variant_error: the image against the run's reference variant (absent for
+  // runs without options and for a variant that is its own reference).
+  bool hasVariantError = false, variantIdentical = false;
+  std::optional<double> variantPsnr;
+  std::string variantAgainst;
 };
 SampleView sampleView(const json& sample);
 std::vector<json> sampleList(const json& page);  // the "samples" array

@@ -221,7 +221,7 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
            {"BYTES/FRAME", Align::Right}});
   for (const auto& run : runList(*res)) {
     RunView r = runView(run);
-    t.addRow({r.id, orMissing(r.capture), r.renderer, r.scene, size(r), orMissing(r.device),
+    t.addRow({r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
               r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3), humanBytes(r.bytes)});
   }
   t.print(io.out);
@@ -240,7 +240,14 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     return 0;
   }
   RunView r = runView(*run);
-  io.out << "run " << r.id << ": " << r.renderer << " on " << r.scene << " at " << size(r) << '\n';
+  io.out << "run " << r.id << ": " << r.variant << " on " << r.scene << " at " << size(r) << '\n';
+  if (!r.options.empty()) {
+    io.out << "options:";
+    for (const auto& [key, value] : r.options.items()) {
+      io.out << ' ' << key << '=' << (value.is_string() ? value.get<std::string>() : value.dump());
+    }
+    io.out << '\n';
+  }
   io.out << "device: " << orMissing(r.device) << "   capture: " << orMissing(r.capture);
   if (!r.counting.empty()) io.out << "   counting: " << r.counting;
   if (r.lights) io.out << "   lights: " << *r.lights;
@@ -248,13 +255,18 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     io.out << "   render targets: " << humanBytes(static_cast<double>(*r.renderTargetBytes));
   io.out << "\n\n";
 
-  Table t({{"CAMERA"},
-           {"SKY", Align::Right},
-           {"FRAME MS", Align::Right},
-           {"OVERHEAD", Align::Right},
-           {"IMAGE ERROR", Align::Right},
-           {"READ/FRAME", Align::Right},
-           {"WRITTEN/FRAME", Align::Right}});
+  // A variant's error against its reference variant gets a column where any sample has one.
+  bool variantErrors = false;
+  for (const auto& sample : sampleList(*samples)) variantErrors = variantErrors || sampleView(sample).hasVariantError;
+  std::vector<Table::Column> columns = {{"CAMERA"},
+                                        {"SKY", Align::Right},
+                                        {"FRAME MS", Align::Right},
+                                        {"OVERHEAD", Align::Right},
+                                        {"IMAGE ERROR", Align::Right}};
+  if (variantErrors) columns.push_back({"VARIANT ERROR", Align::Right});
+  columns.push_back({"READ/FRAME", Align::Right});
+  columns.push_back({"WRITTEN/FRAME", Align::Right});
+  Table t(columns);
   for (const auto& sample : sampleList(*samples)) {
     SampleView s = sampleView(sample);
     std::optional<double> read = s.bytesRead, written = s.bytesWritten;
@@ -268,8 +280,19 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     }
     std::string image = s.identical ? "identical" : s.psnr ? fixed(s.psnr, 1) + " dB" : kMissing;
     if (!s.against.empty() && image != kMissing) image += " vs " + s.against;
-    t.addRow({orMissing(s.camera), percent(s.skyFraction), fixed(s.frameMs, 3), ratio(s.overhead), image,
-              humanBytes(read), humanBytes(written)});
+    std::vector<std::string> row = {orMissing(s.camera), percent(s.skyFraction), fixed(s.frameMs, 3),
+                                    ratio(s.overhead), image};
+    if (variantErrors) {
+      std::string variant = !s.hasVariantError ? kMissing
+                            : s.variantIdentical ? "identical"
+                            : s.variantPsnr      ? fixed(s.variantPsnr, 1) + " dB"
+                                                 : kMissing;
+      if (s.hasVariantError && variant != kMissing) variant += " vs " + s.variantAgainst;
+      row.push_back(variant);
+    }
+    row.push_back(humanBytes(read));
+    row.push_back(humanBytes(written));
+    t.addRow(row);
   }
   t.print(io.out);
   return 0;
@@ -289,7 +312,7 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
     names.push_back("#" + id);
     if (i < c.runs.size()) {
       const RunView& r = c.runs[i];
-      io.out << "#" << id << ": " << r.renderer << " " << r.scene << " " << size(r) << " on "
+      io.out << "#" << id << ": " << r.variant << " " << r.scene << " " << size(r) << " on "
              << orMissing(r.device) << '\n';
     }
   }

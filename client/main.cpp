@@ -15,6 +15,7 @@ using namespace tally::client;
 
 void addFilters(CLI::App* sub, RunFilters& f) {
   sub->add_option("--renderer", f.renderer, "Only this renderer (e.g. deferred)");
+  sub->add_option("--variant", f.variant, "Only this variant, its exact label (e.g. \"visbuffer barycentrics=float32\")");
   sub->add_option("--scene", f.scene, "Only this scene (e.g. atrium)");
   sub->add_option("--width", f.width, "Only this width in pixels")->check(CLI::PositiveNumber);
   sub->add_option("--height", f.height, "Only this height in pixels")->check(CLI::PositiveNumber);

@@ -24,6 +24,12 @@ layout(location = 2) in vec4 inTangent;
 layout(location = 3) in vec2 inUv;
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
+#ifdef TALLY_COUNT_FRAGMENTS
+// output=overdraw|overshading: 1 per fragment into the R32_SFLOAT count
+// target. The pipeline blends src + dst x (1 - src alpha): alpha 0 adds, and
+// outColor's alpha 1 replaces as without blending.
+layout(location = kOutCount) out vec4 outCount;
+#endif
 
 void main() {
   Surface s = surfaceFromMaps(texture(diffuseMap, inUv), texture(ambientMap, inUv),
@@ -31,4 +37,7 @@ void main() {
                               texture(normalMap, inUv), inNormal, inTangent,
                               materials[push.materialIndex].baseColor, materials[push.materialIndex].roughnessFactor);
   outColor = vec4(shade(s, inPosition), 1.0);
+#ifdef TALLY_COUNT_FRAGMENTS
+  outCount = vec4(1.0, 0.0, 0.0, 0.0);
+#endif
 }

@@ -87,6 +87,11 @@ TALLY_CONST(uint, kBindingVisibilityTarget, 0u);     // fat: R32G32_UINT, lean: 
 TALLY_CONST(uint, kBindingUvDerivativeTarget, 1u);   // fat only: R32G32_UINT
 // Set 3, tonemap
 TALLY_CONST(uint, kBindingHdrTarget, 0u);  // RGBA16F
+TALLY_CONST(uint, kBindingBloomTarget, 1u);  // RGBA16F, the blurred bloom (only with bloom on)
+// Set 3, bloom passes: the RGBA16F target the bright pass reads (hdr) or a blur pass blurs
+TALLY_CONST(uint, kBindingBloomSource, 0u);
+// Set 3, forward's overdraw view
+TALLY_CONST(uint, kBindingCountTarget, 0u);  // R32_SFLOAT fragment counts
 
 // ---- Vertex inputs and fragment outputs --------------------------------------
 TALLY_CONST(uint, kAttribPosition, 0u);  // R32G32B32_SFLOAT at Vertex::position
@@ -99,6 +104,7 @@ TALLY_CONST(uint, kOutDiffuse, 1u);      // G-buffer RGBA8
 TALLY_CONST(uint, kOutSpecular, 2u);     // G-buffer RGBA8
 TALLY_CONST(uint, kOutVisibility, 0u);   // fat R32G32_UINT / lean R32_UINT
 TALLY_CONST(uint, kOutUvDerivatives, 1u);  // fat R32G32_UINT
+TALLY_CONST(uint, kOutCount, 1u);        // forward output=overdraw|overshading: R32_SFLOAT, additive
 
 // ---- Structs ------------------------------------------------------------------
 // Depth convention: [0, 1] with far = 1 (the sky's depth), positive-height

@@ -6,12 +6,21 @@
 #include "shared.h"
 
 layout(set = kSetPassInput, binding = kBindingHdrTarget) uniform sampler2D hdrTarget;  // RGBA16F
+#ifdef BLOOM
+// The blurred bright parts (bloom.frag.glsl), added before tonemapping: one
+// more RGBA16F texel per pixel.
+layout(set = kSetPassInput, binding = kBindingBloomTarget) uniform sampler2D bloomTarget;  // RGBA16F
+#endif
 layout(std140, set = kSetFrame, binding = kBindingLighting) uniform LightingBlock { Lighting lighting; };
 
 layout(location = kOutColor) out vec4 outColor;
 
 void main() {
-  vec3 hdr = texelFetch(hdrTarget, ivec2(gl_FragCoord.xy), 0).rgb * lighting.exposure;
+  vec3 hdr = texelFetch(hdrTarget, ivec2(gl_FragCoord.xy), 0).rgb;
+#ifdef BLOOM
+  hdr += texelFetch(bloomTarget, ivec2(gl_FragCoord.xy), 0).rgb;
+#endif
+  hdr *= lighting.exposure;
   float luminance = dot(hdr, vec3(0.2126, 0.7152, 0.0722));
   vec3 ldr = hdr * (1.0 / (1.0 + luminance));  // L / (1 + L), hue kept
   outColor = vec4(clamp(ldr, 0.0, 1.0), 1.0);

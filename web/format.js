@@ -39,8 +39,12 @@ export const resolution = (run) => `${run.width}×${run.height}`;
 // "2026-11-21 06:30" from the API's UTC timestamps (shown in UTC, as stored).
 export const date = (iso) => (iso ? iso.slice(0, 16).replace('T', ' ') : '–');
 
+// A run's variant label: "visbuffer barycentrics=float32", or the renderer
+// for a run without options (and for servers from before variants).
+export const variant = (run) => run.variant || run.renderer;
+
 // "deferred · atrium · 320×180 (#12)": how a run is named in legends.
-export const runLabel = (run) => `${run.renderer} · ${run.scene} · ${resolution(run)}${run.counting !== 'exact' ? ` · ${run.counting}` : ''} (#${run.id})`;
+export const runLabel = (run) => `${variant(run)} · ${run.scene} · ${resolution(run)}${run.counting !== 'exact' ? ` · ${run.counting}` : ''} (#${run.id})`;
 
 // The run's image error against forward in a few words.
 export function imageError(run) {

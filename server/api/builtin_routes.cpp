@@ -4,7 +4,7 @@
 
 namespace tally::api {
 
-void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames) {
+void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames, nlohmann::json options) {
   router.get("/api/health", [](const Request&) {
     return Response::ok(
         {{"status", "ok"}, {"version", protocol::kVersion}, {"api_version", protocol::kApiVersion}});
@@ -13,8 +13,8 @@ void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames) {
   auto doc = std::make_shared<const nlohmann::json>(nlohmann::json::parse(openApiDocument()));
   router.get("/api/openapi.json", [doc](const Request&) { return Response::ok(*doc); });
   if (!rendererNames.empty()) {
-    router.get("/api/renderers", [names = std::move(rendererNames)](const Request&) {
-      return Response::ok({{"renderers", names}});
+    router.get("/api/renderers", [names = std::move(rendererNames), options = std::move(options)](const Request&) {
+      return Response::ok({{"renderers", names}, {"options", options}});
     });
   }
 }

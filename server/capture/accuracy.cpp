@@ -58,7 +58,7 @@ double medianRatio(const RunCounts& run) {
 }  // namespace
 
 bool sameFrames(const RunCounts& a, const RunCounts& b) {
-  if (a.renderer != b.renderer || a.scene != b.scene || a.sceneParams != b.sceneParams || a.device != b.device ||
+  if (a.renderer != b.renderer || a.options != b.options || a.scene != b.scene || a.sceneParams != b.sceneParams || a.device != b.device ||
       a.width != b.width || a.height != b.height || a.lights != b.lights || a.samples.size() != b.samples.size()) {
     return false;
   }
@@ -97,7 +97,7 @@ std::optional<size_t> findReference(const RunCounts& run, const std::vector<RunC
   for (size_t i = 0; i < runs.size(); ++i) {
     const auto& r = runs[i];
     if (r.counting != "exact") continue;
-    if (r.renderer == run.renderer && r.scene == run.scene) anyExact = true;
+    if (r.renderer == run.renderer && r.options == run.options && r.scene == run.scene) anyExact = true;
     if (!sameFrames(run, r)) continue;
     found = i;
     if (r.group == run.group) sameGroup = i;

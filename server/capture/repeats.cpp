@@ -19,7 +19,7 @@ std::string number(double v) {
 std::string configurationKey(const RepeatRun& run) {
   json cameras = json::array();
   for (const auto& s : run.samples) cameras.push_back({s.camera, s.frames});
-  return json{run.renderer, run.scene, run.sceneParams, run.width, run.height, run.device, run.counting, run.lights,
+  return json{run.renderer, run.options, run.scene, run.sceneParams, run.width, run.height, run.device, run.counting, run.lights,
               cameras}
       .dump();
 }

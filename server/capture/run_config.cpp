@@ -26,6 +26,7 @@ Result<std::vector<ResultRun>> resultRuns(const json& result) {
     RunConfig c;
     c.id = std::to_string(i);
     c.renderer = text(r, "renderer");
+    c.options = r.contains("options") && r["options"].is_object() ? r["options"].dump() : "{}";
     c.scene = text(r, "scene");
     c.sceneParams = r.contains("scene_params") ? r["scene_params"].dump() : "";
     c.device = device;

@@ -16,6 +16,9 @@ namespace tally::capture {
 struct RunConfig {
   std::string id;  // the run's id or position, echoed back
   std::string renderer, scene, sceneParams, device, counting;
+  // The renderer's canonical options as JSON text ("{}" for none): variants
+  // of one renderer never measure the same frames.
+  std::string options = "{}";
   int width = 0, height = 0, lights = 0;
 };
 

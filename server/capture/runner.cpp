@@ -1,6 +1,7 @@
 #include "capture/runner.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/gpu_scene.hpp"
+#include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
@@ -176,21 +178,74 @@ json shaderHashes() {
   return out;
 }
 
+json errorJson(const std::string& against, const ImageError& error) {
+  return {{"against", against},
+          {"psnr", std::isinf(error.psnr) ? json(nullptr) : json(error.psnr)},
+          {"identical", std::isinf(error.psnr)},
+          {"max_abs", error.maxAbs},
+          {"mean_abs", error.meanAbs}};
+}
+
+// "deferred" for the renderer as it is, else its options appended
+// ("visbuffer_barycentrics-float32"): screenshot names of variants never collide.
+std::string fileStem(const RendererVariant& variant) {
+  std::string stem = variant.name;
+  for (const auto& [key, value] : variant.options.items()) {
+    stem += "_" + key + "-" + (value.is_string() ? value.get<std::string>() : value.dump());
+  }
+  for (char& ch : stem) {
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '-' && ch != '_' && ch != '.') ch = '-';
+  }
+  return stem;
+}
+
+// The final image per camera of `variant`, uninstrumented; empty where it
+// cannot be set up (the images are then not compared).
+std::vector<std::vector<uint8_t>> referenceImages(gpu::Context& ctx, renderers::GpuScene& gpuScene,
+                                                  const RendererVariant& variant, const Resolution& res,
+                                                  const std::vector<scenes::Camera>& cameras, const CaptureSpec& spec) {
+  std::vector<std::vector<uint8_t>> images;
+  auto made = renderers::makeRenderer(variant.name);
+  if (!made) return images;
+  renderers::RendererOptions ro{{res.width, res.height}, false, spec.modes.front(), spec.lights};
+  renderers::applyOptions(variant.options, ro);
+  if ((*made)->setup(ctx, gpuScene, ro)) {
+    for (const auto& camera : cameras) {
+      (*made)->renderFrame(camera);
+      images.push_back((*made)->finalImage());
+    }
+  }
+  (*made)->destroy();
+  return images;
+}
+
+// The images a run's samples are compared with: forward's ("image_error")
+// and, for a variant with options, its reference variant's ("variant_error").
+struct References {
+  std::vector<std::vector<uint8_t>> forward;
+  std::string variantAgainst;  // empty: no variant_error
+  std::vector<std::vector<uint8_t>> variant;
+};
+
 // One run: a renderer instrumented in one counting mode, each sample's
 // instrumented frames timed against the same number of `plain` frames.
 Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers::Renderer& plain,
-                    const std::string& rendererName, const spirv::Mode& mode, const std::string& where0,
+                    const RendererVariant& variant, const spirv::Mode& mode, const std::string& where0,
                     const std::string& name, const scenes::Scene& scene, const Resolution& res,
-                    const std::vector<scenes::Camera>& cameras, const std::vector<std::vector<uint8_t>>& reference,
+                    const std::vector<scenes::Camera>& cameras, const References& references,
                     const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress) {
+  const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
   auto made = renderers::makeRenderer(rendererName);
   if (!made) return makeError(where + ": " + made.error());
   auto& instrumented = *made;
   renderers::RendererOptions ro{{res.width, res.height}, true, mode, spec.lights};
+  renderers::applyOptions(variant.options, ro);
   auto ok = instrumented->setup(ctx, gpuScene, ro);
   if (!ok) return makeError(where + ": " + ok.error());
   json run = {{"renderer", rendererName},
+              {"options", variant.options},
+              {"variant", variant.label()},
               {"scene", name},
               {"scene_params", scene.params},
               {"width", res.width},
@@ -211,6 +266,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
       headroom.note(frame);
       addCounts(m, frame);
     }
+    json extras = instrumented->frameExtras();  // after the sample's last instrumented frame
     for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, plain.renderFrame(camera));
     std::vector<uint8_t> image = plain.finalImage();
     json sample = sampleJson(m, instrumented->resources(), spec.frames);
@@ -220,19 +276,18 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
     sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
     sample["sky_fraction_estimate"] = camera.skyFraction;
-    if (c < reference.size()) {
-      auto error = compareImages(image, reference[c], res.width, res.height);
-      if (error) {
-        sample["image_error"] = {{"against", "forward"},
-                                 {"psnr", std::isinf(error->psnr) ? json(nullptr) : json(error->psnr)},
-                                 {"identical", std::isinf(error->psnr)},
-                                 {"max_abs", error->maxAbs},
-                                 {"mean_abs", error->meanAbs}};
-      }
+    sample["extras"] = extras.is_object() ? std::move(extras) : json::object();
+    if (c < references.forward.size()) {
+      auto error = compareImages(image, references.forward[c], res.width, res.height);
+      if (error) sample["image_error"] = errorJson("forward", *error);
+    }
+    if (!references.variantAgainst.empty() && c < references.variant.size()) {
+      auto error = compareImages(image, references.variant[c], res.width, res.height);
+      if (error) sample["variant_error"] = errorJson(references.variantAgainst, *error);
     }
     if (!options.screenshotDir.empty()) {
-      // The image is uninstrumented: one screenshot per renderer, whatever the modes.
-      std::string file = rendererName + "_" + name + "_" + std::to_string(res.width) + "x" +
+      // The image is uninstrumented: one screenshot per variant, whatever the modes.
+      std::string file = fileStem(variant) + "_" + name + "_" + std::to_string(res.width) + "x" +
                          std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
       if (&mode == &spec.modes.front()) {
         auto png = encodePng(image, res.width, res.height);
@@ -300,33 +355,30 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 
     for (const auto& res : spec.resolutions) {
       // The reference image per camera: forward, uninstrumented.
-      std::vector<std::vector<uint8_t>> reference;
-      {
-        auto forward = renderers::makeRenderer("forward");
-        if (forward) {
-          renderers::RendererOptions ro{{res.width, res.height}, false, spec.modes.front(), spec.lights};
-          auto ok = (*forward)->setup(ctx, gpuScene, ro);
-          if (ok) {
-            for (const auto& camera : cameras[s]) {
-              (*forward)->renderFrame(camera);
-              reference.push_back((*forward)->finalImage());
-            }
-          }
-          (*forward)->destroy();
-        }
-      }
+      References references;
+      references.forward = referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec);
 
-      for (const auto& rendererName : spec.renderers) {
-        std::string where = rendererName + " " + name + " " + std::to_string(res.width) + "x" + std::to_string(res.height);
-        // One uninstrumented renderer per renderer, timed again beside every mode's run.
+      for (const auto& variant : spec.renderers) {
+        const std::string& rendererName = variant.name;
+        std::string where = variant.label() + " " + name + " " + std::to_string(res.width) + "x" + std::to_string(res.height);
+        // A variant's images are also measured against its reference variant's.
+        RendererVariant referenceVariant = variant.reference();
+        references.variantAgainst.clear();
+        references.variant.clear();
+        if (!variant.options.empty() && referenceVariant != variant) {
+          references.variantAgainst = referenceVariant.label();
+          references.variant = referenceImages(ctx, gpuScene, referenceVariant, res, cameras[s], spec);
+        }
+        // One uninstrumented renderer per variant, timed again beside every mode's run.
         auto plain = renderers::makeRenderer(rendererName);
         if (!plain) return makeError(where + ": " + plain.error());
         renderers::RendererOptions plainOptions{{res.width, res.height}, false, spec.modes.front(), spec.lights};
+        renderers::applyOptions(variant.options, plainOptions);
         auto ok = (*plain)->setup(ctx, gpuScene, plainOptions);
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
-          auto done = runOne(ctx, gpuScene, **plain, rendererName, mode, where, name, loaded[s], res, cameras[s],
-                             reference, spec, options, progress);
+          auto done = runOne(ctx, gpuScene, **plain, variant, mode, where, name, loaded[s], res, cameras[s],
+                             references, spec, options, progress);
           if (!done) {
             (*plain)->destroy();
             return makeError(done.error());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "renderers/options.hpp"
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
 
@@ -25,6 +26,18 @@ Result<uint32_t> boundedInt(const nlohmann::json& j, const std::string& field, u
 
 }  // namespace
 
+std::string RendererVariant::label() const { return renderers::variantLabel(name, options); }
+
+RendererVariant RendererVariant::reference() const {
+  RendererVariant out{name, nlohmann::json::object()};
+  for (const auto& def : renderers::optionDefs()) {
+    if (!options.contains(def.name)) continue;
+    const nlohmann::json& value = def.reference.is_null() ? def.defaultValue() : def.reference;
+    if (value != def.defaultValue()) out.options[def.name] = value;
+  }
+  return out;
+}
+
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "scenes",   "resolutions", "cameras",
@@ -39,21 +52,47 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
 
   // renderers
   if (!j.contains("renderers")) return fieldError("renderers", "required");
-  const auto& renderers = j["renderers"];
-  if (!renderers.is_array() || renderers.empty()) return fieldError("renderers", "must be a non-empty array of names");
+  const auto& entries = j["renderers"];
+  if (!entries.is_array() || entries.empty()) return fieldError("renderers", "must be a non-empty array of names");
   std::string known;
   for (const auto& k : knownRenderers) known += (known.empty() ? "" : ", ") + k;
-  for (size_t i = 0; i < renderers.size(); ++i) {
+  for (size_t i = 0; i < entries.size(); ++i) {
     std::string field = "renderers[" + std::to_string(i) + "]";
-    if (!renderers[i].is_string()) return fieldError(field, "must be a renderer name, got " + show(renderers[i]));
-    std::string name = renderers[i].get<std::string>();
+    const auto& entry = entries[i];
+    nlohmann::json options = nlohmann::json::object();
+    std::string name;
+    if (entry.is_object()) {
+      for (const auto& [key, value] : entry.items()) {
+        if (key != "renderer" && key != "options") {
+          return fieldError(field + "." + key, "unknown field (expected renderer, options)");
+        }
+      }
+      if (!entry.contains("renderer") || !entry["renderer"].is_string()) {
+        return fieldError(field + ".renderer", "required: a renderer name");
+      }
+      name = entry["renderer"].get<std::string>();
+      field += ".renderer";
+      if (entry.contains("options")) options = entry["options"];
+    } else if (entry.is_string()) {
+      name = entry.get<std::string>();
+    } else {
+      return fieldError(field, "must be a renderer name or {\"renderer\", \"options\"}, got " + show(entry));
+    }
     if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
       return fieldError(field, "unknown renderer '" + name + "' (expected one of " + known + ")");
     }
-    if (std::find(spec.renderers.begin(), spec.renderers.end(), name) != spec.renderers.end()) {
-      return fieldError(field, "renderer '" + name + "' listed twice");
+    field = "renderers[" + std::to_string(i) + "]";
+    if (!options.is_object()) return fieldError(field + ".options", "must be an object of option: value, got " + show(options));
+    // canonicalOptions' errors begin with the option's name ("output: ...").
+    auto canonical = renderers::canonicalOptions(name, options);
+    if (!canonical) return makeError(field + ".options." + canonical.error());
+    RendererVariant variant{name, std::move(canonical).value()};
+    for (const auto& seen : spec.renderers) {
+      if (seen.name == variant.name && seen.options == variant.options) {
+        return fieldError(field, "renderer '" + variant.label() + "' listed twice");
+      }
     }
-    spec.renderers.push_back(name);
+    spec.renderers.push_back(std::move(variant));
   }
 
   // scenes: checked here by building their parameters only; the capture loads them.

@@ -26,8 +26,23 @@ struct Resolution {
   uint32_t height = 0;
 };
 
+// One measured variant: a renderer and its canonical options
+// (renderers::canonicalOptions: defaults dropped, {} for the renderer as it is).
+struct RendererVariant {
+  std::string name;
+  nlohmann::json options = nlohmann::json::object();
+
+  std::string label() const;  // renderers::variantLabel: "forward", "forward output=overdraw"
+  // The variant its images are measured against: every set option replaced by
+  // its OptionDef reference value (dropped where that is the default). Equal
+  // to *this when the variant is its own reference.
+  RendererVariant reference() const;
+  bool operator==(const RendererVariant&) const = default;
+};
+
 struct CaptureSpec {
-  std::vector<std::string> renderers;
+  // Each entry is a name or {"renderer": NAME, "options": {...}}.
+  std::vector<RendererVariant> renderers;
   std::vector<nlohmann::json> scenes;  // each as makeScene() takes it
   std::vector<Resolution> resolutions;
   bool autoCameras = true;
@@ -45,7 +60,8 @@ struct CaptureSpec {
 };
 
 // `knownRenderers` is the list to check names against. Errors read
-// "renderers[2]: unknown renderer 'x' (expected one of ...)".
+// "renderers[2]: unknown renderer 'x' (expected one of ...)" or
+// "renderers[1].options.output: ...".
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers);
 
 }  // namespace tally::capture

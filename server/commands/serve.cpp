@@ -12,6 +12,7 @@
 #include "api/http_server.hpp"
 #include "commands/commands.hpp"
 #include "jobs/worker.hpp"
+#include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
 #include "service/service.hpp"
 #include "store/store.hpp"
@@ -65,7 +66,7 @@ int runServe(const ServeArgs& args) {
   context.onJobQueued = [&worker] { worker.wake(); };
 
   api::Router router;
-  api::addBuiltinRoutes(router, renderers::rendererNames());
+  api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson());
   service::addServiceRoutes(router, context);
 
   api::ServerOptions options;

@@ -3,6 +3,9 @@
 // diffuse and specular (RGBA8) plus D32_S8 depth/stencil; the lighting pass
 // (full screen, stencil == 1) reads one texel of each per covered pixel,
 // reconstructs position from depth and shades every light.
+// zprepass=true: a depth-only "zprepass" pass (forward-zprepass's) first, then
+// the G-buffer pass tests depth EQUAL without writing it: one G-buffer
+// fragment per covered pixel.
 #include "renderers/renderers.hpp"
 #include "shared.h"
 
@@ -18,7 +21,15 @@ class DeferredRenderer final : public RendererBase {
   std::string_view name() const override { return "deferred"; }
 
  protected:
-  std::vector<std::string> ownPassNames() const override { return {"gbuffer", "lighting"}; }
+  std::vector<std::string> ownPassNames() const override {
+    if (options_.zprepass) return {"zprepass", "gbuffer", "lighting"};
+    return {"gbuffer", "lighting"};
+  }
+  nlohmann::json notes() const override {
+    if (!options_.zprepass) return nlohmann::json::object();
+    // As forward-zprepass: the counting-only fragment shader gives the pre-pass's depth writes.
+    return {{"zprepass_fragment_shader", options_.instrumented ? "counting_only" : "none"}};
+  }
 
   Result<bool> setupPasses() override {
     for (auto& r : scene_->materialMapResources()) resources_.push_back(r);
@@ -32,12 +43,18 @@ class DeferredRenderer final : public RendererBase {
     const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
     const VkImageLayout shaderRead = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
 
+    const bool prepass = options_.zprepass;
+    // Depth pre-pass: position only, as forward-zprepass.
+    if (prepass) {
+      if (auto ok = addDepthPrepass(); !ok) return ok;
+    }
     // G-buffer.
     {
       uint32_t p = addPass("gbuffer");
+      AttachmentSpec depth{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly};
+      if (prepass) depth = {kDepthFormat, false, depthAttachment, depthAttachment, depthReadOnly};
       VkRenderPass rp = ownRenderPass(createPassRenderPass(
-          *ctx_, {{kNormalFormat}, {kDiffuseFormat}, {kSpecularFormat}},
-          AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
+          *ctx_, {{kNormalFormat}, {kDiffuseFormat}, {kSpecularFormat}}, depth));
       VkFramebuffer fb = framebuffer(rp, {normal->view, diffuse->view, specular->view, depth_->view});
       auto shaders = shaderPipeline(p, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
                                     pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
@@ -45,7 +62,8 @@ class DeferredRenderer final : public RendererBase {
       gpu::GraphicsPipelineDesc desc = *shaders;
       desc.colorAttachmentCount = 3;
       meshVertexInput(desc);
-      geometryState(desc, true);
+      geometryState(desc, !prepass);
+      if (prepass) desc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
       VkPipeline pipe = pipeline(desc);
       VkPipelineLayout layout = desc.layout;
       for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
@@ -54,7 +72,7 @@ class DeferredRenderer final : public RendererBase {
       pass(p).bindings.outputs[shaders::kOutNormal] = "gbuffer.normal";
       pass(p).bindings.outputs[shaders::kOutDiffuse] = "gbuffer.diffuse";
       pass(p).bindings.outputs[shaders::kOutSpecular] = "gbuffer.specular";
-      pass(p).depthWrite = "depth";
+      if (!prepass) pass(p).depthWrite = "depth";
       pass(p).indexFetches = true;
       pass(p).record = [=, this](VkCommandBuffer cmd) {
         std::vector<VkClearValue> clears(4);

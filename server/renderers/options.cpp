@@ -54,6 +54,56 @@ std::vector<OptionDef> makeDefs() {
                   [](RendererOptions& o, const json& v) {
                     o.visibility.uvDerivatives = *parseUvDerivativeEncoding(v.get<std::string>());
                   }});
+  defs.push_back({"output",
+                  {"forward", "forward-zprepass"},
+                  {"shaded", "overdraw", "overshading"},
+                  {},
+                  nullptr,
+                  "What the forward pass outputs besides its shading: nothing more, or 1 per fragment into an "
+                  "R32_SFLOAT count target (additive blending) with the depth test off (overdraw: fragments "
+                  "rasterized per pixel) or on (overshading: fragments shaded per pixel); the image shows the "
+                  "counts as a heat ramp and the sample's extras their per-pixel histogram",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.forwardOutput = *parseForwardOutput(v.get<std::string>()); }});
+  defs.push_back({"zprepass",
+                  {"forward", "deferred"},
+                  {false, true},
+                  {},
+                  nullptr,
+                  "A depth-only pre-pass before the geometry pass, which then tests depth EQUAL without writing "
+                  "it, so each covered pixel is shaded once (forward with it is forward-zprepass)",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.zprepass = v.get<bool>(); }});
+  // Bloom is a post chain of RendererBase before tonemap: every renderer takes it.
+  const std::vector<std::string> everyRenderer = {"forward", "forward-zprepass", "deferred", "visbuffer",
+                                                  "visbuffer-lean"};
+  defs.push_back({"bloom",
+                  everyRenderer,
+                  {"off", "naive", "separable", "bilinear"},
+                  {},
+                  nullptr,
+                  "Bloom: a bright pass into an RGBA16F target, then a Gaussian blur of it added by tonemap: "
+                  "naive 2D (N x N fetches per pixel), separable (N per pass, two passes) or separable with "
+                  "linear-filtered taps merging weight pairs ((N + 1) / 2 per pass)",
+                  "naive",
+                  [](RendererOptions& o, const json& v) { o.bloom.blur = *parseBloomBlur(v.get<std::string>()); }});
+  defs.push_back({"bloom_taps",
+                  everyRenderer,
+                  {9, 5, 13, 17, 25},
+                  {},
+                  nullptr,
+                  "Bloom's Gaussian kernel width N (sigma = N / 6, weights normalised to sum 1); N % 4 == 1 so "
+                  "the bilinear blur pairs every non-centre weight",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.bloom.taps = v.get<uint32_t>(); }});
+  defs.push_back({"bloom_threshold",
+                  everyRenderer,
+                  {},
+                  {0.0, 64.0},
+                  1.0,
+                  "HDR luminance above which a pixel blooms (the excess, hue kept, goes to the bloom target)",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.bloom.threshold = v.get<float>(); }});
   return defs;
 }
 

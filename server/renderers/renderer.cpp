@@ -20,6 +20,22 @@ std::optional<MaterialSelection> parseMaterialSelection(std::string_view name) {
   return std::nullopt;
 }
 
+std::string_view toString(ForwardOutput output) {
+  switch (output) {
+    case ForwardOutput::Shaded: return "shaded";
+    case ForwardOutput::Overdraw: return "overdraw";
+    case ForwardOutput::Overshading: return "overshading";
+  }
+  return "shaded";
+}
+
+std::optional<ForwardOutput> parseForwardOutput(std::string_view name) {
+  for (auto o : {ForwardOutput::Shaded, ForwardOutput::Overdraw, ForwardOutput::Overshading}) {
+    if (name == toString(o)) return o;
+  }
+  return std::nullopt;
+}
+
 std::string_view toString(BarycentricEncoding encoding) {
   return encoding == BarycentricEncoding::Float32 ? "float32" : "unorm16";
 }
@@ -44,6 +60,23 @@ std::optional<UvDerivativeEncoding> parseUvDerivativeEncoding(std::string_view n
   for (auto e :
        {UvDerivativeEncoding::Half, UvDerivativeEncoding::Unorm16Clamped, UvDerivativeEncoding::Float32}) {
     if (name == toString(e)) return e;
+  }
+  return std::nullopt;
+}
+
+std::string_view toString(BloomBlur blur) {
+  switch (blur) {
+    case BloomBlur::Off: return "off";
+    case BloomBlur::Naive: return "naive";
+    case BloomBlur::Separable: return "separable";
+    case BloomBlur::Bilinear: return "bilinear";
+  }
+  return "off";
+}
+
+std::optional<BloomBlur> parseBloomBlur(std::string_view name) {
+  for (auto b : {BloomBlur::Off, BloomBlur::Naive, BloomBlur::Separable, BloomBlur::Bilinear}) {
+    if (name == toString(b)) return b;
   }
   return std::nullopt;
 }

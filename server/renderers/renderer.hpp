@@ -117,6 +117,34 @@ std::string_view toString(UvDerivativeEncoding encoding);  // "half", "unorm16-c
 std::optional<BarycentricEncoding> parseBarycentricEncoding(std::string_view name);
 std::optional<UvDerivativeEncoding> parseUvDerivativeEncoding(std::string_view name);
 
+// What forward's geometry pass outputs (docs/techniques.md, "Overdraw and
+// overshading"). Every mode shades as today; the counting modes add 1 per
+// fragment to an R32_SFLOAT count target and show the counts as a heat ramp.
+enum class ForwardOutput {
+  Shaded,       // the renderer as it is
+  Overdraw,     // depth test and write off: every rasterized fragment is counted
+  Overshading,  // the shaded mode's depth test: fragments that pass early depth
+};
+std::string_view toString(ForwardOutput output);  // "shaded", "overdraw", "overshading"
+std::optional<ForwardOutput> parseForwardOutput(std::string_view name);  // empty for an unknown name
+
+// Bloom (docs/techniques.md, "Bloom"): a bright pass into an RGBA16F target,
+// a Gaussian blur of it, added to the HDR colour by tonemap. The blurs are the
+// measured variants; Off leaves every renderer as it was (no bloom passes).
+enum class BloomBlur {
+  Off,
+  Naive,      // one pass, N x N texel fetches per pixel
+  Separable,  // horizontal then vertical pass, N fetches each
+  Bilinear,   // the same two passes, (N + 1) / 2 linear-filtered taps each
+};
+std::string_view toString(BloomBlur blur);  // "off", "naive", "separable", "bilinear"
+std::optional<BloomBlur> parseBloomBlur(std::string_view name);
+struct BloomOptions {
+  BloomBlur blur = BloomBlur::Off;
+  uint32_t taps = 9;       // odd kernel width N; sigma = N / 6 (renderers/bloom.hpp)
+  float threshold = 1.0f;  // HDR luminance above which a pixel blooms
+};
+
 struct RendererOptions {
   VkExtent2D extent = {320, 180};
   bool instrumented = true;  // false: the uninstrumented twin, for timing
@@ -125,6 +153,11 @@ struct RendererOptions {
   DepthRange depthRange;     // unset (zeros): near/far from the scene bounds (projection.hpp)
   MaterialSelection materialSelection = MaterialSelection::NonUniform;  // visibility-buffer shading passes
   VisibilityEncoding visibility;  // the fat visibility buffer's barycentrics and uv derivatives
+  BloomOptions bloom;             // bloom's blur variant, kernel width and threshold (all renderers)
+  ForwardOutput forwardOutput = ForwardOutput::Shaded;  // forward, forward-zprepass
+  // A depth-only pre-pass before the geometry pass (forward, deferred), which
+  // then tests depth EQUAL without writing it: each covered pixel shaded once.
+  bool zprepass = false;
 };
 
 class Renderer {
@@ -155,6 +188,9 @@ class Renderer {
     (void)resourceName;
     return {};
   }
+  // Technique measurements of the last frame, e.g. {"overdraw": {...}}: the
+  // runner stores them with the sample as "extras".
+  virtual nlohmann::json frameExtras() { return nlohmann::json::object(); }
   // What the renderer decided at setup, e.g. {"barycentrics":"extension"}.
   virtual nlohmann::json notes() const { return nlohmann::json::object(); }
   virtual void destroy() = 0;

@@ -9,6 +9,7 @@
 
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
+#include "renderers/bloom.hpp"
 #include "renderers/projection.hpp"
 #include "shared.h"
 
@@ -30,6 +31,7 @@ std::string formatName(VkFormat format) {
     case VK_FORMAT_D32_SFLOAT_S8_UINT: return "D32_SFLOAT_S8_UINT";
     case VK_FORMAT_R32G32_UINT: return "R32G32_UINT";
     case VK_FORMAT_R32_UINT: return "R32_UINT";
+    case VK_FORMAT_R32_SFLOAT: return "R32_SFLOAT";
     case VK_FORMAT_R32G32B32_UINT: return "R32G32B32_UINT";
     case VK_FORMAT_R32G32B32A32_UINT: return "R32G32B32A32_UINT";
     default: return "VkFormat " + std::to_string(int(format));
@@ -121,6 +123,7 @@ VkRenderPass createPassRenderPass(const gpu::Context& ctx, const std::vector<Att
 
 std::vector<std::string> RendererBase::passNames() const {
   auto names = ownPassNames();
+  for (auto& n : bloomPassNames()) names.push_back(std::move(n));
   names.push_back("tonemap");
   names.push_back("skybox");
   return names;
@@ -278,6 +281,40 @@ VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
   return pipelines_.back();
 }
 
+Result<bool> RendererBase::addDepthPrepass() {
+  const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  uint32_t p = addPass("zprepass");
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(
+      *ctx_, {}, AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthAttachment}));
+  VkFramebuffer fb = framebuffer(rp, {depth_->view});
+  auto vs = shader(p, "zprepass.vert.glsl");
+  if (!vs) return makeError(vs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  if (options_.instrumented) {
+    auto fs = shader(p, "zprepass.frag.glsl");
+    if (!fs) return makeError(fs.error());
+    desc.fragment = *fs;
+  }
+  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
+  desc.renderPass = rp;
+  desc.colorAttachmentCount = 0;
+  meshVertexInput(desc);
+  geometryState(desc, true);
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  pass(p).indexFetches = true;
+  pass(p).depthWrite = "depth";
+  pass(p).record = [=, this](VkCommandBuffer cmd) {
+    beginRenderPass(cmd, p, rp, fb, {depthClear()});
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    drawScene(cmd, p, layout, false);
+    endRenderPass(cmd, p);
+  };
+  return true;
+}
+
 void RendererBase::geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth) {
   desc.depthTest = true;
   desc.depthWrite = writeDepth;
@@ -386,6 +423,9 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
   options_.lights = std::min(options.lights, shaders::kMaxLights);
   extent_ = options.extent;
   if (extent_.width == 0 || extent_.height == 0) return makeError("extent: must be at least 1x1");
+  if (options.bloom.blur != BloomBlur::Off && (options.bloom.taps % 2 == 0 || options.bloom.taps > 63)) {
+    return makeError("bloom_taps: must be an odd kernel width up to 63, got " + std::to_string(options.bloom.taps));
+  }
   counterSet_ = gpu::instrumentOptionsFor(ctx, options.counting).set;
   if (counterSet_ <= shaders::kSetPassInput)
     return makeError("device: too few descriptor sets for the counters");
@@ -477,6 +517,7 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
       destroy();
       return makeError(why);
     }
+    setupBloom();
     setupTonemapAndSkybox();
 
     counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
@@ -499,16 +540,130 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
   return true;
 }
 
+std::vector<std::string> RendererBase::bloomPassNames() const {
+  switch (options_.bloom.blur) {
+    case BloomBlur::Off: return {};
+    case BloomBlur::Naive: return {"bloom_bright", "bloom_blur"};
+    case BloomBlur::Separable:
+    case BloomBlur::Bilinear: return {"bloom_bright", "bloom_blur_h", "bloom_blur_v"};
+  }
+  return {};
+}
+
+void RendererBase::setupBloom() {
+  const BloomOptions& o = options_.bloom;
+  if (o.blur == BloomBlur::Off) return;
+  // Full resolution: every bloom target is the screen's size (createTarget),
+  // so each pass shades one fragment per pixel and its reads are taps x pixels.
+  // transfer_src: the tests read the targets back.
+  const VkImageUsageFlags usage =
+      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  const gpu::Image* bright = createTarget("bloom_bright", kHdrFormat, usage, ResourceKind::Attachment);
+  const bool twoPass = o.blur != BloomBlur::Naive;
+  const gpu::Image* horizontal = twoPass ? createTarget("bloom_h", kHdrFormat, usage, ResourceKind::Attachment)
+                                         : nullptr;
+  bloom_ = createTarget("bloom", kHdrFormat, usage, ResourceKind::Attachment);
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(
+      *ctx_,
+      {{kHdrFormat, false, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+        VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}},
+      std::nullopt));
+  VkDescriptorSetLayout inputLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER});
+  nlohmann::json tapsPerPixel = nlohmann::json::object();
+  auto add = [&](const std::string& name, const gpu::Image& source, const std::string& sourceName,
+                 const gpu::Image& target, const std::string& targetName, VkSampler sampler,
+                 const std::vector<std::string>& defines, uint32_t taps) {
+    uint32_t p = addPass(name);
+    VkDescriptorSet input = allocateSet(inputLayout);
+    writeImage(input, shaders::kBindingBloomSource, source.view, sampler, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    pass(p).bindings.bind(shaders::kSetPassInput, shaders::kBindingBloomSource, sourceName);
+    pass(p).bindings.outputs[shaders::kOutColor] = targetName;
+    VkFramebuffer fb = framebuffer(rp, {target.view});
+    auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "bloom.frag.glsl",
+                                  pipelineLayout(VK_NULL_HANDLE, inputLayout), rp, defines);
+    if (!shaders) throw std::runtime_error(shaders.error());
+    VkPipeline pipe = pipeline(*shaders);
+    VkPipelineLayout layout = shaders->layout;
+    pass(p).record = [=, this](VkCommandBuffer cmd) {
+      beginRenderPass(cmd, p, rp, fb, {});
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+      bindSets(cmd, layout, VK_NULL_HANDLE, input);
+      drawFullScreen(cmd);
+      endRenderPass(cmd, p);
+    };
+    tapsPerPixel[name] = taps;
+  };
+  add("bloom_bright", *hdr_, "hdr", *bright, "bloom_bright", targetSampler_,
+      {"BLOOM_BRIGHT", "BLOOM_THRESHOLD " + glslFloat(o.threshold)}, 1);
+  const std::vector<double> weights = gaussianWeights(o.taps);
+  const std::string n = "BLOOM_TAPS " + std::to_string(o.taps);
+  const std::string w = "BLOOM_WEIGHTS " + glslFloatArray(weights);
+  const std::string h = "BLOOM_DIRECTION ivec2(1, 0)", v = "BLOOM_DIRECTION ivec2(0, 1)";
+  switch (o.blur) {
+    case BloomBlur::Off: break;
+    case BloomBlur::Naive:
+      add("bloom_blur", *bright, "bloom_bright", *bloom_, "bloom", targetSampler_, {"BLOOM_NAIVE", n, w},
+          o.taps * o.taps);
+      break;
+    case BloomBlur::Separable:
+      add("bloom_blur_h", *bright, "bloom_bright", *horizontal, "bloom_h", targetSampler_, {h, n, w}, o.taps);
+      add("bloom_blur_v", *horizontal, "bloom_h", *bloom_, "bloom", targetSampler_, {v, n, w}, o.taps);
+      break;
+    case BloomBlur::Bilinear: {
+      bloomSampler_ = gpu::createSampler(*ctx_, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+      std::vector<double> offsets, merged;
+      for (const auto& t : linearTaps(weights)) {
+        offsets.push_back(t.offset);
+        merged.push_back(t.weight);
+      }
+      const uint32_t taps = uint32_t(merged.size());
+      const std::vector<std::string> common = {"BLOOM_LINEAR", "BLOOM_TAPS " + std::to_string(taps),
+                                               "BLOOM_WEIGHTS " + glslFloatArray(merged),
+                                               "BLOOM_OFFSETS " + glslFloatArray(offsets)};
+      auto with = [&](const std::string& direction) {
+        auto d = common;
+        d.push_back(direction);
+        return d;
+      };
+      add("bloom_blur_h", *bright, "bloom_bright", *horizontal, "bloom_h", bloomSampler_, with(h), taps);
+      add("bloom_blur_v", *horizontal, "bloom_h", *bloom_, "bloom", bloomSampler_, with(v), taps);
+      break;
+    }
+  }
+  tapsPerPixel["tonemap"] = 2;  // the HDR colour and the bloom
+  bloomExtras_ = {{"variant", std::string(toString(o.blur))},
+                  {"taps", o.taps},
+                  {"sigma", bloomSigma(o.taps)},
+                  {"threshold", o.threshold},
+                  {"bloom_resolution", {extent_.width, extent_.height}},
+                  {"taps_per_pixel", tapsPerPixel}};
+}
+
+nlohmann::json RendererBase::frameExtras() {
+  if (bloomExtras_.is_null()) return nlohmann::json::object();
+  return {{"bloom", bloomExtras_}};
+}
+
 void RendererBase::setupTonemapAndSkybox() {
   const VkImageLayout readOnlyDepth = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
-  // Tonemap: full screen, hdr -> final. No depth/stencil: every pixel.
+  // Tonemap: full screen, hdr (plus the bloom with bloom on) -> final. No
+  // depth/stencil: every pixel.
   {
     uint32_t p = addPass("tonemap");
-    VkDescriptorSetLayout inputLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER});
+    std::vector<VkDescriptorType> inputs = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
+    if (bloom_ != nullptr) inputs.push_back(VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER);  // kBindingBloomTarget
+    VkDescriptorSetLayout inputLayout = setLayout(inputs);
     VkDescriptorSet input = allocateSet(inputLayout);
     writeImage(input, shaders::kBindingHdrTarget, hdr_->view, targetSampler_,
                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     pass(p).bindings.bind(shaders::kSetPassInput, shaders::kBindingHdrTarget, "hdr");
+    std::vector<std::string> tonemapDefines;
+    if (bloom_ != nullptr) {
+      writeImage(input, shaders::kBindingBloomTarget, bloom_->view, targetSampler_,
+                 VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      pass(p).bindings.bind(shaders::kSetPassInput, shaders::kBindingBloomTarget, "bloom");
+      tonemapDefines.push_back("BLOOM");
+    }
     pass(p).bindings.outputs[shaders::kOutColor] = "final";
     VkRenderPass rp = ownRenderPass(createPassRenderPass(
         *ctx_,
@@ -517,7 +672,7 @@ void RendererBase::setupTonemapAndSkybox() {
         std::nullopt));
     VkFramebuffer fb = framebuffer(rp, {final_->view});
     auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "tonemap.frag.glsl",
-                                  pipelineLayout(VK_NULL_HANDLE, inputLayout), rp);
+                                  pipelineLayout(VK_NULL_HANDLE, inputLayout), rp, tonemapDefines);
     if (!shaders) throw std::runtime_error(shaders.error());
     gpu::GraphicsPipelineDesc desc = *shaders;
     VkPipeline pipe = pipeline(desc);
@@ -673,6 +828,7 @@ void RendererBase::destroy() {
   for (auto l : ownedSetLayouts_) vkDestroyDescriptorSetLayout(ctx.device, l, nullptr);
   if (targetSampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, targetSampler_, nullptr);
   if (depthOnlyView_ != VK_NULL_HANDLE) vkDestroyImageView(ctx.device, depthOnlyView_, nullptr);
+  if (bloomSampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, bloomSampler_, nullptr);
   for (auto& t : targets_) gpu::destroyImage(ctx, t);
   for (auto* b : {&counters_, &cameraBuffer_, &lightingBuffer_}) gpu::destroyBuffer(ctx, *b);
   gpu::destroyTimestampQueries(ctx, timestamps_);
@@ -691,7 +847,9 @@ void RendererBase::destroy() {
   pool_ = VK_NULL_HANDLE;
   targetSampler_ = VK_NULL_HANDLE;
   depthOnlyView_ = VK_NULL_HANDLE;
-  hdr_ = final_ = depth_ = nullptr;
+  bloomSampler_ = VK_NULL_HANDLE;
+  bloomExtras_ = nullptr;
+  hdr_ = final_ = depth_ = bloom_ = nullptr;
   slotCount_ = 0;
   ready_ = false;
   ctx_ = nullptr;

@@ -50,6 +50,9 @@ class RendererBase : public Renderer {
   std::vector<uint8_t> targetBytes(std::string_view resourceName) override;
   void destroy() override;
   std::vector<std::string> passNames() const override;
+  // {"bloom": {...}} with bloom on (setupBloom), else {}. A renderer that adds
+  // its own extras merges these in.
+  nlohmann::json frameExtras() override;
 
  protected:
   // A pass: its name, how it records (between the base's timestamps), what
@@ -123,6 +126,10 @@ class RendererBase : public Renderer {
   // Geometry passes: depth LESS (written when writeDepth), stencil set to
   // kStencilGeometry on every fragment that passes.
   static void geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth);
+  // A position-only "zprepass" pass clearing and writing "depth"
+  // (zprepass.vert; zprepass.frag in instrumented runs, so that its depth
+  // writes are counted). The next geometry pass loads depth and tests EQUAL.
+  Result<bool> addDepthPrepass();
   // Full-screen shading passes: only pixels the geometry passes marked with
   // kStencilGeometry are shaded (sky pixels are masked out).
   static void geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc);
@@ -149,6 +156,10 @@ class RendererBase : public Renderer {
 
  private:
   void setupTonemapAndSkybox();
+  // Bloom's passes before tonemap (options_.bloom; none when off) and its
+  // targets: "bloom_bright", "bloom_h" (the two-pass blurs), "bloom".
+  void setupBloom();
+  std::vector<std::string> bloomPassNames() const;
   void recordAll(VkCommandBuffer cmd);
 
   std::vector<Pass> passes_;
@@ -161,6 +172,9 @@ class RendererBase : public Renderer {
   VkDescriptorSet frameSet_ = VK_NULL_HANDLE, geometrySet_ = VK_NULL_HANDLE,
                   counterDescriptorSet_ = VK_NULL_HANDLE;
   VkImageView depthOnlyView_ = VK_NULL_HANDLE;
+  const gpu::Image* bloom_ = nullptr;  // the blurred bloom tonemap adds; null with bloom off
+  VkSampler bloomSampler_ = VK_NULL_HANDLE;  // linear, clamp: the bilinear blur's taps
+  nlohmann::json bloomExtras_;               // frameExtras()["bloom"], fixed at setup
   std::vector<VkDescriptorSetLayout> ownedSetLayouts_;
   std::vector<VkPipelineLayout> pipelineLayouts_;
   std::vector<VkPipeline> pipelines_;

@@ -59,11 +59,12 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
       index[r.id] = pool.size();
       pool.push_back(metadata(r));
     }
-    std::string key = r.renderer + "\x1f" + r.scene + "\x1f" + std::to_string(r.width) + "x" +
+    std::string key = r.variant + "\x1f" + r.scene + "\x1f" + std::to_string(r.width) + "x" +
                       std::to_string(r.height) + "\x1f" + std::to_string(r.deviceId);
     if (!queried.insert(key).second) continue;
     store::RunFilter same;
     same.renderer = r.renderer;
+    same.variant = r.variant;  // a variant's exact reference is the exact run of the same variant
     same.scene = r.scene;
     same.width = r.width;
     same.height = r.height;
@@ -86,7 +87,7 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
     needed[index[id]] = true;
     for (size_t i = 0; i < pool.size(); ++i) {
       const auto& e = pool[i];
-      if (e.counting == "exact" && e.renderer == run.renderer && e.scene == run.scene &&
+      if (e.counting == "exact" && e.renderer == run.renderer && e.options == run.options && e.scene == run.scene &&
           e.sceneParams == run.sceneParams && e.lights == run.lights) {
         needed[i] = true;
       }
@@ -111,6 +112,8 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
     json j = {{"run", r.id},
               {"capture", r.jobId},
               {"renderer", r.renderer},
+              {"options", r.options},
+              {"variant", r.variant},
               {"scene", r.scene},
               {"width", r.width},
               {"height", r.height},

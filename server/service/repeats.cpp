@@ -50,7 +50,7 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
   // Samples only for runs that share their cheap keys with another run.
   std::map<std::string, int> seen;
   auto cheapKey = [](const store::RunRow& r) {
-    return json{r.renderer, r.scene, r.sceneParams, r.width, r.height, r.deviceId, r.counting, r.lights, r.sampleCount}
+    return json{r.renderer, r.options, r.scene, r.sceneParams, r.width, r.height, r.deviceId, r.counting, r.lights, r.sampleCount}
         .dump();
   };
   for (const auto& r : rows) ++seen[cheapKey(r)];
@@ -76,6 +76,8 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
     groups.push_back({{"runs", ids},
                       {"captures", captures},
                       {"renderer", first.renderer},
+                      {"options", first.options},
+                      {"variant", first.variant},
                       {"scene", first.scene},
                       {"scene_params", first.sceneParams},
                       {"width", first.width},

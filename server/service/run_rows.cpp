@@ -27,6 +27,7 @@ capture::RunConfig runConfigOf(const store::RunRow& r) {
   capture::RunConfig c;
   c.id = std::to_string(r.id);
   c.renderer = r.renderer;
+  c.options = r.options.dump();
   c.scene = r.scene;
   c.sceneParams = r.sceneParams.dump();
   c.device = std::to_string(r.deviceId);

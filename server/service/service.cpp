@@ -127,6 +127,7 @@ std::optional<std::string> queryTime(const Request& req, const std::string& key)
 store::RunFilter queryFilter(const Request& req) {
   store::RunFilter f;
   f.renderer = queryString(req, "renderer");
+  f.variant = queryString(req, "variant");
   f.scene = queryString(req, "scene");
   if (auto w = queryInt(req, "width", 1, capture::kMaxDimension)) f.width = static_cast<int>(*w);
   if (auto h = queryInt(req, "height", 1, capture::kMaxDimension)) f.height = static_cast<int>(*h);
@@ -170,6 +171,8 @@ json runRowJson(const store::RunRow& r) {
           {"device_id", r.deviceId},
           {"device", r.deviceName},
           {"renderer", r.renderer},
+          {"options", r.options},
+          {"variant", r.variant},
           {"scene", r.scene},
           {"scene_params", r.sceneParams},
           {"width", r.width},
@@ -224,6 +227,8 @@ json sampleRowJson(const store::SampleRow& s) {
             {"bytes_read", s.bytesRead},
             {"bytes_written", s.bytesWritten},
             {"image_error", nullptr},
+            {"variant_error", nullptr},
+            {"extras", s.extras},
             {"screenshot", s.hasScreenshot ? json("/api/samples/" + std::to_string(s.id) + "/screenshot.png")
                                            : json(nullptr)}};
   if (s.imageError) {
@@ -232,6 +237,13 @@ json sampleRowJson(const store::SampleRow& s) {
                         {"psnr", opt(s.imageError->psnr)},
                         {"max_abs", s.imageError->maxAbs},
                         {"mean_abs", s.imageError->meanAbs}};
+  }
+  if (s.variantError) {
+    j["variant_error"] = {{"against", s.variantError->against},
+                          {"identical", s.variantError->identical},
+                          {"psnr", opt(s.variantError->psnr)},
+                          {"max_abs", s.variantError->maxAbs},
+                          {"mean_abs", s.variantError->meanAbs}};
   }
   return j;
 }
@@ -468,7 +480,7 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
 }
 
 Response listRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until", "limit", "cursor"});
+  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until", "limit", "cursor"});
   auto filter = queryFilter(req);
   auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
   json runs = json::array();
@@ -478,13 +490,13 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
 
 // Non-exact runs against their exact reference (service/accuracy.hpp).
 Response accuracy(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until"});
+  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until"});
   return Response::ok(check(accuracyRows(reader(ctx), queryFilter(req))));
 }
 
 // Groups of identical-configuration runs and their agreement (service/repeats.hpp).
 Response repeats(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "scene", "width", "height", "device", "capture", "since", "until"});
+  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until"});
   return Response::ok(check(repeatGroups(reader(ctx), queryFilter(req))));
 }
 
@@ -615,7 +627,7 @@ Response compare(ServiceContext& ctx, const Request& req) {
 }
 
 Response exportRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"format", "renderer", "scene", "width", "height", "device", "capture", "since", "until", "runs"});
+  allowOnly(req, {"format", "renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until", "runs"});
   std::string format = queryString(req, "format", 8).value_or("json");
   if (format != "csv" && format != "json") invalid("format", "must be csv or json");
   store::RunFilter filter = queryFilter(req);

@@ -110,8 +110,8 @@ struct Inserter {
               "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id"),
         run(db,
             "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
-            "render_target_bytes, notes, shaders, counter_headroom) "
-            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)"),
+            "render_target_bytes, notes, shaders, counter_headroom, options, variant) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)"),
         resource(
             db,
             "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
@@ -122,8 +122,10 @@ struct Inserter {
             "INSERT INTO samples (run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, "
             "frame_ms, frame_ms_spread, frame_ms_instrumented, overhead_ratio, image_against, "
             "image_identical, "
-            "psnr, max_abs, mean_abs, screenshot_id) "
-            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)"),
+            "psnr, max_abs, mean_abs, screenshot_id, extras, variant_against, variant_identical, variant_psnr, "
+            "variant_max_abs, variant_mean_abs) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, "
+            "?21, ?22)"),
         pass(db,
              "INSERT INTO passes (sample_id, position, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, "
              "overhead_ratio, fragment_invocations, fragment_invocations_statistic) "
@@ -232,6 +234,32 @@ std::optional<int64_t> insertScreenshot(Inserter& in, const json& sample, const 
   return in.lastId();
 }
 
+// The columns of an {"against", "psnr", "identical", "max_abs", "mean_abs"}
+// object; all empty when the sample has no such key.
+struct ImageErrorColumns {
+  std::optional<std::string> against;
+  std::optional<int64_t> identical;
+  std::optional<double> psnr, maxAbs, meanAbs;
+};
+
+ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const std::string& at,
+                                    const std::optional<std::string>& defaultAgainst) {
+  ImageErrorColumns out;
+  const json* error = find(sample, key);
+  if (!error) return out;
+  std::string errorPath = at + "." + key;
+  if (!error->is_object()) bad(errorPath, "must be an object");
+  out.against = defaultAgainst ? optText(*error, "against", errorPath).value_or(*defaultAgainst)
+                               : text(*error, "against", errorPath);
+  const json* same = find(*error, "identical");
+  if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
+  out.psnr = optNumber(*error, "psnr", errorPath);
+  out.identical = same ? int64_t{same->get<bool>()} : int64_t{!out.psnr};
+  out.maxAbs = number(*error, "max_abs", errorPath);
+  out.meanAbs = number(*error, "mean_abs", errorPath);
+  return out;
+}
+
 void insertSamples(Inserter& in, int64_t runId, const json& run, const std::string& path,
                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   const json& samples = array(run, "samples", path);
@@ -244,20 +272,10 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
     int64_t cameraIndex = optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
     std::optional<double> sky = optNumber(sample, "sky_fraction", at);
     if (sky && *sky < 0) sky.reset();  // -1: the renderer has no skybox pass
-    std::optional<std::string> against;
-    std::optional<int64_t> identical;
-    std::optional<double> psnr, maxAbs, meanAbs;
-    if (const json* error = find(sample, "image_error")) {
-      std::string errorPath = at + ".image_error";
-      if (!error->is_object()) bad(errorPath, "must be an object");
-      against = optText(*error, "against", errorPath).value_or("forward");
-      const json* same = find(*error, "identical");
-      if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
-      psnr = optNumber(*error, "psnr", errorPath);
-      identical = same ? int64_t{same->get<bool>()} : int64_t{!psnr};
-      maxAbs = number(*error, "max_abs", errorPath);
-      meanAbs = number(*error, "mean_abs", errorPath);
-    }
+    ImageErrorColumns image = imageErrorColumns(sample, "image_error", at, "forward");
+    // A variant's error against its reference variant; "against" is required
+    // there, as no renderer is its implied reference.
+    ImageErrorColumns variant = imageErrorColumns(sample, "variant_error", at, std::nullopt);
     auto screenshotId = insertScreenshot(in, sample, at, screenshots);
     auto frames = optInteger(sample, "frames", at);
     in.sample.reset();
@@ -271,12 +289,18 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
         .bind(8, optJson(sample, "frame_ms_spread"))
         .bind(9, optNumber(sample, "frame_ms_instrumented", at))
         .bind(10, optNumber(sample, "overhead_ratio", at))
-        .bind(11, against)
-        .bind(12, identical)
-        .bind(13, psnr)
-        .bind(14, maxAbs)
-        .bind(15, meanAbs)
-        .bind(16, screenshotId);
+        .bind(11, image.against)
+        .bind(12, image.identical)
+        .bind(13, image.psnr)
+        .bind(14, image.maxAbs)
+        .bind(15, image.meanAbs)
+        .bind(16, screenshotId)
+        .bind(17, optObject(sample, "extras", at))
+        .bind(18, variant.against)
+        .bind(19, variant.identical)
+        .bind(20, variant.psnr)
+        .bind(21, variant.maxAbs)
+        .bind(22, variant.meanAbs);
     try {
       in.sample.run();
     } catch (const SqliteError& e) {
@@ -340,7 +364,9 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(9, optInteger(resources, "render_target_bytes", path + ".resources"))
       .bind(10, optObject(run, "notes", path))
       .bind(11, shaders)
-      .bind(12, headroom);
+      .bind(12, headroom)
+      .bind(13, optObject(run, "options", path))
+      .bind(14, optText(run, "variant", path).value_or(text(run, "renderer", path)));
   in.run.run();
   int64_t runId = in.lastId();
   insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");

@@ -22,7 +22,8 @@ const char* const kRunSelect =
     "(SELECT COUNT(s.image_against) FROM samples s WHERE s.run_id = r.id), "
     "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id AND s.image_identical = 1), "
     "(SELECT AVG(s.psnr) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id) "
+    "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
+    "r.options, COALESCE(r.variant, r.renderer) "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -50,6 +51,8 @@ RunRow readRunRow(const Statement& row) {
   run.imageIdentical = static_cast<int>(row.getInt(20));
   run.meanPsnr = row.getOptDouble(21);
   run.minPsnr = row.getOptDouble(22);
+  run.options = row.getJson(23);
+  run.variant = row.getText(24);
   return run;
 }
 
@@ -57,6 +60,7 @@ RunRow readRunRow(const Statement& row) {
 std::string runFilterSql(const RunFilter& f) {
   std::string sql;
   if (f.renderer) sql += " AND r.renderer = ?";
+  if (f.variant) sql += " AND r.variant = ?";
   if (f.scene) sql += " AND r.scene_id IN (SELECT id FROM scenes WHERE name = ?)";
   if (f.width) sql += " AND r.width = ?";
   if (f.height) sql += " AND r.height = ?";
@@ -76,6 +80,7 @@ std::string runFilterSql(const RunFilter& f) {
 int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
   int i = first;
   if (f.renderer) statement.bind(i++, *f.renderer);
+  if (f.variant) statement.bind(i++, *f.variant);
   if (f.scene) statement.bind(i++, *f.scene);
   if (f.width) statement.bind(i++, *f.width);
   if (f.height) statement.bind(i++, *f.height);
@@ -103,7 +108,8 @@ const char* const kSampleColumns =
     "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
     "WHERE p.sample_id = samples.id AND c.access = 'read'), "
     "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
-    "WHERE p.sample_id = samples.id AND c.access = 'write')";
+    "WHERE p.sample_id = samples.id AND c.access = 'write'), "
+    "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs";
 
 SampleRow readSampleRow(const Statement& row) {
   SampleRow s;
@@ -131,6 +137,16 @@ SampleRow readSampleRow(const Statement& row) {
   s.hasScreenshot = row.getInt(17) != 0;
   s.bytesRead = row.getDouble(18);
   s.bytesWritten = row.getDouble(19);
+  s.extras = row.getJson(20);
+  if (auto against = row.getOptText(21)) {
+    ImageError e;
+    e.against = *against;
+    e.identical = row.getInt(22) != 0;
+    e.psnr = row.getOptDouble(23);
+    e.maxAbs = row.getDouble(24);
+    e.meanAbs = row.getDouble(25);
+    s.variantError = e;
+  }
   return s;
 }
 

@@ -83,6 +83,7 @@ struct Device {
 
 struct RunFilter {
   std::optional<std::string> renderer;
+  std::optional<std::string> variant;  // exact variant label ("visbuffer barycentrics=float32")
   std::optional<std::string> scene;  // scene name
   std::optional<int> width;
   std::optional<int> height;
@@ -129,6 +130,10 @@ struct RunRow {
   int imageIdentical = 0;
   std::optional<double> meanPsnr;
   std::optional<double> minPsnr;
+  // The renderer's canonical options ({} for the renderer as it is) and the
+  // variant's label; runs stored before variants are their renderer.
+  nlohmann::json options = nlohmann::json::object();
+  std::string variant;
 };
 
 struct RunPage {
@@ -174,6 +179,8 @@ struct SampleRow {
   double bytesRead = 0, bytesWritten = 0;  // its read and write counters, per frame
   std::optional<ImageError> imageError;
   bool hasScreenshot = false;
+  nlohmann::json extras = nlohmann::json::object();  // technique measurements of the sample
+  std::optional<ImageError> variantError;  // against the run's reference variant
 };
 
 struct Counter {

@@ -270,7 +270,7 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   EXPECT_TRUE(embedded["components"]["schemas"].contains("Error"));
   std::set<std::string> runFilters;
   for (auto& p : embedded["paths"]["/api/runs"]["get"]["parameters"]) runFilters.insert(p["name"]);
-  EXPECT_EQ(runFilters, (std::set<std::string>{"renderer", "scene", "width", "height", "device", "capture",
+  EXPECT_EQ(runFilters, (std::set<std::string>{"renderer", "variant", "scene", "width", "height", "device", "capture",
                                                "since", "until", "limit", "cursor"}));
 }
 

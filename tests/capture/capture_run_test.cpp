@@ -1,6 +1,7 @@
 // `tallyd capture` end to end on lavapipe: the result follows
 // docs/result-schema.md, bytes follow the formats, screenshots are written,
 // and bad specs fail with the field named.
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -11,7 +12,13 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include "capture/image.hpp"
+#include "capture/runner.hpp"
+#include "renderers/gpu_scene.hpp"
+#include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
+#include "scenes/cameras.hpp"
+#include "scenes/spec.hpp"
 
 namespace tally {
 namespace {
@@ -111,6 +118,87 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
     auto expected = (*renderers::makeRenderer(run["renderer"].get<std::string>()))->passNames();
     EXPECT_EQ(passNames, expected);
   }
+}
+
+// Variants: each run carries its canonical options and label; a run without
+// options is as before (no variant_error); the variant that is its own
+// reference (barycentrics=float32) has none; one that is not
+// (uv_derivatives=unorm16-clamped, reference: float32) carries the error of
+// its image against the reference variant's, equal to compareImages of the
+// two images rendered here.
+TEST_F(CaptureRun, VariantsCarryOptionsAndTheirImageError) {
+  const json scene = {{"name", "planes"}, {"layers", 3}, {"order", "back-to-front"}};
+  const json camera = {{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}, {"fov_deg", 60}};
+  json spec = {{"renderers",
+                {"visbuffer",
+                 {{"renderer", "visbuffer"}, {"options", {{"barycentrics", "float32"}}}},
+                 {{"renderer", "visbuffer"}, {"options", {{"uv_derivatives", "unorm16-clamped"}, {"barycentrics", "unorm16"}}}}}},
+               {"scenes", {scene}},
+               {"resolutions", {{64, 36}}},
+               {"cameras", {camera}},
+               {"frames", 1},
+               {"lights", 4}};
+  fs::path out = dir_ / "result.json";
+  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
+  json result = json::parse(slurp(out));
+  ASSERT_EQ(result["runs"].size(), 3u);
+  const json& plain = result["runs"][0];
+  const json& own = result["runs"][1];
+  const json& clamped = result["runs"][2];
+  EXPECT_EQ(plain["options"], json::object());
+  EXPECT_EQ(plain["variant"], "visbuffer");
+  EXPECT_EQ(own["options"], json({{"barycentrics", "float32"}}));
+  EXPECT_EQ(own["variant"], "visbuffer barycentrics=float32");
+  // The default written out is dropped.
+  EXPECT_EQ(clamped["options"], json({{"uv_derivatives", "unorm16-clamped"}}));
+  EXPECT_EQ(clamped["variant"], "visbuffer uv_derivatives=unorm16-clamped");
+  for (const json* run : {&plain, &own, &clamped}) {
+    ASSERT_EQ((*run)["samples"].size(), 1u);
+    EXPECT_TRUE((*run)["samples"][0]["extras"].is_object());
+    EXPECT_TRUE((*run)["samples"][0].contains("image_error"));
+  }
+  EXPECT_FALSE(plain["samples"][0].contains("variant_error"));
+  EXPECT_FALSE(own["samples"][0].contains("variant_error"));
+  ASSERT_TRUE(clamped["samples"][0].contains("variant_error"));
+  const json& error = clamped["samples"][0]["variant_error"];
+  EXPECT_EQ(error["against"], "visbuffer uv_derivatives=float32");
+
+  // The two images, rendered here uninstrumented as the capture does.
+  std::vector<std::vector<uint8_t>> images;
+  auto done = capture::withDevice("", [&](gpu::Context& ctx) -> Result<json> {
+    auto made = scenes::makeScene(scene);
+    if (!made) return makeError(made.error());
+    auto cameras = scenes::camerasFromJson(json::array({camera}));
+    if (!cameras) return makeError(cameras.error());
+    renderers::GpuScene gpuScene;
+    auto uploaded = gpuScene.upload(ctx, *made);
+    if (!uploaded) return makeError(uploaded.error());
+    for (const json& options : {json({{"uv_derivatives", "float32"}}), json({{"uv_derivatives", "unorm16-clamped"}})}) {
+      auto renderer = renderers::makeRenderer("visbuffer");
+      if (!renderer) return makeError(renderer.error());
+      renderers::RendererOptions ro{{64, 36}, false, spirv::Mode{}, 4};
+      renderers::applyOptions(options, ro);
+      auto ok = (*renderer)->setup(ctx, gpuScene, ro);
+      if (!ok) return makeError(ok.error());
+      (*renderer)->renderFrame((*cameras)[0]);
+      images.push_back((*renderer)->finalImage());
+      (*renderer)->destroy();
+    }
+    gpuScene.destroy();
+    return json::object();
+  });
+  ASSERT_TRUE(done) << done.error();
+  ASSERT_EQ(images.size(), 2u);
+  auto expected = capture::compareImages(images[1], images[0], 64, 36);
+  ASSERT_TRUE(expected) << expected.error();
+  EXPECT_EQ(error["identical"].get<bool>(), std::isinf(expected->psnr));
+  if (std::isinf(expected->psnr)) {
+    EXPECT_TRUE(error["psnr"].is_null());
+  } else {
+    EXPECT_DOUBLE_EQ(error["psnr"].get<double>(), expected->psnr);
+  }
+  EXPECT_EQ(error["max_abs"].get<int>(), expected->maxAbs);
+  EXPECT_DOUBLE_EQ(error["mean_abs"].get<double>(), expected->meanAbs);
 }
 
 TEST_F(CaptureRun, BadSpecNamesTheFieldAndWritesNothing) {

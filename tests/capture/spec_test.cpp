@@ -92,7 +92,37 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":[]})", "counting: must be a mode or a non-empty array"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})", "counting: must be a mode or a non-empty array"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"}));
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"},
+        // Variants: {"renderer", "options"} entries.
+        BadCase{R"({"renderers":[{"options":{}}],"resolutions":[[8,8]]})", "renderers[0].renderer: required"},
+        BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})", "renderers[0].renderer: unknown renderer 'fwd'"},
+        BadCase{R"({"renderers":[{"renderer":"visbuffer","option":{}}],"resolutions":[[8,8]]})", "renderers[0].option: unknown field"},
+        BadCase{R"({"renderers":["forward",{"renderer":"visbuffer","options":[]}],"resolutions":[[8,8]]})", "renderers[1].options: must be an object"},
+        BadCase{R"({"renderers":["forward",{"renderer":"visbuffer","options":{"barycentrics":"half"}}],"resolutions":[[8,8]]})",
+                "renderers[1].options.barycentrics: \"half\" is not one of unorm16, float32"},
+        BadCase{R"({"renderers":["forward",{"renderer":"deferred","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
+                "renderers[1].options.barycentrics: deferred takes no option barycentrics"},
+        // The same canonical options twice: the default value written out is the renderer as it is.
+        BadCase{R"({"renderers":["visbuffer",{"renderer":"visbuffer","options":{"barycentrics":"unorm16"}}],"resolutions":[[8,8]]})",
+                "renderers[1]: renderer 'visbuffer' listed twice"},
+        BadCase{R"({"renderers":[{"renderer":"visbuffer","options":{"barycentrics":"float32"}},{"renderer":"visbuffer","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
+                "renderers[1]: renderer 'visbuffer barycentrics=float32' listed twice"}));
+
+TEST(CaptureSpec, VariantsAreCanonical) {
+  auto spec = parse(R"({"renderers":["visbuffer",{"renderer":"visbuffer","options":{"uv_derivatives":"float32",
+    "barycentrics":"float32","material_selection":"nonuniform"}},{"renderer":"forward","options":{}}],"resolutions":[[8,8]]})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  ASSERT_EQ(spec->renderers.size(), 3u);
+  EXPECT_EQ(spec->renderers[0].name, "visbuffer");
+  EXPECT_EQ(spec->renderers[0].options, nlohmann::json::object());
+  EXPECT_EQ(spec->renderers[0].label(), "visbuffer");
+  // material_selection's default is dropped; keys sorted.
+  EXPECT_EQ(spec->renderers[1].options, nlohmann::json({{"barycentrics", "float32"}, {"uv_derivatives", "float32"}}));
+  EXPECT_EQ(spec->renderers[1].label(), "visbuffer barycentrics=float32 uv_derivatives=float32");
+  EXPECT_EQ(spec->renderers[2].name, "forward");
+  EXPECT_EQ(spec->renderers[2].options, nlohmann::json::object());
+  EXPECT_EQ(spec->sampleCount(10), 3u * 10u);
+}
 
 TEST(CaptureSpec, MatrixLimit) {
   std::string resolutions;

@@ -134,6 +134,32 @@ TEST_F(TallyCli, ShowRunAndSamples) {
   EXPECT_NE(r.out.find("1.00 KiB"), std::string::npos);  // written
 }
 
+// Variants: the runs table's renderer column and `show` carry the variant
+// label; `show` lists the options and each sample's error against the
+// reference variant; --variant is passed through as the filter.
+TEST_F(TallyCli, VariantsAreLabelled) {
+  FakeTallyd fake;
+  const std::string label = "visbuffer barycentrics=float32 material_selection=uniform";
+  Outcome list = tally("--server " + fake.url() + " runs --variant '" + label + "'");
+  ASSERT_EQ(list.rc, 0) << list.err;
+  EXPECT_EQ(fake.lastRunsQuery().find("variant")->second, label);
+  EXPECT_NE(list.out.find(label), std::string::npos) << list.out;
+
+  Outcome show = tally("--server " + fake.url() + " show 16");
+  ASSERT_EQ(show.rc, 0) << show.err;
+  EXPECT_NE(show.out.find("run 16: " + label + " on atrium at 320x180"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("options: barycentrics=float32 material_selection=uniform"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("VARIANT ERROR"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("37.5 dB vs visbuffer barycentrics=float32"), std::string::npos) << show.out;
+  EXPECT_NE(show.out.find("identical vs visbuffer barycentrics=float32"), std::string::npos) << show.out;
+
+  // A run without options: no options line, no variant column.
+  Outcome plain = tally("--server " + fake.url() + " show 12");
+  ASSERT_EQ(plain.rc, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("options:"), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.out.find("VARIANT ERROR"), std::string::npos) << plain.out;
+}
+
 TEST_F(TallyCli, CompareTable) {
   FakeTallyd fake;
   Outcome r = tally("--server " + fake.url() + " compare 12 15");

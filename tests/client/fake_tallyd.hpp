@@ -46,6 +46,14 @@ inline json runJson(int id, const std::string& renderer, int width) {
           {"extra_field", {1, 2}}};
 }
 
+// Run 16: a variant of visbuffer (its options set, "variant" its label).
+inline json variantRunJson(int id) {
+  json run = runJson(id, "visbuffer", 320);
+  run["options"] = {{"barycentrics", "float32"}, {"material_selection", "uniform"}};
+  run["variant"] = "visbuffer barycentrics=float32 material_selection=uniform";
+  return run;
+}
+
 class FakeTallyd {
  public:
   // port 0: an ephemeral port; else that port (to stand in for a restarted daemon).
@@ -124,6 +132,8 @@ class FakeTallyd {
         lastRunsQuery_ = req.params;
       }
       std::string cursor = req.get_param_value("cursor");
+      if (req.has_param("variant"))
+        return reply(res, {{"runs", {variantRunJson(16)}}, {"next_cursor", nullptr}});
       if (cursor.empty())
         return reply(res, {{"runs", {runJson(15, "visbuffer", 320), runJson(12, "deferred", 320)}},
                            {"next_cursor", "r9"}});
@@ -134,10 +144,11 @@ class FakeTallyd {
     server_.Get(R"(/api/runs/(\d+))", [reply](const httplib::Request& req, httplib::Response& res) {
       int id = std::stoi(req.matches[1]);
       if (id == 404) return reply(res, apiError("not_found", "run 404 not found"), 404);
+      if (id == 16) return reply(res, variantRunJson(id));
       reply(res, runJson(id, "deferred", 320));
     });
-    server_.Get(R"(/api/runs/(\d+)/samples)", [reply](const httplib::Request&, httplib::Response& res) {
-      reply(res, {{"samples",
+    server_.Get(R"(/api/runs/(\d+)/samples)", [reply](const httplib::Request& req, httplib::Response& res) {
+      json samples = {{"samples",
                    {{{"id", 101},
                      {"camera", 0},
                      {"sky_fraction", 0.31},
@@ -151,7 +162,15 @@ class FakeTallyd {
                      {"frame_ms", 2.5},
                      {"overhead_ratio", 1.02},
                      {"bytes", 2048.0},
-                     {"image_error", {{"against", "forward"}, {"psnr", nullptr}, {"identical", true}}}}}}});
+                     {"image_error", {{"against", "forward"}, {"psnr", nullptr}, {"identical", true}}}}}}};
+      if (std::string(req.matches[1]) == "16") {
+        // The variant's samples: their image against the reference variant's.
+        samples["samples"][0]["variant_error"] = {{"against", "visbuffer barycentrics=float32"}, {"psnr", 37.5},
+                                                  {"identical", false}, {"max_abs", 20}, {"mean_abs", 0.5}};
+        samples["samples"][1]["variant_error"] = {{"against", "visbuffer barycentrics=float32"}, {"psnr", nullptr},
+                                                  {"identical", true}, {"max_abs", 0}, {"mean_abs", 0}};
+      }
+      reply(res, samples);
     });
     server_.Get(R"(/api/samples/(\d+))", [reply](const httplib::Request& req, httplib::Response& res) {
       int id = std::stoi(req.matches[1]);

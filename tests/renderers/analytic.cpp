@@ -43,6 +43,8 @@ constexpr uint32_t kDepthStencilBytes = 5;  // D32_SFLOAT_S8_UINT, written by a 
 constexpr uint32_t kDepthAspectBytes = 4;   // its depth aspect, sampled
 constexpr uint32_t kIndexBytes = 4;         // 32-bit indices
 constexpr uint32_t kLightBytes = 32;        // PointLight, loaded whole
+constexpr uint32_t kCountBytes = 4;         // R32_SFLOAT, forward's overdraw.count
+constexpr uint32_t kStencilBytes = 1;       // the S8 aspect, set without depth (forward output=overdraw)
 
 Term read(std::string resource, uint64_t perFragment, uint32_t elementBytes = 0) {
   return {std::move(resource), false, "counter", perFragment, 0, 0, elementBytes};
@@ -107,33 +109,57 @@ std::vector<Term> materialTerms() { return {read("material_maps.", kMapsPerMater
 
 Term depthWrite() { return {"depth", true, "derived", 1, 0, 0, kDepthStencilBytes}; }
 
-std::vector<PassPrediction> ownPasses(const std::string& renderer, const Geometry& g, const DeviceTraits& d) {
+std::vector<PassPrediction> ownPasses(const std::string& renderer, const Geometry& g, const DeviceTraits& d,
+                                      const nlohmann::json& options) {
   // Early depth test, LESS: back to front every layer is nearer than the
   // last and is shaded; front to back only the first (nearest) one.
   const uint64_t shaded = (g.backToFront ? g.layers : 1) * g.covered;
   if (renderer == "forward" || renderer == "forward-zprepass") {
     std::vector<PassPrediction> out;
-    const bool prepass = renderer == "forward-zprepass";
+    const bool prepass = renderer == "forward-zprepass" || options.value("zprepass", false);
+    const std::string output = options.value("output", "shaded");
+    const bool counting = output != "shaded", overdraw = output == "overdraw";
     if (prepass) {
       // zprepass.vert: the position only; the counting-only fragment shader reads nothing.
       PassPrediction z = meshPass("zprepass", g, shaded, 1);
       add(z, {depthWrite()});
       out.push_back(z);
     }
-    // After the pre-pass, depth EQUAL passes only the nearest layer's fragments.
-    PassPrediction f = meshPass("forward", g, prepass ? g.covered : shaded, 4);
+    // After the pre-pass, depth EQUAL passes only the nearest layer's
+    // fragments; without the depth test (overdraw) every rasterized one.
+    const uint64_t fragments = overdraw ? uint64_t(g.layers) * g.covered : prepass ? g.covered : shaded;
+    PassPrediction f = meshPass("forward", g, fragments, 4);
     add(f, materialTerms());
     add(f, shadeTerms(d, 1));
     add(f, {write("hdr", 1, kHdrBytes)});
-    if (!prepass) add(f, {depthWrite()});
+    if (counting) {
+      // The count output, and blending's destination reads of both outputs.
+      add(f, {write("overdraw.count", 1, kCountBytes), {"hdr", false, "derived", 1, 0, 0, kHdrBytes},
+              {"overdraw.count", false, "derived", 1, 0, 0, kCountBytes}});
+    }
+    if (!prepass) add(f, {overdraw ? Term{"depth", true, "derived", 1, 0, 0, kStencilBytes} : depthWrite()});
     out.push_back(f);
+    if (counting) {
+      // overdraw_view.frag: one count texel to hdr, every pixel.
+      PassPrediction v = fullScreenPass("overdraw_view", g, g.pixels);
+      add(v, {read("overdraw.count", 1, kCountBytes), write("hdr", 1, kHdrBytes)});
+      out.push_back(v);
+    }
     return out;
   }
   if (renderer == "deferred") {
-    PassPrediction gb = meshPass("gbuffer", g, shaded, 4);
+    std::vector<PassPrediction> out;
+    const bool prepass = options.value("zprepass", false);
+    if (prepass) {  // as forward-zprepass's
+      PassPrediction z = meshPass("zprepass", g, shaded, 1);
+      add(z, {depthWrite()});
+      out.push_back(z);
+    }
+    PassPrediction gb = meshPass("gbuffer", g, prepass ? g.covered : shaded, 4);
     add(gb, materialTerms());
-    add(gb, {write("gbuffer.normal", 1, 8), write("gbuffer.diffuse", 1, 4), write("gbuffer.specular", 1, 4),
-             depthWrite()});
+    add(gb, {write("gbuffer.normal", 1, 8), write("gbuffer.diffuse", 1, 4), write("gbuffer.specular", 1, 4)});
+    if (!prepass) add(gb, {depthWrite()});
+    out.push_back(gb);
     // lighting.frag: the G-buffer texels; camera.invViewProj and
     // camera.viewport (worldFromDepth) plus shade()'s camera.position.
     PassPrediction l = fullScreenPass("lighting", g, g.covered);
@@ -141,7 +167,8 @@ std::vector<PassPrediction> ownPasses(const std::string& renderer, const Geometr
             read("gbuffer.specular", 1, 4)});
     add(l, shadeTerms(d, 3));
     add(l, {write("hdr", 1, kHdrBytes)});
-    return {gb, l};
+    out.push_back(l);
+    return out;
   }
   if (renderer != "visbuffer" && renderer != "visbuffer-lean") return {};  // unknown: nothing predicted
   const bool fat = renderer == "visbuffer";
@@ -209,8 +236,18 @@ Geometry geometryOf(const nlohmann::json& spec, VkExtent2D extent) {
   return g;
 }
 
-std::vector<PassPrediction> predict(const std::string& renderer, const Geometry& g, const DeviceTraits& device) {
-  std::vector<PassPrediction> passes = ownPasses(renderer, g, device);
+std::map<uint64_t, uint64_t> countHistogram(const Geometry& g, const std::string& output, bool prepass) {
+  uint64_t perCovered = 1;  // the nearest layer only
+  if (output == "overdraw" || (!prepass && g.backToFront)) perCovered = g.layers;
+  std::map<uint64_t, uint64_t> out;
+  if (g.pixels > g.covered) out[0] = g.pixels - g.covered;
+  if (g.covered > 0) out[perCovered] += g.covered;
+  return out;
+}
+
+std::vector<PassPrediction> predict(const std::string& renderer, const Geometry& g, const DeviceTraits& device,
+                                    const nlohmann::json& options) {
+  std::vector<PassPrediction> passes = ownPasses(renderer, g, device, options);
   // tonemap.frag: hdr and lighting.exposure per pixel, every pixel.
   PassPrediction t = fullScreenPass("tonemap", g, g.pixels);
   add(t, {read("hdr", 1, kHdrBytes), read("lighting", 1), write("final", 1, kFinalBytes)});

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -70,7 +71,18 @@ struct DeviceTraits {
   uint32_t lights = 0;                // RendererOptions::lights
 };
 
-// Every pass of `renderer`, in order, with every access it makes.
-std::vector<PassPrediction> predict(const std::string& renderer, const Geometry& g, const DeviceTraits& device);
+// Every pass of `renderer`, in order, with every access it makes, for the
+// variant `options` (canonical, options.hpp): forward's "output" and
+// "zprepass", deferred's "zprepass".
+std::vector<PassPrediction> predict(const std::string& renderer, const Geometry& g, const DeviceTraits& device,
+                                    const nlohmann::json& options = nlohmann::json::object());
+
+// Forward output=overdraw|overshading: how many pixels receive each count of
+// forward-pass fragments (count -> pixels, every count that occurs, 0 for the
+// pixels no quad covers). Every quad covers the same pixels, so a covered
+// pixel receives every layer without a depth test (overdraw), every layer
+// back to front or only the nearest front to back with it, and only the
+// nearest after a depth pre-pass.
+std::map<uint64_t, uint64_t> countHistogram(const Geometry& g, const std::string& output, bool prepass);
 
 }  // namespace tally::renderers::analytic

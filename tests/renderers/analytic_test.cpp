@@ -15,6 +15,7 @@
 
 #include "analytic.hpp"
 #include "capture/headroom.hpp"
+#include "renderers/options.hpp"
 #include "render_fixture.hpp"
 
 namespace tally::renderers {
@@ -179,6 +180,68 @@ std::string paramName(const ::testing::TestParamInfo<Param>& info) {
 INSTANTIATE_TEST_SUITE_P(Renderers, AnalyticCounts,
                          ::testing::Combine(::testing::ValuesIn(kExtents), ::testing::ValuesIn(specs())),
                          paramName);
+
+// The variants (options.hpp) whose passes change: forward's count outputs
+// and depth pre-pass, deferred's depth pre-pass. Every pass equals its
+// prediction for the variant, as above; each G-buffer or forward pass's
+// shaded fragments per covered pixel (overshading) and the frame's total
+// bytes are printed beside the variant's.
+struct Variant {
+  const char* renderer;
+  const char* options;  // JSON
+};
+const Variant kVariants[] = {
+    {"forward", R"({"zprepass": true})"},
+    {"forward", R"({"output": "overdraw"})"},
+    {"forward", R"({"output": "overshading"})"},
+    {"forward", R"({"output": "overdraw", "zprepass": true})"},
+    {"forward-zprepass", R"({"output": "overshading"})"},
+    {"deferred", R"({"zprepass": true})"},
+    {"deferred", R"({})"},
+};
+
+uint64_t totalBytes(const FrameResult& f) {
+  uint64_t n = 0;
+  for (const auto& p : f.passes) {
+    for (const auto& a : p.accesses) n += a.bytes;
+  }
+  return n;
+}
+
+TEST(AnalyticVariants, EveryVariantMatchesThePrediction) {
+  gpu::Context* ctx = context();
+  ASSERT_NE(ctx, nullptr);
+  for (const VkExtent2D extent : {VkExtent2D{157, 91}, VkExtent2D{160, 90}}) {
+    for (const auto& spec : {planes(3, "back-to-front", 0.5), planes(4, "front-to-back", 1.0)}) {
+      const analytic::Geometry g = analytic::geometryOf(spec, extent);
+      ASSERT_FALSE(g.rows.ambiguous) << spec.dump();
+      for (const auto& v : kVariants) {
+        auto options = canonicalOptions(v.renderer, nlohmann::json::parse(v.options));
+        ASSERT_TRUE(options.ok()) << v.renderer << " " << v.options << ": " << options.error();
+        const std::string label = variantLabel(v.renderer, *options) + " " + spec.dump() + " " +
+                                  std::to_string(extent.width) + "x" + std::to_string(extent.height);
+        Rendered r = render(v.renderer, spec, extent, [&](RendererOptions& o) { applyOptions(*options, o); });
+        ASSERT_TRUE(r.ok) << label << ": " << r.error;
+        analytic::DeviceTraits device;
+        device.lights = kTestLights;
+        const auto want = analytic::predict(v.renderer, g, device, *options);
+        ASSERT_EQ(want.size(), r.frame.passes.size()) << label << ": passes predicted";
+        for (size_t i = 0; i < want.size(); ++i) {
+          const PassResult& got = r.frame.passes[i];
+          ASSERT_EQ(got.name, want[i].name) << label;
+          checkPass(want[i], got, label + " " + got.name);
+          checkStatistic(*ctx, want[i], got, label + " " + got.name);
+          if (got.name == "gbuffer" || got.name == "forward") {
+            std::printf("  %s: %s shades %.3f fragments per covered pixel; %" PRIu64 " bytes in the frame\n",
+                        label.c_str(), got.name.c_str(), double(got.fragmentInvocations) / double(g.covered),
+                        totalBytes(r.frame));
+          }
+        }
+        checkDeclared(want, r, label);
+      }
+    }
+  }
+}
 
 // The counter headroom of a frame (docs/measurement.md, "Counter overflow"):
 // the largest slot is the largest predicted count, the lights buffer read by

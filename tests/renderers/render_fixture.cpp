@@ -138,6 +138,7 @@ Rendered render(const std::string& name, const nlohmann::json& spec, VkExtent2D 
   for (int f = 0; f < frames; ++f) out.frame = (*renderer)->renderFrame(s.camera);
   out.image = (*renderer)->finalImage();
   out.notes = (*renderer)->notes();
+  out.extras = (*renderer)->frameExtras();
   out.resources = (*renderer)->resources();
   out.ok = true;
   EXPECT_EQ(out.frame.passes.size(), (*renderer)->passNames().size());

@@ -38,6 +38,7 @@ struct Rendered {
   FrameResult frame;
   std::vector<uint8_t> image;
   nlohmann::json notes;
+  nlohmann::json extras;  // Renderer::frameExtras() of the last frame
   std::vector<ResourceInfo> resources;
 };
 

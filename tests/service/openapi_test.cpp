@@ -152,6 +152,42 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   EXPECT_GE(repeats["groups"].size(), 2u) << repeats.dump();
   expect("GET", "/api/repeats?limit=3", "/api/repeats", 400);
 
+  // A variant run: options, variant label, extras and variant_error (the
+  // clamped uv derivatives against their float32 reference), found by the
+  // variant filter; GET /api/renderers lists the option table.
+  json variant = tinySpec();
+  variant["renderers"] = {{{"renderer", "visbuffer"}, {"options", {{"uv_derivatives", "unorm16-clamped"}}}}};
+  posted = daemon_->request("POST", "/api/captures", variant.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  ASSERT_EQ(daemon_->waitFinished(posted.j()["id"]).value("status", ""), "done");
+  json variantRuns =
+      expect("GET", "/api/runs?variant=visbuffer%20uv_derivatives%3Dunorm16-clamped", "/api/runs", 200);
+  ASSERT_EQ(variantRuns["runs"].size(), 1u) << variantRuns.dump();
+  const json& variantRun = variantRuns["runs"][0];
+  EXPECT_EQ(variantRun["variant"], "visbuffer uv_derivatives=unorm16-clamped");
+  EXPECT_EQ(variantRun["options"], json({{"uv_derivatives", "unorm16-clamped"}}));
+  EXPECT_EQ(runs["runs"][0]["options"], json::object());
+  EXPECT_EQ(runs["runs"][0]["variant"], runs["runs"][0]["renderer"]);
+  std::string v = std::to_string(variantRun["id"].get<int64_t>());
+  expect("GET", "/api/runs/" + v, "/api/runs/{id}", 200);
+  json variantSamples = expect("GET", "/api/runs/" + v + "/samples", "/api/runs/{id}/samples", 200);
+  ASSERT_FALSE(variantSamples["samples"].empty());
+  for (const auto& s : variantSamples["samples"]) {
+    ASSERT_TRUE(s["variant_error"].is_object()) << s.dump();
+    EXPECT_EQ(s["variant_error"]["against"], "visbuffer uv_derivatives=float32");
+    EXPECT_TRUE(s["extras"].is_object());
+  }
+  EXPECT_TRUE(samples["samples"][0]["variant_error"].is_null());
+  expect("GET", "/api/samples/" + std::to_string(variantSamples["samples"][0]["id"].get<int64_t>()),
+         "/api/samples/{id}", 200);
+  expect("GET", "/api/compare?runs=" + a + "," + v, "/api/compare", 200);
+  json table = expect("GET", "/api/renderers", "/api/renderers", 200);
+  ASSERT_TRUE(table["options"].is_array());
+  bool listed = false;
+  for (const auto& o : table["options"]) listed = listed || o["name"] == "uv_derivatives";
+  EXPECT_TRUE(listed) << table.dump();
+  expect("GET", "/api/runs?variant=nothing%20like%20it", "/api/runs", 200);
+
   // A stability sweep: its job, the list and the sweep with its whole result
   // (one failing and one holding point, so fails_at has a value and a null).
   json sweepSpec = {{"sweep", "depth-reconstruction"}, {"near", {0.01}}, {"far", {1000}},

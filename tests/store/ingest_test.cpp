@@ -168,6 +168,58 @@ TEST_F(Ingest, SampleWithoutScreenshotOrImageError) {
   EXPECT_FALSE(png->has_value());
 }
 
+// A variant run: its options, label, a sample's extras and variant_error come
+// back as they went in; a run without them reads as its renderer, {} and none.
+TEST_F(Ingest, VariantRunRoundTrips) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  json& run = c.result["runs"][1];
+  const std::string renderer = run["renderer"].get<std::string>();
+  const json options = {{"barycentrics", "float32"}};
+  const std::string label = renderer + " barycentrics=float32";
+  run["options"] = options;
+  run["variant"] = label;
+  const json extras = {{"overdraw", {{"histogram", {1, 2, 3}}, {"mean", 1.5}}}};
+  const json variantError = {{"against", renderer}, {"psnr", 38.25}, {"identical", false}, {"max_abs", 9},
+                             {"mean_abs", 0.5}};
+  run["samples"][0]["extras"] = extras;
+  run["samples"][0]["variant_error"] = variantError;
+  ingest(jobId, c);
+
+  auto page = store_->listRuns({.renderer = renderer, .variant = label, .jobId = jobId}, {});
+  ASSERT_TRUE(page) << page.error();
+  ASSERT_EQ(page->runs.size(), 1u);
+  EXPECT_EQ(page->runs[0].options, options);
+  EXPECT_EQ(page->runs[0].variant, label);
+  auto samples = store_->listSamples(page->runs[0].id);
+  ASSERT_TRUE(samples && samples->size() >= 2);
+  EXPECT_EQ((*samples)[0].extras, extras);
+  ASSERT_TRUE((*samples)[0].variantError);
+  EXPECT_EQ((*samples)[0].variantError->against, renderer);
+  EXPECT_FALSE((*samples)[0].variantError->identical);
+  ASSERT_TRUE((*samples)[0].variantError->psnr);
+  EXPECT_EQ(*(*samples)[0].variantError->psnr, 38.25);
+  EXPECT_EQ((*samples)[0].variantError->maxAbs, 9);
+  EXPECT_EQ((*samples)[0].variantError->meanAbs, 0.5);
+  EXPECT_EQ((*samples)[1].extras, json::object());
+  EXPECT_FALSE((*samples)[1].variantError);
+
+  // The run without options is its renderer.
+  const std::string plain = c.result["runs"][0]["renderer"].get<std::string>();
+  auto plainPage = store_->listRuns({.variant = plain, .jobId = jobId}, {});
+  ASSERT_TRUE(plainPage) << plainPage.error();
+  ASSERT_EQ(plainPage->runs.size(), 1u);
+  EXPECT_EQ(plainPage->runs[0].options, json::object());
+  EXPECT_EQ(plainPage->runs[0].variant, plain);
+
+  // variant_error names its reference: no implied one.
+  Capture bad = realisticCapture();
+  bad.result["runs"][0]["samples"][0]["variant_error"] = {{"psnr", 30}, {"max_abs", 1}, {"mean_abs", 0.1}};
+  auto refused = store_->ingestCapture(newJob(), bad.result, bad.screenshots);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("runs[0].samples[0].variant_error.against"), std::string::npos) << refused.error();
+}
+
 TEST_F(Ingest, IngestingTwiceStoresOnce) {
   int64_t jobId = newJob();
   Capture c = realisticCapture();

@@ -195,6 +195,77 @@ TEST(Migrations, VersionOneWithDataUpgradesKeepingEverything) {
   EXPECT_EQ(*integrity, "ok");
 }
 
+// A database of schema 2 with a run (its counter headroom), a sample with an
+// image error, and a sweep upgrades to 3: every row and value kept, the run's
+// variant backfilled with its renderer, options and extras {} and no
+// variant_error; the new columns' checks hold.
+TEST(Migrations, VersionTwoWithDataUpgradesToVariantsKeepingEverything) {
+  TempDb db;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db.path().c_str(), &raw), SQLITE_OK);
+    auto second = migrate(raw, embeddedMigrations().first(2));
+    ASSERT_TRUE(second) << second.error();
+    ASSERT_EQ(*second, 2);
+    const char* rows =
+        "INSERT INTO devices (id, fingerprint, name, vendor, driver, api_version) "
+        "VALUES (1, 'llvmpipe', 'llvmpipe', '0x10005', 'Mesa', '1.3');"
+        "INSERT INTO scenes (id, name, params) VALUES (1, 'atrium', '{}');"
+        "INSERT INTO jobs (id, status, spec, idempotency_key) VALUES (1, 'done', '{\"renderers\":[\"deferred\"]}', 'k');"
+        "INSERT INTO runs (id, job_id, device_id, renderer, scene_id, width, height, counting, lights, "
+        "counter_headroom) VALUES (1, 1, 1, 'deferred', 1, 64, 36, 'exact', 4, '{\"max\":7}');"
+        "INSERT INTO samples (id, run_id, camera_index, camera, frame_ms, bytes, image_against, image_identical, "
+        "psnr, max_abs, mean_abs) VALUES (1, 1, 0, '{}', 1.5, 96, 'forward', 0, 41.5, 3, 0.25);"
+        "INSERT INTO passes (id, sample_id, position, name, gpu_ms) VALUES (1, 1, 0, 'gbuffer', 1.25);"
+        "INSERT INTO counters (pass_id, position, resource, access, count, bytes, source) "
+        "VALUES (1, 0, 'depth', 'write', 24, 96, 'counter');"
+        "INSERT INTO sweeps (id, job_id, device_id, name, parameters, threshold, point_count, result) "
+        "VALUES (1, 1, 1, 'depth', '{}', '{}', 0, '{}');";
+    ASSERT_EQ(sqlite3_exec(raw, rows, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(raw);
+    sqlite3_close(raw);
+  }
+  ASSERT_EQ(userVersion(db.path()), 2);
+
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_GE(store->schemaVersion(), 3);
+  for (const char* table : {"devices", "scenes", "jobs", "runs", "samples", "passes", "counters", "sweeps"}) {
+    EXPECT_EQ(scalar(*store, std::string("SELECT COUNT(*) FROM ") + table), 1) << table;
+  }
+  auto run = store->getRun(1);
+  ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
+  EXPECT_EQ((*run)->row.renderer, "deferred");
+  EXPECT_EQ((*run)->row.variant, "deferred");
+  EXPECT_EQ((*run)->row.options, nlohmann::json::object());
+  EXPECT_EQ((*run)->counterHeadroom, nlohmann::json({{"max", 7}}));
+  EXPECT_EQ((*run)->row.imageCompared, 1);
+  auto samples = store->listSamples(1);
+  ASSERT_TRUE(samples) << samples.error();
+  ASSERT_EQ(samples->size(), 1u);
+  const SampleRow& sample = (*samples)[0];
+  EXPECT_EQ(sample.bytes, 96);
+  ASSERT_TRUE(sample.imageError);
+  EXPECT_EQ(sample.imageError->against, "forward");
+  ASSERT_TRUE(sample.imageError->psnr);
+  EXPECT_EQ(*sample.imageError->psnr, 41.5);
+  EXPECT_EQ(sample.imageError->maxAbs, 3);
+  EXPECT_EQ(sample.extras, nlohmann::json::object());
+  EXPECT_FALSE(sample.variantError);
+  RunFilter byVariant;
+  byVariant.variant = "deferred";
+  auto page = store->listRuns(byVariant, Page{});
+  ASSERT_TRUE(page) << page.error();
+  EXPECT_EQ(page->runs.size(), 1u);
+  for (const char* bad : {"UPDATE runs SET options = 'not json' WHERE id = 1",
+                          "UPDATE samples SET extras = 'not json' WHERE id = 1"}) {
+    EXPECT_NE(sqlite3_exec(store->handle(), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
+  }
+  EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pragma_foreign_key_check"), 0);
+  auto integrity = store->integrityCheck();
+  ASSERT_TRUE(integrity);
+  EXPECT_EQ(*integrity, "ok");
+}
+
 TEST(Migrations, ReaderNeedsAMigratedDatabase) {
   TempDb db;
   auto missing = Store::open(db.path(), {.readOnly = true});

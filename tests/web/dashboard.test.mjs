@@ -87,8 +87,12 @@ async function screenshot(page, name) {
   await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, `${name}.png`), fullPage: true });
 }
 
+// The run of `renderer` as it is (no options), or of a variant label.
 const runOf = (renderer, width, counting = 'exact') =>
-  data.runs.find((r) => r.renderer === renderer && r.width === width && r.counting === counting);
+  data.runs.find((r) => r.variant === renderer && r.width === width && r.counting === counting);
+// The founding study's clamped uv derivatives: measured against the float32 ones (their reference).
+const kVariant = { renderer: 'visbuffer', options: { uv_derivatives: 'unorm16-clamped' } };
+const kVariantLabel = 'visbuffer uv_derivatives=unorm16-clamped';
 
 before(async () => {
   for (const key of ['TALLYD', 'TALLY_WEB_ROOT', 'TALLY_SCREENSHOTS', 'CHROMIUM']) assert.ok(env[key], `${key} is not set`);
@@ -102,8 +106,10 @@ before(async () => {
   }
   // A repeated capture of one configuration: the compare view's spread across captures.
   await daemon.capture({ renderers: ['visbuffer-lean'], scenes: ['atrium'], resolutions: [[128, 72]], frames: 2 }, kCaptureMs);
+  // One variant of visbuffer beside the default one at 128x72.
+  await daemon.capture({ renderers: [kVariant], scenes: ['atrium'], resolutions: [[128, 72]], frames: 2 }, kCaptureMs);
   data.runs = (await daemon.get('/runs?limit=1000')).runs;
-  assert.equal(data.runs.length, 13);
+  assert.equal(data.runs.length, 14);
   // One small stability sweep: one point holds (3 m), one fails (300 m), so
   // fails_at states a value and a hold (tests/service/sweeps_test.cpp).
   const sweepJob = await daemon.capture(kSweepSpec, kCaptureMs);
@@ -433,6 +439,61 @@ describe('dashboard', () => {
     await close();
   });
 
+  test('variants: labelled in the runs list, their own column in compare, their own series in accuracy, variant error in the run view', async () => {
+    const variant = runOf(kVariantLabel, 128);
+    const plain = runOf('visbuffer', 128);
+    assert.ok(variant && plain, 'the variant and the default visbuffer at 128x72');
+    assert.deepEqual(variant.options, kVariant.options);
+    assert.notEqual(variant.id, plain.id);
+
+    // Runs list: the renderer column carries the label.
+    const runsPage = await open('#/runs');
+    const row = runsPage.page.locator(`tbody tr[data-run-id="${variant.id}"]`);
+    await row.waitFor({ timeout: kViewMs });
+    assert.ok((await row.textContent()).includes(kVariantLabel));
+    assert.deepEqual(runsPage.errors, []);
+    await runsPage.close();
+
+    // Compare: the variant is a column of its own next to the default visbuffer, at the API's ratio.
+    const c = await daemon.get(`/compare?runs=${plain.id},${variant.id}`);
+    const { page, errors, close } = await open(`#/compare?runs=${plain.id},${variant.id}`);
+    const headers = await page.locator('[data-table="totals"] thead th').allTextContents();
+    assert.ok(headers.some((t) => t.includes(`visbuffer #${plain.id}`)), headers.join(' | '));
+    assert.ok(headers.some((t) => t.includes(`${kVariantLabel} #${variant.id}`)), headers.join(' | '));
+    const ratio = Number(await page.locator('[data-table="totals"] tr[data-row="total_bytes"] td').nth(1).getAttribute('data-ratio'));
+    assert.equal(ratio, c.total_bytes[1].ratio);
+    assertClose(ratio, variant.mean_bytes / plain.mean_bytes, 'variant bytes ratio');
+    // Scaling: the two are separate series, not merged into one visbuffer line.
+    const scaling = await chart(page, 'scaling-bytes');
+    assert.deepEqual(scaling.datasets.map((d) => d.label).sort(), ['visbuffer', kVariantLabel].sort());
+    assert.deepEqual(scaling.datasets.find((d) => d.label === kVariantLabel).data, [{ x: 128 * 72, y: variant.mean_bytes, run: variant.id }]);
+    assert.deepEqual(errors, []);
+    await close();
+
+    // Speed vs accuracy (image error): the variant is its own series with its own point.
+    const accuracy = await open('#/accuracy?error=image&cost=frame');
+    const image = await chart(accuracy.page, 'accuracy');
+    const series = image.datasets.find((d) => d.label === kVariantLabel);
+    assert.ok(series, `a series named ${kVariantLabel}: ${image.datasets.map((d) => d.label).join(', ')}`);
+    assert.deepEqual(series.data.map((p) => p.run), [variant.id]);
+    if (variant.image_error.mean_psnr !== null) assert.equal(series.data[0].x, variant.image_error.mean_psnr);
+    assert.ok(!image.datasets.find((d) => d.label === 'visbuffer').data.some((p) => p.run === variant.id));
+    assert.deepEqual(accuracy.errors, []);
+    await accuracy.close();
+
+    // Run view: the options are listed; each sample's error against the
+    // reference variant (float32 derivatives) is the API's.
+    const { samples } = await daemon.get(`/runs/${variant.id}/samples`);
+    assert.ok(samples.every((s) => s.variant_error && s.variant_error.against === 'visbuffer uv_derivatives=float32'));
+    const runView = await open(`#/runs/${variant.id}`);
+    assert.ok((await runView.page.locator('h1').textContent()).includes(kVariantLabel));
+    assert.equal(await runView.page.locator('[data-options]').textContent(), 'options: uv_derivatives=unorm16-clamped');
+    const shown = await runView.page.locator('[data-variant-error]').evaluateAll((els) => els.map((e) => e.dataset.variantError));
+    assert.deepEqual(shown, samples.map((s) => String(s.variant_error.psnr)));
+    assert.deepEqual(runView.errors, []);
+    await runView.close();
+  });
+
   test('capture form: starts a capture and follows it to the end', async () => {
     const { page, errors, close } = await open('#/capture');
     for (const box of await page.locator('input[name="renderers"]').all()) {
@@ -466,6 +527,30 @@ describe('dashboard', () => {
     const runs = (await daemon.get(`/runs?capture=${id}`)).runs;
     assert.equal(runs.length, 1);
     assert.deepEqual(await page.locator('tbody tr[data-run-id]').evaluateAll((rows) => rows.map((r) => Number(r.dataset.runId))), runs.map((r) => r.id));
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
+  test('capture form: a renderer\'s option select makes a variant entry in the spec', async () => {
+    const { page, errors, close } = await open('#/capture');
+    const table = (await daemon.get('/renderers')).options;
+    const barycentrics = table.find((o) => o.name === 'barycentrics');
+    const select = page.locator('[data-variant-row="visbuffer"] select[data-option="barycentrics"]').first();
+    // The default is preselected.
+    assert.equal(JSON.parse(await select.inputValue()), barycentrics.default);
+    for (const box of await page.locator('input[name="renderers"]').all()) {
+      if ((await box.getAttribute('value')) !== 'visbuffer') await box.uncheck();
+    }
+    await select.selectOption(JSON.stringify('float32'));
+    await page.fill('input[name="resolutions"]', '32x18');
+    await page.fill('input[name="frames"]', '1');
+    await page.click('form.capture-form button[type="submit"]');
+    const panel = page.locator('.progress-box [data-status="done"]');
+    await panel.waitFor({ timeout: kCaptureMs });
+    const job = await daemon.get(`/captures/${Number(await panel.getAttribute('data-capture'))}`);
+    assert.deepEqual(job.spec.renderers, [{ renderer: 'visbuffer', options: { barycentrics: 'float32' } }]);
+    const { runs } = await daemon.get(`/runs?capture=${job.id}`);
+    assert.deepEqual(runs.map((r) => r.variant), ['visbuffer barycentrics=float32']);
     assert.deepEqual(errors, []);
     await close();
   });

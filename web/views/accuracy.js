@@ -34,7 +34,7 @@ const kMetrics = {
 // times from the run rows.
 function countingPoints(rows, runs, metric, costName) {
   const byId = new Map(runs.map((r) => [r.id, r]));
-  const runOf = (id, row, counting) => byId.get(id) || { id, renderer: row.renderer, scene: row.scene, width: row.width, height: row.height, counting };
+  const runOf = (id, row, counting) => byId.get(id) || { id, renderer: row.renderer, variant: row.variant, options: row.options, scene: row.scene, width: row.width, height: row.height, counting };
   const frameCost = (id) => byId.get(id)?.mean_frame_ms_instrumented ?? null;
   const points = [];
   const references = new Map();  // exact run id -> point
@@ -58,7 +58,7 @@ function imagePoints(runs, cost) {
   const identicalAt = Math.ceil((finite.length ? Math.max(...finite) : 50) + 10);
   const points = compared.map((r) => {
     const identical = r.image_error.mean_psnr === null;
-    return { run: r, group: r.renderer, error: identical ? identicalAt : r.image_error.mean_psnr, identical, cost: cost(r) };
+    return { run: r, group: fmt.variant(r), error: identical ? identicalAt : r.image_error.mean_psnr, identical, cost: cost(r) };
   });
   return { points, identicalAt };
 }
@@ -100,7 +100,7 @@ function pointTable(points, front, errorLabel, errorText, costFormat) {
     h('thead', {}, h('tr', {}, ['Run', 'Renderer', 'Scene', 'Resolution', 'Counting', errorLabel, 'Cost', 'Pareto front'].map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, points.map((p) => h('tr', { dataset: { run: p.run.id, error: p.identical ? 'identical' : p.error, cost: p.cost, front: front.has(p) } },
       h('td', {}, h('a', { href: `#/runs/${p.run.id}` }, `#${p.run.id}`)),
-      h('td', {}, p.run.renderer), h('td', {}, p.run.scene), h('td', {}, fmt.resolution(p.run)), h('td', {}, p.run.counting),
+      h('td', {}, fmt.variant(p.run)), h('td', {}, p.run.scene), h('td', {}, fmt.resolution(p.run)), h('td', {}, p.run.counting),
       h('td', { class: 'num' }, errorText(p)), h('td', { class: 'num' }, costFormat(p.cost)),
       h('td', {}, front.has(p) ? 'yes' : ''))))));
 }

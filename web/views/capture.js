@@ -25,11 +25,47 @@ function parseResolutions(text) {
 // A number when the text is one; else the text, for the server to refuse by name.
 const numberOr = (text) => (text.trim() !== '' && Number.isFinite(Number(text)) ? Number(text) : text);
 
+// Each checked renderer row: its name, or {renderer, options} where an option
+// is set away from its default (the server drops defaults anyway).
+function variantsOf(form) {
+  return [...form.querySelectorAll('[data-variant-row]')].filter((row) => row.querySelector('input[name="renderers"]').checked).map((row) => {
+    const options = {};
+    for (const control of row.querySelectorAll('[data-option]')) {
+      const def = JSON.parse(control.dataset.default);
+      const value = control.dataset.kind === 'range' ? numberOr(control.value) : JSON.parse(control.value);
+      if (JSON.stringify(value) !== JSON.stringify(def)) options[control.dataset.option] = value;
+    }
+    const name = row.dataset.variantRow;
+    return Object.keys(options).length ? { renderer: name, options } : name;
+  });
+}
+
+// One renderer's row: its checkbox and a select per option it takes (the
+// option table of GET /api/renderers), the default preselected; "+ variant"
+// adds another row of the same renderer.
+function variantRow(renderer, optionDefs, checked) {
+  const own = optionDefs.filter((o) => o.renderers.includes(renderer));
+  const controls = own.map((o) => {
+    const attrs = { dataset: { option: o.name, default: JSON.stringify(o.default), kind: o.range ? 'range' : 'values' }, 'aria-label': `${renderer} ${o.name}`, title: o.description };
+    const control = o.range
+      ? h('input', { ...attrs, value: String(o.default), size: 6, inputmode: 'decimal' })
+      : h('select', attrs, o.values.map((v) => h('option', { value: JSON.stringify(v), selected: JSON.stringify(v) === JSON.stringify(o.default) }, typeof v === 'string' ? v : JSON.stringify(v))));
+    return h('label', { class: 'option' }, ` ${o.name} `, control);
+  });
+  const row = h('div', { class: 'variant-row', dataset: { variantRow: renderer } },
+    h('label', {}, h('input', { type: 'checkbox', name: 'renderers', value: renderer, checked }), ' ', renderer), controls);
+  if (own.length) {
+    row.append(' ', h('button', { type: 'button', class: 'secondary', dataset: { addVariant: renderer },
+      onclick: () => row.after(variantRow(renderer, optionDefs, true)) }, '+ variant'));
+  }
+  return row;
+}
+
 function specOf(form) {
   const data = new FormData(form);
   const counting = data.get('counting') === 'sampled' ? `sampled:${data.get('sample_n').trim()}` : data.get('counting');
   return {
-    renderers: data.getAll('renderers'),
+    renderers: variantsOf(form),
     scenes: [...data.getAll('scenes'), ...data.getAll('gltf').map((path) => ({ gltf: path }))],
     resolutions: parseResolutions(data.get('resolutions')),
     cameras: 'auto',
@@ -73,7 +109,7 @@ function sweepForm(onSubmit) {
   return form;
 }
 
-function captureForm(renderers, scenes, onSubmit) {
+function captureForm(renderers, optionDefs, scenes, onSubmit) {
   const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
   const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
   const samplingN = h('input', { name: 'sample_n', value: '4', size: 4, 'aria-label': 'Sampling tile size N' });
@@ -81,7 +117,7 @@ function captureForm(renderers, scenes, onSubmit) {
   const gltf = scenes.gltf.flatMap((folder) => folder.files);
   const form = h('form', { class: 'capture-form', novalidate: true, 'aria-label': 'New capture' },
     h('fieldset', { dataset: { field: 'renderers' } }, h('legend', {}, 'Renderers'),
-      h('div', { class: 'choices' }, renderers.map((r) => choice('renderers', r, true)))),
+      h('div', { class: 'variants' }, renderers.map((r) => variantRow(r, optionDefs, true)))),
     h('fieldset', { dataset: { field: 'scenes' } }, h('legend', {}, 'Scenes'),
       h('div', { class: 'choices' },
         scenes.procedural.map((s) => choice('scenes', s.name, s.name === 'atrium')),
@@ -168,7 +204,8 @@ function summary(spec) {
   if (spec.sweep) return `sweep ${spec.sweep}`;
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
-  return `${(spec.renderers || []).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
+  const variant = (r) => (typeof r === 'string' ? r : [r.renderer, ...Object.entries(r.options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`)].join(' '));
+  return `${(spec.renderers || []).map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
 }
 
 function jobTable(jobs, onCancel) {
@@ -245,7 +282,7 @@ export async function render(page, { signal }) {
     }
   }
 
-  const form = captureForm(renderers.renderers, scenes, (spec) => start(spec, form));
+  const form = captureForm(renderers.renderers, renderers.options || [], scenes, (spec) => start(spec, form));
   const sweeps = sweepForm((spec) => start(spec, sweeps));
   page.append(h('h1', {}, 'New capture'), form,
     h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a stability sweep')), sweeps),

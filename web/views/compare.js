@@ -19,7 +19,7 @@ function comparedCells(values, format) {
 
 function comparedTable(runs, rows, label) {
   return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': label, dataset: { table: label } },
-    h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, ''), runs.map((r, i) => h('th', { scope: 'col', class: 'num' }, `${i === 0 ? 'reference: ' : ''}${r.renderer} #${r.id}`)))),
+    h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, ''), runs.map((r, i) => h('th', { scope: 'col', class: 'num' }, `${i === 0 ? 'reference: ' : ''}${fmt.variant(r)} #${r.id}`)))),
     h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format))))));
 }
 
@@ -44,7 +44,7 @@ function totals(page, c) {
   page.append(h('h2', {}, 'Totals'), comparedTable(c.runs, rows, 'totals'));
   const box = h('div', { class: 'charts' });
   page.append(box);
-  const labels = c.runs.map((r) => `${r.renderer} #${r.id}`);
+  const labels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
   barChart(box, {
     id: 'compare-bytes', title: 'Bytes per frame', labels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
     datasets: [{ label: 'read', data: byAccess(c, 'read') }, { label: 'written', data: byAccess(c, 'write') }],
@@ -63,7 +63,7 @@ function perResource(page, c) {
   barChart(fig, {
     id: 'compare-resources', title: 'Bytes per frame by resource', caption: 'summed over passes',
     labels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${r.renderer} #${r.id}`, data: c.resources.map((res) => res.bytes[i].value) })),
+    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.resources.map((res) => res.bytes[i].value) })),
   });
   fig.querySelector('.chart-box').style.height = `${Math.max(330, 18 * labels.length * Math.min(c.runs.length, 3))}px`;
   page.append(h('details', {}, h('summary', {}, 'Per resource: values, deltas and ratios'),
@@ -75,7 +75,7 @@ function perPass(page, c) {
   page.append(h('h2', {}, 'Per pass'));
   const box = h('div', { class: 'charts' });
   page.append(box);
-  const series = (key) => c.runs.map((r, i) => ({ label: `${r.renderer} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
+  const series = (key) => c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
   barChart(box, { id: 'compare-pass-bytes', title: 'Bytes per frame by pass', labels, labelHeader: 'Pass', logSwitch: true, format: fmt.bytes, datasets: series('bytes') });
   barChart(box, { id: 'compare-pass-ms', title: 'GPU time by pass', labels, labelHeader: 'Pass', format: fmt.ms, datasets: series('gpu_ms') });
   page.append(h('details', {}, h('summary', {}, 'Per pass: values, deltas and ratios'),
@@ -85,23 +85,25 @@ function perPass(page, c) {
     ]), 'passes')));
 }
 
-// For each compared run's renderer: the newest run at every resolution with
-// the same scene, device, counting mode and light count.
+// For each compared run's variant: the newest run at every resolution with
+// the same scene, device, counting mode and light count. Variants of one
+// renderer are series of their own.
 async function scalingSeries(runs, signal) {
-  const byKey = new Map();  // one series per renderer, counting mode, scene, device, lights
+  const byKey = new Map();  // one series per variant, counting mode, scene, device, lights
   for (const run of runs) {
-    const key = `${run.renderer}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}`;
+    const key = `${fmt.variant(run)}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}`;
     if (!byKey.has(key)) byKey.set(key, run);
   }
   return Promise.all([...byKey.values()].map(async (run) => {
-    const { runs: found } = await get('/runs' + queryString({ renderer: run.renderer, scene: run.scene, device: run.device_id, limit: 1000 }), signal);
+    const filter = run.variant ? { variant: run.variant } : { renderer: run.renderer };
+    const { runs: found } = await get('/runs' + queryString({ ...filter, scene: run.scene, device: run.device_id, limit: 1000 }), signal);
     const newest = new Map();  // "WxH" -> run; the list is newest first
     for (const r of found) {
       if (r.counting !== run.counting || r.lights !== run.lights || JSON.stringify(r.scene_params) !== JSON.stringify(run.scene_params)) continue;
       if (!newest.has(fmt.resolution(r))) newest.set(fmt.resolution(r), r);
     }
     const points = [...newest.values()].sort((a, b) => a.width * a.height - b.width * b.height);
-    return { label: `${run.renderer}${run.counting !== 'exact' ? ` (${run.counting})` : ''}`, points };
+    return { label: `${fmt.variant(run)}${run.counting !== 'exact' ? ` (${run.counting})` : ''}`, points };
   }));
 }
 
@@ -130,7 +132,7 @@ async function scaling(page, c, signal) {
 // (/api/repeats lists groups of two or more), or null when it was captured once.
 async function repeatGroups(runs, signal) {
   return Promise.all(runs.map(async (run) => {
-    const { groups } = await get('/repeats' + queryString({ renderer: run.renderer, scene: run.scene, device: run.device_id, width: run.width, height: run.height }), signal);
+    const { groups } = await get('/repeats' + queryString({ ...(run.variant ? { variant: run.variant } : { renderer: run.renderer }), scene: run.scene, device: run.device_id, width: run.width, height: run.height }), signal);
     return groups.find((g) => g.runs.includes(run.id)) || null;
   }));
 }
@@ -164,7 +166,7 @@ async function repeats(page, c, signal) {
   page.append(box);
   barChart(box, {
     id: 'compare-repeats-ms', title: 'Frame time across repeated captures', caption: 'median of the captures, whiskers q1–q3; runs captured once have no bar',
-    labels: c.runs.map((r) => `${r.renderer} #${r.id}`), labelHeader: 'Run', format: fmt.ms,
+    labels: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), labelHeader: 'Run', format: fmt.ms,
     datasets: [{ label: 'median over captures', data: groups.map((g) => (g ? g.frame_ms.median : null)), whiskers: groups.map((g) => (g ? [g.frame_ms.q1, g.frame_ms.q3] : null)) }],
   });
   page.append(table);

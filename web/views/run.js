@@ -129,10 +129,31 @@ function passTable(run, iqr) {
   ], run.passes, { 'aria-label': 'Passes', dataset: { table: 'passes' } });
 }
 
-function imageErrorText(s) {
-  const e = s.image_error;
+function errorText(e) {
   if (!e) return 'not compared';
   return e.identical ? `identical to ${e.against}` : `${fmt.psnr(e.psnr)} vs ${e.against}`;
+}
+const imageErrorText = (s) => errorText(s.image_error);
+
+// "barycentrics=float32, material_selection=uniform"; "" for none.
+function optionsText(options) {
+  return Object.entries(options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`).join(', ');
+}
+
+// A sample's technique measurements, shown without knowing the techniques:
+// a table of key and value per technique, nested values as JSON.
+function extrasSection(samples) {
+  const withExtras = samples.filter((s) => s.extras && Object.keys(s.extras).length);
+  if (!withExtras.length) return null;
+  return h('div', { dataset: { extras: '' } }, withExtras.map((s) => Object.entries(s.extras).map(([technique, value]) =>
+    h('section', { dataset: { extrasSample: String(s.camera_index), technique } },
+      h('h3', {}, `Camera ${s.camera_index}: ${technique}`),
+      value !== null && typeof value === 'object' && !Array.isArray(value)
+        ? table([
+          { label: 'Measure', value: ([k]) => k },
+          { label: 'Value', className: 'num', value: ([, v]) => (typeof v === 'number' ? String(v) : h('pre', {}, JSON.stringify(v, null, 2))) },
+        ], Object.entries(value), { 'aria-label': `${technique} of camera ${s.camera_index}` })
+        : h('pre', {}, JSON.stringify(value, null, 2))))));
 }
 
 function gallery(run, samples, signal) {
@@ -160,6 +181,9 @@ function sampleTable(samples) {
     { label: 'Read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
     { label: 'Written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
     { label: 'Image vs forward', className: 'num', value: imageErrorText },
+    ...(samples.some((s) => s.variant_error)
+      ? [{ label: 'Image vs reference variant', className: 'num', value: (s) => h('span', { dataset: { variantError: s.variant_error ? String(s.variant_error.psnr) : 'none' } }, errorText(s.variant_error)) }]
+      : []),
   ], samples, { 'aria-label': 'Samples', dataset: { table: 'samples' } });
 }
 
@@ -218,8 +242,9 @@ export async function render(page, { params, signal }) {
   const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
 
   page.append(
-    h('h1', {}, `Run #${run.id}: ${run.renderer} · ${run.scene} · ${fmt.resolution(run)}`),
+    h('h1', {}, `Run #${run.id}: ${fmt.variant(run)} · ${run.scene} · ${fmt.resolution(run)}`),
     h('ul', { class: 'meta' },
+      optionsText(run.options) ? h('li', { dataset: { options: '' } }, `options: ${optionsText(run.options)}`) : null,
       h('li', {}, run.device),
       h('li', {}, `counting ${run.counting}`),
       h('li', {}, `${run.lights} lights`),
@@ -253,5 +278,7 @@ export async function render(page, { params, signal }) {
 
   page.append(h('h2', {}, 'Screenshots'), gallery(run, samples, signal));
   page.append(h('h2', {}, 'Samples'), sampleTable(samples));
+  const extras = extrasSection(samples);
+  if (extras) page.append(h('h2', {}, 'Technique measurements'), extras);
   page.append(h('details', {}, h('summary', {}, h('h2', { class: 'inline' }, 'Resources')), resourceTable(run)));
 }

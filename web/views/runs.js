@@ -13,7 +13,7 @@ const kPageSize = 100;
 const kColumns = [
   { key: 'id', label: 'Run', sort: (r) => r.id, cell: (r) => h('a', { href: `#/runs/${r.id}` }, `#${r.id}`) },
   { key: 'created_at', label: 'Date (UTC)', sort: (r) => r.created_at, cell: (r) => fmt.date(r.created_at) },
-  { key: 'renderer', label: 'Renderer', sort: (r) => r.renderer, cell: (r) => r.renderer },
+  { key: 'renderer', label: 'Renderer', sort: (r) => fmt.variant(r), cell: (r) => fmt.variant(r) },
   { key: 'scene', label: 'Scene', sort: (r) => r.scene, cell: (r) => r.scene },
   { key: 'resolution', label: 'Resolution', sort: (r) => r.width * r.height, cell: fmt.resolution, num: true },
   { key: 'device', label: 'Device', sort: (r) => r.device, cell: (r) => h('span', { class: 'clip', title: r.device }, r.device) },
