@@ -32,6 +32,10 @@ RendererVariant RendererVariant::reference() const {
   RendererVariant out{name, nlohmann::json::object()};
   for (const auto& def : renderers::optionDefs()) {
     if (!options.contains(def.name)) continue;
+    if (def.parameter) {
+      out.options[def.name] = options[def.name];
+      continue;
+    }
     const nlohmann::json& value = def.reference.is_null() ? def.defaultValue() : def.reference;
     if (value != def.defaultValue()) out.options[def.name] = value;
   }

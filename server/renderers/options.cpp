@@ -96,6 +96,7 @@ std::vector<OptionDef> makeDefs() {
                   "the bilinear blur pairs every non-centre weight",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.bloom.taps = v.get<uint32_t>(); }});
+  defs.back().parameter = true;
   defs.push_back({"bloom_threshold",
                   everyRenderer,
                   {},
@@ -104,6 +105,7 @@ std::vector<OptionDef> makeDefs() {
                   "HDR luminance above which a pixel blooms (the excess, hue kept, goes to the bloom target)",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.bloom.threshold = v.get<float>(); }});
+  defs.back().parameter = true;
   return defs;
 }
 
@@ -179,6 +181,7 @@ json optionDefsJson() {
               {"renderers", def.renderers},
               {"default", def.defaultValue()},
               {"reference", def.reference.is_null() ? def.defaultValue() : def.reference},
+              {"parameter", def.parameter},
               {"description", def.description}};
     if (def.range.empty()) {
       d["values"] = def.values;

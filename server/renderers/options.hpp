@@ -32,6 +32,11 @@ struct OptionDef {
   // (e.g. the naive blur for bloom); null: the default.
   nlohmann::json reference;
   std::function<void(RendererOptions&, const nlohmann::json&)> apply;
+  // A parameter of a technique (bloom_taps, a map size) rather than the
+  // choice of technique: the reference variant keeps the variant's value, so
+  // that bloom=separable bloom_taps=13 is compared with bloom=naive
+  // bloom_taps=13, not with the naive blur at the default 9 taps.
+  bool parameter = false;
 
   const nlohmann::json& defaultValue() const { return range.empty() ? values.front() : rangeDefault; }
 };

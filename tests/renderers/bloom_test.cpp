@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "capture/image.hpp"
+#include "capture/spec.hpp"
 #include "render_fixture.hpp"
 #include "renderers/bloom.hpp"
 #include "renderers/options.hpp"
@@ -154,8 +155,18 @@ TEST(BloomOptions, BadValuesAreRejectedNamingTheOption) {
   for (const auto& def : optionDefs()) {
     if (def.name == "bloom") {
       EXPECT_EQ(def.reference, "naive");
+      EXPECT_FALSE(def.parameter);
+    }
+    if (def.name == "bloom_taps" || def.name == "bloom_threshold") {
+      EXPECT_TRUE(def.parameter) << def.name;
     }
   }
+  // The reference variant swaps the blur for the naive one and keeps the
+  // kernel's parameters: N taps are compared with N taps.
+  const capture::RendererVariant separable13{"deferred", {{"bloom", "separable"}, {"bloom_taps", 13}}};
+  EXPECT_EQ(separable13.reference().options, nlohmann::json({{"bloom", "naive"}, {"bloom_taps", 13}}));
+  const capture::RendererVariant taps13{"deferred", {{"bloom", "naive"}, {"bloom_taps", 13}}};
+  EXPECT_EQ(taps13.reference(), taps13);  // the reference itself
   // Every renderer takes bloom (a post chain of the shared base).
   for (const auto& name : rendererNames()) EXPECT_TRUE(canonicalOptions(name, {{"bloom", "naive"}}).ok()) << name;
 
