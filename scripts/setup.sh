@@ -9,7 +9,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-tools
   glslang-dev glslang-tools spirv-tools spirv-headers
   libglm-dev libcpp-httplib-dev nlohmann-json3-dev libsqlite3-dev libstb-dev
-  libtinygltf-dev libcli11-dev libgtest-dev
+  libtinygltf-dev libcli11-dev libgtest-dev libmeshoptimizer-dev
   chromium
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.

@@ -27,8 +27,14 @@ layout(std430, set = kSetGeometry, binding = kBindingDraws) readonly buffer Draw
 #ifdef TALLY_MATERIALS
 layout(std430, set = kSetGeometry, binding = kBindingMaterials) readonly buffer MaterialBuffer { Material materials[]; };
 #endif
+#ifdef TALLY_TBN_QUATERNION
+#include "tbn.h"
+#define TALLY_VERTEX PackedVertex  // tangent_frame = quaternion: the packed vertex buffer
+#else
+#define TALLY_VERTEX Vertex
+#endif
 #ifdef TALLY_MESH
-layout(std430, set = kSetGeometry, binding = kBindingVertices) readonly buffer VertexBuffer { Vertex vertices[]; };
+layout(std430, set = kSetGeometry, binding = kBindingVertices) readonly buffer VertexBuffer { TALLY_VERTEX vertices[]; };
 layout(std430, set = kSetGeometry, binding = kBindingIndices) readonly buffer IndexBuffer { uint indices[]; };
 #endif
 
@@ -131,6 +137,18 @@ Interpolated interpolateVertices(Vertex v0, Vertex v1, Vertex v2, vec3 b, mat4 m
   return a;
 }
 
+#ifdef TALLY_TBN_QUATERNION
+vec2 uvOf(PackedVertex v) { return vec2(v.uv[0], v.uv[1]); }
+Vertex unpackVertex(PackedVertex p) {
+  TangentFrame f = decodeTangentFrame(p.tbn);
+  return Vertex(p.position, float[3](f.normal.x, f.normal.y, f.normal.z),
+                float[4](f.tangent.x, f.tangent.y, f.tangent.z, f.tangent.w), p.uv);
+}
+Interpolated interpolateVertices(PackedVertex p0, PackedVertex p1, PackedVertex p2, vec3 b, mat4 model) {
+  return interpolateVertices(unpackVertex(p0), unpackVertex(p1), unpackVertex(p2), b, model);
+}
+#endif
+
 #ifdef TALLY_MESH
 // Vertex ids of triangle `triangle` (gl_PrimitiveID) of a draw.
 uvec3 fetchTriangle(uint firstIndex, int vertexOffset, uint triangle) {
@@ -152,10 +170,16 @@ float attenuation(float d, float radius) {
 }
 
 #ifdef TALLY_LIGHTS
+#ifdef TALLY_SHADOWS
+#include "shadow.h"
+#endif
 vec3 shade(Surface s, vec3 position) {
   vec3 v = normalize(camera.position.xyz - position);
   float shininess = shininessFromRoughness(s.roughness);
   vec3 color = lighting.ambient * s.ambient * s.diffuse;
+#ifdef TALLY_SHADOWS
+  color += sunTerm(s, position, v, shininess);  // the shadowed sun (shadow.h)
+#endif
   uint count = min(lighting.lightCount, kMaxLights);
   for (uint i = 0u; i < count; ++i) {
     PointLight light = lights[i];

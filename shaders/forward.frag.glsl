@@ -5,7 +5,19 @@
 // (so overshading in this pass costs maps and lights).
 #define TALLY_LIGHTS
 #define TALLY_MATERIALS
+#ifdef TALLY_DENSITY
+// output=density: the triangle's vertices by gl_PrimitiveID (density.h).
+#define TALLY_DRAWS
+#define TALLY_MESH
+#ifdef TALLY_DENSITY_QUADS
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_quad : require
+#endif
+#endif
 #include "common.h"
+#ifdef TALLY_DENSITY
+#include "density.h"
+#endif
 
 layout(early_fragment_tests) in;
 
@@ -30,13 +42,29 @@ layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 // outColor's alpha 1 replaces as without blending.
 layout(location = kOutCount) out vec4 outCount;
 #endif
+#ifdef TALLY_DENSITY
+// output=density: quad lanes (densityQuadLanes) into the R32_SFLOAT
+// "density.lanes" target, additive as outCount.
+layout(location = kOutCount + 1) out vec4 outLanes;
+#endif
 
 void main() {
+#ifdef TALLY_DENSITY
+#ifdef TALLY_DENSITY_QUADS
+  outLanes = vec4(densityQuadLanes(), 0.0, 0.0, 0.0);
+#else
+  outLanes = vec4(0.0);  // no quad operations: frameExtras() estimates lanes on the CPU
+#endif
+#endif
   Surface s = surfaceFromMaps(texture(diffuseMap, inUv), texture(ambientMap, inUv),
                               texture(specularMap, inUv), texture(roughnessMap, inUv),
                               texture(normalMap, inUv), inNormal, inTangent,
                               materials[push.materialIndex].baseColor, materials[push.materialIndex].roughnessFactor);
+#ifdef TALLY_DENSITY
+  outColor = vec4(densityColor(densityClass(push.drawIndex, uint(gl_PrimitiveID)), shade(s, inPosition)), 1.0);
+#else
   outColor = vec4(shade(s, inPosition), 1.0);
+#endif
 #ifdef TALLY_COUNT_FRAGMENTS
   outCount = vec4(1.0, 0.0, 0.0, 0.0);
 #endif

@@ -7,6 +7,38 @@
 #define TALLY_LIGHTS
 #include "common.h"
 
+#ifdef TALLY_MSAA
+// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/msaa.hpp): the
+// targets are multisampled. Every sample's depth is fetched; a covered sample
+// (depth < 1, the clear value is the far plane) has its three G-buffer texels
+// fetched and is shaded (at the pixel centre's x, y with the sample's depth);
+// the covered samples' mean is the pixel. No covered sample: discard, so the
+// stencil REPLACE of the pass marks only geometry pixels (late tests: no
+// early_fragment_tests here, or discarded pixels would be marked too).
+layout(set = kSetPassInput, binding = kBindingDepthTarget) uniform sampler2DMS depthTarget;
+layout(set = kSetPassInput, binding = kBindingNormalTarget) uniform sampler2DMS normalTarget;
+layout(set = kSetPassInput, binding = kBindingDiffuseTarget) uniform sampler2DMS diffuseTarget;
+layout(set = kSetPassInput, binding = kBindingSpecularTarget) uniform sampler2DMS specularTarget;
+
+layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
+
+void main() {
+  ivec2 pixel = ivec2(gl_FragCoord.xy);
+  vec3 sum = vec3(0.0);
+  int covered = 0;
+  for (int i = 0; i < TALLY_MSAA; ++i) {
+    float depth = texelFetch(depthTarget, pixel, i).r;
+    if (depth < 1.0) {
+      Surface s = decodeGBuffer(texelFetch(normalTarget, pixel, i), texelFetch(diffuseTarget, pixel, i),
+                                texelFetch(specularTarget, pixel, i));
+      sum += shade(s, worldFromDepth(gl_FragCoord.xy, depth));
+      ++covered;
+    }
+  }
+  if (covered == 0) discard;
+  outColor = vec4(sum / float(covered), 1.0);
+}
+#else
 layout(early_fragment_tests) in;
 
 layout(set = kSetPassInput, binding = kBindingDepthTarget) uniform sampler2D depthTarget;  // D32 depth aspect
@@ -23,3 +55,4 @@ void main() {
                             texelFetch(specularTarget, pixel, 0));
   outColor = vec4(shade(s, worldFromDepth(gl_FragCoord.xy, depth)), 1.0);
 }
+#endif

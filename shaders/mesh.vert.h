@@ -4,8 +4,12 @@
 #include "common.h"
 
 layout(location = kAttribPosition) in vec3 inPosition;
+#ifdef TALLY_TBN_QUATERNION
+layout(location = kAttribNormal) in uint inTbn;  // R32_UINT: the 24-bit frame (tbn.h)
+#else
 layout(location = kAttribNormal) in vec3 inNormal;
 layout(location = kAttribTangent) in vec4 inTangent;
+#endif
 layout(location = kAttribUv) in vec2 inUv;
 
 layout(push_constant) uniform PushBlock { DrawPush push; };
@@ -18,6 +22,11 @@ layout(location = 3) out vec2 outUv;
 invariant gl_Position;
 
 void main() {
+#ifdef TALLY_TBN_QUATERNION
+  TangentFrame frame = decodeTangentFrame(inTbn);
+  vec3 inNormal = frame.normal;
+  vec4 inTangent = frame.tangent;
+#endif
   mat4 model = draws[push.drawIndex].model;
   vec4 world = model * vec4(inPosition, 1.0);
   gl_Position = camera.viewProj * world;

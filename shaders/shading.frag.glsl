@@ -13,10 +13,22 @@
 #include "common.h"
 #include "visibility_encoding.h"
 
+#ifdef TALLY_MSAA
+// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/msaa.hpp): the
+// visibility targets are multisampled. Every sample's id is fetched; each
+// distinct triangle among the covered samples (id != kVisibilityClear) is
+// shaded once (with the texels of its first sample), weighted by its samples;
+// the pixel is the covered samples' mean. No covered sample: discard, so the
+// stencil REPLACE of the pass marks only geometry pixels (late tests: no
+// early_fragment_tests here, or discarded pixels would be marked too).
+layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2DMS visibilityTarget;
+layout(set = kSetPassInput, binding = kBindingUvDerivativeTarget) uniform usampler2DMS uvDerivativeTarget;
+#else
 layout(early_fragment_tests) in;
 
 layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2D visibilityTarget;
 layout(set = kSetPassInput, binding = kBindingUvDerivativeTarget) uniform usampler2D uvDerivativeTarget;
+#endif
 
 // Every map of the scene; the material is known only per pixel, so the index
 // is non-uniform (shaderSampledImageArrayNonUniformIndexing: NVIDIA has it).
@@ -29,58 +41,37 @@ layout(set = kSetPassInput, binding = kBindingUvDerivativeTarget) uniform usampl
 // unless dynamically uniform: what the driver does is what is measured).
 // TALLY_SELECT_FIRST_LANE: every lane takes the first active lane's index or
 // layer, a model of a driver that scalarises the index.
-#ifdef TALLY_SELECT_FIRST_LANE
-#extension GL_KHR_shader_subgroup_ballot : require
-#endif
-#ifdef TALLY_MAP_ARRAYS
-// Fallback without descriptor indexing (lavapipe), defined by the renderer:
-// one sampler2DArray per map kind, Material::maps[k] is the layer. The
-// selection stays per pixel and needs no non-uniform descriptor index.
-layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2DArray diffuseMaps;
-layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2DArray ambientMaps;
-layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2DArray specularMaps;
-layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2DArray roughnessMaps;
-layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2DArray normalMaps;
-#ifdef TALLY_SELECT_FIRST_LANE
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(subgroupBroadcastFirst(maps[kind]))), dx, dy)
-#else
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(maps[kind])), dx, dy)
-#endif
-#else
-layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
-#if defined(TALLY_SELECT_FIRST_LANE)
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[subgroupBroadcastFirst(maps[kind])], a.uv, dx, dy)
-#elif defined(TALLY_SELECT_UNIFORM)
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[maps[kind]], a.uv, dx, dy)
-#else
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[nonuniformEXT(maps[kind])], a.uv, dx, dy)
-#endif
-#endif
+#define TALLY_SHADE_FAT
+#include "visbuffer_shade.h"
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 
+#ifdef TALLY_MSAA
 void main() {
   ivec2 pixel = ivec2(gl_FragCoord.xy);
-  uvec4 visibility = texelFetch(visibilityTarget, pixel, 0);
-  uvec4 uvDerivatives = texelFetch(uvDerivativeTarget, pixel, 0);
-  uint drawId = visibilityDrawId(visibility.x);
-  vec2 b12 = decodeBarycentrics(visibility);
-
-  uvec3 v = fetchTriangle(draws[drawId].firstIndex, draws[drawId].vertexOffset,
-                          visibilityTriangleId(visibility.x));
-  Interpolated a = interpolateVertices(vertices[v.x], vertices[v.y], vertices[v.z],
-                                       vec3(1.0 - b12.x - b12.y, b12), draws[drawId].model);
-  uint material = draws[drawId].materialIndex;
-  uint maps[kMapCount] = materials[material].maps;
-  vec2 dx, dy;
-  decodeUvDerivatives(uvDerivatives, dx, dy);
-
-  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
-                              SAMPLE_MAP(ambientMaps, kMapAmbient),
-                              SAMPLE_MAP(specularMaps, kMapSpecular),
-                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
-                              SAMPLE_MAP(normalMaps, kMapNormal),
-                              a.normal, a.tangent, materials[material].baseColor,
-                              materials[material].roughnessFactor);
-  outColor = vec4(shade(s, a.position), 1.0);
+  uvec4 visibility[TALLY_MSAA];
+  for (int i = 0; i < TALLY_MSAA; ++i) visibility[i] = texelFetch(visibilityTarget, pixel, i);
+  vec3 sum = vec3(0.0);
+  int covered = 0;
+  for (int i = 0; i < TALLY_MSAA; ++i) {
+    if (visibility[i].x == kVisibilityClear) continue;
+    ++covered;
+    int weight = 0;
+    bool first = true;
+    for (int j = 0; j < TALLY_MSAA; ++j) {
+      if (visibility[j].x == visibility[i].x) {
+        ++weight;
+        if (j < i) first = false;
+      }
+    }
+    if (first) sum += float(weight) * shadeTriangle(visibility[i], texelFetch(uvDerivativeTarget, pixel, i));
+  }
+  if (covered == 0) discard;
+  outColor = vec4(sum / float(covered), 1.0);
 }
+#else
+void main() {
+  ivec2 pixel = ivec2(gl_FragCoord.xy);
+  outColor = vec4(shadeTriangle(texelFetch(visibilityTarget, pixel, 0), texelFetch(uvDerivativeTarget, pixel, 0)), 1.0);
+}
+#endif

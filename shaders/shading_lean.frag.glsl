@@ -12,70 +12,51 @@
 #define TALLY_MESH
 #include "common.h"
 
+#ifdef TALLY_MSAA
+// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/msaa.hpp): the
+// visibility targets are multisampled. Every sample's id is fetched; each
+// distinct triangle among the covered samples (id != kVisibilityClear) is
+// shaded once (with the texels of its first sample), weighted by its samples;
+// the pixel is the covered samples' mean. No covered sample: discard, so the
+// stencil REPLACE of the pass marks only geometry pixels (late tests: no
+// early_fragment_tests here, or discarded pixels would be marked too).
+layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2DMS visibilityTarget;
+#else
 layout(early_fragment_tests) in;
 
 layout(set = kSetPassInput, binding = kBindingVisibilityTarget) uniform usampler2D visibilityTarget;  // R32_UINT
+#endif
 
-// See shading.frag: non-uniform indexing, or map arrays (TALLY_MAP_ARRAYS).
-// Material selection (RendererOptions::materialSelection), defined by the
-// renderer; by default the per-pixel selection above. TALLY_SELECT_UNIFORM:
-// the index without nonuniformEXT, as the founding study wrote it (undefined
-// unless dynamically uniform: what the driver does is what is measured).
-// TALLY_SELECT_FIRST_LANE: every lane takes the first active lane's index or
-// layer, a model of a driver that scalarises the index.
-#ifdef TALLY_SELECT_FIRST_LANE
-#extension GL_KHR_shader_subgroup_ballot : require
-#endif
-#ifdef TALLY_MAP_ARRAYS
-// Fallback without descriptor indexing (lavapipe), defined by the renderer:
-// one sampler2DArray per map kind, Material::maps[k] is the layer. The
-// selection stays per pixel and needs no non-uniform descriptor index.
-layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2DArray diffuseMaps;
-layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2DArray ambientMaps;
-layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2DArray specularMaps;
-layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2DArray roughnessMaps;
-layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2DArray normalMaps;
-#ifdef TALLY_SELECT_FIRST_LANE
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(subgroupBroadcastFirst(maps[kind]))), dx, dy)
-#else
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(kindMaps, vec3(a.uv, float(maps[kind])), dx, dy)
-#endif
-#else
-layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
-#if defined(TALLY_SELECT_FIRST_LANE)
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[subgroupBroadcastFirst(maps[kind])], a.uv, dx, dy)
-#elif defined(TALLY_SELECT_UNIFORM)
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[maps[kind]], a.uv, dx, dy)
-#else
-#define SAMPLE_MAP(kindMaps, kind) textureGrad(materialMaps[nonuniformEXT(maps[kind])], a.uv, dx, dy)
-#endif
-#endif
+#define TALLY_SHADE_LEAN
+#include "visbuffer_shade.h"
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 
+#ifdef TALLY_MSAA
 void main() {
-  uint id = texelFetch(visibilityTarget, ivec2(gl_FragCoord.xy), 0).r;
-  uint drawId = visibilityDrawId(id);
-  mat4 model = draws[drawId].model;
-  uvec3 v = fetchTriangle(draws[drawId].firstIndex, draws[drawId].vertexOffset, visibilityTriangleId(id));
-  Vertex v0 = vertices[v.x], v1 = vertices[v.y], v2 = vertices[v.z];
-
-  mat4 clipFromObject = camera.viewProj * model;
-  Barycentrics b = barycentricsFromClip(clipFromObject * vec4(toVec3(v0.position), 1.0),
-                                        clipFromObject * vec4(toVec3(v1.position), 1.0),
-                                        clipFromObject * vec4(toVec3(v2.position), 1.0), gl_FragCoord.xy);
-  Interpolated a = interpolateVertices(v0, v1, v2, b.lambda, model);
-  mat3x2 uvs = mat3x2(uvOf(v0), uvOf(v1), uvOf(v2));
-  vec2 dx = uvs * b.ddx, dy = uvs * b.ddy;
-
-  uint material = draws[drawId].materialIndex;
-  uint maps[kMapCount] = materials[material].maps;
-  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
-                              SAMPLE_MAP(ambientMaps, kMapAmbient),
-                              SAMPLE_MAP(specularMaps, kMapSpecular),
-                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
-                              SAMPLE_MAP(normalMaps, kMapNormal),
-                              a.normal, a.tangent, materials[material].baseColor,
-                              materials[material].roughnessFactor);
-  outColor = vec4(shade(s, a.position), 1.0);
+  ivec2 pixel = ivec2(gl_FragCoord.xy);
+  uint ids[TALLY_MSAA];
+  for (int i = 0; i < TALLY_MSAA; ++i) ids[i] = texelFetch(visibilityTarget, pixel, i).r;
+  vec3 sum = vec3(0.0);
+  int covered = 0;
+  for (int i = 0; i < TALLY_MSAA; ++i) {
+    if (ids[i] == kVisibilityClear) continue;
+    ++covered;
+    int weight = 0;
+    bool first = true;
+    for (int j = 0; j < TALLY_MSAA; ++j) {
+      if (ids[j] == ids[i]) {
+        ++weight;
+        if (j < i) first = false;
+      }
+    }
+    if (first) sum += float(weight) * shadeTriangle(ids[i], gl_FragCoord.xy);
+  }
+  if (covered == 0) discard;
+  outColor = vec4(sum / float(covered), 1.0);
 }
+#else
+void main() {
+  outColor = vec4(shadeTriangle(texelFetch(visibilityTarget, ivec2(gl_FragCoord.xy), 0).r, gl_FragCoord.xy), 1.0);
+}
+#endif

@@ -85,6 +85,8 @@ TALLY_CONST(uint, kBindingSpecularTarget, 3u);  // RGBA8
 // Set 3, visibility shading
 TALLY_CONST(uint, kBindingVisibilityTarget, 0u);     // fat: R32G32_UINT, lean: R32_UINT
 TALLY_CONST(uint, kBindingUvDerivativeTarget, 1u);   // fat only: R32G32_UINT
+// Set 3, shading=compute (lighting.comp, shading*.comp): "hdr" as a storage image
+TALLY_CONST(uint, kBindingHdrImage, 4u);  // RGBA16F, imageStore in layout GENERAL
 // Set 3, tonemap
 TALLY_CONST(uint, kBindingHdrTarget, 0u);  // RGBA16F
 TALLY_CONST(uint, kBindingBloomTarget, 1u);  // RGBA16F, the blurred bloom (only with bloom on)

@@ -4,7 +4,8 @@
 
 namespace tally::api {
 
-void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames, nlohmann::json options) {
+void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames, nlohmann::json options,
+                      std::vector<std::string> workloadNames) {
   router.get("/api/health", [](const Request&) {
     return Response::ok(
         {{"status", "ok"}, {"version", protocol::kVersion}, {"api_version", protocol::kApiVersion}});
@@ -13,8 +14,9 @@ void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames, nl
   auto doc = std::make_shared<const nlohmann::json>(nlohmann::json::parse(openApiDocument()));
   router.get("/api/openapi.json", [doc](const Request&) { return Response::ok(*doc); });
   if (!rendererNames.empty()) {
-    router.get("/api/renderers", [names = std::move(rendererNames), options = std::move(options)](const Request&) {
-      return Response::ok({{"renderers", names}, {"options", options}});
+    router.get("/api/renderers", [names = std::move(rendererNames), options = std::move(options),
+                                  workloads = std::move(workloadNames)](const Request&) {
+      return Response::ok({{"renderers", names}, {"options", options}, {"workloads", workloads}});
     });
   }
 }

@@ -38,6 +38,7 @@ std::string sceneName(const json& spec, const scenes::Scene& scene) {
 struct Line {
   std::string pass, resource, source;
   bool write = false;
+  bool onChip = false;  // Access::onChip (the tile-memory model)
   std::vector<double> counts, bytes;
 };
 
@@ -51,6 +52,8 @@ struct SampleMeasure {
   std::map<std::pair<std::string, std::string>, Line> lines;  // key: pass + "\x1f" + resource + direction
   std::vector<std::string> lineOrder;
   std::map<std::string, std::vector<double>> fragmentInvocations, statistic, instrumentedMs, plainMs;
+  // Passes that dispatch compute work only.
+  std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
   std::vector<double> frameMs, instrumentedFrameMs;
 };
 
@@ -62,6 +65,12 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
     }
     m.fragmentInvocations[pass.name].push_back(double(pass.fragmentInvocations));
     if (pass.fragmentInvocationsStatistic >= 0) m.statistic[pass.name].push_back(double(pass.fragmentInvocationsStatistic));
+    if (pass.computeInvocations > 0 || pass.computeInvocationsStatistic > 0) {
+      m.computeInvocations[pass.name].push_back(double(pass.computeInvocations));
+      if (pass.computeInvocationsStatistic >= 0) {
+        m.computeStatistic[pass.name].push_back(double(pass.computeInvocationsStatistic));
+      }
+    }
     m.instrumentedMs[pass.name].push_back(pass.gpuMs);
     total += pass.gpuMs;
     for (const auto& a : pass.accesses) {
@@ -72,6 +81,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
         it->second.resource = a.resource;
         it->second.write = a.write;
         it->second.source = a.source;
+        it->second.onChip = a.onChip;
       }
       it->second.counts.push_back(double(a.count));
       it->second.bytes.push_back(double(a.bytes));
@@ -93,6 +103,7 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
   std::map<std::string, const renderers::ResourceInfo*> byName;
   for (const auto& r : resources) byName[r.name] = &r;
   json passes = json::array();
+  double sampleBytes = 0, sampleDram = 0;
   for (const auto& name : m.passOrder) {
     Spread plain = spreadOf(m.plainMs.count(name) ? m.plainMs.at(name) : std::vector<double>{});
     Spread instrumented = spreadOf(m.instrumentedMs.at(name));
@@ -105,7 +116,14 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
         {"fragment_invocations", spreadOf(m.fragmentInvocations.at(name)).mean},
     };
     if (m.statistic.count(name)) pass["fragment_invocations_statistic"] = spreadOf(m.statistic.at(name)).mean;
+    if (m.computeInvocations.count(name)) {
+      pass["compute_invocations"] = spreadOf(m.computeInvocations.at(name)).mean;
+    }
+    if (m.computeStatistic.count(name)) {
+      pass["compute_invocations_statistic"] = spreadOf(m.computeStatistic.at(name)).mean;
+    }
     json lines = json::array();
+    double passBytes = 0, passDram = 0;
     for (const auto& [key, line] : m.lines) {
       if (line.pass != name) continue;
       auto info = byName.find(line.resource);
@@ -119,10 +137,18 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
           {"bytes", bytes.mean},
           {"count_spread", toJson(count)},
           {"source", line.source},
+          // The tile-memory model (docs/measurement.md, "Byte models"): 0 DRAM bytes.
+          {"on_chip", line.onChip},
       };
+      passBytes += bytes.mean;
+      if (!line.onChip) passDram += bytes.mean;
       lines.push_back(std::move(r));
     }
     pass["resources"] = std::move(lines);
+    pass["bytes"] = passBytes;                 // the immediate-mode model: every line
+    pass["bytes_tile_model"] = passDram;       // the tile-memory model: lines not on chip
+    sampleBytes += passBytes;
+    sampleDram += passDram;
     passes.push_back(std::move(pass));
   }
   Spread frame = spreadOf(m.frameMs), instrumentedFrame = spreadOf(m.instrumentedFrameMs);
@@ -132,6 +158,8 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
       {"frame_ms_spread", toJson(frame)},
       {"frame_ms_instrumented", instrumentedFrame.median},
       {"overhead_ratio", frame.median > 0 ? instrumentedFrame.median / frame.median : 0.0},
+      {"bytes", sampleBytes},
+      {"bytes_tile_model", sampleDram},
       {"passes", std::move(passes)},
   };
 }
@@ -146,10 +174,12 @@ json resourcesJson(const std::vector<renderers::ResourceInfo>& resources) {
                    {"element_bytes", r.elementBytes},
                    {"width", r.width},
                    {"height", r.height},
+                   {"samples", r.samples},
                    {"allocation_bytes", r.allocationBytes},
-                   // What the format alone implies (width x height x element bytes).
-                   {"format_bytes", uint64_t{r.width} * r.height * r.elementBytes},
-                   {"usage", r.usage}});
+                   // What the format alone implies (width x height x samples x element bytes).
+                   {"format_bytes", uint64_t{r.width} * r.height * r.samples * r.elementBytes},
+                   {"usage", r.usage},
+                   {"memory", r.memory}});
     bool target = r.kind == renderers::ResourceKind::Attachment || r.kind == renderers::ResourceKind::Depth;
     if (target) targets += r.allocationBytes;
   }
@@ -277,7 +307,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
     sample["sky_fraction_estimate"] = camera.skyFraction;
     sample["extras"] = extras.is_object() ? std::move(extras) : json::object();
-    if (c < references.forward.size()) {
+    // Workloads draw no scene: no image_error against forward (variant_error only).
+    if (c < references.forward.size() && !renderers::isWorkload(variant.name)) {
       auto error = compareImages(image, references.forward[c], res.width, res.height);
       if (error) sample["image_error"] = errorJson("forward", *error);
     }
@@ -356,7 +387,11 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
     for (const auto& res : spec.resolutions) {
       // The reference image per camera: forward, uninstrumented.
       References references;
-      references.forward = referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec);
+      // None where every variant is a workload (they are not compared with forward).
+      if (std::any_of(spec.renderers.begin(), spec.renderers.end(),
+                      [](const RendererVariant& v) { return !renderers::isWorkload(v.name); })) {
+        references.forward = referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec);
+      }
 
       for (const auto& variant : spec.renderers) {
         const std::string& rendererName = variant.name;

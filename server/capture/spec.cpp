@@ -31,7 +31,15 @@ std::string RendererVariant::label() const { return renderers::variantLabel(name
 RendererVariant RendererVariant::reference() const {
   RendererVariant out{name, nlohmann::json::object()};
   for (const auto& def : renderers::optionDefs()) {
-    if (!options.contains(def.name)) continue;
+    if (!options.contains(def.name)) {
+      // An unset option joins the reference with its reference value where
+      // the technique it belongs to is on (OptionDef::referenceWith).
+      if (!def.referenceWith.empty() && options.contains(def.referenceWith) && !def.reference.is_null() &&
+          def.reference != def.defaultValue()) {
+        out.options[def.name] = def.reference;
+      }
+      continue;
+    }
     if (def.parameter) {
       out.options[def.name] = options[def.name];
       continue;
@@ -44,59 +52,76 @@ RendererVariant RendererVariant::reference() const {
 
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"renderers", "scenes",   "resolutions", "cameras",
-                                                 "frames",    "counting", "lights"};
+  static const std::vector<std::string> kKeys = {"renderers", "workloads", "scenes", "resolutions",
+                                                 "cameras",   "frames",    "counting", "lights"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key, "unknown field (expected renderers, scenes, resolutions, cameras, frames, counting, lights)");
+      return fieldError(key,
+                        "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, counting, "
+                        "lights)");
     }
   }
   CaptureSpec spec;
   spec.source = j;
 
-  // renderers
-  if (!j.contains("renderers")) return fieldError("renderers", "required");
-  const auto& entries = j["renderers"];
-  if (!entries.is_array() || entries.empty()) return fieldError("renderers", "must be a non-empty array of names");
-  std::string known;
-  for (const auto& k : knownRenderers) known += (known.empty() ? "" : ", ") + k;
-  for (size_t i = 0; i < entries.size(); ++i) {
-    std::string field = "renderers[" + std::to_string(i) + "]";
-    const auto& entry = entries[i];
-    nlohmann::json options = nlohmann::json::object();
-    std::string name;
-    if (entry.is_object()) {
-      for (const auto& [key, value] : entry.items()) {
-        if (key != "renderer" && key != "options") {
-          return fieldError(field + "." + key, "unknown field (expected renderer, options)");
+  // renderers, then workloads (renderers::workloadNames(): compute workloads,
+  // listed only under "workloads"): one variant list. At least one of the two.
+  if (!j.contains("renderers") && !j.contains("workloads")) return fieldError("renderers", "required");
+  for (const char* list : {"renderers", "workloads"}) {
+    if (!j.contains(list)) continue;
+    const bool workloads = std::string(list) == "workloads";
+    const std::vector<std::string> knownNames = workloads ? renderers::workloadNames() : knownRenderers;
+    const std::string noun = workloads ? "workload" : "renderer";
+    const auto& entries = j[list];
+    if (!entries.is_array() || entries.empty()) return fieldError(list, "must be a non-empty array of names");
+    std::string known;
+    for (const auto& k : knownNames) known += (known.empty() ? "" : ", ") + k;
+    for (size_t i = 0; i < entries.size(); ++i) {
+      std::string field = std::string(list) + "[" + std::to_string(i) + "]";
+      const auto& entry = entries[i];
+      nlohmann::json options = nlohmann::json::object();
+      std::string name;
+      if (entry.is_object()) {
+        // A workload entry may say "workload" or "renderer".
+        const std::string nameKey = workloads && entry.contains("workload") ? "workload" : "renderer";
+        for (const auto& [key, value] : entry.items()) {
+          if (key != nameKey && key != "options") {
+            return fieldError(field + "." + key, "unknown field (expected " + nameKey + ", options)");
+          }
+        }
+        if (!entry.contains(nameKey) || !entry[nameKey].is_string()) {
+          return fieldError(field + "." + nameKey, "required: a " + noun + " name");
+        }
+        name = entry[nameKey].get<std::string>();
+        field += "." + nameKey;
+        if (entry.contains("options")) options = entry["options"];
+      } else if (entry.is_string()) {
+        name = entry.get<std::string>();
+      } else {
+        return fieldError(field, "must be a " + noun + " name or {\"" + noun + "\", \"options\"}, got " + show(entry));
+      }
+      if (std::find(knownNames.begin(), knownNames.end(), name) == knownNames.end()) {
+        if (!workloads && renderers::isWorkload(name)) {
+          return fieldError(field, "'" + name + "' is a workload: list it under \"workloads\"");
+        }
+        if (workloads && std::find(knownRenderers.begin(), knownRenderers.end(), name) != knownRenderers.end()) {
+          return fieldError(field, "'" + name + "' is a renderer, not a workload: list it under \"renderers\"");
+        }
+        return fieldError(field, "unknown " + noun + " '" + name + "' (expected one of " + known + ")");
+      }
+      field = std::string(list) + "[" + std::to_string(i) + "]";
+      if (!options.is_object()) return fieldError(field + ".options", "must be an object of option: value, got " + show(options));
+      // canonicalOptions' errors begin with the option's name ("output: ...").
+      auto canonical = renderers::canonicalOptions(name, options);
+      if (!canonical) return makeError(field + ".options." + canonical.error());
+      RendererVariant variant{name, std::move(canonical).value()};
+      for (const auto& seen : spec.renderers) {
+        if (seen.name == variant.name && seen.options == variant.options) {
+          return fieldError(field, noun + " '" + variant.label() + "' listed twice");
         }
       }
-      if (!entry.contains("renderer") || !entry["renderer"].is_string()) {
-        return fieldError(field + ".renderer", "required: a renderer name");
-      }
-      name = entry["renderer"].get<std::string>();
-      field += ".renderer";
-      if (entry.contains("options")) options = entry["options"];
-    } else if (entry.is_string()) {
-      name = entry.get<std::string>();
-    } else {
-      return fieldError(field, "must be a renderer name or {\"renderer\", \"options\"}, got " + show(entry));
+      spec.renderers.push_back(std::move(variant));
     }
-    if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
-      return fieldError(field, "unknown renderer '" + name + "' (expected one of " + known + ")");
-    }
-    field = "renderers[" + std::to_string(i) + "]";
-    if (!options.is_object()) return fieldError(field + ".options", "must be an object of option: value, got " + show(options));
-    // canonicalOptions' errors begin with the option's name ("output: ...").
-    auto canonical = renderers::canonicalOptions(name, options);
-    if (!canonical) return makeError(field + ".options." + canonical.error());
-    RendererVariant variant{name, std::move(canonical).value()};
-    for (const auto& seen : spec.renderers) {
-      if (seen.name == variant.name && seen.options == variant.options) {
-        return fieldError(field, "renderer '" + variant.label() + "' listed twice");
-      }
-    }
-    spec.renderers.push_back(std::move(variant));
   }
 
   // scenes: checked here by building their parameters only; the capture loads them.

@@ -66,7 +66,8 @@ int runServe(const ServeArgs& args) {
   context.onJobQueued = [&worker] { worker.wake(); };
 
   api::Router router;
-  api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson());
+  api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson(),
+                        renderers::workloadNames());
   service::addServiceRoutes(router, context);
 
   api::ServerOptions options;

@@ -70,6 +70,7 @@ struct GraphicsPipelineDesc {
   VkStencilOp stencilPassOp = VK_STENCIL_OP_KEEP;  // on stencil and depth pass
   uint32_t stencilReference = 0;
   uint32_t stencilWriteMask = 0;  // 0: the stencil is only tested
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;  // rasterization samples (the render pass's)
 };
 
 // Viewport and scissor are dynamic state (set them when recording).

@@ -160,7 +160,7 @@ void destroyBuffer(const Context& ctx, Buffer& buffer) {
 }
 
 Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat format,
-                  VkImageUsageFlags usage) {
+                  VkImageUsageFlags usage, VkSampleCountFlagBits samples) {
   Image result;
   result.format = format;
   result.extent = {width, height};
@@ -171,7 +171,7 @@ Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat 
   info.extent = {width, height, 1};
   info.mipLevels = 1;
   info.arrayLayers = 1;
-  info.samples = VK_SAMPLE_COUNT_1_BIT;
+  info.samples = samples;
   info.tiling = VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;

@@ -47,8 +47,9 @@ void destroyBuffer(const Context& ctx, Buffer& buffer);
 
 // 2D, one mip level, one layer, optimal tiling, device-local, with a view
 // (aspect derived from the format). Starts in VK_IMAGE_LAYOUT_UNDEFINED.
+// `samples` > 1: a multisampled image (render targets; MSAA).
 Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat format,
-                  VkImageUsageFlags usage);
+                  VkImageUsageFlags usage, VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
 void destroyImage(const Context& ctx, Image& image);
 
 // Records commands with `record`, submits them on ctx.queue and waits.

@@ -8,11 +8,17 @@
 // overdraw, as shaded for overshading), an "overdraw_view" pass turns the
 // counts into a heat ramp in "hdr", and frameExtras() gives their per-pixel
 // histogram checked against the counted fragment invocations.
+// output=density: the forward pass (depth test as shaded) colours each
+// fragment by its triangle's screen-space class (shaders/density.h) instead
+// of its shading, counts fragments into "overdraw.count" and quad lanes
+// (helpers included, subgroup quad operations) into "density.lanes"; no heat
+// view. frameExtras() adds a CPU census of the triangles (renderers/density.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
 
+#include "renderers/density.hpp"
 #include "renderers/renderers.hpp"
 #include "shared.h"
 
@@ -31,11 +37,17 @@ class ForwardRenderer final : public RendererBase {
   explicit ForwardRenderer(bool prepass) : prepassRenderer_(prepass) {}
   std::string_view name() const override { return prepassRenderer_ ? "forward-zprepass" : "forward"; }
   nlohmann::json notes() const override {
-    if (!prepass()) return nlohmann::json::object();
+    nlohmann::json out = nlohmann::json::object();
     // Instrumented runs give the pre-pass an empty fragment shader
     // (zprepass.frag) so that its depth writes are counted; the timing twin
     // stays depth-only.
-    return {{"zprepass_fragment_shader", options_.instrumented ? "counting_only" : "none"}};
+    if (prepass()) out["zprepass_fragment_shader"] = options_.instrumented ? "counting_only" : "none";
+    if (density()) {
+      out["density_lanes"] = quadOps_ ? "gpu_quad_ops (helper lanes: gl_HelperInvocation)"
+                             : helperByMask_ ? "cpu_raster_no_depth (llvmpipe: helper lanes not observable)"
+                                             : "cpu_raster_no_depth (no subgroup quad operations in fragment shaders)";
+    }
+    return out;
   }
   nlohmann::json frameExtras() override;
 
@@ -44,7 +56,7 @@ class ForwardRenderer final : public RendererBase {
     std::vector<std::string> names;
     if (prepass()) names.push_back("zprepass");
     names.push_back("forward");
-    if (counting()) names.push_back("overdraw_view");
+    if (heatView()) names.push_back("overdraw_view");
     return names;
   }
 
@@ -55,11 +67,16 @@ class ForwardRenderer final : public RendererBase {
   bool prepass() const { return prepassRenderer_ || options_.zprepass; }
   bool counting() const { return options_.forwardOutput != ForwardOutput::Shaded; }
   bool overdraw() const { return options_.forwardOutput == ForwardOutput::Overdraw; }
+  bool density() const { return options_.forwardOutput == ForwardOutput::Density; }
+  bool heatView() const { return counting() && !density(); }  // overdraw, overshading
+  nlohmann::json densityExtras();
   Result<bool> setupOverdrawView(const gpu::Image* count);
 
   bool prepassRenderer_;
   uint64_t countedFragments_ = 0;      // the forward pass's counted fragment invocations, last frame
   int64_t statisticFragments_ = -1;    // its pipeline statistic; -1 not queried
+  bool quadOps_ = false;               // density: subgroup quad operations in fragment shaders
+  bool helperByMask_ = false;          // density: helper lanes by gl_SampleMaskIn (llvmpipe)
 };
 
 Result<bool> ForwardRenderer::setupPasses() {
@@ -79,6 +96,28 @@ Result<bool> ForwardRenderer::setupPasses() {
                              VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  // frameExtras() reads it back
                          ResourceKind::Attachment);
   }
+  const gpu::Image* lanes = nullptr;
+  if (density()) {
+    lanes = createTarget("density.lanes", kCountFormat,
+                         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, ResourceKind::Attachment);
+    VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 props = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    props.pNext = &subgroup;
+    vkGetPhysicalDeviceProperties2(ctx_->physicalDevice, &props);
+    quadOps_ = (subgroup.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT) != 0 &&
+               (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_QUAD_BIT) != 0;
+    // llvmpipe cannot compile gl_HelperInvocation (is_helper_invocation):
+    // there a helper lane is one with no covered sample (density.h).
+    VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceProperties2 driverProps = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    driverProps.pNext = &driver;
+    vkGetPhysicalDeviceProperties2(ctx_->physicalDevice, &driverProps);
+    // llvmpipe: gl_HelperInvocation does not compile and gl_SampleMaskIn
+    // does not mark its helper lanes (measured 1 lane per covered pixel on
+    // isolated pixels): lanes come from the CPU estimate there.
+    helperByMask_ = driver.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+    if (helperByMask_) quadOps_ = false;
+  }
   if (prepass()) {
     if (auto ok = addDepthPrepass(); !ok) return ok;
   }
@@ -87,13 +126,17 @@ Result<bool> ForwardRenderer::setupPasses() {
   if (prepass()) depth = {kDepthFormat, false, depthAttachment, depthAttachment, depthReadOnly};
   std::vector<AttachmentSpec> colors = {{kHdrFormat}};
   if (counting()) colors.push_back({kCountFormat});  // cleared to 0 each frame
+  if (density()) colors.push_back({kCountFormat});   // density.lanes, cleared to 0
   VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, colors, depth));
   std::vector<VkImageView> views = {hdr_->view};
   if (counting()) views.push_back(count->view);
+  if (density()) views.push_back(lanes->view);
   views.push_back(depth_->view);
   VkFramebuffer fb = framebuffer(rp, views);
   std::vector<std::string> defines;
   if (counting()) defines.push_back("TALLY_COUNT_FRAGMENTS");
+  if (density()) defines.push_back("TALLY_DENSITY");
+  if (density() && quadOps_) defines.push_back("TALLY_DENSITY_QUADS");
   auto shaders = shaderPipeline(p, "forward.vert.glsl", "forward.frag.glsl",
                                 pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp, defines);
   if (!shaders) return makeError(shaders.error());
@@ -102,7 +145,7 @@ Result<bool> ForwardRenderer::setupPasses() {
   geometryState(desc, !prepass());
   if (prepass()) desc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
   if (counting()) {
-    desc.colorAttachmentCount = 2;
+    desc.colorAttachmentCount = density() ? 3 : 2;
     // One blend state for both outputs: hdr's alpha 1 replaces, the count's alpha 0 adds.
     desc.blend = true;
     // Overdraw: no depth test, so every rasterized fragment is shaded and
@@ -116,6 +159,7 @@ Result<bool> ForwardRenderer::setupPasses() {
   }
   pass(p).bindings.outputs[shaders::kOutColor] = "hdr";
   if (counting()) pass(p).bindings.outputs[shaders::kOutCount] = "overdraw.count";
+  if (density()) pass(p).bindings.outputs[shaders::kOutCount + 1] = "density.lanes";
   pass(p).indexFetches = true;
   if (!prepass() && !overdraw()) pass(p).depthWrite = "depth";  // overdraw: finishFrame adds the stencil writes
   const size_t clearCount = colors.size() + 1;
@@ -128,7 +172,7 @@ Result<bool> ForwardRenderer::setupPasses() {
     drawScene(cmd, p, layout, true);
     endRenderPass(cmd, p);
   };
-  if (counting()) return setupOverdrawView(count);
+  if (heatView()) return setupOverdrawView(count);
   return true;
 }
 
@@ -171,7 +215,8 @@ FrameResult ForwardRenderer::finishFrame(FrameResult frame) {
     // (docs/measurement.md): a read per counted write, of the same size.
     std::vector<Access> blendReads;
     for (const auto& a : r.accesses) {
-      if (a.write && a.source == "counter" && (a.resource == "hdr" || a.resource == "overdraw.count")) {
+      if (a.write && a.source == "counter" &&
+          (a.resource == "hdr" || a.resource == "overdraw.count" || a.resource == "density.lanes")) {
         blendReads.push_back(a);
       }
     }
@@ -187,6 +232,10 @@ FrameResult ForwardRenderer::finishFrame(FrameResult frame) {
 nlohmann::json ForwardRenderer::frameExtras() {
   nlohmann::json extras = RendererBase::frameExtras();  // the shared post chain's (bloom)
   if (!counting()) return extras;
+  if (density()) {
+    extras["density"] = densityExtras();
+    return extras;
+  }
   const std::vector<uint8_t> bytes = targetBytes("overdraw.count");
   std::map<uint64_t, uint64_t> pixelsWith;  // count -> pixels
   uint64_t fragments = 0, covered = 0, max = 0;
@@ -220,6 +269,12 @@ nlohmann::json ForwardRenderer::frameExtras() {
   }
   extras["overdraw"] = out;
   return extras;
+}
+
+nlohmann::json ForwardRenderer::densityExtras() {
+  const density::Census census = density::census(*scene_, frameCamera_.viewProj, extent_);
+  return density::extras(census, targetBytes("overdraw.count"), targetBytes("density.lanes"), quadOps_, finalImage(),
+                         countedFragments_, options_.instrumented);
 }
 
 }  // namespace

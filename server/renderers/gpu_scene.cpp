@@ -6,6 +6,7 @@
 #include <span>
 
 #include "gpu/vk_check.hpp"
+#include "renderers/lod.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -294,7 +295,12 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     dd.indexCount = d.indexCount;
     drawData.push_back(dd);
   }
-  vertices_ = storageBuffer(ctx, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  cpuPositions_.clear();
+  cpuPositions_.reserve(vertices.size());
+  for (const auto& v : vertices) cpuPositions_.push_back(v.position);
+  cpuIndices_ = indices;
+  // Transfer source: tangent_frame = quaternion packs a copy (renderers/tbn.cpp).
+  vertices_ = storageBuffer(ctx, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   indices_ = storageBuffer(ctx, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
   drawBuffer_ = storageBuffer(ctx, drawData, 0);
 
@@ -440,6 +446,7 @@ void GpuScene::destroy() {
   if (ctx_ == nullptr) return;
   const gpu::Context& ctx = *ctx_;
   vkDeviceWaitIdle(ctx.device);
+  lod_.reset();  // its index buffer, before the context goes
   for (auto* b : {&vertices_, &indices_, &drawBuffer_, &materialBuffer_, &lightBuffer_})
     gpu::destroyBuffer(ctx, *b);
   for (auto& t : textures_) destroyMipImage(ctx, t);
@@ -451,9 +458,21 @@ void GpuScene::destroy() {
   if (skySampler_ != VK_NULL_HANDLE) vkDestroySampler(ctx.device, skySampler_, nullptr);
   sampler_ = skySampler_ = VK_NULL_HANDLE;
   draws_.clear();
+  cpuPositions_.clear();
+  cpuIndices_.clear();
   materialMapViews_.clear();
   mapBytesPerKind_ = {};
   ctx_ = nullptr;
+}
+
+Result<const SceneLod*> GpuScene::lod() const {
+  if (ctx_ == nullptr) return makeError("lod: the scene is not uploaded");
+  if (!lod_) {
+    auto built = SceneLod::build(*ctx_, *this);
+    if (!built) return makeError(built.error());
+    lod_ = std::shared_ptr<const SceneLod>(std::move(*built));
+  }
+  return lod_.get();
 }
 
 std::vector<ResourceInfo> GpuScene::bufferResources() const {

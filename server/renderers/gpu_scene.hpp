@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,8 @@ struct MipImage {
   uint32_t width = 0, height = 0, levels = 1, layers = 1;
   uint64_t allocationBytes = 0;
 };
+
+class SceneLod;  // renderers/lod.hpp
 
 struct GpuDraw {
   uint32_t material = 0;
@@ -81,11 +84,20 @@ class GpuScene {
   VkSampler sampler() const { return sampler_; }        // trilinear, repeat
   VkSampler skySampler() const { return skySampler_; }  // linear, clamp
 
+  // CPU copies of the uploaded geometry (all meshes, as in vertices() and
+  // indices(); draws() gives each draw's range; models are the identity):
+  // CPU passes over what the GPU draws (forward output=density).
+  const std::vector<glm::vec3>& cpuPositions() const { return cpuPositions_; }
+  const std::vector<uint32_t>& cpuIndices() const { return cpuIndices_; }
+
   const gpu::Buffer& vertices() const { return vertices_; }
   const gpu::Buffer& indices() const { return indices_; }
   const gpu::Buffer& drawBuffer() const { return drawBuffer_; }
   const gpu::Buffer& materialBuffer() const { return materialBuffer_; }
   const gpu::Buffer& lightBuffer() const { return lightBuffer_; }
+  // Levels of detail of every draw (renderers/lod.hpp), built on the first
+  // call (by a renderer with LOD on) and kept with the scene.
+  Result<const SceneLod*> lod() const;
 
   // "vertices", "indices", "draws", "materials", "lights", "sky".
   std::vector<ResourceInfo> bufferResources() const;
@@ -102,11 +114,14 @@ class GpuScene {
   std::vector<VkImageView> indexedViews_;
   std::vector<std::string> indexedNames_;
   std::vector<GpuDraw> draws_;
+  std::vector<glm::vec3> cpuPositions_;
+  std::vector<uint32_t> cpuIndices_;
   std::vector<MipImage> textures_;                         // per scene texture
   std::array<MipImage, scenes::kMapSlotCount> dummies_;    // 1x1 per kind
   std::array<MipImage, scenes::kMapSlotCount> mapArrays_;  // layered per kind
   std::vector<std::array<VkImageView, scenes::kMapSlotCount>> materialMapViews_;
   std::array<uint64_t, scenes::kMapSlotCount> mapBytesPerKind_{};  // textures + dummy
+  mutable std::shared_ptr<const SceneLod> lod_;  // lod(): built on first use
   MipImage sky_;
   VkSampler sampler_ = VK_NULL_HANDLE, skySampler_ = VK_NULL_HANDLE;
 };

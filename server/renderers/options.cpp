@@ -2,6 +2,10 @@
 
 #include <algorithm>
 
+#include "renderers/shadows.hpp"
+#include "renderers/tbn.hpp"
+#include "renderers/workloads.hpp"
+
 namespace tally::renderers {
 namespace {
 
@@ -56,13 +60,15 @@ std::vector<OptionDef> makeDefs() {
                   }});
   defs.push_back({"output",
                   {"forward", "forward-zprepass"},
-                  {"shaded", "overdraw", "overshading"},
+                  {"shaded", "overdraw", "overshading", "density"},
                   {},
                   nullptr,
                   "What the forward pass outputs besides its shading: nothing more, or 1 per fragment into an "
                   "R32_SFLOAT count target (additive blending) with the depth test off (overdraw: fragments "
                   "rasterized per pixel) or on (overshading: fragments shaded per pixel); the image shows the "
-                  "counts as a heat ramp and the sample's extras their per-pixel histogram",
+                  "counts as a heat ramp and the sample's extras their per-pixel histogram; density colours each "
+                  "fragment by its triangle's screen-space class (sub-pixel, long-thin, normal) and measures quad "
+                  "lanes (helpers included) per covered pixel",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.forwardOutput = *parseForwardOutput(v.get<std::string>()); }});
   defs.push_back({"zprepass",
@@ -74,6 +80,16 @@ std::vector<OptionDef> makeDefs() {
                   "it, so each covered pixel is shaded once (forward with it is forward-zprepass)",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.zprepass = v.get<bool>(); }});
+  defs.push_back({"gbuffer",
+                  {"deferred"},
+                  {"sampled", "subpass"},
+                  {},
+                  nullptr,
+                  "How the lighting pass reads the G-buffer: sampled (two render passes, combined image samplers) "
+                  "or subpass (one render pass, two subpasses: transient, lazily allocated G-buffer attachments "
+                  "with storeOp DONT_CARE read by subpassLoad, so a tile-based GPU keeps them on chip)",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.gbufferSubpass = v.get<std::string>() == "subpass"; }});
   // Bloom is a post chain of RendererBase before tonemap: every renderer takes it.
   const std::vector<std::string> everyRenderer = {"forward", "forward-zprepass", "deferred", "visbuffer",
                                                   "visbuffer-lean"};
@@ -106,6 +122,85 @@ std::vector<OptionDef> makeDefs() {
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.bloom.threshold = v.get<float>(); }});
   defs.back().parameter = true;
+  defs.push_back({"lod",
+                  everyRenderer,
+                  {"off", 0.5, 1, 2, 4, 8},
+                  {},
+                  nullptr,
+                  "Levels of detail (meshoptimizer's simplifier, borders locked, index count halved per level): "
+                  "off, or a pixel threshold: per draw and frame, the coarsest level whose geometric error "
+                  "projected at the draw's bounding sphere stays at most this many pixels",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.lodThresholdPx = v.is_string() ? 0.0f : v.get<float>(); }});
+  defs.push_back({"msaa",
+                  {"deferred", "visbuffer", "visbuffer-lean"},
+                  {1, 2, 4, 8},
+                  {},
+                  nullptr,
+                  "MSAA sample count of the geometry pass's targets and depth (G-buffer, or visibility ids and "
+                  "barycentrics/derivatives); the shading pass fetches every sample, shades the covered ones "
+                  "(deferred: per sample; visibility buffers: per distinct triangle) and averages them into the "
+                  "1-sample HDR target. Counts the device lacks are refused at setup",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.msaa = v.get<uint32_t>(); }});
+  defs.push_back({"shading",
+                  {"deferred", "visbuffer", "visbuffer-lean"},
+                  {"fragment", "compute"},
+                  {},
+                  nullptr,
+                  "How the full-screen shading pass (deferred's lighting, the visibility buffers' shading) runs: a "
+                  "fragment pass masked by stencil, or a compute dispatch (8x8 workgroups, one invocation per "
+                  "pixel) with the same shading code that writes the HDR target with imageStore, sky pixels "
+                  "included (the cleared value). Not with msaa > 1 or gbuffer=subpass",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.computeShading = v.get<std::string>() == "compute"; }});
+  // Shadow mapping (renderers/shadows.hpp): every renderer shades with it.
+  const std::vector<std::string> shadowRenderers = {"forward", "forward-zprepass", "deferred", "visbuffer",
+                                                    "visbuffer-lean"};
+  defs.push_back({"shadows",
+                  shadowRenderers,
+                  {"off", "hard", "pcf2x2", "pcf4x4"},
+                  {},
+                  nullptr,
+                  "Shadow mapping of one directional sun (orthographic map fitted to the scene bounds, a depth-only "
+                  "\"shadow\" pass): hard (one nearest depth-compare tap), pcf2x2 (one linear compare tap: hardware "
+                  "2x2 PCF) or pcf4x4 (four linear compare taps at +-1 texel: 4x4 texels); off: no sun, no pass",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.shadows.filter = *parseShadowFilter(v.get<std::string>()); }});
+  // A parameter: map-size variants are compared with the same filter at 4096.
+  defs.back().parameter = true;
+  defs.push_back({"shadow_map_size",
+                  shadowRenderers,
+                  {2048, 512, 1024, 4096},
+                  {},
+                  nullptr,
+                  "Texels per side of the D32_SFLOAT shadow map (with shadows on)",
+                  4096,
+                  [](RendererOptions& o, const json& v) { o.shadows.mapSize = v.get<uint32_t>(); }});
+  defs.back().referenceWith = "shadows";
+  defs.push_back({"shadow_bias",
+                  shadowRenderers,
+                  {},
+                  {0.0, 8.0},
+                  1.5,
+                  "Shadow depth bias in shadow-map texels (the world size of one texel), times 1 + tan of the "
+                  "surface's angle to the sun (slope-scaled, tan capped at 4)",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) { o.shadows.bias = v.get<float>(); }});
+  defs.back().parameter = true;
+  defs.push_back({"tangent_frame",
+                  everyRenderer,
+                  {"float", "quaternion"},
+                  {},
+                  nullptr,
+                  "How vertices carry their tangent frame: float normal and tangent (48-byte vertices), or a "
+                  "packed 24-byte vertex buffer with the frame as a 24-bit smallest-three unit quaternion "
+                  "(bitangent sign in the largest component's sign), read by every vertex path",
+                  nullptr,
+                  [](RendererOptions& o, const json& v) {
+                    o.tangentFrame = *parseTangentFrameEncoding(v.get<std::string>());
+                  }});
+  addWorkloadOptions(defs);  // volume-fog, raytrace (workloads.cpp)
   return defs;
 }
 

@@ -37,6 +37,12 @@ struct OptionDef {
   // that bloom=separable bloom_taps=13 is compared with bloom=naive
   // bloom_taps=13, not with the naive blur at the default 9 taps.
   bool parameter = false;
+  // Where set: the reference variant takes this option's reference value
+  // also when the variant leaves it at its default, provided the variant
+  // sets the option named here. shadow_map_size (default 2048, reference
+  // 4096) names "shadows": shadows=hard is compared with shadows=hard
+  // shadow_map_size=4096, while a variant without shadows stays its own reference.
+  std::string referenceWith;
 
   const nlohmann::json& defaultValue() const { return range.empty() ? values.front() : rangeDefault; }
 };

@@ -58,6 +58,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       uint64_t n = slotValue(counters, site.slot);
       if (site.stage == spirv::Stage::Fragment) out.fragmentInvocations += n;
       if (site.stage == spirv::Stage::Vertex) out.vertexInvocations += n;
+      if (site.stage == spirv::Stage::Compute) out.computeInvocations += n;
       noteSlot(n, std::string(spirv::toString(site.stage)) + " invocations");
       continue;
     }

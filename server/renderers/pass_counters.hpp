@@ -34,6 +34,7 @@ struct PassCounts {
   std::vector<Access> accesses;
   uint64_t fragmentInvocations = 0;
   uint64_t vertexInvocations = 0;
+  uint64_t computeInvocations = 0;
   // The largest single slot of the pass and what it counts (a resource line's
   // name, or "fragment invocations"): how close a counter came to wrapping.
   uint64_t maxSlotCount = 0;

@@ -25,12 +25,13 @@ std::string_view toString(ForwardOutput output) {
     case ForwardOutput::Shaded: return "shaded";
     case ForwardOutput::Overdraw: return "overdraw";
     case ForwardOutput::Overshading: return "overshading";
+    case ForwardOutput::Density: return "density";
   }
   return "shaded";
 }
 
 std::optional<ForwardOutput> parseForwardOutput(std::string_view name) {
-  for (auto o : {ForwardOutput::Shaded, ForwardOutput::Overdraw, ForwardOutput::Overshading}) {
+  for (auto o : {ForwardOutput::Shaded, ForwardOutput::Overdraw, ForwardOutput::Overshading, ForwardOutput::Density}) {
     if (name == toString(o)) return o;
   }
   return std::nullopt;
@@ -85,14 +86,26 @@ std::vector<std::string> rendererNames() {
   return {"forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean"};
 }
 
+std::vector<std::string> workloadNames() { return {"volume-fog", "raytrace"}; }
+
+bool isWorkload(std::string_view name) {
+  for (const auto& n : workloadNames()) {
+    if (n == name) return true;
+  }
+  return false;
+}
+
 Result<std::unique_ptr<Renderer>> makeRenderer(std::string_view name) {
   if (name == "forward") return makeForward(false);
   if (name == "forward-zprepass") return makeForward(true);
   if (name == "deferred") return makeDeferred();
   if (name == "visbuffer-lean") return makeLeanVisbuffer();
   if (name == "visbuffer") return makeVisbuffer();
+  if (name == "volume-fog") return makeVolumeFog();
+  if (name == "raytrace") return makeRaytrace();
   std::string known;
   for (const auto& n : rendererNames()) known += (known.empty() ? "" : ", ") + n;
+  for (const auto& n : workloadNames()) known += ", " + n;
   return makeError("renderer: unknown '" + std::string(name) + "' (known: " + known + ")");
 }
 

@@ -34,8 +34,13 @@ struct ResourceInfo {
   std::string formatName;    // "R16G16B16A16_SFLOAT"; "" for buffers
   uint32_t elementBytes = 0;  // bytes per texel (format) or per buffer element
   uint32_t width = 0, height = 0;  // images; 0 for buffers
+  uint32_t samples = 1;            // images: VkImageCreateInfo::samples (MSAA targets > 1); 1 for buffers
   uint64_t allocationBytes = 0;    // VkMemoryRequirements::size of the real allocation(s)
   std::string usage;               // e.g. "color_attachment|sampled"
+  // Images: the memory type the allocation came from, "device_local",
+  // "lazily_allocated" (transient attachments where the device offers it) or
+  // "host_visible" (a type without DEVICE_LOCAL); "" for buffers.
+  std::string memory;
 };
 
 // One line of a pass's traffic: a resource read or written.
@@ -47,6 +52,10 @@ struct Access {
   // "counter": the instrumented shaders counted it; "derived": computed from
   // counted events (depth writes = fragment invocations, index fetches = indices drawn).
   std::string source = "counter";
+  // The tile-memory byte model (docs/measurement.md, "Byte models"): true
+  // where a tile-based GPU keeps this traffic on chip (writes of a DONT_CARE
+  // attachment, input-attachment reads within the render pass), 0 DRAM bytes.
+  bool onChip = false;
 };
 
 struct PassResult {
@@ -54,6 +63,8 @@ struct PassResult {
   double gpuMs = 0;        // from timestamps around the pass
   uint64_t fragmentInvocations = 0;           // counted (the fragment shaders' invocation sites)
   int64_t fragmentInvocationsStatistic = -1;  // pipeline statistics; -1 if not queried
+  uint64_t computeInvocations = 0;            // counted (the compute shaders' invocation sites)
+  int64_t computeInvocationsStatistic = -1;   // pipeline statistics; -1 if not queried
   std::vector<Access> accesses;
   uint64_t maxSlotCount = 0;    // the largest single counter slot this frame (0 uninstrumented)
   std::string maxSlotResource;  // what that slot counts
@@ -124,8 +135,12 @@ enum class ForwardOutput {
   Shaded,       // the renderer as it is
   Overdraw,     // depth test and write off: every rasterized fragment is counted
   Overshading,  // the shaded mode's depth test: fragments that pass early depth
+  // Mesh density (docs/techniques.md, "Mesh density"): each fragment coloured
+  // by its triangle's screen-space class (sub-pixel, long-thin, normal); the
+  // fragments and quad lanes (helpers included) counted per pixel.
+  Density,
 };
-std::string_view toString(ForwardOutput output);  // "shaded", "overdraw", "overshading"
+std::string_view toString(ForwardOutput output);  // "shaded", "overdraw", "overshading", "density"
 std::optional<ForwardOutput> parseForwardOutput(std::string_view name);  // empty for an unknown name
 
 // Bloom (docs/techniques.md, "Bloom"): a bright pass into an RGBA16F target,
@@ -145,6 +160,44 @@ struct BloomOptions {
   float threshold = 1.0f;  // HDR luminance above which a pixel blooms
 };
 
+// Shadow mapping (docs/techniques.md, "Shadow mapping"; renderers/shadows.hpp):
+// one directional sun, a depth-only "shadow" pass into a D32_SFLOAT map, read
+// by every shading pass. Off leaves every renderer as it was (no sun, no pass).
+enum class ShadowFilter {
+  Off,
+  Hard,    // one nearest depth-compare tap
+  Pcf2x2,  // one linear depth-compare tap (hardware 2x2 PCF)
+  Pcf4x4,  // four linear compare taps at +-1 texel: a 4x4 texel footprint
+};
+struct ShadowOptions {
+  ShadowFilter filter = ShadowFilter::Off;
+  uint32_t mapSize = 2048;  // texels per side
+  float bias = 1.5f;        // in shadow-map texels (world size of one), times 1 + tan(slope)
+  float sunDirection[3] = {-0.35f, 1.0f, 0.25f};  // towards the sun (world, +Y up); normalised at setup
+};
+
+// How vertices carry their tangent frame (docs/techniques.md, "Packed tangent
+// frames"; renderers/tbn.hpp): Float, shaders::Vertex's float normal and
+// tangent (48-byte vertices); Quaternion, a packed 24-byte vertex buffer with
+// the frame as a 24-bit unit quaternion, read by every vertex path.
+enum class TangentFrameEncoding { Float, Quaternion };
+
+// The compute workloads (docs/techniques.md, "Volume fog", "Ray tracer";
+// renderers/workloads.hpp). Renderers ignore them.
+enum class FogOctaves {
+  Fixed,     // loop to maxOctaves read from a uniform: the reference
+  Dynamic,   // clamp(max - floor(log2(t / t0)), 1, max): a runtime loop bound from distance
+  Constant,  // the max as a compile-time #define: the compiler may unroll
+};
+struct WorkloadOptions {
+  FogOctaves fogOctaves = FogOctaves::Fixed;
+  uint32_t fogSteps = 64;        // samples per ray between the box's entry and exit
+  uint32_t fogMaxOctaves = 6;    // 1..8
+  float fogDensity = 1.0f;       // extinction scale (per scene diagonal); 0: transparent
+  uint32_t spheres = 32;         // raytrace: sphere count
+  uint32_t bounces = 1;          // raytrace: specular reflection rays per hit chain, 0..3
+};
+
 struct RendererOptions {
   VkExtent2D extent = {320, 180};
   bool instrumented = true;  // false: the uninstrumented twin, for timing
@@ -158,6 +211,26 @@ struct RendererOptions {
   // A depth-only pre-pass before the geometry pass (forward, deferred), which
   // then tests depth EQUAL without writing it: each covered pixel shaded once.
   bool zprepass = false;
+  TangentFrameEncoding tangentFrame = TangentFrameEncoding::Float;  // every renderer
+  // Levels of detail (docs/techniques.md, "Levels of detail"; renderers/lod.hpp):
+  // 0 off, else the pixel threshold: per draw, per frame, the coarsest
+  // meshoptimizer level whose projected error is at most this many pixels.
+  float lodThresholdPx = 0.0f;
+  // Deferred's G-buffer (docs/techniques.md, "Tile memory"): false, two render
+  // passes, lighting samples it; true, one render pass of two subpasses,
+  // transient attachments read by subpassLoad.
+  bool gbufferSubpass = false;
+  // MSAA sample count of the geometry pass's targets and depth (deferred,
+  // visbuffer, visbuffer-lean): 1, 2, 4 or 8; the shading pass resolves into
+  // the 1-sample "hdr" (docs/techniques.md, "MSAA footprint"; renderers/msaa.hpp).
+  uint32_t msaa = 1;
+  ShadowOptions shadows;  // shadow mapping (all renderers); filter Off: none
+  // Shading in compute (deferred, visbuffer, visbuffer-lean; docs/techniques.md,
+  // "Shading in compute"): the "lighting" / "shading" pass as a compute
+  // dispatch (8x8 workgroups) that imageStores "hdr", instead of a full-screen
+  // fragment pass. False: the fragment pass as it was.
+  bool computeShading = false;
+  WorkloadOptions workload;  // the compute workloads' parameters (volume-fog, raytrace)
 };
 
 class Renderer {
@@ -201,6 +274,10 @@ std::string shaderDirectory();
 
 // "forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean".
 std::vector<std::string> rendererNames();
+// The compute workloads, made by makeRenderer like renderers but listed apart:
+// "volume-fog", "raytrace" (capture specs' "workloads").
+std::vector<std::string> workloadNames();
+bool isWorkload(std::string_view name);
 Result<std::unique_ptr<Renderer>> makeRenderer(std::string_view name);
 
 }  // namespace tally::renderers

@@ -11,6 +11,7 @@
 #include "gpu/vk_check.hpp"
 #include "renderers/bloom.hpp"
 #include "renderers/projection.hpp"
+#include "renderers/tile_memory.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -47,6 +48,9 @@ std::string usageName(VkImageUsageFlags usage) {
   add(VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth_stencil_attachment");
   add(VK_IMAGE_USAGE_SAMPLED_BIT, "sampled");
   add(VK_IMAGE_USAGE_TRANSFER_SRC_BIT, "transfer_src");
+  add(VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT, "input_attachment");
+  add(VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT, "transient_attachment");
+  add(VK_IMAGE_USAGE_STORAGE_BIT, "storage");  // compute passes' imageStore targets
   return out;
 }
 
@@ -69,7 +73,7 @@ VkRenderPass createPassRenderPass(const gpu::Context& ctx, const std::vector<Att
   for (const auto& c : colors) {
     VkAttachmentDescription a = {};
     a.format = c.format;
-    a.samples = VK_SAMPLE_COUNT_1_BIT;
+    a.samples = c.samples;
     a.loadOp = c.clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
     a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     a.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
@@ -83,7 +87,7 @@ VkRenderPass createPassRenderPass(const gpu::Context& ctx, const std::vector<Att
   if (depth) {
     VkAttachmentDescription a = {};
     a.format = depth->format;
-    a.samples = VK_SAMPLE_COUNT_1_BIT;
+    a.samples = depth->samples;
     a.loadOp = depth->clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
     a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     a.stencilLoadOp = a.loadOp;
@@ -123,9 +127,10 @@ VkRenderPass createPassRenderPass(const gpu::Context& ctx, const std::vector<Att
 
 std::vector<std::string> RendererBase::passNames() const {
   auto names = ownPassNames();
+  if (options_.shadows.filter != ShadowFilter::Off) names.insert(names.begin(), "shadow");  // shadows.cpp
   for (auto& n : bloomPassNames()) names.push_back(std::move(n));
   names.push_back("tonemap");
-  names.push_back("skybox");
+  if (drawsSky()) names.push_back("skybox");
   return names;
 }
 
@@ -146,12 +151,14 @@ PassBindings RendererBase::commonBindings() const {
   b.bind(shaders::kSetGeometry, shaders::kBindingMaterials, "materials");
   b.bind(shaders::kSetGeometry, shaders::kBindingVertices, "vertices");
   b.bind(shaders::kSetGeometry, shaders::kBindingIndices, "indices");
+  shadowBindings(b);  // "shadow", "shadow_map" in set 0 with shadows on
   return b;
 }
 
 const gpu::Image* RendererBase::createTarget(const std::string& name, VkFormat format,
-                                             VkImageUsageFlags usage, ResourceKind kind) {
-  targets_.push_back(gpu::createImage(*ctx_, extent_.width, extent_.height, format, usage));
+                                             VkImageUsageFlags usage, ResourceKind kind, uint32_t samples) {
+  targets_.push_back(gpu::createImage(*ctx_, extent_.width, extent_.height, format, usage,
+                                      VkSampleCountFlagBits(samples)));
   targetNames_.push_back({name, usage});
   const gpu::Image& image = targets_.back();
   VkMemoryRequirements r;
@@ -164,8 +171,33 @@ const gpu::Image* RendererBase::createTarget(const std::string& name, VkFormat f
   info.elementBytes = gpu::formatBytes(format);
   info.width = extent_.width;
   info.height = extent_.height;
+  info.samples = samples;
   info.allocationBytes = r.size;
   info.usage = usageName(usage);
+  info.memory = imageMemoryKind(*ctx_, r);
+  resources_.push_back(info);
+  return &image;
+}
+
+const gpu::Image* RendererBase::createTransientTarget(const std::string& name, VkFormat format,
+                                                      VkImageUsageFlags usage) {
+  std::string memory;
+  targets_.push_back(createTransientImage(*ctx_, extent_.width, extent_.height, format, usage, memory));
+  targetNames_.push_back({name, usage});
+  const gpu::Image& image = targets_.back();
+  VkMemoryRequirements r;
+  vkGetImageMemoryRequirements(ctx_->device, image.image, &r);
+  ResourceInfo info;
+  info.name = name;
+  info.kind = ResourceKind::Attachment;
+  info.format = format;
+  info.formatName = formatName(format);
+  info.elementBytes = gpu::formatBytes(format);
+  info.width = extent_.width;
+  info.height = extent_.height;
+  info.allocationBytes = r.size;
+  info.usage = usageName(usage);
+  info.memory = memory;
   resources_.push_back(info);
   return &image;
 }
@@ -207,10 +239,13 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
                                             const std::vector<std::string>& defines) {
   auto source = gpu::loadShaderSource(*ctx_, shaderDirectory(), file);
   if (!source) return makeError(source.error());
-  if (!defines.empty()) {
+  std::vector<std::string> allDefines = defines;
+  if (packedVertices_) allDefines.push_back("TALLY_TBN_QUATERNION");  // shaders/tbn.h; none: float as it was
+  for (auto& d : shadowDefines()) allDefines.push_back(std::move(d));    // shaders/shadow.h; none with shadows off
+  if (!allDefines.empty()) {
     size_t eol = source->source.find('\n');
     std::string text;
-    for (const auto& d : defines) text += "#define " + d + "\n";
+    for (const auto& d : allDefines) text += "#define " + d + "\n";
     source->source.insert(eol == std::string::npos ? source->source.size() : eol + 1, text);
   }
   std::vector<uint32_t> words;
@@ -243,7 +278,7 @@ VkDescriptorSetLayout RendererBase::setLayout(const std::vector<VkDescriptorType
     b.binding = i;
     b.descriptorType = types[i];
     b.descriptorCount = i < counts.size() ? counts[i] : 1;
-    b.stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+    b.stageFlags = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT | VK_SHADER_STAGE_COMPUTE_BIT;
     bindings.push_back(b);
   }
   ownedSetLayouts_.push_back(gpu::createDescriptorSetLayout(*ctx_, bindings));
@@ -338,7 +373,16 @@ void RendererBase::geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc) {
   desc.stencilReference = kStencilGeometry;
 }
 
-void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) {
+void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) const {
+  if (packedVertices_) {  // renderers/tbn.hpp: PackedVertex
+    desc.vertexBindings = {{0, sizeof(PackedVertex), VK_VERTEX_INPUT_RATE_VERTEX}};
+    desc.vertexAttributes = {
+        {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(PackedVertex, position)},
+        {shaders::kAttribNormal, 0, VK_FORMAT_R32_UINT, offsetof(PackedVertex, tbn)},
+        {shaders::kAttribUv, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(PackedVertex, uv)},
+    };
+    return;
+  }
   desc.vertexBindings = {{0, sizeof(shaders::Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
   desc.vertexAttributes = {
       {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
@@ -350,10 +394,55 @@ void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) {
 
 void RendererBase::bindSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet material,
                             VkDescriptorSet passInput, VkDescriptorSet geometry) {
+  bindSetsAt(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, material, passInput, geometry);
+}
+
+void RendererBase::bindComputeSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet material,
+                                   VkDescriptorSet passInput, VkDescriptorSet geometry) {
+  bindSetsAt(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout, material, passInput, geometry);
+}
+
+VkPipelineLayout RendererBase::computePipelineLayout(VkDescriptorSetLayout material,
+                                                     VkDescriptorSetLayout passInput) {
+  std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
+  sets[shaders::kSetFrame] = frameLayout_;
+  sets[shaders::kSetGeometry] = geometryLayout_;
+  if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
+  if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
+  sets[counterSet_] = counterLayout_;
+  pipelineLayouts_.push_back(
+      gpu::createPipelineLayout(*ctx_, sets, sizeof(shaders::DrawPush), VK_SHADER_STAGE_COMPUTE_BIT));
+  return pipelineLayouts_.back();
+}
+
+Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::string& file,
+                                                 VkPipelineLayout layout, const std::vector<std::string>& defines) {
+  auto module = shader(passIndex, file, defines);
+  if (!module) return makeError(module.error());
+  pipelines_.push_back(gpu::createComputePipeline(*ctx_, *module, layout));
+  return pipelines_.back();
+}
+
+void RendererBase::beginComputePass(VkCommandBuffer cmd, uint32_t passIndex) {
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::beginStatistics(cmd, statistics_, passIndex);
+}
+
+void RendererBase::endComputePass(VkCommandBuffer cmd, uint32_t passIndex) {
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::endStatistics(cmd, statistics_, passIndex);
+}
+
+void RendererBase::writeStorageImage(VkDescriptorSet set, uint32_t binding, VkImageView view) {
+  gpu::DescriptorWrite w;
+  w.binding = binding;
+  w.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+  w.image = {VK_NULL_HANDLE, view, VK_IMAGE_LAYOUT_GENERAL};
+  gpu::updateDescriptorSet(*ctx_, set, {&w, 1});
+}
+
+void RendererBase::bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout,
+                              VkDescriptorSet material, VkDescriptorSet passInput, VkDescriptorSet geometry) {
   auto bind = [&](uint32_t index, VkDescriptorSet set) {
-    if (set != VK_NULL_HANDLE) {
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, index, 1, &set, 0, nullptr);
-    }
+    if (set != VK_NULL_HANDLE) vkCmdBindDescriptorSets(cmd, point, layout, index, 1, &set, 0, nullptr);
   };
   bind(shaders::kSetFrame, frameSet_);
   bind(shaders::kSetMaterial, material);
@@ -364,7 +453,7 @@ void RendererBase::bindSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDesc
 
 VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials) {
   VkDescriptorSet set = allocateSet(geometryLayout_);
-  const gpu::Buffer* buffers[] = {&scene_->drawBuffer(), &materials, &scene_->vertices(), &scene_->indices()};
+  const gpu::Buffer* buffers[] = {&drawsBuffer(), &materials, &vertexBuffer(), &indexBuffer()};
   gpu::DescriptorWrite writes[4];
   for (uint32_t i = 0; i < 4; ++i) {
     writes[i].binding = i;
@@ -378,12 +467,16 @@ VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials) {
 void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout,
                              bool materialSets) {
   VkDeviceSize offset = 0;
-  VkBuffer vb = scene_->vertices().buffer;
+  VkBuffer vb = vertexBuffer().buffer;
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
-  vkCmdBindIndexBuffer(cmd, scene_->indices().buffer, 0, VK_INDEX_TYPE_UINT32);
+  vkCmdBindIndexBuffer(cmd, indexBuffer().buffer, 0, VK_INDEX_TYPE_UINT32);
   const auto& draws = scene_->draws();
   for (uint32_t i = 0; i < draws.size(); ++i) {
-    const GpuDraw& d = draws[i];
+    GpuDraw d = draws[i];
+    if (lod_) {  // the level chosen for this frame (LodSelection::select)
+      d.firstIndex = lod_->chosen(i).firstIndex;
+      d.indexCount = lod_->chosen(i).indexCount;
+    }
     if (materialSets) {
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, shaders::kSetMaterial, 1,
                               &materialSets_[d.material], 0, nullptr);
@@ -415,6 +508,12 @@ void RendererBase::endRenderPass(VkCommandBuffer cmd, uint32_t passIndex) {
   vkCmdEndRenderPass(cmd);
 }
 
+void RendererBase::nextSubpass(VkCommandBuffer cmd, uint32_t fromPass, uint32_t toPass) {
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::endStatistics(cmd, statistics_, fromPass);
+  vkCmdNextSubpass(cmd, VK_SUBPASS_CONTENTS_INLINE);
+  if (statistics_.pool != VK_NULL_HANDLE) gpu::beginStatistics(cmd, statistics_, toPass);
+}
+
 Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const RendererOptions& options) {
   destroy();
   ctx_ = &ctx;
@@ -434,12 +533,15 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     VkDescriptorPoolSize sizes[] = {
         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 24}};
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 24},
+        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16}};
     pool_ = gpu::createDescriptorPool(ctx, materials + 32, sizes);
     using T = VkDescriptorType;
     const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
             image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    frameLayout_ = setLayout({ubo, ubo, ssbo});
+    frameLayout_ = options.shadows.filter == ShadowFilter::Off
+                       ? setLayout({ubo, ubo, ssbo})
+                       : setLayout({ubo, ubo, ssbo, ubo, image});  // + shadow_shared.h's kBindingShadow(Map)
     geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo});
     emptyLayout_ = setLayout({});
     counterLayout_ = setLayout({ssbo});
@@ -456,6 +558,18 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     lighting.exposure = 1.0f;
     gpu::uploadBuffer(ctx, lightingBuffer_, {reinterpret_cast<const uint8_t*>(&lighting), sizeof lighting});
 
+    if (options_.lodThresholdPx > 0) {  // levels of detail (renderers/lod.hpp): chains built on first use
+      lod_ = std::make_unique<LodSelection>();
+      if (auto ok = lod_->setup(ctx, scene, options_.lodThresholdPx); !ok) {
+        lod_.reset();
+        return makeError(ok.error());
+      }
+    }
+    if (options_.tangentFrame == TangentFrameEncoding::Quaternion) {  // renderers/tbn.hpp
+      auto packed = buildPackedVertices(ctx, scene);
+      if (!packed) return makeError(packed.error());
+      packedVertices_ = std::make_unique<PackedVertexBuffer>(std::move(*packed));
+    }
     frameSet_ = allocateSet(frameLayout_);
     geometrySet_ = allocateSet(geometryLayout_);
     auto bufferWrite = [](uint32_t binding, VkDescriptorType type, const gpu::Buffer& b) {
@@ -470,8 +584,8 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
                                           bufferWrite(2, ssbo, scene.lightBuffer())};
     gpu::updateDescriptorSet(ctx, frameSet_, frameWrites);
     gpu::DescriptorWrite geometryWrites[] = {
-        bufferWrite(0, ssbo, scene.drawBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
-        bufferWrite(2, ssbo, scene.vertices()), bufferWrite(3, ssbo, scene.indices())};
+        bufferWrite(0, ssbo, drawsBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
+        bufferWrite(2, ssbo, vertexBuffer()), bufferWrite(3, ssbo, indexBuffer())};
     gpu::updateDescriptorSet(ctx, geometrySet_, geometryWrites);
     for (uint32_t m = 0; m < materials; ++m) {
       VkDescriptorSet set = allocateSet(materialLayout_);
@@ -489,7 +603,13 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     targetSampler_ = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 
     // Shared targets and resources.
-    for (auto& r : scene.bufferResources()) resources_.push_back(r);
+    for (auto& r : scene.bufferResources()) {
+      // With LOD on, "indices" is the buffer the renderer binds: the original
+      // indices and every coarser level.
+      if (lod_ && r.name == "indices") r.allocationBytes = lod_->indexAllocationBytes();
+      if (packedVertices_ && r.name == "vertices") r = packedVertices_->info;  // the buffer bound instead
+      resources_.push_back(r);
+    }
     ResourceInfo camera;
     camera.name = "camera";
     camera.kind = ResourceKind::Buffer;
@@ -502,7 +622,8 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     camera.allocationBytes = lightingBuffer_.size;
     resources_.push_back(camera);
     resources_.push_back(scene.skyResource());
-    hdr_ = createTarget("hdr", kHdrFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+    hdr_ = createTarget("hdr", kHdrFormat,
+                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | hdrExtraUsage(),
                         ResourceKind::Attachment);
     final_ = createTarget("final", kFinalFormat,
                           VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
@@ -512,6 +633,11 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
                               VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  // depthImage() reads it back
                           ResourceKind::Depth);
 
+    if (auto ok = setupShadows(); !ok) {  // the "shadow" pass first (shadows.cpp)
+      std::string why = ok.error();
+      destroy();
+      return makeError(why);
+    }
     if (auto ok = setupPasses(); !ok) {
       std::string why = ok.error();
       destroy();
@@ -530,7 +656,8 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
     if (ctx.pipelineStatistics) {
       statistics_ = gpu::createStatisticsQueries(ctx, uint32_t(passes_.size()),
-                                                 VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT);
+                                                 VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT |
+                                                     VK_QUERY_PIPELINE_STATISTIC_COMPUTE_SHADER_INVOCATIONS_BIT);
     }
   } catch (const std::exception& e) {
     destroy();
@@ -640,9 +767,20 @@ void RendererBase::setupBloom() {
 }
 
 nlohmann::json RendererBase::frameExtras() {
-  if (bloomExtras_.is_null()) return nlohmann::json::object();
-  return {{"bloom", bloomExtras_}};
+  nlohmann::json extras = nlohmann::json::object();
+  if (!bloomExtras_.is_null()) extras["bloom"] = bloomExtras_;
+  if (!shadow_.extras.is_null()) extras["shadows"] = shadow_.extras;
+  if (lod_) extras["lod"] = lod_->extras();
+  if (!tileMemoryExtras_.is_null()) extras["tile_memory"] = tileMemoryExtras_;
+  if (packedVertices_) extras["tangent_frame"] = packedVertices_->stats;  // renderers/tbn.hpp
+  return extras;
 }
+
+const gpu::Buffer& RendererBase::vertexBuffer() const {
+  return packedVertices_ ? packedVertices_->buffer : scene_->vertices();
+}
+const gpu::Buffer& RendererBase::indexBuffer() const { return lod_ ? lod_->indexBuffer() : scene_->indices(); }
+const gpu::Buffer& RendererBase::drawsBuffer() const { return lod_ ? lod_->drawBuffer() : scene_->drawBuffer(); }
 
 void RendererBase::setupTonemapAndSkybox() {
   const VkImageLayout readOnlyDepth = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
@@ -668,7 +806,8 @@ void RendererBase::setupTonemapAndSkybox() {
     VkRenderPass rp = ownRenderPass(createPassRenderPass(
         *ctx_,
         {{kFinalFormat, false, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-          VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}},
+          // The skybox pass draws into it next; without one, finalImage() reads it.
+          drawsSky() ? VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
         std::nullopt));
     VkFramebuffer fb = framebuffer(rp, {final_->view});
     auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "tonemap.frag.glsl",
@@ -686,7 +825,7 @@ void RendererBase::setupTonemapAndSkybox() {
     };
   }
   // Skybox: the far plane where the stencil is 0 (no geometry), into final.
-  {
+  if (drawsSky()) {
     uint32_t p = addPass("skybox");
     VkDescriptorSetLayout skyLayout = setLayout({VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER});
     VkDescriptorSet sky = allocateSet(skyLayout);
@@ -744,7 +883,9 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
                          ? options_.depthRange
                          : depthRangeFor(scene_->bounds(), camera);
   shaders::Camera c = cameraUniform(camera, extent_, range);
+  frameCamera_ = c;
   gpu::uploadBuffer(*ctx_, cameraBuffer_, {reinterpret_cast<const uint8_t*>(&c), sizeof c});
+  if (lod_) lod_->select(camera, extent_);
 
   gpu::submitAndWait(*ctx_, [&](VkCommandBuffer cmd) { recordAll(cmd); });
 
@@ -764,10 +905,14 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     PassResult r;
     r.name = p.name;
     if (i < times.size()) r.gpuMs = times[i];
-    if (i < stats.size()) r.fragmentInvocationsStatistic = int64_t(stats[i].fragmentShaderInvocations);
+    if (i < stats.size()) {
+      r.fragmentInvocationsStatistic = int64_t(stats[i].fragmentShaderInvocations);
+      r.computeInvocationsStatistic = int64_t(stats[i].computeShaderInvocations);
+    }
     if (options_.instrumented) {
       PassCounts counts = attributeCounters(p.sites, counters, p.bindings, resources_);
       r.fragmentInvocations = counts.fragmentInvocations;
+      r.computeInvocations = counts.computeInvocations;
       r.accesses = std::move(counts.accesses);
       r.maxSlotCount = counts.maxSlotCount;
       r.maxSlotResource = std::move(counts.maxSlotResource);
@@ -775,12 +920,26 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
         addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
       }
       if (!p.depthWrite.empty()) {
-        addAccess(r.accesses, p.depthWrite, true, r.fragmentInvocations, depthBytes, "derived");
+        // The written target's texel ("depth": D32_S8; "shadow_map": D32_SFLOAT).
+        uint32_t writeBytes = depthBytes;
+        for (const auto& info : resources_) {
+          if (info.name == p.depthWrite && info.elementBytes > 0) writeBytes = info.elementBytes;
+        }
+        addAccess(r.accesses, p.depthWrite, true, r.fragmentInvocations, writeBytes, "derived");
       }
     }
     frame.passes.push_back(std::move(r));
   }
-  return finishFrame(std::move(frame));
+  frame = finishFrame(std::move(frame));
+  // The tile-memory model: lines of the resources a pass keeps on chip.
+  for (uint32_t i = 0; i < passes_.size() && i < frame.passes.size(); ++i) {
+    for (auto& a : frame.passes[i].accesses) a.onChip = passes_[i].onChip.count(a.resource) > 0;
+  }
+  // Extras only where a pass keeps something on chip (a technique's
+  // measurement, as bloom's); elsewhere both models agree line by line.
+  const bool anyOnChip = std::any_of(passes_.begin(), passes_.end(), [](const Pass& p) { return !p.onChip.empty(); });
+  if (options_.instrumented && anyOnChip) tileMemoryExtras_ = tileMemorySummary(frame);
+  return frame;
 }
 
 std::vector<uint8_t> RendererBase::finalImage() {
@@ -819,6 +978,9 @@ void RendererBase::destroy() {
   const gpu::Context& ctx = *ctx_;
   vkDeviceWaitIdle(ctx.device);
   destroyPasses();
+  lod_.reset();
+  if (packedVertices_) gpu::destroyBuffer(ctx, packedVertices_->buffer);
+  packedVertices_.reset();
   for (auto p : pipelines_) vkDestroyPipeline(ctx.device, p, nullptr);
   for (auto l : pipelineLayouts_) vkDestroyPipelineLayout(ctx.device, l, nullptr);
   for (auto& m : modules_) gpu::destroyShaderModule(ctx, m);
@@ -849,7 +1011,9 @@ void RendererBase::destroy() {
   depthOnlyView_ = VK_NULL_HANDLE;
   bloomSampler_ = VK_NULL_HANDLE;
   bloomExtras_ = nullptr;
+  tileMemoryExtras_ = nullptr;
   hdr_ = final_ = depth_ = bloom_ = nullptr;
+  destroyShadows();
   slotCount_ = 0;
   ready_ = false;
   ctx_ = nullptr;

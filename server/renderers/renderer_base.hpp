@@ -8,6 +8,7 @@
 #include <deque>
 #include <functional>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,12 @@
 #include "gpu/queries.hpp"
 #include "gpu/resources.hpp"
 #include "renderers/gpu_scene.hpp"
+#include "renderers/lod.hpp"
 #include "renderers/pass_counters.hpp"
 #include "renderers/renderer.hpp"
+#include "renderers/shadows.hpp"
+#include "renderers/tbn.hpp"
+#include "shared.h"
 
 namespace tally::renderers {
 
@@ -32,6 +37,7 @@ struct AttachmentSpec {
   VkImageLayout initial = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImageLayout layout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;  // during the subpass
   VkImageLayout final = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;  // the image's (MSAA targets)
 };
 
 // One subpass; external dependencies make each render pass wait for all
@@ -63,6 +69,10 @@ class RendererBase : public Renderer {
     PassBindings bindings;
     std::vector<spirv::Site> sites;
     std::string depthWrite;     // resource whose depth/stencil the pass writes ("" none)
+    // Tile-memory model: resources whose traffic in this pass a tile-based GPU
+    // keeps on chip (DONT_CARE attachments, input attachments of the render
+    // pass); their lines get Access::onChip (renderers/tile_memory.hpp).
+    std::set<std::string> onChip;
     uint64_t indicesDrawn = 0;  // this frame, by drawScene
     bool indexFetches = false;  // derive "indices" reads from indicesDrawn
   };
@@ -81,8 +91,12 @@ class RendererBase : public Renderer {
 
   // A colour or depth target, recorded as a resource.
   // The image lives until destroy() (stable address).
+  // `samples` > 1: a multisampled target (RendererOptions::msaa).
   const gpu::Image* createTarget(const std::string& name, VkFormat format, VkImageUsageFlags usage,
-                                 ResourceKind kind);
+                                 ResourceKind kind, uint32_t samples = 1);
+  // A transient colour attachment (renderers/tile_memory.hpp): lazily
+  // allocated memory where the device offers it; ResourceInfo::memory says.
+  const gpu::Image* createTransientTarget(const std::string& name, VkFormat format, VkImageUsageFlags usage);
   VkImageView depthOnlyView();  // the depth aspect of "depth", for sampling
   VkFramebuffer framebuffer(VkRenderPass renderPass, const std::vector<VkImageView>& views);
 
@@ -109,19 +123,71 @@ class RendererBase : public Renderer {
                   VkImageLayout layout);
 
   // Vertex buffer binding 0 (shaders::Vertex) with the four attributes.
-  static void meshVertexInput(gpu::GraphicsPipelineDesc& desc);
+  // tangent_frame = quaternion: the packed 24-byte vertex (renderers/tbn.hpp),
+  // position, uv and the frame as R32_UINT at kAttribNormal.
+  void meshVertexInput(gpu::GraphicsPipelineDesc& desc) const;
   // Frame and geometry sets, `material`/`passInput` where given, counters.
   // `geometry` replaces the scene's geometry set where given.
   void bindSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet material,
                 VkDescriptorSet passInput, VkDescriptorSet geometry = VK_NULL_HANDLE);
+  void bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout, VkDescriptorSet material,
+                  VkDescriptorSet passInput, VkDescriptorSet geometry);
   // A geometry set (draws, materials, vertices, indices) with another materials buffer.
   VkDescriptorSet geometrySetWith(const gpu::Buffer& materials);
-  // Every draw, push constants and (when materialSets) the draw's material set.
+  // Every draw, push constants and (when materialSets) the draw's material
+  // set; with LOD on, each draw's level chosen for this frame.
   void drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout, bool materialSets);
   void beginRenderPass(VkCommandBuffer cmd, uint32_t passIndex, VkRenderPass renderPass, VkFramebuffer fb,
                        const std::vector<VkClearValue>& clears);
   void endRenderPass(VkCommandBuffer cmd, uint32_t passIndex);
+  // Inside one render pass: ends pass `fromPass`'s statistics query, moves to
+  // the next subpass and begins `toPass`'s (queries may not span subpasses).
+  // Timestamps stay around whole records: the pass that records the render
+  // pass carries the time of all its subpasses.
+  void nextSubpass(VkCommandBuffer cmd, uint32_t fromPass, uint32_t toPass);
   void drawFullScreen(VkCommandBuffer cmd) { vkCmdDraw(cmd, 3, 1, 0, 0); }
+
+  // Compute passes. A pass that dispatches compiles its .comp.glsl through
+  // computePipeline() (instrumented like every shader; the sites go to the
+  // pass, its invocations to PassResult::computeInvocations) with a layout
+  // from computePipelineLayout() (sets as pipelineLayout(), push constants
+  // for the compute stage), binds with bindComputeSets() and brackets its
+  // dispatches with beginComputePass()/endComputePass() (the pass's pipeline
+  // statistics). Storage images are written in VK_IMAGE_LAYOUT_GENERAL; the
+  // pass moves them there and back itself (gpu::transitionImage).
+  VkPipelineLayout computePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput);
+  Result<VkPipeline> computePipeline(uint32_t passIndex, const std::string& file, VkPipelineLayout layout,
+                                     const std::vector<std::string>& defines = {});
+  void bindComputeSets(VkCommandBuffer cmd, VkPipelineLayout layout, VkDescriptorSet material,
+                       VkDescriptorSet passInput, VkDescriptorSet geometry = VK_NULL_HANDLE);
+  void beginComputePass(VkCommandBuffer cmd, uint32_t passIndex);
+  void endComputePass(VkCommandBuffer cmd, uint32_t passIndex);
+  // A VK_DESCRIPTOR_TYPE_STORAGE_IMAGE descriptor in layout GENERAL.
+  void writeStorageImage(VkDescriptorSet set, uint32_t binding, VkImageView view);
+  // Extra usage for the "hdr" target: VK_IMAGE_USAGE_STORAGE_BIT where a
+  // compute pass writes it. Only such renderers ask: storage usage can cost
+  // the target its compression on some GPUs.
+  virtual VkImageUsageFlags hdrExtraUsage() const { return 0; }
+  // Shading in compute (compute_shading.cpp; RendererOptions::computeShading):
+  // pass `passIndex` dispatches `file` in kComputeShadingGroup^2 workgroups
+  // over the extent with sets as bindComputeSets(material, input, geometry);
+  // `inputLayout` is computeShadingInputLayout()'s, and "hdr" is written here
+  // at kBindingHdrImage (moved UNDEFINED -> GENERAL before the dispatch and to
+  // SHADER_READ_ONLY_OPTIMAL after it). Renderers using it return
+  // computeShadingUsage() from hdrExtraUsage() and computeShadingNotes() in notes().
+  static constexpr uint32_t kComputeShadingGroup = 8;
+  // `inputs` (at most kBindingHdrImage) combined image samplers at bindings
+  // 0.., and the storage image at shaders::kBindingHdrImage; compute stage only.
+  VkDescriptorSetLayout computeShadingInputLayout(uint32_t inputs);
+  Result<bool> addComputeShading(uint32_t passIndex, const std::string& file, VkDescriptorSetLayout material,
+                                 VkDescriptorSet materialSet, VkDescriptorSetLayout inputLayout,
+                                 VkDescriptorSet input, VkDescriptorSet geometry,
+                                 const std::vector<std::string>& defines = {});
+  VkImageUsageFlags computeShadingUsage() const;
+  void computeShadingNotes(nlohmann::json& notes) const;
+  // False for a compute workload that fills "hdr" everywhere and has no
+  // depth/stencil: the base then adds no skybox pass.
+  virtual bool drawsSky() const { return true; }
 
   // Geometry passes: depth LESS (written when writeDepth), stencil set to
   // kStencilGeometry on every fragment that passes.
@@ -136,6 +202,16 @@ class RendererBase : public Renderer {
   static VkClearValue depthClear();  // depth 1 (far), stencil 0
   // After the base has attributed a frame: renderer-specific derived lines.
   virtual FrameResult finishFrame(FrameResult frame) { return frame; }
+
+  // The index and draws buffers the geometry set and drawScene bind: the
+  // scene's, or with LOD on the LOD index buffer and the per-frame draws.
+  const gpu::Buffer& indexBuffer() const;
+  const gpu::Buffer& drawsBuffer() const;
+  std::unique_ptr<LodSelection> lod_;  // with options_.lodThresholdPx > 0
+  // The vertex buffer the geometry set and drawScene bind: the scene's, or
+  // with tangent_frame = quaternion the packed one (renderers/tbn.hpp).
+  const gpu::Buffer& vertexBuffer() const;
+  std::unique_ptr<PackedVertexBuffer> packedVertices_;
 
   // Frame-set and geometry-set bindings every pass may read.
   PassBindings commonBindings() const;
@@ -152,6 +228,7 @@ class RendererBase : public Renderer {
   std::vector<VkDescriptorSet> materialSets_;
   VkDescriptorSet mapArraySet_ = VK_NULL_HANDLE;
   VkSampler targetSampler_ = VK_NULL_HANDLE;  // nearest, clamp: texelFetch of targets
+  shaders::Camera frameCamera_ = {};          // the camera uniform of the last renderFrame()
   std::vector<ResourceInfo> resources_;
 
  private:
@@ -160,6 +237,14 @@ class RendererBase : public Renderer {
   // targets: "bloom_bright", "bloom_h" (the two-pass blurs), "bloom".
   void setupBloom();
   std::vector<std::string> bloomPassNames() const;
+  // Shadow mapping (shadows.cpp; none with shadows off): the "shadow" pass
+  // first, "shadow_map" and the sun's uniform bound in set 0, the defines
+  // every shader gets and the bindings every pass has.
+  Result<bool> setupShadows();
+  void destroyShadows();
+  std::vector<std::string> shadowDefines() const;
+  void shadowBindings(PassBindings& bindings) const;
+  ShadowState shadow_;
   void recordAll(VkCommandBuffer cmd);
 
   std::vector<Pass> passes_;
@@ -175,6 +260,7 @@ class RendererBase : public Renderer {
   const gpu::Image* bloom_ = nullptr;  // the blurred bloom tonemap adds; null with bloom off
   VkSampler bloomSampler_ = VK_NULL_HANDLE;  // linear, clamp: the bilinear blur's taps
   nlohmann::json bloomExtras_;               // frameExtras()["bloom"], fixed at setup
+  nlohmann::json tileMemoryExtras_;          // frameExtras()["tile_memory"], of the last frame
   std::vector<VkDescriptorSetLayout> ownedSetLayouts_;
   std::vector<VkPipelineLayout> pipelineLayouts_;
   std::vector<VkPipeline> pipelines_;

@@ -11,5 +11,7 @@ std::unique_ptr<Renderer> makeForward(bool prepass);
 std::unique_ptr<Renderer> makeDeferred();
 std::unique_ptr<Renderer> makeVisbuffer();
 std::unique_ptr<Renderer> makeLeanVisbuffer();
+std::unique_ptr<Renderer> makeVolumeFog();  // workloads.cpp
+std::unique_ptr<Renderer> makeRaytrace();   // workloads.cpp
 
 }  // namespace tally::renderers

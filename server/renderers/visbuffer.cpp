@@ -57,13 +57,16 @@ class VisbufferRenderer final : public VisbufferBase {
     if (auto fits = checkIdCapacity(); !fits) return fits;
     addMapResources();
     const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-    // The ids are readable (targetBytes) so they can be checked against the geometry.
-    Target id{createTarget("visibility.id", idFormat(), usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                           ResourceKind::Attachment),
+    // The ids are readable (targetBytes) so they can be checked against the geometry;
+    // multisampled ones (msaa > 1) are not (no copy from a multisampled image).
+    const uint32_t n = targetSamples();
+    const VkImageUsageFlags readable = n > 1 ? 0 : VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    if (auto ok = checkMsaa({{idFormat(), usage}, {derivativeFormat(), usage}}); !ok) return ok;
+    Target id{createTarget("visibility.id", idFormat(), usage | readable, ResourceKind::Attachment, n),
               "visibility.id"};
     // The derivatives too: the precision sweep decodes them (mip level per pixel).
-    Target uvd{createTarget("visibility.uv_derivatives", derivativeFormat(),
-                            usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, ResourceKind::Attachment),
+    Target uvd{createTarget("visibility.uv_derivatives", derivativeFormat(), usage | readable,
+                            ResourceKind::Attachment, n),
                "visibility.uv_derivatives"};
     extension_ = ctx_->fragmentBarycentric;
     const std::vector<std::string> defines = encodingDefines(options_.visibility);

@@ -62,9 +62,31 @@ std::string materialSelectionUnsupported(const gpu::Context& ctx, MaterialSelect
   return "";
 }
 
+Result<bool> VisbufferBase::checkMsaa(const std::vector<MsaaTarget>& targets) const {
+  if (std::string why = msaaUnsupported(*ctx_, options_.msaa, targets, false); !why.empty()) {
+    return makeError(std::string(name()) + ": " + why);
+  }
+  return true;
+}
+
+FrameResult VisbufferBase::finishFrame(FrameResult frame) {
+  for (auto& p : frame.passes) {
+    if (p.name == "visibility") scaleSampleWrites(p, resources_, options_.msaa);
+  }
+  return frame;
+}
+
+nlohmann::json VisbufferBase::frameExtras() {
+  nlohmann::json extras = RendererBase::frameExtras();
+  if (options_.msaa > 1) extras["msaa"] = msaaExtras(resources_, options_.msaa);
+  return extras;
+}
+
 nlohmann::json VisbufferBase::notes() const {
-  return {{"material_maps", indexedMaps() ? "descriptor_indexing" : "texture_arrays"},
-          {"material_selection", toString(options_.materialSelection)}};
+  nlohmann::json notes = {{"material_maps", indexedMaps() ? "descriptor_indexing" : "texture_arrays"},
+                          {"material_selection", toString(options_.materialSelection)}};
+  computeShadingNotes(notes);
+  return notes;
 }
 
 Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const std::string& fragment,
@@ -73,28 +95,37 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
   const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   uint32_t p = addPass("visibility");
+  const uint32_t n = options_.msaa;
+  const auto samples = VkSampleCountFlagBits(n);
   std::vector<AttachmentSpec> colors;
   std::vector<VkImageView> views;
   for (uint32_t i = 0; i < targets.size(); ++i) {
     colors.push_back({targets[i].image->format});
+    colors.back().samples = samples;
     views.push_back(targets[i].image->view);
     pass(p).bindings.outputs[i] = targets[i].name;  // kOutVisibility = 0, kOutUvDerivatives = 1
   }
-  views.push_back(depth_->view);
-  VkRenderPass rp = ownRenderPass(createPassRenderPass(
-      *ctx_, colors,
-      AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly}));
+  // msaa: an N-sample depth/stencil for this pass only (the shading pass reads no depth).
+  const gpu::Image* depth =
+      n > 1 ? createTarget(kMsaaDepthName, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                           ResourceKind::Depth, n)
+            : depth_;
+  views.push_back(depth->view);
+  AttachmentSpec depthSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthReadOnly};
+  depthSpec.samples = samples;
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, colors, depthSpec));
   VkFramebuffer fb = framebuffer(rp, views);
   auto shaders =
       shaderPipeline(p, vertex, fragment, pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE), rp, defines);
   if (!shaders) return makeError(shaders.error());
   gpu::GraphicsPipelineDesc desc = *shaders;
   desc.colorAttachmentCount = uint32_t(colors.size());
+  desc.samples = samples;
   meshVertexInput(desc);
   geometryState(desc, true);
   VkPipeline pipe = pipeline(desc);
   VkPipelineLayout layout = desc.layout;
-  pass(p).depthWrite = "depth";
+  pass(p).depthWrite = n > 1 ? kMsaaDepthName : "depth";
   pass(p).indexFetches = true;
   const size_t colorCount = colors.size();
   pass(p).record = [=, this](VkCommandBuffer cmd) {
@@ -116,8 +147,14 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
                                            const std::vector<std::string>& encodingDefines) {
   const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   uint32_t p = addPass("shading");
+  if (options_.computeShading && options_.msaa > 1) {
+    return makeError(std::string(name()) + ": shading=compute with msaa " + std::to_string(options_.msaa) +
+                     " is not supported");
+  }
   std::vector<VkDescriptorType> types(inputs.size(), VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER);
-  VkDescriptorSetLayout inputLayout = setLayout(types);
+  // shading=compute: the same inputs and "hdr" as a storage image (compute_shading.cpp).
+  VkDescriptorSetLayout inputLayout =
+      options_.computeShading ? computeShadingInputLayout(uint32_t(inputs.size())) : setLayout(types);
   VkDescriptorSet input = allocateSet(inputLayout);
   auto& b = pass(p).bindings;
   for (uint32_t i = 0; i < inputs.size(); ++i) {
@@ -165,16 +202,30 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
       b.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
     }
   }
+  if (options_.computeShading) {
+    // shading.frag.glsl -> shading.comp.glsl: the same shadeTriangle (visbuffer_shade.h).
+    const std::string compute = fragment.substr(0, fragment.find(".frag")) + ".comp.glsl";
+    return addComputeShading(p, compute, mapsLayout, maps, inputLayout, input, geometry, defines);
+  }
   b.outputs[shaders::kOutColor] = "hdr";
-  VkRenderPass rp = ownRenderPass(
-      createPassRenderPass(*ctx_, {{kHdrFormat}},
-                           AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly}));
+  const bool msaa = options_.msaa > 1;
+  if (msaa) defines.push_back("TALLY_MSAA " + std::to_string(options_.msaa));
+  // msaa: the 1-sample "depth" is cleared here and gets the stencil mask (msaa.hpp).
+  const AttachmentSpec depth =
+      msaa ? AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED,
+                            VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, depthReadOnly}
+           : AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly};
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, {{kHdrFormat}}, depth));
   VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
   auto shaders =
       shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(mapsLayout, inputLayout), rp, defines);
   if (!shaders) return makeError(shaders.error());
   gpu::GraphicsPipelineDesc desc = *shaders;
-  geometryPixelsOnly(desc);
+  if (msaa) {
+    msaaResolveState(desc);
+  } else {
+    geometryPixelsOnly(desc);
+  }
   VkPipeline pipe = pipeline(desc);
   VkPipelineLayout layout = desc.layout;
   pass(p).record = [=, this](VkCommandBuffer cmd) {

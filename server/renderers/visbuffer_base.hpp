@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "renderers/msaa.hpp"
 #include "renderers/renderer_base.hpp"
 
 namespace tally::renderers {
@@ -36,12 +37,25 @@ std::string materialSelectionUnsupported(const gpu::Context& ctx, MaterialSelect
 class VisbufferBase : public RendererBase {
  public:
   nlohmann::json notes() const override;
+  // Bloom's, plus {"msaa": msaaExtras(...)} with msaa > 1 (renderers/msaa.hpp).
+  nlohmann::json frameExtras() override;
 
  protected:
   bool indexedMaps() const;  // the descriptor-indexing path (needs setup's context and scene)
   // Fails with visibilityIdOverflow's reason when the scene does not fit the id.
   Result<bool> checkIdCapacity() const;
   void addMapResources();    // the material map resources of the chosen path
+  // msaa > 1 (RendererOptions::msaa): the visibility targets have N samples,
+  // the visibility pass renders "depth.msaa" (N samples), the shading pass
+  // fetches every sample's id, shades each distinct triangle once weighted by
+  // its samples and marks the 1-sample "depth" (renderers/msaa.hpp). Fails
+  // naming the limit when the device lacks N for these targets.
+  Result<bool> checkMsaa(const std::vector<MsaaTarget>& targets) const;
+  uint32_t targetSamples() const { return options_.msaa; }
+  // The visibility pass's writes: per covered sample (msaa.hpp, scaleSampleWrites).
+  FrameResult finishFrame(FrameResult frame) override;
+  // shading=compute: "hdr" is a storage image (compute_shading.cpp).
+  VkImageUsageFlags hdrExtraUsage() const override { return computeShadingUsage(); }
   struct Target {
     const gpu::Image* image = nullptr;
     std::string name;  // ResourceInfo name

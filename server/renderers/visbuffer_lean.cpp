@@ -18,9 +18,12 @@ class LeanVisbufferRenderer final : public VisbufferBase {
     if (auto fits = checkIdCapacity(); !fits) return fits;
     addMapResources();
     const VkImageUsageFlags usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-    // The ids are readable (targetBytes) so they can be checked against the geometry.
-    Target id{createTarget("visibility.id", kIdFormat, usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                           ResourceKind::Attachment),
+    // The ids are readable (targetBytes) so they can be checked against the geometry;
+    // multisampled ones (msaa > 1) are not (no copy from a multisampled image).
+    const uint32_t n = targetSamples();
+    const VkImageUsageFlags readable = n > 1 ? 0 : VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    if (auto ok = checkMsaa({{kIdFormat, usage}}); !ok) return ok;
+    Target id{createTarget("visibility.id", kIdFormat, usage | readable, ResourceKind::Attachment, n),
               "visibility.id"};
     auto ok = addVisibilityPass("zprepass.vert.glsl", "visibility_lean.frag.glsl", {id});
     if (!ok) return ok;

@@ -267,6 +267,8 @@ json passJson(const store::Pass& p) {
           {"overhead_ratio", opt(p.overheadRatio)},
           {"fragment_invocations", opt(p.fragmentInvocations)},
           {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
+          {"compute_invocations", opt(p.computeInvocations)},
+          {"compute_invocations_statistic", opt(p.computeInvocationsStatistic)},
           {"resources", resources}};
 }
 

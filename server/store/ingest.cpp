@@ -128,8 +128,9 @@ struct Inserter {
             "?21, ?22)"),
         pass(db,
              "INSERT INTO passes (sample_id, position, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, "
-             "overhead_ratio, fragment_invocations, fragment_invocations_statistic) "
-             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)"),
+             "overhead_ratio, fragment_invocations, fragment_invocations_statistic, compute_invocations, "
+             "compute_invocations_statistic) "
+             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
         counter(db,
                 "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
                 "count_spread, source) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"),
@@ -214,7 +215,9 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
         .bind(6, optNumber(pass, "gpu_ms_instrumented", at))
         .bind(7, optNumber(pass, "overhead_ratio", at))
         .bind(8, optNumber(pass, "fragment_invocations", at))
-        .bind(9, optNumber(pass, "fragment_invocations_statistic", at));
+        .bind(9, optNumber(pass, "fragment_invocations_statistic", at))
+        .bind(10, optNumber(pass, "compute_invocations", at))
+        .bind(11, optNumber(pass, "compute_invocations_statistic", at));
     in.pass.run();
     insertCounters(in, in.lastId(), pass, at);
   }

@@ -261,7 +261,8 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
     sample.row = readSampleRow(query);
     Statement passes(db_,
                      "SELECT id, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, overhead_ratio, "
-                     "fragment_invocations, fragment_invocations_statistic FROM passes WHERE sample_id = ?1 "
+                     "fragment_invocations, fragment_invocations_statistic, compute_invocations, "
+                     "compute_invocations_statistic FROM passes WHERE sample_id = ?1 "
                      "ORDER BY position");
     passes.bind(1, sampleId);
     std::map<int64_t, size_t> byId;
@@ -274,7 +275,9 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
                                    passes.getOptDouble(5),
                                    passes.getOptDouble(6),
                                    passes.getOptDouble(7),
-                                   {}});
+                                   {},
+                                   passes.getOptDouble(8),
+                                   passes.getOptDouble(9)});
     }
     Statement counters(
         db_,

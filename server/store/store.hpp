@@ -202,6 +202,9 @@ struct Pass {
   std::optional<double> fragmentInvocations;
   std::optional<double> fragmentInvocationsStatistic;
   std::vector<Counter> counters;  // in the result's order
+  // Passes that dispatch compute work; empty for the others.
+  std::optional<double> computeInvocations;
+  std::optional<double> computeInvocationsStatistic;
 };
 
 struct Sample {

@@ -163,7 +163,7 @@ TEST(RendererOptionsDefaults, ForwardAndDeferredUnchanged) {
 TEST(RendererOptionsTable, BadValuesAreRefusedWithTheOptionNamed) {
   auto bad = canonicalOptions("forward", {{"output", "wireframe"}});
   ASSERT_FALSE(bad.ok());
-  EXPECT_EQ(bad.error(), "output: \"wireframe\" is not one of shaded, overdraw, overshading");
+  EXPECT_EQ(bad.error(), "output: \"wireframe\" is not one of shaded, overdraw, overshading, density");
   bad = canonicalOptions("forward", {{"zprepass", "yes"}});
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().rfind("zprepass: ", 0), 0u) << bad.error();

@@ -76,6 +76,8 @@ gpu::Context* context() {
     s.tried = true;
     gpu::ContextOptions options;
     if (const char* device = std::getenv("TALLY_TEST_DEVICE")) options.device = device;
+    // TALLY_TEST_VALIDATION=1: VK_LAYER_KHRONOS_validation where installed (messages on stderr).
+    if (std::getenv("TALLY_TEST_VALIDATION") != nullptr) options.validation = true;
     auto created = gpu::createContext(options);
     if (created) {
       s.ctx = std::make_unique<gpu::Context>(std::move(created).value());

@@ -21,6 +21,9 @@ class Ingest : public StoreTest {
 TEST_F(Ingest, ReadsBackWhatWentIn) {
   int64_t jobId = newJob();
   Capture c = realisticCapture();
+  // A compute pass carries its invocations (migration 0004); the others have none.
+  c.result["runs"][1]["samples"][0]["passes"][1]["compute_invocations"] = 57600.0;
+  c.result["runs"][1]["samples"][0]["passes"][1]["compute_invocations_statistic"] = 57601.0;
   EXPECT_EQ(ingest(jobId, c), 2);
 
   auto page = store_->listRuns({.jobId = jobId}, {});
@@ -114,6 +117,13 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
         EXPECT_EQ(pass.overheadRatio, 1.1);
         EXPECT_EQ(pass.fragmentInvocations, inPass["fragment_invocations"].get<double>());
         EXPECT_EQ(pass.fragmentInvocationsStatistic, inPass["fragment_invocations_statistic"].get<double>());
+        if (inPass.contains("compute_invocations")) {
+          EXPECT_EQ(pass.computeInvocations, inPass["compute_invocations"].get<double>());
+          EXPECT_EQ(pass.computeInvocationsStatistic, inPass["compute_invocations_statistic"].get<double>());
+        } else {
+          EXPECT_FALSE(pass.computeInvocations);
+          EXPECT_FALSE(pass.computeInvocationsStatistic);
+        }
         ASSERT_EQ(pass.counters.size(), 3u);
         for (size_t k = 0; k < 3; ++k) {
           const json& inCounter = inPass["resources"][k];

@@ -29,7 +29,9 @@ TEST(Migrations, EmbeddedAreNumberedFromOneWithoutGaps) {
   for (size_t i = 0; i < all.size(); ++i) {
     EXPECT_EQ(all[i].version, static_cast<int>(i + 1));
     EXPECT_FALSE(all[i].name.empty());
-    EXPECT_NE(all[i].sql.find("CREATE"), std::string_view::npos) << all[i].name;
+    // Each one changes the schema.
+    EXPECT_TRUE(all[i].sql.find("CREATE") != std::string_view::npos || all[i].sql.find("ALTER") != std::string_view::npos)
+        << all[i].name;
   }
   EXPECT_EQ(all[0].name, "initial");
   EXPECT_EQ(latestSchemaVersion(), static_cast<int>(all.size()));

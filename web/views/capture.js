@@ -27,8 +27,9 @@ const numberOr = (text) => (text.trim() !== '' && Number.isFinite(Number(text)) 
 
 // Each checked renderer row: its name, or {renderer, options} where an option
 // is set away from its default (the server drops defaults anyway).
-function variantsOf(form) {
-  return [...form.querySelectorAll('[data-variant-row]')].filter((row) => row.querySelector('input[name="renderers"]').checked).map((row) => {
+// `list`: "renderers" or "workloads" (the compute workloads' rows).
+function variantsOf(form, list = 'renderers') {
+  return [...form.querySelectorAll('[data-variant-row]')].filter((row) => (row.dataset.list || 'renderers') === list && row.querySelector('input[name="renderers"]').checked).map((row) => {
     const options = {};
     for (const control of row.querySelectorAll('[data-option]')) {
       const def = JSON.parse(control.dataset.default);
@@ -43,7 +44,7 @@ function variantsOf(form) {
 // One renderer's row: its checkbox and a select per option it takes (the
 // option table of GET /api/renderers), the default preselected; "+ variant"
 // adds another row of the same renderer.
-function variantRow(renderer, optionDefs, checked) {
+function variantRow(renderer, optionDefs, checked, list = 'renderers') {
   const own = optionDefs.filter((o) => o.renderers.includes(renderer));
   const controls = own.map((o) => {
     const attrs = { dataset: { option: o.name, default: JSON.stringify(o.default), kind: o.range ? 'range' : 'values' }, 'aria-label': `${renderer} ${o.name}`, title: o.description };
@@ -52,11 +53,11 @@ function variantRow(renderer, optionDefs, checked) {
       : h('select', attrs, o.values.map((v) => h('option', { value: JSON.stringify(v), selected: JSON.stringify(v) === JSON.stringify(o.default) }, typeof v === 'string' ? v : JSON.stringify(v))));
     return h('label', { class: 'option' }, ` ${o.name} `, control);
   });
-  const row = h('div', { class: 'variant-row', dataset: { variantRow: renderer } },
+  const row = h('div', { class: 'variant-row', dataset: { variantRow: renderer, list } },
     h('label', {}, h('input', { type: 'checkbox', name: 'renderers', value: renderer, checked }), ' ', renderer), controls);
   if (own.length) {
     row.append(' ', h('button', { type: 'button', class: 'secondary', dataset: { addVariant: renderer },
-      onclick: () => row.after(variantRow(renderer, optionDefs, true)) }, '+ variant'));
+      onclick: () => row.after(variantRow(renderer, optionDefs, true, list)) }, '+ variant'));
   }
   return row;
 }
@@ -64,8 +65,11 @@ function variantRow(renderer, optionDefs, checked) {
 function specOf(form) {
   const data = new FormData(form);
   const counting = data.get('counting') === 'sampled' ? `sampled:${data.get('sample_n').trim()}` : data.get('counting');
+  const renderers = variantsOf(form);
+  const workloads = variantsOf(form, 'workloads');
   return {
-    renderers: variantsOf(form),
+    ...(renderers.length || !workloads.length ? { renderers } : {}),
+    ...(workloads.length ? { workloads } : {}),
     scenes: [...data.getAll('scenes'), ...data.getAll('gltf').map((path) => ({ gltf: path }))],
     resolutions: parseResolutions(data.get('resolutions')),
     cameras: 'auto',
@@ -109,7 +113,7 @@ function sweepForm(onSubmit) {
   return form;
 }
 
-function captureForm(renderers, optionDefs, scenes, onSubmit) {
+function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
   const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
   const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
   const samplingN = h('input', { name: 'sample_n', value: '4', size: 4, 'aria-label': 'Sampling tile size N' });
@@ -118,6 +122,10 @@ function captureForm(renderers, optionDefs, scenes, onSubmit) {
   const form = h('form', { class: 'capture-form', novalidate: true, 'aria-label': 'New capture' },
     h('fieldset', { dataset: { field: 'renderers' } }, h('legend', {}, 'Renderers'),
       h('div', { class: 'variants' }, renderers.map((r) => variantRow(r, optionDefs, true)))),
+    workloads.length
+      ? h('fieldset', { dataset: { field: 'workloads' } }, h('legend', {}, 'Workloads (compute: scene bounds and cameras only)'),
+        h('div', { class: 'variants' }, workloads.map((w) => variantRow(w, optionDefs, false, 'workloads'))))
+      : null,
     h('fieldset', { dataset: { field: 'scenes' } }, h('legend', {}, 'Scenes'),
       h('div', { class: 'choices' },
         scenes.procedural.map((s) => choice('scenes', s.name, s.name === 'atrium')),
@@ -205,7 +213,7 @@ function summary(spec) {
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
   const variant = (r) => (typeof r === 'string' ? r : [r.renderer, ...Object.entries(r.options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`)].join(' '));
-  return `${(spec.renderers || []).map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
+  return `${[...(spec.renderers || []), ...(spec.workloads || [])].map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
 }
 
 function jobTable(jobs, onCancel) {
@@ -282,7 +290,8 @@ export async function render(page, { signal }) {
     }
   }
 
-  const form = captureForm(renderers.renderers, renderers.options || [], scenes, (spec) => start(spec, form));
+  const form = captureForm(renderers.renderers, renderers.options || [], scenes, (spec) => start(spec, form),
+    renderers.workloads || []);
   const sweeps = sweepForm((spec) => start(spec, sweeps));
   page.append(h('h1', {}, 'New capture'), form,
     h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a stability sweep')), sweeps),

@@ -155,7 +155,7 @@ export async function render(page, { query, signal }) {
   };
   page.append(
     h('h1', {}, 'Runs'),
-    filterForm(query, { renderers: renderers.renderers, scenes: sceneNames, devices: devices.devices }, apply),
+    filterForm(query, { renderers: [...renderers.renderers, ...(renderers.workloads || [])], scenes: sceneNames, devices: devices.devices }, apply),
     h('div', { class: 'toolbar' }, compareButton, status),
     rows.length
       ? h('div', { class: 'table-wrap' }, h('table', { class: 'runs', 'aria-label': 'Runs' }, thead, tbody))
