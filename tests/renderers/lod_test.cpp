@@ -176,10 +176,11 @@ struct LodScene {
 };
 
 LodScene& lodScene() {
-  context();  // the device first, so that it outlives the scene below (statics die in reverse)
-  static std::unique_ptr<LodScene> s;
-  if (!s) {
-    s = std::make_unique<LodScene>();
+  // Never freed: the fixture's environment destroys the device before
+  // statics die, and GpuScene::destroy needs it (the process ends anyway).
+  static LodScene* s = nullptr;
+  if (s == nullptr) {
+    s = new LodScene();
     s->scene.name = "lod-test";
     s->scene.meshes = {sphere({0, 0, 0}, 1.0f, 48, 24), sphere({1.5f, 0, -12}, 1.0f, 48, 24),
                        sphere({-3, 0, -40}, 1.0f, 48, 24), grid(50.0f, -1.0f, 24)};
