@@ -32,11 +32,21 @@ VkImageAspectFlags aspectOf(VkFormat format) {
 }
 
 VkDeviceMemory allocate(const Context& ctx, const VkMemoryRequirements& requirements, MemoryUse use,
-                        bool deviceAddress, bool* coherent) {
+                        bool deviceAddress, bool* coherent, VkMemoryPropertyFlags* memoryFlags = nullptr) {
   VkMemoryPropertyFlags required = 0;
   VkMemoryPropertyFlags preferred = 0;
+  uint32_t lazy = ~0u;
   switch (use) {
     case MemoryUse::DeviceLocal: preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT; break;
+    case MemoryUse::Transient:
+      preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+      for (uint32_t i = 0; i < ctx.memoryProperties.memoryTypeCount && lazy == ~0u; ++i) {
+        if ((requirements.memoryTypeBits & (1u << i)) != 0 &&
+            (ctx.memoryProperties.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_LAZILY_ALLOCATED_BIT) != 0) {
+          lazy = i;
+        }
+      }
+      break;
     case MemoryUse::Upload:
       required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
       break;
@@ -45,7 +55,9 @@ VkDeviceMemory allocate(const Context& ctx, const VkMemoryRequirements& requirem
       preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
       break;
   }
-  uint32_t type = selectMemoryType(ctx.memoryProperties, requirements.memoryTypeBits, required, preferred);
+  uint32_t type = lazy != ~0u ? lazy
+                              : selectMemoryType(ctx.memoryProperties, requirements.memoryTypeBits, required, preferred);
+  if (memoryFlags != nullptr) *memoryFlags = ctx.memoryProperties.memoryTypes[type].propertyFlags;
   if (coherent != nullptr) {
     *coherent =
         (ctx.memoryProperties.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT) != 0;
@@ -160,7 +172,8 @@ void destroyBuffer(const Context& ctx, Buffer& buffer) {
 }
 
 Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat format,
-                  VkImageUsageFlags usage, VkSampleCountFlagBits samples) {
+                  VkImageUsageFlags usage, VkSampleCountFlagBits samples, MemoryUse use,
+                  VkMemoryPropertyFlags* memoryFlags) {
   Image result;
   result.format = format;
   result.extent = {width, height};
@@ -180,7 +193,7 @@ Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat 
   try {
     VkMemoryRequirements requirements;
     vkGetImageMemoryRequirements(ctx.device, result.image, &requirements);
-    result.memory = allocate(ctx, requirements, MemoryUse::DeviceLocal, false, nullptr);
+    result.memory = allocate(ctx, requirements, use, false, nullptr, memoryFlags);
     VK_CHECK(vkBindImageMemory(ctx.device, result.image, result.memory, 0));
 
     VkImageViewCreateInfo viewInfo = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};

@@ -35,6 +35,9 @@ enum class MemoryUse {
   DeviceLocal,  // GPU-only
   Upload,       // host-visible, written by the CPU (staging, uniforms)
   Readback,     // host-visible, read by the CPU (prefers host-cached)
+  // Transient attachments: a LAZILY_ALLOCATED type where the image may take
+  // one (tile-based GPUs back it with tile memory only), else device-local.
+  Transient,
 };
 
 // A memory type allowed by typeBits with all `required` flags; `preferred`
@@ -47,9 +50,12 @@ void destroyBuffer(const Context& ctx, Buffer& buffer);
 
 // 2D, one mip level, one layer, optimal tiling, device-local, with a view
 // (aspect derived from the format). Starts in VK_IMAGE_LAYOUT_UNDEFINED.
-// `samples` > 1: a multisampled image (render targets; MSAA).
+// `samples` > 1: a multisampled image (render targets; MSAA). `use`:
+// DeviceLocal or Transient; `memoryFlags`, where given, gets the property
+// flags of the memory type taken.
 Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat format,
-                  VkImageUsageFlags usage, VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT);
+                  VkImageUsageFlags usage, VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT,
+                  MemoryUse use = MemoryUse::DeviceLocal, VkMemoryPropertyFlags* memoryFlags = nullptr);
 void destroyImage(const Context& ctx, Image& image);
 
 // Records commands with `record`, submits them on ctx.queue and waits.

@@ -300,14 +300,18 @@ void RendererBase::writeImage(VkDescriptorSet set, uint32_t binding, VkImageView
 
 VkPipelineLayout RendererBase::pipelineLayout(VkDescriptorSetLayout material,
                                               VkDescriptorSetLayout passInput) {
+  return makePipelineLayout(material, passInput, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
+}
+
+VkPipelineLayout RendererBase::makePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput,
+                                                  VkShaderStageFlags pushStages) {
   std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
   sets[shaders::kSetFrame] = frameLayout_;
   sets[shaders::kSetGeometry] = geometryLayout_;
   if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
   if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
   sets[counterSet_] = counterLayout_;
-  pipelineLayouts_.push_back(gpu::createPipelineLayout(
-      *ctx_, sets, sizeof(shaders::DrawPush), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT));
+  pipelineLayouts_.push_back(gpu::createPipelineLayout(*ctx_, sets, sizeof(shaders::DrawPush), pushStages));
   return pipelineLayouts_.back();
 }
 
@@ -322,19 +326,9 @@ Result<bool> RendererBase::addDepthPrepass() {
   VkRenderPass rp = ownRenderPass(createPassRenderPass(
       *ctx_, {}, AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED, depthAttachment, depthAttachment}));
   VkFramebuffer fb = framebuffer(rp, {depth_->view});
-  auto vs = shader(p, "zprepass.vert.glsl");
-  if (!vs) return makeError(vs.error());
-  gpu::GraphicsPipelineDesc desc;
-  desc.vertex = *vs;
-  if (options_.instrumented) {
-    auto fs = shader(p, "zprepass.frag.glsl");
-    if (!fs) return makeError(fs.error());
-    desc.fragment = *fs;
-  }
-  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
-  desc.renderPass = rp;
-  desc.colorAttachmentCount = 0;
-  meshVertexInput(desc);
+  auto depthOnly = depthOnlyPipeline(p, "zprepass.vert.glsl", rp);
+  if (!depthOnly) return makeError(depthOnly.error());
+  gpu::GraphicsPipelineDesc desc = *depthOnly;
   geometryState(desc, true);
   VkPipeline pipe = pipeline(desc);
   VkPipelineLayout layout = desc.layout;
@@ -348,6 +342,24 @@ Result<bool> RendererBase::addDepthPrepass() {
     endRenderPass(cmd, p);
   };
   return true;
+}
+
+Result<gpu::GraphicsPipelineDesc> RendererBase::depthOnlyPipeline(uint32_t passIndex, const std::string& vertex,
+                                                                  VkRenderPass renderPass) {
+  auto vs = shader(passIndex, vertex);
+  if (!vs) return makeError(vs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  if (options_.instrumented) {
+    auto fs = shader(passIndex, "zprepass.frag.glsl");
+    if (!fs) return makeError(fs.error());
+    desc.fragment = *fs;
+  }
+  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
+  desc.renderPass = renderPass;
+  desc.colorAttachmentCount = 0;
+  meshVertexInput(desc);
+  return desc;
 }
 
 void RendererBase::geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth) {
@@ -404,15 +416,7 @@ void RendererBase::bindComputeSets(VkCommandBuffer cmd, VkPipelineLayout layout,
 
 VkPipelineLayout RendererBase::computePipelineLayout(VkDescriptorSetLayout material,
                                                      VkDescriptorSetLayout passInput) {
-  std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
-  sets[shaders::kSetFrame] = frameLayout_;
-  sets[shaders::kSetGeometry] = geometryLayout_;
-  if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
-  if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
-  sets[counterSet_] = counterLayout_;
-  pipelineLayouts_.push_back(
-      gpu::createPipelineLayout(*ctx_, sets, sizeof(shaders::DrawPush), VK_SHADER_STAGE_COMPUTE_BIT));
-  return pipelineLayouts_.back();
+  return makePipelineLayout(material, passInput, VK_SHADER_STAGE_COMPUTE_BIT);
 }
 
 Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::string& file,

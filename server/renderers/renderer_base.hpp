@@ -196,6 +196,12 @@ class RendererBase : public Renderer {
   // (zprepass.vert; zprepass.frag in instrumented runs, so that its depth
   // writes are counted). The next geometry pass loads depth and tests EQUAL.
   Result<bool> addDepthPrepass();
+  // A depth-only pipeline description for pass `passIndex`: `vertex` (a
+  // position-only vertex shader), zprepass.frag in instrumented runs (its
+  // counted invocations give the pass's depth writes), the mesh vertex input,
+  // no colour attachment; the caller sets the depth state.
+  Result<gpu::GraphicsPipelineDesc> depthOnlyPipeline(uint32_t passIndex, const std::string& vertex,
+                                                      VkRenderPass renderPass);
   // Full-screen shading passes: only pixels the geometry passes marked with
   // kStencilGeometry are shaded (sky pixels are masked out).
   static void geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc);
@@ -233,6 +239,9 @@ class RendererBase : public Renderer {
 
  private:
   void setupTonemapAndSkybox();
+  // Sets as pipelineLayout() describes; push constants DrawPush for `pushStages`.
+  VkPipelineLayout makePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput,
+                                      VkShaderStageFlags pushStages);
   // Bloom's passes before tonemap (options_.bloom; none when off) and its
   // targets: "bloom_bright", "bloom_h" (the two-pass blurs), "bloom".
   void setupBloom();

@@ -171,19 +171,9 @@ Result<bool> RendererBase::setupShadows() {
   const VkExtent2D extent = {size, size};
   framebuffers_.push_back(gpu::createFramebuffer(*ctx_, rp, std::span<const VkImageView>(&shadow_.map.view, 1), extent));
   VkFramebuffer fb = framebuffers_.back();
-  auto vs = shader(p, "shadow.vert.glsl");
-  if (!vs) return makeError(vs.error());
-  gpu::GraphicsPipelineDesc desc;
-  desc.vertex = *vs;
-  if (options_.instrumented) {
-    auto fs = shader(p, "zprepass.frag.glsl");
-    if (!fs) return makeError(fs.error());
-    desc.fragment = *fs;
-  }
-  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
-  desc.renderPass = rp;
-  desc.colorAttachmentCount = 0;
-  meshVertexInput(desc);
+  auto depthOnly = depthOnlyPipeline(p, "shadow.vert.glsl", rp);
+  if (!depthOnly) return makeError(depthOnly.error());
+  gpu::GraphicsPipelineDesc desc = *depthOnly;
   desc.depthTest = true;
   desc.depthWrite = true;
   desc.depthCompare = VK_COMPARE_OP_LESS;

@@ -43,51 +43,11 @@ nlohmann::json tileMemorySummary(const FrameResult& frame) {
 
 gpu::Image createTransientImage(const gpu::Context& ctx, uint32_t width, uint32_t height, VkFormat format,
                                 VkImageUsageFlags usage, std::string& memoryKind) {
-  gpu::Image result;
-  result.format = format;
-  result.extent = {width, height};
-  result.aspect = VK_IMAGE_ASPECT_COLOR_BIT;
-  VkImageCreateInfo info = {VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-  info.imageType = VK_IMAGE_TYPE_2D;
-  info.format = format;
-  info.extent = {width, height, 1};
-  info.mipLevels = 1;
-  info.arrayLayers = 1;
-  info.samples = VK_SAMPLE_COUNT_1_BIT;
-  info.tiling = VK_IMAGE_TILING_OPTIMAL;
-  info.usage = usage;
-  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  VK_CHECK(vkCreateImage(ctx.device, &info, nullptr, &result.image));
-  try {
-    VkMemoryRequirements requirements;
-    vkGetImageMemoryRequirements(ctx.device, result.image, &requirements);
-    uint32_t type = gpu::selectMemoryType(ctx.memoryProperties, requirements.memoryTypeBits, 0,
-                                          VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    for (uint32_t i = 0; i < ctx.memoryProperties.memoryTypeCount; ++i) {
-      if ((requirements.memoryTypeBits & (1u << i)) == 0) continue;
-      if (ctx.memoryProperties.memoryTypes[i].propertyFlags & VK_MEMORY_PROPERTY_LAZILY_ALLOCATED_BIT) {
-        type = i;
-        break;
-      }
-    }
-    memoryKind = memoryKindName(ctx.memoryProperties.memoryTypes[type].propertyFlags);
-    VkMemoryAllocateInfo alloc = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    alloc.allocationSize = requirements.size;
-    alloc.memoryTypeIndex = type;
-    VK_CHECK(vkAllocateMemory(ctx.device, &alloc, nullptr, &result.memory));
-    VK_CHECK(vkBindImageMemory(ctx.device, result.image, result.memory, 0));
-    VkImageViewCreateInfo view = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    view.image = result.image;
-    view.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    view.format = format;
-    view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    VK_CHECK(vkCreateImageView(ctx.device, &view, nullptr, &result.view));
-  } catch (...) {
-    gpu::destroyImage(ctx, result);
-    throw;
-  }
-  return result;
+  VkMemoryPropertyFlags flags = 0;
+  gpu::Image image = gpu::createImage(ctx, width, height, format, usage, VK_SAMPLE_COUNT_1_BIT,
+                                      gpu::MemoryUse::Transient, &flags);
+  memoryKind = memoryKindName(flags);
+  return image;
 }
 
 }  // namespace tally::renderers
