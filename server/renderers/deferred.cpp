@@ -233,8 +233,10 @@ class DeferredRenderer final : public RendererBase {
 // gbuffer=subpass: one render pass. Attachments 0-2 the transient G-buffer
 // (cleared, storeOp DONT_CARE), 3 depth/stencil (stored: the skybox tests its
 // stencil; loaded after a pre-pass), 4 hdr (cleared, stored). Subpass 0 writes
-// 0-3; subpass 1 reads 3 (depth aspect) and 0-2 as input attachments 0-3,
-// tests stencil == 1 against 3 read-only and writes 4.
+// 0-3; subpass 1 reads 0-2 as input attachments 0-2 and the depth aspect of
+// 3 through the sampled depth view (stored anyway; on the H200 its read as an
+// input attachment differed), tests stencil == 1 against 3 read-only and
+// writes 4.
 Result<bool> DeferredRenderer::setupSubpassPasses() {
   const VkImageUsageFlags transient =
       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT;
@@ -289,24 +291,18 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   const VkAttachmentReference depthWrite = {3, depthAttachment};
   const VkAttachmentReference depthRead = {3, depthReadOnly};
   const VkAttachmentReference hdrOut = {4, colorAttachment};
-  const VkAttachmentReference inputs[4] = {{3, depthReadOnly}, {0, shaderRead}, {1, shaderRead}, {2, shaderRead}};
+  const VkAttachmentReference inputs[3] = {{0, shaderRead}, {1, shaderRead}, {2, shaderRead}};
   VkSubpassDescription subpasses[2] = {};
   subpasses[0].pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
   subpasses[0].colorAttachmentCount = 3;
   subpasses[0].pColorAttachments = gbufferOut;
   subpasses[0].pDepthStencilAttachment = &depthWrite;
   subpasses[1].pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-  subpasses[1].inputAttachmentCount = 4;
+  subpasses[1].inputAttachmentCount = 3;
   subpasses[1].pInputAttachments = inputs;
   subpasses[1].colorAttachmentCount = 1;
   subpasses[1].pColorAttachments = &hdrOut;
   subpasses[1].pDepthStencilAttachment = &depthRead;
-  // Input attachment 0 of subpass 1 reads the depth aspect only.
-  VkInputAttachmentAspectReference depthAspect = {1, 0, VK_IMAGE_ASPECT_DEPTH_BIT};
-  VkRenderPassInputAttachmentAspectCreateInfo aspects = {
-      VK_STRUCTURE_TYPE_RENDER_PASS_INPUT_ATTACHMENT_ASPECT_CREATE_INFO};
-  aspects.aspectReferenceCount = 1;
-  aspects.pAspectReferences = &depthAspect;
   // External dependencies as createPassRenderPass's (passes run one after
   // another); subpass 0 -> 1 by region: the G-buffer and depth writes before
   // the input-attachment and depth/stencil reads of the same pixel.
@@ -330,11 +326,12 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   inner.dstStageMask = VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
                        VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
   inner.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-  inner.dstAccessMask = VK_ACCESS_INPUT_ATTACHMENT_READ_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT;
+  // Depth is sampled (texelFetch at the pixel itself: by region still holds).
+  inner.dstAccessMask =
+      VK_ACCESS_INPUT_ATTACHMENT_READ_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
   inner.dependencyFlags = VK_DEPENDENCY_BY_REGION_BIT;
   deps.push_back(inner);
   VkRenderPassCreateInfo info = {VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-  info.pNext = &aspects;
   info.attachmentCount = uint32_t(attachments.size());
   info.pAttachments = attachments.data();
   info.subpassCount = 2;
@@ -372,21 +369,23 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   // visible to the fragment stage only: the set layout and pool are our own.
   uint32_t l = addPass("lighting");
   std::vector<VkDescriptorSetLayoutBinding> bindings;
-  for (uint32_t b : {shaders::kBindingDepthTarget, shaders::kBindingNormalTarget, shaders::kBindingDiffuseTarget,
-                     shaders::kBindingSpecularTarget}) {
+  bindings.push_back({shaders::kBindingDepthTarget, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1,
+                      VK_SHADER_STAGE_FRAGMENT_BIT, nullptr});
+  for (uint32_t b : {shaders::kBindingNormalTarget, shaders::kBindingDiffuseTarget, shaders::kBindingSpecularTarget}) {
     bindings.push_back({b, VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr});
   }
   subpassLayout_ = gpu::createDescriptorSetLayout(*ctx_, bindings);
-  VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, 4};
-  subpassPool_ = gpu::createDescriptorPool(*ctx_, 1, {&size, 1});
+  const VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT, 3},
+                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}};
+  subpassPool_ = gpu::createDescriptorPool(*ctx_, 1, sizes);
   VkDescriptorSet input = gpu::allocateDescriptorSet(*ctx_, subpassPool_, subpassLayout_);
   const VkImageView views[4] = {depthOnlyView(), targets[0]->view, targets[1]->view, targets[2]->view};
   const VkImageLayout layouts[4] = {depthReadOnly, shaderRead, shaderRead, shaderRead};
   gpu::DescriptorWrite writes[4];
   for (uint32_t i = 0; i < 4; ++i) {
     writes[i].binding = bindings[i].binding;
-    writes[i].type = VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT;
-    writes[i].image = {VK_NULL_HANDLE, views[i], layouts[i]};
+    writes[i].type = i == 0 ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER : VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT;
+    writes[i].image = {i == 0 ? targetSampler_ : VK_NULL_HANDLE, views[i], layouts[i]};
   }
   gpu::updateDescriptorSet(*ctx_, input, writes);
   auto& b = pass(l).bindings;
@@ -394,7 +393,8 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   b.elementBytes[{shaders::kSetPassInput, shaders::kBindingDepthTarget}] = 4;  // the D32 depth aspect
   for (uint32_t i = 0; i < 3; ++i) b.bind(shaders::kSetPassInput, shaders::kBindingNormalTarget + i, names[i]);
   b.outputs[shaders::kOutColor] = "hdr";  // stored: DRAM
-  pass(l).onChip = {"depth", names[0], names[1], names[2]};  // subpassLoad within the render pass
+  // subpassLoad within the render pass; depth is sampled from its stored target: DRAM.
+  pass(l).onChip = {names[0], names[1], names[2]};
   auto lshaders = shaderPipeline(l, "fullscreen.vert.glsl", "lighting_subpass.frag.glsl",
                                  pipelineLayout(VK_NULL_HANDLE, subpassLayout_), rp);
   if (!lshaders) return makeError(lshaders.error());

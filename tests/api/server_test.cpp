@@ -60,7 +60,7 @@ TEST_F(ServerTest, OpenApiAndRenderers) {
   auto renderers = cli.Get("/api/renderers");
   ASSERT_TRUE(renderers);
   EXPECT_EQ(nlohmann::json::parse(renderers->body),
-            nlohmann::json::parse(R"({"renderers":["forward","deferred"],"options":[]})"));
+            nlohmann::json::parse(R"({"renderers":["forward","deferred"],"options":[],"workloads":["volume-fog"]})"));
 }
 
 TEST_F(ServerTest, HandlersSeeParsedRequests) {

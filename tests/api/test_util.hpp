@@ -128,7 +128,7 @@ class TempDir {
 // capture-level route with a parameter.
 inline Router testRouter() {
   Router r;
-  addBuiltinRoutes(r, {"forward", "deferred"});
+  addBuiltinRoutes(r, {"forward", "deferred"}, nlohmann::json::array(), {"volume-fog"});
   auto echo = [](const Request& req) {
     return Response::ok({{"method", req.method},
                          {"path", req.path},

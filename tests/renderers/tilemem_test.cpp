@@ -112,16 +112,21 @@ TEST(TileMemory, LightingSubpassReadsAreAttachmentReads) {
   ASSERT_TRUE(source.ok()) << source.error();
   auto compiled = gpu::compileAndInstrument(*ctx, *source, gpu::instrumentOptionsFor(*ctx, spirv::Mode{}));
   ASSERT_TRUE(compiled.ok()) << compiled.error();
-  std::set<int64_t> attachmentBindings;
+  std::set<int64_t> attachmentBindings, textureBindings;
   for (const auto& site : compiled->result.sites) {
-    EXPECT_NE(site.kind, spirv::SiteKind::TextureRead) << site.resource;
     if (site.kind == spirv::SiteKind::AttachmentRead) {
       EXPECT_EQ(site.set, int64_t(shaders::kSetPassInput));
       attachmentBindings.insert(site.binding);
     }
+    if (site.kind == spirv::SiteKind::TextureRead) {
+      EXPECT_EQ(site.set, int64_t(shaders::kSetPassInput));
+      textureBindings.insert(site.binding);
+    }
   }
-  EXPECT_EQ(attachmentBindings, std::set<int64_t>({shaders::kBindingDepthTarget, shaders::kBindingNormalTarget,
-                                                   shaders::kBindingDiffuseTarget, shaders::kBindingSpecularTarget}));
+  EXPECT_EQ(attachmentBindings, std::set<int64_t>({shaders::kBindingNormalTarget, shaders::kBindingDiffuseTarget,
+                                                   shaders::kBindingSpecularTarget}));
+  // Depth through the sampled depth view, as the sampled variant reads it.
+  EXPECT_EQ(textureBindings, std::set<int64_t>({shaders::kBindingDepthTarget}));
 }
 
 // Counts: the subpass variant's lighting reads covered pixels x 4 attachments,
@@ -187,15 +192,16 @@ TEST(TileMemory, SubpassCountsAndImageMatchSampled) {
 
 // The tile-memory model on the planes scene: the subpass variant's DRAM
 // bytes are the immediate bytes less the G-buffer writes (gbuffer fragments x
-// 8 + 4 + 4 bytes) and the input-attachment reads (covered pixels x 4 + 8 +
-// 4 + 4 bytes); the sampled variant and forward keep everything in DRAM.
+// 8 + 4 + 4 bytes) and the input-attachment reads (covered pixels x 8 + 4 +
+// 4 bytes); depth is sampled from its stored target (DRAM); the sampled
+// variant and forward keep everything in DRAM.
 TEST(TileMemory, ByteModelRemovesExactlyTheOnChipLines) {
   const auto spec = planes(2, "back-to-front", 0.8);
   const analytic::Geometry g = analytic::geometryOf(spec, kExtent);
   ASSERT_FALSE(g.rows.ambiguous);
   const uint64_t gbufferFragments = uint64_t(g.layers) * g.covered;  // back to front: every layer shaded
   const uint64_t onChip = gbufferFragments * (kNormalBytes + kDiffuseBytes + kSpecularBytes) +
-                          g.covered * (kDepthAspectBytes + kNormalBytes + kDiffuseBytes + kSpecularBytes);
+                          g.covered * (kNormalBytes + kDiffuseBytes + kSpecularBytes);
 
   Rendered subpass = render("deferred", spec, kExtent, gbuffer("subpass"));
   ASSERT_TRUE(subpass.ok) << subpass.error;
@@ -210,14 +216,14 @@ TEST(TileMemory, ByteModelRemovesExactlyTheOnChipLines) {
   EXPECT_EQ(t.at("bytes_dram").get<uint64_t>(), immediate - onChip) << t.dump();
   EXPECT_EQ(t.at("on_chip_lines"),
             nlohmann::json({"gbuffer/gbuffer.normal/write", "gbuffer/gbuffer.diffuse/write",
-                            "gbuffer/gbuffer.specular/write", "lighting/depth/read", "lighting/gbuffer.normal/read",
+                            "gbuffer/gbuffer.specular/write", "lighting/gbuffer.normal/read",
                             "lighting/gbuffer.diffuse/read", "lighting/gbuffer.specular/read"}))
       << t.dump();
   // Per pass: lighting's DRAM bytes are its hdr writes and buffer reads.
   const PassResult& lighting = passNamed(subpass, "lighting");
   uint64_t lightingDram = 0;
   for (const auto& a : lighting.accesses) {
-    const bool attachmentInput = !a.write && (a.resource == "depth" || a.resource.rfind("gbuffer.", 0) == 0);
+    const bool attachmentInput = !a.write && a.resource.rfind("gbuffer.", 0) == 0;
     EXPECT_EQ(a.onChip, attachmentInput) << a.resource;
     if (!attachmentInput) lightingDram += a.bytes;
   }
@@ -225,6 +231,10 @@ TEST(TileMemory, ByteModelRemovesExactlyTheOnChipLines) {
   const Access* hdr = line(lighting, "hdr", true);
   ASSERT_NE(hdr, nullptr);
   EXPECT_FALSE(hdr->onChip);  // stored for tonemap
+  const Access* depthRead = line(lighting, "depth", false);
+  ASSERT_NE(depthRead, nullptr);
+  EXPECT_EQ(depthRead->bytes, g.covered * kDepthAspectBytes);
+  EXPECT_FALSE(depthRead->onChip);  // sampled from the stored depth target
   const Access* depth = line(passNamed(subpass, "gbuffer"), "depth", true);
   ASSERT_NE(depth, nullptr);
   EXPECT_FALSE(depth->onChip);  // stored: the skybox tests its stencil
