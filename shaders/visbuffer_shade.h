@@ -45,6 +45,20 @@ layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D mat
 #endif
 #endif
 
+// Both buffers: the material's five maps sampled at the interpolated uv with
+// the uv derivatives dx, dy (SAMPLE_MAP above), then every light.
+vec3 shadeInterpolated(uint material, Interpolated a, vec2 dx, vec2 dy) {
+  uint maps[kMapCount] = materials[material].maps;
+  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
+                              SAMPLE_MAP(ambientMaps, kMapAmbient),
+                              SAMPLE_MAP(specularMaps, kMapSpecular),
+                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
+                              SAMPLE_MAP(normalMaps, kMapNormal),
+                              a.normal, a.tangent, materials[material].baseColor,
+                              materials[material].roughnessFactor);
+  return shade(s, a.position);
+}
+
 #ifdef TALLY_SHADE_FAT
 // The fat visibility texel's triangle: barycentrics and uv derivatives as stored.
 vec3 shadeTriangle(uvec4 visibility, uvec4 uvDerivatives) {
@@ -55,19 +69,9 @@ vec3 shadeTriangle(uvec4 visibility, uvec4 uvDerivatives) {
                           visibilityTriangleId(visibility.x));
   Interpolated a = interpolateVertices(vertices[v.x], vertices[v.y], vertices[v.z],
                                        vec3(1.0 - b12.x - b12.y, b12), draws[drawId].model);
-  uint material = draws[drawId].materialIndex;
-  uint maps[kMapCount] = materials[material].maps;
   vec2 dx, dy;
   decodeUvDerivatives(uvDerivatives, dx, dy);
-
-  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
-                              SAMPLE_MAP(ambientMaps, kMapAmbient),
-                              SAMPLE_MAP(specularMaps, kMapSpecular),
-                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
-                              SAMPLE_MAP(normalMaps, kMapNormal),
-                              a.normal, a.tangent, materials[material].baseColor,
-                              materials[material].roughnessFactor);
-  return shade(s, a.position);
+  return shadeInterpolated(draws[drawId].materialIndex, a, dx, dy);
 }
 #endif
 
@@ -88,16 +92,7 @@ vec3 shadeTriangle(uint id, vec2 fragCoord) {
   mat3x2 uvs = mat3x2(uvOf(v0), uvOf(v1), uvOf(v2));
   vec2 dx = uvs * b.ddx, dy = uvs * b.ddy;
 
-  uint material = draws[drawId].materialIndex;
-  uint maps[kMapCount] = materials[material].maps;
-  Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse),
-                              SAMPLE_MAP(ambientMaps, kMapAmbient),
-                              SAMPLE_MAP(specularMaps, kMapSpecular),
-                              SAMPLE_MAP(roughnessMaps, kMapRoughness),
-                              SAMPLE_MAP(normalMaps, kMapNormal),
-                              a.normal, a.tangent, materials[material].baseColor,
-                              materials[material].roughnessFactor);
-  return shade(s, a.position);
+  return shadeInterpolated(draws[drawId].materialIndex, a, dx, dy);
 }
 #endif
 
