@@ -17,6 +17,50 @@ const char* toString(MapSlot slot) {
   return "?";
 }
 
+const char* toString(Wrap wrap) {
+  switch (wrap) {
+    case Wrap::Repeat: return "repeat";
+    case Wrap::MirroredRepeat: return "mirrored_repeat";
+    case Wrap::ClampToEdge: return "clamp_to_edge";
+  }
+  return "?";
+}
+
+glm::mat3x2 UvTransform::matrix() const {
+  const float c = std::cos(rotation), s = std::sin(rotation);
+  // KHR_texture_transform: T * R * S with R = [c s; -s c] (rows), so
+  // u' = c*sx*u + s*sy*v + ox, v' = -s*sx*u + c*sy*v + oy.
+  return glm::mat3x2(glm::vec2(c * scale.x, -s * scale.x), glm::vec2(s * scale.y, c * scale.y), offset);
+}
+
+Scene::Features Scene::features() const {
+  Features f;
+  std::vector<bool> drawn(materials.size(), false);
+  for (const Mesh& m : meshes) {
+    if (m.material < drawn.size()) drawn[m.material] = true;
+    f.vertexColors = f.vertexColors || !m.colors.empty();
+  }
+  for (size_t i = 0; i < materials.size(); ++i) {
+    if (!drawn[i]) continue;
+    const Material& m = materials[i];
+    f.alphaMask = f.alphaMask || m.alphaMode == AlphaMode::Mask;
+    f.alphaBlend = f.alphaBlend || m.alphaMode == AlphaMode::Blend;
+    f.singleSided = f.singleSided || !m.doubleSided;
+    f.emissive = f.emissive || m.emissive();
+    f.emissiveMaps = f.emissiveMaps || (m.emissive() && m.emissiveMap >= 0);
+    for (size_t k = 0; k < kMapSlotCount; ++k) {
+      if (m.maps[k] < 0) continue;
+      f.uv1 = f.uv1 || m.texCoord[k] == 1;
+      f.uvTransform = f.uvTransform || !m.transform[k].identity();
+    }
+    if (m.emissive() && m.emissiveMap >= 0) {
+      f.uv1 = f.uv1 || m.emissiveTexCoord == 1;
+      f.uvTransform = f.uvTransform || !m.emissiveTransform.identity();
+    }
+  }
+  return f;
+}
+
 size_t Scene::triangleCount() const {
   size_t n = 0;
   for (const Mesh& m : meshes) n += m.triangleCount();

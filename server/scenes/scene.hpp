@@ -6,7 +6,8 @@
 // - Right-handed world, +Y up, metres; front faces wind counter-clockwise (glTF).
 // - Camera: fovDeg is the VERTICAL field of view; the view basis is viewMatrix()
 //   (+Y up, with a fallback when looking straight up or down).
-// - UVs may leave [0, 1]: samplers repeat (as Sponza's and the procedural maps expect).
+// - UVs may leave [0, 1]: each texture's Sampler says how it wraps (glTF's
+//   default, and the procedural maps', is repeat).
 // - Material maps: Diffuse is sRGB; Ambient (occlusion in R), Specular,
 //   Roughness (roughness in G, metalness in B, glTF order) and Normal
 //   (tangent space, xyz * 0.5 + 0.5) are linear. Procedural grey maps repeat the
@@ -58,6 +59,11 @@ struct Bounds {
 struct Mesh {
   std::vector<Vertex> vertices;
   std::vector<uint32_t> indices;  // triangle list
+  // Optional per-vertex streams, parallel to `vertices` (empty: absent):
+  // COLOR_0 as linear RGBA (multiplies the base colour; alpha 1 where the file
+  // gives RGB), and TEXCOORD_1.
+  std::vector<glm::vec4> colors;
+  std::vector<glm::vec2> uv1;
   uint32_t material = 0;          // index into Scene::materials
   Bounds bounds;
   std::string name;
@@ -72,6 +78,32 @@ const char* toString(MapSlot slot);  // "diffuse", "ambient", ...
 
 enum class AlphaMode : uint32_t { Opaque, Mask, Blend };
 
+// A texture's sampler (glTF samplers): wrap per axis and filters. The default
+// is glTF's when a texture names no sampler: repeat, trilinear.
+enum class Wrap : uint32_t { Repeat, MirroredRepeat, ClampToEdge };
+enum class Filter : uint32_t { Nearest, Linear };
+struct Sampler {
+  Wrap wrapU = Wrap::Repeat;
+  Wrap wrapV = Wrap::Repeat;
+  Filter mag = Filter::Linear;
+  Filter min = Filter::Linear;
+  Filter mip = Filter::Linear;  // between mip levels
+  bool mipmaps = true;          // false: level 0 only (glTF minFilter NEAREST or LINEAR)
+  bool operator==(const Sampler&) const = default;
+  auto operator<=>(const Sampler&) const = default;
+};
+const char* toString(Wrap wrap);  // "repeat", "mirrored_repeat", "clamp_to_edge"
+
+// KHR_texture_transform of one texture reference: uv' = T(offset) R(rotation) S(scale) uv.
+struct UvTransform {
+  glm::vec2 offset{0.0f};
+  float rotation = 0.0f;  // radians, counter-clockwise in uv space
+  glm::vec2 scale{1.0f};
+  bool identity() const { return offset == glm::vec2(0.0f) && rotation == 0.0f && scale == glm::vec2(1.0f); }
+  // Columns: the 2x2 linear part, then the translation (as the shaders apply it).
+  glm::mat3x2 matrix() const;
+};
+
 struct Material {
   std::string name;
   // Texture index per MapSlot, or -1: the renderer binds its shared 1x1 dummy.
@@ -82,8 +114,19 @@ struct Material {
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;  // for AlphaMode::Mask
   bool doubleSided = false;  // draw without back-face culling
+  // Per map (MapSlot order): the uv set it samples (0: TEXCOORD_0, 1:
+  // TEXCOORD_1) and its KHR_texture_transform.
+  std::array<uint32_t, kMapSlotCount> texCoord{0, 0, 0, 0, 0};
+  std::array<UvTransform, kMapSlotCount> transform{};
+  // glTF emissive: emissiveFactor times the emissive texture (sRGB; -1: none,
+  // then the factor alone), added to the shaded colour.
+  glm::vec3 emissiveFactor{0.0f};
+  int32_t emissiveMap = -1;
+  uint32_t emissiveTexCoord = 0;
+  UvTransform emissiveTransform;
 
   int32_t map(MapSlot slot) const { return maps[static_cast<size_t>(slot)]; }
+  bool emissive() const { return emissiveFactor != glm::vec3(0.0f); }
 };
 
 // Level 0; the GPU side generates the mip chain unless `mips` gives it.
@@ -97,6 +140,7 @@ struct Texture {
   // as rgba8: a texture whose levels must differ from box-filtered ones
   // (the precision sweep sees the mip level in the image). Empty: generated.
   std::vector<std::vector<uint8_t>> mips;
+  Sampler sampler;  // how every use of this texture samples it
 };
 
 struct Camera {
@@ -123,6 +167,20 @@ struct Scene {
 
   size_t triangleCount() const;
   size_t vertexCount() const;
+  // What the scene asks of a renderer beyond the founding study's opaque,
+  // single-uv, single-sampler materials; each turns a shader feature on, so
+  // a scene without it renders (and counts) exactly as before.
+  struct Features {
+    bool alphaMask = false;     // a drawn material with AlphaMode::Mask
+    bool alphaBlend = false;    // ... with AlphaMode::Blend
+    bool vertexColors = false;  // a mesh with COLOR_0
+    bool uv1 = false;           // a map that samples TEXCOORD_1
+    bool uvTransform = false;   // a map with a non-identity KHR_texture_transform
+    bool emissive = false;      // a material with a non-zero emissive factor
+    bool emissiveMaps = false;  // ... with an emissive texture
+    bool singleSided = false;   // a drawn material that is not double-sided (back faces culled)
+  };
+  Features features() const;
 };
 
 // View matrix for a camera: glm::lookAt with +Y up; when the view direction is

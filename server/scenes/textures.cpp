@@ -267,7 +267,9 @@ uint32_t addProceduralMaterial(Scene& scene, ProceduralMaterial kind, uint32_t s
   m.name = name;
   const auto first = int32_t(scene.textures.size());
   for (size_t i = 0; i < kMapSlotCount; ++i) m.maps[i] = first + int32_t(i);
-  m.doubleSided = kind == ProceduralMaterial::Fabric;  // banners are seen from both sides
+  // The procedural scenes are drawn without back-face culling, as the
+  // founding study drew them (their counts and the analytic tests assume it).
+  m.doubleSided = true;
   // Order matches MapSlot: Diffuse, Ambient, Specular, Roughness, Normal.
   scene.textures.push_back(std::move(diffuse));
   scene.textures.push_back(std::move(ambient));
