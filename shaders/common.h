@@ -36,7 +36,13 @@ layout(std430, set = kSetGeometry, binding = kBindingMaterials) readonly buffer 
 #ifdef TALLY_MESH
 layout(std430, set = kSetGeometry, binding = kBindingVertices) readonly buffer VertexBuffer { TALLY_VERTEX vertices[]; };
 layout(std430, set = kSetGeometry, binding = kBindingIndices) readonly buffer IndexBuffer { uint indices[]; };
+#if defined(TALLY_VERTEX_COLORS) || defined(TALLY_UV1)
+layout(std430, set = kSetGeometry, binding = kBindingVertexAttributes) readonly buffer VertexAttributeBuffer {
+  VertexAttributes vertexAttributes[];
+};
 #endif
+#endif
+#include "material_features.h"
 
 // ---- Surface ------------------------------------------------------------------
 struct Surface {

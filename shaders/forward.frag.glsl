@@ -19,21 +19,17 @@
 #include "density.h"
 #endif
 
+// alphaMode MASK draws (TALLY_ALPHA_TEST) discard, so their coverage is
+// known only after the shader: no early tests there.
+#ifndef TALLY_ALPHA_TEST
 layout(early_fragment_tests) in;
-
-// The current material's maps, bound per draw (a neutral 1x1 dummy where missing).
-layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2D diffuseMap;
-layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2D ambientMap;
-layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2D specularMap;
-layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2D roughnessMap;
-layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2D normalMap;
-
-layout(push_constant) uniform PushBlock { DrawPush push; };
+#endif
+#include "draw_material.h"  // the draw's maps, uvs, vertex colour, alpha test, emission
+#ifdef TALLY_TRANSPARENT
+#include "tonemap.h"
+#endif
 
 layout(location = 0) in vec3 inPosition;
-layout(location = 1) in vec3 inNormal;
-layout(location = 2) in vec4 inTangent;
-layout(location = 3) in vec2 inUv;
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 #ifdef TALLY_COUNT_FRAGMENTS
@@ -56,14 +52,16 @@ void main() {
   outLanes = vec4(0.0);  // no quad operations: frameExtras() estimates lanes on the CPU
 #endif
 #endif
-  Surface s = surfaceFromMaps(texture(diffuseMap, inUv), texture(ambientMap, inUv),
-                              texture(specularMap, inUv), texture(roughnessMap, inUv),
-                              texture(normalMap, inUv), inNormal, inTangent,
-                              materials[push.materialIndex].baseColor, materials[push.materialIndex].roughnessFactor);
+  DrawMaterial d = drawMaterial();
+  Surface s = d.surface;
 #ifdef TALLY_DENSITY
   outColor = vec4(densityColor(densityClass(push.drawIndex, uint(gl_PrimitiveID)), shade(s, inPosition)), 1.0);
+#elif defined(TALLY_TRANSPARENT)
+  // alphaMode BLEND, after the sky, into "final": tonemapped here, then
+  // blended (premultiplied alpha) by the pipeline in linear space.
+  outColor = vec4(tonemapReinhard(shade(s, inPosition) + d.emission, lighting.exposure) * d.alpha, d.alpha);
 #else
-  outColor = vec4(shade(s, inPosition), 1.0);
+  outColor = vec4(shade(s, inPosition) + d.emission, 1.0);
 #endif
 #ifdef TALLY_COUNT_FRAGMENTS
   outCount = vec4(1.0, 0.0, 0.0, 0.0);

@@ -7,29 +7,24 @@
 #define TALLY_MATERIALS
 #include "common.h"
 
+#ifndef TALLY_ALPHA_TEST  // alphaMode MASK draws discard: no early tests there
 layout(early_fragment_tests) in;
-
-layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2D diffuseMap;
-layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2D ambientMap;
-layout(set = kSetMaterial, binding = kMapSpecular) uniform sampler2D specularMap;
-layout(set = kSetMaterial, binding = kMapRoughness) uniform sampler2D roughnessMap;
-layout(set = kSetMaterial, binding = kMapNormal) uniform sampler2D normalMap;
-
-layout(push_constant) uniform PushBlock { DrawPush push; };
-
-// location 0 (world position) is not read: lighting.frag reconstructs it from depth.
-layout(location = 1) in vec3 inNormal;
-layout(location = 2) in vec4 inTangent;
-layout(location = 3) in vec2 inUv;
+#endif
+// The draw's maps, uvs, vertex colour, alpha test and emission. Location 0
+// (world position) is not read: lighting.frag reconstructs it from depth.
+#include "draw_material.h"
 
 layout(location = kOutNormal) out vec4 outNormal;      // RGBA16F
 layout(location = kOutDiffuse) out vec4 outDiffuse;    // RGBA8
 layout(location = kOutSpecular) out vec4 outSpecular;  // RGBA8
+#ifdef TALLY_EMISSIVE
+layout(location = kOutEmissive) out vec4 outEmissive;  // RGBA16F "gbuffer.emissive" (glTF emissive scenes)
+#endif
 
 void main() {
-  Surface s = surfaceFromMaps(texture(diffuseMap, inUv), texture(ambientMap, inUv),
-                              texture(specularMap, inUv), texture(roughnessMap, inUv),
-                              texture(normalMap, inUv), inNormal, inTangent,
-                              materials[push.materialIndex].baseColor, materials[push.materialIndex].roughnessFactor);
-  encodeGBuffer(s, outNormal, outDiffuse, outSpecular);
+  DrawMaterial d = drawMaterial();
+  encodeGBuffer(d.surface, outNormal, outDiffuse, outSpecular);
+#ifdef TALLY_EMISSIVE
+  outEmissive = vec4(d.emission, 0.0);
+#endif
 }

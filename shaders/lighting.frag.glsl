@@ -45,6 +45,9 @@ layout(set = kSetPassInput, binding = kBindingDepthTarget) uniform sampler2D dep
 layout(set = kSetPassInput, binding = kBindingNormalTarget) uniform sampler2D normalTarget;
 layout(set = kSetPassInput, binding = kBindingDiffuseTarget) uniform sampler2D diffuseTarget;
 layout(set = kSetPassInput, binding = kBindingSpecularTarget) uniform sampler2D specularTarget;
+#ifdef TALLY_EMISSIVE
+layout(set = kSetPassInput, binding = kBindingEmissiveTarget) uniform sampler2D emissiveTarget;  // RGBA16F
+#endif
 
 layout(location = kOutColor) out vec4 outColor;  // RGBA16F HDR
 
@@ -54,5 +57,8 @@ void main() {
   Surface s = decodeGBuffer(texelFetch(normalTarget, pixel, 0), texelFetch(diffuseTarget, pixel, 0),
                             texelFetch(specularTarget, pixel, 0));
   outColor = vec4(shade(s, worldFromDepth(gl_FragCoord.xy, depth)), 1.0);
+#ifdef TALLY_EMISSIVE
+  outColor.rgb += texelFetch(emissiveTarget, pixel, 0).rgb;  // glTF emission, stored by the G-buffer pass
+#endif
 }
 #endif

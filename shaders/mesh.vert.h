@@ -11,6 +11,14 @@ layout(location = kAttribNormal) in vec3 inNormal;
 layout(location = kAttribTangent) in vec4 inTangent;
 #endif
 layout(location = kAttribUv) in vec2 inUv;
+#ifdef TALLY_VERTEX_COLORS
+layout(location = kAttribColor) in vec4 inColor;  // COLOR_0 (vertex buffer 1)
+layout(location = 4) out vec4 outColor;
+#endif
+#ifdef TALLY_UV1
+layout(location = kAttribUv1) in vec2 inUv1;  // TEXCOORD_1 (vertex buffer 1)
+layout(location = 5) out vec2 outUv1;
+#endif
 
 layout(push_constant) uniform PushBlock { DrawPush push; };
 
@@ -34,4 +42,10 @@ void main() {
   outNormal = mat3(model) * inNormal;  // DrawData::model has uniform scale
   outTangent = vec4(mat3(model) * inTangent.xyz, inTangent.w);
   outUv = inUv;
+#ifdef TALLY_VERTEX_COLORS
+  outColor = inColor;
+#endif
+#ifdef TALLY_UV1
+  outUv1 = inUv1;
+#endif
 }

@@ -11,7 +11,9 @@
 layout(std140, set = kSetFrame, binding = kBindingShadow) uniform ShadowBlock { Shadow shadow; };
 layout(location = kAttribPosition) in vec3 inPosition;
 layout(push_constant) uniform PushBlock { DrawPush push; };
+#include "alpha_test_vert.h"
 
 void main() {
   gl_Position = shadow.viewProj * (draws[push.drawIndex].model * vec4(inPosition, 1.0));
+  passAlphaInputs();  // alphaMode MASK draws (alpha_test_vert.h)
 }

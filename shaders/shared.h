@@ -77,11 +77,18 @@ TALLY_CONST(uint, kBindingDraws, 0u);      // SSBO DrawData[]
 TALLY_CONST(uint, kBindingMaterials, 1u);  // SSBO Material[]
 TALLY_CONST(uint, kBindingVertices, 2u);   // SSBO Vertex[] (also the vertex buffer)
 TALLY_CONST(uint, kBindingIndices, 3u);    // SSBO uint[] (also the index buffer, 32-bit)
+// glTF scenes only (scenes::Scene::Features): read by shaders compiled with
+// the matching TALLY_* feature define, never by the founding study's scenes.
+TALLY_CONST(uint, kBindingVertexAttributes, 4u);  // SSBO VertexAttributes[] (also vertex buffer 1)
+TALLY_CONST(uint, kBindingMaterialExtras, 5u);    // SSBO MaterialExtra[], parallel to Material[]
 // Set 3, deferred lighting
 TALLY_CONST(uint, kBindingDepthTarget, 0u);     // D32_S8, depth aspect view
 TALLY_CONST(uint, kBindingNormalTarget, 1u);    // RGBA16F
 TALLY_CONST(uint, kBindingDiffuseTarget, 2u);   // RGBA8
 TALLY_CONST(uint, kBindingSpecularTarget, 3u);  // RGBA8
+// RGBA16F "gbuffer.emissive", glTF emissive scenes, fragment lighting only
+// (the compute variant's storage-image slot: emissive scenes refuse shading=compute).
+TALLY_CONST(uint, kBindingEmissiveTarget, 4u);
 // Set 3, visibility shading
 TALLY_CONST(uint, kBindingVisibilityTarget, 0u);     // fat: R32G32_UINT, lean: R32_UINT
 TALLY_CONST(uint, kBindingUvDerivativeTarget, 1u);   // fat only: R32G32_UINT
@@ -100,10 +107,20 @@ TALLY_CONST(uint, kAttribPosition, 0u);  // R32G32B32_SFLOAT at Vertex::position
 TALLY_CONST(uint, kAttribNormal, 1u);    // R32G32B32_SFLOAT
 TALLY_CONST(uint, kAttribTangent, 2u);   // R32G32B32A32_SFLOAT
 TALLY_CONST(uint, kAttribUv, 3u);        // R32G32_SFLOAT
+TALLY_CONST(uint, kAttribColor, 4u);     // R16G16B16A16_UNORM, vertex buffer 1 (TALLY_VERTEX_COLORS)
+TALLY_CONST(uint, kAttribUv1, 5u);       // R32G32_SFLOAT, vertex buffer 1 (TALLY_UV1)
+// Set 1, per draw: the emissive map beside the five (TALLY_EMISSIVE_MAPS);
+// map arrays: the emissive sampler2DArray.
+TALLY_CONST(uint, kBindingEmissiveMap, 5u);
+TALLY_CONST(uint, kMapEmissive, 5u);     // MaterialExtra::uvTransform and texCoords index of the emissive map
+// MaterialExtra::flags
+TALLY_CONST(uint, kMaterialAlphaMask, 1u);   // alphaMode MASK: discard below alphaCutoff
+TALLY_CONST(uint, kMaterialAlphaBlend, 2u);  // alphaMode BLEND: drawn in the transparent pass
 TALLY_CONST(uint, kOutColor, 0u);        // HDR RGBA16F (forward, lighting, shading, sky); LDR (tonemap)
 TALLY_CONST(uint, kOutNormal, 0u);       // G-buffer RGBA16F
 TALLY_CONST(uint, kOutDiffuse, 1u);      // G-buffer RGBA8
 TALLY_CONST(uint, kOutSpecular, 2u);     // G-buffer RGBA8
+TALLY_CONST(uint, kOutEmissive, 3u);     // G-buffer RGBA16F "gbuffer.emissive" (TALLY_EMISSIVE scenes only)
 TALLY_CONST(uint, kOutVisibility, 0u);   // fat R32G32_UINT / lean R32_UINT
 TALLY_CONST(uint, kOutUvDerivatives, 1u);  // fat R32G32_UINT
 TALLY_CONST(uint, kOutCount, 1u);        // forward output=overdraw|overshading: R32_SFLOAT, additive
@@ -150,6 +167,31 @@ struct Material {          // std430; 48 bytes (vec4 first: std430 aligns the st
   float reserved[2];
 };
 
+// glTF's optional vertex streams, parallel to Vertex[]: COLOR_0 as RGBA16
+// unorm (two uints: R | G << 16, B | A << 16; white where a mesh has none)
+// and TEXCOORD_1 (TEXCOORD_0's values where a mesh has none).
+struct VertexAttributes {  // std430; 16 bytes
+  uint color[2];
+  float uv1[2];
+};
+
+// What a glTF material adds to the founding study's Material, read only by
+// shaders compiled with the feature's define.
+struct MaterialExtra {     // std430; 240 bytes
+  vec4 emissive;           // rgb: emissiveFactor (times KHR_materials_emissive_strength); a unused
+  // KHR_texture_transform per map (kMapCount maps, then kMapEmissive):
+  // uv' = (row 2k . (u, v, 1), row 2k+1 . (u, v, 1)); xyz used.
+  vec4 uvTransform[12];
+  uint emissiveMap;        // per-draw path: unused; indexed path: materialMaps[] index; map arrays: layer
+  uint texCoords;          // bit k: map k samples TEXCOORD_1 (bit kMapEmissive: the emissive map)
+  // Map arrays only (one repeat sampler per kind): each map's wrap, 4 bits per
+  // map k at 4k: U in bits 0-1, V in bits 2-3 (0 repeat, 1 mirrored, 2 clamp).
+  uint wraps;
+  uint flags;              // kMaterialAlphaMask | kMaterialAlphaBlend
+  float alphaCutoff;       // alphaMode MASK
+  float reserved[3];
+};
+
 struct DrawData {    // std430; 80 bytes; indexed by DrawPush::drawIndex and the visibility draw id
   mat4 model;        // object -> world, uniform scale (normals use mat3(model))
   uint materialIndex;
@@ -169,6 +211,7 @@ static_assert(visibilityDrawId(packVisibilityId(kMaxDraws - 1, 5)) == kMaxDraws 
 static_assert(sizeof(Camera) == 304 && sizeof(Lighting) == 16 && sizeof(PointLight) == 32);
 static_assert(sizeof(Vertex) == 48 && sizeof(Material) == 48 && sizeof(DrawData) == 80);
 static_assert(sizeof(DrawPush) == 8);
+static_assert(sizeof(VertexAttributes) == 16 && sizeof(MaterialExtra) == 240);
 static_assert(offsetof(Vertex, normal) == 12 && offsetof(Vertex, tangent) == 24 && offsetof(Vertex, uv) == 40);
 static_assert(offsetof(Material, maps) == 16 && offsetof(Material, roughnessFactor) == 36);
 static_assert(offsetof(DrawData, materialIndex) == 64 && offsetof(DrawData, vertexOffset) == 72);

@@ -4,6 +4,7 @@
 // texel per pixel. Writes linear values: the LDR target is R8G8B8A8_SRGB, so
 // the hardware encodes on store. No depth/stencil attachment.
 #include "shared.h"
+#include "tonemap.h"
 
 layout(set = kSetPassInput, binding = kBindingHdrTarget) uniform sampler2D hdrTarget;  // RGBA16F
 #ifdef BLOOM
@@ -20,8 +21,5 @@ void main() {
 #ifdef BLOOM
   hdr += texelFetch(bloomTarget, ivec2(gl_FragCoord.xy), 0).rgb;
 #endif
-  hdr *= lighting.exposure;
-  float luminance = dot(hdr, vec3(0.2126, 0.7152, 0.0722));
-  vec3 ldr = hdr * (1.0 / (1.0 + luminance));  // L / (1 + L), hue kept
-  outColor = vec4(clamp(ldr, 0.0, 1.0), 1.0);
+  outColor = vec4(tonemapReinhard(hdr, lighting.exposure), 1.0);
 }

@@ -12,7 +12,14 @@
 #include "common.h"
 #include "visibility_encoding.h"
 
+#ifdef TALLY_ALPHA_TEST
+// alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
+#define TALLY_MATERIALS
+#include "common.h"
+#include "alpha_test.h"
+#else
 layout(early_fragment_tests) in;
+#endif
 
 layout(push_constant) uniform PushBlock { DrawPush push; };
 
@@ -22,6 +29,9 @@ layout(location = kOutVisibility) out VisibilityTexel outVisibility;           /
 layout(location = kOutUvDerivatives) out UvDerivativeTexel outUvDerivatives;  // dFdx(uv), dFdy(uv)
 
 void main() {
+#ifdef TALLY_ALPHA_TEST
+  alphaTest(push.materialIndex);
+#endif
   uint triangle = uint(gl_PrimitiveID);
   uvec3 v = fetchTriangle(draws[push.drawIndex].firstIndex, draws[push.drawIndex].vertexOffset, triangle);
   mat4 clipFromObject = camera.viewProj * draws[push.drawIndex].model;

@@ -8,6 +8,8 @@
 layout(location = kAttribPosition) in vec3 inPosition;
 layout(location = kAttribUv) in vec2 inUv;
 layout(push_constant) uniform PushBlock { DrawPush push; };
+#define TALLY_HAS_UV_INPUT
+#include "alpha_test_vert.h"
 
 layout(location = 0) out vec2 outUv;
 
@@ -18,4 +20,5 @@ void main() {
   vec4 world = model * vec4(inPosition, 1.0);
   gl_Position = camera.viewProj * world;
   outUv = inUv;
+  passAlphaInputs();  // alphaMode MASK draws (alpha_test_vert.h)
 }

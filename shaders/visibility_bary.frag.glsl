@@ -7,7 +7,14 @@
 #include "shared.h"
 #include "visibility_encoding.h"
 
+#ifdef TALLY_ALPHA_TEST
+// alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
+#define TALLY_MATERIALS
+#include "common.h"
+#include "alpha_test.h"
+#else
 layout(early_fragment_tests) in;
+#endif
 
 layout(push_constant) uniform PushBlock { DrawPush push; };
 
@@ -17,6 +24,9 @@ layout(location = kOutVisibility) out VisibilityTexel outVisibility;           /
 layout(location = kOutUvDerivatives) out UvDerivativeTexel outUvDerivatives;  // dFdx(uv), dFdy(uv)
 
 void main() {
+#ifdef TALLY_ALPHA_TEST
+  alphaTest(push.materialIndex);
+#endif
   // gl_BaryCoordEXT follows the triangle's vertex order, as the index buffer does.
   outVisibility = encodeVisibility(packVisibilityId(push.drawIndex, uint(gl_PrimitiveID)), gl_BaryCoordEXT.yz);
   outUvDerivatives = encodeUvDerivatives(dFdx(inUv), dFdy(inUv));

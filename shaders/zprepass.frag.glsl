@@ -5,6 +5,21 @@
 // shader has nothing to count, and the fragment-invocation statistic is 0
 // there (NVIDIA) or counts rejected fragments too (lavapipe). The
 // uninstrumented twin, used for timing, keeps the depth-only pipeline.
+#extension GL_GOOGLE_include_directive : require
+#ifdef TALLY_ALPHA_TEST
+// alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
+#define TALLY_MATERIALS
+#include "common.h"
+#include "alpha_test.h"
+#else
 layout(early_fragment_tests) in;
+#endif
+#ifdef TALLY_ALPHA_TEST
+layout(push_constant) uniform PushBlock { DrawPush push; };
+#endif
 
-void main() {}
+void main() {
+#ifdef TALLY_ALPHA_TEST
+  alphaTest(push.materialIndex);
+#endif
+}

@@ -8,6 +8,7 @@
 
 layout(location = kAttribPosition) in vec3 inPosition;
 layout(push_constant) uniform PushBlock { DrawPush push; };
+#include "alpha_test_vert.h"
 
 invariant gl_Position;
 
@@ -15,4 +16,5 @@ void main() {
   mat4 model = draws[push.drawIndex].model;
   vec4 world = model * vec4(inPosition, 1.0);
   gl_Position = camera.viewProj * world;
+  passAlphaInputs();  // alphaMode MASK draws (alpha_test_vert.h)
 }

@@ -237,9 +237,9 @@ VkPipeline createGraphicsPipeline(const Context& ctx, const GraphicsPipelineDesc
   blend.attachmentCount = static_cast<uint32_t>(blends.size());
   blend.pAttachments = blends.data();
 
-  VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkDynamicState dynamicStates[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE};
   VkPipelineDynamicStateCreateInfo dynamic = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-  dynamic.dynamicStateCount = 2;
+  dynamic.dynamicStateCount = desc.dynamicCullMode ? 3 : 2;
   dynamic.pDynamicStates = dynamicStates;
 
   VkGraphicsPipelineCreateInfo info = {VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};

@@ -59,6 +59,9 @@ struct GraphicsPipelineDesc {
   std::vector<VkVertexInputAttributeDescription> vertexAttributes;
   VkPrimitiveTopology topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
   VkCullModeFlags cullMode = VK_CULL_MODE_NONE;
+  // Cull mode as dynamic state (Vulkan 1.3 vkCmdSetCullMode): set per draw
+  // (glTF doubleSided) while recording; cullMode is then only the initial value.
+  bool dynamicCullMode = false;
   VkFrontFace frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
   bool depthTest = false;
   bool depthWrite = false;

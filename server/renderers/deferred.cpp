@@ -59,6 +59,16 @@ class DeferredRenderer final : public RendererBase {
   }
 
   VkImageUsageFlags hdrExtraUsage() const override { return computeShadingUsage(); }
+  std::string featureRefusal() const override {
+    std::string why = RendererBase::featureRefusal();
+    if (!why.empty() || !scene_->features().emissive) return why;
+    // The emission travels in a fourth G-buffer target read by the fragment lighting pass only.
+    if (options_.gbufferSubpass) return "deferred: emissive materials with gbuffer=subpass are not supported";
+    if (options_.computeShading) return "deferred: emissive materials with shading=compute are not supported";
+    if (options_.msaa > 1)
+      return "deferred: emissive materials with msaa " + std::to_string(options_.msaa) + " are not supported";
+    return "";
+  }
 
   void destroyPasses() override {
     if (msaaDepthView_ != VK_NULL_HANDLE) vkDestroyImageView(ctx_->device, msaaDepthView_, nullptr);
@@ -108,6 +118,10 @@ class DeferredRenderer final : public RendererBase {
         createTarget("gbuffer.diffuse", kDiffuseFormat, usage, ResourceKind::Attachment, n);
     const gpu::Image* specular =
         createTarget("gbuffer.specular", kSpecularFormat, usage, ResourceKind::Attachment, n);
+    // glTF emission (featureRefusal: 1 sample, fragment lighting): a fourth target.
+    const bool emissive = scene_->features().emissive;
+    const gpu::Image* emission =
+        emissive ? createTarget("gbuffer.emissive", kHdrFormat, usage, ResourceKind::Attachment) : nullptr;
     // The geometry pass's depth: "depth" itself at 1 sample, else an N-sample one.
     const gpu::Image* geometryDepth =
         msaa ? createTarget(kMsaaDepthName, kDepthFormat,
@@ -131,14 +145,20 @@ class DeferredRenderer final : public RendererBase {
       if (prepass) depth = {kDepthFormat, false, depthAttachment, depthAttachment, depthReadOnly};
       depth.samples = samples;
       std::vector<AttachmentSpec> colors = {{kNormalFormat}, {kDiffuseFormat}, {kSpecularFormat}};
+      std::vector<VkImageView> views = {normal->view, diffuse->view, specular->view};
+      if (emissive) {
+        colors.push_back({kHdrFormat});
+        views.push_back(emission->view);
+      }
       for (auto& c : colors) c.samples = samples;
+      views.push_back(geometryDepth->view);
       VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, colors, depth));
-      VkFramebuffer fb = framebuffer(rp, {normal->view, diffuse->view, specular->view, geometryDepth->view});
+      VkFramebuffer fb = framebuffer(rp, views);
       auto shaders = shaderPipeline(p, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
                                     pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
       if (!shaders) return makeError(shaders.error());
       gpu::GraphicsPipelineDesc desc = *shaders;
-      desc.colorAttachmentCount = 3;
+      desc.colorAttachmentCount = uint32_t(colors.size());
       desc.samples = samples;
       meshVertexInput(desc);
       geometryState(desc, !prepass);
@@ -151,15 +171,23 @@ class DeferredRenderer final : public RendererBase {
       pass(p).bindings.outputs[shaders::kOutNormal] = "gbuffer.normal";
       pass(p).bindings.outputs[shaders::kOutDiffuse] = "gbuffer.diffuse";
       pass(p).bindings.outputs[shaders::kOutSpecular] = "gbuffer.specular";
+      if (emissive) pass(p).bindings.outputs[shaders::kOutEmissive] = "gbuffer.emissive";
+      if (scene_->features().emissiveMaps) {
+        pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, "material_maps.emissive");
+      }
       if (!prepass) pass(p).depthWrite = geometryDepthName;
       pass(p).indexFetches = true;
-      pass(p).record = [=, this](VkCommandBuffer cmd) {
-        std::vector<VkClearValue> clears(4);
-        clears[3] = depthClear();
+      auto masked = maskedDraws(p, desc, "gbuffer.vert.glsl", "gbuffer.frag.glsl");
+      if (!masked) return makeError(masked.error());
+      const size_t clearCount = colors.size() + 1;
+      pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
+        std::vector<VkClearValue> clears(clearCount);
+        clears.back() = depthClear();
         beginRenderPass(cmd, p, rp, fb, clears);
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
         bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
         drawScene(cmd, p, layout, true);
+        if (masked) masked(cmd);
         endRenderPass(cmd, p);
       };
     }
@@ -170,7 +198,9 @@ class DeferredRenderer final : public RendererBase {
       const T image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
       // shading=compute: the same four inputs and "hdr" as a storage image (compute_shading.cpp).
       VkDescriptorSetLayout inputLayout =
-          options_.computeShading ? computeShadingInputLayout(4) : setLayout({image, image, image, image});
+          options_.computeShading ? computeShadingInputLayout(4)
+          : emissive              ? setLayout({image, image, image, image, image})  // + kBindingEmissiveTarget
+                                  : setLayout({image, image, image, image});
       VkDescriptorSet input = allocateSet(inputLayout);
       if (msaa) msaaDepthView_ = depthAspectView(*ctx_, *geometryDepth);
       writeImage(input, shaders::kBindingDepthTarget, msaa ? msaaDepthView_ : depthOnlyView(), targetSampler_,
@@ -184,6 +214,10 @@ class DeferredRenderer final : public RendererBase {
       b.bind(shaders::kSetPassInput, shaders::kBindingNormalTarget, "gbuffer.normal");
       b.bind(shaders::kSetPassInput, shaders::kBindingDiffuseTarget, "gbuffer.diffuse");
       b.bind(shaders::kSetPassInput, shaders::kBindingSpecularTarget, "gbuffer.specular");
+      if (emissive) {
+        writeImage(input, shaders::kBindingEmissiveTarget, emission->view, targetSampler_, shaderRead);
+        b.bind(shaders::kSetPassInput, shaders::kBindingEmissiveTarget, "gbuffer.emissive");
+      }
       if (options_.computeShading) {
         return addComputeShading(p, "lighting.comp.glsl", VK_NULL_HANDLE, VK_NULL_HANDLE, inputLayout, input,
                                  VK_NULL_HANDLE);
@@ -355,6 +389,8 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   if (prepass) gdesc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
   VkPipeline gpipe = pipeline(gdesc);
   VkPipelineLayout glayout = gdesc.layout;
+  auto gmasked = maskedDraws(g, gdesc, "gbuffer.vert.glsl", "gbuffer.frag.glsl");
+  if (!gmasked) return makeError(gmasked.error());
   for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
     pass(g).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
   }
@@ -404,13 +440,14 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   VkPipeline lpipe = pipeline(ldesc);
   VkPipelineLayout llayout = ldesc.layout;
 
-  pass(g).record = [=, this](VkCommandBuffer cmd) {
+  pass(g).record = [=, this, masked = *gmasked](VkCommandBuffer cmd) {
     std::vector<VkClearValue> clears(5);
     clears[3] = depthClear();
     beginRenderPass(cmd, g, rp, fb, clears);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, gpipe);
     bindSets(cmd, glayout, VK_NULL_HANDLE, VK_NULL_HANDLE);
     drawScene(cmd, g, glayout, true);
+    if (masked) masked(cmd);
     nextSubpass(cmd, g, l);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lpipe);
     bindSets(cmd, llayout, VK_NULL_HANDLE, input);

@@ -162,14 +162,20 @@ Result<bool> ForwardRenderer::setupPasses() {
   if (density()) pass(p).bindings.outputs[shaders::kOutCount + 1] = "density.lanes";
   pass(p).indexFetches = true;
   if (!prepass() && !overdraw()) pass(p).depthWrite = "depth";  // overdraw: finishFrame adds the stencil writes
+  if (scene_->features().emissiveMaps) {
+    pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, "material_maps.emissive");
+  }
   const size_t clearCount = colors.size() + 1;
-  pass(p).record = [=, this](VkCommandBuffer cmd) {
+  auto masked = maskedDraws(p, desc, "forward.vert.glsl", "forward.frag.glsl", defines);
+  if (!masked) return makeError(masked.error());
+  pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
     std::vector<VkClearValue> clears(clearCount);  // colours 0 (no fragments yet)
     clears.back() = depthClear();
     beginRenderPass(cmd, p, rp, fb, clears);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
     bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
     drawScene(cmd, p, layout, true);
+    if (masked) masked(cmd);
     endRenderPass(cmd, p);
   };
   if (heatView()) return setupOverdrawView(count);

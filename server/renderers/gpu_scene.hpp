@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -46,7 +47,18 @@ struct GpuDraw {
   uint32_t firstIndex = 0;
   int32_t vertexOffset = 0;
   uint32_t indexCount = 0;
+  scenes::AlphaMode alpha = scenes::AlphaMode::Opaque;  // its material's
+  bool doubleSided = true;                              // its material's; false: back faces culled
+  glm::vec3 center{0.0f};                               // of its bounds: the transparent pass sorts by it
 };
+
+// Which draws a geometry pass records (RendererBase::drawScene).
+enum class DrawSubset {
+  Opaque,  // alphaMode OPAQUE: the founding study's draws
+  Masked,  // alphaMode MASK: a pipeline that alpha-tests (no early fragment tests)
+  Blend,   // alphaMode BLEND: the transparent pass, back to front
+};
+bool inSubset(const GpuDraw& draw, DrawSubset subset);
 
 class GpuScene {
  public:
@@ -64,6 +76,32 @@ class GpuScene {
   const scenes::Bounds& bounds() const { return bounds_; }
   const std::vector<GpuDraw>& draws() const { return draws_; }
   uint32_t materialCount() const { return uint32_t(materialMapViews_.size()); }
+  // What the scene asks beyond the founding study (scenes::Scene::features).
+  const scenes::Scene::Features& features() const { return features_; }
+  // The shader defines those features turn on, for every shader of every
+  // renderer (shaders/common.h): none for the procedural scenes, so their
+  // shaders and counts are the founding study's.
+  std::vector<std::string> featureDefines() const;
+  // The emissive map of a material (TALLY_EMISSIVE_MAPS): its texture, or a
+  // white dummy (the factor alone), with the sampler to bind it with.
+  VkImageView emissiveMap(uint32_t material) const { return emissiveViews_[material]; }
+  VkSampler emissiveSampler(uint32_t material) const { return emissiveSamplers_[material]; }
+  // The sampler of a material's map of kind k: the texture's own (glTF
+  // samplers), or the default (repeat, trilinear) for a dummy.
+  VkSampler materialSampler(uint32_t material, uint32_t kind) const { return materialSamplers_[material][kind]; }
+  // Descriptor-indexing path: element e's sampler (its texture's own).
+  const std::vector<VkSampler>& indexedMapSamplers() const { return indexedSamplers_; }
+  // Map arrays: the emissive maps' layered image (TALLY_EMISSIVE_MAPS).
+  VkImageView emissiveArray() const { return emissiveArray_.view; }
+  // True when a map-array shader must wrap uvs itself (a texture that does
+  // not repeat; the arrays' one sampler repeats): TALLY_WRAP_EMULATION.
+  bool wrapEmulation() const { return wrapEmulation_; }
+  // True when a feature define reads MaterialExtra (the alpha modes, uv
+  // sets and transforms, emissive, wrap emulation).
+  bool usesMaterialExtras() const {
+    return features_.alphaMask || features_.alphaBlend || features_.uv1 || features_.uvTransform ||
+           features_.emissive || wrapEmulation_;
+  }
 
   // The material's map of kind k (the kind's dummy where it has none), for
   // the per-draw passes (forward, gbuffer).
@@ -95,6 +133,12 @@ class GpuScene {
   const gpu::Buffer& drawBuffer() const { return drawBuffer_; }
   const gpu::Buffer& materialBuffer() const { return materialBuffer_; }
   const gpu::Buffer& lightBuffer() const { return lightBuffer_; }
+  // shaders::VertexAttributes per vertex (a 16-byte stand-in when no mesh
+  // has colours or a second uv set); MaterialExtra per material, for the
+  // per-draw and map-array paths and for the descriptor-indexing path.
+  const gpu::Buffer& attributeBuffer() const { return attributes_; }
+  const gpu::Buffer& materialExtraBuffer() const { return materialExtras_; }
+  const gpu::Buffer& indexedMaterialExtraBuffer() const { return indexedMaterialExtras_; }
   // Levels of detail of every draw (renderers/lod.hpp), built on the first
   // call (by a renderer with LOD on) and kept with the scene.
   Result<const SceneLod*> lod() const;
@@ -102,7 +146,8 @@ class GpuScene {
   // "vertices", "indices", "draws", "materials", "lights", "sky".
   std::vector<ResourceInfo> bufferResources() const;
   ResourceInfo skyResource() const;
-  // "material_maps.<kind>": the per-texture images (and dummy) of each kind.
+  // "material_maps.<kind>": the per-texture images (and dummy) of each kind
+  // ("material_maps.emissive" too where a material has an emissive map).
   std::vector<ResourceInfo> materialMapResources() const;
   // "material_maps.<kind>": the layered image of each kind.
   std::vector<ResourceInfo> mapArrayResources() const;
@@ -111,6 +156,17 @@ class GpuScene {
   gpu::Context* ctx_ = nullptr;
   scenes::Bounds bounds_;
   gpu::Buffer vertices_, indices_, drawBuffer_, materialBuffer_, lightBuffer_, indexedMaterialBuffer_;
+  gpu::Buffer attributes_, materialExtras_, indexedMaterialExtras_;
+  scenes::Scene::Features features_;
+  bool wrapEmulation_ = false;
+  std::map<scenes::Sampler, VkSampler> samplers_;  // one per distinct glTF sampler
+  std::vector<std::array<VkSampler, scenes::kMapSlotCount>> materialSamplers_;
+  std::vector<VkSampler> indexedSamplers_;
+  std::vector<VkImageView> emissiveViews_;
+  std::vector<VkSampler> emissiveSamplers_;
+  MipImage emissiveDummy_, emissiveArray_;
+  uint64_t emissiveBytes_ = 0;
+  VkSampler samplerFor(const scenes::Sampler& s);
   std::vector<VkImageView> indexedViews_;
   std::vector<std::string> indexedNames_;
   std::vector<GpuDraw> draws_;

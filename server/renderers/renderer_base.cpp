@@ -131,6 +131,7 @@ std::vector<std::string> RendererBase::passNames() const {
   for (auto& n : bloomPassNames()) names.push_back(std::move(n));
   names.push_back("tonemap");
   if (drawsSky()) names.push_back("skybox");
+  if (hasTransparentPass()) names.push_back("transparent");
   return names;
 }
 
@@ -151,6 +152,8 @@ PassBindings RendererBase::commonBindings() const {
   b.bind(shaders::kSetGeometry, shaders::kBindingMaterials, "materials");
   b.bind(shaders::kSetGeometry, shaders::kBindingVertices, "vertices");
   b.bind(shaders::kSetGeometry, shaders::kBindingIndices, "indices");
+  b.bind(shaders::kSetGeometry, shaders::kBindingVertexAttributes, "vertex_attributes");
+  b.bind(shaders::kSetGeometry, shaders::kBindingMaterialExtras, "material_extras");
   shadowBindings(b);  // "shadow", "shadow_map" in set 0 with shadows on
   return b;
 }
@@ -241,6 +244,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
   if (!source) return makeError(source.error());
   std::vector<std::string> allDefines = defines;
   if (packedVertices_) allDefines.push_back("TALLY_TBN_QUATERNION");  // shaders/tbn.h; none: float as it was
+  for (auto& d : scene_->featureDefines()) allDefines.push_back(std::move(d));  // glTF features; none for procedural scenes
   for (auto& d : shadowDefines()) allDefines.push_back(std::move(d));    // shaders/shadow.h; none with shadows off
   if (!allDefines.empty()) {
     size_t eol = source->source.find('\n');
@@ -334,14 +338,95 @@ Result<bool> RendererBase::addDepthPrepass() {
   VkPipelineLayout layout = desc.layout;
   pass(p).indexFetches = true;
   pass(p).depthWrite = "depth";
-  pass(p).record = [=, this](VkCommandBuffer cmd) {
+  auto masked = maskedDraws(p, desc, "zprepass.vert.glsl", "zprepass.frag.glsl");
+  if (!masked) return makeError(masked.error());
+  pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
     beginRenderPass(cmd, p, rp, fb, {depthClear()});
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
     bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
     drawScene(cmd, p, layout, false);
+    if (masked) masked(cmd);
     endRenderPass(cmd, p);
   };
   return true;
+}
+
+Result<RendererBase::DrawRecorder> RendererBase::maskedDraws(uint32_t passIndex, gpu::GraphicsPipelineDesc desc,
+                                                             const std::string& vertex, const std::string& fragment,
+                                                             const std::vector<std::string>& defines) {
+  if (!scene_->features().alphaMask) return DrawRecorder{};
+  std::vector<std::string> masked = defines;
+  masked.push_back("TALLY_ALPHA_TEST");
+  auto vs = shader(passIndex, vertex, masked);
+  if (!vs) return makeError(vs.error());
+  auto fs = shader(passIndex, fragment, masked);
+  if (!fs) return makeError(fs.error());
+  desc.vertex = *vs;
+  desc.fragment = *fs;
+  desc.layout = pipelineLayout(materialLayout_, VK_NULL_HANDLE);
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  // The test's diffuse read (alpha_test.h; the per-draw passes bind all five already).
+  pass(passIndex).bindings.bind(shaders::kSetMaterial, shaders::kMapDiffuse, "material_maps.diffuse");
+  return DrawRecorder([=, this](VkCommandBuffer cmd) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    drawScene(cmd, passIndex, layout, true, DrawSubset::Masked);
+  });
+}
+
+std::string RendererBase::featureRefusal() const {
+  const auto& f = scene_->features();
+  const std::string who = std::string(name()) + ": ";
+  if (f.alphaBlend && options_.msaa > 1) {
+    return who + "alphaMode BLEND with msaa " + std::to_string(options_.msaa) +
+           " is not supported (the transparent pass tests the 1-sample depth, which holds no depth with msaa)";
+  }
+  if (f.alphaMask && options_.forwardOutput == ForwardOutput::Overdraw) {
+    return who + "alphaMode MASK with output=overdraw is not supported (overdraw counts with the depth test off)";
+  }
+  return "";
+}
+
+bool RendererBase::hasTransparentPass() const {
+  return scene_ != nullptr && scene_->features().alphaBlend && drawsSky();
+}
+
+void RendererBase::setupTransparentPass() {
+  uint32_t p = addPass("transparent");
+  const VkImageLayout readOnlyDepth = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(
+      *ctx_,
+      {{kFinalFormat, false, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+        VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
+      AttachmentSpec{kDepthFormat, false, readOnlyDepth, readOnlyDepth, readOnlyDepth}));
+  VkFramebuffer fb = framebuffer(rp, {final_->view, depth_->view});
+  auto shaders = shaderPipeline(p, "forward.vert.glsl", "forward.frag.glsl", pipelineLayout(materialLayout_, VK_NULL_HANDLE),
+                                rp, {"TALLY_TRANSPARENT"});
+  if (!shaders) throw std::runtime_error(shaders.error());
+  gpu::GraphicsPipelineDesc desc = *shaders;
+  meshVertexInput(desc);
+  desc.depthTest = true;
+  desc.depthWrite = false;
+  desc.depthCompare = VK_COMPARE_OP_LESS;
+  desc.blend = true;  // premultiplied: src + dst x (1 - src alpha), in linear (final is sRGB)
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+    pass(p).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
+  }
+  if (scene_->features().emissiveMaps) {
+    pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, "material_maps.emissive");
+  }
+  pass(p).bindings.outputs[shaders::kOutColor] = "final";
+  pass(p).indexFetches = true;
+  pass(p).record = [=, this](VkCommandBuffer cmd) {
+    beginRenderPass(cmd, p, rp, fb, {});
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    drawScene(cmd, p, layout, true, DrawSubset::Blend);
+    endRenderPass(cmd, p);
+  };
 }
 
 Result<gpu::GraphicsPipelineDesc> RendererBase::depthOnlyPipeline(uint32_t passIndex, const std::string& vertex,
@@ -386,6 +471,17 @@ void RendererBase::geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc) {
 }
 
 void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) const {
+  desc.dynamicCullMode = dynamicCull_;
+  meshVertexStreams(desc);
+  const auto& f = scene_->features();
+  if (f.vertexColors || f.uv1) {  // glTF's optional streams: vertex buffer 1
+    desc.vertexBindings.push_back({1, sizeof(shaders::VertexAttributes), VK_VERTEX_INPUT_RATE_VERTEX});
+    if (f.vertexColors) desc.vertexAttributes.push_back({shaders::kAttribColor, 1, VK_FORMAT_R16G16B16A16_UNORM, 0});
+    if (f.uv1) desc.vertexAttributes.push_back({shaders::kAttribUv1, 1, VK_FORMAT_R32G32_SFLOAT, 8});
+  }
+}
+
+void RendererBase::meshVertexStreams(gpu::GraphicsPipelineDesc& desc) const {
   if (packedVertices_) {  // renderers/tbn.hpp: PackedVertex
     desc.vertexBindings = {{0, sizeof(PackedVertex), VK_VERTEX_INPUT_RATE_VERTEX}};
     desc.vertexAttributes = {
@@ -455,11 +551,12 @@ void RendererBase::bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, Vk
   bind(counterSet_, counterDescriptorSet_);
 }
 
-VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials) {
+VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials, const gpu::Buffer& materialExtras) {
   VkDescriptorSet set = allocateSet(geometryLayout_);
-  const gpu::Buffer* buffers[] = {&drawsBuffer(), &materials, &vertexBuffer(), &indexBuffer()};
-  gpu::DescriptorWrite writes[4];
-  for (uint32_t i = 0; i < 4; ++i) {
+  const gpu::Buffer* buffers[] = {&drawsBuffer(),  &materials, &vertexBuffer(), &indexBuffer(),
+                                  &scene_->attributeBuffer(), &materialExtras};
+  gpu::DescriptorWrite writes[6];
+  for (uint32_t i = 0; i < 6; ++i) {
     writes[i].binding = i;
     writes[i].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[i].buffer = {buffers[i]->buffer, 0, VK_WHOLE_SIZE};
@@ -469,14 +566,25 @@ VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials) {
 }
 
 void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout,
-                             bool materialSets) {
-  VkDeviceSize offset = 0;
-  VkBuffer vb = vertexBuffer().buffer;
-  vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+                             bool materialSets, DrawSubset subset) {
+  VkDeviceSize offsets[2] = {0, 0};
+  VkBuffer vbs[2] = {vertexBuffer().buffer, scene_->attributeBuffer().buffer};
+  const auto& f = scene_->features();
+  vkCmdBindVertexBuffers(cmd, 0, f.vertexColors || f.uv1 ? 2 : 1, vbs, offsets);
   vkCmdBindIndexBuffer(cmd, indexBuffer().buffer, 0, VK_INDEX_TYPE_UINT32);
   const auto& draws = scene_->draws();
-  for (uint32_t i = 0; i < draws.size(); ++i) {
+  std::vector<uint32_t> order;
+  for (uint32_t i = 0; i < draws.size(); ++i)
+    if (inSubset(draws[i], subset)) order.push_back(i);
+  if (subset == DrawSubset::Blend) {  // back to front from this frame's eye, by the draws' centres
+    const glm::vec3 eye(frameCamera_.position);
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return glm::length(draws[a].center - eye) > glm::length(draws[b].center - eye);
+    });
+  }
+  for (uint32_t i : order) {
     GpuDraw d = draws[i];
+    if (dynamicCull_) vkCmdSetCullMode(cmd, d.doubleSided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
     if (lod_) {  // the level chosen for this frame (LodSelection::select)
       d.firstIndex = lod_->chosen(i).firstIndex;
       d.indexCount = lod_->chosen(i).indexCount;
@@ -535,9 +643,9 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
   try {
     const uint32_t materials = scene.materialCount();
     VkDescriptorPoolSize sizes[] = {
-        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 5 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
+        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 6 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 24},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 48},
         {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16}};
     pool_ = gpu::createDescriptorPool(ctx, materials + 32, sizes);
     using T = VkDescriptorType;
@@ -546,11 +654,23 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     frameLayout_ = options.shadows.filter == ShadowFilter::Off
                        ? setLayout({ubo, ubo, ssbo})
                        : setLayout({ubo, ubo, ssbo, ubo, image});  // + shadow_shared.h's kBindingShadow(Map)
-    geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo});
+    // draws, materials, vertices, indices; vertex_attributes, material_extras (glTF features)
+    geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
     emptyLayout_ = setLayout({});
     counterLayout_ = setLayout({ssbo});
-    materialLayout_ = setLayout({image, image, image, image, image});
-    mapArrayLayout_ = setLayout({image, image, image, image, image});
+    // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
+    const bool emissiveMaps = scene.features().emissiveMaps;
+    materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
+                                   : setLayout({image, image, image, image, image});
+    mapArrayLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
+                                   : setLayout({image, image, image, image, image});
+    dynamicCull_ = scene.features().singleSided;
+    if (dynamicCull_ && std::min(ctx.apiVersion, ctx.properties.apiVersion) < VK_API_VERSION_1_3) {
+      destroy();
+      return makeError(std::string(name()) +
+                       ": the scene has single-sided materials; culling their back faces per draw needs "
+                       "Vulkan 1.3 (dynamic cull mode)");
+    }
 
     cameraBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Camera), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
                                       gpu::MemoryUse::Upload);
@@ -589,21 +709,26 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     gpu::updateDescriptorSet(ctx, frameSet_, frameWrites);
     gpu::DescriptorWrite geometryWrites[] = {
         bufferWrite(0, ssbo, drawsBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
-        bufferWrite(2, ssbo, vertexBuffer()), bufferWrite(3, ssbo, indexBuffer())};
+        bufferWrite(2, ssbo, vertexBuffer()), bufferWrite(3, ssbo, indexBuffer()),
+        bufferWrite(shaders::kBindingVertexAttributes, ssbo, scene.attributeBuffer()),
+        bufferWrite(shaders::kBindingMaterialExtras, ssbo, scene.materialExtraBuffer())};
     gpu::updateDescriptorSet(ctx, geometrySet_, geometryWrites);
-    for (uint32_t m = 0; m < materials; ++m) {
+    const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    for (uint32_t m = 0; m < materials; ++m) {  // each map with its texture's own sampler
       VkDescriptorSet set = allocateSet(materialLayout_);
       for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-        writeImage(set, k, scene.materialMap(m, k), scene.sampler(),
-                   VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        writeImage(set, k, scene.materialMap(m, k), scene.materialSampler(m, k), readOnly);
       }
+      if (emissiveMaps) writeImage(set, shaders::kBindingEmissiveMap, scene.emissiveMap(m), scene.emissiveSampler(m), readOnly);
       materialSets_.push_back(set);
     }
+    // Map arrays: one repeating trilinear sampler per kind; a texture that
+    // wraps otherwise is wrapped in the shader (TALLY_WRAP_EMULATION).
     mapArraySet_ = allocateSet(mapArrayLayout_);
     for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-      writeImage(mapArraySet_, k, scene.mapArray(k), scene.sampler(),
-                 VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+      writeImage(mapArraySet_, k, scene.mapArray(k), scene.sampler(), readOnly);
     }
+    if (emissiveMaps) writeImage(mapArraySet_, shaders::kBindingEmissiveMap, scene.emissiveArray(), scene.sampler(), readOnly);
     targetSampler_ = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 
     // Shared targets and resources.
@@ -639,6 +764,10 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
 
     if (auto ok = setupShadows(); !ok) {  // the "shadow" pass first (shadows.cpp)
       std::string why = ok.error();
+      destroy();
+      return makeError(why);
+    }
+    if (std::string why = featureRefusal(); !why.empty()) {
       destroy();
       return makeError(why);
     }
@@ -840,7 +969,9 @@ void RendererBase::setupTonemapAndSkybox() {
     VkRenderPass rp = ownRenderPass(createPassRenderPass(
         *ctx_,
         {{kFinalFormat, false, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-          VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
+          VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+          // The transparent pass blends into it next; without one, finalImage() reads it.
+          hasTransparentPass() ? VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL}},
         AttachmentSpec{kDepthFormat, false, readOnlyDepth, readOnlyDepth, readOnlyDepth}));
     VkFramebuffer fb = framebuffer(rp, {final_->view, depth_->view});
     auto shaders = shaderPipeline(p, "skybox.vert.glsl", "skybox.frag.glsl", pipelineLayout(skyLayout, VK_NULL_HANDLE),
@@ -860,6 +991,7 @@ void RendererBase::setupTonemapAndSkybox() {
       endRenderPass(cmd, p);
     };
   }
+  if (hasTransparentPass()) setupTransparentPass();
 }
 
 void RendererBase::recordAll(VkCommandBuffer cmd) {
@@ -930,6 +1062,14 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
           if (info.name == p.depthWrite && info.elementBytes > 0) writeBytes = info.elementBytes;
         }
         addAccess(r.accesses, p.depthWrite, true, r.fragmentInvocations, writeBytes, "derived");
+      }
+      if (p.name == "transparent") {
+        // Blending reads the destination texel of every write (docs/measurement.md).
+        std::vector<Access> blendReads;
+        for (const auto& a : r.accesses)
+          if (a.write && a.source == "counter" && a.resource == "final") blendReads.push_back(a);
+        for (const auto& a : blendReads)
+          addAccess(r.accesses, a.resource, false, a.count, a.count ? a.bytes / a.count : 0, "derived");
       }
     }
     frame.passes.push_back(std::move(r));

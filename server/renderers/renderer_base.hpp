@@ -125,6 +125,9 @@ class RendererBase : public Renderer {
   // Vertex buffer binding 0 (shaders::Vertex) with the four attributes.
   // tangent_frame = quaternion: the packed 24-byte vertex (renderers/tbn.hpp),
   // position, uv and the frame as R32_UINT at kAttribNormal.
+  // glTF scenes: vertex buffer 1 (shaders::VertexAttributes) where a mesh has
+  // colours or a second uv set, and the cull mode as dynamic state where a
+  // material is single-sided.
   void meshVertexInput(gpu::GraphicsPipelineDesc& desc) const;
   // Frame and geometry sets, `material`/`passInput` where given, counters.
   // `geometry` replaces the scene's geometry set where given.
@@ -132,11 +135,15 @@ class RendererBase : public Renderer {
                 VkDescriptorSet passInput, VkDescriptorSet geometry = VK_NULL_HANDLE);
   void bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout, VkDescriptorSet material,
                   VkDescriptorSet passInput, VkDescriptorSet geometry);
-  // A geometry set (draws, materials, vertices, indices) with another materials buffer.
-  VkDescriptorSet geometrySetWith(const gpu::Buffer& materials);
-  // Every draw, push constants and (when materialSets) the draw's material
-  // set; with LOD on, each draw's level chosen for this frame.
-  void drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout, bool materialSets);
+  // A geometry set (draws, materials, vertices, indices, vertex attributes,
+  // material extras) with other materials buffers.
+  VkDescriptorSet geometrySetWith(const gpu::Buffer& materials, const gpu::Buffer& materialExtras);
+  // The draws of `subset` (alpha mode), push constants and (when
+  // materialSets) the draw's material set; with LOD on, each draw's level
+  // chosen for this frame; the cull mode per draw where the scene has
+  // single-sided materials; Blend back to front from the frame's eye.
+  void drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipelineLayout layout, bool materialSets,
+                 DrawSubset subset = DrawSubset::Opaque);
   void beginRenderPass(VkCommandBuffer cmd, uint32_t passIndex, VkRenderPass renderPass, VkFramebuffer fb,
                        const std::vector<VkClearValue>& clears);
   void endRenderPass(VkCommandBuffer cmd, uint32_t passIndex);
@@ -146,6 +153,19 @@ class RendererBase : public Renderer {
   // pass carries the time of all its subpasses.
   void nextSubpass(VkCommandBuffer cmd, uint32_t fromPass, uint32_t toPass);
   void drawFullScreen(VkCommandBuffer cmd) { vkCmdDraw(cmd, 3, 1, 0, 0); }
+
+  // alphaMode MASK (glTF scenes): the masked twin of a geometry pipeline,
+  // `desc` with `vertex` and `fragment` compiled again with TALLY_ALPHA_TEST
+  // (no early fragment tests; discard below the cutoff) and the material set
+  // bound per draw for the test. The returned recorder binds it and draws the
+  // scene's masked draws; it is empty when the scene has none. Record it
+  // right after the pass's opaque drawScene, inside the same render pass.
+  using DrawRecorder = std::function<void(VkCommandBuffer)>;
+  Result<DrawRecorder> maskedDraws(uint32_t passIndex, gpu::GraphicsPipelineDesc desc, const std::string& vertex,
+                                   const std::string& fragment, const std::vector<std::string>& defines = {});
+  // Why a renderer configuration cannot draw this scene's glTF features
+  // ("" when it can): the variants that do not carry them refuse.
+  virtual std::string featureRefusal() const;
 
   // Compute passes. A pass that dispatches compiles its .comp.glsl through
   // computePipeline() (instrumented like every shader; the sites go to the
@@ -239,6 +259,11 @@ class RendererBase : public Renderer {
 
  private:
   void setupTonemapAndSkybox();
+  // alphaMode BLEND (glTF scenes): the "transparent" pass after the skybox,
+  // forward-shaded and tonemapped per fragment, blended into "final" back to
+  // front with depth tested against the opaque depth and not written.
+  void setupTransparentPass();
+  bool hasTransparentPass() const;
   // Sets as pipelineLayout() describes; push constants DrawPush for `pushStages`.
   VkPipelineLayout makePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput,
                                       VkShaderStageFlags pushStages);
@@ -285,6 +310,8 @@ class RendererBase : public Renderer {
   };
   std::vector<TargetName> targetNames_;  // parallel to targets_
   bool ready_ = false;
+  bool dynamicCull_ = false;  // the scene has single-sided materials: cull mode per draw
+  void meshVertexStreams(gpu::GraphicsPipelineDesc& desc) const;  // vertex buffer 0
 
  protected:
   // Render passes created by derived classes are destroyed with the renderer.

@@ -181,7 +181,10 @@ Result<bool> RendererBase::setupShadows() {
   VkPipelineLayout layout = desc.layout;
   pass(p).indexFetches = true;
   pass(p).depthWrite = "shadow_map";
-  pass(p).record = [=, this](VkCommandBuffer cmd) {
+  // alphaMode MASK draws cast the shadow of what their test keeps.
+  auto masked = maskedDraws(p, desc, "shadow.vert.glsl", "zprepass.frag.glsl");
+  if (!masked) return makeError(masked.error());
+  pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
     VkClearValue clear = {};
     clear.depthStencil = {1.0f, 0};
     VkRenderPassBeginInfo begin = {VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -196,6 +199,7 @@ Result<bool> RendererBase::setupShadows() {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
     bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
     drawScene(cmd, p, layout, false);
+    if (masked) masked(cmd);
     endRenderPass(cmd, p);
   };
   const glm::vec4 d = uniform.direction;

@@ -128,7 +128,9 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
   pass(p).depthWrite = n > 1 ? kMsaaDepthName : "depth";
   pass(p).indexFetches = true;
   const size_t colorCount = colors.size();
-  pass(p).record = [=, this](VkCommandBuffer cmd) {
+  auto masked = maskedDraws(p, desc, vertex, fragment, defines);  // alphaMode MASK: ids only where the test passes
+  if (!masked) return makeError(masked.error());
+  pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
     std::vector<VkClearValue> clears(colorCount + 1);
     for (size_t i = 0; i < colorCount; ++i) {
       for (auto& v : clears[i].color.uint32) v = shaders::kVisibilityClear;
@@ -138,6 +140,7 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
     bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
     drawScene(cmd, p, layout, false);
+    if (masked) masked(cmd);
     endRenderPass(cmd, p);
   };
   return true;
@@ -192,14 +195,17 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
       writes[e].binding = shaders::kBindingMaterialMaps;
       writes[e].arrayElement = e;
       writes[e].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-      writes[e].image = {scene_->sampler(), views[e], VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+      writes[e].image = {scene_->indexedMapSamplers()[e], views[e], VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
     gpu::updateDescriptorSet(*ctx_, maps, writes);
     b.bindings[{shaders::kSetMaterial, shaders::kBindingMaterialMaps}] = scene_->indexedMapNames();
-    geometry = geometrySetWith(scene_->indexedMaterialBuffer());
+    geometry = geometrySetWith(scene_->indexedMaterialBuffer(), scene_->indexedMaterialExtraBuffer());
   } else {
     for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
       b.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
+    }
+    if (scene_->features().emissiveMaps) {
+      b.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, std::string("material_maps.") + mapKindName(shaders::kMapEmissive));
     }
   }
   if (options_.computeShading) {
