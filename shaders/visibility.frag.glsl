@@ -1,5 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#ifdef TALLY_ALPHA_TEST
+#define TALLY_MATERIALS  // alpha_test.h reads the material
+#endif
 // Fat visibility buffer, pass 1, for devices without fragment-shader
 // barycentrics: ids, barycentrics and uv derivatives of the visible triangle.
 // The barycentrics come from the triangle's three vertices, fetched from the
@@ -14,7 +17,6 @@
 
 #ifdef TALLY_ALPHA_TEST
 // alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#define TALLY_MATERIALS
 #include "common.h"
 #include "alpha_test.h"
 #else

@@ -1,5 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#ifdef TALLY_ALPHA_TEST
+#define TALLY_MATERIALS  // alpha_test.h reads the material
+#endif
 #extension GL_EXT_fragment_shader_barycentric : require
 // Fat visibility buffer, pass 1, on devices with fragment-shader barycentrics
 // (VK_KHR_fragment_shader_barycentric; not lavapipe): the rasteriser's
@@ -9,7 +12,6 @@
 
 #ifdef TALLY_ALPHA_TEST
 // alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#define TALLY_MATERIALS
 #include "common.h"
 #include "alpha_test.h"
 #else

@@ -1,12 +1,14 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#ifdef TALLY_ALPHA_TEST
+#define TALLY_MATERIALS  // alpha_test.h reads the material
+#endif
 // Lean visibility buffer (Burns & Hunt 2013), pass 1, after zprepass.vert:
 // one 32-bit id per pixel plus depth; shading_lean.frag recomputes the rest.
 #include "shared.h"
 
 #ifdef TALLY_ALPHA_TEST
 // alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#define TALLY_MATERIALS
 #include "common.h"
 #include "alpha_test.h"
 #else

@@ -7,8 +7,10 @@
 // uninstrumented twin, used for timing, keeps the depth-only pipeline.
 #extension GL_GOOGLE_include_directive : require
 #ifdef TALLY_ALPHA_TEST
+#define TALLY_MATERIALS  // alpha_test.h reads the material
+#endif
+#ifdef TALLY_ALPHA_TEST
 // alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#define TALLY_MATERIALS
 #include "common.h"
 #include "alpha_test.h"
 #else

@@ -356,7 +356,11 @@ Result<RendererBase::DrawRecorder> RendererBase::maskedDraws(uint32_t passIndex,
                                                              const std::vector<std::string>& defines) {
   if (!scene_->features().alphaMask) return DrawRecorder{};
   std::vector<std::string> masked = defines;
-  masked.push_back("TALLY_ALPHA_TEST");
+  // After an alpha-tested depth pre-pass (depth EQUAL, no write) the depth
+  // already holds the test's outcome: the masked draws keep early tests and
+  // shade only the fragments the pre-pass kept.
+  const bool afterPrepass = desc.depthTest && !desc.depthWrite && desc.depthCompare == VK_COMPARE_OP_EQUAL;
+  if (!afterPrepass) masked.push_back("TALLY_ALPHA_TEST");
   auto vs = shader(passIndex, vertex, masked);
   if (!vs) return makeError(vs.error());
   auto fs = shader(passIndex, fragment, masked);

@@ -1,0 +1,253 @@
+// glTF material features in every renderer, on small files the tests write
+// (gltf_writer.hpp): alpha mask, alpha blend (sorted, its own pass), back-face
+// culling per draw (doubleSided, negative scale), vertex colours, the second
+// uv set, texture transforms, each texture's own sampler and emission.
+//
+// The scenes are built so the expected figures follow by hand: the camera
+// sits at (0, 0, 1) looking down -Z with a 60 degree vertical field of view,
+// so a quad in the plane z = 0 spanning half-height tan(30 deg) and
+// half-width tan(30 deg) x W / H fills the view exactly; its u grows
+// linearly across the screen (a plane parallel to the image plane), so pixel
+// column i samples u = 0.5 + (i + 0.5 - W / 2) / (W x kMargin) with the quad
+// widened by kMargin. A texture whose left half differs from its right half
+// then splits the image at the centre column.
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gltf_writer.hpp"
+#include "render_fixture.hpp"
+
+namespace tally::renderers {
+using namespace fixture;
+using tally::testing::GltfQuad;
+using tally::testing::GltfWriter;
+using tally::testing::quadFacingCamera;
+namespace {
+
+constexpr VkExtent2D kExtent = {64, 36};
+constexpr uint64_t kPixels = 64 * 36;
+constexpr uint64_t kLeftHalf = 32 * 36;  // columns 0..31
+constexpr float kMargin = 1.01f;         // the full-view quad is 1% wider and taller than the view
+const float kHalfHeight = std::tan(glm::radians(30.0f)) * kMargin;
+const float kHalfWidth = kHalfHeight * float(kExtent.width) / float(kExtent.height);
+
+const std::vector<std::string> kRenderers = {"forward", "forward-zprepass", "deferred", "visbuffer",
+                                             "visbuffer-lean"};
+
+// The pass that shades each covered pixel once (after the geometry pass).
+std::string shadingPass(const std::string& renderer) {
+  if (renderer == "deferred") return "lighting";
+  if (renderer == "visbuffer" || renderer == "visbuffer-lean") return "shading";
+  return "forward";  // forward-zprepass: depth EQUAL, one fragment per covered pixel
+}
+
+scenes::Camera frontCamera() {
+  scenes::Camera c;
+  c.eye = glm::vec3(0, 0, 1);
+  c.target = glm::vec3(0, 0, 0);
+  c.fovDeg = 60.0f;
+  return c;
+}
+
+// A width x height texture whose columns left of the middle are `left` and the others `right`.
+std::vector<uint8_t> halves(int width, int height, glm::u8vec4 left, glm::u8vec4 right) {
+  std::vector<uint8_t> out;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const glm::u8vec4 c = x < width / 2 ? left : right;
+      out.insert(out.end(), {c.r, c.g, c.b, c.a});
+    }
+  return out;
+}
+
+GltfQuad fullView(float z, int material) {
+  return quadFacingCamera(-kHalfWidth, -kHalfHeight, kHalfWidth, kHalfHeight, z, material);
+}
+
+// Writes the file and returns its scene spec, with the test camera set.
+nlohmann::json sceneOf(const GltfWriter& w, const std::string& name) {
+  static const std::string dir = tally::testing::tempFolder("tally-gltf-features-");
+  nlohmann::json spec = {{"gltf", w.write(dir, name)}};
+  testScene(spec).camera = frontCamera();
+  return spec;
+}
+
+struct Rgb {
+  double r = 0, g = 0, b = 0;
+};
+// Mean colour of the columns [x0, x1) of an RGBA8 image of kExtent.
+Rgb meanColumns(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1) {
+  Rgb m;
+  double n = 0;
+  for (uint32_t y = 0; y < kExtent.height; ++y)
+    for (uint32_t x = x0; x < x1; ++x) {
+      const uint8_t* p = &image[(size_t(y) * kExtent.width + x) * 4];
+      m.r += p[0];
+      m.g += p[1];
+      m.b += p[2];
+      n += 1;
+    }
+  m.r /= n;
+  m.g /= n;
+  m.b /= n;
+  return m;
+}
+
+// The image with nothing drawn: the sky of the same camera (an empty-looking
+// scene: one quad far behind the camera).
+std::vector<uint8_t> skyImage() {
+  GltfWriter w;
+  w.addQuad(quadFacingCamera(-0.1f, -0.1f, 0.1f, 0.1f, 5.0f, -1));  // behind the eye: never seen
+  Rendered r = render("forward", sceneOf(w, "sky_only"), kExtent);
+  EXPECT_TRUE(r.ok) << r.error;
+  return r.image;
+}
+
+TEST(GltfAlphaMask, OnlyTexelsAboveTheCutoffCoverPixelsInEveryRenderer) {
+  // Left half of the texture opaque, right half transparent; cutoff 0.5:
+  // the left 32 columns pass (trilinear alpha at their u stays above 0.75),
+  // the right 32 are discarded.
+  GltfWriter w;
+  const int t = w.addTexture(64, 64, halves(64, 64, {255, 255, 255, 255}, {255, 255, 255, 0}));
+  const int m = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", t}}},
+                                                         {"baseColorFactor", {1.0, 0.1, 0.1, 1.0}}}},
+                               {"alphaMode", "MASK"},
+                               {"alphaCutoff", 0.5}});
+  w.addQuad(fullView(0.0f, m));
+  const nlohmann::json spec = sceneOf(w, "alpha_mask");
+  const std::vector<uint8_t> sky = skyImage();
+  const Rgb skyRight = meanColumns(sky, 32, 64);
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    // Shading happens where the test passed: stencil (deferred, visbuffers)
+    // and depth EQUAL (the pre-pass) carry the geometry pass's test.
+    EXPECT_EQ(passNamed(r, shadingPass(name)).fragmentInvocations, name == "forward" ? kPixels : kLeftHalf)
+        << name;
+    if (name == "forward") {
+      // Late tests: the shader runs on all 2304 covered pixels, and stores hdr on the 1152 it keeps.
+      EXPECT_EQ(counted(passNamed(r, "forward"), "hdr", true), kLeftHalf);
+    }
+    // The image: the quad's red on the left, exactly the sky on the right.
+    const Rgb left = meanColumns(r.image, 0, 32), right = meanColumns(r.image, 32, 64);
+    EXPECT_GT(left.r, 2 * left.b) << name;
+    EXPECT_NEAR(right.r, skyRight.r, 0.5) << name;
+    EXPECT_NEAR(right.b, skyRight.b, 0.5) << name;
+  }
+}
+
+TEST(GltfAlphaMask, PrepassAndVisibilityPassAlphaTestToo) {
+  // A masked quad in front of an opaque one: where the mask discards, the
+  // opaque quad behind must be what the later passes see (its id, its depth).
+  GltfWriter w;
+  const int t = w.addTexture(64, 64, halves(64, 64, {255, 255, 255, 255}, {255, 255, 255, 0}));
+  const int masked = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", t}}},
+                                                              {"baseColorFactor", {1.0, 0.1, 0.1, 1.0}}}},
+                                    {"alphaMode", "MASK"}});
+  const int opaque = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {0.1, 0.1, 1.0, 1.0}}}}});
+  GltfQuad front = fullView(0.5f, masked);  // at half the distance: half the size fills the view
+  for (auto& c : front.corners) c *= glm::vec3(0.5f, 0.5f, 1.0f);
+  w.addQuad(front);
+  GltfQuad back = fullView(0.0f, opaque);
+  for (auto& c : back.corners) c *= glm::vec3(1.2f, 1.2f, 1.0f);  // beyond the view: covers every pixel
+  w.addQuad(back);
+  const nlohmann::json spec = sceneOf(w, "alpha_mask_over_opaque");
+  Rendered reference = render("forward", spec, kExtent);
+  ASSERT_TRUE(reference.ok) << reference.error;
+  const Rgb refLeft = meanColumns(reference.image, 0, 32), refRight = meanColumns(reference.image, 32, 64);
+  EXPECT_GT(refLeft.r, refLeft.b);    // the masked quad's red where it is kept
+  EXPECT_GT(refRight.b, refRight.r);  // the opaque quad's blue through the discarded half
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    // Every pixel is covered by one of the two; each shaded once after the geometry pass.
+    if (name != "forward") {
+      EXPECT_EQ(passNamed(r, shadingPass(name)).fragmentInvocations, kPixels) << name;
+    }
+    const Rgb left = meanColumns(r.image, 0, 32), right = meanColumns(r.image, 32, 64);
+    EXPECT_GT(left.r, left.b) << name;
+    EXPECT_GT(right.b, right.r) << name;
+    EXPECT_NEAR(left.r, refLeft.r, 3.0) << name;
+    EXPECT_NEAR(right.b, refRight.b, 3.0) << name;
+  }
+}
+
+TEST(GltfAlphaBlend, TransparentPassBlendsBackToFrontAfterTheOpaquePasses) {
+  // An opaque blue quad fills the view at z = 0. Two half-transparent quads
+  // cover the left half: red nearer (z = 0.5), green farther (z = 0.25),
+  // listed near first. Back to front gives 0.5 red + 0.25 green + 0.25 blue;
+  // the file's order would give 0.5 green + 0.25 red.
+  GltfWriter w;
+  const int blue = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {0.05, 0.05, 1.0, 1.0}}}}});
+  const int red = w.addMaterial(
+      {{"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 0.0, 0.0, 0.5}}}}, {"alphaMode", "BLEND"}});
+  const int green = w.addMaterial(
+      {{"pbrMetallicRoughness", {{"baseColorFactor", {0.0, 1.0, 0.0, 0.5}}}}, {"alphaMode", "BLEND"}});
+  w.addQuad(quadFacingCamera(-3.0f, -3.0f, 0.0f, 3.0f, 0.5f, red));
+  w.addQuad(quadFacingCamera(-3.0f, -3.0f, 0.0f, 3.0f, 0.25f, green));
+  GltfQuad back = fullView(0.0f, blue);
+  for (auto& c : back.corners) c *= glm::vec3(1.2f, 1.2f, 1.0f);
+  w.addQuad(back);
+  const nlohmann::json spec = sceneOf(w, "alpha_blend");
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    const PassResult& t = passNamed(r, "transparent");
+    ASSERT_EQ(r.frame.passes.back().name, "transparent") << name << ": the last pass, after the sky";
+    // Both transparent quads over the left half, neither behind the opaque one.
+    EXPECT_EQ(t.fragmentInvocations, 2 * kLeftHalf) << name;
+    EXPECT_EQ(counted(t, "final", true), 2 * kLeftHalf) << name;
+    EXPECT_EQ(counted(t, "final", false, "derived"), 2 * kLeftHalf) << name << ": blending reads the destination";
+    // The opaque passes never see them: one shaded pixel per pixel of the blue quad.
+    if (name != "forward") {
+      EXPECT_EQ(passNamed(r, shadingPass(name)).fragmentInvocations, kPixels) << name;
+    }
+    const Rgb left = meanColumns(r.image, 0, 32), right = meanColumns(r.image, 32, 64);
+    EXPECT_GT(left.r, 1.3 * left.g) << name << ": red is nearer, so it must weigh twice green";
+    EXPECT_GT(left.r, right.r + 10) << name;
+    EXPECT_GT(right.b, right.r) << name;
+  }
+}
+
+TEST(GltfDoubleSided, BackFacesAreCulledPerDrawUnlessDoubleSided) {
+  // The same quad wound clockwise as seen from the camera (its back face
+  // towards it): single-sided it is culled, double-sided it fills the view.
+  // A mirrored node (scale -1 in x) of a front-facing quad stays front-facing.
+  for (const char* kind : {"single", "double", "mirrored"}) {
+    GltfWriter w;
+    const bool doubleSided = std::string(kind) == "double";
+    const int m = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 0.1, 0.1, 1.0}}}},
+                                 {"doubleSided", doubleSided}});
+    GltfQuad q = fullView(0.0f, m);
+    if (std::string(kind) == "mirrored") {
+      q.node = {{"scale", {-1.0, 1.0, 1.0}}};
+    } else {
+      std::swap(q.corners[1], q.corners[3]);  // clockwise from the front: the back face looks at the camera
+      std::swap(q.uv[1], q.uv[3]);
+    }
+    w.addQuad(q);
+    // A second, double-sided quad far behind keeps the scene's bounds (and lights) the same size.
+    const int behind = w.addMaterial({{"doubleSided", true}});
+    w.addQuad(quadFacingCamera(-0.01f, -0.01f, 0.01f, 0.01f, -50.0f, behind));
+    const nlohmann::json spec = sceneOf(w, std::string("sided_") + kind);
+    const bool visible = std::string(kind) != "single";
+    // The far quad covers a few pixels at the centre: derive them from its size.
+    for (const auto& name : kRenderers) {
+      Rendered r = render(name, spec, kExtent);
+      ASSERT_TRUE(r.ok) << name << ": " << r.error;
+      const uint64_t shaded = passNamed(r, shadingPass(name)).fragmentInvocations;
+      if (visible) {
+        EXPECT_EQ(shaded, kPixels) << kind << " " << name;
+      } else {
+        // Only the far quad: 0.02 m at 51 m is 0.02 / (2 x 51 x tan 30) x 36 = 0.012 rows: no pixel centre.
+        EXPECT_EQ(shaded, 0u) << kind << " " << name;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tally::renderers
