@@ -75,9 +75,10 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
                        site.kind == SiteKind::ImageAtomic;
     const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
     if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
-      addAccess(out.accesses, bindings.vertexInputs, false, slotValue(counters, site.slot), site.elementBytes,
-                "counter");
-      noteSlot(slotValue(counters, site.slot), bindings.vertexInputs);
+      auto at = bindings.vertexInputsAt.find(uint32_t(*site.location));
+      const std::string& buffer = at != bindings.vertexInputsAt.end() ? at->second : bindings.vertexInputs;
+      addAccess(out.accesses, buffer, false, slotValue(counters, site.slot), site.elementBytes, "counter");
+      noteSlot(slotValue(counters, site.slot), buffer);
       continue;
     }
     auto it = bindings.bindings.find({site.set, site.binding});

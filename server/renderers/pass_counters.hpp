@@ -22,7 +22,8 @@ namespace tally::renderers {
 struct PassBindings {
   std::map<std::pair<int64_t, int64_t>, std::vector<std::string>> bindings;
   std::map<uint32_t, std::string> outputs;  // fragment output Location -> attachment
-  std::string vertexInputs = "vertices";    // the vertex buffer behind every vertex attribute
+  std::string vertexInputs = "vertices";    // the vertex buffer behind every vertex attribute ...
+  std::map<uint32_t, std::string> vertexInputsAt;  // ... but these Locations' (glTF's second vertex buffer)
   // Bytes per read where the bound view differs from the resource's format
   // (the depth aspect of D32_S8: 4).
   std::map<std::pair<int64_t, int64_t>, uint32_t> elementBytes;

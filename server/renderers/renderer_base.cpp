@@ -154,6 +154,8 @@ PassBindings RendererBase::commonBindings() const {
   b.bind(shaders::kSetGeometry, shaders::kBindingIndices, "indices");
   b.bind(shaders::kSetGeometry, shaders::kBindingVertexAttributes, "vertex_attributes");
   b.bind(shaders::kSetGeometry, shaders::kBindingMaterialExtras, "material_extras");
+  b.vertexInputsAt[shaders::kAttribColor] = "vertex_attributes";  // vertex buffer 1 (glTF scenes)
+  b.vertexInputsAt[shaders::kAttribUv1] = "vertex_attributes";
   shadowBindings(b);  // "shadow", "shadow_map" in set 0 with shadows on
   return b;
 }

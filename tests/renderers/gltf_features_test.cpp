@@ -11,7 +11,9 @@
 // column i samples u = 0.5 + (i + 0.5 - W / 2) / (W x kMargin) with the quad
 // widened by kMargin. A texture whose left half differs from its right half
 // then splits the image at the centre column.
+#include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,11 +80,11 @@ nlohmann::json sceneOf(const GltfWriter& w, const std::string& name) {
 struct Rgb {
   double r = 0, g = 0, b = 0;
 };
-// Mean colour of the columns [x0, x1) of an RGBA8 image of kExtent.
-Rgb meanColumns(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1) {
+// Mean colour of the columns [x0, x1) and rows [y0, y1) of an RGBA8 image of kExtent.
+Rgb meanRect(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1) {
   Rgb m;
   double n = 0;
-  for (uint32_t y = 0; y < kExtent.height; ++y)
+  for (uint32_t y = y0; y < y1; ++y)
     for (uint32_t x = x0; x < x1; ++x) {
       const uint8_t* p = &image[(size_t(y) * kExtent.width + x) * 4];
       m.r += p[0];
@@ -94,6 +96,9 @@ Rgb meanColumns(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1) {
   m.g /= n;
   m.b /= n;
   return m;
+}
+Rgb meanColumns(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1) {
+  return meanRect(image, x0, x1, 0, kExtent.height);
 }
 
 // The image with nothing drawn: the sky of the same camera (an empty-looking
@@ -245,6 +250,166 @@ TEST(GltfDoubleSided, BackFacesAreCulledPerDrawUnlessDoubleSided) {
         // Only the far quad: 0.02 m at 51 m is 0.02 / (2 x 51 x tan 30) x 36 = 0.012 rows: no pixel centre.
         EXPECT_EQ(shaded, 0u) << kind << " " << name;
       }
+    }
+  }
+}
+
+
+// Mean brightness (R + G + B) / 3 of the columns [x0, x1) and rows [y0, y1).
+double brightness(const std::vector<uint8_t>& image, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1) {
+  const Rgb m = meanRect(image, x0, x1, y0, y1);
+  return (m.r + m.g + m.b) / 3.0;
+}
+
+// Three strips of the view (12 rows each, top to bottom in the image), each
+// a quad of the given material and uvs.
+void addStrips(GltfWriter& w, const std::array<int, 3>& materials, const std::array<std::array<glm::vec2, 4>, 3>& uvs,
+               const std::array<std::optional<std::array<glm::vec2, 4>>, 3>& uv1 = {}) {
+  for (int i = 0; i < 3; ++i) {
+    const float top = kHalfHeight * (1.0f - 2.0f * float(i) / 3.0f);
+    const float bottom = kHalfHeight * (1.0f - 2.0f * float(i + 1) / 3.0f);
+    GltfQuad q = quadFacingCamera(-kHalfWidth, bottom, kHalfWidth, top, 0.0f, materials[size_t(i)]);
+    q.uv = uvs[size_t(i)];
+    q.uv1 = uv1[size_t(i)];
+    w.addQuad(q);
+  }
+}
+
+// uvs with u from 0 at the left edge to `u1` at the right, v from 0 to 1.
+std::array<glm::vec2, 4> uSpan(float u0, float u1) {
+  return {glm::vec2(u0, 0), glm::vec2(u1, 0), glm::vec2(u1, 1), glm::vec2(u0, 1)};
+}
+
+// Whether the middle 8 columns of each quarter of the strip's middle rows are
+// bright: closer to `bright` than to `dark`.
+std::vector<bool> quarters(const std::vector<uint8_t>& image, int strip, double dark, double bright) {
+  std::vector<bool> out;
+  const uint32_t y0 = uint32_t(strip) * 12 + 3, y1 = y0 + 6;
+  for (uint32_t q = 0; q < 4; ++q) {
+    const double b = brightness(image, q * 16 + 4, q * 16 + 12, y0, y1);
+    out.push_back(std::abs(b - bright) < std::abs(b - dark));
+  }
+  return out;
+}
+
+const glm::u8vec4 kBlack = {0, 0, 0, 255}, kWhite = {255, 255, 255, 255};
+
+TEST(GltfSamplers, EachTextureWrapsAsItsSamplerSays) {
+  // u from 0 to 2 across the view; the texture is black left, white right:
+  //   repeat   0-.5 black, .5-1 white, 1-1.5 black, 1.5-2 white: B W B W
+  //   clamp    u > 1 reads the right edge (white):               B W W W
+  //   mirrored 1-2 reads 1-0:                                     B W W B
+  GltfWriter w;
+  const auto texels = halves(64, 64, kBlack, kWhite);
+  const int repeat = w.addTexture(64, 64, texels, {{"wrapS", 10497}, {"wrapT", 10497}});
+  const int clamp = w.addTexture(64, 64, texels, {{"wrapS", 33071}, {"wrapT", 10497}});
+  const int mirror = w.addTexture(64, 64, texels, {{"wrapS", 33648}, {"wrapT", 10497}});
+  std::array<int, 3> materials;
+  for (int i = 0; i < 3; ++i) {
+    materials[size_t(i)] = w.addMaterial(
+        {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", std::array{repeat, clamp, mirror}[size_t(i)]}}}}},
+         {"emissiveFactor", {0.0, 0.0, 0.0}}});
+  }
+  addStrips(w, materials, {uSpan(0, 2), uSpan(0, 2), uSpan(0, 2)});
+  const nlohmann::json spec = sceneOf(w, "samplers");
+  const std::vector<std::vector<bool>> want = {{false, true, false, true}, {false, true, true, true},
+                                               {false, true, true, false}};
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    for (int strip = 0; strip < 3; ++strip) {
+      // Quarter 0 is black and quarter 1 white in every mode: the references.
+      const uint32_t y0 = uint32_t(strip) * 12 + 3;
+      const double dark = brightness(r.image, 4, 12, y0, y0 + 6), bright = brightness(r.image, 20, 28, y0, y0 + 6);
+      ASSERT_GT(bright, dark + 20) << name << " strip " << strip;
+      EXPECT_EQ(quarters(r.image, strip, dark, bright), want[size_t(strip)]) << name << " strip " << strip;
+    }
+  }
+}
+
+TEST(GltfUvSets, MapsSampleTheirUvSetThroughTheirTransform) {
+  // TEXCOORD_0 is 0 everywhere (black); TEXCOORD_1 spans 0..1. Top strip:
+  // the map samples TEXCOORD_1: dark left, bright right. Middle: the same
+  // with KHR_texture_transform offset (0.5, 0): bright left, dark right
+  // (u + 0.5 repeats). Bottom: TEXCOORD_0: dark everywhere.
+  GltfWriter w;
+  w.useExtension("KHR_texture_transform");
+  const int t = w.addTexture(64, 64, halves(64, 64, kBlack, kWhite));
+  const int uv1 = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", t}, {"texCoord", 1}}}}}});
+  nlohmann::json shiftedInfo = {{"index", t}, {"texCoord", 1}};
+  shiftedInfo["extensions"]["KHR_texture_transform"]["offset"] = {0.5, 0.0};
+  nlohmann::json shiftedMaterial;
+  shiftedMaterial["pbrMetallicRoughness"]["baseColorTexture"] = shiftedInfo;
+  const int shifted = w.addMaterial(shiftedMaterial);
+  const int uv0 = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", t}}}}}});
+  const std::array<glm::vec2, 4> zero = {glm::vec2(0), glm::vec2(0), glm::vec2(0), glm::vec2(0)};
+  addStrips(w, {uv1, shifted, uv0}, {zero, zero, zero}, {uSpan(0, 1), uSpan(0, 1), uSpan(0, 1)});
+  const nlohmann::json spec = sceneOf(w, "uv_sets");
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    const double leftTop = brightness(r.image, 4, 28, 3, 9), rightTop = brightness(r.image, 36, 60, 3, 9);
+    const double leftMid = brightness(r.image, 4, 28, 15, 21), rightMid = brightness(r.image, 36, 60, 15, 21);
+    const double leftLow = brightness(r.image, 4, 28, 27, 33), rightLow = brightness(r.image, 36, 60, 27, 33);
+    EXPECT_GT(rightTop, leftTop + 20) << name;
+    EXPECT_GT(leftMid, rightMid + 20) << name;
+    EXPECT_NEAR(leftLow, rightLow, 4) << name;
+    EXPECT_LT(rightLow, rightTop - 20) << name;
+  }
+}
+
+TEST(GltfVertexColors, ColourMultipliesTheBaseColourAndIsCounted) {
+  // White material; COLOR_0 red at the left corners, blue at the right.
+  GltfWriter w;
+  const int m = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {1.0, 1.0, 1.0, 1.0}}}}});
+  GltfQuad q = fullView(0.0f, m);
+  q.color = std::array<glm::vec4, 4>{glm::vec4(1, 0, 0, 1), glm::vec4(0, 0, 1, 1), glm::vec4(0, 0, 1, 1),
+                                     glm::vec4(1, 0, 0, 1)};
+  w.addQuad(q);
+  const nlohmann::json spec = sceneOf(w, "vertex_colors");
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    const Rgb left = meanColumns(r.image, 0, 16), right = meanColumns(r.image, 48, 64);
+    EXPECT_GT(left.r, 2 * left.b) << name;
+    EXPECT_GT(right.b, 2 * right.r) << name;
+    EXPECT_LT(left.g, left.r / 4) << name;
+    // The colours are read where the renderer reads vertices: the vertex
+    // stage (4 vertices) or, in the visibility buffers' shading, 3 vertices per pixel.
+    uint64_t reads = 0;
+    for (const auto& p : r.frame.passes) reads += counted(p, "vertex_attributes", false);
+    if (name == "visbuffer" || name == "visbuffer-lean") {
+      EXPECT_GE(counted(passNamed(r, "shading"), "vertex_attributes", false), 3 * kPixels) << name;
+    } else {
+      EXPECT_GT(reads, 0u) << name;
+      EXPECT_LE(reads, 4u * 4u) << name << ": one read per vertex and pass";
+    }
+  }
+}
+
+TEST(GltfEmissive, EmissionIsAddedInEveryRenderer) {
+  // A black material that emits (0, 0.8, 0): green everywhere. A second,
+  // lower strip emits red through an emissive map white on the left only.
+  GltfWriter w;
+  const int t = w.addTexture(64, 64, halves(64, 64, kWhite, kBlack));
+  const int factor = w.addMaterial(
+      {{"pbrMetallicRoughness", {{"baseColorFactor", {0.0, 0.0, 0.0, 1.0}}}}, {"emissiveFactor", {0.0, 0.8, 0.0}}});
+  const int mapped = w.addMaterial({{"pbrMetallicRoughness", {{"baseColorFactor", {0.0, 0.0, 0.0, 1.0}}}},
+                                    {"emissiveFactor", {1.0, 0.0, 0.0}},
+                                    {"emissiveTexture", {{"index", t}}}});
+  addStrips(w, {factor, factor, mapped}, {uSpan(0, 1), uSpan(0, 1), uSpan(0, 1)});
+  const nlohmann::json spec = sceneOf(w, "emissive");
+  for (const auto& name : kRenderers) {
+    Rendered r = render(name, spec, kExtent);
+    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    const Rgb top = meanColumns(r.image, 0, 64);  // all rows: green dominates the two upper strips
+    EXPECT_GT(top.g, 2 * top.r) << name;
+    const Rgb low = meanRect(r.image, 4, 28, 27, 33), lowRight = meanRect(r.image, 36, 60, 27, 33);
+    EXPECT_GT(low.r, lowRight.r + 40) << name << ": the emissive map's white half";
+    if (name == "deferred") {
+      // The emission travels in its own G-buffer target, written and read once per covered pixel.
+      EXPECT_EQ(counted(passNamed(r, "gbuffer"), "gbuffer.emissive", true), kPixels);
+      EXPECT_EQ(counted(passNamed(r, "lighting"), "gbuffer.emissive", false), kPixels);
     }
   }
 }
