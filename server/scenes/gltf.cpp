@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <thread>
 #include <tuple>
@@ -212,11 +213,88 @@ void computeNormals(Mesh& mesh) {
   }
 }
 
+// One texture of the scene: a glTF image in a colour space through a sampler.
 struct ImageUse {
   int image;
   bool srgb;
-  bool operator<(const ImageUse& o) const { return std::tie(image, srgb) < std::tie(o.image, o.srgb); }
+  Sampler sampler;
+  bool operator<(const ImageUse& o) const {
+    return std::tie(image, srgb, sampler) < std::tie(o.image, o.srgb, o.sampler);
+  }
 };
+
+// glTF sampler enums (KHR's OpenGL values) -> Sampler; unknown values are errors.
+Result<Sampler> samplerOf(const tinygltf::Sampler& s, const std::string& what) {
+  Sampler out;
+  auto wrap = [&](int v, Wrap* into, const char* axis) -> std::optional<Error> {
+    switch (v) {
+      case -1:
+      case TINYGLTF_TEXTURE_WRAP_REPEAT: *into = Wrap::Repeat; return std::nullopt;
+      case TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT: *into = Wrap::MirroredRepeat; return std::nullopt;
+      case TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE: *into = Wrap::ClampToEdge; return std::nullopt;
+      default: return makeError(what + ": " + axis + " " + std::to_string(v) + " is not a glTF wrap mode");
+    }
+  };
+  if (auto e = wrap(s.wrapS, &out.wrapU, "wrapS")) return *e;
+  if (auto e = wrap(s.wrapT, &out.wrapV, "wrapT")) return *e;
+  switch (s.magFilter) {
+    case -1:
+    case TINYGLTF_TEXTURE_FILTER_LINEAR: out.mag = Filter::Linear; break;
+    case TINYGLTF_TEXTURE_FILTER_NEAREST: out.mag = Filter::Nearest; break;
+    default: return makeError(what + ": magFilter " + std::to_string(s.magFilter) + " is not a glTF filter");
+  }
+  switch (s.minFilter) {
+    case -1:
+    case TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR: break;  // the default: trilinear
+    case TINYGLTF_TEXTURE_FILTER_NEAREST: out.min = Filter::Nearest; out.mipmaps = false; break;
+    case TINYGLTF_TEXTURE_FILTER_LINEAR: out.mipmaps = false; break;
+    case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST: out.min = out.mip = Filter::Nearest; break;
+    case TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_NEAREST: out.mip = Filter::Nearest; break;
+    case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_LINEAR: out.min = Filter::Nearest; break;
+    default: return makeError(what + ": minFilter " + std::to_string(s.minFilter) + " is not a glTF filter");
+  }
+  return out;
+}
+
+// A textureInfo's uv set and KHR_texture_transform (whose texCoord overrides).
+struct TextureRef {
+  int index = -1;
+  int texCoord = 0;
+  UvTransform transform;
+};
+Result<TextureRef> textureRef(int index, int texCoord, const tinygltf::ExtensionMap& extensions,
+                              const std::string& what) {
+  TextureRef r{index, texCoord, {}};
+  auto ext = extensions.find("KHR_texture_transform");
+  if (ext != extensions.end() && ext->second.IsObject()) {
+    const tinygltf::Value& t = ext->second;
+    auto numbers = [&](const char* key, size_t n, float* out) -> std::optional<Error> {
+      const tinygltf::Value& v = t.Get(key);
+      if (!v.IsArray()) return std::nullopt;
+      if (v.ArrayLen() != n) return makeError(what + ": KHR_texture_transform " + key + " must have " + std::to_string(n) + " numbers");
+      for (size_t i = 0; i < n; ++i) {
+        const tinygltf::Value& x = v.Get(int(i));
+        if (!x.IsNumber()) return makeError(what + ": KHR_texture_transform " + key + " must be numbers");
+        out[i] = float(x.GetNumberAsDouble());
+        if (!std::isfinite(out[i])) return makeError(what + ": KHR_texture_transform " + key + " is not finite");
+      }
+      return std::nullopt;
+    };
+    if (auto e = numbers("offset", 2, &r.transform.offset.x)) return *e;
+    if (auto e = numbers("scale", 2, &r.transform.scale.x)) return *e;
+    if (t.Has("rotation")) {
+      if (!t.Get("rotation").IsNumber()) return makeError(what + ": KHR_texture_transform rotation must be a number");
+      r.transform.rotation = float(t.Get("rotation").GetNumberAsDouble());
+      if (!std::isfinite(r.transform.rotation)) return makeError(what + ": KHR_texture_transform rotation is not finite");
+    }
+    if (t.Has("texCoord") && t.Get("texCoord").IsInt()) r.texCoord = t.Get("texCoord").GetNumberAsInt();
+  }
+  if (r.index >= 0 && (r.texCoord < 0 || r.texCoord > 1)) {
+    return makeError(what + ": texCoord " + std::to_string(r.texCoord) +
+                     " is not supported (Tally reads TEXCOORD_0 and TEXCOORD_1)");
+  }
+  return r;
+}
 
 struct Loader {
   const GltfOptions& options;
@@ -238,6 +316,15 @@ struct Loader {
     if (gltfTexture < 0) return int32_t(-1);
     if (size_t(gltfTexture) >= model.textures.size())
       return makeError(what + ": texture " + std::to_string(gltfTexture) + " does not exist");
+    Sampler sampler;
+    const int samplerIndex = model.textures[size_t(gltfTexture)].sampler;
+    if (samplerIndex >= 0) {
+      if (size_t(samplerIndex) >= model.samplers.size())
+        return makeError(what + ": sampler " + std::to_string(samplerIndex) + " does not exist");
+      Result<Sampler> s = samplerOf(model.samplers[size_t(samplerIndex)], "sampler " + std::to_string(samplerIndex));
+      if (!s) return makeError(s.error());
+      sampler = *s;
+    }
     int image = model.textures[size_t(gltfTexture)].source;
     if (image < 0) {
       scene.notes.push_back(what + ": texture " + std::to_string(gltfTexture) +
@@ -246,7 +333,7 @@ struct Loader {
     }
     if (size_t(image) >= model.images.size())
       return makeError(what + ": image " + std::to_string(image) + " does not exist");
-    ImageUse use{image, srgb};
+    ImageUse use{image, srgb, sampler};
     auto it = textureOf.find(use);
     if (it != textureOf.end()) return it->second;
     int32_t index = int32_t(uses.size());
@@ -271,32 +358,65 @@ struct Loader {
                     : g.alphaMode == "BLEND" ? AlphaMode::Blend
                                              : AlphaMode::Opaque;
       m.alphaCutoff = float(g.alphaCutoff);
-      m.doubleSided = g.doubleSided;
 
+      m.doubleSided = g.doubleSided;
+      if (g.emissiveFactor.size() == 3)
+        m.emissiveFactor = glm::vec3(g.emissiveFactor[0], g.emissiveFactor[1], g.emissiveFactor[2]);
+      auto strength = g.extensions.find("KHR_materials_emissive_strength");
+      if (strength != g.extensions.end() && strength->second.Get("emissiveStrength").IsNumber())
+        m.emissiveFactor *= float(strength->second.Get("emissiveStrength").GetNumberAsDouble());
+      if (!std::isfinite(m.emissiveFactor.x + m.emissiveFactor.y + m.emissiveFactor.z))
+        return makeError(what + ": emissiveFactor is not finite");
       int specular = -1;
+      int specularTexCoord = 0;
+      tinygltf::ExtensionMap specularExtensions;
       bool specularSrgb = false;
       auto ext = g.extensions.find("KHR_materials_specular");
       if (ext != g.extensions.end() && ext->second.IsObject()) {
         const tinygltf::Value& color = ext->second.Get("specularColorTexture");
         const tinygltf::Value& strength = ext->second.Get("specularTexture");
-        if (color.IsObject() && color.Get("index").IsInt()) {
-          specular = color.Get("index").GetNumberAsInt();
-          specularSrgb = true;
-        } else if (strength.IsObject() && strength.Get("index").IsInt()) {
-          specular = strength.Get("index").GetNumberAsInt();
+        const tinygltf::Value& used = color.IsObject() && color.Get("index").IsInt() ? color : strength;
+        if (used.IsObject() && used.Get("index").IsInt()) {
+          specular = used.Get("index").GetNumberAsInt();
+          specularSrgb = &used == &color;
+          if (used.Get("texCoord").IsInt()) specularTexCoord = used.Get("texCoord").GetNumberAsInt();
         }
       }
-      const std::pair<MapSlot, std::pair<int, bool>> slots[] = {
-          {MapSlot::Diffuse, {pbr.baseColorTexture.index, true}},
-          {MapSlot::Ambient, {g.occlusionTexture.index, false}},
-          {MapSlot::Specular, {specular, specularSrgb}},
-          {MapSlot::Roughness, {pbr.metallicRoughnessTexture.index, false}},
-          {MapSlot::Normal, {g.normalTexture.index, false}},
+      struct Source {
+        MapSlot slot;
+        int index, texCoord;
+        const tinygltf::ExtensionMap* extensions;
+        bool srgb;
       };
-      for (const auto& [slot, source] : slots) {
-        Result<int32_t> t = texture(source.first, source.second, what + " " + toString(slot));
+      const Source slots[] = {
+          {MapSlot::Diffuse, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
+           &pbr.baseColorTexture.extensions, true},
+          {MapSlot::Ambient, g.occlusionTexture.index, g.occlusionTexture.texCoord, &g.occlusionTexture.extensions,
+           false},
+          {MapSlot::Specular, specular, specularTexCoord, &specularExtensions, specularSrgb},
+          {MapSlot::Roughness, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+           &pbr.metallicRoughnessTexture.extensions, false},
+          {MapSlot::Normal, g.normalTexture.index, g.normalTexture.texCoord, &g.normalTexture.extensions, false},
+      };
+      for (const Source& source : slots) {
+        const std::string map = what + " " + toString(source.slot);
+        Result<TextureRef> ref = textureRef(source.index, source.texCoord, *source.extensions, map);
+        if (!ref) return makeError(ref.error());
+        Result<int32_t> t = texture(ref->index, source.srgb, map);
         if (!t) return makeError(t.error());
-        m.maps[size_t(slot)] = *t;
+        m.maps[size_t(source.slot)] = *t;
+        m.texCoord[size_t(source.slot)] = uint32_t(ref->texCoord);
+        m.transform[size_t(source.slot)] = ref->transform;
+      }
+      {
+        Result<TextureRef> ref = textureRef(g.emissiveTexture.index, g.emissiveTexture.texCoord,
+                                            g.emissiveTexture.extensions, what + " emissive");
+        if (!ref) return makeError(ref.error());
+        Result<int32_t> t = texture(ref->index, true, what + " emissive");
+        if (!t) return makeError(t.error());
+        m.emissiveMap = *t;
+        m.emissiveTexCoord = uint32_t(ref->texCoord);
+        m.emissiveTransform = ref->transform;
       }
       scene.materials.push_back(std::move(m));
     }
@@ -314,18 +434,19 @@ struct Loader {
     const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
     if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
         mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-      scene.notes.push_back(what + ": skipped a primitive of mode " + std::to_string(mode) +
-                            " (points or lines; only triangles are drawn)");
-      return true;
+      static const char* kModes[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"};
+      return makeError(what + " primitive " + std::to_string(p) + ": mode " + std::to_string(mode) +
+                       (mode >= 0 && mode < 4 ? std::string(" (") + kModes[mode] + ")" : std::string()) +
+                       " is not drawn: Tally renders triangles only, and refuses rather than drop them");
     }
     if (attribute("POSITION") < 0) return makeError(what + ": primitive has no POSITION attribute");
     Result<std::vector<float>> pos = readFloats(model, attribute("POSITION"), 3, false, what + " POSITION");
     if (!pos) return makeError(pos.error());
     const size_t n = pos->size() / 3;
-    std::vector<float> nrm, uv, tan;
+    std::vector<float> nrm, uv, tan, uv1;
     for (auto [name, comps, into, normalized] :
          {std::tuple{"NORMAL", 3, &nrm, false}, std::tuple{"TEXCOORD_0", 2, &uv, true},
-          std::tuple{"TANGENT", 4, &tan, false}}) {
+          std::tuple{"TANGENT", 4, &tan, false}, std::tuple{"TEXCOORD_1", 2, &uv1, true}}) {
       if (attribute(name) < 0) continue;
       Result<std::vector<float>> r = readFloats(model, attribute(name), comps, normalized, what + " " + name);
       if (!r) return makeError(r.error());
@@ -343,6 +464,17 @@ struct Loader {
       for (uint32_t i = 0; i < n; ++i) raw[i] = i;
     }
 
+    std::vector<float> colors;  // COLOR_0 as RGBA
+    if (attribute("COLOR_0") >= 0) {
+      const int index = attribute("COLOR_0");
+      const int components = size_t(index) < model.accessors.size() && model.accessors[size_t(index)].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+      Result<std::vector<float>> r = readFloats(model, index, components, true, what + " COLOR_0");
+      if (!r) return makeError(r.error());
+      if (r->size() / size_t(components) != n) return makeError(what + ": COLOR_0 count differs from POSITION count");
+      colors.resize(n * 4, 1.0f);
+      for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < components; ++c) colors[i * 4 + size_t(c)] = (*r)[i * size_t(components) + size_t(c)];
+    }
     Mesh mesh;
     mesh.name = meshName(meshIndex, p);
     if (prim.material >= 0) {
@@ -384,6 +516,17 @@ struct Loader {
             len > 1e-6f && std::isfinite(len) ? glm::vec4(t / len, w) : glm::vec4(anyOrthogonal(v.normal), w);
       }
     }
+    if (mesh.material < scene.materials.size() && uv1.empty()) {
+      const Material& mat = scene.materials[mesh.material];
+      bool wantsUv1 = mat.emissiveMap >= 0 && mat.emissiveTexCoord == 1;
+      for (size_t k = 0; k < kMapSlotCount; ++k) wantsUv1 = wantsUv1 || (mat.maps[k] >= 0 && mat.texCoord[k] == 1);
+      if (wantsUv1)
+        scene.notes.push_back(what + ": material \"" + mat.name +
+                              "\" samples TEXCOORD_1, which the mesh lacks; TEXCOORD_0 is used instead");
+    }
+    for (size_t i = 0; i < colors.size() / 4; ++i)
+      mesh.colors.emplace_back(colors[4 * i], colors[4 * i + 1], colors[4 * i + 2], colors[4 * i + 3]);
+    for (size_t i = 0; i < uv1.size() / 2; ++i) mesh.uv1.emplace_back(uv1[2 * i], uv1[2 * i + 1]);
     if (nrm.empty()) computeNormals(mesh);
     if (tan.empty()) computeTangents(mesh);
     updateBounds(mesh);
@@ -493,6 +636,7 @@ struct Loader {
       t.width = decoded[k].width;
       t.height = decoded[k].height;
       t.srgb = u.srgb;
+      t.sampler = u.sampler;
       t.rgba8 = decoded[k].rgba8;  // copies only when an image is used in both colour spaces
       scene.textures.push_back(std::move(t));
     }
