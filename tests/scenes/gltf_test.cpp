@@ -73,20 +73,26 @@ TEST(Gltf, FileTangentsAreKept) {
   for (const Vertex& v : r->meshes[0].vertices) EXPECT_EQ(v.tangent, glm::vec4(0, 1, 0, -1));
 }
 
-TEST(Gltf, StripsBecomeListsAndLinesAreSkippedWithANote) {
+TEST(Gltf, StripsBecomeListsAndLinesAreRefused) {
   TempDir dir;
   GltfWriter w;
   json strip = w.quadPrimitive();
   strip["mode"] = 5;
   strip["indices"] = w.accessor(std::vector<uint8_t>{0, 1, 3, 2}, 5121, "SCALAR", 4);
-  json lines = w.quadPrimitive();
-  lines["mode"] = 1;
-  w.meshNode({strip, lines});
+  w.meshNode({strip});
   Result<Scene> r = loadGltf(w.write(dir, "s.gltf"));
   ASSERT_TRUE(r.ok()) << r.error();
   EXPECT_EQ(r->triangleCount(), 2u);
-  ASSERT_EQ(r->notes.size(), 1u);
-  EXPECT_NE(r->notes[0].find("mode 1"), std::string::npos) << r->notes[0];
+  EXPECT_TRUE(r->notes.empty());
+  // Lines are not drawn: the file is refused, naming the primitive and its mode.
+  GltfWriter withLines;
+  json lines = withLines.quadPrimitive();
+  lines["mode"] = 1;
+  withLines.meshNode({withLines.quadPrimitive(), lines});
+  Result<Scene> refused = loadGltf(withLines.write(dir, "lines.gltf"));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().find("primitive 1: mode 1 (LINES)"), std::string::npos) << refused.error();
+  EXPECT_NE(refused.error().find("lines.gltf"), std::string::npos) << refused.error();
 }
 
 TEST(Gltf, MaterialsMapToTheFiveSlots) {
