@@ -7,6 +7,7 @@
 #ifndef TALLY_SHADERS_ALPHA_TEST_H
 #define TALLY_SHADERS_ALPHA_TEST_H
 #ifdef TALLY_ALPHA_TEST
+#include "draw_uv.h"
 
 layout(location = 8) in vec2 alphaUv0;
 #ifdef TALLY_UV1
@@ -19,12 +20,11 @@ layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2D alphaDiffuse
 
 void alphaTest(uint material) {
 #ifdef TALLY_UV1
-  vec2 uv1 = alphaUv1;
+  UvFrame f = uvFrame(alphaUv0, alphaUv1);
 #else
-  vec2 uv1 = alphaUv0;
+  UvFrame f = uvFrame(alphaUv0, alphaUv0);
 #endif
-  float alpha = texture(alphaDiffuseMap, mapUv(material, kMapDiffuse, alphaUv0, uv1)).a *
-                materials[material].baseColor.a;
+  float alpha = SAMPLE_DRAW_MAP(alphaDiffuseMap, material, kMapDiffuse, f).a * materials[material].baseColor.a;
 #ifdef TALLY_VERTEX_COLORS
   alpha *= alphaColor.a;
 #endif

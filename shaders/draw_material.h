@@ -6,6 +6,7 @@
 // same maps the same way.
 #ifndef TALLY_SHADERS_DRAW_MATERIAL_H
 #define TALLY_SHADERS_DRAW_MATERIAL_H
+#include "draw_uv.h"
 
 layout(set = kSetMaterial, binding = kMapDiffuse) uniform sampler2D diffuseMap;
 layout(set = kSetMaterial, binding = kMapAmbient) uniform sampler2D ambientMap;
@@ -45,19 +46,20 @@ DrawMaterial drawMaterial() {
 #ifdef TALLY_VERTEX_COLORS
   baseColor *= inColor;
 #endif
-  vec4 diffuse = texture(diffuseMap, mapUv(m, kMapDiffuse, inUv, uv1));
+  UvFrame f = uvFrame(inUv, uv1);  // derivatives before anything is loaded
+  vec4 diffuse = SAMPLE_DRAW_MAP(diffuseMap, m, kMapDiffuse, f);
   DrawMaterial d;
   d.alpha = diffuse.a * baseColor.a;
 #ifdef TALLY_ALPHA_TEST
   if (d.alpha < materialExtras[m].alphaCutoff) discard;  // before the other maps are read
 #endif
-  d.surface = surfaceFromMaps(diffuse, texture(ambientMap, mapUv(m, kMapAmbient, inUv, uv1)),
-                              texture(specularMap, mapUv(m, kMapSpecular, inUv, uv1)),
-                              texture(roughnessMap, mapUv(m, kMapRoughness, inUv, uv1)),
-                              texture(normalMap, mapUv(m, kMapNormal, inUv, uv1)), inNormal, inTangent, baseColor,
+  d.surface = surfaceFromMaps(diffuse, SAMPLE_DRAW_MAP(ambientMap, m, kMapAmbient, f),
+                              SAMPLE_DRAW_MAP(specularMap, m, kMapSpecular, f),
+                              SAMPLE_DRAW_MAP(roughnessMap, m, kMapRoughness, f),
+                              SAMPLE_DRAW_MAP(normalMap, m, kMapNormal, f), inNormal, inTangent, baseColor,
                               materials[m].roughnessFactor);
 #ifdef TALLY_EMISSIVE_MAPS
-  d.emission = emissionOf(m, texture(emissiveMap, mapUv(m, kMapEmissive, inUv, uv1)));
+  d.emission = emissionOf(m, SAMPLE_DRAW_MAP(emissiveMap, m, kMapEmissive, f));
 #else
   d.emission = emissionOf(m, vec4(1.0));
 #endif

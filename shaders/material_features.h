@@ -56,16 +56,18 @@ bool mapUsesUv1(uint material, uint k) {
 }
 
 // Map arrays share one repeating sampler per kind: a map whose sampler
-// mirrors or clamps gets its uv folded here (bilinear taps at a clamped or
-// mirrored edge still reach across it: within half a texel of the edge).
-vec2 wrapUv(uint material, uint k, vec2 uv) {
+// mirrors or clamps gets its uv folded here, then kept half a texel (of
+// level 0, `size` texels) inside the edge so the repeating sampler's
+// bilinear taps do not reach across it. Exact at level 0; coarser levels
+// still blend within half of their texel at the edge.
+vec2 wrapUv(uint material, uint k, vec2 uv, vec2 size) {
 #ifdef TALLY_WRAP_EMULATION
   uint bits = (materialExtras[material].wraps >> (4u * k)) & 15u;
   for (int axis = 0; axis < 2; ++axis) {
     uint mode = (bits >> (2u * uint(axis))) & 3u;
-    float t = uv[axis];
-    if (mode == 1u) t = 1.0 - abs(mod(t, 2.0) - 1.0);  // mirrored repeat
-    if (mode == 2u) t = clamp(t, 0.0, 1.0);            // clamp to edge
+    float t = uv[axis], edge = 0.5 / size[axis];
+    if (mode == 1u) t = clamp(1.0 - abs(mod(t, 2.0) - 1.0), edge, 1.0 - edge);  // mirrored repeat
+    if (mode == 2u) t = clamp(t, edge, 1.0 - edge);                            // clamp to edge
     uv[axis] = t;
   }
 #endif

@@ -43,11 +43,13 @@ layout(set = kSetMaterial, binding = kBindingEmissiveMap) uniform sampler2DArray
 #define SAMPLE_LAYER(kindMaps, index, c) textureGrad(kindMaps, vec3(c.uv, float(SELECT_MAP(index))), c.dx, c.dy)
 #define SAMPLE_MAP(kindMaps, kind, c) SAMPLE_LAYER(kindMaps, maps[kind], c)
 #define SAMPLE_EMISSIVE(index, c) SAMPLE_LAYER(emissiveMaps, index, c)
+#define MAP_SIZE(kindMaps) vec2(textureSize(kindMaps, 0).xy)  // an image query: not counted
 #else
 layout(set = kSetMaterial, binding = kBindingMaterialMaps) uniform sampler2D materialMaps[kMaxMaterialMaps];
 #define SAMPLE_INDEX(index, c) textureGrad(materialMaps[SELECT_MAP(index)], c.uv, c.dx, c.dy)
 #define SAMPLE_MAP(kindMaps, kind, c) SAMPLE_INDEX(maps[kind], c)
 #define SAMPLE_EMISSIVE(index, c) SAMPLE_INDEX(index, c)
+#define MAP_SIZE(kindMaps) vec2(1.0)  // each texture has its own sampler: no wrap to emulate
 #endif
 
 // glTF's optional vertex streams at the pixel (white and TEXCOORD_0 without
@@ -62,14 +64,15 @@ struct ExtraAttributes {
 struct MapCoords {
   vec2 uv, dx, dy;
 };
-MapCoords mapCoords(uint material, uint k, vec2 uv0, vec2 dx, vec2 dy, ExtraAttributes e) {
+// `size`: the map array's level-0 texels (map arrays), for the wrap.
+MapCoords mapCoords(uint material, uint k, vec2 uv0, vec2 dx, vec2 dy, ExtraAttributes e, vec2 size) {
   MapCoords c;
   bool second = mapUsesUv1(material, k);
   c.uv = mapUv(material, k, uv0, e.uv1);
   c.dx = mapUvDelta(material, k, second ? e.dx1 : dx);
   c.dy = mapUvDelta(material, k, second ? e.dy1 : dy);
 #ifdef TALLY_MAP_ARRAYS
-  c.uv = wrapUv(material, k, c.uv);
+  c.uv = wrapUv(material, k, c.uv, size);
 #endif
   return c;
 }
@@ -78,11 +81,11 @@ MapCoords mapCoords(uint material, uint k, vec2 uv0, vec2 dx, vec2 dy, ExtraAttr
 // derivatives (SAMPLE_MAP above), then every light, then the emission.
 vec3 shadeInterpolated(uint material, Interpolated a, vec2 dx, vec2 dy, ExtraAttributes e) {
   uint maps[kMapCount] = materials[material].maps;
-  MapCoords cDiffuse = mapCoords(material, kMapDiffuse, a.uv, dx, dy, e);
-  MapCoords cAmbient = mapCoords(material, kMapAmbient, a.uv, dx, dy, e);
-  MapCoords cSpecular = mapCoords(material, kMapSpecular, a.uv, dx, dy, e);
-  MapCoords cRoughness = mapCoords(material, kMapRoughness, a.uv, dx, dy, e);
-  MapCoords cNormal = mapCoords(material, kMapNormal, a.uv, dx, dy, e);
+  MapCoords cDiffuse = mapCoords(material, kMapDiffuse, a.uv, dx, dy, e, MAP_SIZE(diffuseMaps));
+  MapCoords cAmbient = mapCoords(material, kMapAmbient, a.uv, dx, dy, e, MAP_SIZE(ambientMaps));
+  MapCoords cSpecular = mapCoords(material, kMapSpecular, a.uv, dx, dy, e, MAP_SIZE(specularMaps));
+  MapCoords cRoughness = mapCoords(material, kMapRoughness, a.uv, dx, dy, e, MAP_SIZE(roughnessMaps));
+  MapCoords cNormal = mapCoords(material, kMapNormal, a.uv, dx, dy, e, MAP_SIZE(normalMaps));
   Surface s = surfaceFromMaps(SAMPLE_MAP(diffuseMaps, kMapDiffuse, cDiffuse),
                               SAMPLE_MAP(ambientMaps, kMapAmbient, cAmbient),
                               SAMPLE_MAP(specularMaps, kMapSpecular, cSpecular),
@@ -92,7 +95,7 @@ vec3 shadeInterpolated(uint material, Interpolated a, vec2 dx, vec2 dy, ExtraAtt
                               materials[material].roughnessFactor);
   vec3 color = shade(s, a.position);
 #ifdef TALLY_EMISSIVE_MAPS
-  MapCoords cEmissive = mapCoords(material, kMapEmissive, a.uv, dx, dy, e);
+  MapCoords cEmissive = mapCoords(material, kMapEmissive, a.uv, dx, dy, e, MAP_SIZE(emissiveMaps));
   color += emissionOf(material, SAMPLE_EMISSIVE(materialExtras[material].emissiveMap, cEmissive));
 #elif defined(TALLY_EMISSIVE)
   color += emissionOf(material, vec4(1.0));
