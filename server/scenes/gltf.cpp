@@ -1,4 +1,5 @@
 #include "scenes/gltf.hpp"
+#include "scenes/gltf_check.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -25,11 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 using tinygltf::Model;
 
-// Extensions we cannot honour and that change what the geometry or images are.
-const std::set<std::string> kUnsupportedRequired = {
-    "KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization",
-    "KHR_texture_basisu",         "EXT_texture_webp",        "MSFT_texture_dds",
-};
 
 // tinygltf calls this per image while parsing; we keep the encoded bytes and
 // decode later on several threads (decoding is most of Sponza's load time).
@@ -71,7 +67,12 @@ Result<std::vector<float>> readFloats(const Model& model, int index, int compone
   const size_t elementSize = size_t(componentSize) * size_t(components);
   const size_t start = view.byteOffset + acc.byteOffset;
   const size_t limit = std::min(view.byteOffset + view.byteLength, buffer.data.size());
-  if (acc.count > 0 && start + size_t(stride) * (acc.count - 1) + elementSize > limit)
+  if (size_t(stride) < elementSize)
+    return makeError(where + ": byteStride " + std::to_string(stride) + " is smaller than its element (" +
+                     std::to_string(elementSize) + " bytes)");
+  size_t span = 0;  // overflow-checked: a huge count must not wrap past the check and allocate
+  if (acc.count > 0 && (__builtin_mul_overflow(size_t(stride), acc.count - 1, &span) ||
+                        __builtin_add_overflow(span, start + elementSize, &span) || span > limit))
     return makeError(where + ": reads past the end of buffer " + std::to_string(view.buffer) +
                      (buffer.data.empty() ? " (the buffer has no data)" : ""));
 
@@ -131,7 +132,9 @@ Result<std::vector<uint32_t>> readIndices(const Model& model, int index, size_t 
   if (stride <= 0) return makeError(where + ": invalid stride");
   const size_t start = view.byteOffset + acc.byteOffset;
   const size_t limit = std::min(view.byteOffset + view.byteLength, buffer.data.size());
-  if (acc.count > 0 && start + size_t(stride) * (acc.count - 1) + size > limit)
+  size_t span = 0;  // overflow-checked, as readFloats
+  if (acc.count > 0 && (size_t(stride) < size || __builtin_mul_overflow(size_t(stride), acc.count - 1, &span) ||
+                        __builtin_add_overflow(span, start + size, &span) || span > limit))
     return makeError(where + ": reads past the end of buffer " + std::to_string(view.buffer) +
                      (buffer.data.empty() ? " (the buffer has no data)" : ""));
   std::vector<uint32_t> out(acc.count);
@@ -443,6 +446,11 @@ struct Loader {
     Result<std::vector<float>> pos = readFloats(model, attribute("POSITION"), 3, false, what + " POSITION");
     if (!pos) return makeError(pos.error());
     const size_t n = pos->size() / 3;
+    for (size_t i = 0; i < pos->size(); ++i) {
+      if (!std::isfinite((*pos)[i]))
+        return makeError(what + " POSITION (accessor " + std::to_string(attribute("POSITION")) + "): vertex " +
+                         std::to_string(i / 3) + " is not finite (" + std::to_string((*pos)[i]) + ")");
+    }
     std::vector<float> nrm, uv, tan, uv1;
     for (auto [name, comps, into, normalized] :
          {std::tuple{"NORMAL", 3, &nrm, false}, std::tuple{"TEXCOORD_0", 2, &uv, true},
@@ -605,6 +613,15 @@ struct Loader {
           continue;
         }
         int w = 0, h = 0, comp = 0;
+        // The header's size first: a decoded image is w x h x 4 bytes.
+        if (stbi_info_from_memory(im.image.data(), int(im.image.size()), &w, &h, &comp) &&
+            (uint32_t(w) > kMaxImageSide || uint32_t(h) > kMaxImageSide ||
+             uint64_t(w) * uint64_t(h) > kMaxImageTexels)) {
+          errors[k] = "image " + std::to_string(images[k]) + " (" + imageName(images[k]) + "): " + std::to_string(w) +
+                      "x" + std::to_string(h) + " texels, over Tally's limit of " + std::to_string(kMaxImageSide) +
+                      " per side";
+          continue;
+        }
         stbi_uc* px = stbi_load_from_memory(im.image.data(), int(im.image.size()), &w, &h, &comp, 4);
         if (!px) {
           errors[k] =
@@ -681,7 +698,13 @@ Result<Scene> loadGltf(const std::string& path, const GltfOptions& options) {
   }
   const bool binary = std::memcmp(magic, "glTF", 4) == 0;
 
+  // Extensions, ranges and the node graph's instance counts, before tinygltf
+  // reads any buffer or image (gltf_check.hpp).
+  Result<GltfPrecheck> precheck = precheckGltf(path);
+  if (!precheck) return makeError(quote(path) + ": " + precheck.error());
+
   Loader loader{options, {}, {}, {}, {}, -1};
+  loader.scene.notes = precheck->notes;
   tinygltf::TinyGLTF gltf;
   gltf.SetImageLoader(keepEncoded, nullptr);
   std::string err, warn;
@@ -690,9 +713,6 @@ Result<Scene> loadGltf(const std::string& path, const GltfOptions& options) {
   if (!ok) return makeError(quote(path) + ": not a valid glTF file: " + trimmed(err.empty() ? warn : err));
   if (!warn.empty()) loader.scene.notes.push_back("tinygltf: " + trimmed(warn));
 
-  for (const std::string& ext : loader.model.extensionsRequired)
-    if (kUnsupportedRequired.count(ext))
-      return makeError(quote(path) + ": requires extension " + ext + ", which Tally cannot read");
 
   Result<bool> r = loader.loadMaterials();
   if (r) r = loader.loadNodes();

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,10 +112,16 @@ struct GltfWriter {
     return doc["nodes"][0];
   }
 
+  // Broken-file tests: a byteLength other than the data's, text instead of
+  // the document, and a flag the test acts on after writing.
+  std::optional<uint64_t> declaredBufferBytes;
+  std::string rawText;
+  bool hugePng = false;
+
   std::string write(const TempDir& dir, const std::string& name) {
-    doc["buffers"] = {
-        {{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}};
-    return dir.write(name, doc.dump());
+    doc["buffers"] = {{{"byteLength", declaredBufferBytes.value_or(bin.size())},
+                       {"uri", "data:application/octet-stream;base64," + base64(bin)}}};
+    return dir.write(name, rawText.empty() ? doc.dump() : rawText);
   }
 };
 
