@@ -1,4 +1,5 @@
 #include "capture/runner.hpp"
+#include "renderers/scene_limits.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -369,6 +370,17 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
     auto scene = scenes::makeScene(spec.scenes[i]);
     if (!scene) return makeError("scenes[" + std::to_string(i) + "]: " + scene.error());
     loaded.push_back(std::move(scene).value());
+  }
+  // Every (renderer, scene) pair the renderer cannot draw is refused here,
+  // before any GPU time is spent (renderers/scene_limits.hpp).
+  for (size_t i = 0; i < loaded.size(); ++i) {
+    for (const auto& variant : spec.renderers) {
+      renderers::RendererOptions ro{{spec.resolutions.front().width, spec.resolutions.front().height}, true,
+                                    spec.modes.front(), spec.lights};
+      renderers::applyOptions(variant.options, ro);
+      if (std::string why = renderers::sceneRefusal(variant.name, loaded[i], ro); !why.empty())
+        return makeError("scenes[" + std::to_string(i) + "] (" + sceneName(spec.scenes[i], loaded[i]) + "): " + why);
+    }
   }
   std::vector<std::vector<scenes::Camera>> cameras;
   size_t total = 0;

@@ -38,6 +38,19 @@ int runCapture(const CaptureArgs& args) {
   } else {
     spec = capture::parseCaptureSpec(json, renderers::rendererNames());
     if (!spec) return fail("spec: " + spec.error());
+    // A relative glTF path names a file beside the spec, never one in the
+    // working directory (the daemon resolves against its --scenes folders).
+    for (size_t i = 0; i < spec->scenes.size(); ++i) {
+      auto& scene = spec->scenes[i];
+      if (!scene.is_object() || !scene.contains("gltf") || !scene["gltf"].is_string()) continue;
+      const std::filesystem::path given = scene["gltf"].get<std::string>();
+      if (given.is_absolute()) continue;
+      if (args.spec == "-") {
+        return fail("spec: scenes[" + std::to_string(i) + "].gltf: the relative path \"" + given.string() +
+                    "\" needs a spec file to resolve against (--spec FILE); with --spec - give an absolute path");
+      }
+      scene["gltf"] = (std::filesystem::absolute(args.spec).parent_path() / given).lexically_normal().string();
+    }
   }
 
   capture::CaptureOptions options;

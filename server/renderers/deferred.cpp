@@ -59,16 +59,6 @@ class DeferredRenderer final : public RendererBase {
   }
 
   VkImageUsageFlags hdrExtraUsage() const override { return computeShadingUsage(); }
-  std::string featureRefusal() const override {
-    std::string why = RendererBase::featureRefusal();
-    if (!why.empty() || !scene_->features().emissive) return why;
-    // The emission travels in a fourth G-buffer target read by the fragment lighting pass only.
-    if (options_.gbufferSubpass) return "deferred: emissive materials with gbuffer=subpass are not supported";
-    if (options_.computeShading) return "deferred: emissive materials with shading=compute are not supported";
-    if (options_.msaa > 1)
-      return "deferred: emissive materials with msaa " + std::to_string(options_.msaa) + " are not supported";
-    return "";
-  }
 
   void destroyPasses() override {
     if (msaaDepthView_ != VK_NULL_HANDLE) vkDestroyImageView(ctx_->device, msaaDepthView_, nullptr);

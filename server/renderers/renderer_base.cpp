@@ -1,4 +1,5 @@
 #include "renderers/renderer_base.hpp"
+#include "renderers/scene_limits.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -382,16 +383,7 @@ Result<RendererBase::DrawRecorder> RendererBase::maskedDraws(uint32_t passIndex,
 }
 
 std::string RendererBase::featureRefusal() const {
-  const auto& f = scene_->features();
-  const std::string who = std::string(name()) + ": ";
-  if (f.alphaBlend && options_.msaa > 1) {
-    return who + "alphaMode BLEND with msaa " + std::to_string(options_.msaa) +
-           " is not supported (the transparent pass tests the 1-sample depth, which holds no depth with msaa)";
-  }
-  if (f.alphaMask && options_.forwardOutput == ForwardOutput::Overdraw) {
-    return who + "alphaMode MASK with output=overdraw is not supported (overdraw counts with the depth test off)";
-  }
-  return "";
+  return renderers::featureRefusal(name(), scene_->features(), options_);  // scene_limits.hpp
 }
 
 bool RendererBase::hasTransparentPass() const {

@@ -163,9 +163,9 @@ class RendererBase : public Renderer {
   using DrawRecorder = std::function<void(VkCommandBuffer)>;
   Result<DrawRecorder> maskedDraws(uint32_t passIndex, gpu::GraphicsPipelineDesc desc, const std::string& vertex,
                                    const std::string& fragment, const std::vector<std::string>& defines = {});
-  // Why a renderer configuration cannot draw this scene's glTF features
-  // ("" when it can): the variants that do not carry them refuse.
-  virtual std::string featureRefusal() const;
+  // Why this configuration cannot draw the scene's glTF features ("" when
+  // it can; scene_limits.hpp): checked before setupPasses().
+  std::string featureRefusal() const;
 
   // Compute passes. A pass that dispatches compiles its .comp.glsl through
   // computePipeline() (instrumented like every shader; the sites go to the
