@@ -253,7 +253,16 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   if (r.lights) io.out << "   lights: " << *r.lights;
   if (r.renderTargetBytes)
     io.out << "   render targets: " << humanBytes(static_cast<double>(*r.renderTargetBytes));
-  io.out << "\n\n";
+  io.out << "\n";
+  // What the scene's loader simplified or ignored, then the renderer's choices.
+  const json notes = run->contains("notes") && (*run)["notes"].is_object() ? (*run)["notes"] : json::object();
+  if (notes.contains("scene") && notes["scene"].is_array()) {
+    for (const auto& note : notes["scene"]) io.out << "scene note: " << (note.is_string() ? note.get<std::string>() : note.dump()) << '\n';
+  }
+  for (const auto& [key, value] : notes.items()) {
+    if (key != "scene") io.out << "note: " << key << " = " << (value.is_string() ? value.get<std::string>() : value.dump()) << '\n';
+  }
+  io.out << '\n';
 
   // A variant's error against its reference variant gets a column where any sample has one.
   bool variantErrors = false;

@@ -28,6 +28,15 @@ namespace {
 
 using nlohmann::json;
 
+// A run's notes: the renderer's (an object of its choices), and under
+// "scene" what the scene's loader simplified or ignored (Scene::notes).
+json runNotes(const renderers::Renderer& renderer, const scenes::Scene& scene) {
+  json notes = renderer.notes();
+  if (!notes.is_object()) notes = json::object();
+  if (!scene.notes.empty()) notes["scene"] = scene.notes;
+  return notes;
+}
+
 std::string sceneName(const json& spec, const scenes::Scene& scene) {
   if (spec.is_object() && spec.contains("gltf")) {
     return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
@@ -283,7 +292,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
               {"height", res.height},
               {"counting", spirv::toString(mode)},
               {"lights", spec.lights},
-              {"notes", instrumented->notes()},
+              {"notes", runNotes(*instrumented, scene)},
               {"resources", resourcesJson(instrumented->resources())},
               {"samples", json::array()}};
   CounterHeadroom headroom;

@@ -134,6 +134,18 @@ TEST_F(TallyCli, ShowRunAndSamples) {
   EXPECT_NE(r.out.find("1.00 KiB"), std::string::npos);  // written
 }
 
+TEST_F(TallyCli, ShowPrintsTheScenesAndTheRenderersNotes) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " show 17");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("scene note: KHR_materials_clearcoat: used but not implemented; clearcoat is not drawn\n"),
+            std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("note: zprepass_fragment_shader = counting_only\n"), std::string::npos) << r.out;
+  // A run without notes prints none.
+  Outcome plain = tally("--server " + fake.url() + " show 12");
+  EXPECT_EQ(plain.out.find("note:"), std::string::npos) << plain.out;
+}
+
 // Variants: the runs table's renderer column and `show` carry the variant
 // label; `show` lists the options and each sample's error against the
 // reference variant; --variant is passed through as the filter.

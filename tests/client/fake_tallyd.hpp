@@ -145,6 +145,13 @@ class FakeTallyd {
       int id = std::stoi(req.matches[1]);
       if (id == 404) return reply(res, apiError("not_found", "run 404 not found"), 404);
       if (id == 16) return reply(res, variantRunJson(id));
+      if (id == 17) {  // a user's glTF scene: the loader's notes and the renderer's
+        json run = runJson(id, "forward", 320);
+        run["scene"] = "ToyCar";
+        run["notes"] = {{"scene", {"KHR_materials_clearcoat: used but not implemented; clearcoat is not drawn"}},
+                        {"zprepass_fragment_shader", "counting_only"}};
+        return reply(res, run);
+      }
       reply(res, runJson(id, "deferred", 320));
     });
     server_.Get(R"(/api/runs/(\d+)/samples)", [reply](const httplib::Request& req, httplib::Response& res) {

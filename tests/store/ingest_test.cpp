@@ -24,6 +24,8 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
   // A compute pass carries its invocations (migration 0004); the others have none.
   c.result["runs"][1]["samples"][0]["passes"][1]["compute_invocations"] = 57600.0;
   c.result["runs"][1]["samples"][0]["passes"][1]["compute_invocations_statistic"] = 57601.0;
+  // A glTF scene's loader notes ride in the run's notes under "scene".
+  c.result["runs"][0]["notes"]["scene"] = {"KHR_lights_punctual: used but not implemented; the file's lights are ignored"};
   EXPECT_EQ(ingest(jobId, c), 2);
 
   auto page = store_->listRuns({.jobId = jobId}, {});
@@ -44,6 +46,7 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
     EXPECT_EQ(row.counting, "exact");
     EXPECT_EQ(row.lights, 400);
     EXPECT_EQ(row.notes, in["notes"]);
+    if (i == 0) EXPECT_EQ(row.notes["scene"][0], in["notes"]["scene"][0]);
     EXPECT_EQ(row.renderTargetBytes, in["resources"]["render_target_bytes"].get<int64_t>());
     EXPECT_EQ(row.deviceName, c.result["device"]["name"]);
     EXPECT_EQ(row.sampleCount, 2);

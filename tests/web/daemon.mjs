@@ -3,7 +3,7 @@
 // exactly as the dashboard's would, and run on whatever Vulkan device the
 // machine has (lavapipe without a GPU).
 import { spawn } from 'node:child_process';
-import { mkdtempSync, rmSync } from 'node:fs';
+import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { setTimeout as sleep } from 'node:timers/promises';
@@ -16,12 +16,15 @@ export class Daemon {
     this.tallyd = tallyd;
     this.webRoot = webRoot;
     this.dir = mkdtempSync(join(tmpdir(), 'tally-web-'));
+    // glTF scenes the tests write (--scenes: the daemon reads glTF files only from here).
+    this.scenes = join(this.dir, 'scenes');
+    mkdirSync(this.scenes);
     this.log = '';
   }
 
   async start() {
     // Captures' temp files (specs, results) live in our folder too.
-    this.child = spawn(this.tallyd, ['serve', '--db', join(this.dir, 'tally.db'), '--port', '0', '--web', this.webRoot],
+    this.child = spawn(this.tallyd, ['serve', '--db', join(this.dir, 'tally.db'), '--port', '0', '--web', this.webRoot, '--scenes', this.scenes],
       { stdio: ['ignore', 'pipe', 'pipe'], env: { ...process.env, TMPDIR: this.dir } });
     this.child.stderr.on('data', (d) => { this.log += d; });
     const exited = new Promise((resolve) => this.child.once('exit', (code, signal) => resolve({ code, signal })));

@@ -12,7 +12,7 @@
 // Environment (tests/web/run.sh sets it): TALLYD, TALLY_WEB_ROOT,
 // TALLY_SCREENSHOTS, CHROMIUM.
 import assert from 'node:assert/strict';
-import { mkdirSync } from 'node:fs';
+import { mkdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { after, before, describe, test } from 'node:test';
 
@@ -702,6 +702,35 @@ describe('dashboard', () => {
     assert.match(await page.locator('h1').textContent(), new RegExp(`Sweep #${job.sweeps[0]}:`));
     // The one console line: Chromium's note of the 400 answer to the bad spec.
     assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), [['/api/captures', true]]);
+    await close();
+  });
+
+  test('run view and API: the notes of a user\'s glTF scene (what its loader ignored) reach the run', async () => {
+    // One quad whose file uses an extension Tally does not draw: the loader's note must be in the run.
+    const positions = new Float32Array([0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0]);
+    const indices = new Uint16Array([0, 1, 2, 0, 2, 3, 0]);  // padded to 4 bytes
+    const bin = Buffer.concat([Buffer.from(positions.buffer), Buffer.from(indices.buffer)]);
+    const gltf = {
+      asset: { version: '2.0' }, scene: 0, scenes: [{ nodes: [0] }], nodes: [{ mesh: 0 }],
+      meshes: [{ primitives: [{ attributes: { POSITION: 0 }, indices: 1 }] }],
+      extensionsUsed: ['KHR_materials_clearcoat'],
+      buffers: [{ byteLength: bin.length, uri: `data:application/octet-stream;base64,${bin.toString('base64')}` }],
+      bufferViews: [{ buffer: 0, byteOffset: 0, byteLength: 48 }, { buffer: 0, byteOffset: 48, byteLength: 12 }],
+      accessors: [{ bufferView: 0, componentType: 5126, count: 4, type: 'VEC3', min: [0, 0, 0], max: [1, 1, 0] },
+        { bufferView: 1, componentType: 5123, count: 6, type: 'SCALAR' }],
+    };
+    writeFileSync(join(daemon.scenes, 'clearcoat-quad.gltf'), JSON.stringify(gltf));
+    const job = await daemon.capture({ renderers: ['forward'], scenes: [{ gltf: 'clearcoat-quad.gltf' }], resolutions: [[64, 36]], frames: 1,
+      cameras: [{ eye: [0.5, 0.5, 2], target: [0.5, 0.5, 0] }] }, kCaptureMs);
+    const { runs } = await daemon.get(`/runs?capture=${job.id}`);
+    assert.equal(runs.length, 1);
+    const run = await daemon.get(`/runs/${runs[0].id}`);
+    const note = 'KHR_materials_clearcoat: used but not implemented; clearcoat is not drawn';
+    assert.deepEqual(run.notes.scene, [note], 'the API carries the scene\'s notes');
+    const { page, errors, close } = await open(`#/runs/${run.id}`);
+    assert.deepEqual(await page.locator('[data-scene-notes] li').allTextContents(), [note]);
+    await screenshot(page, 'run-notes');
+    assert.deepEqual(errors, []);
     await close();
   });
 });

@@ -209,6 +209,19 @@ function factor(v) {
 // How far the run's counters are from wrapping (docs/measurement.md,
 // "Counter overflow"): the largest count one slot reached in a frame, and how
 // many times resolution x overshading could grow before a counter wraps.
+// What the scene's loader simplified or ignored (notes.scene), then the
+// renderer's own choices (every other key of notes).
+function notesSection(run) {
+  const notes = run.notes && typeof run.notes === 'object' ? run.notes : {};
+  const scene = Array.isArray(notes.scene) ? notes.scene : [];
+  const others = Object.entries(notes).filter(([k]) => k !== 'scene');
+  if (!scene.length && !others.length) return null;
+  return h('div', { class: 'panel', dataset: { notes: '' } },
+    scene.length ? h('ul', { dataset: { sceneNotes: '' } }, scene.map((n) => h('li', {}, String(n)))) : null,
+    others.length ? h('ul', { dataset: { rendererNotes: '' } }, others.map(([k, v]) =>
+      h('li', {}, `${k}: ${typeof v === 'string' ? v : JSON.stringify(v)}`))) : null);
+}
+
 function headroomSection(run) {
   const hr = run.counter_headroom;
   if (!hr) {
@@ -261,6 +274,8 @@ export async function render(page, { params, signal }) {
       tile('Written per frame', fmt.bytes(written), 'written'),
       tile('Render targets', fmt.bytes(run.render_target_bytes), 'render-targets')));
 
+  const notes = notesSection(run);
+  if (notes) page.append(h('h2', {}, 'Notes'), notes);
   page.append(h('h2', {}, 'Counter headroom'), headroomSection(run));
 
   page.append(h('h2', {}, 'Traffic per pass and resource'));
