@@ -17,8 +17,12 @@ glm::mat4 perspective(float fovYRad, float aspect, float zNear, float zFar) {
 }
 
 DepthRange depthRangeFor(const scenes::Bounds& bounds, const scenes::Camera& camera) {
-  float diagonal = std::max(bounds.diagonal(), 1e-3f);
-  float zNear = std::clamp(diagonal * 1e-3f, 0.01f, 0.1f);
+  float diagonal = std::max(bounds.diagonal(), 1e-5f);
+  // 1/1000 of the diagonal, at least 1 cm and at most 10 cm; a scene under
+  // 2 m across (a 10 cm model) lowers the floor to 1/200 of its diagonal,
+  // half the clearance auto cameras keep from surfaces (cameras.cpp), so no
+  // near-plane holes there. Scenes of 2 m and more keep the 1 cm floor.
+  float zNear = std::clamp(diagonal * 1e-3f, std::min(0.01f, diagonal * 5e-3f), 0.1f);
   float zFar = (glm::length(camera.eye - bounds.center()) + diagonal * 0.5f) * 1.01f + 1.0f;
   return {zNear, zFar};
 }

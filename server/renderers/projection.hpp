@@ -17,7 +17,8 @@ namespace tally::renderers {
 glm::mat4 perspective(float fovYRad, float aspect, float zNear, float zFar);
 
 // Near/far from the scene bounds, so the far plane lies beyond every triangle
-// (the CPU sky estimate assumes unbounded rays).
+// (the CPU sky estimate assumes unbounded rays) and the near plane scales
+// with the scene: diagonal / 1000 within [min(1 cm, diagonal / 200), 10 cm].
 DepthRange depthRangeFor(const scenes::Bounds& bounds, const scenes::Camera& camera);
 
 shaders::Camera cameraUniform(const scenes::Camera& camera, VkExtent2D extent, DepthRange range);

@@ -42,6 +42,10 @@ constexpr float kVarietyMaxSky = 0.95f;
 // ... and the least mean distance to what the rays hit, in bounds diagonals
 // (~3 m in atrium and Sponza), so they do not stare at a nearby wall.
 constexpr float kVarietyMinDepth = 0.1f;
+// A scene whose smallest extent is under this fraction of its largest is
+// flat or thin (a single triangle, a plane, a 1 cm panel): eyes inside its
+// bounds lie in its plane and see it edge-on, so it is viewed from outside.
+constexpr float kThinFraction = 0.05f;
 
 struct Basis {
   glm::vec3 right, up, forward;
@@ -155,13 +159,44 @@ std::vector<Candidate> gridCandidates(const Scene& scene, const Bvh& bvh) {
   return out;
 }
 
+bool isThin(const Bounds& b) {
+  const glm::vec3 e = b.extent();
+  const float largest = std::max({e.x, e.y, e.z}), smallest = std::min({e.x, e.y, e.z});
+  return smallest < kThinFraction * largest;
+}
+
 // Fallback when no grid eye is in open space (a closed object, a solid
-// block): views from outside the bounds, one from beyond each corner, aimed
-// at the centre and turned a little.
+// block), and the views of flat or thin scenes: from outside the bounds,
+// one from beyond each corner (off every axis plane, so off a flat scene's
+// plane too), aimed at the centre and turned a little; for a thin scene also
+// head-on from either side of its thin axis, framing its largest extent.
 std::vector<Candidate> outsideCandidates(const Scene& scene) {
   const Bounds& b = scene.bounds;
   const glm::vec3 center = b.center(), half = 0.5f * b.extent();
   std::vector<Candidate> out;
+  if (isThin(b)) {
+    const glm::vec3 e = b.extent();
+    const int thin = e.x <= e.y && e.x <= e.z ? 0 : e.y <= e.z ? 1 : 2;
+    const float reach = 0.6f * std::max({e.x, e.y, e.z}) / std::tan(glm::radians(30.0f)) + e[thin];
+    for (float side : {1.0f, -1.0f}) {
+      glm::vec3 axis(0.0f);
+      axis[thin] = side;
+      // Tilted 20 degrees off the normal towards another axis: a view
+      // straight down a vertical axis would need viewMatrix's fallback up.
+      glm::vec3 other(0.0f);
+      other[(thin + 1) % 3] = 1.0f;
+      const glm::vec3 dir = glm::normalize(axis * std::cos(glm::radians(20.0f)) + other * std::sin(glm::radians(20.0f)));
+      Candidate c;
+      c.camera.eye = center + dir * reach;
+      c.camera.target = center;
+      const glm::vec3 d = glm::normalize(center - c.camera.eye);
+      c.yaw = glm::degrees(std::atan2(d.z, d.x));
+      c.pitch = glm::degrees(std::asin(std::clamp(d.y, -1.0f, 1.0f)));
+      c.where = (c.camera.eye - b.min) / glm::max(b.extent(), glm::vec3(1e-6f));
+      c.description = fmt("outside, head-on to the flat scene from its %s side", side > 0 ? "+" : "-");
+      out.push_back(std::move(c));
+    }
+  }
   for (int corner = 0; corner < 8; ++corner) {
     glm::vec3 sign(corner & 1 ? 1.0f : -1.0f, corner & 2 ? 1.0f : -1.0f, corner & 4 ? 1.0f : -1.0f);
     glm::vec3 eye = center + sign * (half * 1.5f + glm::vec3(0.25f * b.diagonal()));
@@ -226,8 +261,9 @@ std::vector<Camera> autoCameras(const Scene& scene) {
   if (scene.triangleCount() == 0 || scene.bounds.empty()) return {};
   const Bvh bvh = Bvh::build(scene);
   const float diagonal = scene.bounds.diagonal();
-  std::vector<Candidate> cands =
-      scene.fixedCameras.empty() ? gridCandidates(scene, bvh) : fixedCandidates(scene);
+  std::vector<Candidate> cands = !scene.fixedCameras.empty() ? fixedCandidates(scene)
+                                 : isThin(scene.bounds)      ? outsideCandidates(scene)
+                                                             : gridCandidates(scene, bvh);
   if (cands.empty()) cands = outsideCandidates(scene);
   for (Candidate& c : cands)
     c.screen = cast(bvh, c.camera, kSkyAspect, kScreenRaysX, kScreenRaysY, diagonal, true);
@@ -347,6 +383,25 @@ std::vector<Camera> autoCameras(const Scene& scene) {
     categories.push_back("");
     perBin[size_t(bin(cands[best].screen.sky))]++;
     update(best);
+  }
+
+  // Every camera must see some of the scene: one whose full grid hits
+  // nothing (a category's nearest miss, a variety pick) gives way to the
+  // unchosen candidate that sees the most geometry on the screening grid.
+  for (size_t k = 0; k < chosen.size(); ++k) {
+    if (full(cands[chosen[k]]) < 1.0f) continue;
+    std::vector<size_t> order;
+    for (size_t i = 0; i < cands.size(); ++i)
+      if (!isChosen(i) && cands[i].screen.sky < 1.0f) order.push_back(i);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return cands[a].screen.sky < cands[b].screen.sky; });
+    for (size_t i : order) {
+      if (full(cands[i]) < 1.0f) {
+        chosen[k] = i;
+        categories[k] = "sees geometry (in place of a view of sky only)";
+        break;
+      }
+    }
   }
 
   std::vector<Camera> out;

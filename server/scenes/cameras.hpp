@@ -44,11 +44,14 @@ float skyFraction(const Scene& scene, const Camera& camera, float aspect = kSkyA
 // changing the covered fraction; the three categories are met where the
 // scene's geometry allows (the sky scene's quad spans less than the field of
 // view vertically, so it has no all-geometry view).
-// Other scenes: eyes on a grid inside the bounds that are in open space, 8
+// Flat or thin scenes (smallest extent under 5% of the largest): views from
+// outside, off the scene's plane. Other scenes: eyes on a grid inside the bounds that are in open space, 8
 // yaws x 7 pitches each, screened with a coarse ray grid, then one camera per
 // category and the rest spread over sky-fraction bins, then position and
 // direction. When no grid eye is in open space (a closed object), views from
-// outside the bounds instead. Empty for a scene without triangles.
+// outside the bounds instead. Every camera of a scene with triangles sees
+// some of them (full-grid sky fraction below 1): one that would not is
+// replaced. Empty for a scene without triangles.
 std::vector<Camera> autoCameras(const Scene& scene);
 
 // An explicit list: [{"eye":[x,y,z], "target":[x,y,z], "fov_deg":60,

@@ -186,7 +186,7 @@ bool isImplementedExtension(const std::string& name) { return kImplemented.count
 
 Result<GltfPrecheck> precheckGltf(const std::string& path) {
   Result<Source> read = readSource(path);
-  if (!read) return makeError(read.error());
+  if (!read) return makeError("not a valid glTF file: " + read.error());
   const Source& src = *read;
   const json& doc = src.doc;
   GltfPrecheck out;
