@@ -34,6 +34,10 @@ json runNotes(const renderers::Renderer& renderer, const scenes::Scene& scene) {
   json notes = renderer.notes();
   if (!notes.is_object()) notes = json::object();
   if (!scene.notes.empty()) notes["scene"] = scene.notes;
+  // Alpha-tested draws run without early fragment tests, so their depth and
+  // stencil writes are derived from the fragments their shaders ran: an upper
+  // bound that includes the discarded ones (docs/measurement.md).
+  if (scene.features().alphaMask) notes["alpha_mask_depth_writes"] = "upper_bound";
   return notes;
 }
 
