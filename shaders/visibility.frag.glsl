@@ -1,8 +1,5 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-#ifdef TALLY_ALPHA_TEST
-#define TALLY_MATERIALS  // alpha_test.h reads the material
-#endif
 // Fat visibility buffer, pass 1, for devices without fragment-shader
 // barycentrics: ids, barycentrics and uv derivatives of the visible triangle.
 // The barycentrics come from the triangle's three vertices, fetched from the
@@ -12,16 +9,10 @@
 // needs the Geometry capability (geometryShader; lavapipe and NVIDIA have it).
 #define TALLY_DRAWS
 #define TALLY_MESH
+#include "alpha_test_stage.h"  // early tests, or the alpha test of MASK draws
 #include "common.h"
 #include "visibility_encoding.h"
 
-#ifdef TALLY_ALPHA_TEST
-// alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#include "common.h"
-#include "alpha_test.h"
-#else
-layout(early_fragment_tests) in;
-#endif
 
 layout(push_constant) uniform PushBlock { DrawPush push; };
 
@@ -31,9 +22,7 @@ layout(location = kOutVisibility) out VisibilityTexel outVisibility;           /
 layout(location = kOutUvDerivatives) out UvDerivativeTexel outUvDerivatives;  // dFdx(uv), dFdy(uv)
 
 void main() {
-#ifdef TALLY_ALPHA_TEST
-  alphaTest(push.materialIndex);
-#endif
+  ALPHA_TEST(push.materialIndex);  // alphaMode MASK draws (alpha_test_stage.h)
   uint triangle = uint(gl_PrimitiveID);
   uvec3 v = fetchTriangle(draws[push.drawIndex].firstIndex, draws[push.drawIndex].vertexOffset, triangle);
   mat4 clipFromObject = camera.viewProj * draws[push.drawIndex].model;

@@ -6,22 +6,11 @@
 // there (NVIDIA) or counts rejected fragments too (lavapipe). The
 // uninstrumented twin, used for timing, keeps the depth-only pipeline.
 #extension GL_GOOGLE_include_directive : require
-#ifdef TALLY_ALPHA_TEST
-#define TALLY_MATERIALS  // alpha_test.h reads the material
-#endif
-#ifdef TALLY_ALPHA_TEST
-// alphaMode MASK draws (alpha_test.h): the test decides coverage, so no early tests.
-#include "common.h"
-#include "alpha_test.h"
-#else
-layout(early_fragment_tests) in;
-#endif
+#include "alpha_test_stage.h"  // early tests, or the alpha test of MASK draws
 #ifdef TALLY_ALPHA_TEST
 layout(push_constant) uniform PushBlock { DrawPush push; };
 #endif
 
 void main() {
-#ifdef TALLY_ALPHA_TEST
-  alphaTest(push.materialIndex);
-#endif
+  ALPHA_TEST(push.materialIndex);  // alphaMode MASK draws (alpha_test_stage.h)
 }
