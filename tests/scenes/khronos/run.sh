@@ -7,7 +7,8 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../../.." && pwd)
-models=$(cd "$root/../shared/scenes/khronos" 2>/dev/null && pwd) || { echo "no ../shared/scenes/khronos" >&2; exit 1; }
+# KHRONOS_DIR: the models elsewhere (the GPU machine has a copy in .scenes/khronos).
+models=$(cd "${KHRONOS_DIR:-$root/../shared/scenes/khronos}" 2>/dev/null && pwd) || { echo "no Khronos models (../shared/scenes/khronos or KHRONOS_DIR)" >&2; exit 1; }
 out=${1:-$root/build/khronos}
 tallyd=${TALLYD:-$root/build/server/tallyd}
 mkdir -p "$out"
@@ -21,7 +22,8 @@ for spec in "$here"/*.json; do
     renderer=$(basename "$f" | cut -d_ -f1)
     cp "$f" "$out/$model/$renderer.png"
   done
-  ref=$(ls "$models/$model/screenshot/"screenshot.* | head -n 1)
+  ref=$(ls "$models/$model/screenshot/"screenshot.* 2>/dev/null | head -n 1)
+  [ -n "$ref" ] || continue
   if command -v convert >/dev/null && [ "${ref##*.}" != png ]; then convert "$ref" "$out/$model/reference.png"; else cp "$ref" "$out/$model/reference.png"; fi
   echo "$model: $(ls "$out/$model" | tr '\n' ' ')"
 done
