@@ -1,5 +1,4 @@
 #include "capture/runner.hpp"
-#include "renderers/scene_limits.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -11,19 +10,27 @@
 #include <map>
 #include <optional>
 
-#include "capture/headroom.hpp"
-#include "capture/image.hpp"
-#include "capture/stats.hpp"
+#include "analysis/headroom.hpp"
+#include "analysis/image.hpp"
+#include "analysis/stats.hpp"
 #include "gpu/context.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
+#include "renderers/scene_limits.hpp"
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
 
 namespace tally::capture {
+
+using analysis::compareImages;
+using analysis::CounterHeadroom;
+using analysis::encodePng;
+using analysis::ImageError;
+using analysis::Spread;
+using analysis::spreadOf;
 namespace {
 
 using nlohmann::json;
@@ -354,17 +361,10 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
 
 }  // namespace
 
-Result<json> withDevice(const std::string& device, const std::function<Result<json>(gpu::Context&)>& work) {
-  gpu::ContextOptions contextOptions;
-  contextOptions.device = device;
-  auto created = gpu::createContext(contextOptions);
-  if (!created) return makeError("device: " + created.error());
-  gpu::Context ctx = std::move(created).value();
-  struct ContextGuard {
-    gpu::Context& ctx;
-    ~ContextGuard() { gpu::destroyContext(ctx); }
-  } guard{ctx};
-  return work(ctx);
+Result<json> runSweep(const sweeps::SweepSpec& spec, const CaptureOptions& options) {
+  return gpu::withDevice(options.device, [&](gpu::Context& ctx) {
+    return sweeps::runSweep(ctx, spec, sweeps::SweepOptions{options.screenshotDir, options.progress});
+  });
 }
 
 namespace {
@@ -458,7 +458,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 }  // namespace
 
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
-  return withDevice(options.device, [&](gpu::Context& ctx) { return captureOn(ctx, spec, options); });
+  return gpu::withDevice(options.device, [&](gpu::Context& ctx) { return captureOn(ctx, spec, options); });
 }
 
 }  // namespace tally::capture

@@ -8,16 +8,14 @@
 #include <nlohmann/json.hpp>
 
 #include "capture/spec.hpp"
+#include "sweeps/sweep.hpp"
 #include "gpu/context.hpp"
+#include "common/progress.hpp"
 #include "common/result.hpp"
 
 namespace tally::capture {
 
-struct CaptureProgress {
-  size_t done = 0;   // samples finished
-  size_t total = 0;  // samples in the matrix
-  std::string current;  // "deferred atrium 320x180 camera 3"
-};
+using CaptureProgress = Progress;  // samples of the matrix, or a sweep's steps
 
 struct CaptureOptions {
   std::string device;         // as gpu::ContextOptions::device
@@ -29,9 +27,8 @@ struct CaptureOptions {
 // device, a scene that does not load, a renderer the device cannot run).
 Result<nlohmann::json> runCapture(const CaptureSpec& spec, const CaptureOptions& options);
 
-// Opens the device (as gpu::ContextOptions::device), runs `work` on it and
-// closes it again, whatever `work` returns. Fails first if there is no such device.
-Result<nlohmann::json> withDevice(const std::string& device,
-                                  const std::function<Result<nlohmann::json>(gpu::Context&)>& work);
+// Runs a stability sweep (a spec with "sweep", sweeps/sweep.hpp) on the
+// device the options name, as runCapture runs a matrix.
+Result<nlohmann::json> runSweep(const sweeps::SweepSpec& spec, const CaptureOptions& options);
 
 }  // namespace tally::capture

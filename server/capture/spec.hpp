@@ -8,23 +8,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/resolution.hpp"
 #include "common/result.hpp"
 #include "scenes/scene.hpp"
 #include "spirv/instrument.hpp"
 
 namespace tally::capture {
 
-// Limits on what one spec may ask for. The service tightens them further.
-inline constexpr uint32_t kMaxDimension = 16384;          // Vulkan's common maxImageDimension2D
-inline constexpr uint64_t kMaxPixels = 7680ull * 4320ull;  // 8K: beyond it a frame's targets pass 1 GiB
+// Limits on what one spec may ask for (with kMaxDimension and kMaxPixels per
+// frame, common/resolution.hpp). The service tightens them further.
 inline constexpr uint32_t kMaxFrames = 1000;
 inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
 inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x modes x cameras)
-
-struct Resolution {
-  uint32_t width = 0;
-  uint32_t height = 0;
-};
 
 // One measured variant: a renderer and its canonical options
 // (renderers::canonicalOptions: defaults dropped, {} for the renderer as it is).

@@ -4,7 +4,7 @@
 #include <iostream>
 #include <iterator>
 
-#include "capture/accuracy.hpp"
+#include "analysis/accuracy.hpp"
 #include "commands/commands.hpp"
 
 namespace tally::cli {
@@ -28,9 +28,9 @@ int runAccuracy(const AccuracyArgs& args) {
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   auto result = nlohmann::json::parse(text, nullptr, false);
   if (result.is_discarded()) return fail(args.result + ": not valid JSON");
-  auto runs = capture::runCountsFromResult(result);
+  auto runs = analysis::runCountsFromResult(result);
   if (!runs) return fail(args.result + ": " + runs.error());
-  auto rows = capture::accuracyRows(*runs);
+  auto rows = analysis::accuracyRows(*runs);
 
   if (args.json) {
     nlohmann::json out = nlohmann::json::array();
@@ -50,11 +50,11 @@ int runAccuracy(const AccuracyArgs& args) {
         j["reference"] = std::stoi(row.reference->id);
         j["overhead_ratio"] = a.overheadRatio;
         j["reference_overhead_ratio"] = a.referenceOverheadRatio;
-        j.update(capture::toJson(a.errors));
+        j.update(analysis::toJson(a.errors));
         j["worst_sample"] = a.worstSample;
         nlohmann::json samples = nlohmann::json::array();
         for (const auto& s : a.samples) {
-          nlohmann::json sj = capture::toJson(s.errors);
+          nlohmann::json sj = analysis::toJson(s.errors);
           sj["index"] = s.index;
           sj["overhead_ratio"] = s.overheadRatio;
           sj["reference_overhead_ratio"] = s.referenceOverheadRatio;
@@ -72,7 +72,7 @@ int runAccuracy(const AccuracyArgs& args) {
   // on a line of its own so that every mode's cost is visible.
   std::printf("%-18s %-10s %-10s %-11s %9s %11s %11s %11s  %s\n", "renderer", "scene", "resolution", "mode",
               "overhead", "total_err", "l1_err", "worst_err", "worst resource");
-  std::vector<const capture::RunCounts*> shownExact;
+  std::vector<const analysis::RunCounts*> shownExact;
   for (const auto& row : rows) {
     std::string res = std::to_string(row.run->width) + "x" + std::to_string(row.run->height);
     if (!row.accuracy) {

@@ -6,7 +6,7 @@
 #include "capture/runner.hpp"
 #include "capture/spec.hpp"
 #include "capture/summary.hpp"
-#include "capture/sweep.hpp"
+#include "sweeps/sweep.hpp"
 #include "commands/commands.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/renderer.hpp"
@@ -28,12 +28,12 @@ int runCapture(const CaptureArgs& args) {
   }
   auto json = nlohmann::json::parse(text, nullptr, false);
   if (json.is_discarded()) return fail("spec: not valid JSON");
-  // A spec with "sweep" is a stability sweep (capture/sweep.hpp), not a capture matrix.
-  const bool sweep = capture::isSweepSpec(json);
-  Result<capture::SweepSpec> sweepSpec = makeError("not a sweep");
+  // A spec with "sweep" is a stability sweep (sweeps/sweep.hpp), not a capture matrix.
+  const bool sweep = sweeps::isSweepSpec(json);
+  Result<sweeps::SweepSpec> sweepSpec = makeError("not a sweep");
   Result<capture::CaptureSpec> spec = makeError("not a capture matrix");
   if (sweep) {
-    sweepSpec = capture::parseSweepSpec(json, renderers::rendererNames());
+    sweepSpec = sweeps::parseSweepSpec(json, renderers::rendererNames());
     if (!sweepSpec) return fail("spec: " + sweepSpec.error());
   } else {
     spec = capture::parseCaptureSpec(json, renderers::rendererNames());
@@ -59,7 +59,7 @@ int runCapture(const CaptureArgs& args) {
     std::filesystem::path out(args.out);
     options.screenshotDir = (out.parent_path() / (out.stem().string() + "-screenshots")).string();
   }
-  options.progress = [&args](const capture::CaptureProgress& p) {
+  options.progress = [&args](const Progress& p) {
     if (args.quiet) return;
     std::cerr << "[" << p.done << "/" << p.total << "] " << p.current << "\n";
   };

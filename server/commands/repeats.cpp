@@ -3,7 +3,7 @@
 #include <iostream>
 #include <iterator>
 
-#include "capture/repeats.hpp"
+#include "analysis/repeats.hpp"
 #include "commands/commands.hpp"
 
 namespace tally::cli {
@@ -13,18 +13,18 @@ int runRepeats(const RepeatsArgs& args) {
     std::cerr << "tallyd repeats: " << message << "\n";
     return 1;
   };
-  std::vector<capture::RepeatRun> runs;
+  std::vector<analysis::RepeatRun> runs;
   for (const auto& file : args.results) {
     std::ifstream in(file, std::ios::binary);
     if (!in) return fail(file + ": cannot open for reading");
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     auto result = nlohmann::json::parse(text, nullptr, false);
     if (result.is_discarded()) return fail(file + ": not valid JSON");
-    auto got = capture::repeatRunsFromResult(result, file);
+    auto got = analysis::repeatRunsFromResult(result, file);
     if (!got) return fail(file + ": " + got.error());
     runs.insert(runs.end(), got->begin(), got->end());
   }
-  auto groups = capture::repeatGroups(runs);
+  auto groups = analysis::repeatGroups(runs);
 
   if (args.json) {
     nlohmann::json out = nlohmann::json::array();
@@ -39,18 +39,18 @@ int runRepeats(const RepeatsArgs& args) {
                      {"height", first.height},
                      {"counting", first.counting},
                      {"cameras", first.samples.size()},
-                     {"frame_ms", capture::toJson(g.frameMs)},
-                     {"bytes", capture::toJson(g.bytes)},
-                     {"counts", capture::toJson(g.counts)}});
+                     {"frame_ms", analysis::toJson(g.frameMs)},
+                     {"bytes", analysis::toJson(g.bytes)},
+                     {"counts", analysis::toJson(g.counts)}});
     }
-    std::cout << nlohmann::json{{"groups", out}, {"band_iqrs", capture::kRepeatBandIqrs}}.dump(1) << "\n";
+    std::cout << nlohmann::json{{"groups", out}, {"band_iqrs", analysis::kRepeatBandIqrs}}.dump(1) << "\n";
     return 0;
   }
 
   // One line per group: frame time across captures (median [q1, q3], range),
   // the within-run noise and band; then bytes and counts.
   std::printf("band: across-capture median -/+ %.1f x within-run IQR (docs/measurement.md, Repeatability)\n",
-              capture::kRepeatBandIqrs);
+              analysis::kRepeatBandIqrs);
   std::printf("%-18s %-10s %-9s %-7s %4s  %-44s %9s %7s  %-14s %s\n", "renderer", "scene", "resolution", "mode", "runs",
               "frame ms per run", "median", "IQR", "within IQR", "agrees  bytes  counts");
   for (const auto& g : groups) {

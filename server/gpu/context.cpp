@@ -525,4 +525,18 @@ nlohmann::json describe(const Context& ctx) {
   };
 }
 
+Result<nlohmann::json> withDevice(const std::string& device,
+                                  const std::function<Result<nlohmann::json>(Context&)>& work) {
+  ContextOptions contextOptions;
+  contextOptions.device = device;
+  auto created = createContext(contextOptions);
+  if (!created) return makeError("device: " + created.error());
+  Context ctx = std::move(created).value();
+  struct ContextGuard {
+    Context& ctx;
+    ~ContextGuard() { destroyContext(ctx); }
+  } guard{ctx};
+  return work(ctx);
+}
+
 }  // namespace tally::gpu

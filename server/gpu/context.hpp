@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -76,6 +77,11 @@ struct Context {
 // device, no device matching options.device, with the list of those there are).
 Result<Context> createContext(const ContextOptions& options = {});
 void destroyContext(Context& ctx);
+
+// Opens the device (as ContextOptions::device), runs `work` on it and closes it
+// again, whatever `work` returns. Fails first ("device: ...") if there is no such device.
+Result<nlohmann::json> withDevice(const std::string& device,
+                                  const std::function<Result<nlohmann::json>(Context&)>& work);
 
 // "0: llvmpipe (LLVM 15.0.6, 256 bits) [cpu, Vulkan 1.3.230]" per device, one a line.
 Result<std::vector<std::string>> listDevices();

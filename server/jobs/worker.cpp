@@ -171,7 +171,7 @@ void Worker::runJob(const store::Job& job) {
   auto result = nlohmann::json::parse(text->begin(), text->end(), nullptr, false);
   if (result.is_discarded() || !result.is_object()) return fail("the capture's result is not valid JSON");
 
-  // A spec with "sweep" ran a stability sweep (capture::isSweepSpec): its
+  // A spec with "sweep" ran a stability sweep (sweeps::isSweepSpec): its
   // result is one sweeps row, not runs.
   if (job.spec.is_object() && job.spec.contains("sweep")) {
     if (!result.contains("sweep") || result["sweep"] != job.spec["sweep"]) {

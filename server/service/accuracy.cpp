@@ -4,7 +4,7 @@
 #include <map>
 #include <set>
 
-#include "capture/accuracy.hpp"
+#include "analysis/accuracy.hpp"
 #include "service/run_rows.hpp"
 
 namespace tally::service {
@@ -12,23 +12,23 @@ namespace {
 
 using nlohmann::json;
 
-capture::RunCounts metadata(const store::RunRow& r) {
-  capture::RunCounts c;
-  static_cast<capture::RunConfig&>(c) = runConfigOf(r);
+analysis::RunCounts metadata(const store::RunRow& r) {
+  analysis::RunCounts c;
+  static_cast<analysis::RunConfig&>(c) = runConfigOf(r);
   c.group = std::to_string(r.jobId);
   return c;
 }
 
 // The run's samples with their per-line bytes, as runCountsFromResult reads them.
-Result<bool> loadSamples(store::Store& store, int64_t runId, capture::RunCounts& run) {
+Result<bool> loadSamples(store::Store& store, int64_t runId, analysis::RunCounts& run) {
   auto samples = store.listSamples(runId);
   if (!samples) return makeError(samples.error());
   for (const auto& row : *samples) {
     auto sample = store.getSample(row.id);
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
-    capture::SampleCounts counts;
-    counts.camera = capture::cameraKey(row.camera);
+    analysis::SampleCounts counts;
+    counts.camera = analysis::cameraKey(row.camera);
     counts.frameMs = row.frameMs;
     counts.frameMsInstrumented = row.frameMsInstrumented.value_or(0.0);
     for (const auto& pass : (*sample)->passes) {
@@ -48,7 +48,7 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
 
   // Candidates for references: every exact run of the same renderer and
   // scene (any capture, any time), whatever else the filter says.
-  std::vector<capture::RunCounts> pool;
+  std::vector<analysis::RunCounts> pool;
   std::map<int64_t, size_t> index;  // run id -> position in pool
   std::vector<int64_t> rowIds;
   std::set<std::string> queried;  // renderer, scene, resolution, device already looked up
@@ -99,7 +99,7 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
     if (!ok) return makeError(ok.error());
   }
   // findReference takes the last match as the newest: order by id.
-  std::vector<capture::RunCounts> sorted = pool;
+  std::vector<analysis::RunCounts> sorted = pool;
   std::sort(sorted.begin(), sorted.end(),
             [](const auto& a, const auto& b) { return std::stoll(a.id) < std::stoll(b.id); });
 
@@ -123,10 +123,10 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
               {"created_at", r.createdAt},
               {"sample_count", static_cast<int64_t>(run.samples.size())}};
     std::string why;
-    auto ref = capture::findReference(run, sorted, &why);
-    std::optional<capture::RunAccuracy> accuracy;
+    auto ref = analysis::findReference(run, sorted, &why);
+    std::optional<analysis::RunAccuracy> accuracy;
     if (ref) {
-      auto a = capture::compareToExact(run, sorted[*ref]);
+      auto a = analysis::compareToExact(run, sorted[*ref]);
       if (a) {
         accuracy = std::move(a).value();
       } else {
@@ -145,7 +145,7 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
       j["reason"] = nullptr;
       j["overhead_ratio"] = accuracy->overheadRatio;
       j["reference_overhead_ratio"] = accuracy->referenceOverheadRatio;
-      j.update(capture::toJson(accuracy->errors));
+      j.update(analysis::toJson(accuracy->errors));
       j["worst_sample"] = static_cast<int64_t>(accuracy->worstSample);
     }
     rows.push_back(std::move(j));

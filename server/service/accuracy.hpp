@@ -1,6 +1,6 @@
 // GET /api/accuracy: every run counted in a cheaper mode against the exact
 // run of the same frames, computed from the stored counters at query time
-// with capture/accuracy (the same code as `tallyd accuracy`).
+// with analysis/accuracy (the same code as `tallyd accuracy`).
 #pragma once
 
 #include <nlohmann/json.hpp>

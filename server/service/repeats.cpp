@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <map>
 
-#include "capture/repeats.hpp"
-#include "capture/stats.hpp"
+#include "analysis/repeats.hpp"
+#include "analysis/stats.hpp"
 #include "service/run_rows.hpp"
 
 namespace tally::service {
@@ -13,25 +13,25 @@ namespace {
 using nlohmann::json;
 
 // The run's configuration and its samples, as repeatRunsFromResult reads a result.
-Result<capture::RepeatRun> load(store::Store& store, const store::RunRow& r) {
-  capture::RepeatRun run;
-  static_cast<capture::RunConfig&>(run) = runConfigOf(r);
+Result<analysis::RepeatRun> load(store::Store& store, const store::RunRow& r) {
+  analysis::RepeatRun run;
+  static_cast<analysis::RunConfig&>(run) = runConfigOf(r);
   auto samples = store.listSamples(r.id);
   if (!samples) return makeError(samples.error());
   for (const auto& row : *samples) {
     auto sample = store.getSample(row.id);
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
-    capture::RepeatSample s;
-    s.camera = capture::cameraKey(row.camera);
+    analysis::RepeatSample s;
+    s.camera = analysis::cameraKey(row.camera);
     s.frames = row.frames.value_or(0);
     s.frameMs = row.frameMs;
-    s.frameMsIqr = capture::iqrOf(row.frameMsSpread);
+    s.frameMsIqr = analysis::iqrOf(row.frameMsSpread);
     s.bytes = row.bytes;
     for (const auto& pass : (*sample)->passes) {
       for (const auto& c : pass.counters) {
         s.counts[lineKey(pass.name, c)] += c.count;
-        if (c.count > 0) s.bytesIqr += capture::iqrOf(c.countSpread) * c.bytes / c.count;
+        if (c.count > 0) s.bytesIqr += analysis::iqrOf(c.countSpread) * c.bytes / c.count;
       }
     }
     run.samples.push_back(std::move(s));
@@ -54,7 +54,7 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
         .dump();
   };
   for (const auto& r : rows) ++seen[cheapKey(r)];
-  std::vector<capture::RepeatRun> runs;
+  std::vector<analysis::RepeatRun> runs;
   std::map<std::string, const store::RunRow*> rowsById;
   for (const auto& r : rows) {
     if (seen[cheapKey(r)] < 2) continue;
@@ -65,7 +65,7 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
   }
 
   json groups = json::array();
-  for (const auto& g : capture::repeatGroups(runs)) {
+  for (const auto& g : analysis::repeatGroups(runs)) {
     const store::RunRow& first = *rowsById[g.runs.front()->id];
     json ids = json::array(), captures = json::array(), frames = json::array();
     for (const auto* run : g.runs) {
@@ -88,11 +88,11 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
                       {"lights", first.lights},
                       {"cameras", g.runs.front()->samples.size()},
                       {"frames", frames},
-                      {"frame_ms", capture::toJson(g.frameMs)},
-                      {"bytes", capture::toJson(g.bytes)},
-                      {"counts", capture::toJson(g.counts)}});
+                      {"frame_ms", analysis::toJson(g.frameMs)},
+                      {"bytes", analysis::toJson(g.bytes)},
+                      {"counts", analysis::toJson(g.counts)}});
   }
-  return json{{"groups", std::move(groups)}, {"band_iqrs", capture::kRepeatBandIqrs}, {"truncated", !complete}};
+  return json{{"groups", std::move(groups)}, {"band_iqrs", analysis::kRepeatBandIqrs}, {"truncated", !complete}};
 }
 
 }  // namespace tally::service

@@ -1,6 +1,6 @@
 // GET /api/repeats: groups of runs with one configuration (repeated captures
 // of the same spec) and whether they agree within their own noise, computed
-// from the stored samples with capture/repeats (the same code as
+// from the stored samples with analysis/repeats (the same code as
 // `tallyd repeats`).
 #pragma once
 

@@ -23,8 +23,8 @@ Result<std::vector<store::RunRow>> selectRuns(store::Store& store, const store::
   return rows;
 }
 
-capture::RunConfig runConfigOf(const store::RunRow& r) {
-  capture::RunConfig c;
+analysis::RunConfig runConfigOf(const store::RunRow& r) {
+  analysis::RunConfig c;
   c.id = std::to_string(r.id);
   c.renderer = r.renderer;
   c.options = r.options.dump();

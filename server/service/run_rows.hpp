@@ -1,11 +1,11 @@
 // Stored runs as the accuracy and repeatability routes read them: every run a
 // filter selects (bounded), and a run's configuration in the form the shared
-// computations (capture/accuracy, capture/repeats) compare.
+// computations (analysis/accuracy, analysis/repeats) compare.
 #pragma once
 
 #include <vector>
 
-#include "capture/run_config.hpp"
+#include "analysis/run_config.hpp"
 #include "common/result.hpp"
 #include "store/store.hpp"
 
@@ -17,9 +17,9 @@ Result<std::vector<store::RunRow>> selectRuns(store::Store& store, const store::
                                               bool& complete);
 
 // The run's configuration; its device is the device id (names may repeat).
-capture::RunConfig runConfigOf(const store::RunRow& row);
+analysis::RunConfig runConfigOf(const store::RunRow& row);
 
-// One stored counter line: "pass/resource access", as capture::lineKey names a result's.
+// One stored counter line: "pass/resource access", as analysis::lineKey names a result's.
 std::string lineKey(const std::string& pass, const store::Counter& counter);
 
 }  // namespace tally::service

@@ -9,7 +9,7 @@
 #include <system_error>
 
 #include "capture/spec.hpp"
-#include "capture/sweep.hpp"
+#include "sweeps/sweep.hpp"
 #include "service/accuracy.hpp"
 #include "service/repeats.hpp"
 
@@ -129,8 +129,8 @@ store::RunFilter queryFilter(const Request& req) {
   f.renderer = queryString(req, "renderer");
   f.variant = queryString(req, "variant");
   f.scene = queryString(req, "scene");
-  if (auto w = queryInt(req, "width", 1, capture::kMaxDimension)) f.width = static_cast<int>(*w);
-  if (auto h = queryInt(req, "height", 1, capture::kMaxDimension)) f.height = static_cast<int>(*h);
+  if (auto w = queryInt(req, "width", 1, kMaxDimension)) f.width = static_cast<int>(*w);
+  if (auto h = queryInt(req, "height", 1, kMaxDimension)) f.height = static_cast<int>(*h);
   if (const std::string* d = req.queryValue("device")) {
     // A device id, or its exact name.
     bool numeric = !d->empty() && d->find_first_not_of("0123456789") == std::string::npos;
@@ -364,9 +364,9 @@ std::string resolveGltf(const ServiceOptions& options, const std::string& given,
 json validateSpec(const ServiceContext& ctx, const json& body) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
   // A stability sweep ({"sweep": NAME, ...}) is checked by its own parser; its
-  // limits on points and resolution are the sweep's (capture/sweep.hpp).
-  if (capture::isSweepSpec(body)) {
-    auto sweep = capture::parseSweepSpec(body, ctx.rendererNames);
+  // limits on points and resolution are the sweep's (sweeps/sweep.hpp).
+  if (sweeps::isSweepSpec(body)) {
+    auto sweep = sweeps::parseSweepSpec(body, ctx.rendererNames);
     if (!sweep) throw RequestError(400, api::code::kInvalidField, sweep.error(), fieldOf(sweep.error()));
     return body;
   }

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "capture/runner.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/options.hpp"
@@ -165,7 +165,7 @@ TEST_F(CaptureRun, VariantsCarryOptionsAndTheirImageError) {
 
   // The two images, rendered here uninstrumented as the capture does.
   std::vector<std::vector<uint8_t>> images;
-  auto done = capture::withDevice("", [&](gpu::Context& ctx) -> Result<json> {
+  auto done = gpu::withDevice("", [&](gpu::Context& ctx) -> Result<json> {
     auto made = scenes::makeScene(scene);
     if (!made) return makeError(made.error());
     auto cameras = scenes::camerasFromJson(json::array({camera}));
@@ -189,7 +189,7 @@ TEST_F(CaptureRun, VariantsCarryOptionsAndTheirImageError) {
   });
   ASSERT_TRUE(done) << done.error();
   ASSERT_EQ(images.size(), 2u);
-  auto expected = capture::compareImages(images[1], images[0], 64, 36);
+  auto expected = analysis::compareImages(images[1], images[0], 64, 36);
   ASSERT_TRUE(expected) << expected.error();
   EXPECT_EQ(error["identical"].get<bool>(), std::isinf(expected->psnr));
   if (std::isinf(expected->psnr)) {

@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "capture/spec.hpp"
 #include "render_fixture.hpp"
 #include "renderers/bloom.hpp"
@@ -319,9 +319,9 @@ TEST(Bloom, ImagesAgainstTheNaiveBlur) {
     Rendered separable = render("forward", spec, extent, bloomWith(BloomBlur::Separable, n, 0.0f));
     Rendered bilinear = render("forward", spec, extent, bloomWith(BloomBlur::Bilinear, n, 0.0f));
     ASSERT_TRUE(off.ok && naive.ok && separable.ok && bilinear.ok);
-    auto bloomEffect = capture::compareImages(off.image, naive.image, extent.width, extent.height);
-    auto sep = capture::compareImages(naive.image, separable.image, extent.width, extent.height);
-    auto bil = capture::compareImages(naive.image, bilinear.image, extent.width, extent.height);
+    auto bloomEffect = analysis::compareImages(off.image, naive.image, extent.width, extent.height);
+    auto sep = analysis::compareImages(naive.image, separable.image, extent.width, extent.height);
+    auto bil = analysis::compareImages(naive.image, bilinear.image, extent.width, extent.height);
     ASSERT_TRUE(bloomEffect.ok() && sep.ok() && bil.ok());
     std::printf("N=%u  off vs naive: max %d mean %.4f  separable vs naive: max %d mean %.4f PSNR %.1f dB  "
                 "bilinear vs naive: max %d mean %.4f PSNR %.1f dB\n",

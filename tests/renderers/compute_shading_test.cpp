@@ -29,7 +29,7 @@
 #include <gtest/gtest.h>
 
 #include "analytic.hpp"
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
 
@@ -220,7 +220,7 @@ TEST(ComputeShadingImages, MatchTheFragmentPass) {
       Rendered comp = render(name, spec, extent, withCompute(true));
       ASSERT_TRUE(frag.ok) << frag.error;
       ASSERT_TRUE(comp.ok) << comp.error;
-      auto e = capture::compareImages(frag.image, comp.image, extent.width, extent.height);
+      auto e = analysis::compareImages(frag.image, comp.image, extent.width, extent.height);
       ASSERT_TRUE(e.ok()) << e.error();
       std::printf("[compute shading] %s %s: psnr %.2f dB, max %d, mean %.5f\n", name.c_str(), spec.dump().c_str(),
                   e->psnr, e->maxAbs, e->meanAbs);
@@ -262,7 +262,7 @@ TEST(ComputeShadingImages, HdrLayoutAcrossFramesAndBloom) {
     ASSERT_TRUE(comp.ok) << comp.error;
     ASSERT_TRUE(once.ok) << once.error;
     EXPECT_EQ(comp.image, once.image) << "the third frame equals the first";
-    auto e = capture::compareImages(frag.image, comp.image, extent.width, extent.height);
+    auto e = analysis::compareImages(frag.image, comp.image, extent.width, extent.height);
     ASSERT_TRUE(e.ok());
     EXPECT_GE(e->psnr, kMinPsnr);
     EXPECT_NE(line(passNamed(comp, "bloom_bright"), "hdr", false), nullptr) << "bloom samples the stored hdr";

@@ -15,7 +15,7 @@
 
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "render_fixture.hpp"
 #include "renderers/lod.hpp"
 #include "renderers/options.hpp"
@@ -312,7 +312,7 @@ TEST(Lod, ChosenLevelsCountsAndImage) {
     // and interiors keep the original vertices' normals: mean error below 1
     // level of 255 and PSNR above 30 dB against LOD off.
     if (t == 1.0f) {
-      auto err = capture::compareImages(r.image, off.image, kExtent.width, kExtent.height);
+      auto err = analysis::compareImages(r.image, off.image, kExtent.width, kExtent.height);
       ASSERT_TRUE(err.ok());
       std::printf("lod=1 vs off: psnr %.2f dB, mean %.3f, max %d; triangles %llu of %llu\n", err->psnr, err->meanAbs,
                   err->maxAbs, (unsigned long long)triangles, (unsigned long long)full);
@@ -336,7 +336,7 @@ TEST(Lod, VisibilityBufferShadesTheChosenLevelsTriangles) {
   for (const char* name : {"visbuffer", "visbuffer-lean"}) {
     const LodRender fOff = renderLod("forward", 0), vOff = renderLod(name, 0);
     const LodRender fOn = renderLod("forward", 8), vOn = renderLod(name, 8);
-    const double base = capture::psnr(vOff.image, fOff.image), lod = capture::psnr(vOn.image, fOn.image);
+    const double base = analysis::psnr(vOff.image, fOff.image), lod = analysis::psnr(vOn.image, fOn.image);
     std::printf("%s vs forward: psnr %.2f dB off, %.2f dB lod=8\n", name, base, lod);
     EXPECT_GT(lod, std::min(base, 60.0) - 3.0) << name;
     uint64_t indices = 0;

@@ -10,11 +10,11 @@
 
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "render_fixture.hpp"
 
 namespace tally::renderers {
-using capture::psnr;
+using analysis::psnr;
 using namespace fixture;
 namespace {
 

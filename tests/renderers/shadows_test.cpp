@@ -15,7 +15,7 @@
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "capture/spec.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
@@ -384,7 +384,7 @@ TEST(Shadows, LargerMapsAreCloserToTheReference) {
     return r.image;
   };
   auto err = [&](const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
-    auto e = capture::compareImages(a, b, extent.width, extent.height);
+    auto e = analysis::compareImages(a, b, extent.width, extent.height);
     EXPECT_TRUE(e.ok());
     return e ? e->meanAbs : 0.0;
   };
@@ -414,7 +414,7 @@ TEST(Shadows, EveryRendererAgreesWithForward) {
     for (const auto& name : rendererNames()) {
       if (name == "forward") continue;
       Rendered r = render(name, spec, extent, shadowsWith(agreeFilter(), 1024, false, false));
-      const double db = capture::psnr(reference.image, r.image);
+      const double db = analysis::psnr(reference.image, r.image);
       std::printf("%-16s shadows (pcf2x2, else hard) PSNR vs forward %.1f dB\n", name.c_str(), db);
       EXPECT_GE(db, kMinPsnrDb) << name;
     }
@@ -424,7 +424,7 @@ TEST(Shadows, EveryRendererAgreesWithForward) {
   for (const auto& name : rendererNames()) {
     if (name == "forward") continue;
     Rendered r = renderStrip(*strip, name, extent, shadowsWith(agreeFilter(), 1024, true, false));
-    EXPECT_GE(capture::psnr(reference.image, r.image), kMinPsnrDb) << name << " on the strip scene";
+    EXPECT_GE(analysis::psnr(reference.image, r.image), kMinPsnrDb) << name << " on the strip scene";
   }
 }
 

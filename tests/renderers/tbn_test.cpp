@@ -14,7 +14,7 @@
 
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "gpu/pipelines.hpp"
 #include "gpu/resources.hpp"
 #include "gpu/shaders.hpp"
@@ -302,7 +302,7 @@ TEST(TbnImages, QuaternionAgainstFloatEveryRenderer) {
     Rendered f = render(name, "atrium", extent, withFrame(TangentFrameEncoding::Float));
     Rendered q = render(name, "atrium", extent, withFrame(TangentFrameEncoding::Quaternion));
     ASSERT_TRUE(f.ok && q.ok) << name << ": " << f.error << q.error;
-    auto e = capture::compareImages(f.image, q.image, extent.width, extent.height);
+    auto e = analysis::compareImages(f.image, q.image, extent.width, extent.height);
     ASSERT_TRUE(e.ok());
     std::printf("%-16s quaternion vs float: PSNR %.1f dB, max %d, mean %.4f\n", name.c_str(), e->psnr, e->maxAbs,
                 e->meanAbs);

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "analytic.hpp"
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "gpu/shaders.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
@@ -178,7 +178,7 @@ TEST(TileMemory, SubpassCountsAndImageMatchSampled) {
     // Bound: 0 (lavapipe measured 0); a driver that compiles the two
     // fragment shaders with different float contraction could differ by one
     // 8-bit step, which would fail this test and be worth knowing.
-    auto e = capture::compareImages(sampled.image, subpass.image, kExtent.width, kExtent.height);
+    auto e = analysis::compareImages(sampled.image, subpass.image, kExtent.width, kExtent.height);
     ASSERT_TRUE(e.ok());
     std::printf("%s: subpass vs sampled max %d mean %.5f\n", label.c_str(), e->maxAbs, e->meanAbs);
     EXPECT_EQ(e->maxAbs, 0) << label;

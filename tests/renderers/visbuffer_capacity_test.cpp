@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "analytic.hpp"
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "render_fixture.hpp"
 #include "renderers/visbuffer_base.hpp"
 #include "shared.h"
@@ -69,7 +69,7 @@ TEST(VisibilityIdCapacity, AtTheDrawLimitTheVisibilityBuffersRenderExactly) {
   for (const char* name : kVisbuffers) {
     Rendered r = render(name, spec, kExtent);
     ASSERT_TRUE(r.ok) << name << ": " << r.error;
-    EXPECT_GE(capture::psnr(reference.image, r.image), kMinPsnrDb) << name;
+    EXPECT_GE(analysis::psnr(reference.image, r.image), kMinPsnrDb) << name;
     analytic::DeviceTraits device;
     device.lights = kTestLights;
     device.barycentricExtension = r.notes.value("barycentrics", "") == "extension";

@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "capture/image.hpp"
+#include "analysis/image.hpp"
 #include "capture/spec.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
@@ -419,8 +419,8 @@ TEST(VolumeFog, ImagesAgreeAcrossOctaveModes) {
   WorkloadRun constant = runWorkload("volume-fog", camera, fogWith(FogOctaves::Constant, 32, 6, 1.0f));
   WorkloadRun dynamic = runWorkload("volume-fog", camera, fogWith(FogOctaves::Dynamic, 32, 6, 1.0f));
   ASSERT_TRUE(fixed.ok && constant.ok && dynamic.ok);
-  auto c = capture::compareImages(constant.image, fixed.image, kExtent.width, kExtent.height);
-  auto d = capture::compareImages(dynamic.image, fixed.image, kExtent.width, kExtent.height);
+  auto c = analysis::compareImages(constant.image, fixed.image, kExtent.width, kExtent.height);
+  auto d = analysis::compareImages(dynamic.image, fixed.image, kExtent.width, kExtent.height);
   ASSERT_TRUE(c.ok() && d.ok());
   EXPECT_LE(c->maxAbs, 2);
   EXPECT_GE(d->psnr, 30.0);

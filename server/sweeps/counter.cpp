@@ -1,0 +1,235 @@
+#include "sweeps/counter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "analysis/headroom.hpp"
+#include "sweeps/fields.hpp"
+#include "gpu/context.hpp"
+#include "renderers/gpu_scene.hpp"
+#include "renderers/renderer.hpp"
+#include "scenes/spec.hpp"
+
+namespace tally::sweeps {
+
+using analysis::CounterHeadroom;
+namespace {
+
+using nlohmann::json;
+using fields::fieldError;
+using fields::show;
+
+constexpr size_t kMaxAxis = 16;
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+Result<uint32_t> integerIn(const json& j, const std::string& field, int64_t lo, int64_t hi) {
+  if (!j.is_number_integer() || j.get<int64_t>() < lo || j.get<int64_t>() > hi) {
+    return fieldError(field, "must be an integer from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                                 ", got " + show(j));
+  }
+  return uint32_t(j.get<int64_t>());
+}
+
+// A 16:9 resolution with `pixels` pixels, for reading a load as a screen size.
+std::string resolution16x9(double pixels) {
+  double h = std::sqrt(pixels * 9.0 / 16.0);
+  return std::to_string(int64_t(std::llround(h * 16.0 / 9.0))) + "x" + std::to_string(int64_t(std::llround(h)));
+}
+
+}  // namespace
+
+Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
+  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
+  static const std::vector<std::string> kKeys = {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"};
+  for (const auto& [key, value] : j.items()) {
+    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
+      return fieldError(key, "unknown field (expected sweep, renderers, layers, resolutions, lights, threshold)");
+    }
+  }
+  CounterSweepSpec spec;
+  spec.source = j;
+  if (j.contains("renderers")) {
+    const auto& r = j["renderers"];
+    if (!r.is_array() || r.empty() || r.size() > kMaxAxis) {
+      return fieldError("renderers", "must be an array of 1 to " + std::to_string(kMaxAxis) + " renderer names");
+    }
+    spec.renderers.clear();
+    for (size_t i = 0; i < r.size(); ++i) {
+      std::string f = "renderers[" + std::to_string(i) + "]";
+      if (!r[i].is_string() ||
+          std::find(knownRenderers.begin(), knownRenderers.end(), r[i].get<std::string>()) == knownRenderers.end()) {
+        return fieldError(f, "unknown renderer " + show(r[i]) + " (expected one of " + joined(knownRenderers) + ")");
+      }
+      if (std::find(spec.renderers.begin(), spec.renderers.end(), r[i].get<std::string>()) != spec.renderers.end()) {
+        return fieldError(f, r[i].get<std::string>() + " listed twice");
+      }
+      spec.renderers.push_back(r[i].get<std::string>());
+    }
+  }
+  if (!j.contains("layers")) return fieldError("layers", "required, e.g. [1, 2, 4, 8]");
+  const auto& l = j["layers"];
+  if (!l.is_array() || l.empty() || l.size() > kMaxAxis) {
+    return fieldError("layers", "must be an array of 1 to " + std::to_string(kMaxAxis) + " layer counts");
+  }
+  for (size_t i = 0; i < l.size(); ++i) {
+    auto v = integerIn(l[i], "layers[" + std::to_string(i) + "]", 1, 64);
+    if (!v) return makeError(v.error());
+    spec.layers.push_back(*v);
+  }
+  if (!j.contains("resolutions")) return fieldError("resolutions", "required, e.g. [[64, 36], [128, 72]]");
+  const auto& rs = j["resolutions"];
+  if (!rs.is_array() || rs.empty() || rs.size() > kMaxAxis) {
+    return fieldError("resolutions", "must be an array of 1 to " + std::to_string(kMaxAxis) + " [width, height]");
+  }
+  for (size_t i = 0; i < rs.size(); ++i) {
+    auto r = fields::resolution(rs[i]);
+    if (!r) return makeError("resolutions[" + std::to_string(i) + "]" + r.error().substr(std::string("resolution").size()));
+    spec.resolutions.push_back(*r);
+  }
+  if (j.contains("lights")) {
+    auto v = integerIn(j["lights"], "lights", 1, 4096);
+    if (!v) return makeError(v.error());
+    spec.lights = *v;
+  }
+  if (j.contains("threshold")) {
+    const auto& t = j["threshold"];
+    if (!t.is_object() || t.size() != 1 || !t.contains("bits")) {
+      return fieldError("threshold", "must be {\"bits\": n}, the counter width whose wrap is the failure, got " + show(t));
+    }
+    auto v = integerIn(t["bits"], "threshold.bits", 8, 64);
+    if (!v) return makeError(v.error());
+    spec.bits = int(*v);
+  }
+  if (spec.renderers.size() * spec.layers.size() * spec.resolutions.size() > 512) {
+    return fieldError("spec", "more than 512 points (renderers x layers x resolutions)");
+  }
+  return spec;
+}
+
+Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, const SweepOptions& options) {
+  const double wrapAt = std::ldexp(1.0, spec.bits);
+  Progress progress{0, spec.renderers.size() * spec.layers.size() * spec.resolutions.size(), ""};
+  json points = json::array();
+  for (uint32_t layers : spec.layers) {
+    auto scene = scenes::makeScene({{"name", "planes"}, {"layers", layers}, {"order", "back-to-front"}});
+    if (!scene) return makeError("layers " + std::to_string(layers) + ": " + scene.error());
+    renderers::GpuScene gpuScene;
+    if (auto up = gpuScene.upload(ctx, *scene); !up) return makeError("layers " + std::to_string(layers) + ": " + up.error());
+    const scenes::Camera camera = scene->fixedCameras.front();
+    for (const auto& res : spec.resolutions) {
+      for (const auto& name : spec.renderers) {
+        const std::string where = name + " layers " + std::to_string(layers) + " at " + std::to_string(res.width) +
+                                  "x" + std::to_string(res.height);
+        progress.current = where;
+        if (options.progress) options.progress(progress);
+        auto made = renderers::makeRenderer(name);
+        if (!made) return makeError(where + ": " + made.error());
+        renderers::RendererOptions ro;
+        ro.extent = {res.width, res.height};
+        ro.lights = spec.lights;
+        if (auto ok = (*made)->setup(ctx, gpuScene, ro); !ok) return makeError(where + ": " + ok.error());
+        const renderers::FrameResult frame = (*made)->renderFrame(camera);
+        (*made)->destroy();
+        CounterHeadroom headroom;
+        headroom.note(frame);
+        // The slot's own pass sets its load: forward's light loop runs per
+        // shaded fragment (grows with overshading), a deferred or visibility
+        // shading pass's once per covered pixel (does not).
+        const renderers::PassResult* slotPass = nullptr;
+        uint64_t heaviest = 0;
+        for (const auto& pass : frame.passes) {
+          heaviest = std::max(heaviest, pass.fragmentInvocations);
+          if (!slotPass || pass.maxSlotCount > slotPass->maxSlotCount) slotPass = &pass;
+        }
+        const double pixels = double(res.width) * res.height;
+        const double load = slotPass ? double(slotPass->fragmentInvocations) : 0.0;
+        const double perFragment = load > 0 ? double(headroom.maxSlotCount) / load : 0.0;
+        points.push_back({{"renderer", name},
+                          {"layers", layers},
+                          {"width", res.width},
+                          {"height", res.height},
+                          {"pixels", pixels},
+                          {"overshading", double(heaviest) / pixels},
+                          {"slot_pass", slotPass ? slotPass->name : ""},
+                          {"load", load},
+                          {"load_per_pixel", load / pixels},
+                          {"max_slot_count", headroom.maxSlotCount},
+                          {"max_slot", headroom.maxSlot},
+                          {"counts_per_fragment", perFragment},
+                          {"error", {{"fraction_of_wrap", double(headroom.maxSlotCount) / wrapAt},
+                                     {"wraps", double(headroom.maxSlotCount) >= wrapAt}}},
+                          {"predicted", {{"wrap_load", perFragment > 0 ? json(wrapAt / perFragment) : json(nullptr)}}}});
+        ++progress.done;
+      }
+    }
+    gpuScene.destroy();
+  }
+  progress.current = "done";
+  if (options.progress) options.progress(progress);
+
+  // Per renderer and overshading (layers): the load at which the worst
+  // counts per fragment reach 2^bits, the pixels and 16:9 resolution that
+  // load means at that overshading, and the smallest measured load that did.
+  json failing = json::array();
+  bool any = false;
+  for (const auto& name : spec.renderers) {
+    for (uint32_t layers : spec.layers) {
+      double worst = 0, perPixel = 0;
+      json measured = nullptr;
+      for (const auto& p : points) {
+        if (p["renderer"] != name || p["layers"] != layers) continue;
+        worst = std::max(worst, p["counts_per_fragment"].get<double>());
+        perPixel = std::max(perPixel, p["load_per_pixel"].get<double>());
+        if (p["error"]["wraps"].get<bool>() &&
+            (measured.is_null() || p["load"].get<double>() < measured.get<double>())) {
+          measured = p["load"];
+        }
+      }
+      json entry = {{"renderer", name}, {"layers", layers}, {"load", nullptr}, {"measured_load", measured}};
+      if (worst > 0 && perPixel > 0) {
+        any = true;
+        const double load = wrapAt / worst;
+        entry["load"] = load;
+        entry["counts_per_fragment"] = worst;
+        entry["pixels"] = load / perPixel;
+        entry["resolution_16x9"] = resolution16x9(load / perPixel);
+      }
+      failing.push_back(std::move(entry));
+    }
+  }
+  return json{{"sweep", std::string(kCounterSweepName)},
+              {"device", gpu::describe(ctx)},
+              {"spec", spec.source},
+              {"parameters", {"renderer", "layers", "pixels"}},
+              {"lights", spec.lights},
+              {"method",
+               {{"scene", "planes, layers back to front (every layer shaded: overshading = layers)"},
+                {"load", "fragment invocations of the pass holding the largest slot"},
+                {"overshading", "fragment invocations of the heaviest pass / pixels"},
+                {"slot", "the largest count one counter slot reached in one frame (counters are zeroed per frame)"},
+                {"proof", "tests/integration/overflow_test.cpp: counters preloaded below 2^32 carry exactly"}}},
+              {"threshold", {{"bits", spec.bits}}},
+              {"points", points},
+              {"fails_at", any ? json{{"load", failing}} : json(nullptr)},
+              {"plots",
+               json::array({{{"title", "Largest counter slot against load"},
+                             {"x", "load"}, {"x_log", true}, {"y", "max_slot_count"}, {"y_log", true},
+                             {"y_label", "counts in one slot per frame"}, {"series", {"renderer", "layers"}},
+                             {"threshold", wrapAt}},
+                            {{"title", "Counts per fragment (flat: the slot grows with the load)"},
+                             {"x", "load"}, {"x_log", true}, {"y", "counts_per_fragment"}, {"y_log", false},
+                             {"y_label", "slot counts / fragment"}, {"series", {"renderer", "layers"}},
+                             {"threshold", nullptr}},
+                            {{"title", "Largest slot against pixels"},
+                             {"x", "pixels"}, {"x_log", true}, {"y", "max_slot_count"}, {"y_log", true},
+                             {"y_label", "counts in one slot per frame"}, {"series", {"renderer", "layers"}},
+                             {"threshold", wrapAt}}})}};
+}
+
+}  // namespace tally::sweeps
