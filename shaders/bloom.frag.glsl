@@ -8,7 +8,7 @@
 //   BLOOM_DIRECTION  ivec2(1, 0) or ivec2(0, 1): one direction of the
 //                    separable Gaussian, BLOOM_TAPS fetches per pixel, or with
 //                    BLOOM_LINEAR BLOOM_TAPS linear-filtered taps at
-//                    BLOOM_OFFSETS (between texel pairs, renderers/bloom.hpp)
+//                    BLOOM_OFFSETS (between texel pairs, renderers/techniques/bloom.hpp)
 // BLOOM_WEIGHTS (a float[BLOOM_TAPS] initialiser) holds the normalised
 // weights. Texel fetches clamp to the edge; the linear taps use a
 // clamp-to-edge sampler, which gives the same edge texels.

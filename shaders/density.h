@@ -1,7 +1,7 @@
 // Forward output=density (docs/techniques.md, "Mesh density"): the class of
 // the fragment's triangle in screen space, and the lanes its 2x2 quad launched.
 // Needs TALLY_DRAWS and TALLY_MESH (the triangle's vertices by gl_PrimitiveID)
-// before common.h. The classes, as renderers/density.hpp classifies on the CPU:
+// before common.h. The classes, as renderers/techniques/density.hpp classifies on the CPU:
 // - sub-pixel: screen area < 1 px^2;
 // - long-thin: area >= 1 px^2 but the smallest altitude (2 x area / longest
 //   edge) < 1 px: a sliver narrower than a pixel;

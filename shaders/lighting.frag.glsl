@@ -8,7 +8,7 @@
 #include "common.h"
 
 #ifdef TALLY_MSAA
-// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/msaa.hpp): the
+// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/techniques/msaa.hpp): the
 // targets are multisampled. Every sample's depth is fetched; a covered sample
 // (depth < 1, the clear value is the far plane) has its three G-buffer texels
 // fetched and is shaded (at the pixel centre's x, y with the sample's depth);

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // A small compute ray tracer (docs/techniques.md, "Ray tracer";
-// renderers/workloads.cpp): spheres from a storage buffer on a ground plane,
+// renderers/workloads/workloads.cpp): spheres from a storage buffer on a ground plane,
 // one point light. Per pixel a primary ray; per hit one shadow ray to the
 // light and, up to `bounces` times, a specular reflection ray. Every ray tests
 // every sphere (one vec4 read each); diffuse + Blinn-Phong specular shading.

@@ -13,7 +13,7 @@
 #include "common.h"
 
 #ifdef TALLY_MSAA
-// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/msaa.hpp): the
+// MSAA (RendererOptions::msaa = TALLY_MSAA samples, renderers/techniques/msaa.hpp): the
 // visibility targets are multisampled. Every sample's id is fetched; each
 // distinct triangle among the covered samples (id != kVisibilityClear) is
 // shaded once (with the texels of its first sample), weighted by its samples;

@@ -1,5 +1,5 @@
 // Shadow mapping's uniform and bindings, shared by the GLSL (shadow.h,
-// shadow.vert.glsl) and the C++ (renderers/shadows.cpp). Only included with
+// shadow.vert.glsl) and the C++ (renderers/techniques/shadows.cpp). Only included with
 // shadows on, so that with shadows off every shader is what it was.
 // Set 0 (frame) gains two bindings with shadows on:
 #ifndef TALLY_SHADERS_SHADOW_SHARED_H

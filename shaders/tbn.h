@@ -1,6 +1,6 @@
 // Packed tangent frames (tangent_frame = quaternion; docs/techniques.md,
 // "Packed tangent frames"): the 24-bit "smallest three" unit quaternion of
-// server/renderers/tbn.hpp (bit layout there) and the packed vertex. GLSL only;
+// server/renderers/techniques/tbn.hpp (bit layout there) and the packed vertex. GLSL only;
 // included by common.h and mesh.vert.h when TALLY_TBN_QUATERNION is defined.
 #ifndef TALLY_SHADERS_TBN_H
 #define TALLY_SHADERS_TBN_H

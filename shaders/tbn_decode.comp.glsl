@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Test kernel (tests/renderers/tbn_test.cpp): decodes packed frames with the
+// Test kernel (tests/renderers/techniques/tbn_test.cpp): decodes packed frames with the
 // renderers' GLSL decoder, so the C++ encoder can be checked against it.
 #include "tbn.h"
 

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Volume fog (docs/techniques.md, "Volume fog"; renderers/workloads.cpp): per
+// Volume fog (docs/techniques.md, "Volume fog"; renderers/workloads/workloads.cpp): per
 // pixel a ray through the scene's bounding box, fogSteps samples between its
 // entry and exit, each the fractal sum of `n` octaves of the tiled 3D density
 // texture (one texture() per octave, doubling frequency, halving amplitude;

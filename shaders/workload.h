@@ -1,4 +1,4 @@
-// The compute workloads' shared GLSL (renderers/workloads.hpp): the camera,
+// The compute workloads' shared GLSL (renderers/workloads/workloads.hpp): the camera,
 // the "hdr" storage image every pixel is written to, and the primary ray.
 #ifndef TALLY_SHADERS_WORKLOAD_H
 #define TALLY_SHADERS_WORKLOAD_H

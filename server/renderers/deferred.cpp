@@ -6,7 +6,7 @@
 // zprepass=true: a depth-only "zprepass" pass (forward-zprepass's) first, then
 // the G-buffer pass tests depth EQUAL without writing it: one G-buffer
 // fragment per covered pixel.
-// msaa=N > 1 (renderers/msaa.hpp): the G-buffer targets and "depth.msaa" have
+// msaa=N > 1 (renderers/techniques/msaa.hpp): the G-buffer targets and "depth.msaa" have
 // N samples; the lighting pass (no stencil test) fetches every sample's depth,
 // and the G-buffer texels of the covered ones (depth < 1), shades each covered
 // sample and averages them into the 1-sample "hdr"; it discards pixels with no
@@ -17,7 +17,7 @@
 // cleared and never stored, and the lighting subpass reads them and the depth
 // aspect with subpassLoad (lighting_subpass.frag).
 #include "gpu/vk_check.hpp"
-#include "renderers/msaa.hpp"
+#include "renderers/techniques/msaa.hpp"
 #include "renderers/renderers.hpp"
 #include "shared.h"
 

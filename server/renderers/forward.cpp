@@ -12,13 +12,13 @@
 // fragment by its triangle's screen-space class (shaders/density.h) instead
 // of its shading, counts fragments into "overdraw.count" and quad lanes
 // (helpers included, subgroup quad operations) into "density.lanes"; no heat
-// view. frameExtras() adds a CPU census of the triangles (renderers/density.hpp).
+// view. frameExtras() adds a CPU census of the triangles (renderers/techniques/density.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
 
-#include "renderers/density.hpp"
+#include "renderers/techniques/density.hpp"
 #include "renderers/renderers.hpp"
 #include "shared.h"
 

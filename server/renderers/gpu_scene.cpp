@@ -6,7 +6,7 @@
 #include <span>
 
 #include "gpu/vk_check.hpp"
-#include "renderers/lod.hpp"
+#include "renderers/techniques/lod.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -374,7 +374,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   cpuPositions_.reserve(vertices.size());
   for (const auto& v : vertices) cpuPositions_.push_back(v.position);
   cpuIndices_ = indices;
-  // Transfer source: tangent_frame = quaternion packs a copy (renderers/tbn.cpp).
+  // Transfer source: tangent_frame = quaternion packs a copy (renderers/techniques/tbn.cpp).
   vertices_ = storageBuffer(ctx, vertices, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT);
   indices_ = storageBuffer(ctx, indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT);
   drawBuffer_ = storageBuffer(ctx, drawData, 0);

@@ -40,7 +40,7 @@ struct MipImage {
   uint64_t allocationBytes = 0;
 };
 
-class SceneLod;  // renderers/lod.hpp
+class SceneLod;  // renderers/techniques/lod.hpp
 
 struct GpuDraw {
   uint32_t material = 0;
@@ -139,7 +139,7 @@ class GpuScene {
   const gpu::Buffer& attributeBuffer() const { return attributes_; }
   const gpu::Buffer& materialExtraBuffer() const { return materialExtras_; }
   const gpu::Buffer& indexedMaterialExtraBuffer() const { return indexedMaterialExtras_; }
-  // Levels of detail of every draw (renderers/lod.hpp), built on the first
+  // Levels of detail of every draw (renderers/techniques/lod.hpp), built on the first
   // call (by a renderer with LOD on) and kept with the scene.
   Result<const SceneLod*> lod() const;
 

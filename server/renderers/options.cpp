@@ -2,9 +2,9 @@
 
 #include <algorithm>
 
-#include "renderers/shadows.hpp"
-#include "renderers/tbn.hpp"
-#include "renderers/workloads.hpp"
+#include "renderers/techniques/shadows.hpp"
+#include "renderers/techniques/tbn.hpp"
+#include "renderers/workloads/workloads.hpp"
 
 namespace tally::renderers {
 namespace {
@@ -154,7 +154,7 @@ std::vector<OptionDef> makeDefs() {
                   "included (the cleared value). Not with msaa > 1 or gbuffer=subpass",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.computeShading = v.get<std::string>() == "compute"; }});
-  // Shadow mapping (renderers/shadows.hpp): every renderer shades with it.
+  // Shadow mapping (renderers/techniques/shadows.hpp): every renderer shades with it.
   const std::vector<std::string> shadowRenderers = {"forward", "forward-zprepass", "deferred", "visbuffer",
                                                     "visbuffer-lean"};
   defs.push_back({"shadows",

@@ -4,7 +4,7 @@
 // the passes here.
 #include <stdexcept>
 
-#include "renderers/bloom.hpp"
+#include "renderers/techniques/bloom.hpp"
 #include "renderers/renderer_base.hpp"
 #include "shared.h"
 

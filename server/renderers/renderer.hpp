@@ -156,11 +156,11 @@ std::string_view toString(BloomBlur blur);  // "off", "naive", "separable", "bil
 std::optional<BloomBlur> parseBloomBlur(std::string_view name);
 struct BloomOptions {
   BloomBlur blur = BloomBlur::Off;
-  uint32_t taps = 9;       // odd kernel width N; sigma = N / 6 (renderers/bloom.hpp)
+  uint32_t taps = 9;       // odd kernel width N; sigma = N / 6 (renderers/techniques/bloom.hpp)
   float threshold = 1.0f;  // HDR luminance above which a pixel blooms
 };
 
-// Shadow mapping (docs/techniques.md, "Shadow mapping"; renderers/shadows.hpp):
+// Shadow mapping (docs/techniques.md, "Shadow mapping"; renderers/techniques/shadows.hpp):
 // one directional sun, a depth-only "shadow" pass into a D32_SFLOAT map, read
 // by every shading pass. Off leaves every renderer as it was (no sun, no pass).
 enum class ShadowFilter {
@@ -177,13 +177,13 @@ struct ShadowOptions {
 };
 
 // How vertices carry their tangent frame (docs/techniques.md, "Packed tangent
-// frames"; renderers/tbn.hpp): Float, shaders::Vertex's float normal and
+// frames"; renderers/techniques/tbn.hpp): Float, shaders::Vertex's float normal and
 // tangent (48-byte vertices); Quaternion, a packed 24-byte vertex buffer with
 // the frame as a 24-bit unit quaternion, read by every vertex path.
 enum class TangentFrameEncoding { Float, Quaternion };
 
 // The compute workloads (docs/techniques.md, "Volume fog", "Ray tracer";
-// renderers/workloads.hpp). Renderers ignore them.
+// renderers/workloads/workloads.hpp). Renderers ignore them.
 enum class FogOctaves {
   Fixed,     // loop to maxOctaves read from a uniform: the reference
   Dynamic,   // clamp(max - floor(log2(t / t0)), 1, max): a runtime loop bound from distance
@@ -212,7 +212,7 @@ struct RendererOptions {
   // then tests depth EQUAL without writing it: each covered pixel shaded once.
   bool zprepass = false;
   TangentFrameEncoding tangentFrame = TangentFrameEncoding::Float;  // every renderer
-  // Levels of detail (docs/techniques.md, "Levels of detail"; renderers/lod.hpp):
+  // Levels of detail (docs/techniques.md, "Levels of detail"; renderers/techniques/lod.hpp):
   // 0 off, else the pixel threshold: per draw, per frame, the coarsest
   // meshoptimizer level whose projected error is at most this many pixels.
   float lodThresholdPx = 0.0f;
@@ -222,7 +222,7 @@ struct RendererOptions {
   bool gbufferSubpass = false;
   // MSAA sample count of the geometry pass's targets and depth (deferred,
   // visbuffer, visbuffer-lean): 1, 2, 4 or 8; the shading pass resolves into
-  // the 1-sample "hdr" (docs/techniques.md, "MSAA footprint"; renderers/msaa.hpp).
+  // the 1-sample "hdr" (docs/techniques.md, "MSAA footprint"; renderers/techniques/msaa.hpp).
   uint32_t msaa = 1;
   ShadowOptions shadows;  // shadow mapping (all renderers); filter Off: none
   // Shading in compute (deferred, visbuffer, visbuffer-lean; docs/techniques.md,

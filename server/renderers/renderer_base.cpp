@@ -9,9 +9,9 @@
 
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
-#include "renderers/bloom.hpp"
+#include "renderers/techniques/bloom.hpp"
 #include "renderers/projection.hpp"
-#include "renderers/tile_memory.hpp"
+#include "renderers/techniques/tile_memory.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -406,7 +406,7 @@ void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) const {
 }
 
 void RendererBase::meshVertexStreams(gpu::GraphicsPipelineDesc& desc) const {
-  if (packedVertices_) {  // renderers/tbn.hpp: PackedVertex
+  if (packedVertices_) {  // renderers/techniques/tbn.hpp: PackedVertex
     desc.vertexBindings = {{0, sizeof(PackedVertex), VK_VERTEX_INPUT_RATE_VERTEX}};
     desc.vertexAttributes = {
         {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(PackedVertex, position)},
@@ -606,14 +606,14 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     lighting.exposure = 1.0f;
     gpu::uploadBuffer(ctx, lightingBuffer_, {reinterpret_cast<const uint8_t*>(&lighting), sizeof lighting});
 
-    if (options_.lodThresholdPx > 0) {  // levels of detail (renderers/lod.hpp): chains built on first use
+    if (options_.lodThresholdPx > 0) {  // levels of detail (renderers/techniques/lod.hpp): chains built on first use
       lod_ = std::make_unique<LodSelection>();
       if (auto ok = lod_->setup(ctx, scene, options_.lodThresholdPx); !ok) {
         lod_.reset();
         return makeError(ok.error());
       }
     }
-    if (options_.tangentFrame == TangentFrameEncoding::Quaternion) {  // renderers/tbn.hpp
+    if (options_.tangentFrame == TangentFrameEncoding::Quaternion) {  // renderers/techniques/tbn.hpp
       auto packed = buildPackedVertices(ctx, scene);
       if (!packed) return makeError(packed.error());
       packedVertices_ = std::make_unique<PackedVertexBuffer>(std::move(*packed));
@@ -730,7 +730,7 @@ nlohmann::json RendererBase::frameExtras() {
   if (!shadow_.extras.is_null()) extras["shadows"] = shadow_.extras;
   if (lod_) extras["lod"] = lod_->extras();
   if (!tileMemoryExtras_.is_null()) extras["tile_memory"] = tileMemoryExtras_;
-  if (packedVertices_) extras["tangent_frame"] = packedVertices_->stats;  // renderers/tbn.hpp
+  if (packedVertices_) extras["tangent_frame"] = packedVertices_->stats;  // renderers/techniques/tbn.hpp
   return extras;
 }
 

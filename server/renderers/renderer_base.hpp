@@ -16,11 +16,11 @@
 #include "gpu/queries.hpp"
 #include "gpu/resources.hpp"
 #include "renderers/gpu_scene.hpp"
-#include "renderers/lod.hpp"
+#include "renderers/techniques/lod.hpp"
 #include "renderers/pass_counters.hpp"
 #include "renderers/renderer.hpp"
-#include "renderers/shadows.hpp"
-#include "renderers/tbn.hpp"
+#include "renderers/techniques/shadows.hpp"
+#include "renderers/techniques/tbn.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -71,7 +71,7 @@ class RendererBase : public Renderer {
     std::string depthWrite;     // resource whose depth/stencil the pass writes ("" none)
     // Tile-memory model: resources whose traffic in this pass a tile-based GPU
     // keeps on chip (DONT_CARE attachments, input attachments of the render
-    // pass); their lines get Access::onChip (renderers/tile_memory.hpp).
+    // pass); their lines get Access::onChip (renderers/techniques/tile_memory.hpp).
     std::set<std::string> onChip;
     uint64_t indicesDrawn = 0;  // this frame, by drawScene
     bool indexFetches = false;  // derive "indices" reads from indicesDrawn
@@ -94,7 +94,7 @@ class RendererBase : public Renderer {
   // `samples` > 1: a multisampled target (RendererOptions::msaa).
   const gpu::Image* createTarget(const std::string& name, VkFormat format, VkImageUsageFlags usage,
                                  ResourceKind kind, uint32_t samples = 1);
-  // A transient colour attachment (renderers/tile_memory.hpp): lazily
+  // A transient colour attachment (renderers/techniques/tile_memory.hpp): lazily
   // allocated memory where the device offers it; ResourceInfo::memory says.
   const gpu::Image* createTransientTarget(const std::string& name, VkFormat format, VkImageUsageFlags usage);
   VkImageView depthOnlyView();  // the depth aspect of "depth", for sampling
@@ -123,7 +123,7 @@ class RendererBase : public Renderer {
                   VkImageLayout layout);
 
   // Vertex buffer binding 0 (shaders::Vertex) with the four attributes.
-  // tangent_frame = quaternion: the packed 24-byte vertex (renderers/tbn.hpp),
+  // tangent_frame = quaternion: the packed 24-byte vertex (renderers/techniques/tbn.hpp),
   // position, uv and the frame as R32_UINT at kAttribNormal.
   // glTF scenes: vertex buffer 1 (shaders::VertexAttributes) where a mesh has
   // colours or a second uv set, and the cull mode as dynamic state where a
@@ -235,7 +235,7 @@ class RendererBase : public Renderer {
   const gpu::Buffer& drawsBuffer() const;
   std::unique_ptr<LodSelection> lod_;  // with options_.lodThresholdPx > 0
   // The vertex buffer the geometry set and drawScene bind: the scene's, or
-  // with tangent_frame = quaternion the packed one (renderers/tbn.hpp).
+  // with tangent_frame = quaternion the packed one (renderers/techniques/tbn.hpp).
   const gpu::Buffer& vertexBuffer() const;
   std::unique_ptr<PackedVertexBuffer> packedVertices_;
 

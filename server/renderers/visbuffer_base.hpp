@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "renderers/msaa.hpp"
+#include "renderers/techniques/msaa.hpp"
 #include "renderers/renderer_base.hpp"
 
 namespace tally::renderers {
@@ -37,7 +37,7 @@ std::string materialSelectionUnsupported(const gpu::Context& ctx, MaterialSelect
 class VisbufferBase : public RendererBase {
  public:
   nlohmann::json notes() const override;
-  // Bloom's, plus {"msaa": msaaExtras(...)} with msaa > 1 (renderers/msaa.hpp).
+  // Bloom's, plus {"msaa": msaaExtras(...)} with msaa > 1 (renderers/techniques/msaa.hpp).
   nlohmann::json frameExtras() override;
 
  protected:
@@ -48,7 +48,7 @@ class VisbufferBase : public RendererBase {
   // msaa > 1 (RendererOptions::msaa): the visibility targets have N samples,
   // the visibility pass renders "depth.msaa" (N samples), the shading pass
   // fetches every sample's id, shades each distinct triangle once weighted by
-  // its samples and marks the 1-sample "depth" (renderers/msaa.hpp). Fails
+  // its samples and marks the 1-sample "depth" (renderers/techniques/msaa.hpp). Fails
   // naming the limit when the device lacks N for these targets.
   Result<bool> checkMsaa(const std::vector<MsaaTarget>& targets) const;
   uint32_t targetSamples() const { return options_.msaa; }

@@ -17,7 +17,7 @@
 
 #include "analysis/image.hpp"
 #include "render_fixture.hpp"
-#include "renderers/lod.hpp"
+#include "renderers/techniques/lod.hpp"
 #include "renderers/options.hpp"
 #include "scenes/mesh_builder.hpp"
 

@@ -1,4 +1,4 @@
-#include "renderers/density.hpp"
+#include "renderers/techniques/density.hpp"
 
 #include <algorithm>
 #include <cmath>

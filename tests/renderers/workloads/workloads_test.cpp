@@ -1,7 +1,7 @@
 // The compute workloads (docs/techniques.md, "Volume fog", "Ray tracer"):
 // option-table and spec checks, and on the test device (lavapipe in CI) the
 // counted reads against a CPU replica of each shader's loop structure (the
-// same formulas in C++, renderers/workloads.hpp), and the fog's images across
+// same formulas in C++, renderers/workloads/workloads.hpp), and the fog's images across
 // octave modes against the fixed-maximum reference.
 #include <algorithm>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
 #include "renderers/projection.hpp"
-#include "renderers/workloads.hpp"
+#include "renderers/workloads/workloads.hpp"
 
 namespace tally::renderers {
 using namespace fixture;

@@ -1,4 +1,4 @@
-#include "renderers/bloom.hpp"
+#include "renderers/techniques/bloom.hpp"
 
 #include <cmath>
 #include <cstdio>

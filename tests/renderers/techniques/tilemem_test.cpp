@@ -17,7 +17,7 @@
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer_base.hpp"
-#include "renderers/tile_memory.hpp"
+#include "renderers/techniques/tile_memory.hpp"
 #include "shared.h"
 
 namespace tally::renderers {

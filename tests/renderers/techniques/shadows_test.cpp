@@ -19,7 +19,7 @@
 #include "capture/spec.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
-#include "renderers/shadows.hpp"
+#include "renderers/techniques/shadows.hpp"
 #include "scenes/mesh_builder.hpp"
 #include "scenes/textures.hpp"
 

@@ -1,4 +1,4 @@
-#include "renderers/tbn.hpp"
+#include "renderers/techniques/tbn.hpp"
 
 #include <algorithm>
 #include <cmath>

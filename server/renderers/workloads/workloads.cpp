@@ -1,4 +1,4 @@
-#include "renderers/workloads.hpp"
+#include "renderers/workloads/workloads.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "gpu/vk_check.hpp"
 #include "renderers/renderers.hpp"
-#include "renderers/tile_memory.hpp"
+#include "renderers/techniques/tile_memory.hpp"
 
 namespace tally::renderers {
 

@@ -1,4 +1,4 @@
-#include "renderers/lod.hpp"
+#include "renderers/techniques/lod.hpp"
 
 #include <algorithm>
 #include <chrono>

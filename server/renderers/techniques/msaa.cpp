@@ -1,4 +1,4 @@
-#include "renderers/msaa.hpp"
+#include "renderers/techniques/msaa.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "renderers/tile_memory.hpp"
+#include "renderers/techniques/tile_memory.hpp"
 
 #include "gpu/vk_check.hpp"
 

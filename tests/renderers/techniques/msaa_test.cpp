@@ -23,7 +23,7 @@
 
 #include "analytic.hpp"
 #include "render_fixture.hpp"
-#include "renderers/msaa.hpp"
+#include "renderers/techniques/msaa.hpp"
 #include "renderers/options.hpp"
 
 namespace tally::renderers {

@@ -20,7 +20,7 @@
 #include "gpu/shaders.hpp"
 #include "render_fixture.hpp"
 #include "renderers/options.hpp"
-#include "renderers/tbn.hpp"
+#include "renderers/techniques/tbn.hpp"
 #include "scenes/spec.hpp"
 #include "shared.h"
 

@@ -1,6 +1,6 @@
 // Shadow mapping (shadows.hpp): the option's names, the sun's fitted
 // orthographic projection and RendererBase's shadow pass.
-#include "renderers/shadows.hpp"
+#include "renderers/techniques/shadows.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -14,7 +14,7 @@
 #include "analysis/image.hpp"
 #include "capture/spec.hpp"
 #include "render_fixture.hpp"
-#include "renderers/bloom.hpp"
+#include "renderers/techniques/bloom.hpp"
 #include "renderers/options.hpp"
 
 namespace tally::renderers {
