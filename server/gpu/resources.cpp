@@ -265,6 +265,39 @@ void transitionImage(VkCommandBuffer cmd, const Image& image, VkImageLayout from
                        nullptr, 0, nullptr, 1, &barrier);
 }
 
+namespace {
+
+// A temporary host-visible buffer, freed however the work that uses it ends.
+struct StagingBuffer {
+  const Context& ctx;
+  Buffer buffer;
+  StagingBuffer(const Context& c, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use)
+      : ctx(c), buffer(createBuffer(c, size, usage, use)) {}
+  ~StagingBuffer() { destroyBuffer(ctx, buffer); }
+  StagingBuffer(const StagingBuffer&) = delete;
+  StagingBuffer& operator=(const StagingBuffer&) = delete;
+};
+
+}  // namespace
+
+void submitFromStaging(const Context& ctx, std::span<const uint8_t> data,
+                       const std::function<void(VkCommandBuffer, VkBuffer)>& record) {
+  StagingBuffer staging(ctx, data.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload);
+  std::memcpy(staging.buffer.mapped, data.data(), data.size());
+  flush(ctx, staging.buffer);
+  submitAndWait(ctx, [&](VkCommandBuffer cmd) { record(cmd, staging.buffer.buffer); });
+}
+
+std::vector<uint8_t> submitToStaging(const Context& ctx, VkDeviceSize size,
+                                     const std::function<void(VkCommandBuffer, VkBuffer)>& record) {
+  StagingBuffer staging(ctx, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback);
+  submitAndWait(ctx, [&](VkCommandBuffer cmd) { record(cmd, staging.buffer.buffer); });
+  invalidate(ctx, staging.buffer);
+  std::vector<uint8_t> out(size);
+  std::memcpy(out.data(), staging.buffer.mapped, size);
+  return out;
+}
+
 void uploadBuffer(const Context& ctx, const Buffer& buffer, std::span<const uint8_t> data,
                   VkDeviceSize offset) {
   if (data.empty()) return;
@@ -276,19 +309,11 @@ void uploadBuffer(const Context& ctx, const Buffer& buffer, std::span<const uint
     flush(ctx, buffer);
     return;
   }
-  Buffer staging = createBuffer(ctx, data.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload);
-  try {
-    std::memcpy(staging.mapped, data.data(), data.size());
-    submitAndWait(ctx, [&](VkCommandBuffer cmd) {
-      VkBufferCopy region = {0, offset, data.size()};
-      vkCmdCopyBuffer(cmd, staging.buffer, buffer.buffer, 1, &region);
-      fullBarrier(cmd);
-    });
-  } catch (...) {
-    destroyBuffer(ctx, staging);
-    throw;
-  }
-  destroyBuffer(ctx, staging);
+  submitFromStaging(ctx, data, [&](VkCommandBuffer cmd, VkBuffer staging) {
+    VkBufferCopy region = {0, offset, data.size()};
+    vkCmdCopyBuffer(cmd, staging, buffer.buffer, 1, &region);
+    fullBarrier(cmd);
+  });
 }
 
 std::vector<uint8_t> readBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset,
@@ -304,22 +329,12 @@ std::vector<uint8_t> readBuffer(const Context& ctx, const Buffer& buffer, VkDevi
     std::memcpy(out.data(), static_cast<const uint8_t*>(buffer.mapped) + offset, size);
     return out;
   }
-  Buffer staging = createBuffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback);
-  try {
-    submitAndWait(ctx, [&](VkCommandBuffer cmd) {
-      fullBarrier(cmd);
-      VkBufferCopy region = {offset, 0, size};
-      vkCmdCopyBuffer(cmd, buffer.buffer, staging.buffer, 1, &region);
-      fullBarrier(cmd);
-    });
-    invalidate(ctx, staging);
-    std::memcpy(out.data(), staging.mapped, size);
-  } catch (...) {
-    destroyBuffer(ctx, staging);
-    throw;
-  }
-  destroyBuffer(ctx, staging);
-  return out;
+  return submitToStaging(ctx, size, [&](VkCommandBuffer cmd, VkBuffer staging) {
+    fullBarrier(cmd);
+    VkBufferCopy region = {offset, 0, size};
+    vkCmdCopyBuffer(cmd, buffer.buffer, staging, 1, &region);
+    fullBarrier(cmd);
+  });
 }
 
 void zeroBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize size) {
@@ -337,48 +352,27 @@ void uploadImage(const Context& ctx, const Image& image, std::span<const uint8_t
     throwVulkanError(VK_ERROR_UNKNOWN, "uploadImage (texel data size does not match the image)", __FILE__,
                      __LINE__);
   }
-  Buffer staging = createBuffer(ctx, texels.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::Upload);
-  try {
-    std::memcpy(staging.mapped, texels.data(), texels.size());
-    submitAndWait(ctx, [&](VkCommandBuffer cmd) {
-      transitionImage(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-      VkBufferImageCopy region = {};
-      region.imageSubresource = {copyAspect(image), 0, 0, 1};
-      region.imageExtent = {image.extent.width, image.extent.height, 1};
-      vkCmdCopyBufferToImage(cmd, staging.buffer, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                             &region);
-      transitionImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, finalLayout);
-    });
-  } catch (...) {
-    destroyBuffer(ctx, staging);
-    throw;
-  }
-  destroyBuffer(ctx, staging);
+  submitFromStaging(ctx, texels, [&](VkCommandBuffer cmd, VkBuffer staging) {
+    transitionImage(cmd, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    VkBufferImageCopy region = {};
+    region.imageSubresource = {copyAspect(image), 0, 0, 1};
+    region.imageExtent = {image.extent.width, image.extent.height, 1};
+    vkCmdCopyBufferToImage(cmd, staging, image.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    transitionImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, finalLayout);
+  });
 }
 
 std::vector<uint8_t> readImage(const Context& ctx, const Image& image, VkImageLayout currentLayout) {
   VkDeviceSize size = VkDeviceSize(image.extent.width) * image.extent.height * copyTexelBytes(image);
-  Buffer staging = createBuffer(ctx, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::Readback);
-  std::vector<uint8_t> out(size);
-  try {
-    submitAndWait(ctx, [&](VkCommandBuffer cmd) {
-      transitionImage(cmd, image, currentLayout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-      VkBufferImageCopy region = {};
-      region.imageSubresource = {copyAspect(image), 0, 0, 1};
-      region.imageExtent = {image.extent.width, image.extent.height, 1};
-      vkCmdCopyImageToBuffer(cmd, image.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.buffer, 1,
-                             &region);
-      transitionImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, currentLayout);
-      fullBarrier(cmd);
-    });
-    invalidate(ctx, staging);
-    std::memcpy(out.data(), staging.mapped, size);
-  } catch (...) {
-    destroyBuffer(ctx, staging);
-    throw;
-  }
-  destroyBuffer(ctx, staging);
-  return out;
+  return submitToStaging(ctx, size, [&](VkCommandBuffer cmd, VkBuffer staging) {
+    transitionImage(cmd, image, currentLayout, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    VkBufferImageCopy region = {};
+    region.imageSubresource = {copyAspect(image), 0, 0, 1};
+    region.imageExtent = {image.extent.width, image.extent.height, 1};
+    vkCmdCopyImageToBuffer(cmd, image.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1, &region);
+    transitionImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, currentLayout);
+    fullBarrier(cmd);
+  });
 }
 
 uint32_t formatBytes(VkFormat format) {

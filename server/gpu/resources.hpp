@@ -61,6 +61,16 @@ void destroyImage(const Context& ctx, Image& image);
 // Records commands with `record`, submits them on ctx.queue and waits.
 void submitAndWait(const Context& ctx, const std::function<void(VkCommandBuffer)>& record);
 
+// Copies `data` into a temporary upload buffer, submits `record` (which copies
+// from that buffer, passed in) and waits; the buffer is freed whatever happens.
+void submitFromStaging(const Context& ctx, std::span<const uint8_t> data,
+                       const std::function<void(VkCommandBuffer, VkBuffer)>& record);
+// Submits `record` (which copies `size` bytes into a temporary readback
+// buffer, passed in), waits and returns those bytes; the buffer is freed
+// whatever happens.
+std::vector<uint8_t> submitToStaging(const Context& ctx, VkDeviceSize size,
+                                     const std::function<void(VkCommandBuffer, VkBuffer)>& record);
+
 // A full-resource layout transition with conservative ALL_COMMANDS barriers;
 // for setup and readback paths, not for per-pass synchronisation.
 void transitionImage(VkCommandBuffer cmd, const Image& image, VkImageLayout from, VkImageLayout to);

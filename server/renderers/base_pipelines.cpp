@@ -1,0 +1,177 @@
+// RendererBase: shader modules (instrumented per mode), pipeline layouts and
+// the graphics and compute pipelines every renderer builds on.
+#include "renderers/renderer_base.hpp"
+
+#include <cstdlib>
+
+#include "gpu/shaders.hpp"
+#include "gpu/vk_check.hpp"
+#include "shared.h"
+
+namespace tally::renderers {
+
+std::string shaderDirectory() {
+  // The binary may run where the source tree is elsewhere (tests/gpu/).
+  if (const char* dir = std::getenv("TALLY_SHADER_DIR"); dir != nullptr && *dir) return dir;
+  return TALLY_RENDERER_SHADER_DIR;
+}
+
+Result<gpu::GraphicsPipelineDesc> RendererBase::shaderPipeline(uint32_t passIndex, const std::string& vertex,
+                                                               const std::string& fragment, VkPipelineLayout layout,
+                                                               VkRenderPass renderPass,
+                                                               const std::vector<std::string>& fragmentDefines) {
+  auto vs = shader(passIndex, vertex);
+  if (!vs) return makeError(vs.error());
+  auto fs = shader(passIndex, fragment, fragmentDefines);
+  if (!fs) return makeError(fs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  desc.fragment = *fs;
+  desc.layout = layout;
+  desc.renderPass = renderPass;
+  return desc;
+}
+
+Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
+                                            const std::vector<std::string>& defines) {
+  auto source = gpu::loadShaderSource(*ctx_, shaderDirectory(), file);
+  if (!source) return makeError(source.error());
+  std::vector<std::string> allDefines = defines;
+  if (packedVertices_) allDefines.push_back("TALLY_TBN_QUATERNION");  // shaders/tbn.h; none: float as it was
+  for (auto& d : scene_->featureDefines()) allDefines.push_back(std::move(d));  // glTF features; none for procedural scenes
+  for (auto& d : shadowDefines()) allDefines.push_back(std::move(d));    // shaders/shadow.h; none with shadows off
+  if (!allDefines.empty()) {
+    size_t eol = source->source.find('\n');
+    std::string text;
+    for (const auto& d : allDefines) text += "#define " + d + "\n";
+    source->source.insert(eol == std::string::npos ? source->source.size() : eol + 1, text);
+  }
+  std::vector<uint32_t> words;
+  if (options_.instrumented) {
+    auto instrumentOptions = gpu::instrumentOptionsFor(*ctx_, options_.counting, slotCount_);
+    if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
+      return makeError(file + ": " + why);
+    }
+    auto compiled = gpu::compileAndInstrument(*ctx_, *source, instrumentOptions);
+    if (!compiled) return makeError(file + ": " + compiled.error());
+    counterSet_ = instrumentOptions.set;
+    slotCount_ += compiled->result.slotCount;
+    auto& sites = passes_[passIndex].sites;
+    sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
+    words = std::move(compiled->words);
+  } else {
+    auto compiled = gpu::compileShader(*source);
+    if (!compiled) return makeError(file + ": " + compiled.error());
+    words = std::move(compiled->words);
+  }
+  modules_.push_back(gpu::createShaderModule(*ctx_, words));
+  return modules_.back();
+}
+
+VkPipelineLayout RendererBase::pipelineLayout(VkDescriptorSetLayout material,
+                                              VkDescriptorSetLayout passInput) {
+  return makePipelineLayout(material, passInput, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
+}
+
+VkPipelineLayout RendererBase::makePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput,
+                                                  VkShaderStageFlags pushStages) {
+  std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
+  sets[shaders::kSetFrame] = frameLayout_;
+  sets[shaders::kSetGeometry] = geometryLayout_;
+  if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
+  if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
+  sets[counterSet_] = counterLayout_;
+  pipelineLayouts_.push_back(gpu::createPipelineLayout(*ctx_, sets, sizeof(shaders::DrawPush), pushStages));
+  return pipelineLayouts_.back();
+}
+
+VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
+  pipelines_.push_back(gpu::createGraphicsPipeline(*ctx_, desc));
+  return pipelines_.back();
+}
+
+Result<gpu::GraphicsPipelineDesc> RendererBase::depthOnlyPipeline(uint32_t passIndex, const std::string& vertex,
+                                                                  VkRenderPass renderPass) {
+  auto vs = shader(passIndex, vertex);
+  if (!vs) return makeError(vs.error());
+  gpu::GraphicsPipelineDesc desc;
+  desc.vertex = *vs;
+  if (options_.instrumented) {
+    auto fs = shader(passIndex, "zprepass.frag.glsl");
+    if (!fs) return makeError(fs.error());
+    desc.fragment = *fs;
+  }
+  desc.layout = pipelineLayout(VK_NULL_HANDLE, VK_NULL_HANDLE);
+  desc.renderPass = renderPass;
+  desc.colorAttachmentCount = 0;
+  meshVertexInput(desc);
+  return desc;
+}
+
+void RendererBase::geometryState(gpu::GraphicsPipelineDesc& desc, bool writeDepth) {
+  desc.depthTest = true;
+  desc.depthWrite = writeDepth;
+  desc.depthCompare = VK_COMPARE_OP_LESS;  // depth [0, 1], far = 1 (shared.h)
+  desc.stencilTest = true;
+  desc.stencilCompare = VK_COMPARE_OP_ALWAYS;
+  desc.stencilPassOp = VK_STENCIL_OP_REPLACE;
+  desc.stencilReference = kStencilGeometry;
+  desc.stencilWriteMask = 0xff;
+}
+
+VkClearValue RendererBase::depthClear() {
+  VkClearValue v = {};
+  v.depthStencil = {1.0f, 0};
+  return v;
+}
+
+void RendererBase::geometryPixelsOnly(gpu::GraphicsPipelineDesc& desc) {
+  desc.stencilTest = true;
+  desc.stencilCompare = VK_COMPARE_OP_EQUAL;
+  desc.stencilReference = kStencilGeometry;
+}
+
+void RendererBase::meshVertexInput(gpu::GraphicsPipelineDesc& desc) const {
+  desc.dynamicCullMode = dynamicCull_;
+  meshVertexStreams(desc);
+  const auto& f = scene_->features();
+  if (f.vertexColors || f.uv1) {  // glTF's optional streams: vertex buffer 1
+    desc.vertexBindings.push_back({1, sizeof(shaders::VertexAttributes), VK_VERTEX_INPUT_RATE_VERTEX});
+    if (f.vertexColors) desc.vertexAttributes.push_back({shaders::kAttribColor, 1, VK_FORMAT_R16G16B16A16_UNORM, 0});
+    if (f.uv1) desc.vertexAttributes.push_back({shaders::kAttribUv1, 1, VK_FORMAT_R32G32_SFLOAT, 8});
+  }
+}
+
+void RendererBase::meshVertexStreams(gpu::GraphicsPipelineDesc& desc) const {
+  if (packedVertices_) {  // renderers/techniques/tbn.hpp: PackedVertex
+    desc.vertexBindings = {{0, sizeof(PackedVertex), VK_VERTEX_INPUT_RATE_VERTEX}};
+    desc.vertexAttributes = {
+        {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(PackedVertex, position)},
+        {shaders::kAttribNormal, 0, VK_FORMAT_R32_UINT, offsetof(PackedVertex, tbn)},
+        {shaders::kAttribUv, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(PackedVertex, uv)},
+    };
+    return;
+  }
+  desc.vertexBindings = {{0, sizeof(shaders::Vertex), VK_VERTEX_INPUT_RATE_VERTEX}};
+  desc.vertexAttributes = {
+      {shaders::kAttribPosition, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
+      {shaders::kAttribNormal, 0, VK_FORMAT_R32G32B32_SFLOAT, 12},
+      {shaders::kAttribTangent, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 24},
+      {shaders::kAttribUv, 0, VK_FORMAT_R32G32_SFLOAT, 40},
+  };
+}
+
+VkPipelineLayout RendererBase::computePipelineLayout(VkDescriptorSetLayout material,
+                                                     VkDescriptorSetLayout passInput) {
+  return makePipelineLayout(material, passInput, VK_SHADER_STAGE_COMPUTE_BIT);
+}
+
+Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::string& file,
+                                                 VkPipelineLayout layout, const std::vector<std::string>& defines) {
+  auto module = shader(passIndex, file, defines);
+  if (!module) return makeError(module.error());
+  pipelines_.push_back(gpu::createComputePipeline(*ctx_, *module, layout));
+  return pipelines_.back();
+}
+
+}  // namespace tally::renderers
