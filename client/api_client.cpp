@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 
 #include <httplib.h>
 
@@ -193,26 +194,43 @@ Result<json> ApiClient::cancelCapture(const std::string& id) {
   return sendJson("DELETE", "/api/captures/" + pathId(id));
 }
 
-Result<json> ApiClient::listRuns(const RunFilters& filters, std::optional<int> limit,
-                                 const std::string& cursor) {
-  auto params = filterParams(filters);
+namespace {
+
+using Params = std::vector<std::pair<std::string, std::string>>;
+
+// One page of a listing: the filters, then limit and cursor when given.
+std::string pageQuery(Params params, std::optional<int> limit, const std::string& cursor) {
   if (limit) params.emplace_back("limit", std::to_string(*limit));
   if (!cursor.empty()) params.emplace_back("cursor", cursor);
-  return sendJson("GET", "/api/runs" + query(params));
+  return query(params);
 }
 
-Result<json> ApiClient::listAllRuns(const RunFilters& filters, std::optional<int> limit) {
-  json all = {{"runs", json::array()}};
+// Follows next_cursor from the first page to the end: {key: [...every page's items...]}.
+Result<json> allPages(const std::string& key, const std::function<Result<json>(const std::string& cursor)>& page,
+                      const std::function<std::vector<json>(const json&)>& items) {
+  json all = {{key, json::array()}};
   std::string cursor;
-  for (int page = 0; page < 100000; ++page) {  // a server that loops its cursor must not hang us forever
-    auto res = listRuns(filters, limit, cursor);
+  for (int n = 0; n < 100000; ++n) {  // a server that loops its cursor must not hang us forever
+    auto res = page(cursor);
     if (!res) return res;
-    for (auto& run : runList(*res)) all["runs"].push_back(std::move(run));
+    for (auto& item : items(*res)) all[key].push_back(std::move(item));
     std::string next = nextCursor(*res);
     if (next.empty() || next == cursor) break;
     cursor = next;
   }
   return all;
+}
+
+}  // namespace
+
+Result<json> ApiClient::listRuns(const RunFilters& filters, std::optional<int> limit,
+                                 const std::string& cursor) {
+  return sendJson("GET", "/api/runs" + pageQuery(filterParams(filters), limit, cursor));
+}
+
+Result<json> ApiClient::listAllRuns(const RunFilters& filters, std::optional<int> limit) {
+  return allPages(
+      "runs", [&](const std::string& cursor) { return listRuns(filters, limit, cursor); }, runList);
 }
 
 Result<json> ApiClient::getRun(const std::string& id) { return sendJson("GET", "/api/runs/" + pathId(id)); }
@@ -231,24 +249,12 @@ Result<json> ApiClient::compare(const std::vector<std::string>& runIds) {
 
 Result<json> ApiClient::listSweeps(const SweepFilters& filters, std::optional<int> limit,
                                    const std::string& cursor) {
-  auto params = sweepParams(filters);
-  if (limit) params.emplace_back("limit", std::to_string(*limit));
-  if (!cursor.empty()) params.emplace_back("cursor", cursor);
-  return sendJson("GET", "/api/sweeps" + query(params));
+  return sendJson("GET", "/api/sweeps" + pageQuery(sweepParams(filters), limit, cursor));
 }
 
 Result<json> ApiClient::listAllSweeps(const SweepFilters& filters, std::optional<int> limit) {
-  json all = {{"sweeps", json::array()}};
-  std::string cursor;
-  for (int page = 0; page < 100000; ++page) {  // as listAllRuns: a looping cursor must not hang us
-    auto res = listSweeps(filters, limit, cursor);
-    if (!res) return res;
-    for (auto& sweep : sweepList(*res)) all["sweeps"].push_back(std::move(sweep));
-    std::string next = nextCursor(*res);
-    if (next.empty() || next == cursor) break;
-    cursor = next;
-  }
-  return all;
+  return allPages(
+      "sweeps", [&](const std::string& cursor) { return listSweeps(filters, limit, cursor); }, sweepList);
 }
 
 Result<json> ApiClient::getSweep(const std::string& id) { return sendJson("GET", "/api/sweeps/" + pathId(id)); }

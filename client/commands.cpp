@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <thread>
@@ -33,6 +34,22 @@ int fail(Io& io, const std::string& message) {
 }
 
 void printJson(Io& io, const json& j) { io.out << j.dump(2) << '\n'; }
+
+// A listing (`tally runs`, `tally sweeps`): the response as JSON, or a table
+// of one row per item and a hint on stderr when a page was cut short.
+int printListing(Io& io, const Result<json>& res, bool all, const std::string& noun, std::vector<Table::Column> columns,
+                 const std::function<void(const json& page, Table& table)>& addRows) {
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t(std::move(columns));
+  addRows(*res, t);
+  t.print(io.out);
+  if (!all && !nextCursor(*res).empty()) io.err << "more " << noun << ": add --all, or --limit N\n";
+  return 0;
+}
 
 std::string size(const RunView& r) {
   if (!r.width || !r.height) return kMissing;
@@ -205,29 +222,24 @@ int runCancel(ApiClient& api, const std::string& id, Io& io) {
 
 int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
   auto res = args.all ? api.listAllRuns(args.filters, args.limit) : api.listRuns(args.filters, args.limit);
-  if (!res) return fail(io, res.error());
-  if (io.json) {
-    printJson(io, *res);
-    return 0;
-  }
-  Table t({{"ID", Align::Right},
-           {"CAPTURE", Align::Right},
-           {"RENDERER"},
-           {"SCENE"},
-           {"SIZE", Align::Right},
-           {"DEVICE"},
-           {"SAMPLES", Align::Right},
-           {"FRAME MS", Align::Right},
-           {"BYTES/FRAME", Align::Right}});
-  for (const auto& run : runList(*res)) {
-    RunView r = runView(run);
-    t.addRow({r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
-              r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3), humanBytes(r.bytes)});
-  }
-  t.print(io.out);
-  std::string next = nextCursor(*res);
-  if (!args.all && !next.empty()) io.err << "more runs: add --all, or --limit N\n";
-  return 0;
+  return printListing(io, res, args.all, "runs",
+                      {{"ID", Align::Right},
+                       {"CAPTURE", Align::Right},
+                       {"RENDERER"},
+                       {"SCENE"},
+                       {"SIZE", Align::Right},
+                       {"DEVICE"},
+                       {"SAMPLES", Align::Right},
+                       {"FRAME MS", Align::Right},
+                       {"BYTES/FRAME", Align::Right}},
+                      [](const json& page, Table& t) {
+                        for (const auto& run : runList(page)) {
+                          RunView r = runView(run);
+                          t.addRow({r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
+                                    r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3),
+                                    humanBytes(r.bytes)});
+                        }
+                      });
 }
 
 int runShow(ApiClient& api, const std::string& runId, Io& io) {
@@ -392,28 +404,23 @@ std::string failsSummary(const SweepView& s) {
 
 int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io) {
   auto res = args.all ? api.listAllSweeps(args.filters, args.limit) : api.listSweeps(args.filters, args.limit);
-  if (!res) return fail(io, res.error());
-  if (io.json) {
-    printJson(io, *res);
-    return 0;
-  }
-  Table t({{"ID", Align::Right},
-           {"CAPTURE", Align::Right},
-           {"NAME"},
-           {"CREATED"},
-           {"DEVICE"},
-           {"POINTS", Align::Right},
-           {"THRESHOLD"},
-           {"FAILING GROUPS"}});
-  for (const auto& sweep : sweepList(*res)) {
-    SweepView s = sweepView(sweep);
-    t.addRow({s.id, orMissing(s.capture), s.name, orMissing(s.createdAt), orMissing(s.device),
-              s.points ? std::to_string(*s.points) : kMissing, thresholdText(s.threshold), failsSummary(s)});
-  }
-  t.print(io.out);
-  std::string next = nextCursor(*res);
-  if (!args.all && !next.empty()) io.err << "more sweeps: add --all, or --limit N\n";
-  return 0;
+  return printListing(io, res, args.all, "sweeps",
+                      {{"ID", Align::Right},
+                       {"CAPTURE", Align::Right},
+                       {"NAME"},
+                       {"CREATED"},
+                       {"DEVICE"},
+                       {"POINTS", Align::Right},
+                       {"THRESHOLD"},
+                       {"FAILING GROUPS"}},
+                      [](const json& page, Table& t) {
+                        for (const auto& sweep : sweepList(page)) {
+                          SweepView s = sweepView(sweep);
+                          t.addRow({s.id, orMissing(s.capture), s.name, orMissing(s.createdAt),
+                                    orMissing(s.device), s.points ? std::to_string(*s.points) : kMissing,
+                                    thresholdText(s.threshold), failsSummary(s)});
+                        }
+                      });
 }
 
 int runSweep(ApiClient& api, const std::string& sweepId, Io& io) {

@@ -31,20 +31,19 @@ int runCapture(ApiClient& api, const CaptureArgs& args, Io& io);
 int runStatus(ApiClient& api, const std::string& id, Io& io);
 int runCancel(ApiClient& api, const std::string& id, Io& io);
 
-struct RunsArgs {
-  RunFilters filters;
+// The arguments of a listing: its filters, a page size, or every page.
+template <class Filters>
+struct ListArgs {
+  Filters filters;
   std::optional<int> limit;
   bool all = false;  // follow next_cursor to the end
 };
+using RunsArgs = ListArgs<RunFilters>;
 int runRuns(ApiClient& api, const RunsArgs& args, Io& io);
 int runShow(ApiClient& api, const std::string& runId, Io& io);
 int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io);
 
-struct SweepsArgs {
-  SweepFilters filters;
-  std::optional<int> limit;
-  bool all = false;  // follow next_cursor to the end
-};
+using SweepsArgs = ListArgs<SweepFilters>;
 int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io);
 // Its threshold, where it fails (fails_at) and its points.
 int runSweep(ApiClient& api, const std::string& sweepId, Io& io);

@@ -1,8 +1,9 @@
 // RendererBase: drawing the scene (per draw, per subset, each with its cull
-// mode) and the shared depth pre-pass.
+// mode), the shared depth pre-pass and the full-screen shading pass.
 #include "renderers/renderer_base.hpp"
 
 #include "gpu/vk_check.hpp"
+#include "renderers/techniques/msaa.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
@@ -77,5 +78,42 @@ const gpu::Buffer& RendererBase::vertexBuffer() const {
 const gpu::Buffer& RendererBase::indexBuffer() const { return lod_ ? lod_->indexBuffer() : scene_->indices(); }
 
 const gpu::Buffer& RendererBase::drawsBuffer() const { return lod_ ? lod_->drawBuffer() : scene_->drawBuffer(); }
+
+Result<bool> RendererBase::addFullScreenShading(uint32_t passIndex, const std::string& fragment,
+                                                VkDescriptorSetLayout material, VkDescriptorSet materialSet,
+                                                VkDescriptorSetLayout inputLayout, VkDescriptorSet input,
+                                                VkDescriptorSet geometry, std::vector<std::string> defines) {
+  const uint32_t p = passIndex;
+  const bool msaa = options_.msaa > 1;
+  if (msaa) defines.push_back("TALLY_MSAA " + std::to_string(options_.msaa));
+  const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  // msaa: the 1-sample "depth" is cleared here and gets the stencil mask (msaa.hpp).
+  const AttachmentSpec depth =
+      msaa ? AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED,
+                            VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, depthReadOnly}
+           : AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly};
+  VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, {{kHdrFormat}}, depth));
+  VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
+  auto shaders =
+      shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(material, inputLayout), rp, defines);
+  if (!shaders) return makeError(shaders.error());
+  gpu::GraphicsPipelineDesc desc = *shaders;
+  if (msaa) {
+    msaaResolveState(desc);
+  } else {
+    geometryPixelsOnly(desc);
+  }
+  VkPipeline pipe = pipeline(desc);
+  VkPipelineLayout layout = desc.layout;
+  pass(p).bindings.outputs[shaders::kOutColor] = "hdr";
+  pass(p).record = [=, this](VkCommandBuffer cmd) {
+    beginRenderPass(cmd, p, rp, fb, {VkClearValue{}, depthClear()});
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    bindSets(cmd, layout, materialSet, input, geometry);
+    drawFullScreen(cmd);
+    endRenderPass(cmd, p);
+  };
+  return true;
+}
 
 }  // namespace tally::renderers

@@ -144,40 +144,14 @@ class DeferredRenderer final : public RendererBase {
       views.push_back(geometryDepth->view);
       VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, colors, depth));
       VkFramebuffer fb = framebuffer(rp, views);
-      auto shaders = shaderPipeline(p, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
-                                    pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
-      if (!shaders) return makeError(shaders.error());
-      gpu::GraphicsPipelineDesc desc = *shaders;
-      desc.colorAttachmentCount = uint32_t(colors.size());
-      desc.samples = samples;
-      meshVertexInput(desc);
-      geometryState(desc, !prepass);
-      if (prepass) desc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
-      VkPipeline pipe = pipeline(desc);
-      VkPipelineLayout layout = desc.layout;
-      for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-        pass(p).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
-      }
-      pass(p).bindings.outputs[shaders::kOutNormal] = "gbuffer.normal";
-      pass(p).bindings.outputs[shaders::kOutDiffuse] = "gbuffer.diffuse";
-      pass(p).bindings.outputs[shaders::kOutSpecular] = "gbuffer.specular";
-      if (emissive) pass(p).bindings.outputs[shaders::kOutEmissive] = "gbuffer.emissive";
-      if (scene_->features().emissiveMaps) {
-        pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, "material_maps.emissive");
-      }
-      if (!prepass) pass(p).depthWrite = geometryDepthName;
-      pass(p).indexFetches = true;
-      auto masked = maskedDraws(p, desc, "gbuffer.vert.glsl", "gbuffer.frag.glsl");
-      if (!masked) return makeError(masked.error());
+      auto g = gbufferPipeline(p, rp, uint32_t(colors.size()), samples, geometryDepthName);
+      if (!g) return makeError(g.error());
       const size_t clearCount = colors.size() + 1;
-      pass(p).record = [=, this, masked = *masked](VkCommandBuffer cmd) {
+      pass(p).record = [=, this, g = *g](VkCommandBuffer cmd) {
         std::vector<VkClearValue> clears(clearCount);
         clears.back() = depthClear();
         beginRenderPass(cmd, p, rp, fb, clears);
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
-        bindSets(cmd, layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
-        drawScene(cmd, p, layout, true);
-        if (masked) masked(cmd);
+        recordGbuffer(cmd, p, g);
         endRenderPass(cmd, p);
       };
     }
@@ -212,40 +186,31 @@ class DeferredRenderer final : public RendererBase {
         return addComputeShading(p, "lighting.comp.glsl", VK_NULL_HANDLE, VK_NULL_HANDLE, inputLayout, input,
                                  VK_NULL_HANDLE);
       }
-      b.outputs[shaders::kOutColor] = "hdr";
-      // msaa: the 1-sample "depth" is cleared here and gets the stencil mask (msaa.hpp).
-      const AttachmentSpec depth =
-          msaa ? AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED,
-                                VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, depthReadOnly}
-               : AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly};
-      VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, {{kHdrFormat}}, depth));
-      VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-      std::vector<std::string> defines;
-      if (msaa) defines.push_back("TALLY_MSAA " + std::to_string(n));
-      auto shaders = shaderPipeline(p, "fullscreen.vert.glsl", "lighting.frag.glsl",
-                                    pipelineLayout(VK_NULL_HANDLE, inputLayout), rp, defines);
-      if (!shaders) return makeError(shaders.error());
-      gpu::GraphicsPipelineDesc desc = *shaders;
-      if (msaa) {
-        msaaResolveState(desc);
-      } else {
-        geometryPixelsOnly(desc);
-      }
-      VkPipeline pipe = pipeline(desc);
-      VkPipelineLayout layout = desc.layout;
-      pass(p).record = [=, this](VkCommandBuffer cmd) {
-        beginRenderPass(cmd, p, rp, fb, {VkClearValue{}, depthClear()});
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
-        bindSets(cmd, layout, VK_NULL_HANDLE, input);
-        drawFullScreen(cmd);
-        endRenderPass(cmd, p);
-      };
+      return addFullScreenShading(p, "lighting.frag.glsl", VK_NULL_HANDLE, VK_NULL_HANDLE, inputLayout, input,
+                                  VK_NULL_HANDLE);
     }
-    return true;
   }
 
  private:
   Result<bool> setupSubpassPasses();
+
+  // The G-buffer pass as both layouts build it: its pipeline on subpass 0 of
+  // `rp` with `colors` color attachments (normal, diffuse, specular[,
+  // emissive]), the masked twin, and the pass's bindings (material maps,
+  // outputs, the depth it writes unless a pre-pass did).
+  struct Gbuffer {
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+    DrawRecorder masked;
+  };
+  Result<Gbuffer> gbufferPipeline(uint32_t p, VkRenderPass rp, uint32_t colors, VkSampleCountFlagBits samples,
+                                  const std::string& depthName);
+  void recordGbuffer(VkCommandBuffer cmd, uint32_t p, const Gbuffer& g) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.pipeline);
+    bindSets(cmd, g.layout, VK_NULL_HANDLE, VK_NULL_HANDLE);
+    drawScene(cmd, p, g.layout, true);
+    if (g.masked) g.masked(cmd);
+  }
 
   VkImageView msaaDepthView_ = VK_NULL_HANDLE;  // the depth aspect of "depth.msaa" (msaa > 1)
   // gbuffer=subpass: the input attachments' set (fragment stage only, so its own layout and pool).
@@ -253,6 +218,40 @@ class DeferredRenderer final : public RendererBase {
   VkDescriptorPool subpassPool_ = VK_NULL_HANDLE;
   nlohmann::json gbufferMemory_ = nlohmann::json::object();  // G-buffer target -> ResourceInfo::memory
 };
+
+Result<DeferredRenderer::Gbuffer> DeferredRenderer::gbufferPipeline(uint32_t p, VkRenderPass rp, uint32_t colors,
+                                                                 VkSampleCountFlagBits samples,
+                                                                 const std::string& depthName) {
+  const bool prepass = options_.zprepass;
+  auto shaders = shaderPipeline(p, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
+                                pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
+  if (!shaders) return makeError(shaders.error());
+  gpu::GraphicsPipelineDesc desc = *shaders;
+  desc.colorAttachmentCount = colors;
+  desc.samples = samples;
+  meshVertexInput(desc);
+  geometryState(desc, !prepass);
+  if (prepass) desc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
+  Gbuffer g;
+  g.pipeline = pipeline(desc);
+  g.layout = desc.layout;
+  for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+    pass(p).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
+  }
+  pass(p).bindings.outputs[shaders::kOutNormal] = "gbuffer.normal";
+  pass(p).bindings.outputs[shaders::kOutDiffuse] = "gbuffer.diffuse";
+  pass(p).bindings.outputs[shaders::kOutSpecular] = "gbuffer.specular";
+  if (colors > 3) pass(p).bindings.outputs[shaders::kOutEmissive] = "gbuffer.emissive";
+  if (scene_->features().emissiveMaps) {
+    pass(p).bindings.bind(shaders::kSetMaterial, shaders::kBindingEmissiveMap, "material_maps.emissive");
+  }
+  if (!prepass) pass(p).depthWrite = depthName;
+  pass(p).indexFetches = true;
+  auto masked = maskedDraws(p, desc, "gbuffer.vert.glsl", "gbuffer.frag.glsl");
+  if (!masked) return makeError(masked.error());
+  g.masked = std::move(masked).value();
+  return g;
+}
 
 // gbuffer=subpass: one render pass. Attachments 0-2 the transient G-buffer
 // (cleared, storeOp DONT_CARE), 3 depth/stencil (stored: the skybox tests its
@@ -369,27 +368,9 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
 
   // Subpass 0: the G-buffer, as the sampled variant's pass.
   uint32_t g = addPass("gbuffer");
-  auto gshaders = shaderPipeline(g, "gbuffer.vert.glsl", "gbuffer.frag.glsl",
-                                 pipelineLayout(materialLayout_, VK_NULL_HANDLE), rp);
-  if (!gshaders) return makeError(gshaders.error());
-  gpu::GraphicsPipelineDesc gdesc = *gshaders;
-  gdesc.colorAttachmentCount = 3;
-  meshVertexInput(gdesc);
-  geometryState(gdesc, !prepass);
-  if (prepass) gdesc.depthCompare = VK_COMPARE_OP_EQUAL;  // bit-identical depth (`invariant`)
-  VkPipeline gpipe = pipeline(gdesc);
-  VkPipelineLayout glayout = gdesc.layout;
-  auto gmasked = maskedDraws(g, gdesc, "gbuffer.vert.glsl", "gbuffer.frag.glsl");
-  if (!gmasked) return makeError(gmasked.error());
-  for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-    pass(g).bindings.bind(shaders::kSetMaterial, k, std::string("material_maps.") + mapKindName(k));
-  }
-  for (uint32_t i = 0; i < 3; ++i) {
-    pass(g).bindings.outputs[shaders::kOutNormal + i] = names[i];
-    pass(g).onChip.insert(names[i]);  // DONT_CARE: tile memory only
-  }
-  if (!prepass) pass(g).depthWrite = "depth";  // stored: DRAM
-  pass(g).indexFetches = true;
+  auto gpipe = gbufferPipeline(g, rp, 3, VK_SAMPLE_COUNT_1_BIT, "depth");
+  if (!gpipe) return makeError(gpipe.error());
+  for (uint32_t i = 0; i < 3; ++i) pass(g).onChip.insert(names[i]);  // DONT_CARE: tile memory only
 
   // Subpass 1: lighting from the input attachments. Their descriptors may be
   // visible to the fragment stage only: the set layout and pool are our own.
@@ -430,14 +411,11 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   VkPipeline lpipe = pipeline(ldesc);
   VkPipelineLayout llayout = ldesc.layout;
 
-  pass(g).record = [=, this, masked = *gmasked](VkCommandBuffer cmd) {
+  pass(g).record = [=, this, gbuffer = *gpipe](VkCommandBuffer cmd) {
     std::vector<VkClearValue> clears(5);
     clears[3] = depthClear();
     beginRenderPass(cmd, g, rp, fb, clears);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, gpipe);
-    bindSets(cmd, glayout, VK_NULL_HANDLE, VK_NULL_HANDLE);
-    drawScene(cmd, g, glayout, true);
-    if (masked) masked(cmd);
+    recordGbuffer(cmd, g, gbuffer);
     nextSubpass(cmd, g, l);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, lpipe);
     bindSets(cmd, llayout, VK_NULL_HANDLE, input);

@@ -188,6 +188,16 @@ class RendererBase : public Renderer {
   // compute pass writes it. Only such renderers ask: storage usage can cost
   // the target its compression on some GPUs.
   virtual VkImageUsageFlags hdrExtraUsage() const { return 0; }
+  // The full-screen shading pass into "hdr" (deferred lighting, visibility
+  // buffer shading): `fragment` with `defines` over fullscreen.vert, sets
+  // material/input/geometry bound as given. At 1 sample it shades only the
+  // pixels the scene covered (depth test against "depth", read only); with
+  // msaa it clears the 1-sample "depth" and resolves per sample
+  // (techniques/msaa.hpp). addComputeShading is its compute twin.
+  Result<bool> addFullScreenShading(uint32_t passIndex, const std::string& fragment, VkDescriptorSetLayout material,
+                                    VkDescriptorSet materialSet, VkDescriptorSetLayout inputLayout,
+                                    VkDescriptorSet input, VkDescriptorSet geometry,
+                                    std::vector<std::string> defines = {});
   // Shading in compute (compute_shading.cpp; RendererOptions::computeShading):
   // pass `passIndex` dispatches `file` in kComputeShadingGroup^2 workgroups
   // over the extent with sets as bindComputeSets(material, input, geometry);

@@ -148,7 +148,6 @@ Result<bool> VisbufferBase::addVisibilityPass(const std::string& vertex, const s
 
 Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const std::vector<Target>& inputs,
                                            const std::vector<std::string>& encodingDefines) {
-  const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   uint32_t p = addPass("shading");
   if (options_.computeShading && options_.msaa > 1) {
     return makeError(std::string(name()) + ": shading=compute with msaa " + std::to_string(options_.msaa) +
@@ -213,35 +212,7 @@ Result<bool> VisbufferBase::addShadingPass(const std::string& fragment, const st
     const std::string compute = fragment.substr(0, fragment.find(".frag")) + ".comp.glsl";
     return addComputeShading(p, compute, mapsLayout, maps, inputLayout, input, geometry, defines);
   }
-  b.outputs[shaders::kOutColor] = "hdr";
-  const bool msaa = options_.msaa > 1;
-  if (msaa) defines.push_back("TALLY_MSAA " + std::to_string(options_.msaa));
-  // msaa: the 1-sample "depth" is cleared here and gets the stencil mask (msaa.hpp).
-  const AttachmentSpec depth =
-      msaa ? AttachmentSpec{kDepthFormat, true, VK_IMAGE_LAYOUT_UNDEFINED,
-                            VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, depthReadOnly}
-           : AttachmentSpec{kDepthFormat, false, depthReadOnly, depthReadOnly, depthReadOnly};
-  VkRenderPass rp = ownRenderPass(createPassRenderPass(*ctx_, {{kHdrFormat}}, depth));
-  VkFramebuffer fb = framebuffer(rp, {hdr_->view, depth_->view});
-  auto shaders =
-      shaderPipeline(p, "fullscreen.vert.glsl", fragment, pipelineLayout(mapsLayout, inputLayout), rp, defines);
-  if (!shaders) return makeError(shaders.error());
-  gpu::GraphicsPipelineDesc desc = *shaders;
-  if (msaa) {
-    msaaResolveState(desc);
-  } else {
-    geometryPixelsOnly(desc);
-  }
-  VkPipeline pipe = pipeline(desc);
-  VkPipelineLayout layout = desc.layout;
-  pass(p).record = [=, this](VkCommandBuffer cmd) {
-    beginRenderPass(cmd, p, rp, fb, {VkClearValue{}, depthClear()});
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
-    bindSets(cmd, layout, maps, input, geometry);
-    drawFullScreen(cmd);
-    endRenderPass(cmd, p);
-  };
-  return true;
+  return addFullScreenShading(p, fragment, mapsLayout, maps, inputLayout, input, geometry, defines);
 }
 
 }  // namespace tally::renderers
