@@ -30,20 +30,10 @@ for scene in $scenes; do
   spec_in="tests/gpu/accuracy-$scene.json"
   [ -f "$spec_in" ] || { echo "accuracy.sh: no $spec_in" >&2; status=2; continue; }
   spec="$out/accuracy-$scene-spec.json"
-  sed -e "s|SPONZA|$sponza|" \
-      -e "s|\[1280, 720\]|[$width, $height]|" \
-      -e "s|\"frames\": 10|\"frames\": $frames|" "$spec_in" > "$spec"
-  start=$(date +%s%N)
-  "$tallyd" capture --spec "$spec" --out "$out/accuracy-$scene.json" 2> "$out/accuracy-$scene.log"
-  rc=$?
-  end=$(date +%s%N)
-  echo "accuracy $scene ${width}x${height}: capture wall time $(( (end - start) / 1000000 )) ms, exit $rc" \
-    | tee -a "$out/accuracy.log"
-  if [ "$rc" -ne 0 ]; then
-    tail -5 "$out/accuracy-$scene.log"
-    status=$rc
-    continue
-  fi
+  python3 tests/gpu/spec_edit.py "$spec_in" --sponza "$sponza" --resolution "${width}x${height}" \
+    --frames "$frames" > "$spec" || { status=2; continue; }
+  tally_timed_capture "accuracy $scene ${width}x${height}" "$spec" "$out/accuracy-$scene.json" \
+    "$out/accuracy-$scene.log" "$out/accuracy.log" || { status=$?; continue; }
   "$tallyd" accuracy --result "$out/accuracy-$scene.json" > "$out/accuracy-$scene.txt" || status=1
   "$tallyd" accuracy --result "$out/accuracy-$scene.json" --json > "$out/accuracy-$scene.accuracy.json" || status=1
   cat "$out/accuracy-$scene.txt"

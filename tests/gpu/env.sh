@@ -1,4 +1,4 @@
-# Sourced by the GPU scripts (run.sh, protocol.sh, accuracy.sh), from the
+# Sourced by the GPU scripts (run.sh, protocol.sh, accuracy.sh, ...), from the
 # repository root: makes Vulkan work on the GPU test machine, which has the
 # NVIDIA driver but not the Vulkan loader, and finds what build.sh built.
 #
@@ -9,6 +9,9 @@
 #                      when no loader can be had.
 #   tally_sponza_path  the Sponza glTF: the copy in .scenes/sponza (the GPU
 #                      machine has no ../shared), else ../shared's.
+#   tally_gpu_script   the common start of a script that runs tallyd.
+#   tally_timed_capture  one timed `tallyd capture`.
+# Specs are shrunk or redirected by tests/gpu/spec_edit.py.
 
 tally_gpu_env() {
   local debs f d icd_found=false
@@ -58,4 +61,19 @@ tally_gpu_script() {
   esac
   tally_gpu_env || return 2
   export TALLY_SHADER_DIR="$PWD/shaders"
+}
+
+# Runs `tallyd capture` on SPEC into RESULT, its stderr in LOG; prints (and
+# appends to SUMMARY, when given) "LABEL: capture wall time N ms, exit RC",
+# and the log's tail when it failed. Returns tallyd's exit status.
+#   tally_timed_capture LABEL SPEC RESULT LOG [SUMMARY]
+tally_timed_capture() {
+  local label="$1" spec="$2" result="$3" log="$4" summary="${5:-/dev/null}" start end rc
+  start=$(date +%s%N)
+  "$tallyd" capture --spec "$spec" --out "$result" 2> "$log"
+  rc=$?
+  end=$(date +%s%N)
+  echo "$label: capture wall time $(( (end - start) / 1000000 )) ms, exit $rc" | tee -a "$summary"
+  [ "$rc" -eq 0 ] || tail -5 "$log"
+  return "$rc"
 }

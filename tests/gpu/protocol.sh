@@ -23,7 +23,7 @@ tallyd="build-gpu/server/tallyd"
 tally_gpu_env || exit 2
 export TALLY_SHADER_DIR="$PWD/shaders"
 sponza="$(tally_sponza_path)"
-sed "s|SPONZA|$sponza|" "$spec_in" > "$out/protocol-spec.json"
+python3 tests/gpu/spec_edit.py "$spec_in" --sponza "$sponza" > "$out/protocol-spec.json" || exit 2
 
 start=$(date +%s%N)
 "$tallyd" capture --spec "$out/protocol-spec.json" --out "$out/protocol.json" --summary \

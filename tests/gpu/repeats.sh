@@ -26,20 +26,12 @@ repeats="${REPEATS:-3}"
 frames="${REPEATS_FRAMES:-20}"
 
 spec="$out/repeats-spec.json"
-sed -e "s|\[1280, 720\]|[$width, $height]|" -e "s|\"frames\": 20|\"frames\": $frames|" \
-    tests/gpu/repeats-atrium.json > "$spec"
+python3 tests/gpu/spec_edit.py tests/gpu/repeats-atrium.json --resolution "${width}x${height}" \
+  --frames "$frames" > "$spec" || exit 2
 results=()
 for i in $(seq 1 "$repeats"); do
-  start=$(date +%s%N)
-  "$tallyd" capture --spec "$spec" --out "$out/repeats-$i.json" 2> "$out/repeats-$i.log"
-  rc=$?
-  end=$(date +%s%N)
-  echo "repeats $i/$repeats atrium ${width}x${height}: capture wall time $(( (end - start) / 1000000 )) ms, exit $rc" \
-    | tee -a "$out/repeats.log"
-  if [ "$rc" -ne 0 ]; then
-    tail -5 "$out/repeats-$i.log"
-    exit "$rc"
-  fi
+  tally_timed_capture "repeats $i/$repeats atrium ${width}x${height}" "$spec" "$out/repeats-$i.json" \
+    "$out/repeats-$i.log" "$out/repeats.log" || exit $?
   results+=(--result "$out/repeats-$i.json")
 done
 "$tallyd" repeats "${results[@]}" > "$out/repeats.txt" || exit 1

@@ -31,24 +31,9 @@ for name in "${names[@]}"; do
   source_spec="tests/gpu/specs/$name.json"
   [ -f "$source_spec" ] || { echo "sweeps.sh: no $source_spec" >&2; status=2; continue; }
   spec="$out/sweep-$name-spec.json"
-  python3 - "$source_spec" "$override" > "$spec" <<'PY'
-import json, sys
-spec = json.load(open(sys.argv[1]))
-if sys.argv[2]:
-    w, h = sys.argv[2].split("x")
-    spec["resolution"] = [int(w), int(h)]
-print(json.dumps(spec))
-PY
-  start=$(date +%s%N)
-  "$tallyd" capture --spec "$spec" --out "$out/sweep-$name.json" 2> "$out/sweep-$name.log"
-  rc=$?
-  end=$(date +%s%N)
-  echo "sweep $name: wall time $(( (end - start) / 1000000 )) ms, exit $rc"
-  if [ "$rc" -ne 0 ]; then
-    tail -5 "$out/sweep-$name.log"
-    status=$rc
-    continue
-  fi
+  python3 tests/gpu/spec_edit.py "$source_spec" ${override:+--resolution "$override"} > "$spec" \
+    || { status=2; continue; }
+  tally_timed_capture "sweep $name" "$spec" "$out/sweep-$name.json" "$out/sweep-$name.log" || { status=$?; continue; }
   # Fails_at, then one table per plot: the x value, the series values and y.
   python3 - "$out/sweep-$name.json" > "$out/sweep-$name.txt" <<'PY'
 import json, sys

@@ -40,30 +40,10 @@ for name in "${names[@]}"; do
   for scene in $(python3 -c 'import json,sys; print(" ".join(json.load(open(sys.argv[1])).get("scenes", ["atrium"])))' "$source_spec"); do
     tag="$name-$(echo "$scene" | tr 'A-Z' 'a-z')"
     spec="$out/technique-$tag-spec.json"
-    python3 - "$source_spec" "$scene" "$sponza" "$override" "$frames" "${CAMERAS:-2}" > "$spec" <<'PY'
-import json, sys
-spec = json.load(open(sys.argv[1]))
-scene, sponza, override, frames, cameras = sys.argv[2:7]
-spec["scenes"] = [{"gltf": sponza} if scene == "SPONZA" else scene]
-if "cameras" not in spec:
-    spec["cameras"] = json.load(open(f"tests/gpu/accuracy-{scene.lower()}.json"))["cameras"][: int(cameras)]
-if override:
-    w, h = override.split("x")
-    spec["resolutions"] = [[int(w), int(h)]]
-if frames:
-    spec["frames"] = int(frames)
-print(json.dumps(spec))
-PY
-    start=$(date +%s%N)
-    "$tallyd" capture --spec "$spec" --out "$out/technique-$tag.json" 2> "$out/technique-$tag.log"
-    rc=$?
-    end=$(date +%s%N)
-    echo "technique $tag: wall time $(( (end - start) / 1000000 )) ms, exit $rc"
-    if [ "$rc" -ne 0 ]; then
-      tail -5 "$out/technique-$tag.log"
-      status=$rc
-      continue
-    fi
+    python3 tests/gpu/spec_edit.py "$source_spec" --scene "$scene" --cameras "${CAMERAS:-2}" --sponza "$sponza" \
+      ${override:+--resolution "$override"} ${frames:+--frames "$frames"} > "$spec" || { status=2; continue; }
+    tally_timed_capture "technique $tag" "$spec" "$out/technique-$tag.json" "$out/technique-$tag.log" \
+      || { status=$?; continue; }
     python3 tests/gpu/techniques_summary.py "$out/technique-$tag.json" > "$out/technique-$tag.txt" || status=1
     cat "$out/technique-$tag.txt"
   done

@@ -17,30 +17,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-json sweepResult() {
-  json points = json::array();
-  for (double distance : {3.0, 300.0}) {
-    points.push_back({{"near", 0.01}, {"far", 1000.0}, {"distance", distance},
-                      {"error", {{"max_relative", 1e-7 * distance / 0.01}}}});
-  }
-  return {{"sweep", "depth-reconstruction"},
-          {"device", device()},
-          {"spec", {{"sweep", "depth-reconstruction"}}},
-          {"parameters", {"near", "far", "distance"}},
-          {"threshold", {{"relative", 1e-3}}},
-          {"points", points},
-          {"fails_at", {{"distance", {{{"near", 0.01}, {"far", 1000.0}, {"distance", 300.0}}}}}},
-          {"plots",
-           {{{"title", "Error against distance"},
-             {"x", "distance"},
-             {"x_log", true},
-             {"y", "error.max_relative"},
-             {"y_log", true},
-             {"y_label", "max relative error"},
-             {"series", {"near", "far"}},
-             {"threshold", 1e-3}}}}};
-}
-
 class WorkerSweeps : public StoreTest {
  protected:
   void SetUp() override {

@@ -46,7 +46,9 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
     EXPECT_EQ(row.counting, "exact");
     EXPECT_EQ(row.lights, 400);
     EXPECT_EQ(row.notes, in["notes"]);
-    if (i == 0) EXPECT_EQ(row.notes["scene"][0], in["notes"]["scene"][0]);
+    if (i == 0) {
+      EXPECT_EQ(row.notes["scene"][0], in["notes"]["scene"][0]);
+    }
     EXPECT_EQ(row.renderTargetBytes, in["resources"]["render_target_bytes"].get<int64_t>());
     EXPECT_EQ(row.deviceName, c.result["device"]["name"]);
     EXPECT_EQ(row.sampleCount, 2);

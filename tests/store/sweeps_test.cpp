@@ -7,43 +7,6 @@
 namespace tally::store::testing {
 namespace {
 
-// A sweep result of the documented shape (docs/result-schema.md, "Sweep
-// results"): two near values x two distances, error growing with distance.
-json sweepResult(const std::string& name = "depth-reconstruction",
-                 const std::string& deviceName = "llvmpipe (LLVM 15.0.6, 256 bits)") {
-  json points = json::array();
-  for (double near : {0.01, 1.0}) {
-    for (double distance : {3.0, 300.0}) {
-      double relative = 1e-7 * distance / near;
-      points.push_back({{"near", near},
-                        {"far", 1000.0},
-                        {"far_over_near", 1000.0 / near},
-                        {"distance", distance},
-                        {"error", {{"max_abs", relative * distance}, {"max_relative", relative}}}});
-    }
-  }
-  return {{"sweep", name},
-          {"device", device(deviceName)},
-          {"spec", {{"sweep", name}, {"near", {0.01, 1.0}}, {"far", {1000.0}}, {"distances", {3.0, 300.0}}}},
-          {"parameters", {"near", "far", "distance"}},
-          {"threshold", {{"relative", 1e-4}}},
-          {"points", points},
-          // 1e-7 * 300 / 0.01 = 3e-3 fails; 1e-7 * 3 / 0.01 = 3e-5 and 3e-5 (near 1, 300 m) do not.
-          {"fails_at",
-           {{"distance",
-             {{{"near", 0.01}, {"far", 1000.0}, {"distance", 300.0}},
-              {{"near", 1.0}, {"far", 1000.0}, {"distance", nullptr}}}}}},
-          {"plots",
-           {{{"title", "Error against distance"},
-             {"x", "distance"},
-             {"x_log", true},
-             {"y", "error.max_relative"},
-             {"y_log", true},
-             {"y_label", "max relative error"},
-             {"series", {"near", "far"}},
-             {"threshold", 1e-4}}}}};
-}
-
 class Sweeps : public StoreTest {
  protected:
   int64_t newSweepJob() {

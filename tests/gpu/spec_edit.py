@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Rewrites a capture or sweep spec for a GPU run and prints it as JSON.
+
+The GPU scripts (accuracy.sh, repeats.sh, protocol.sh, sweeps.sh,
+techniques.sh) all shrink or redirect their checked-in specs the same way:
+
+  spec_edit.py SPEC [--resolution WxH] [--frames N] [--sponza PATH]
+               [--scene NAME [--cameras N]]
+
+  --resolution  a sweep's "resolution", or a capture's "resolutions" (one entry)
+  --frames      a capture's "frames"
+  --sponza      every scene "SPONZA" (a name, or a {"gltf": "SPONZA"} path)
+                becomes {"gltf": PATH}
+  --scene       the capture's one scene (SPONZA for Sponza); where the spec has
+                no "cameras", the first N (--cameras, default 2) of
+                tests/gpu/accuracy-<scene>.json, which frame that scene
+"""
+import argparse
+import json
+import sys
+
+
+def resolution(text):
+    try:
+        w, h = text.lower().split("x")
+        return [int(w), int(h)]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be WxH, got '{text}'")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("spec")
+    ap.add_argument("--resolution", type=resolution)
+    ap.add_argument("--frames", type=int)
+    ap.add_argument("--sponza")
+    ap.add_argument("--scene")
+    ap.add_argument("--cameras", type=int, default=2)
+    args = ap.parse_args()
+
+    with open(args.spec) as f:
+        spec = json.load(f)
+    if args.scene:
+        spec["scenes"] = [args.scene]
+        if "cameras" not in spec:
+            with open(f"tests/gpu/accuracy-{args.scene.lower()}.json") as f:
+                spec["cameras"] = json.load(f)["cameras"][: args.cameras]
+    if args.sponza and "scenes" in spec:
+        def sponza(scene):
+            named = scene == "SPONZA" or (isinstance(scene, dict) and scene.get("gltf") == "SPONZA")
+            return {"gltf": args.sponza} if named else scene
+        spec["scenes"] = [sponza(s) for s in spec["scenes"]]
+    if args.resolution:
+        if "sweep" in spec:
+            spec["resolution"] = args.resolution
+        else:
+            spec["resolutions"] = [args.resolution]
+    if args.frames:
+        spec["frames"] = args.frames
+    json.dump(spec, sys.stdout, indent=1)
+    print()
+
+
+if __name__ == "__main__":
+    main()
