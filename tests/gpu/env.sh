@@ -21,7 +21,7 @@ tally_gpu_env() {
   if [ ${#debs[@]} -gt 0 ]; then
     for f in "${debs[@]}"; do dpkg -x "$f" /; done
     ldconfig
-  elif ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
+  elif ! ldconfig -p | grep 'libvulkan\.so\.1' >/dev/null; then  # not -q: an early exit breaks the pipe (pipefail)
     echo "no Vulkan loader installed and no .gl/*.deb to unpack" >&2
     return 2
   fi
