@@ -1,0 +1,80 @@
+#!/usr/bin/env python3
+"""The parts of server/ and who may include whom (docs/architecture.md).
+
+Every `#include "part/..."` in server/PART/ must name PART itself or a part
+PART may use. A part that is not in the table, or an include of one that is
+not allowed, fails with the file, the line and the rule it breaks. The table
+is the CMake link graph written out: a new dependency is a decision, made here
+and in docs/architecture.md together.
+
+  layers.py [SERVER_DIR]
+"""
+import os
+import re
+import sys
+
+# part -> the parts it may include (besides itself and common/).
+ALLOWED = {
+    "common": set(),
+    "spirv": set(),
+    "gpu": {"spirv"},
+    "scenes": set(),
+    "renderers": {"gpu", "scenes", "spirv"},
+    "analysis": {"renderers", "spirv"},
+    "sweeps": {"analysis", "renderers", "gpu", "scenes", "spirv"},
+    "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv"},
+    "store": set(),
+    "api": set(),
+    "jobs": {"store"},
+    "service": {"api", "store", "capture", "sweeps", "analysis", "renderers", "scenes", "spirv", "gpu"},
+    "commands": {"service", "api", "store", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
+                 "spirv", "gpu"},
+}
+# Files directly in server/ (main.cpp, protocol.hpp): the executable's own.
+TOP = {"commands", "service", "api", "store", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
+       "spirv", "gpu"}
+
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')
+
+
+def check(server):
+    errors = []
+    parts = {d for d in os.listdir(server) if os.path.isdir(os.path.join(server, d))}
+    for unknown in sorted(parts - ALLOWED.keys()):
+        errors.append(f"server/{unknown}/: a part not in the layer table (tests/layout/layers.py)")
+    for root, _, files in os.walk(server):
+        rel = os.path.relpath(root, server)
+        part = rel.split(os.sep)[0] if rel != "." else None
+        allowed = TOP if part is None else ALLOWED.get(part, set())
+        for name in sorted(files):
+            if not name.endswith((".cpp", ".hpp", ".h", ".in")):
+                continue
+            path = os.path.join(root, name)
+            with open(path, encoding="utf-8") as f:
+                for number, line in enumerate(f, 1):
+                    m = INCLUDE.match(line)
+                    if not m:
+                        continue
+                    target = m.group(1)
+                    if target not in ALLOWED or target in ("common", part):
+                        continue  # a system or shader header, common/, or the part itself
+                    if target not in allowed:
+                        who = f"server/{part}" if part else "server/"
+                        errors.append(f"{os.path.relpath(path, os.path.dirname(server))}:{number}: "
+                                      f"{who} may not include {target}/ (allowed: {', '.join(sorted(allowed)) or 'common only'})")
+    return errors
+
+
+def main():
+    server = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..", "server")
+    errors = check(os.path.normpath(server))
+    for e in errors:
+        print(e)
+    if errors:
+        return 1
+    print(f"layers: {len(ALLOWED)} parts, every include allowed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
