@@ -75,7 +75,9 @@ Result<std::string> readMaybeGzipped(const std::string& path) {
 json standInShaderHashes() {
   json out = json::object();
   std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(renderers::shaderDirectory(), ec)) {
+  auto dir = renderers::shaderDirectory();
+  if (!dir) return out;
+  for (const auto& entry : std::filesystem::directory_iterator(*dir, ec)) {
     if (!entry.is_regular_file()) continue;
     char hex[17];
     std::snprintf(hex, sizeof hex, "%016zx", std::hash<std::string>{}(entry.path().filename().string()));

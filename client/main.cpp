@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "common/version.hpp"
 #include "protocol.hpp"
 
 namespace {
@@ -129,7 +130,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;  // --help is 0; usage errors 2
   }
   if (version) {
-    std::cout << "tally " << tally::protocol::kVersion << " (API v" << tally::protocol::kApiVersion << ")\n";
+    std::cout << tally::versionLine("tally") << ", API v" << tally::protocol::kApiVersion << "\n";
     return 0;
   }
   if (app.get_subcommands().empty()) {

@@ -2,9 +2,11 @@
 #include <CLI/CLI.hpp>
 
 #include "commands/commands.hpp"
+#include "common/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"tallyd: Tally's capture daemon and instrumentation tool"};
+  app.set_version_flag("--version", tally::versionLine("tallyd"), "Print the version and the commit it was built from");
   app.require_subcommand(1);
   tally::cli::InstrumentArgs instrumentArgs;
   auto* instrument = app.add_subcommand("instrument", "Instrument a SPIR-V module and print its site table as JSON");
@@ -19,7 +21,7 @@ int main(int argc, char** argv) {
 
   tally::cli::DemoArgs demoArgs;
   auto* demo = app.add_subcommand("demo", "Instrument the project's own shaders and print their site tables");
-  demo->add_option("--shaders", demoArgs.shaderDir, "Folder of <pass>.<stage>.glsl files")->capture_default_str();
+  demo->add_option("--shaders", demoArgs.shaderDir, "Folder of <pass>.<stage>.glsl files (default: the data folder's shaders/)");
   demo->add_option("--mode", demoArgs.mode, "exact | subgroup | sampled:N")->capture_default_str();
 
   tally::cli::CaptureArgs captureArgs;
@@ -42,15 +44,31 @@ int main(int argc, char** argv) {
 
   tally::cli::ServeArgs serveArgs;
   auto* serve = app.add_subcommand("serve", "Serve the REST API and dashboard; run queued captures");
-  serve->add_option("--db", serveArgs.db, "SQLite database file")->required();
+  serve->add_option("--db", serveArgs.db, "SQLite database file (default: $XDG_DATA_HOME/tally/tally.db)");
   serve->add_option("--bind", serveArgs.bind, "Address to listen on")->capture_default_str();
   serve->add_option("--port", serveArgs.port, "Port (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
   serve->add_option("--token-file", serveArgs.tokenFile, "Token file (required off loopback)");
   serve->add_option("--device", serveArgs.device, "Device index or name substring for captures");
-  serve->add_option("--web", serveArgs.web, "Dashboard folder");
+  serve->add_option("--web", serveArgs.web, "Dashboard folder (default: the installed dashboard)");
   serve->add_option("--scenes", serveArgs.scenes, "Folder glTF scenes may be loaded from (repeatable)");
+  serve->footer(
+      "Environment:\n"
+      "  XDG_DATA_HOME    the database's folder is $XDG_DATA_HOME/tally without --db (else HOME)\n"
+      "  HOME             $HOME/.local/share/tally without --db and XDG_DATA_HOME\n"
+      "  TALLY_DATA_DIR   the data folder (shaders/, web/) where none is found beside the binary\n"
+      "                   (bin/../share/tally)\n"
+      "  TALLY_SHADER_DIR the renderers' shaders, over the data folder's (for shader work)\n"
+      "  VK_DRIVER_FILES, VK_ICD_FILENAMES  the Vulkan loader's choice of driver (captures)\n"
+      "  TMPDIR           where each capture job's spec, result and screenshots are written\n"
+      "  JOURNAL_STREAM   set by systemd: log lines then carry their syslog priority (<6>) and no time");
   serve->add_option("--job-deadline", serveArgs.jobDeadlineSeconds, "Seconds a capture job may run")
       ->capture_default_str()->check(CLI::Range(1, 7 * 24 * 3600));
+  serve->add_option("--request-timeout", serveArgs.requestTimeoutSeconds,
+                    "Seconds from a connection to its whole request (header and body), else 408")
+      ->capture_default_str()->check(CLI::Range(0.1, 3600.0));
+  serve->add_option("--max-connections-per-peer", serveArgs.maxConnectionsPerPeer,
+                    "Open connections one remote address may hold, else 503 (behind a reverse proxy, raise it)")
+      ->capture_default_str()->check(CLI::Range(1, 100000));
 
   try {
     app.parse(argc, argv);

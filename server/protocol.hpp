@@ -3,7 +3,7 @@
 
 namespace tally::protocol {
 
-inline constexpr const char* kVersion = "0.1.0";
+// The build's version is tally::version() (common/version.hpp, from CMake).
 inline constexpr int kApiVersion = 1;
 
 // The port `tally` connects to by default (http://127.0.0.1:kDefaultPort).

@@ -1,5 +1,6 @@
 #include "api/builtin_routes.hpp"
 
+#include "common/version.hpp"
 #include "protocol.hpp"
 
 namespace tally::api {
@@ -8,7 +9,10 @@ void addBuiltinRoutes(Router& router, std::vector<std::string> rendererNames, nl
                       std::vector<std::string> workloadNames) {
   router.get("/api/health", [](const Request&) {
     return Response::ok(
-        {{"status", "ok"}, {"version", protocol::kVersion}, {"api_version", protocol::kApiVersion}});
+        {{"status", "ok"},
+         {"version", std::string(version())},
+         {"commit", std::string(gitCommit())},
+         {"api_version", protocol::kApiVersion}});
   });
   // Parsed once, so a broken document fails at startup rather than per request.
   auto doc = std::make_shared<const nlohmann::json>(nlohmann::json::parse(openApiDocument()));

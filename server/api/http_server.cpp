@@ -1,10 +1,14 @@
 #include "api/http_server.hpp"
 
 #include <httplib.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -12,8 +16,10 @@
 #include <variant>
 
 #include "api/auth.hpp"
+#include "api/connection_gate.hpp"
 #include "api/request_checks.hpp"
 #include "api/static_files.hpp"
+#include "common/log.hpp"
 
 namespace tally::api {
 namespace {
@@ -23,7 +29,8 @@ using HandlerResponse = httplib::Server::HandlerResponse;
 constexpr int kListenBacklog = 128;
 
 bool isBodyMethod(const std::string& m) { return m == "POST" || m == "PUT" || m == "PATCH"; }
-bool isApiPath(std::string_view p) { return p == "/api" || p.rfind("/api/", 0) == 0; }
+// Routed paths: the API and the metrics; everything else is a static file.
+bool isApiPath(std::string_view p) { return p == "/api" || p.rfind("/api/", 0) == 0 || p == "/metrics"; }
 
 // Sent with every response, errors included.
 void addSecurityHeaders(httplib::Response& res) {
@@ -79,6 +86,75 @@ Response refuse(int status, const char* code, std::string message, std::string_v
   return errorResponse(status, code, message, field);
 }
 
+// A request the gate read whole, answered on its socket: reads come from the
+// bytes read so far (then the socket, which a whole request never needs),
+// writes go to the socket with a per-write timeout and an overall deadline,
+// so that a client that stops reading cannot hold the thread for long.
+class GatedStream final : public httplib::Stream {
+ public:
+  GatedStream(const ReadyRequest& ready, std::chrono::milliseconds readTimeout,
+              std::chrono::milliseconds writeTimeout)
+      : r_(ready),
+        readTimeout_(readTimeout),
+        writeTimeout_(writeTimeout),
+        writeDeadline_(std::chrono::steady_clock::now() + 6 * writeTimeout) {}
+
+  bool is_readable() const override { return at_ < r_.bytes.size() || wait(POLLIN, readTimeout_); }
+  bool is_writable() const override {
+    return std::chrono::steady_clock::now() < writeDeadline_ && wait(POLLOUT, writeTimeout_);
+  }
+  ssize_t read(char* ptr, size_t size) override {
+    if (at_ < r_.bytes.size()) {
+      size_t n = std::min(size, r_.bytes.size() - at_);
+      std::memcpy(ptr, r_.bytes.data() + at_, n);
+      at_ += n;
+      return ssize_t(n);
+    }
+    if (!wait(POLLIN, readTimeout_)) return -1;
+    return ::recv(r_.fd, ptr, size, 0);
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    if (!is_writable()) return -1;
+    ssize_t n = ::send(r_.fd, ptr, size, MSG_NOSIGNAL);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) return 0;
+    return n;
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    ip = r_.peerIp;
+    port = r_.peerPort;
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    ip = r_.localIp;
+    port = r_.localPort;
+  }
+  socket_t socket() const override { return r_.fd; }
+
+ private:
+  bool wait(short events, std::chrono::milliseconds timeout) const {
+    pollfd p{r_.fd, events, 0};
+    int n;
+    do {
+      n = ::poll(&p, 1, int(timeout.count()));
+    } while (n < 0 && errno == EINTR);
+    return n > 0 && (p.revents & events) != 0;
+  }
+
+  const ReadyRequest& r_;
+  size_t at_ = 0;
+  std::chrono::milliseconds readTimeout_, writeTimeout_;
+  std::chrono::steady_clock::time_point writeDeadline_;
+};
+
+// The library's request handling (parsing, routing, responses) over a
+// request the gate has read; its accept loop is not used.
+class GatedServer : public httplib::Server {
+ public:
+  void serve(httplib::Stream& stream) {
+    bool closed = false;
+    process_request(stream, /*close_connection=*/true, closed, nullptr);
+  }
+};
+
 }  // namespace
 
 struct HttpServer::Impl {
@@ -86,17 +162,29 @@ struct HttpServer::Impl {
   Router router;
   Auth auth;
   std::optional<StaticFiles> web;
-  httplib::Server server;
+  GatedServer server;
   int port = 0;
   socket_t listenSocket = -1;
   std::atomic<bool> ran{false};
   std::thread thread;
+  std::unique_ptr<ConnectionGate> gate;
+  std::unique_ptr<httplib::ThreadPool> pool;
+  metrics::Registry* metrics = nullptr;
+
+  // The route a request counts under in the metrics: its pattern
+  // ("/api/runs/{id}"), "static" for dashboard files, "unmatched" otherwise.
+  std::string routeLabel(const std::string& method, const std::string& path) const {
+    if (!isApiPath(path)) return "static";
+    auto m = router.match(method == "HEAD" ? "GET" : method, path);
+    return m.outcome == Router::Outcome::kFound ? m.route->pattern : "unmatched";
+  }
+  void serveReady(const ReadyRequest& ready);
 
   void log(std::string_view line) const {
     if (options.log) {
       options.log(line);
     } else {
-      std::cerr << "tallyd: " << line << '\n';
+      log::error(line);
     }
   }
 
@@ -238,6 +326,19 @@ void HttpServer::Impl::handle(const httplib::Request& req, httplib::Response& re
   write(res, router.dispatch(std::move(request)), true);
 }
 
+thread_local std::chrono::steady_clock::time_point tRequestStart;
+
+void HttpServer::Impl::serveReady(const ReadyRequest& ready) {
+  tRequestStart = std::chrono::steady_clock::now();
+  {
+    GatedStream stream(ready, options.readTimeout, options.writeTimeout);
+    server.serve(stream);
+  }
+  ::shutdown(ready.fd, SHUT_WR);
+  ::close(ready.fd);
+  gate->release(ready.peerIp);
+}
+
 void HttpServer::Impl::install() {
   server.set_default_headers({{"X-Content-Type-Options", "nosniff"},
                               {"X-Frame-Options", "DENY"},
@@ -246,10 +347,16 @@ void HttpServer::Impl::install() {
   // leaves that body unread, and it must not be parsed as the next request.
   server.set_keep_alive_max_count(1);
   server.set_payload_max_length(options.maxBodyBytes);  // backstop; admit() refuses first
-  server.set_read_timeout(options.readTimeout);
-  server.set_write_timeout(options.writeTimeout);
-  const size_t threads = options.threads == 0 ? 1 : options.threads;
-  server.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  // Time and count every answered request by route and status (the
+  // library calls its logger once the response is written).
+  if (metrics != nullptr) {
+    server.set_logger([this](const httplib::Request& req, const httplib::Response& res) {
+      double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tRequestStart).count();
+      std::string route = routeLabel(req.method, req.path);
+      metrics->observe("tally_http_request_duration_seconds", {{"route", route}}, seconds);
+      metrics->add("tally_http_requests_total", {{"route", route}, {"code", std::to_string(res.status)}});
+    });
+  }
   // The library's default adds SO_REUSEPORT, which would let a second process
   // bind our port and take a share of the connections. Keep SO_REUSEADDR only
   // (restarts while old connections sit in TIME_WAIT).
@@ -324,6 +431,18 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(ServerOptions options, Ro
   impl->options = std::move(options);
   impl->router = std::move(router);
   impl->auth = std::move(*auth);
+  impl->metrics = impl->options.metrics;
+  if (impl->metrics != nullptr) {
+    impl->metrics->declare("tally_http_request_duration_seconds", metrics::Type::kHistogram,
+                           "Time from a request read whole to its response written, by route", metrics::kRequestSeconds);
+    impl->metrics->declare("tally_http_requests_total", metrics::Type::kCounter,
+                           "Requests answered, by route and status code");
+    impl->metrics->declare("tally_http_connections_refused_total", metrics::Type::kCounter,
+                           "Connections closed by the front door: peer_limit, total_limit, timeout "
+                           "(request not read whole in time), header_too_large");
+    impl->metrics->declare("tally_http_connections_open", metrics::Type::kGauge,
+                           "Connections open: being read, or being answered");
+  }
   impl->install();
 
   const std::string host = impl->options.bindAddress == "localhost" ? "127.0.0.1" : impl->options.bindAddress;
@@ -336,9 +455,33 @@ Result<std::unique_ptr<HttpServer>> HttpServer::create(ServerOptions options, Ro
                        " (in use, or not an address here)");
     impl->port = impl->options.port;
   }
+  if (impl->listenSocket < 0) return makeError("cannot bind " + host + ": no socket");
   // The library listens with a backlog of 5; a dashboard opening a dozen
   // connections at once would see SYNs dropped and retried a second later.
-  if (impl->listenSocket >= 0) ::listen(impl->listenSocket, kListenBacklog);
+  ::listen(impl->listenSocket, kListenBacklog);
+
+  GateOptions gate;
+  gate.requestTimeout = impl->options.requestTimeout;
+  gate.maxBodyBytes = impl->options.maxBodyBytes;
+  gate.maxConnections = impl->options.maxConnections;
+  gate.maxConnectionsPerPeer = impl->options.maxConnectionsPerPeer;
+  Impl* raw = impl.get();
+  impl->gate = std::make_unique<ConnectionGate>(
+      impl->listenSocket, gate,
+      [raw](ReadyRequest ready) {
+        auto shared = std::make_shared<ReadyRequest>(std::move(ready));
+        raw->pool->enqueue([raw, shared] { raw->serveReady(*shared); });
+      },
+      [raw](Refusal why, const std::string& peer) {
+        if (raw->metrics != nullptr)
+          raw->metrics->add("tally_http_connections_refused_total", {{"reason", refusalName(why)}});
+        (void)peer;  // counted, not logged: a flood of refusals must not flood the journal
+      });
+  if (impl->metrics != nullptr) {
+    impl->metrics->onScrape([raw](metrics::Registry& r) {
+      r.set("tally_http_connections_open", {}, double(raw->gate->openConnections()));
+    });
+  }
   return std::unique_ptr<HttpServer>(new HttpServer(std::move(impl)));
 }
 
@@ -347,27 +490,30 @@ HttpServer::HttpServer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 HttpServer::~HttpServer() {
   stop();
   if (impl_->thread.joinable()) impl_->thread.join();
-  // The library closes its socket when serving ends, not when it never began.
-  if (!impl_->ran && impl_->listenSocket >= 0) ::close(impl_->listenSocket);
+  if (impl_->listenSocket >= 0) ::close(impl_->listenSocket);
 }
 
 int HttpServer::port() const { return impl_->port; }
 bool HttpServer::tokensRequired() const { return impl_->auth.required(); }
 
 void HttpServer::run() {
-  impl_->ran = true;
-  impl_->server.listen_after_bind();
+  if (impl_->ran.exchange(true)) return;
+  const size_t threads = impl_->options.threads == 0 ? 1 : impl_->options.threads;
+  impl_->pool = std::make_unique<httplib::ThreadPool>(threads);
+  if (!impl_->gate->run()) impl_->log("cannot start serving: epoll failed");
+  // Requests already handed on are answered before run() returns.
+  impl_->pool->shutdown();
 }
 
 void HttpServer::start() {
   if (impl_->thread.joinable()) return;
   impl_->thread = std::thread([this] { run(); });
-  // stop() only acts on a running server: wait until it is (the socket is
-  // already listening, so clients can connect meanwhile).
-  for (int i = 0; i < 2000 && !impl_->server.is_running(); ++i)
+  // Wait until the gate serves (the socket is already listening, so clients
+  // can connect meanwhile), or was stopped first.
+  for (int i = 0; i < 2000 && !impl_->gate->running() && impl_->thread.joinable(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
 }
 
-void HttpServer::stop() { impl_->server.stop(); }
+void HttpServer::stop() { impl_->gate->stop(); }
 
 }  // namespace tally::api

@@ -1,4 +1,5 @@
-// HttpServer: cpp-httplib underneath, JSON handlers (Router) on top.
+// HttpServer: an evented front door (ConnectionGate) that reads each request
+// whole, cpp-httplib's request handling underneath, JSON handlers (Router) on top.
 // Everything the library gets wrong or leaves open is closed here: framing
 // (chunked/gzip bodies, missing or oversized Content-Length), traversal,
 // exception text on the wire, spoofable REMOTE_ADDR, auth, DNS rebinding.
@@ -13,6 +14,7 @@
 #include <string_view>
 
 #include "api/router.hpp"
+#include "common/metrics.hpp"
 #include "common/result.hpp"
 
 namespace tally::api {
@@ -23,9 +25,15 @@ struct ServerOptions {
   std::filesystem::path tokenFile;      // empty: none (loopback only); given: always enforced
   std::filesystem::path webRoot;        // empty: no static files (non-/api paths answer 404)
   std::size_t maxBodyBytes = 1u << 20;  // 1 MiB: a capture spec is a few KiB
-  std::chrono::milliseconds readTimeout{5000};
-  std::chrono::milliseconds writeTimeout{5000};
-  std::size_t threads = 8;  // worker threads; one request per connection (no keep-alive)
+  std::chrono::milliseconds readTimeout{5000};   // a handler's read past what the front door read
+  std::chrono::milliseconds writeTimeout{5000};  // per write; a response may take 6x this in all
+  std::size_t threads = 8;  // threads answering requests read whole; one request per connection
+  // The front door (api/connection_gate.hpp): requests are read whole by one
+  // evented thread before a worker thread sees them.
+  std::chrono::milliseconds requestTimeout{10000};  // accept -> whole request, else 408
+  std::size_t maxConnections = 1024;                // open at once, else 503
+  std::size_t maxConnectionsPerPeer = 64;           // per remote address, else 503
+  metrics::Registry* metrics = nullptr;             // request counts and latencies, when given
   // Server-side log (internal errors with their text). Default: stderr.
   std::function<void(std::string_view)> log;
 };

@@ -1,4 +1,5 @@
 #include "capture/runner.hpp"
+#include "common/version.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -213,7 +214,9 @@ json shaderHashes() {
   json out = json::object();
   std::error_code ec;
   std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(renderers::shaderDirectory(), ec)) {
+  auto dir = renderers::shaderDirectory();
+  if (!dir) return out;  // runCapture refused already
+  for (const auto& entry : std::filesystem::directory_iterator(*dir, ec)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
@@ -372,6 +375,7 @@ namespace {
 Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const CaptureOptions& options) {
 
   json result = {{"device", gpu::describe(ctx)},
+                 {"tally", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}},
                  {"spec", spec.source},
                  {"shaders", shaderHashes()},
                  {"runs", json::array()}};
@@ -458,6 +462,8 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 }  // namespace
 
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
+  // Before the device: without shaders nothing can be drawn.
+  if (auto dir = renderers::shaderDirectory(); !dir) return makeError(dir.error());
   return gpu::withDevice(options.device, [&](gpu::Context& ctx) { return captureOn(ctx, spec, options); });
 }
 

@@ -23,7 +23,7 @@ struct InstrumentArgs {
 int runInstrument(const InstrumentArgs& args);
 
 struct DemoArgs {
-  std::string shaderDir = TALLY_SHADER_DIR;
+  std::string shaderDir;  // "" : the renderers' shaders (renderers::shaderDirectory)
   std::string mode = "exact";
 };
 
@@ -66,14 +66,16 @@ struct RepeatsArgs {
 int runRepeats(const RepeatsArgs& args);
 
 struct ServeArgs {
-  std::string db;                   // SQLite file (created and migrated)
+  std::string db;                   // SQLite file (created and migrated); "": $XDG_DATA_HOME/tally/tally.db
   std::string bind = "127.0.0.1";
   int port = 8377;                  // protocol::kDefaultPort; 0: an ephemeral port (printed)
   std::string tokenFile;            // required for a non-loopback bind
   std::string device;               // passed to each capture as --device
-  std::string web;                  // dashboard files; empty: none
+  std::string web;                  // dashboard files; "": the data folder's web/ (common/paths.hpp)
   std::vector<std::string> scenes;  // folders glTF scenes may come from
   int jobDeadlineSeconds = 1800;    // per capture job
+  double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
+  int maxConnectionsPerPeer = 64;     // open connections per remote address
 };
 
 // Serves the REST API (and the dashboard) until SIGINT/SIGTERM; runs queued

@@ -7,6 +7,7 @@
 
 #include "commands/commands.hpp"
 #include "gpu/glsl.hpp"
+#include "renderers/renderer.hpp"
 #include "spirv/instrument.hpp"
 
 namespace tally::cli {
@@ -17,13 +18,22 @@ int runDemo(const DemoArgs& args) {
     std::cerr << "tallyd demo: --mode: " << mode.error() << "\n";
     return 1;
   }
+  std::string shaderDir = args.shaderDir;
+  if (shaderDir.empty()) {
+    auto dir = renderers::shaderDirectory();
+    if (!dir) {
+      std::cerr << "tallyd demo: " << dir.error() << "\n";
+      return 1;
+    }
+    shaderDir = *dir;
+  }
   std::error_code ec;
   std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(args.shaderDir, ec)) {
+  for (const auto& entry : std::filesystem::directory_iterator(shaderDir, ec)) {
     if (entry.path().extension() == ".glsl") files.push_back(entry.path());
   }
   if (ec) {
-    std::cerr << "tallyd demo: " << args.shaderDir << ": " << ec.message() << "\n";
+    std::cerr << "tallyd demo: " << shaderDir << ": " << ec.message() << "\n";
     return 1;
   }
   std::sort(files.begin(), files.end());
@@ -38,7 +48,7 @@ int runDemo(const DemoArgs& args) {
     glsl::CompileOptions compileOptions;
     compileOptions.fileName = path.filename().string();
     compileOptions.debugInfo = true;
-    compileOptions.includeDirs = {args.shaderDir};
+    compileOptions.includeDirs = {shaderDir};
     auto words = glsl::compile(text.str(), *stage, compileOptions);
     if (!words) {
       std::cerr << words.error() << "\n";

@@ -38,19 +38,20 @@ Worker::Worker(store::Store& writer, WorkerOptions options) : store_(writer), op
 
 Worker::~Worker() { stop(); }
 
-void Worker::log(const std::string& line) const {
+void Worker::log(log::Level level, std::optional<int64_t> job, const std::string& message) const {
+  log::Event event{level, job, message};
   if (options_.log) {
-    options_.log(line);
+    options_.log(event);
   } else {
-    std::fprintf(stderr, "%s\n", line.c_str());
+    log::write(event);
   }
 }
 
 Result<store::Recovery> Worker::recover() {
   auto recovery = store_.requeueInterrupted(options_.maxAttempts);
   if (!recovery) return recovery;
-  for (int64_t id : recovery->requeued) log("job " + std::to_string(id) + ": interrupted, queued again");
-  for (int64_t id : recovery->failed) log("job " + std::to_string(id) + ": interrupted too often, failed");
+  for (int64_t id : recovery->requeued) log(log::Level::kWarning, id, "interrupted, queued again");
+  for (int64_t id : recovery->failed) log(log::Level::kError, id, "interrupted too often, failed");
   return recovery;
 }
 
@@ -77,7 +78,7 @@ void Worker::loop() {
   while (!stopping_) {
     auto claimed = store_.claimNextJob(static_cast<int64_t>(getpid()));
     if (!claimed) {
-      log("worker: cannot claim a job: " + claimed.error());
+      log(log::Level::kError, std::nullopt, "worker: cannot claim a job: " + claimed.error());
     } else if (claimed->has_value()) {
       runJob(**claimed);
       continue;
@@ -99,11 +100,24 @@ Result<std::vector<uint8_t>> readFile(const fs::path& path) {
 }  // namespace
 
 void Worker::runJob(const store::Job& job) {
-  const std::string name = "job " + std::to_string(job.id);
+  const auto started = std::chrono::steady_clock::now();
+  const bool isSweep = job.spec.is_object() && job.spec.contains("sweep");
+  std::string device;
+  auto finished = [&](const char* status) {
+    if (!options_.onFinished) return;
+    JobOutcome outcome;
+    outcome.id = job.id;
+    outcome.status = status;
+    outcome.kind = isSweep ? "sweep" : "capture";
+    outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    outcome.device = device;
+    options_.onFinished(outcome);
+  };
   auto fail = [&](const std::string& reason) {
-    log(name + ": failed: " + reason);
+    log(log::Level::kError, job.id, "failed: " + reason);
     auto r = store_.finishJob(job.id, store::JobStatus::Failed, reason);
-    if (!r) log(name + ": cannot record the failure: " + r.error());
+    if (!r) log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
+    finished("failed");
   };
 
   std::error_code ec;
@@ -156,11 +170,12 @@ void Worker::runJob(const store::Job& job) {
     return cancelled;
   };
 
-  log(name + ": running");
+  log(log::Level::kInfo, job.id, "running");
   auto ran = runChild(child);
   if (stopping_) return;  // left running: recovery at the next start retries it
   if (cancelled) {
-    log(name + ": cancelled");
+    log(log::Level::kInfo, job.id, "cancelled");
+    finished("cancelled");
     return;
   }
   if (!ran) return fail(ran.error());
@@ -170,21 +185,26 @@ void Worker::runJob(const store::Job& job) {
   if (!text) return fail(text.error());
   auto result = nlohmann::json::parse(text->begin(), text->end(), nullptr, false);
   if (result.is_discarded() || !result.is_object()) return fail("the capture's result is not valid JSON");
+  if (result.contains("device") && result["device"].is_object() && result["device"].contains("name") &&
+      result["device"]["name"].is_string()) {
+    device = result["device"]["name"].get<std::string>();
+  }
 
   // A spec with "sweep" ran a stability sweep (sweeps::isSweepSpec): its
   // result is one sweeps row, not runs.
-  if (job.spec.is_object() && job.spec.contains("sweep")) {
+  if (isSweep) {
     if (!result.contains("sweep") || result["sweep"] != job.spec["sweep"]) {
       return fail("the sweep's result names sweep " + result.value("sweep", nlohmann::json()).dump() +
                   ", the spec " + job.spec["sweep"].dump());
     }
     auto sweep = store_.ingestSweep(job.id, result);
     if (!sweep) return fail("cannot store the sweep: " + sweep.error());
-    auto finished = store_.finishJob(job.id, store::JobStatus::Done);
-    if (!finished) {
-      log(name + ": cannot finish: " + finished.error());
+    auto done = store_.finishJob(job.id, store::JobStatus::Done);
+    if (!done) {
+      log(log::Level::kError, job.id, "cannot finish: " + done.error());
     } else {
-      log(name + ": done, sweep " + std::to_string(*sweep));
+      log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(*sweep));
+      finished("done");
     }
     return;
   }
@@ -210,11 +230,12 @@ void Worker::runJob(const store::Job& job) {
 
   auto ingested = store_.ingestCapture(job.id, result, screenshots);
   if (!ingested) return fail("cannot store the result: " + ingested.error());
-  auto finished = store_.finishJob(job.id, store::JobStatus::Done);
-  if (!finished) {
-    log(name + ": cannot finish: " + finished.error());
+  auto done = store_.finishJob(job.id, store::JobStatus::Done);
+  if (!done) {
+    log(log::Level::kError, job.id, "cannot finish: " + done.error());
   } else {
-    log(name + ": done, " + std::to_string(*ingested) + " runs");
+    log(log::Level::kInfo, job.id, "done, " + std::to_string(*ingested) + " runs");
+    finished("done");
   }
 }
 

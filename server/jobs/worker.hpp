@@ -16,6 +16,7 @@
 #include <string_view>
 #include <thread>
 
+#include "common/log.hpp"
 #include "common/result.hpp"
 #include "store/store.hpp"
 
@@ -28,7 +29,18 @@ struct WorkerOptions {
   int maxAttempts = 3;              // a job interrupted this often fails on restart
   std::filesystem::path tempRoot;   // empty: std::filesystem::temp_directory_path()
   std::chrono::milliseconds idlePoll{500};  // queue poll when not woken
-  std::function<void(std::string_view)> log;  // default: stderr
+  std::function<void(const log::Event&)> log;  // default: log::write (stderr, one line per event)
+  // Called as each job leaves the worker (not when stop() leaves it running).
+  std::function<void(const struct JobOutcome&)> onFinished;
+};
+
+// How a job ended, for the daemon's metrics.
+struct JobOutcome {
+  int64_t id = 0;
+  std::string status;   // "done", "failed" or "cancelled"
+  std::string kind;     // "capture" or "sweep"
+  double seconds = 0;   // from claiming the job to its end
+  std::string device;   // the device the capture ran on (its result's device.name); "" when unknown
 };
 
 // "[3/12] deferred atrium 320x180 camera 2" -> done 3, total 12, current.
@@ -57,7 +69,7 @@ class Worker {
  private:
   void loop();
   void runJob(const store::Job& job);
-  void log(const std::string& line) const;
+  void log(log::Level level, std::optional<int64_t> job, const std::string& message) const;
 
   store::Store& store_;
   WorkerOptions options_;

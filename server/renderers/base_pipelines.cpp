@@ -4,16 +4,18 @@
 
 #include <cstdlib>
 
+#include "common/paths.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
 #include "shared.h"
 
 namespace tally::renderers {
 
-std::string shaderDirectory() {
-  // The binary may run where the source tree is elsewhere (tests/gpu/).
-  if (const char* dir = std::getenv("TALLY_SHADER_DIR"); dir != nullptr && *dir) return dir;
-  return TALLY_RENDERER_SHADER_DIR;
+Result<std::string> shaderDirectory() {
+  if (const char* dir = std::getenv("TALLY_SHADER_DIR"); dir != nullptr && *dir) return std::string(dir);
+  auto data = dataDirectory();
+  if (!data) return makeError(data.error());
+  return (*data / "shaders").string();
 }
 
 Result<gpu::GraphicsPipelineDesc> RendererBase::shaderPipeline(uint32_t passIndex, const std::string& vertex,
@@ -34,7 +36,9 @@ Result<gpu::GraphicsPipelineDesc> RendererBase::shaderPipeline(uint32_t passInde
 
 Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
                                             const std::vector<std::string>& defines) {
-  auto source = gpu::loadShaderSource(*ctx_, shaderDirectory(), file);
+  auto dir = shaderDirectory();
+  if (!dir) return makeError(dir.error());
+  auto source = gpu::loadShaderSource(*ctx_, *dir, file);
   if (!source) return makeError(source.error());
   std::vector<std::string> allDefines = defines;
   if (packedVertices_) allDefines.push_back("TALLY_TBN_QUATERNION");  // shaders/tbn.h; none: float as it was

@@ -269,8 +269,9 @@ class Renderer {
   virtual void destroy() = 0;
 };
 
-// Where the renderers' GLSL is read from: $TALLY_SHADER_DIR, else the source tree's shaders/.
-std::string shaderDirectory();
+// Where the renderers' GLSL is read from: $TALLY_SHADER_DIR (for shaders
+// being worked on), else the data folder's shaders/ (common/paths.hpp).
+Result<std::string> shaderDirectory();
 
 // "forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean".
 std::vector<std::string> rendererNames();

@@ -182,6 +182,8 @@ json runRowJson(const store::RunRow& r) {
           {"render_target_bytes", opt(r.renderTargetBytes)},
           {"notes", r.notes},
           {"created_at", r.createdAt},
+          {"tally_version", opt(r.tallyVersion)},
+          {"tally_commit", opt(r.tallyCommit)},
           {"sample_count", r.sampleCount},
           {"mean_frame_ms", opt(r.meanFrameMs)},
           {"mean_bytes", opt(r.meanBytes)},
@@ -478,6 +480,8 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
     return api::conflict("capture " + std::to_string(id) + " has already finished (" + store::toString(job->status) +
                          ")");
   }
+  // A running job is reported by the worker when it stops the child.
+  if (before->status == store::JobStatus::Queued && ctx.onQueuedJobCancelled) ctx.onQueuedJobCancelled(id);
   return Response::ok(jobJson(*job));
 }
 

@@ -28,6 +28,7 @@ struct ServiceContext {
   std::vector<std::string> rendererNames;
   ServiceOptions options;
   std::function<void()> onJobQueued;  // wakes the worker; may be empty
+  std::function<void(int64_t)> onQueuedJobCancelled;  // a job cancelled before it ran (metrics); may be empty
   std::function<void(std::string_view)> log;  // internal errors; default stderr
 };
 

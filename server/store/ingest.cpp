@@ -110,8 +110,8 @@ struct Inserter {
               "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id"),
         run(db,
             "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
-            "render_target_bytes, notes, shaders, counter_headroom, options, variant) "
-            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)"),
+            "render_target_bytes, notes, shaders, counter_headroom, options, variant, tally_version, tally_commit) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)"),
         resource(
             db,
             "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
@@ -337,8 +337,20 @@ void insertResources(Inserter& in, int64_t runId, const json& list, const std::s
   }
 }
 
-int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& shaders, const json& run,
-                  const std::string& path, const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+// The build that made a result: {"version", "commit"} (absent before builds recorded it).
+struct Build {
+  std::optional<std::string> version, commit;
+};
+
+Build buildOf(const json& result) {
+  const json* tally = find(result, "tally");
+  if (!tally) return {};
+  if (!tally->is_object()) bad("tally", "must be an object");
+  return {optText(*tally, "version", "tally"), optText(*tally, "commit", "tally")};
+}
+
+int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& shaders, const Build& build,
+                  const json& run, const std::string& path, const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!run.is_object()) bad(path, "must be an object");
   in.scene.reset();
   in.scene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
@@ -369,7 +381,9 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(11, shaders)
       .bind(12, headroom)
       .bind(13, optObject(run, "options", path))
-      .bind(14, optText(run, "variant", path).value_or(text(run, "renderer", path)));
+      .bind(14, optText(run, "variant", path).value_or(text(run, "renderer", path)))
+      .bind(15, build.version)
+      .bind(16, build.commit);
   in.run.run();
   int64_t runId = in.lastId();
   insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");
@@ -532,10 +546,11 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
     Inserter in(db_);
     int64_t deviceId = insertDevice(in, result);
     json shaders = optObject(result, "shaders", "result");
+    Build build = buildOf(result);
     const json* runs = find(result, "runs");
     if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
     for (size_t r = 0; r < runs->size(); ++r) {
-      insertRun(in, jobId, deviceId, shaders, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
+      insertRun(in, jobId, deviceId, shaders, build, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
     }
     tx.commit();
     return static_cast<int64_t>(runs->size());

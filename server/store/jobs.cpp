@@ -181,6 +181,18 @@ Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& pag
   });
 }
 
+Result<std::map<std::string, int64_t>> Store::jobCounts() {
+  std::lock_guard lock(mutex_);
+  return guarded<std::map<std::string, int64_t>>("jobCounts", [&]() -> Result<std::map<std::string, int64_t>> {
+    std::map<std::string, int64_t> out;
+    for (auto s : {JobStatus::Queued, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Cancelled})
+      out[toString(s)] = 0;
+    Statement query(db_, "SELECT status, count(*) FROM jobs GROUP BY status");
+    while (query.step()) out[query.getText(0)] = query.getInt(1);
+    return out;
+  });
+}
+
 Result<Recovery> Store::requeueInterrupted(int maxAttempts) {
   if (maxAttempts < 1) return makeError("maxAttempts: must be at least 1");
   std::lock_guard lock(mutex_);

@@ -23,7 +23,7 @@ const char* const kRunSelect =
     "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id AND s.image_identical = 1), "
     "(SELECT AVG(s.psnr) FROM samples s WHERE s.run_id = r.id), "
     "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
-    "r.options, COALESCE(r.variant, r.renderer) "
+    "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -53,6 +53,8 @@ RunRow readRunRow(const Statement& row) {
   run.minPsnr = row.getOptDouble(22);
   run.options = row.getJson(23);
   run.variant = row.getText(24);
+  run.tallyVersion = row.getOptText(25);
+  run.tallyCommit = row.getOptText(26);
   return run;
 }
 

@@ -134,6 +134,8 @@ struct RunRow {
   // variant's label; runs stored before variants are their renderer.
   nlohmann::json options = nlohmann::json::object();
   std::string variant;
+  // The Tally build that made the run; absent for runs stored before 0005.
+  std::optional<std::string> tallyVersion, tallyCommit;
 };
 
 struct RunPage {
@@ -321,6 +323,8 @@ class Store {
   Result<bool> finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error = {});
   // queued | running -> cancelled; a finished job is returned unchanged. Empty: no such job.
   Result<std::optional<Job>> cancelJob(int64_t jobId);
+  // Jobs by status ("queued", "running", "done", "failed", "cancelled"), each present.
+  Result<std::map<std::string, int64_t>> jobCounts();
   Result<std::optional<Job>> getJob(int64_t jobId);
   // Newest first, cursor-paginated like listRuns; status empty: every status.
   Result<JobPage> listJobs(std::optional<JobStatus> status, const Page& page);

@@ -5,6 +5,7 @@
 #include <future>
 #include <thread>
 
+#include "common/version.hpp"
 #include "protocol.hpp"
 #include "test_util.hpp"
 
@@ -46,7 +47,8 @@ TEST_F(ServerTest, Health) {
   EXPECT_EQ(res->get_header_value("X-Content-Type-Options"), "nosniff");
   auto body = nlohmann::json::parse(res->body);
   EXPECT_EQ(body["status"], "ok");
-  EXPECT_EQ(body["version"], protocol::kVersion);
+  EXPECT_EQ(body["version"], std::string(version()));
+  EXPECT_EQ(body["commit"], std::string(gitCommit()));
   EXPECT_EQ(body["api_version"], protocol::kApiVersion);
   EXPECT_FALSE(server_->tokensRequired());
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "jobs/child_process.hpp"
+#include "proc_file.hpp"
 
 namespace tally::jobs {
 namespace {
@@ -99,8 +100,7 @@ TEST(ChildProcess, MissingProgramIsAnErrorNotACrash) {
 
 // The state letter of /proc/PID/stat, or 0 when there is no such process.
 char processState(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string stat = tally::test::readProcFile("/proc/" + std::to_string(pid) + "/stat");
   size_t paren = stat.rfind(')');
   return paren == std::string::npos || paren + 2 >= stat.size() ? 0 : stat[paren + 2];
 }
@@ -112,8 +112,7 @@ std::vector<pid_t> childrenOf(pid_t parent) {
   for (const auto& entry : std::filesystem::directory_iterator("/proc", ec)) {
     std::string name = entry.path().filename().string();
     if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-    std::ifstream in(entry.path() / "stat");
-    std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string stat = tally::test::readProcFile(entry.path() / "stat");
     size_t paren = stat.rfind(')');
     if (paren == std::string::npos) continue;
     std::istringstream rest(stat.substr(paren + 2));
@@ -148,8 +147,7 @@ TEST(ChildProcess, ChildDiesWithAParentKilledByNine) {
   // Wait for the exec, so that the check is on sleep itself.
   std::string comm;
   for (int i = 0; i < 200 && comm != "sleep\n"; ++i) {
-    std::ifstream in("/proc/" + std::to_string(child) + "/comm");
-    comm.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    comm = tally::test::readProcFile("/proc/" + std::to_string(child) + "/comm");
     if (comm != "sleep\n") std::this_thread::sleep_for(10ms);
   }
   ASSERT_EQ(comm, "sleep\n");

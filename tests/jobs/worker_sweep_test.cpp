@@ -46,7 +46,7 @@ class WorkerSweeps : public StoreTest {
     options.tallydPath = script.string();
     options.tempRoot = dir_ / "tmp";
     options.idlePoll = 20ms;
-    options.log = [](std::string_view) {};
+    options.log = [](const tally::log::Event&) {};
     jobs::Worker worker(*store_, options);
     worker.start();
     Job job;

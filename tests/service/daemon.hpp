@@ -21,6 +21,8 @@
 #include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "proc_file.hpp"
+
 extern char** environ;
 
 namespace tally::service::test {
@@ -39,6 +41,7 @@ inline std::string slurp(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
+
 
 // A `tallyd serve` child; its stdout (the address line) goes to a file.
 class Daemon {
@@ -113,8 +116,8 @@ class Daemon {
     for (const auto& entry : fs::directory_iterator("/proc", ec)) {
       std::string name = entry.path().filename().string();
       if (name.find_first_not_of("0123456789") != std::string::npos) continue;
-      if (slurp(entry.path() / "cmdline").find(tmp().string() + "/tally-job-") == std::string::npos) continue;
-      std::string stat = slurp(entry.path() / "stat");
+      if (tally::test::readProcFile(entry.path() / "cmdline").find(tmp().string() + "/tally-job-") == std::string::npos) continue;
+      std::string stat = tally::test::readProcFile(entry.path() / "stat");
       size_t paren = stat.rfind(')');
       if (paren != std::string::npos && paren + 2 < stat.size() && stat[paren + 2] == 'Z') continue;
       found.push_back(std::stoi(name));

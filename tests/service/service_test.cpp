@@ -193,8 +193,7 @@ TEST_F(ServiceTest, CancelARunningCaptureKillsItsChild) {
     childGone = true;
     std::error_code ec;
     for (const auto& entry : fs::directory_iterator("/proc", ec)) {
-      std::ifstream in(entry.path() / "cmdline");
-      std::string cmd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      std::string cmd = tally::test::readProcFile(entry.path() / "cmdline");
       if (cmd.find(d.tmp().string() + "/tally-job-" + std::to_string(id) + "-") != std::string::npos) childGone = false;
     }
   }

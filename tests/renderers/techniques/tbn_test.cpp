@@ -128,7 +128,7 @@ TEST(TbnEncoding, GlslDecoderAgreesWithTheCppEncoder) {
   for (const Frame& f : frames) words.push_back(encodeTangentFrame(f.normal, f.tangent));
   const uint32_t count = uint32_t(words.size());
 
-  auto source = gpu::loadShaderSource(*ctx, shaderDirectory(), "tbn_decode.comp.glsl");
+  auto source = gpu::loadShaderSource(*ctx, shaderDirectory().value(), "tbn_decode.comp.glsl");
   ASSERT_TRUE(source.ok()) << source.error();
   auto compiled = gpu::compileShader(*source);
   ASSERT_TRUE(compiled.ok()) << compiled.error();

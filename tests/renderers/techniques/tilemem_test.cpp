@@ -108,7 +108,7 @@ TEST(TileMemoryOptions, TableAndBadValues) {
 TEST(TileMemory, LightingSubpassReadsAreAttachmentReads) {
   gpu::Context* ctx = context();
   ASSERT_NE(ctx, nullptr);
-  auto source = gpu::loadShaderSource(*ctx, shaderDirectory(), "lighting_subpass.frag.glsl");
+  auto source = gpu::loadShaderSource(*ctx, shaderDirectory().value(), "lighting_subpass.frag.glsl");
   ASSERT_TRUE(source.ok()) << source.error();
   auto compiled = gpu::compileAndInstrument(*ctx, *source, gpu::instrumentOptionsFor(*ctx, spirv::Mode{}));
   ASSERT_TRUE(compiled.ok()) << compiled.error();
