@@ -108,8 +108,8 @@ RequestExtent requestExtent(std::string_view bytes, std::size_t maxBodyBytes) {
       if (value.empty() || value.size() > 18) valid = false;
       for (char c : value) valid = valid && c >= '0' && c <= '9';
       if (valid) length = std::stoull(std::string(value));
-    } else if (equalsIgnoreCase(name, "Transfer-Encoding")) {
-      chunked = true;
+    } else if (equalsIgnoreCase(name, "Transfer-Encoding") || equalsIgnoreCase(name, "Content-Encoding")) {
+      chunked = true;  // refused from the header (411, 415): no body to wait for
     } else if (equalsIgnoreCase(name, "Expect")) {
       expect = equalsIgnoreCase(value, "100-continue");
     }
