@@ -11,6 +11,9 @@ packages=(
   libglm-dev libcpp-httplib-dev nlohmann-json3-dev libsqlite3-dev libstb-dev
   libtinygltf-dev libcli11-dev libgtest-dev libmeshoptimizer-dev
   chromium
+  # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)
+  # and the /metrics test's parser (Debian's python3, /usr/bin/python3).
+  curl dpkg-dev python3-prometheus-client
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
