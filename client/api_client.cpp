@@ -336,6 +336,8 @@ RunView runView(const json& run) {
   }
   v.counting = str(run, "counting");
   v.createdAt = str(run, "created_at");
+  v.tallyVersion = str(run, "tally_version");
+  v.tallyCommit = str(run, "tally_commit");
   v.width = integer(run, "width");
   v.height = integer(run, "height");
   v.lights = integer(run, "lights");

@@ -123,6 +123,7 @@ std::vector<json> jobList(const json& page);  // the "captures" array
 
 struct RunView {
   std::string id, capture, renderer, scene, device, counting, createdAt;
+  std::string tallyVersion, tallyCommit;  // the build that made it; "" for runs stored before builds recorded it
   // The variant label ("visbuffer barycentrics=float32"; the renderer for a
   // run without options or from a server before variants) and its options.
   std::string variant;

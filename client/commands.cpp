@@ -265,6 +265,8 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   if (r.lights) io.out << "   lights: " << *r.lights;
   if (r.renderTargetBytes)
     io.out << "   render targets: " << humanBytes(static_cast<double>(*r.renderTargetBytes));
+  if (!r.tallyVersion.empty() || !r.tallyCommit.empty())
+    io.out << "   built by: tally " << orMissing(r.tallyVersion) << " (commit " << orMissing(r.tallyCommit) << ")";
   io.out << "\n";
   // What the scene's loader simplified or ignored, then the renderer's choices.
   const json notes = run->contains("notes") && (*run)["notes"].is_object() ? (*run)["notes"] : json::object();

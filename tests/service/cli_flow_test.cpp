@@ -487,6 +487,14 @@ void CliFlow::checkShow(Db& db, const DbRun& run) {
                         std::to_string(run.width) + "x" + std::to_string(run.height));
   EXPECT_EQ(out[1].rfind("device: " + run.device + "   capture: " + std::to_string(run.capture), 0), 0u)
       << out[1];
+  // The build that made the run, as stored.
+  json build = db.rows("SELECT tally_version, tally_commit FROM runs WHERE id = ?1", {run.id});
+  ASSERT_EQ(build.size(), 1u);
+  ASSERT_TRUE(build[0][1].is_string());
+  EXPECT_NE(out[1].find("   built by: tally " + build[0][0].get<std::string>() + " (commit " +
+                        build[0][1].get<std::string>() + ")"),
+            std::string::npos)
+      << out[1];
   // out[2] is blank, out[3] the titles: CAMERA SKY FRAME-MS OVERHEAD IMAGE-ERROR READ/FRAME WRITTEN/FRAME
   for (size_t i = 0; i < samples.size(); ++i) {
     auto c = cells(out[4 + i]);

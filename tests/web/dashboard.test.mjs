@@ -232,6 +232,9 @@ describe('dashboard', () => {
     }
 
     const { page, errors, close } = await open(`#/runs/${id}`);
+    // The build that made the run, as the API has it.
+    assert.ok(run.tally_commit, 'the run records its build');
+    assert.equal(await page.locator('[data-build]').textContent(), `tally ${run.tally_version} (${run.tally_commit})`);
     for (const access of ['read', 'write']) {
       const c = await chart(page, `pass-resource-${access}`);
       assert.deepEqual(c.labels, run.passes.map((p) => p.name));

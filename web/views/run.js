@@ -263,6 +263,7 @@ export async function render(page, { params, signal }) {
       h('li', {}, `${run.lights} lights`),
       h('li', {}, `${run.sample_count} samples`),
       h('li', {}, `${fmt.date(run.created_at)} UTC`),
+      run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution'))),
     h('div', { class: 'tiles' },
