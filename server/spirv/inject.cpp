@@ -84,8 +84,13 @@ class Injector {
 
   std::string run(const SiteScan& scan, const std::vector<uint32_t>& slots) {
     // Which helper each stage uses decides the capabilities and version.
+    const bool accumulate = options_.mode.kind == CountMode::Accumulate;
     bool subgroup = false;
     for (const auto& ep : scan.entryPoints) {
+      if (accumulate) {
+        if (accumulates(ep.stage) && subgroupFlush(ep.stage)) subgroup = true;
+        continue;
+      }
       Helper h = helperFor(ep.stage);
       if (h != Helper::Exact && options_.mode.kind == CountMode::Subgroup) subgroup = true;
     }
@@ -111,6 +116,7 @@ class Injector {
     for (size_t i = 0; i < scan.sites.size(); ++i) {
       const FoundSite& s = scan.sites[i];
       const EntryPoint& ep = scan.entryPoints[s.entryIndex];
+      if (accumulate && accumulateSite(s, ep, slots[i], after, before)) continue;
       Helper kind = helperFor(ep.stage);
       if (s.dynamicIndex == 0 && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
       if (s.dynamicIndex == 0 && kind == Helper::SubgroupFragment) kind = Helper::SubgroupUniformFragment;
@@ -143,10 +149,15 @@ class Injector {
       }
     }
 
+    if (accumulate) insertFlushes(scan, before);
+
     // Entry-point interfaces: builtins always, every global from SPIR-V 1.4 on.
     for (const auto& ep : scan.entryPoints) {
       std::set<uint32_t> add(stageBuiltins_[ep.stage].begin(), stageBuiltins_[ep.stage].end());
-      if (m_.version >= kVersion14) add.insert(counters_);
+      if (m_.version >= kVersion14) {
+        add.insert(counters_);
+        add.insert(accumulators_.begin(), accumulators_.end());
+      }
       Instruction& inst = m_.entryPoints[ep.instIndex];
       for (uint32_t id : add) {
         if (std::find(ep.interface.begin(), ep.interface.end(), id) == ep.interface.end()) inst.words.push_back(id);
@@ -180,7 +191,8 @@ class Injector {
  private:
   Helper helperFor(Stage stage) {
     switch (options_.mode.kind) {
-      case CountMode::Exact: return Helper::Exact;
+      case CountMode::Exact:
+      case CountMode::Accumulate: return Helper::Exact;  // accumulate: its fall-back per access
       case CountMode::Subgroup:
         if ((options_.subgroupStages & stageBit(stage)) == 0) {
           noteOnce("subgroup mode: " + std::string(toString(stage)) +
@@ -548,6 +560,269 @@ class Injector {
     return id;
   }
 
+  // ---- accumulate: a register per slot, one flush per invocation --------
+  //
+  // Each site adds 1 to a Private (per-invocation) u32 accumulator of its
+  // slot; the invocation flushes every accumulator of its stage once, where
+  // it ends: before each OpReturn of the entry function, and before OpKill,
+  // OpTerminateInvocation, OpDemoteToHelperInvocation (then zeroed: the
+  // helper it becomes is not counted) and OpEmitMeshTasksEXT wherever they
+  // are. The flush reduces across the subgroup (lo and hi 16 bits apart, so
+  // that the sum is exact for any per-invocation count below 2^32) and one
+  // elected lane adds a non-zero total; without subgroup arithmetic in the
+  // stage each lane adds its own non-zero accumulator.
+
+  static bool accumulates(Stage stage) { return stage != Stage::Other; }
+  bool subgroupFlush(Stage stage) const { return (options_.subgroupStages & stageBit(stage)) != 0; }
+
+  // A Private u32 (or u32[n]) variable initialised to zero.
+  uint32_t privateVariable(uint32_t valueType, uint32_t zero, const std::string& varName) {
+    uint32_t id = m_.newId();
+    newGlobals_.emplace_back(spv::Op::OpVariable,
+                             std::vector<uint32_t>{tPtr(spv::StorageClass::Private, valueType), id,
+                                                   static_cast<uint32_t>(spv::StorageClass::Private), zero});
+    name(id, varName);
+    accumulators_.push_back(id);
+    return id;
+  }
+
+  uint32_t scalarAccumulator(uint32_t slot) {
+    if (auto it = scalarAcc_.find(slot); it != scalarAcc_.end()) return it->second;
+    uint32_t id = privateVariable(tU32(), constantU32(0), "tally_acc_" + std::to_string(slot));
+    scalarAcc_.emplace(slot, id);
+    return id;
+  }
+
+  struct ArrayAccumulator {
+    uint32_t variable, length;
+  };
+  uint32_t arrayAccumulator(uint32_t base, uint32_t length) {
+    for (const auto& [key, acc] : arrayAcc_) {
+      if (key == base && acc.length == length) return acc.variable;
+    }
+    uint32_t arrayType = m_.newId();
+    newGlobals_.emplace_back(spv::Op::OpTypeArray, std::vector<uint32_t>{arrayType, tU32(), constantU32(length)});
+    uint32_t null = m_.newId();
+    newGlobals_.emplace_back(spv::Op::OpConstantNull, std::vector<uint32_t>{arrayType, null});
+    uint32_t id = privateVariable(arrayType, null, "tally_acc_" + std::to_string(base) + "_x" + std::to_string(length));
+    arrayAcc_.emplace_back(base, ArrayAccumulator{id, length});
+    return id;
+  }
+
+  // acc += 1 through a Private pointer.
+  void increment(Body& b, uint32_t pointer) {
+    uint32_t v = op(b, spv::Op::OpLoad, tU32(), {pointer});
+    uint32_t w = op(b, spv::Op::OpIAdd, tU32(), {v, constantU32(1)});
+    opNoResult(b, spv::Op::OpStore, {pointer, w});
+  }
+
+  // The clamped element of a run-time descriptor index (as slotValue, without the base).
+  uint32_t clampedIndex(Body& b, const FoundSite& s, uint32_t length) {
+    uint32_t u = tU32();
+    uint32_t index = s.dynamicIndex;
+    const Instruction* t = defs_.def(types_.typeOf(index));
+    if (t != nullptr && t->opcode() == spv::Op::OpTypeInt) {
+      if (t->word(2) != 32) {
+        index = op(b, spv::Op::OpUConvert, u, {index});
+      } else if (t->word(3) == 1) {
+        index = op(b, spv::Op::OpBitcast, u, {index});
+      }
+    }
+    uint32_t inRange = op(b, spv::Op::OpULessThan, tBool(), {index, constantU32(length)});
+    return op(b, spv::Op::OpSelect, u, {inRange, index, constantU32(length - 1)});
+  }
+
+  // Emits the site's increment; false when the site is counted per access instead.
+  bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
+                      std::vector<std::map<size_t, std::vector<Instruction>>>& after,
+                      std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
+    if (!accumulates(ep.stage)) {
+      noteOnce("accumulate mode: " + std::string(toString(ep.stage)) + " stage is counted per access");
+      return false;
+    }
+    uint32_t length = s.dynamicIndex == 0 ? 1 : (s.arrayLength != 0 ? s.arrayLength : kRuntimeArraySlots);
+    if (s.dynamicIndex != 0 && length > kAccumulateArrayMax) {
+      noteOnce("accumulate mode: descriptor arrays of more than " + std::to_string(kAccumulateArrayMax) +
+               " elements indexed at run time are counted per access");
+      return false;
+    }
+    const auto& insts = m_.functions[s.function].insts;
+    auto emitInto = [&](std::vector<Instruction>& list) {
+      Body b{list};
+      uint32_t pointer;
+      if (s.dynamicIndex == 0) {
+        pointer = scalarAccumulator(slot);
+      } else {
+        uint32_t array = arrayAccumulator(slot, length);
+        pointer = op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()),
+                     {array, clampedIndex(b, s, length)});
+      }
+      increment(b, pointer);
+    };
+    switch (s.placement) {
+      case Placement::AfterInstruction: emitInto(after[s.function][s.instruction]); break;
+      case Placement::EntryStart: {
+        size_t at = 0;
+        while (at < insts.size() && insts[at].opcode() != spv::Op::OpLabel) ++at;
+        ++at;
+        while (at < insts.size() && (insts[at].opcode() == spv::Op::OpVariable ||
+                                     insts[at].opcode() == spv::Op::OpLine || insts[at].opcode() == spv::Op::OpNoLine)) {
+          ++at;
+        }
+        emitInto(before[s.function][at]);
+        break;
+      }
+      case Placement::BeforeReturns:
+        for (size_t at = 0; at < insts.size(); ++at) {
+          if (insts[at].opcode() == spv::Op::OpReturn) emitInto(before[s.function][at]);
+        }
+        break;
+    }
+    // The stage's flush covers this slot (or these slots).
+    auto& flush = flushSlots_[ep.stage];
+    if (s.dynamicIndex == 0) {
+      flush.scalars.insert(slot);
+    } else {
+      flush.arrays.insert({slot, length});
+    }
+    return true;
+  }
+
+  // counters[slot] += hi * 65536 + lo, both u32 below 2^32 / 65536 * subgroup size.
+  void emitAddWide(Body& b, uint32_t slot, uint32_t lo, uint32_t hi) {
+    uint32_t zero = constantU32(0), semantics = constantU32(kSemanticsRelaxed);
+    if (options_.width == CounterWidth::Int64) {
+      uint32_t wideHi = op(b, spv::Op::OpUConvert, tU64(), {hi});
+      uint32_t shifted = op(b, spv::Op::OpShiftLeftLogical, tU64(), {wideHi, constantU32(16)});
+      uint32_t wideLo = op(b, spv::Op::OpUConvert, tU64(), {lo});
+      uint32_t amount = op(b, spv::Op::OpIAdd, tU64(), {shifted, wideLo});
+      uint32_t ptr = op(b, spv::Op::OpAccessChain, elementPtr_, {counters_, zero, slot});
+      op(b, spv::Op::OpAtomicIAdd, tU64(), {ptr, atomicScope(), semantics, amount});
+      return;
+    }
+    // The amount as two words, then the low word's carry into the high one.
+    uint32_t u = tU32();
+    uint32_t hiLow = op(b, spv::Op::OpShiftLeftLogical, u, {hi, constantU32(16)});
+    uint32_t low = op(b, spv::Op::OpIAdd, u, {hiLow, lo});
+    uint32_t carryIn = op(b, spv::Op::OpULessThan, tBool(), {low, lo});
+    uint32_t hiHigh = op(b, spv::Op::OpShiftRightLogical, u, {hi, constantU32(16)});
+    uint32_t high = op(b, spv::Op::OpIAdd, u, {hiHigh, op(b, spv::Op::OpSelect, u, {carryIn, constantU32(1), zero})});
+    uint32_t lowIndex = op(b, spv::Op::OpIMul, u, {slot, constantU32(2)});
+    uint32_t lowPtr = op(b, spv::Op::OpAccessChain, elementPtr_, {counters_, zero, lowIndex});
+    uint32_t old = op(b, spv::Op::OpAtomicIAdd, u, {lowPtr, atomicScope(), semantics, low});
+    uint32_t sum = op(b, spv::Op::OpIAdd, u, {old, low});
+    uint32_t wrapped = op(b, spv::Op::OpULessThan, tBool(), {sum, old});
+    uint32_t total = op(b, spv::Op::OpIAdd, u, {high, op(b, spv::Op::OpSelect, u, {wrapped, constantU32(1), zero})});
+    uint32_t any = op(b, spv::Op::OpINotEqual, tBool(), {total, zero});
+    uint32_t carry = m_.newId(), merge = m_.newId();
+    selection(b, any, carry, merge, merge);
+    label(b, carry);
+    uint32_t highIndex = op(b, spv::Op::OpIAdd, u, {lowIndex, constantU32(1)});
+    uint32_t highPtr = op(b, spv::Op::OpAccessChain, elementPtr_, {counters_, zero, highIndex});
+    op(b, spv::Op::OpAtomicIAdd, u, {highPtr, atomicScope(), semantics, total});
+    branch(b, merge);
+    label(b, merge);
+  }
+
+  // Flushes one accumulator (a Private u32 pointer) into counter `slot`, then zeroes it.
+  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot, uint32_t isHelper) {
+    uint32_t u = tU32(), zero = constantU32(0);
+    uint32_t v = op(b, spv::Op::OpLoad, u, {pointer});
+    opNoResult(b, spv::Op::OpStore, {pointer, zero});
+    uint32_t add = m_.newId(), done = m_.newId();
+    if (subgroupFlush(stage)) {
+      if (isHelper != 0) v = op(b, spv::Op::OpSelect, u, {isHelper, zero, v});
+      uint32_t scope = constantU32(kScopeSubgroup);
+      uint32_t lo = op(b, spv::Op::OpBitwiseAnd, u, {v, constantU32(0xffffu)});
+      uint32_t hi = op(b, spv::Op::OpShiftRightLogical, u, {v, constantU32(16)});
+      uint32_t sumLo = op(b, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, lo});
+      uint32_t sumHi = op(b, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, hi});
+      uint32_t either = op(b, spv::Op::OpBitwiseOr, u, {sumLo, sumHi});
+      uint32_t nonZero = op(b, spv::Op::OpINotEqual, tBool(), {either, zero});
+      uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
+      uint32_t go = op(b, spv::Op::OpLogicalAnd, tBool(), {elected, nonZero});
+      selection(b, go, add, done, done);
+      label(b, add);
+      emitAddWide(b, constantU32(slot), sumLo, sumHi);
+    } else {
+      // Per lane. A helper lane's atomic has no effect (Vulkan), as in exact mode.
+      uint32_t nonZero = op(b, spv::Op::OpINotEqual, tBool(), {v, zero});
+      selection(b, nonZero, add, done, done);
+      label(b, add);
+      emitAdd(b, constantU32(slot), v);
+    }
+    branch(b, done);
+    label(b, done);
+  }
+
+  // The stage's flush function: every accumulator its sites use.
+  uint32_t flushFunction(Stage stage) {
+    if (auto it = flushFunctions_.find(stage); it != flushFunctions_.end()) return it->second;
+    uint32_t fnType = type(spv::Op::OpTypeFunction, {tVoid()});
+    Function fn;
+    Body b{fn.insts};
+    uint32_t id = m_.newId();
+    b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, 0, fnType});
+    label(b, m_.newId());
+    uint32_t isHelper = 0;
+    if (stage == Stage::Fragment && subgroupFlush(stage)) {
+      // Helper lanes take part in the reduction but must add nothing.
+      uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
+      std::vector<uint32_t> load = {var};
+      if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
+      isHelper = op(b, spv::Op::OpLoad, tBool(), load);
+    }
+    const FlushSlots& slots = flushSlots_[stage];
+    for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot, isHelper);
+    for (const auto& [base, length] : slots.arrays) {
+      uint32_t array = arrayAccumulator(base, length);
+      for (uint32_t i = 0; i < length; ++i) {
+        uint32_t element = op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()), {array, constantU32(i)});
+        flushOne(b, stage, element, base + i, isHelper);
+      }
+    }
+    opNoResult(b, spv::Op::OpReturn, {});
+    b.insts.emplace_back(spv::Op::OpFunctionEnd, std::vector<uint32_t>{});
+    name(id, "tally_flush_" + std::string(toString(stage)));
+    newFunctions_.push_back(std::move(fn));
+    flushFunctions_.emplace(stage, id);
+    return id;
+  }
+
+  // Calls each stage's flush where its invocations end.
+  void insertFlushes(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
+    // Functions by id, and the stage of the entry points that reach each.
+    std::map<uint32_t, int> byId;
+    for (size_t f = 0; f < m_.functions.size(); ++f) byId[m_.functions[f].id()] = static_cast<int>(f);
+    std::map<int, Stage> stageOf;
+    for (const auto& ep : scan.entryPoints) {
+      if (!accumulates(ep.stage) || !flushSlots_.count(ep.stage)) continue;
+      std::vector<int> work = {ep.functionIndex};
+      while (!work.empty()) {
+        int f = work.back();
+        work.pop_back();
+        if (f < 0 || !stageOf.emplace(f, ep.stage).second) continue;
+        for (const auto& inst : m_.functions[f].insts) {
+          if (inst.opcode() == spv::Op::OpFunctionCall) {
+            if (auto it = byId.find(inst.word(3)); it != byId.end()) work.push_back(it->second);
+          }
+        }
+      }
+    }
+    std::set<int> entryFunctions;
+    for (const auto& ep : scan.entryPoints) entryFunctions.insert(ep.functionIndex);
+    for (const auto& [f, stage] : stageOf) {
+      const auto& insts = m_.functions[f].insts;
+      for (size_t at = 0; at < insts.size(); ++at) {
+        spv::Op o = insts[at].opcode();
+        bool ends = (o == spv::Op::OpReturn && entryFunctions.count(f)) || o == spv::Op::OpKill ||
+                    o == spv::Op::OpTerminateInvocation || o == spv::Op::OpDemoteToHelperInvocation ||
+                    o == spv::Op::OpEmitMeshTasksEXT;
+        if (ends) before[f][at].push_back(Instruction(spv::Op::OpFunctionCall, {tVoid(), m_.newId(), flushFunction(stage)}));
+      }
+    }
+  }
+
   Instruction call(uint32_t helper, uint32_t slot) {
     return Instruction(spv::Op::OpFunctionCall, {tVoid(), m_.newId(), helper, slot});
   }
@@ -590,6 +865,16 @@ class Injector {
   std::vector<std::pair<uint32_t, uint32_t>> createdBuiltins_;
   std::map<Stage, std::set<uint32_t>> stageBuiltins_;
   std::map<std::pair<Helper, Stage>, uint32_t> helpers_;
+  // accumulate mode
+  struct FlushSlots {
+    std::set<uint32_t> scalars;
+    std::set<std::pair<uint32_t, uint32_t>> arrays;  // (first slot, length)
+  };
+  std::map<Stage, FlushSlots> flushSlots_;
+  std::map<uint32_t, uint32_t> scalarAcc_;  // slot -> Private u32
+  std::vector<std::pair<uint32_t, ArrayAccumulator>> arrayAcc_;
+  std::vector<uint32_t> accumulators_;      // every Private variable added
+  std::map<Stage, uint32_t> flushFunctions_;
   std::vector<Instruction> newGlobals_, newAnnotations_, newNames_;
   std::vector<Function> newFunctions_;
 };

@@ -16,6 +16,15 @@ namespace tally::spirv {
 // larger indices are clamped into the last one.
 constexpr uint32_t kRuntimeArraySlots = 128;
 
+// accumulate mode: a descriptor array indexed at run time accumulates into a
+// Private u32 array of its length up to this many elements (64 bytes per
+// invocation, which drivers keep in registers or in L1-resident local
+// memory, and a flush of 16 unrolled reductions). Longer arrays (runtime-
+// sized ones: 128 slots) would cost more local memory and flush work per
+// invocation than the atomics they save in the usual few accesses per
+// invocation: their sites are counted per access, with a note.
+constexpr uint32_t kAccumulateArrayMax = 16;
+
 // Sampling tile for sampled:N: th = largest divisor of N with th*th <= N,
 // tw = N / th. One invocation per tile of tw x th pixels (or invocations) counts.
 struct TileShape {

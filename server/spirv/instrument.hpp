@@ -15,9 +15,10 @@
 namespace tally::spirv {
 
 enum class CountMode {
-  Exact,     // one atomic per access
-  Subgroup,  // reduce across the subgroup, one atomic per subgroup and slot
-  Sampled,   // count in 1 of N pixels/invocations (stratified), scale by N
+  Exact,       // one atomic per access
+  Subgroup,    // reduce across the subgroup, one atomic per subgroup and slot
+  Sampled,     // count in 1 of N pixels/invocations (stratified), scale by N
+  Accumulate,  // add in a per-invocation register; flush once where the invocation ends
 };
 
 struct Mode {
@@ -25,7 +26,7 @@ struct Mode {
   uint32_t sampleRate = 1;  // N for Sampled, 1 otherwise
 };
 
-// "exact", "subgroup", "sampled:N" (N in [2, 65536]).
+// "exact", "subgroup", "sampled:N" (N in [2, 65536]), "accumulate".
 Result<Mode> parseMode(std::string_view text);
 std::string toString(const Mode& mode);
 

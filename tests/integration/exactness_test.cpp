@@ -40,6 +40,7 @@ const ModeCase kModes[] = {
     {"exact", CounterWidth::Int64},      {"exact", CounterWidth::Uint32Pair},
     {"subgroup", CounterWidth::Int64},   {"sampled:4", CounterWidth::Int64},
     {"sampled:16", CounterWidth::Int64}, {"sampled:64", CounterWidth::Int64},
+    {"accumulate", CounterWidth::Int64}, {"accumulate", CounterWidth::Uint32Pair},
 };
 
 struct Size {

@@ -11,7 +11,8 @@
 //   2^32 less than the true value there;
 // - sampled:N adds N at a time, and the headroom is odd, so the add that wraps
 //   a slot always straddles 2^32 rather than landing on it; subgroup mode adds
-//   a lane count. Both must carry exactly as exact mode does.
+//   a lane count, accumulate a subgroup's total (its high and low 16 bits
+//   added as one 64-bit amount). All must carry exactly as exact mode does.
 #include <algorithm>
 #include <cinttypes>
 #include <cstdio>
@@ -168,10 +169,11 @@ TEST_P(CounterOverflow, CarriesAcrossTwoTo32) {
 std::vector<OverflowCase> overflowCases() {
   std::vector<OverflowCase> cases;
   for (const char* pass : {"fragment", "compute"}) {
-    for (const char* mode : {"exact", "subgroup", "sampled:4", "sampled:16", "sampled:64"}) {
+    for (const char* mode : {"exact", "subgroup", "sampled:4", "sampled:16", "sampled:64", "accumulate"}) {
       cases.push_back({pass, mode, CounterWidth::Uint32Pair});
     }
     cases.push_back({pass, "exact", CounterWidth::Int64});
+    cases.push_back({pass, "accumulate", CounterWidth::Int64});
     cases.push_back({pass, "sampled:16", CounterWidth::Int64});
   }
   return cases;

@@ -121,12 +121,17 @@ void checkDeclared(const std::vector<analytic::PassPrediction>& want, const Rend
   }
 }
 
-using Param = std::tuple<VkExtent2D, nlohmann::json>;
+// The counting modes whose counts are exact: the analytic suite runs each.
+const std::string kExactModes[] = {"exact", "accumulate"};
+
+using Param = std::tuple<VkExtent2D, nlohmann::json, std::string>;
 
 class AnalyticCounts : public ::testing::TestWithParam<Param> {};
 
 TEST_P(AnalyticCounts, EveryRendererMatchesThePrediction) {
-  const auto& [extent, spec] = GetParam();
+  const auto& [extent, spec, modeName] = GetParam();
+  auto mode = spirv::parseMode(modeName);
+  ASSERT_TRUE(mode.ok()) << mode.error();
   const analytic::Geometry g = analytic::geometryOf(spec, extent);
   ASSERT_FALSE(g.rows.ambiguous) << "an edge of " << spec.dump() << " lies on a snapping midpoint at "
                                  << extent.height << " rows: choose another coverage";
@@ -135,8 +140,8 @@ TEST_P(AnalyticCounts, EveryRendererMatchesThePrediction) {
   gpu::Context* ctx = context();
   ASSERT_NE(ctx, nullptr);
   for (const auto& name : rendererNames()) {
-    Rendered r = render(name, spec, extent);
-    ASSERT_TRUE(r.ok) << name << ": " << r.error;
+    Rendered r = render(name, spec, extent, [&](RendererOptions& o) { o.counting = *mode; });
+    ASSERT_TRUE(r.ok) << name << " (" << modeName << "): " << r.error;
     analytic::DeviceTraits device;
     device.lights = kTestLights;
     device.barycentricExtension = r.notes.value("barycentrics", "") == "extension";
@@ -145,7 +150,7 @@ TEST_P(AnalyticCounts, EveryRendererMatchesThePrediction) {
     for (size_t i = 0; i < want.size(); ++i) {
       const PassResult& got = r.frame.passes[i];
       ASSERT_EQ(got.name, want[i].name) << name;
-      const std::string where = name + " " + got.name;
+      const std::string where = name + " " + got.name + " (" + modeName + ")";
       checkPass(want[i], got, where);
       checkStatistic(*ctx, want[i], got, where);
     }
@@ -166,8 +171,8 @@ std::vector<nlohmann::json> specs() {
 }
 
 std::string paramName(const ::testing::TestParamInfo<Param>& info) {
-  const auto& [extent, spec] = info.param;
-  std::string name = std::to_string(extent.width) + "x" + std::to_string(extent.height) + "_" +
+  const auto& [extent, spec, mode] = info.param;
+  std::string name = mode + "_" + std::to_string(extent.width) + "x" + std::to_string(extent.height) + "_" +
                      spec.value("name", "");
   if (spec.contains("layers")) {
     name += std::to_string(spec["layers"].get<int>()) +
@@ -178,7 +183,8 @@ std::string paramName(const ::testing::TestParamInfo<Param>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Renderers, AnalyticCounts,
-                         ::testing::Combine(::testing::ValuesIn(kExtents), ::testing::ValuesIn(specs())),
+                         ::testing::Combine(::testing::ValuesIn(kExtents), ::testing::ValuesIn(specs()),
+                                            ::testing::ValuesIn(kExactModes)),
                          paramName);
 
 // The variants (options.hpp) whose passes change: forward's count outputs
@@ -215,12 +221,18 @@ TEST(AnalyticVariants, EveryVariantMatchesThePrediction) {
     for (const auto& spec : {planes(3, "back-to-front", 0.5), planes(4, "front-to-back", 1.0)}) {
       const analytic::Geometry g = analytic::geometryOf(spec, extent);
       ASSERT_FALSE(g.rows.ambiguous) << spec.dump();
-      for (const auto& v : kVariants) {
+      for (const auto& v : kVariants) for (const std::string& modeName : kExactModes) {
+        auto mode = spirv::parseMode(modeName);
+        ASSERT_TRUE(mode.ok()) << mode.error();
         auto options = canonicalOptions(v.renderer, nlohmann::json::parse(v.options));
         ASSERT_TRUE(options.ok()) << v.renderer << " " << v.options << ": " << options.error();
         const std::string label = variantLabel(v.renderer, *options) + " " + spec.dump() + " " +
-                                  std::to_string(extent.width) + "x" + std::to_string(extent.height);
-        Rendered r = render(v.renderer, spec, extent, [&](RendererOptions& o) { applyOptions(*options, o); });
+                                  std::to_string(extent.width) + "x" + std::to_string(extent.height) + " (" +
+                                  modeName + ")";
+        Rendered r = render(v.renderer, spec, extent, [&](RendererOptions& o) {
+          applyOptions(*options, o);
+          o.counting = *mode;
+        });
         ASSERT_TRUE(r.ok) << label << ": " << r.error;
         analytic::DeviceTraits device;
         device.lights = kTestLights;
