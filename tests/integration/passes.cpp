@@ -188,10 +188,10 @@ VkDescriptorSetLayoutBinding binding(uint32_t index, VkDescriptorType type, VkSh
 // ---------------------------------------------------------------- fragment
 
 FragmentPass::FragmentPass(const gpu::Context& ctx, uint32_t width, uint32_t height,
-                           std::optional<glsl::Target> target)
+                           std::optional<glsl::Target> target, const std::string& fragment)
     : ctx_(ctx), width_(width), height_(height) {
   auto vert = compileFile(ctx, "fullscreen.vert.glsl", target);
-  auto frag = compileFile(ctx, "five_reads.frag.glsl", target);
+  auto frag = compileFile(ctx, fragment, target);
   if (!vert) compileError_ = vert.error();
   if (!frag) compileError_ = frag.error();
   if (vert && frag) {
@@ -338,9 +338,9 @@ Result<PassRun> FragmentPass::run(const RunOptions& options) {
 
 // ----------------------------------------------------------------- compute
 
-ComputePass::ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t height)
+ComputePass::ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t height, const std::string& shader)
     : ctx_(ctx), width_(width), height_(height) {
-  auto comp = compileFile(ctx, "mixed_reads.comp.glsl", std::nullopt);
+  auto comp = compileFile(ctx, shader, std::nullopt);
   if (comp) {
     words_ = std::move(*comp);
   } else {

@@ -51,9 +51,11 @@ struct PassRun {
 
 class FragmentPass {
  public:
-  // `target` overrides gpu::glslTarget(ctx) for both stages.
+  // `target` overrides gpu::glslTarget(ctx) for both stages. `fragment` is a
+  // shader of shaders/ with five_reads' bindings (3 sampler2D, one output).
   FragmentPass(const gpu::Context& ctx, uint32_t width, uint32_t height,
-               std::optional<glsl::Target> target = std::nullopt);
+               std::optional<glsl::Target> target = std::nullopt,
+               const std::string& fragment = "five_reads.frag.glsl");
   ~FragmentPass();
   FragmentPass(const FragmentPass&) = delete;
   FragmentPass& operator=(const FragmentPass&) = delete;
@@ -81,7 +83,9 @@ class FragmentPass {
 
 class ComputePass {
  public:
-  ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t height);
+  // `shader`: a compute shader of shaders/ with mixed_reads' bindings.
+  ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t height,
+              const std::string& shader = "mixed_reads.comp.glsl");
   ~ComputePass();
   ComputePass(const ComputePass&) = delete;
   ComputePass& operator=(const ComputePass&) = delete;

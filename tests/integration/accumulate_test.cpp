@@ -1,0 +1,96 @@
+// Where invocations end early, and where one invocation counts past 16 bits:
+// the cases the accumulate mode's flush must get right, run in every exact
+// mode on the device (lavapipe in CI) against counts derived by hand in the
+// shaders' headers.
+//  - discard_left / demote_left: the left 100 columns end (OpKill) or turn
+//    into helpers (OpDemoteToHelperInvocation) after two of five reads;
+//  - long_loop: 70008 buffer loads per invocation, both 16-bit halves of the
+//    flush's reduction non-zero.
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "gpu_fixture.hpp"
+#include "passes.hpp"
+
+namespace tally::test {
+namespace {
+
+using spirv::CounterWidth;
+using spirv::SiteKind;
+using spirv::Stage;
+
+struct ExactMode {
+  const char* mode;
+  CounterWidth width;
+};
+const ExactMode kExactModes[] = {{"exact", CounterWidth::Int64},
+                                 {"exact", CounterWidth::Uint32Pair},
+                                 {"subgroup", CounterWidth::Int64},
+                                 {"accumulate", CounterWidth::Int64},
+                                 {"accumulate", CounterWidth::Uint32Pair}};
+
+// Sum over the slots of the sites of `kind` on the resource named `resource`.
+uint64_t sumResource(const PassRun& run, SiteKind kind, const std::string& resource) {
+  std::vector<spirv::Site> picked;
+  for (const auto& s : run.sites) {
+    if (s.kind == kind && s.resource == resource) picked.push_back(s);
+  }
+  return sumKind(picked, run.counters, kind, Stage::Fragment) + sumKind(picked, run.counters, kind, Stage::Compute);
+}
+
+const gpu::Context* deviceOrSkip(std::string& why) { return testContext(&why); }
+
+class EarlyEnd : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(EarlyEnd, CountsStopWhereTheInvocationEnds) {
+  std::string why;
+  const gpu::Context* ctx = deviceOrSkip(why);
+  ASSERT_NE(ctx, nullptr) << why;
+  for (auto [w, h] : {std::pair<uint32_t, uint32_t>{333, 197}, {157, 91}}) {
+    FragmentPass pass(*ctx, w, h, std::nullopt, GetParam());
+    const uint64_t all = uint64_t(w) * h, kept = uint64_t(w - 100) * h;
+    for (const auto& m : kExactModes) {
+      if (m.width == CounterWidth::Int64 && !ctx->int64Atomics) continue;
+      auto mode = spirv::parseMode(m.mode);
+      ASSERT_TRUE(mode.ok());
+      auto run = pass.run({*mode, m.width, 1});
+      ASSERT_TRUE(run.ok()) << run.error();
+      const std::string where = std::string(GetParam()) + " " + std::to_string(w) + "x" + std::to_string(h) + " " +
+                                modeLabel(*mode, m.width);
+      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "albedo"), all + kept) << where;
+      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "detail"), all + kept) << where;
+      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "mask"), kept) << where;
+      EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::OutputWrite, Stage::Fragment), kept) << where;
+      EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::Invocation, Stage::Fragment), all) << where;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shaders, EarlyEnd, ::testing::Values("discard_left.frag.glsl", "demote_left.frag.glsl"),
+                         [](const auto& info) { return std::string(info.param).substr(0, std::string(info.param).find('_')); });
+
+TEST(LongLoop, SeventyThousandLoadsPerInvocationCountExactly) {
+  std::string why;
+  const gpu::Context* ctx = deviceOrSkip(why);
+  ASSERT_NE(ctx, nullptr) << why;
+  constexpr uint32_t w = 13, h = 9;  // 117 invocations in bounds of 16 x 16 launched
+  constexpr uint64_t kLoads = 70008;  // long_loop.comp.glsl
+  ComputePass pass(*ctx, w, h, "long_loop.comp.glsl");
+  for (const auto& m : kExactModes) {
+    if (m.width == CounterWidth::Int64 && !ctx->int64Atomics) continue;
+    auto mode = spirv::parseMode(m.mode);
+    ASSERT_TRUE(mode.ok());
+    auto run = pass.run({*mode, m.width, 1});
+    ASSERT_TRUE(run.ok()) << run.error();
+    const std::string where = modeLabel(*mode, m.width);
+    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::BufferRead, Stage::Compute), uint64_t(w) * h * kLoads)
+        << where;
+    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::BufferWrite, Stage::Compute), uint64_t(w) * h) << where;
+    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::Invocation, Stage::Compute), 16u * 16u) << where;
+  }
+}
+
+}  // namespace
+}  // namespace tally::test
