@@ -1,0 +1,49 @@
+#!/usr/bin/env python3
+"""The cost of counting, by renderer (or variant), pass and counting mode,
+from capture results: the median over a run's samples of the overhead ratio
+(counted frame or pass time over the uninstrumented one of the same run).
+Prints Markdown tables: frames, then passes.
+
+  counting_summary.py RESULT.json [RESULT.json ...]
+"""
+import json
+import statistics
+import sys
+from collections import OrderedDict
+
+
+def median(values):
+    values = [v for v in values if v is not None]
+    return statistics.median(values) if values else None
+
+
+def fmt(v):
+    return "-" if v is None else f"x{v:.3f}"
+
+
+frames = OrderedDict()  # (label, scene, size) -> {mode: ratio}
+passes = OrderedDict()  # (label, scene, size, pass) -> {mode: ratio}
+modes = []
+for path in sys.argv[1:]:
+    result = json.load(open(path))
+    for run in result["runs"]:
+        label = run.get("variant") or run["renderer"]
+        key = (label, run["scene"], f'{run["width"]}x{run["height"]}')
+        mode = run.get("counting", "exact")
+        if mode not in modes:
+            modes.append(mode)
+        frames.setdefault(key, {})[mode] = median(s.get("overhead_ratio") for s in run["samples"])
+        names = [p["name"] for p in run["samples"][0]["passes"]] if run["samples"] else []
+        for name in names:
+            ratios = [p.get("overhead_ratio") for s in run["samples"] for p in s["passes"] if p["name"] == name]
+            passes.setdefault(key + (name,), {})[mode] = median(ratios)
+
+print("| renderer | scene | size | " + " | ".join(modes) + " |")
+print("|---|---|---|" + "---|" * len(modes))
+for (label, scene, size), by in frames.items():
+    print(f"| {label} | {scene} | {size} | " + " | ".join(fmt(by.get(m)) for m in modes) + " |")
+print()
+print("| renderer | pass | " + " | ".join(modes) + " |")
+print("|---|---|" + "---|" * len(modes))
+for (label, scene, size, name), by in passes.items():
+    print(f"| {label} | {name} | " + " | ".join(fmt(by.get(m)) for m in modes) + " |")
