@@ -309,6 +309,12 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
               {"notes", runNotes(*instrumented, scene)},
               {"resources", resourcesJson(instrumented->resources())},
               {"samples", json::array()}};
+  // The cost of the instrumentation in the compiled code, where the driver
+  // reports it (VK_KHR_pipeline_executable_properties: NVIDIA's register
+  // count, local memory): the same passes' pipelines counted and plain.
+  if (json counted = instrumented->pipelineStatistics(); !counted.empty()) {
+    run["pipeline_statistics"] = {{"instrumented", std::move(counted)}, {"plain", plain.pipelineStatistics()}};
+  }
   CounterHeadroom headroom;
   for (size_t c = 0; c < cameras.size(); ++c) {
     const auto& camera = cameras[c];

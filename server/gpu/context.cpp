@@ -265,6 +265,7 @@ void createDevice(Context& ctx, const Candidate& chosen) {
   VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, available.data()));
   available.resize(extCount);
   const bool hasBarycentric = hasExtension(available, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
+  const bool hasExecutableProps = hasExtension(available, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
   const bool hasAtomicInt64Ext = !v12 && hasExtension(available, VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
   const bool hasDriverPropsExt = !v12 && hasExtension(available, VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
 
@@ -290,6 +291,8 @@ void createDevice(Context& ctx, const Candidate& chosen) {
       VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
   VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR haveBary = {
       VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
+  VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR haveExec = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR};
   void** tail = &have.pNext;
   auto append = [&tail](auto& s) {
     *tail = &s;
@@ -302,6 +305,7 @@ void createDevice(Context& ctx, const Candidate& chosen) {
   if (v13) append(have13);
   if (hasAtomicInt64Ext) append(haveAtomic);
   if (hasBarycentric) append(haveBary);
+  if (hasExecutableProps) append(haveExec);
   vkGetPhysicalDeviceFeatures2(ctx.physicalDevice, &have);
   if (!v12)
     haveAtomic.shaderBufferInt64Atomics = hasAtomicInt64Ext ? haveAtomic.shaderBufferInt64Atomics : VK_FALSE;
@@ -316,6 +320,8 @@ void createDevice(Context& ctx, const Candidate& chosen) {
       VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
   VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR wantBary = {
       VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
+  VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR wantExec = {
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR};
   tail = &want.pNext;
   VkPhysicalDeviceFeatures& w = want.features;
   // Counters: 64-bit integers and stores/atomics from every stage.
@@ -382,6 +388,8 @@ void createDevice(Context& ctx, const Candidate& chosen) {
     want13.synchronization2 = have13.synchronization2;
     want13.dynamicRendering = have13.dynamicRendering;
     want13.maintenance4 = have13.maintenance4;
+    // Alpha-tested and test shaders may demote instead of discarding.
+    want13.shaderDemoteToHelperInvocation = have13.shaderDemoteToHelperInvocation;
     append(want13);
   }
   if (hasBarycentric && haveBary.fragmentShaderBarycentric) {
@@ -391,6 +399,12 @@ void createDevice(Context& ctx, const Candidate& chosen) {
     ctx.fragmentBarycentric = true;
   }
   if (hasDriverPropsExt) ctx.enabledExtensions.push_back(VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
+  if (hasExecutableProps && haveExec.pipelineExecutableInfo) {
+    wantExec.pipelineExecutableInfo = VK_TRUE;
+    append(wantExec);
+    ctx.enabledExtensions.push_back(VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
+    ctx.pipelineExecutableInfo = true;
+  }
 
   ctx.shaderInt64 = h.shaderInt64;
   ctx.int64Atomics = h.shaderInt64 && atomics64;
@@ -517,6 +531,7 @@ nlohmann::json describe(const Context& ctx) {
         {"subgroupArithmetic", ctx.subgroupArithmetic},
         {"subgroupStages", ctx.subgroupStages},
         {"fragmentBarycentric", ctx.fragmentBarycentric},
+        {"pipelineExecutableInfo", ctx.pipelineExecutableInfo},
         {"pipelineStatistics", ctx.pipelineStatistics},
         {"timestamps", ctx.timestamps},
         {"descriptorIndexing", ctx.descriptorIndexing},

@@ -56,6 +56,10 @@ struct Context {
   uint32_t subgroupStages = 0;               // tally::spirv::stageBit mask; 0 without subgroupArithmetic
   bool shaderSubgroupExtendedTypes = false;  // 64-bit subgroup arithmetic
   bool fragmentBarycentric = false;          // VK_KHR_fragment_shader_barycentric enabled
+  // VK_KHR_pipeline_executable_properties enabled: pipelines are created with
+  // CAPTURE_STATISTICS and gpu::executableStatistics reads the driver's
+  // figures (NVIDIA: register count, local memory, binary size).
+  bool pipelineExecutableInfo = false;
   bool pipelineStatistics = false;           // pipelineStatisticsQuery
   bool timestamps = false;                   // the queue writes timestamps
   uint32_t timestampValidBits = 0;

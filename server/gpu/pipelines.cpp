@@ -256,6 +256,7 @@ VkPipeline createGraphicsPipeline(const Context& ctx, const GraphicsPipelineDesc
   info.layout = desc.layout;
   info.renderPass = desc.renderPass;
   info.subpass = desc.subpass;
+  if (ctx.pipelineExecutableInfo) info.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
   VkPipeline pipeline = VK_NULL_HANDLE;
   VK_CHECK(vkCreateGraphicsPipelines(ctx.device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
   return pipeline;
@@ -268,9 +269,70 @@ VkPipeline createComputePipeline(const Context& ctx, VkShaderModule module, VkPi
   info.stage.module = module;
   info.stage.pName = "main";
   info.layout = layout;
+  if (ctx.pipelineExecutableInfo) info.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
   VkPipeline pipeline = VK_NULL_HANDLE;
   VK_CHECK(vkCreateComputePipelines(ctx.device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline));
   return pipeline;
+}
+
+namespace {
+
+std::string stageNames(VkShaderStageFlags stages) {
+  static const std::pair<VkShaderStageFlagBits, const char*> kNames[] = {
+      {VK_SHADER_STAGE_VERTEX_BIT, "vertex"},
+      {VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT, "tess_control"},
+      {VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT, "tess_eval"},
+      {VK_SHADER_STAGE_GEOMETRY_BIT, "geometry"},
+      {VK_SHADER_STAGE_FRAGMENT_BIT, "fragment"},
+      {VK_SHADER_STAGE_COMPUTE_BIT, "compute"}};
+  std::string out;
+  for (auto [bit, name] : kNames) {
+    if (stages & bit) out += (out.empty() ? "" : "|") + std::string(name);
+  }
+  return out.empty() ? "other" : out;
+}
+
+}  // namespace
+
+std::vector<ExecutableStatistics> executableStatistics(const Context& ctx, VkPipeline pipeline) {
+  std::vector<ExecutableStatistics> out;
+  if (!ctx.pipelineExecutableInfo || pipeline == VK_NULL_HANDLE) return out;
+  auto getProperties = reinterpret_cast<PFN_vkGetPipelineExecutablePropertiesKHR>(
+      vkGetDeviceProcAddr(ctx.device, "vkGetPipelineExecutablePropertiesKHR"));
+  auto getStatistics = reinterpret_cast<PFN_vkGetPipelineExecutableStatisticsKHR>(
+      vkGetDeviceProcAddr(ctx.device, "vkGetPipelineExecutableStatisticsKHR"));
+  if (getProperties == nullptr || getStatistics == nullptr) return out;
+  VkPipelineInfoKHR info = {VK_STRUCTURE_TYPE_PIPELINE_INFO_KHR};
+  info.pipeline = pipeline;
+  uint32_t count = 0;
+  if (getProperties(ctx.device, &info, &count, nullptr) != VK_SUCCESS) return out;
+  std::vector<VkPipelineExecutablePropertiesKHR> properties(count, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_PROPERTIES_KHR});
+  if (getProperties(ctx.device, &info, &count, properties.data()) != VK_SUCCESS) return out;
+  for (uint32_t i = 0; i < count; ++i) {
+    ExecutableStatistics e;
+    e.stages = stageNames(properties[i].stages);
+    e.name = properties[i].name;
+    VkPipelineExecutableInfoKHR exec = {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR};
+    exec.pipeline = pipeline;
+    exec.executableIndex = i;
+    uint32_t n = 0;
+    if (getStatistics(ctx.device, &exec, &n, nullptr) != VK_SUCCESS) continue;
+    std::vector<VkPipelineExecutableStatisticKHR> stats(n, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR});
+    if (getStatistics(ctx.device, &exec, &n, stats.data()) != VK_SUCCESS) continue;
+    for (const auto& s : stats) {
+      double v = 0;
+      switch (s.format) {
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: v = s.value.b32 ? 1 : 0; break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: v = double(s.value.i64); break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: v = double(s.value.u64); break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_FLOAT64_KHR: v = s.value.f64; break;
+        default: continue;
+      }
+      e.values[s.name] = v;
+    }
+    out.push_back(std::move(e));
+  }
+  return out;
 }
 
 void setViewportAndScissor(VkCommandBuffer cmd, VkExtent2D extent) {

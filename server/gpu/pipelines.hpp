@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <vulkan/vulkan.h>
@@ -79,6 +81,17 @@ struct GraphicsPipelineDesc {
 // Viewport and scissor are dynamic state (set them when recording).
 VkPipeline createGraphicsPipeline(const Context& ctx, const GraphicsPipelineDesc& desc);
 VkPipeline createComputePipeline(const Context& ctx, VkShaderModule module, VkPipelineLayout layout);
+
+// What the driver reports of one executable of a pipeline (a shader stage,
+// as compiled) through VK_KHR_pipeline_executable_properties: its statistics
+// by the driver's own names ("Register Count", ...), as numbers. Empty where
+// the context has no pipelineExecutableInfo.
+struct ExecutableStatistics {
+  std::string stages;  // "vertex", "fragment", "compute", "vertex|fragment"
+  std::string name;    // the driver's name for the executable
+  std::map<std::string, double> values;
+};
+std::vector<ExecutableStatistics> executableStatistics(const Context& ctx, VkPipeline pipeline);
 
 // Viewport and scissor covering `extent`.
 void setViewportAndScissor(VkCommandBuffer cmd, VkExtent2D extent);

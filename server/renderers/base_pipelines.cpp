@@ -69,6 +69,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     words = std::move(compiled->words);
   }
   modules_.push_back(gpu::createShaderModule(*ctx_, words));
+  modulePass_[modules_.back()] = passIndex;
   return modules_.back();
 }
 
@@ -91,7 +92,26 @@ VkPipelineLayout RendererBase::makePipelineLayout(VkDescriptorSetLayout material
 
 VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
   pipelines_.push_back(gpu::createGraphicsPipeline(*ctx_, desc));
+  for (VkShaderModule m : {desc.fragment, desc.vertex}) {
+    if (auto it = modulePass_.find(m); it != modulePass_.end()) {
+      passPipelines_.emplace_back(it->second, pipelines_.back());
+      break;
+    }
+  }
   return pipelines_.back();
+}
+
+nlohmann::json RendererBase::pipelineStatistics() const {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& [passIndex, pipeline] : passPipelines_) {
+    for (const auto& e : gpu::executableStatistics(*ctx_, pipeline)) {
+      out.push_back({{"pass", passes_[passIndex].name},
+                     {"stages", e.stages},
+                     {"executable", e.name},
+                     {"statistics", e.values}});
+    }
+  }
+  return out;
 }
 
 Result<gpu::GraphicsPipelineDesc> RendererBase::depthOnlyPipeline(uint32_t passIndex, const std::string& vertex,
@@ -175,6 +195,7 @@ Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::
   auto module = shader(passIndex, file, defines);
   if (!module) return makeError(module.error());
   pipelines_.push_back(gpu::createComputePipeline(*ctx_, *module, layout));
+  passPipelines_.emplace_back(passIndex, pipelines_.back());
   return pipelines_.back();
 }
 

@@ -266,6 +266,11 @@ class Renderer {
   virtual nlohmann::json frameExtras() { return nlohmann::json::object(); }
   // What the renderer decided at setup, e.g. {"barycentrics":"extension"}.
   virtual nlohmann::json notes() const { return nlohmann::json::object(); }
+  // After setup: what the driver reports of each pass's pipelines (register
+  // count, local memory, ...: gpu::executableStatistics), as
+  // [{"pass", "stages", "executable", "statistics": {name: value}}]; empty
+  // where the device does not report them.
+  virtual nlohmann::json pipelineStatistics() const { return nlohmann::json::array(); }
   virtual void destroy() = 0;
 };
 

@@ -345,6 +345,8 @@ void RendererBase::destroy() {
   gpu::destroyTimestampQueries(ctx, timestamps_);
   gpu::destroyStatisticsQueries(ctx, statistics_);
   pipelines_.clear();
+  passPipelines_.clear();
+  modulePass_.clear();
   pipelineLayouts_.clear();
   modules_.clear();
   framebuffers_.clear();

@@ -8,6 +8,7 @@
 #include <deque>
 #include <functional>
 #include <optional>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -55,6 +56,7 @@ class RendererBase : public Renderer {
   std::vector<float> depthImage() override;
   std::vector<uint8_t> targetBytes(std::string_view resourceName) override;
   void destroy() override;
+  nlohmann::json pipelineStatistics() const override;
   std::vector<std::string> passNames() const override;
   // {"bloom": {...}} with bloom on (setupBloom), else {}. A renderer that adds
   // its own extras merges these in.
@@ -309,6 +311,8 @@ class RendererBase : public Renderer {
   std::vector<VkPipelineLayout> pipelineLayouts_;
   std::vector<VkPipeline> pipelines_;
   std::vector<VkShaderModule> modules_;
+  std::map<VkShaderModule, uint32_t> modulePass_;                // the pass each module was compiled for
+  std::vector<std::pair<uint32_t, VkPipeline>> passPipelines_;  // (pass, pipeline), for pipelineStatistics
   std::vector<VkRenderPass> renderPasses_;
   std::vector<VkFramebuffer> framebuffers_;
   gpu::TimestampQueries timestamps_;

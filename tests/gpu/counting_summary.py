@@ -47,3 +47,28 @@ print("| renderer | pass | " + " | ".join(modes) + " |")
 print("|---|---|" + "---|" * len(modes))
 for (label, scene, size, name), by in passes.items():
     print(f"| {label} | {name} | " + " | ".join(fmt(by.get(m)) for m in modes) + " |")
+
+# The compiled code's cost, where the driver reports it: per pass and stage,
+# the plain pipeline's figure and the counted one's in each mode.
+KEYS = ("register", "occupancy", "local", "spill", "shared", "warps", "threads")
+code = OrderedDict()  # (label, pass, stages, statistic) -> {"plain": v, mode: v}
+for path in sys.argv[1:]:
+    for run in json.load(open(path))["runs"]:
+        stats = run.get("pipeline_statistics")
+        if not stats:
+            continue
+        label = run.get("variant") or run["renderer"]
+        mode = run.get("counting", "exact")
+        for which, column in (("plain", "plain"), ("instrumented", mode)):
+            for e in stats.get(which, []):
+                for name, v in e["statistics"].items():
+                    if any(k in name.lower() for k in KEYS):
+                        row = code.setdefault((label, e["pass"], e["stages"], name), {})
+                        row[column] = max(row.get(column, v), v)
+if code:
+    print()
+    print("| renderer | pass | stages | statistic | plain | " + " | ".join(modes) + " |")
+    print("|---|---|---|---|---|" + "---|" * len(modes))
+    for (label, name, stages, stat), by in code.items():
+        cells = [by.get("plain")] + [by.get(m) for m in modes]
+        print(f"| {label} | {name} | {stages} | {stat} | " + " | ".join("-" if c is None else f"{c:g}" for c in cells) + " |")
