@@ -573,7 +573,9 @@ class Injector {
   // stage each lane adds its own non-zero accumulator.
 
   static bool accumulates(Stage stage) { return stage != Stage::Other; }
-  bool subgroupFlush(Stage stage) const { return (options_.subgroupStages & stageBit(stage)) != 0; }
+  bool subgroupFlush(Stage stage) const {
+    return !options_.mode.laneFlush && (options_.subgroupStages & stageBit(stage)) != 0;
+  }
 
   // A Private u32 (or u32[n]) variable initialised to zero.
   uint32_t privateVariable(uint32_t valueType, uint32_t zero, const std::string& varName) {
@@ -725,13 +727,12 @@ class Injector {
   }
 
   // Flushes one accumulator (a Private u32 pointer) into counter `slot`, then zeroes it.
-  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot, uint32_t isHelper) {
+  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot) {
     uint32_t u = tU32(), zero = constantU32(0);
     uint32_t v = op(b, spv::Op::OpLoad, u, {pointer});
     opNoResult(b, spv::Op::OpStore, {pointer, zero});
     uint32_t add = m_.newId(), done = m_.newId();
     if (subgroupFlush(stage)) {
-      if (isHelper != 0) v = op(b, spv::Op::OpSelect, u, {isHelper, zero, v});
       uint32_t scope = constantU32(kScopeSubgroup);
       uint32_t lo = op(b, spv::Op::OpBitwiseAnd, u, {v, constantU32(0xffffu)});
       uint32_t hi = op(b, spv::Op::OpShiftRightLogical, u, {v, constantU32(16)});
@@ -764,22 +765,32 @@ class Injector {
     uint32_t id = m_.newId();
     b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, 0, fnType});
     label(b, m_.newId());
-    uint32_t isHelper = 0;
+    uint32_t end = 0;
     if (stage == Stage::Fragment && subgroupFlush(stage)) {
-      // Helper lanes take part in the reduction but must add nothing.
+      // Helper lanes stay out of the flush altogether: were one the elected
+      // lane, its atomic would have no effect and the subgroup's count would
+      // be lost (NVIDIA elects them: found by the analytic suite on an H100).
       uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
       std::vector<uint32_t> load = {var};
       if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
-      isHelper = op(b, spv::Op::OpLoad, tBool(), load);
+      uint32_t isHelper = op(b, spv::Op::OpLoad, tBool(), load);
+      uint32_t body = m_.newId();
+      end = m_.newId();
+      selection(b, isHelper, end, body, end);
+      label(b, body);
     }
     const FlushSlots& slots = flushSlots_[stage];
-    for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot, isHelper);
+    for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot);
     for (const auto& [base, length] : slots.arrays) {
       uint32_t array = arrayAccumulator(base, length);
       for (uint32_t i = 0; i < length; ++i) {
         uint32_t element = op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()), {array, constantU32(i)});
-        flushOne(b, stage, element, base + i, isHelper);
+        flushOne(b, stage, element, base + i);
       }
+    }
+    if (end != 0) {
+      branch(b, end);
+      label(b, end);
     }
     opNoResult(b, spv::Op::OpReturn, {});
     b.insts.emplace_back(spv::Op::OpFunctionEnd, std::vector<uint32_t>{});

@@ -61,6 +61,7 @@ Result<Mode> parseMode(std::string_view text) {
   if (text == "exact") return Mode{CountMode::Exact, 1};
   if (text == "subgroup") return Mode{CountMode::Subgroup, 1};
   if (text == "accumulate") return Mode{CountMode::Accumulate, 1};
+  if (text == "accumulate:lane") return Mode{CountMode::Accumulate, 1, true};
   constexpr std::string_view kSampled = "sampled:";
   if (text.starts_with(kSampled)) {
     std::string_view digits = text.substr(kSampled.size());
@@ -73,7 +74,7 @@ Result<Mode> parseMode(std::string_view text) {
     if (n < 2 || n > 65536) return makeError("mode '" + std::string(text) + "': N must be between 2 and 65536");
     return Mode{CountMode::Sampled, n};
   }
-  return makeError("unknown mode '" + std::string(text) + "' (expected exact, subgroup, sampled:N or accumulate)");
+  return makeError("unknown mode '" + std::string(text) + "' (expected exact, subgroup, sampled:N, accumulate or accumulate:lane)");
 }
 
 std::string toString(const Mode& mode) {
@@ -81,7 +82,7 @@ std::string toString(const Mode& mode) {
     case CountMode::Exact: return "exact";
     case CountMode::Subgroup: return "subgroup";
     case CountMode::Sampled: return "sampled:" + std::to_string(mode.sampleRate);
-    case CountMode::Accumulate: return "accumulate";
+    case CountMode::Accumulate: return mode.laneFlush ? "accumulate:lane" : "accumulate";
   }
   return "exact";
 }

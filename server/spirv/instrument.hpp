@@ -24,9 +24,14 @@ enum class CountMode {
 struct Mode {
   CountMode kind = CountMode::Exact;
   uint32_t sampleRate = 1;  // N for Sampled, 1 otherwise
+  // Accumulate: each lane flushes its own registers with one atomic each
+  // (no subgroup reduction), for devices that combine same-address atomics
+  // of a warp themselves (NVIDIA), where an explicit reduction costs more.
+  bool laneFlush = false;
 };
 
-// "exact", "subgroup", "sampled:N" (N in [2, 65536]), "accumulate".
+// "exact", "subgroup", "sampled:N" (N in [2, 65536]), "accumulate",
+// "accumulate:lane".
 Result<Mode> parseMode(std::string_view text);
 std::string toString(const Mode& mode);
 

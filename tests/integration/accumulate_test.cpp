@@ -29,7 +29,9 @@ const ExactMode kExactModes[] = {{"exact", CounterWidth::Int64},
                                  {"exact", CounterWidth::Uint32Pair},
                                  {"subgroup", CounterWidth::Int64},
                                  {"accumulate", CounterWidth::Int64},
-                                 {"accumulate", CounterWidth::Uint32Pair}};
+                                 {"accumulate", CounterWidth::Uint32Pair},
+                                 {"accumulate:lane", CounterWidth::Int64},
+                                 {"accumulate:lane", CounterWidth::Uint32Pair}};
 
 // Sum over the slots of the sites of `kind` on the resource named `resource`.
 uint64_t sumResource(const PassRun& run, SiteKind kind, const std::string& resource) {

@@ -122,7 +122,7 @@ void checkDeclared(const std::vector<analytic::PassPrediction>& want, const Rend
 }
 
 // The counting modes whose counts are exact: the analytic suite runs each.
-const std::string kExactModes[] = {"exact", "accumulate"};
+const std::string kExactModes[] = {"exact", "accumulate", "accumulate:lane"};
 
 using Param = std::tuple<VkExtent2D, nlohmann::json, std::string>;
 
@@ -172,7 +172,9 @@ std::vector<nlohmann::json> specs() {
 
 std::string paramName(const ::testing::TestParamInfo<Param>& info) {
   const auto& [extent, spec, mode] = info.param;
-  std::string name = mode + "_" + std::to_string(extent.width) + "x" + std::to_string(extent.height) + "_" +
+  std::string label = mode;
+  for (char& c : label) c = c == ':' ? '_' : c;
+  std::string name = label + "_" + std::to_string(extent.width) + "x" + std::to_string(extent.height) + "_" +
                      spec.value("name", "");
   if (spec.contains("layers")) {
     name += std::to_string(spec["layers"].get<int>()) +
