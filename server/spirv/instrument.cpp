@@ -60,8 +60,9 @@ std::optional<Stage> stageFromString(std::string_view name) {
 Result<Mode> parseMode(std::string_view text) {
   if (text == "exact") return Mode{CountMode::Exact, 1};
   if (text == "subgroup") return Mode{CountMode::Subgroup, 1};
-  if (text == "accumulate") return Mode{CountMode::Accumulate, 1};
-  if (text == "accumulate:lane") return Mode{CountMode::Accumulate, 1, true};
+  if (text == "accumulate") return Mode{CountMode::Accumulate, 1, Flush::Auto};
+  if (text == "accumulate:subgroup") return Mode{CountMode::Accumulate, 1, Flush::Subgroup};
+  if (text == "accumulate:lane") return Mode{CountMode::Accumulate, 1, Flush::Lane};
   constexpr std::string_view kSampled = "sampled:";
   if (text.starts_with(kSampled)) {
     std::string_view digits = text.substr(kSampled.size());
@@ -74,7 +75,7 @@ Result<Mode> parseMode(std::string_view text) {
     if (n < 2 || n > 65536) return makeError("mode '" + std::string(text) + "': N must be between 2 and 65536");
     return Mode{CountMode::Sampled, n};
   }
-  return makeError("unknown mode '" + std::string(text) + "' (expected exact, subgroup, sampled:N, accumulate or accumulate:lane)");
+  return makeError("unknown mode '" + std::string(text) + "' (expected exact, subgroup, sampled:N, accumulate, accumulate:subgroup or accumulate:lane)");
 }
 
 std::string toString(const Mode& mode) {
@@ -82,7 +83,8 @@ std::string toString(const Mode& mode) {
     case CountMode::Exact: return "exact";
     case CountMode::Subgroup: return "subgroup";
     case CountMode::Sampled: return "sampled:" + std::to_string(mode.sampleRate);
-    case CountMode::Accumulate: return mode.laneFlush ? "accumulate:lane" : "accumulate";
+    case CountMode::Accumulate:
+      return mode.flush == Flush::Lane ? "accumulate:lane" : mode.flush == Flush::Subgroup ? "accumulate:subgroup" : "accumulate";
   }
   return "exact";
 }

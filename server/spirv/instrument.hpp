@@ -21,17 +21,21 @@ enum class CountMode {
   Accumulate,  // add in a per-invocation register; flush once where the invocation ends
 };
 
+// How the accumulate mode flushes its per-invocation registers.
+enum class Flush {
+  Auto,      // compute, task and mesh reduce across the subgroup; vertex, tessellation, geometry and fragment per lane
+  Subgroup,  // a subgroup reduction and one atomic per slot, in every stage with subgroup arithmetic
+  Lane,      // one atomic per lane and non-zero slot
+};
+
 struct Mode {
   CountMode kind = CountMode::Exact;
   uint32_t sampleRate = 1;  // N for Sampled, 1 otherwise
-  // Accumulate: each lane flushes its own registers with one atomic each
-  // (no subgroup reduction), for devices that combine same-address atomics
-  // of a warp themselves (NVIDIA), where an explicit reduction costs more.
-  bool laneFlush = false;
+  Flush flush = Flush::Auto;  // Accumulate only
 };
 
 // "exact", "subgroup", "sampled:N" (N in [2, 65536]), "accumulate",
-// "accumulate:lane".
+// "accumulate:subgroup", "accumulate:lane".
 Result<Mode> parseMode(std::string_view text);
 std::string toString(const Mode& mode);
 

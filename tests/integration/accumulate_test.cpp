@@ -30,6 +30,8 @@ const ExactMode kExactModes[] = {{"exact", CounterWidth::Int64},
                                  {"subgroup", CounterWidth::Int64},
                                  {"accumulate", CounterWidth::Int64},
                                  {"accumulate", CounterWidth::Uint32Pair},
+                                 {"accumulate:subgroup", CounterWidth::Int64},
+                                 {"accumulate:subgroup", CounterWidth::Uint32Pair},
                                  {"accumulate:lane", CounterWidth::Int64},
                                  {"accumulate:lane", CounterWidth::Uint32Pair}};
 

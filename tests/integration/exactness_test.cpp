@@ -41,6 +41,7 @@ const ModeCase kModes[] = {
     {"subgroup", CounterWidth::Int64},   {"sampled:4", CounterWidth::Int64},
     {"sampled:16", CounterWidth::Int64}, {"sampled:64", CounterWidth::Int64},
     {"accumulate", CounterWidth::Int64}, {"accumulate", CounterWidth::Uint32Pair},
+    {"accumulate:subgroup", CounterWidth::Int64}, {"accumulate:subgroup", CounterWidth::Uint32Pair},
     {"accumulate:lane", CounterWidth::Int64}, {"accumulate:lane", CounterWidth::Uint32Pair},
 };
 

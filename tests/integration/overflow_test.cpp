@@ -169,7 +169,7 @@ TEST_P(CounterOverflow, CarriesAcrossTwoTo32) {
 std::vector<OverflowCase> overflowCases() {
   std::vector<OverflowCase> cases;
   for (const char* pass : {"fragment", "compute"}) {
-    for (const char* mode : {"exact", "subgroup", "sampled:4", "sampled:16", "sampled:64", "accumulate", "accumulate:lane"}) {
+    for (const char* mode : {"exact", "subgroup", "sampled:4", "sampled:16", "sampled:64", "accumulate", "accumulate:subgroup", "accumulate:lane"}) {
       cases.push_back({pass, mode, CounterWidth::Uint32Pair});
     }
     cases.push_back({pass, "exact", CounterWidth::Int64});

@@ -122,7 +122,7 @@ void checkDeclared(const std::vector<analytic::PassPrediction>& want, const Rend
 }
 
 // The counting modes whose counts are exact: the analytic suite runs each.
-const std::string kExactModes[] = {"exact", "accumulate", "accumulate:lane"};
+const std::string kExactModes[] = {"exact", "accumulate", "accumulate:subgroup", "accumulate:lane"};
 
 using Param = std::tuple<VkExtent2D, nlohmann::json, std::string>;
 

@@ -64,7 +64,7 @@ json modesSpec() {
           {"resolutions", {{kWidth, kHeight}}},
           {"cameras", {{{"eye", {-4.8, 0.728, -3.0}}, {"target", {-4.541, 8.156, -3.0}}, {"fov_deg", 60}}}},
           {"frames", 1},
-          {"counting", {"exact", "subgroup", "sampled:4"}},
+          {"counting", {"exact", "subgroup", "sampled:4", "accumulate"}},
           {"lights", 4}};
 }
 
@@ -74,7 +74,7 @@ TEST_F(AccuracyTest, ModesAgainstExact) {
   ASSERT_EQ(r.status, 200) << r.body;
   json rows = r.j()["rows"];
   EXPECT_EQ(r.j()["truncated"], false);
-  ASSERT_EQ(rows.size(), 6u) << r.body;  // 3 renderers x (subgroup, sampled:4); exact runs are references
+  ASSERT_EQ(rows.size(), 9u) << r.body;  // 3 renderers x (subgroup, sampled:4, accumulate); exact runs are references
 
   std::map<std::string, int> seen;
   for (const auto& row : rows) {
@@ -98,8 +98,9 @@ TEST_F(AccuracyTest, ModesAgainstExact) {
     auto run = counts(row["run"].get<int64_t>());
     auto exact = counts(row["reference"].get<int64_t>());
     ASSERT_FALSE(exact.empty()) << what;
-    if (mode == "subgroup") {
-      // Subgroup aggregation is exact: every counter of every pass agrees.
+    if (mode == "subgroup" || mode == "accumulate") {
+      // Subgroup aggregation and per-invocation accumulation are exact: every
+      // counter of every pass agrees.
       EXPECT_EQ(row["total_error"], 0.0) << what;
       EXPECT_EQ(row["l1_error"], 0.0) << what;
       EXPECT_EQ(row["worst_error"], 0.0) << what;
@@ -132,11 +133,12 @@ TEST_F(AccuracyTest, ModesAgainstExact) {
   for (const char* renderer : {"forward", "deferred", "visbuffer"}) {
     EXPECT_EQ(seen[std::string(renderer) + " subgroup"], 1) << renderer;
     EXPECT_EQ(seen[std::string(renderer) + " sampled:4"], 1) << renderer;
+    EXPECT_EQ(seen[std::string(renderer) + " accumulate"], 1) << renderer;
   }
 
   // Filters narrow the rows; unknown parameters are refused.
   json forward = daemon_->request("GET", "/api/accuracy?renderer=forward&capture=" + std::to_string(id)).j();
-  ASSERT_EQ(forward["rows"].size(), 2u) << forward.dump();
+  ASSERT_EQ(forward["rows"].size(), 3u) << forward.dump();
   for (const auto& row : forward["rows"]) EXPECT_EQ(row["renderer"], "forward");
   EXPECT_EQ(daemon_->request("GET", "/api/accuracy?width=" + std::to_string(kWidth + 1))
                 .j()["rows"].size(), 0u);

@@ -164,7 +164,7 @@ struct Variant {
 
 std::vector<Variant> variants() {
   std::vector<Variant> out;
-  for (const char* m : {"exact", "subgroup", "sampled:4", "sampled:64", "accumulate", "accumulate:lane"}) {
+  for (const char* m : {"exact", "subgroup", "sampled:4", "sampled:64", "accumulate", "accumulate:subgroup", "accumulate:lane"}) {
     auto mode = spirv::parseMode(m);
     EXPECT_TRUE(mode.ok()) << m << ": " << (mode.ok() ? "" : mode.error());
     if (!mode.ok()) continue;
@@ -263,7 +263,7 @@ TEST_P(CorpusTest, SitesMatchExpectation) {
   ASSERT_EQ(shader.expected.count("invocation"), 1u) << "every shader has an invocation site";
 
   const auto modes = variants();
-  ASSERT_EQ(modes.size(), 12u);
+  ASSERT_EQ(modes.size(), 14u);
   for (auto target : {glsl::Target::Vulkan10, glsl::Target::Vulkan13}) {
     if (target == glsl::Target::Vulkan10 && shader.vulkan13Only) continue;
     SCOPED_TRACE(std::string(targetName(target)));

@@ -98,10 +98,10 @@ before(async () => {
   for (const key of ['TALLYD', 'TALLY_WEB_ROOT', 'TALLY_SCREENSHOTS', 'CHROMIUM']) assert.ok(env[key], `${key} is not set`);
   mkdirSync(env.TALLY_SCREENSHOTS, { recursive: true });
   daemon = await new Daemon(env.TALLYD, env.TALLY_WEB_ROOT).start();
-  // Four renderers at two resolutions (the scaling chart needs two), then two
+  // Four renderers at two resolutions (the scaling chart needs two), then three
   // counting modes next to exact for the speed/accuracy view. 10 cameras each.
   await daemon.capture({ renderers: ['forward', 'deferred', 'visbuffer', 'visbuffer-lean'], scenes: ['atrium'], resolutions: [[64, 36], [128, 72]], frames: 2 }, kCaptureMs);
-  for (const counting of ['subgroup', 'sampled:4']) {
+  for (const counting of ['subgroup', 'sampled:4', 'accumulate']) {
     await daemon.capture({ renderers: ['deferred', 'visbuffer'], resolutions: [[128, 72]], frames: 2, counting }, kCaptureMs);
   }
   // A repeated capture of one configuration: the compare view's spread across captures.
@@ -109,7 +109,7 @@ before(async () => {
   // One variant of visbuffer beside the default one at 128x72.
   await daemon.capture({ renderers: [kVariant], scenes: ['atrium'], resolutions: [[128, 72]], frames: 2 }, kCaptureMs);
   data.runs = (await daemon.get('/runs?limit=1000')).runs;
-  assert.equal(data.runs.length, 14);
+  assert.equal(data.runs.length, 16);
   // One small stability sweep: one point holds (3 m), one fails (300 m), so
   // fails_at states a value and a hold (tests/service/sweeps_test.cpp).
   const sweepJob = await daemon.capture(kSweepSpec, kCaptureMs);
@@ -374,11 +374,12 @@ describe('dashboard', () => {
     const c = await chart(page, 'accuracy');
     const plotted = c.datasets.filter((d) => d.label !== 'Pareto front').flatMap((d) => d.data.map((p) => ({ ...p, mode: d.label })));
 
-    // Expected: the API's rows (deferred and visbuffer at 128x72 in subgroup
-    // and sampled:4), each against the exact run of its renderer, which is
-    // drawn at error 0 with its own overhead ratio.
+    // Expected: the API's rows (deferred and visbuffer at 128x72 in subgroup,
+    // sampled:4 and accumulate), each against the exact run of its renderer,
+    // which is drawn at error 0 with its own overhead ratio.
     const { rows: accuracyRows } = await daemon.get('/accuracy');
-    assert.equal(accuracyRows.length, 4);
+    assert.equal(accuracyRows.length, 6);
+    assert.equal(accuracyRows.filter((r) => r.counting === 'accumulate').length, 2, 'the accumulate mode has its points');
     const expectedOf = (field) => {
       const points = [];
       for (const row of accuracyRows) {
@@ -395,8 +396,8 @@ describe('dashboard', () => {
       const r = runOf(row.renderer, 128, row.counting);
       const exact = runOf(row.renderer, 128);
       assertClose(row.total_error, Math.abs(r.mean_bytes - exact.mean_bytes) / exact.mean_bytes, `run ${row.run} total error`);
-      // Subgroup counting is exact on lavapipe: no line differs.
-      if (row.counting === 'subgroup') assert.equal(row.l1_error, 0, `run ${row.run} subgroup L1 error`);
+      // Subgroup and accumulate counting are exact on lavapipe: no line differs.
+      if (row.counting === 'subgroup' || row.counting === 'accumulate') assert.equal(row.l1_error, 0, `run ${row.run} ${row.counting} L1 error`);
       assert.ok(row.total_error <= row.l1_error + 1e-12, `run ${row.run}: totals cancel, lines do not`);
     }
     const expected = expectedOf('l1_error');
