@@ -573,17 +573,14 @@ class Injector {
   // stage each lane adds its own non-zero accumulator.
 
   static bool accumulates(Stage stage) { return stage != Stage::Other; }
-  // Auto reduces where invocations run as plain compute (measured on an
-  // H100, docs/accuracy.md): there same-address atomics from every lane
-  // contend (ray tracer x18.8 per lane against x2.4 reduced), while in the
-  // graphics stages the driver combines a warp's atomics itself and an
-  // explicit reduction costs more (tonemap x2.2 reduced, x1.5 per lane).
+  // Auto: per lane in options_.autoLaneStages, else reduced (docs/measurement.md,
+  // "Which flush", with the figures that chose it).
   bool subgroupFlush(Stage stage) const {
     if ((options_.subgroupStages & stageBit(stage)) == 0) return false;
     switch (options_.mode.flush) {
       case Flush::Subgroup: return true;
       case Flush::Lane: return false;
-      case Flush::Auto: return stage == Stage::Compute || stage == Stage::Task || stage == Stage::Mesh;
+      case Flush::Auto: return (options_.autoLaneStages & stageBit(stage)) == 0;
     }
     return false;
   }

@@ -23,7 +23,7 @@ enum class CountMode {
 
 // How the accumulate mode flushes its per-invocation registers.
 enum class Flush {
-  Auto,      // compute, task and mesh reduce across the subgroup; vertex, tessellation, geometry and fragment per lane
+  Auto,      // per lane in InstrumentOptions::autoLaneStages, else reduced where the stage has subgroup arithmetic
   Subgroup,  // a subgroup reduction and one atomic per slot, in every stage with subgroup arithmetic
   Lane,      // one atomic per lane and non-zero slot
 };
@@ -58,6 +58,12 @@ struct InstrumentOptions {
   // Stages whose subgroup operations the device supports; Subgroup mode falls
   // back to Exact elsewhere (lavapipe: fragment and compute only).
   uint32_t subgroupStages = kAllStages;
+  // Accumulate's Auto flush goes per lane in these stages: where the device
+  // combines a warp's same-address atomics itself (NVIDIA's graphics
+  // stages, gpu::instrumentOptionsFor), an explicit reduction costs more.
+  // Elsewhere it reduces where the stage has subgroup arithmetic.
+  uint32_t autoLaneStages = stageBit(Stage::Vertex) | stageBit(Stage::TessControl) | stageBit(Stage::TessEval) |
+                            stageBit(Stage::Geometry) | stageBit(Stage::Fragment);
   // Validate input and output with SPIRV-Tools.
   bool validate = true;
 };
