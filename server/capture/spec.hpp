@@ -45,7 +45,9 @@ struct CaptureSpec {
   uint32_t frames = kDefaultFrames;
   // One run per mode: "counting" is a mode or an array of modes. The
   // uninstrumented baseline is not a mode: every run times it (frame_ms).
-  std::vector<spirv::Mode> modes = {spirv::Mode{}};
+  // Default: accumulate, the cheapest exact mode on lavapipe and the H200
+  // (docs/accuracy.md, "The accumulate mode").
+  std::vector<spirv::Mode> modes = {spirv::Mode{spirv::CountMode::Accumulate}};
   uint32_t lights = 400;  // as in the founding study
   nlohmann::json source;  // the spec as given, stored with the result
 

@@ -201,7 +201,7 @@ struct WorkloadOptions {
 struct RendererOptions {
   VkExtent2D extent = {320, 180};
   bool instrumented = true;  // false: the uninstrumented twin, for timing
-  spirv::Mode counting;      // exact | subgroup | sampled:N
+  spirv::Mode counting{spirv::CountMode::Accumulate};  // the capture spec's default; exact | subgroup | sampled:N | accumulate...
   uint32_t lights = 400;     // point lights, as in the founding study
   DepthRange depthRange;     // unset (zeros): near/far from the scene bounds (projection.hpp)
   MaterialSelection materialSelection = MaterialSelection::NonUniform;  // visibility-buffer shading passes

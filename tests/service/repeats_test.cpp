@@ -139,7 +139,7 @@ TEST_F(RepeatsTest, SameSpecTwice) {
     EXPECT_EQ(g["captures"], (json{first, second})) << what;
     EXPECT_EQ(g["width"], 64);
     EXPECT_EQ(g["height"], 36);
-    EXPECT_EQ(g["counting"], "exact");
+    EXPECT_EQ(g["counting"], "accumulate");  // the default
     EXPECT_EQ(g["cameras"], 2);
     EXPECT_EQ(g["frames"], (json{3, 3}));
     std::vector<Recomputed> runs;
