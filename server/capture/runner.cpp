@@ -1,7 +1,7 @@
 #include "capture/runner.hpp"
-#include "common/version.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +14,7 @@
 #include "analysis/headroom.hpp"
 #include "analysis/image.hpp"
 #include "analysis/stats.hpp"
+#include "common/version.hpp"
 #include "gpu/context.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
@@ -253,11 +254,54 @@ std::string fileStem(const RendererVariant& variant) {
   return stem;
 }
 
+// Where a capture's wall time goes (result "timing", `tallyd capture
+// --summary`): seconds per phase, summed over the capture.
+class Phases {
+ public:
+  using Clock = std::chrono::steady_clock;
+  void add(const std::string& phase, double seconds) { seconds_[phase] += seconds; }
+  // Times the rest of the enclosing scope into `phase`.
+  auto scope(const std::string& phase) {
+    struct Scope {
+      Phases& phases;
+      std::string phase;
+      Clock::time_point started = Clock::now();
+      ~Scope() { phases.add(phase, std::chrono::duration<double>(Clock::now() - started).count()); }
+    };
+    return Scope{*this, phase};
+  }
+  void addFrame(const renderers::FrameResult& f, const std::string& prefix) {
+    add(prefix + "_frames", f.submitSeconds);
+    add(prefix + "_readback", f.readbackSeconds);
+  }
+  void addSetup(const renderers::Renderer& r, double seconds) {
+    auto t = r.setupTimes();
+    add("setup_shaders", t.shaderSeconds);
+    add("setup_pipelines", t.pipelineSeconds);
+    add("setup_other", std::max(0.0, seconds - t.shaderSeconds - t.pipelineSeconds));
+  }
+  const std::map<std::string, double>& seconds() const { return seconds_; }
+
+ private:
+  std::map<std::string, double> seconds_;
+};
+
+// Renderer::setup, timed into `phases`.
+Result<bool> timedSetup(Phases& phases, renderers::Renderer& r, gpu::Context& ctx, const renderers::GpuScene& scene,
+                        const renderers::RendererOptions& options) {
+  auto started = Phases::Clock::now();
+  auto ok = r.setup(ctx, scene, options);
+  phases.addSetup(r, std::chrono::duration<double>(Phases::Clock::now() - started).count());
+  return ok;
+}
+
 // The final image per camera of `variant`, uninstrumented; empty where it
 // cannot be set up (the images are then not compared).
 std::vector<std::vector<uint8_t>> referenceImages(gpu::Context& ctx, renderers::GpuScene& gpuScene,
                                                   const RendererVariant& variant, const Resolution& res,
-                                                  const std::vector<scenes::Camera>& cameras, const CaptureSpec& spec) {
+                                                  const std::vector<scenes::Camera>& cameras, const CaptureSpec& spec,
+                                                  Phases& phases) {
+  auto timed = phases.scope("reference_images");
   std::vector<std::vector<uint8_t>> images;
   auto made = renderers::makeRenderer(variant.name);
   if (!made) return images;
@@ -287,7 +331,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
                     const RendererVariant& variant, const spirv::Mode& mode, const std::string& where0,
                     const std::string& name, const scenes::Scene& scene, const Resolution& res,
                     const std::vector<scenes::Camera>& cameras, const References& references,
-                    const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress) {
+                    const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress,
+                    Phases& phases) {
   const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
   auto made = renderers::makeRenderer(rendererName);
@@ -295,7 +340,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
   auto& instrumented = *made;
   renderers::RendererOptions ro{{res.width, res.height}, true, mode, spec.lights};
   renderers::applyOptions(variant.options, ro);
-  auto ok = instrumented->setup(ctx, gpuScene, ro);
+  auto ok = timedSetup(phases, *instrumented, ctx, gpuScene, ro);
   if (!ok) return makeError(where + ": " + ok.error());
   json run = {{"renderer", rendererName},
               {"options", variant.options},
@@ -323,12 +368,21 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     SampleMeasure m;
     for (uint32_t f = 0; f < spec.frames; ++f) {
       const renderers::FrameResult frame = instrumented->renderFrame(camera);
+      phases.addFrame(frame, "counted");
       headroom.note(frame);
       addCounts(m, frame);
     }
     json extras = instrumented->frameExtras();  // after the sample's last instrumented frame
-    for (uint32_t f = 0; f < spec.frames; ++f) addTimes(m, plain.renderFrame(camera));
-    std::vector<uint8_t> image = plain.finalImage();
+    for (uint32_t f = 0; f < spec.frames; ++f) {
+      const renderers::FrameResult frame = plain.renderFrame(camera);
+      phases.addFrame(frame, "timed");
+      addTimes(m, frame);
+    }
+    std::vector<uint8_t> image;
+    {
+      auto timed = phases.scope("final_image");
+      image = plain.finalImage();
+    }
     json sample = sampleJson(m, instrumented->resources(), spec.frames);
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
@@ -337,20 +391,24 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
     sample["sky_fraction_estimate"] = camera.skyFraction;
     sample["extras"] = extras.is_object() ? std::move(extras) : json::object();
-    // Workloads draw no scene: no image_error against forward (variant_error only).
-    if (c < references.forward.size() && !renderers::isWorkload(variant.name)) {
-      auto error = compareImages(image, references.forward[c], res.width, res.height);
-      if (error) sample["image_error"] = errorJson("forward", *error);
-    }
-    if (!references.variantAgainst.empty() && c < references.variant.size()) {
-      auto error = compareImages(image, references.variant[c], res.width, res.height);
-      if (error) sample["variant_error"] = errorJson(references.variantAgainst, *error);
+    {
+      auto timed = phases.scope("image_error");
+      // Workloads draw no scene: no image_error against forward (variant_error only).
+      if (c < references.forward.size() && !renderers::isWorkload(variant.name)) {
+        auto error = compareImages(image, references.forward[c], res.width, res.height);
+        if (error) sample["image_error"] = errorJson("forward", *error);
+      }
+      if (!references.variantAgainst.empty() && c < references.variant.size()) {
+        auto error = compareImages(image, references.variant[c], res.width, res.height);
+        if (error) sample["variant_error"] = errorJson(references.variantAgainst, *error);
+      }
     }
     if (!options.screenshotDir.empty()) {
       // The image is uninstrumented: one screenshot per variant, whatever the modes.
       std::string file = fileStem(variant) + "_" + name + "_" + std::to_string(res.width) + "x" +
                          std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
       if (&mode == &spec.modes.front()) {
+        auto timed = phases.scope("screenshots");
         auto png = encodePng(image, res.width, res.height);
         std::ofstream out(std::filesystem::path(options.screenshotDir) / file, std::ios::binary);
         out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
@@ -378,7 +436,7 @@ Result<json> runSweep(const sweeps::SweepSpec& spec, const CaptureOptions& optio
 
 namespace {
 
-Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const CaptureOptions& options) {
+Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const CaptureOptions& options, Phases& phases) {
 
   json result = {{"device", gpu::describe(ctx)},
                  {"tally", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}},
@@ -389,6 +447,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 
   // Load every scene first: a bad file fails the capture before any GPU time is spent.
   std::vector<scenes::Scene> loaded;
+  auto loading = Phases::Clock::now();
   for (size_t i = 0; i < spec.scenes.size(); ++i) {
     auto scene = scenes::makeScene(spec.scenes[i]);
     if (!scene) return makeError("scenes[" + std::to_string(i) + "]: " + scene.error());
@@ -405,6 +464,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         return makeError("scenes[" + std::to_string(i) + "] (" + sceneName(spec.scenes[i], loaded[i]) + "): " + why);
     }
   }
+  phases.add("scene_load", std::chrono::duration<double>(Phases::Clock::now() - loading).count());
   std::vector<std::vector<scenes::Camera>> cameras;
   size_t total = 0;
   for (const auto& scene : loaded) {
@@ -415,7 +475,9 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
   CaptureProgress progress{0, total, ""};
   for (size_t s = 0; s < loaded.size(); ++s) {
     renderers::GpuScene gpuScene;
+    auto uploading = Phases::Clock::now();
     auto uploaded = gpuScene.upload(ctx, loaded[s]);
+    phases.add("scene_upload", std::chrono::duration<double>(Phases::Clock::now() - uploading).count());
     if (!uploaded) return makeError("scenes[" + std::to_string(s) + "]: " + uploaded.error());
     std::string name = sceneName(spec.scenes[s], loaded[s]);
 
@@ -425,7 +487,8 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
       // None where every variant is a workload (they are not compared with forward).
       if (std::any_of(spec.renderers.begin(), spec.renderers.end(),
                       [](const RendererVariant& v) { return !renderers::isWorkload(v.name); })) {
-        references.forward = referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec);
+        references.forward =
+            referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec, phases);
       }
 
       for (const auto& variant : spec.renderers) {
@@ -437,18 +500,18 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         references.variant.clear();
         if (!variant.options.empty() && referenceVariant != variant) {
           references.variantAgainst = referenceVariant.label();
-          references.variant = referenceImages(ctx, gpuScene, referenceVariant, res, cameras[s], spec);
+          references.variant = referenceImages(ctx, gpuScene, referenceVariant, res, cameras[s], spec, phases);
         }
         // One uninstrumented renderer per variant, timed again beside every mode's run.
         auto plain = renderers::makeRenderer(rendererName);
         if (!plain) return makeError(where + ": " + plain.error());
         renderers::RendererOptions plainOptions{{res.width, res.height}, false, spec.modes.front(), spec.lights};
         renderers::applyOptions(variant.options, plainOptions);
-        auto ok = (*plain)->setup(ctx, gpuScene, plainOptions);
+        auto ok = timedSetup(phases, **plain, ctx, gpuScene, plainOptions);
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
           auto done = runOne(ctx, gpuScene, **plain, variant, mode, where, name, loaded[s], res, cameras[s],
-                             references, spec, options, progress);
+                             references, spec, options, progress, phases);
           if (!done) {
             (*plain)->destroy();
             return makeError(done.error());
@@ -470,7 +533,29 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
   // Before the device: without shaders nothing can be drawn.
   if (auto dir = renderers::shaderDirectory(); !dir) return makeError(dir.error());
-  return gpu::withDevice(options.device, [&](gpu::Context& ctx) { return captureOn(ctx, spec, options); });
+  Phases phases;
+  auto started = Phases::Clock::now();
+  Phases::Clock::time_point opened;
+  auto result = gpu::withDevice(options.device, [&](gpu::Context& ctx) {
+    opened = Phases::Clock::now();
+    return captureOn(ctx, spec, options, phases);
+  });
+  if (!result) return result;
+  // Seconds per phase; "device" opens (and closes) the Vulkan device, "other"
+  // is what no phase names (building the result, spec checks).
+  double total = std::chrono::duration<double>(Phases::Clock::now() - started).count();
+  double named = 0;
+  json timing = json::object();
+  for (const auto& [phase, seconds] : phases.seconds()) {
+    timing[phase] = seconds;
+    named += seconds;
+  }
+  double device = std::chrono::duration<double>(opened - started).count();
+  timing["device"] = device;
+  timing["other"] = std::max(0.0, total - named - device);
+  timing["total"] = total;
+  (*result)["timing"] = std::move(timing);
+  return result;
 }
 
 }  // namespace tally::capture

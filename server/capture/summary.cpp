@@ -1,6 +1,7 @@
 #include "capture/summary.hpp"
 
 #include <cstdio>
+#include <algorithm>
 #include <map>
 #include <vector>
 
@@ -116,6 +117,20 @@ std::string summarize(const nlohmann::json& result, const std::string& baseline)
                     human(t.imageRead).c_str(), ratio(t.imageRead, b.imageRead), human(t.bufferRead).c_str(),
                     ratio(t.bufferRead, b.bufferRead), human(t.written).c_str(), ratio(t.written, b.written), t.ms,
                     t.overhead);
+    }
+  }
+  // Where the capture's time went (result "timing"), largest first.
+  if (result.contains("timing") && result["timing"].is_object() && result["timing"].contains("total")) {
+    const auto& timing = result["timing"];
+    double total = timing["total"].get<double>();
+    std::vector<std::pair<double, std::string>> phases;
+    for (const auto& [phase, seconds] : timing.items()) {
+      if (phase != "total" && seconds.is_number()) phases.emplace_back(seconds.get<double>(), phase);
+    }
+    std::sort(phases.rbegin(), phases.rend());
+    out += format("\ncapture time %.1f s:\n", total);
+    for (const auto& [seconds, phase] : phases) {
+      out += format("  %-18s %8.2f s %5.1f%%\n", phase.c_str(), seconds, total > 0 ? 100.0 * seconds / total : 0.0);
     }
   }
   return out;

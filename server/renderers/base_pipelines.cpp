@@ -2,6 +2,7 @@
 // the graphics and compute pipelines every renderer builds on.
 #include "renderers/renderer_base.hpp"
 
+#include <chrono>
 #include <cstdlib>
 
 #include "common/paths.hpp"
@@ -36,6 +37,12 @@ Result<gpu::GraphicsPipelineDesc> RendererBase::shaderPipeline(uint32_t passInde
 
 Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::string& file,
                                             const std::vector<std::string>& defines) {
+  const auto started = std::chrono::steady_clock::now();
+  struct Timed {
+    std::chrono::steady_clock::time_point started;
+    double& into;
+    ~Timed() { into += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(); }
+  } timed{started, setupTimes_.shaderSeconds};
   auto dir = shaderDirectory();
   if (!dir) return makeError(dir.error());
   auto source = gpu::loadShaderSource(*ctx_, *dir, file);
@@ -91,7 +98,9 @@ VkPipelineLayout RendererBase::makePipelineLayout(VkDescriptorSetLayout material
 }
 
 VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
+  const auto started = std::chrono::steady_clock::now();
   pipelines_.push_back(gpu::createGraphicsPipeline(*ctx_, desc));
+  setupTimes_.pipelineSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   for (VkShaderModule m : {desc.fragment, desc.vertex}) {
     if (auto it = modulePass_.find(m); it != modulePass_.end()) {
       passPipelines_.emplace_back(it->second, pipelines_.back());
@@ -194,7 +203,9 @@ Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::
                                                  VkPipelineLayout layout, const std::vector<std::string>& defines) {
   auto module = shader(passIndex, file, defines);
   if (!module) return makeError(module.error());
+  const auto started = std::chrono::steady_clock::now();
   pipelines_.push_back(gpu::createComputePipeline(*ctx_, *module, layout));
+  setupTimes_.pipelineSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   passPipelines_.emplace_back(passIndex, pipelines_.back());
   return pipelines_.back();
 }

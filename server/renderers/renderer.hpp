@@ -72,6 +72,15 @@ struct PassResult {
 
 struct FrameResult {
   std::vector<PassResult> passes;
+  // Host wall time of the frame: recording, submitting and waiting for the
+  // GPU; then reading back timestamps, statistics and counters (seconds).
+  double submitSeconds = 0, readbackSeconds = 0;
+};
+
+// Where a renderer's set-up time went (seconds): GLSL compilation with
+// instrumentation, and pipeline creation (the driver's compiler).
+struct SetupTimes {
+  double shaderSeconds = 0, pipelineSeconds = 0;
 };
 
 // A fixed depth range for the projection (metres).
@@ -271,6 +280,8 @@ class Renderer {
   // [{"pass", "stages", "executable", "statistics": {name: value}}]; empty
   // where the device does not report them.
   virtual nlohmann::json pipelineStatistics() const { return nlohmann::json::array(); }
+  // Since the last setup().
+  virtual SetupTimes setupTimes() const { return {}; }
   virtual void destroy() = 0;
 };
 

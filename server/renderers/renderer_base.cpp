@@ -3,6 +3,8 @@
 // Passes, pipelines, descriptor sets and scene draws are in base_*.cpp.
 #include "renderers/renderer_base.hpp"
 
+#include <chrono>
+
 #include <algorithm>
 #include <cstring>
 
@@ -17,6 +19,7 @@ namespace tally::renderers {
 
 Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const RendererOptions& options) {
   destroy();
+  setupTimes_ = {};
   ctx_ = &ctx;
   scene_ = &scene;
   options_ = options;
@@ -228,7 +231,11 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
   gpu::uploadBuffer(*ctx_, cameraBuffer_, {reinterpret_cast<const uint8_t*>(&c), sizeof c});
   if (lod_) lod_->select(camera, extent_);
 
+  using Clock = std::chrono::steady_clock;
+  auto submitted = Clock::now();
   gpu::submitAndWait(*ctx_, [&](VkCommandBuffer cmd) { recordAll(cmd); });
+  auto waited = Clock::now();
+  frame.submitSeconds = std::chrono::duration<double>(waited - submitted).count();
 
   std::vector<double> times;
   if (timestamps_.pool != VK_NULL_HANDLE) times = gpu::readPassTimesMs(*ctx_, timestamps_);
@@ -240,6 +247,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     counters.resize(slotCount_);
     std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
   }
+  frame.readbackSeconds = std::chrono::duration<double>(Clock::now() - waited).count();
   const uint32_t depthBytes = gpu::formatBytes(kDepthFormat);
   for (uint32_t i = 0; i < passes_.size(); ++i) {
     const Pass& p = passes_[i];

@@ -57,6 +57,7 @@ class RendererBase : public Renderer {
   std::vector<uint8_t> targetBytes(std::string_view resourceName) override;
   void destroy() override;
   nlohmann::json pipelineStatistics() const override;
+  SetupTimes setupTimes() const override { return setupTimes_; }
   std::vector<std::string> passNames() const override;
   // {"bloom": {...}} with bloom on (setupBloom), else {}. A renderer that adds
   // its own extras merges these in.
@@ -311,6 +312,7 @@ class RendererBase : public Renderer {
   std::vector<VkPipelineLayout> pipelineLayouts_;
   std::vector<VkPipeline> pipelines_;
   std::vector<VkShaderModule> modules_;
+  SetupTimes setupTimes_;
   std::map<VkShaderModule, uint32_t> modulePass_;                // the pass each module was compiled for
   std::vector<std::pair<uint32_t, VkPipeline>> passPipelines_;  // (pass, pipeline), for pipelineStatistics
   std::vector<VkRenderPass> renderPasses_;

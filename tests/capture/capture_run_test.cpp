@@ -65,6 +65,24 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
   EXPECT_TRUE(result["device"].contains("name"));
   ASSERT_TRUE(result.contains("shaders"));
   EXPECT_EQ(result["shaders"]["forward.frag.glsl"].get<std::string>().size(), 16u);
+  // The build, and where the capture's time went: every phase it ran, none
+  // negative, adding up to the total (wall time measured around them).
+  EXPECT_TRUE(result["tally"]["version"].is_string());
+  EXPECT_TRUE(result["tally"]["commit"].is_string());
+  ASSERT_TRUE(result["timing"].is_object());
+  double sum = 0;
+  for (const auto& [phase, seconds] : result["timing"].items()) {
+    ASSERT_TRUE(seconds.is_number()) << phase;
+    EXPECT_GE(seconds.get<double>(), 0.0) << phase;
+    if (phase != "total") sum += seconds.get<double>();
+  }
+  for (const char* phase : {"scene_load", "scene_upload", "reference_images", "setup_shaders", "setup_pipelines",
+                            "counted_frames", "counted_readback", "timed_frames", "timed_readback", "image_error",
+                            "screenshots", "device", "other"}) {
+    EXPECT_TRUE(result["timing"].contains(phase)) << phase;
+  }
+  EXPECT_GT(result["timing"]["counted_frames"].get<double>(), 0.0);
+  EXPECT_NEAR(sum, result["timing"]["total"].get<double>(), 1e-6 + 1e-9 * sum);
   ASSERT_EQ(result["runs"].size(), renderers::rendererNames().size());
   for (const auto& run : result["runs"]) {
     SCOPED_TRACE(run["renderer"].get<std::string>());
