@@ -6,7 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
+#include <deque>
 #include <fstream>
+#include <future>
 #include <iterator>
 #include <map>
 #include <optional>
@@ -97,7 +99,10 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
     m.instrumentedMs[pass.name].push_back(pass.gpuMs);
     total += pass.gpuMs;
     for (const auto& a : pass.accesses) {
-      auto key = std::make_pair(pass.name, a.resource + (a.write ? "\x1fw" : "\x1fr"));
+      // One line per (pass, resource, access, source): a counted and a
+      // derived line on one resource (the visibility pass's index reads)
+      // stay apart, not averaged into one.
+      auto key = std::make_pair(pass.name, a.resource + (a.write ? "\x1fw\x1f" : "\x1fr\x1f") + a.source);
       auto [it, inserted] = m.lines.try_emplace(key);
       if (inserted) {
         it->second.pass = pass.name;
@@ -122,7 +127,8 @@ void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
   m.frameMs.push_back(total);
 }
 
-json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources, uint32_t frames) {
+json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources, uint32_t frames,
+                uint32_t countedFrames) {
   std::map<std::string, const renderers::ResourceInfo*> byName;
   for (const auto& r : resources) byName[r.name] = &r;
   json passes = json::array();
@@ -175,8 +181,16 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
     passes.push_back(std::move(pass));
   }
   Spread frame = spreadOf(m.frameMs), instrumentedFrame = spreadOf(m.instrumentedFrameMs);
+  // A fixed camera counts the same every frame; a count that varies across
+  // the counted frames (non-deterministic work, or a driver fault) is flagged.
+  bool countsVary = false;
+  for (const auto& [key, line] : m.lines) {
+    for (double c : line.counts) countsVary = countsVary || c != line.counts.front();
+  }
   return {
       {"frames", frames},
+      {"counted_frames", countedFrames},
+      {"counts_vary", countsVary},
       {"frame_ms", frame.median},
       {"frame_ms_spread", toJson(frame)},
       {"frame_ms_instrumented", instrumentedFrame.median},
@@ -325,6 +339,41 @@ struct References {
   std::vector<std::vector<uint8_t>> variant;
 };
 
+// Screenshots are encoded and written on other threads while the GPU renders
+// the next samples: PNG encoding of a 1920x1080 image takes about 0.4 s, a
+// quarter of the founding protocol's 187 s when done in line (H200,
+// docs/accuracy.md). At most kInFlight at once; finish() waits for all and
+// names the first file that could not be written.
+class ScreenshotWriter {
+ public:
+  void write(std::filesystem::path path, std::vector<uint8_t> rgba, uint32_t width, uint32_t height) {
+    while (pending_.size() >= kInFlight) collect();
+    pending_.push_back(std::async(std::launch::async, [path = std::move(path), rgba = std::move(rgba), width, height] {
+      auto png = encodePng(rgba, width, height);
+      std::ofstream out(path, std::ios::binary);
+      out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+      out.close();
+      return out ? std::string() : path.string();
+    }));
+  }
+  // "" when every screenshot was written.
+  std::string finish() {
+    while (!pending_.empty()) collect();
+    return failed_;
+  }
+  ~ScreenshotWriter() { finish(); }
+
+ private:
+  static constexpr size_t kInFlight = 8;  // 8 images of 8 MiB at 1920x1080
+  void collect() {
+    std::string failed = pending_.front().get();
+    if (failed_.empty()) failed_ = failed;
+    pending_.pop_front();
+  }
+  std::deque<std::future<std::string>> pending_;
+  std::string failed_;
+};
+
 // One run: a renderer instrumented in one counting mode, each sample's
 // instrumented frames timed against the same number of `plain` frames.
 Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers::Renderer& plain,
@@ -332,7 +381,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
                     const std::string& name, const scenes::Scene& scene, const Resolution& res,
                     const std::vector<scenes::Camera>& cameras, const References& references,
                     const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress,
-                    Phases& phases) {
+                    Phases& phases, ScreenshotWriter& screenshots) {
   const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
   auto made = renderers::makeRenderer(rendererName);
@@ -366,7 +415,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     progress.current = where + " camera " + std::to_string(c);
     if (options.progress) options.progress(progress);
     SampleMeasure m;
-    for (uint32_t f = 0; f < spec.frames; ++f) {
+    for (uint32_t f = 0; f < spec.countedFramesOrAll(); ++f) {
       const renderers::FrameResult frame = instrumented->renderFrame(camera);
       phases.addFrame(frame, "counted");
       headroom.note(frame);
@@ -383,7 +432,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
       auto timed = phases.scope("final_image");
       image = plain.finalImage();
     }
-    json sample = sampleJson(m, instrumented->resources(), spec.frames);
+    json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrAll());
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
     // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
@@ -408,10 +457,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
       std::string file = fileStem(variant) + "_" + name + "_" + std::to_string(res.width) + "x" +
                          std::to_string(res.height) + "_cam" + std::to_string(c) + ".png";
       if (&mode == &spec.modes.front()) {
-        auto timed = phases.scope("screenshots");
-        auto png = encodePng(image, res.width, res.height);
-        std::ofstream out(std::filesystem::path(options.screenshotDir) / file, std::ios::binary);
-        out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+        auto timed = phases.scope("screenshots");  // waiting for a free writer only
+        screenshots.write(std::filesystem::path(options.screenshotDir) / file, image, res.width, res.height);
       }
       sample["screenshot"] = file;
     } else {
@@ -472,6 +519,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
     total += spec.renderers.size() * spec.resolutions.size() * spec.modes.size() * cameras.back().size();
   }
 
+  ScreenshotWriter screenshots;
   CaptureProgress progress{0, total, ""};
   for (size_t s = 0; s < loaded.size(); ++s) {
     renderers::GpuScene gpuScene;
@@ -511,7 +559,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
           auto done = runOne(ctx, gpuScene, **plain, variant, mode, where, name, loaded[s], res, cameras[s],
-                             references, spec, options, progress, phases);
+                             references, spec, options, progress, phases, screenshots);
           if (!done) {
             (*plain)->destroy();
             return makeError(done.error());
@@ -522,6 +570,10 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
       }
     }
     gpuScene.destroy();
+  }
+  {
+    auto timed = phases.scope("screenshots");
+    if (std::string failed = screenshots.finish(); !failed.empty()) return makeError("cannot write screenshot " + failed);
   }
   progress.current = "done";
   if (options.progress) options.progress(progress);

@@ -52,13 +52,13 @@ RendererVariant RendererVariant::reference() const {
 
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"renderers", "workloads", "scenes", "resolutions",
-                                                 "cameras",   "frames",    "counting", "lights"};
+  static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
+                                                 "frames",    "counted_frames", "counting", "lights"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
-                        "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, counting, "
-                        "lights)");
+                        "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
+                        "counted_frames, counting, lights)");
     }
   }
   CaptureSpec spec;
@@ -188,6 +188,12 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     auto frames = boundedInt(j["frames"], "frames", 1, kMaxFrames);
     if (!frames) return makeError(frames.error());
     spec.frames = *frames;
+  }
+  if (j.contains("counted_frames")) {
+    // At most the timed frames: the overhead ratio compares the two.
+    auto counted = boundedInt(j["counted_frames"], "counted_frames", 1, spec.frames);
+    if (!counted) return makeError(counted.error());
+    spec.countedFrames = *counted;
   }
   if (j.contains("counting")) {
     // A string (one mode) or a non-empty array of distinct modes.

@@ -43,6 +43,13 @@ struct CaptureSpec {
   bool autoCameras = true;
   std::vector<scenes::Camera> cameras;  // when !autoCameras
   uint32_t frames = kDefaultFrames;
+  // Instrumented frames per sample, whose counts are averaged and whose
+  // times give the overhead ratio; 0: as many as `frames` (the timed,
+  // uninstrumented ones). A fixed camera counts the same every frame, so 2
+  // catch a count that varies (the sample says counts_vary) at a tenth of
+  // the counting time of 20.
+  uint32_t countedFrames = 0;
+  uint32_t countedFramesOrAll() const { return countedFrames == 0 ? frames : countedFrames; }
   // One run per mode: "counting" is a mode or an array of modes. The
   // uninstrumented baseline is not a mode: every run times it (frame_ms).
   // Default: accumulate, the cheapest exact mode on lavapipe and the H200

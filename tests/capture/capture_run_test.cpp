@@ -56,7 +56,8 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
                {"scenes", {{{"name", "planes"}, {"layers", 3}, {"order", "back-to-front"}}}},
                {"resolutions", {{64, 36}}},
                {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}, {"fov_deg", 60}}}},
-               {"frames", 2},
+               {"frames", 3},
+               {"counted_frames", 2},
                {"lights", 4}};
   fs::path out = dir_ / "result.json";
   ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
@@ -105,6 +106,9 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
     }
     EXPECT_TRUE(fs::exists(dir_ / "result-screenshots" / sample["screenshot"].get<std::string>()));
     EXPECT_GT(sample["frame_ms"].get<double>(), 0.0);
+    EXPECT_EQ(sample["frames"], 3);
+    EXPECT_EQ(sample["counted_frames"], 2);
+    EXPECT_EQ(sample["counts_vary"], false);  // a fixed camera counts the same every frame
     if (run["renderer"] != "forward") {
       EXPECT_TRUE(sample.contains("image_error"));
     }

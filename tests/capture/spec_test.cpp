@@ -16,6 +16,7 @@ TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
   auto spec = parse(R"({"renderers":["deferred","visbuffer"],"resolutions":[[320,180]]})");
   ASSERT_TRUE(spec.ok()) << spec.error();
   EXPECT_EQ(spec->frames, 20u);
+  EXPECT_EQ(spec->countedFramesOrAll(), 20u);  // counted_frames: as many as frames
   EXPECT_EQ(spec->lights, 400u);
   EXPECT_TRUE(spec->autoCameras);
   ASSERT_EQ(spec->modes.size(), 1u);
@@ -85,6 +86,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":"random"})", "cameras: must be \"auto\""},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":[{"eye":[1,2],"target":[0,0,0]}]})", "cameras[0].eye"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":0})", "frames: must be an integer between 1 and 1000"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":4,"counted_frames":5})",
+                "counted_frames: must be an integer between 1 and 4"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counted_frames":0})",
+                "counted_frames: must be an integer between 1 and 20"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"fast"})", "counting: unknown mode 'fast'"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"sampled:1"})", "counting: mode 'sampled:1'"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact","subgroup","fast"]})", "counting[2]: unknown mode 'fast'"},
