@@ -61,29 +61,17 @@ const char* typeName(Type t) {
   return "untyped";
 }
 
-// HELP text escapes \ and newline only.
-std::string escapeHelp(std::string_view help) {
-  std::string out;
-  for (char c : help) {
-    if (c == '\\') {
-      out += "\\\\";
-    } else if (c == '\n') {
-      out += "\\n";
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
-std::string escapeLabelValue(std::string_view value) {
+namespace {
+
+// The format escapes \ and newline in HELP text, and " too in label values.
+std::string escape(std::string_view value, bool quotes) {
   std::string out;
   for (char c : value) {
     if (c == '\\') {
       out += "\\\\";
-    } else if (c == '"') {
+    } else if (c == '"' && quotes) {
       out += "\\\"";
     } else if (c == '\n') {
       out += "\\n";
@@ -93,6 +81,12 @@ std::string escapeLabelValue(std::string_view value) {
   }
   return out;
 }
+
+std::string escapeHelp(std::string_view help) { return escape(help, false); }
+
+}  // namespace
+
+std::string escapeLabelValue(std::string_view value) { return escape(value, true); }
 
 void Registry::declare(std::string name, Type type, std::string help, std::vector<double> buckets) {
   std::lock_guard lock(mutex_);

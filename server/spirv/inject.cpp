@@ -626,7 +626,7 @@ class Injector {
     opNoResult(b, spv::Op::OpStore, {pointer, w});
   }
 
-  // The clamped element of a run-time descriptor index (as slotValue, without the base).
+  // min(index, length - 1) of a run-time descriptor index, as a u32.
   uint32_t clampedIndex(Body& b, const FoundSite& s, uint32_t length) {
     uint32_t u = tU32();
     uint32_t index = s.dynamicIndex;
@@ -851,21 +851,8 @@ class Injector {
   uint32_t slotValue(const FoundSite& s, uint32_t base, std::vector<Instruction>& list) {
     if (s.dynamicIndex == 0) return constantU32(base);
     Body b{list};
-    uint32_t u = tU32();
-    uint32_t index = s.dynamicIndex;
-    const Instruction* t = defs_.def(types_.typeOf(index));
-    if (t != nullptr && t->opcode() == spv::Op::OpTypeInt) {
-      if (t->word(2) != 32) {
-        index = op(b, spv::Op::OpUConvert, u, {index});
-      } else if (t->word(3) == 1) {
-        index = op(b, spv::Op::OpBitcast, u, {index});
-      }
-    }
     uint32_t length = s.arrayLength != 0 ? s.arrayLength : kRuntimeArraySlots;
-    uint32_t last = constantU32(length - 1);
-    uint32_t inRange = op(b, spv::Op::OpULessThan, tBool(), {index, constantU32(length)});
-    uint32_t clamped = op(b, spv::Op::OpSelect, u, {inRange, index, last});
-    return op(b, spv::Op::OpIAdd, u, {constantU32(base), clamped});
+    return op(b, spv::Op::OpIAdd, tU32(), {constantU32(base), clampedIndex(b, s, length)});
   }
 
   Module& m_;
