@@ -129,18 +129,9 @@ class Injector {
           list.push_back(call(helper, slot));
           break;
         }
-        case Placement::EntryStart: {
-          size_t at = 0;
-          while (at < insts.size() && insts[at].opcode() != spv::Op::OpLabel) ++at;
-          ++at;
-          while (at < insts.size() && (insts[at].opcode() == spv::Op::OpVariable ||
-                                       insts[at].opcode() == spv::Op::OpLine ||
-                                       insts[at].opcode() == spv::Op::OpNoLine)) {
-            ++at;
-          }
-          before[s.function][at].push_back(call(helper, constantU32(slots[i])));
+        case Placement::EntryStart:
+          before[s.function][entryStart(insts)].push_back(call(helper, constantU32(slots[i])));
           break;
-        }
         case Placement::BeforeReturns:
           for (size_t at = 0; at < insts.size(); ++at) {
             if (insts[at].opcode() == spv::Op::OpReturn) before[s.function][at].push_back(call(helper, constantU32(slots[i])));
@@ -454,6 +445,32 @@ class Injector {
     return op(b, spv::Op::OpIEqual, tBool(), {local, pick});
   }
 
+  // Opens a block that only non-helper lanes enter; returns the merge label
+  // the caller branches to (and opens) when the block ends.
+  uint32_t skipHelperLanes(Body& b, Stage stage) {
+    uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
+    std::vector<uint32_t> load = {var};
+    if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
+    uint32_t isHelper = op(b, spv::Op::OpLoad, tBool(), load);
+    uint32_t body = m_.newId(), end = m_.newId();
+    selection(b, isHelper, end, body, end);
+    label(b, body);
+    return end;
+  }
+
+  // Where code counted at entry goes: after the entry block's label and its
+  // OpVariables (and debug lines).
+  static size_t entryStart(const std::vector<Instruction>& insts) {
+    size_t at = 0;
+    while (at < insts.size() && insts[at].opcode() != spv::Op::OpLabel) ++at;
+    ++at;
+    while (at < insts.size() && (insts[at].opcode() == spv::Op::OpVariable || insts[at].opcode() == spv::Op::OpLine ||
+                                 insts[at].opcode() == spv::Op::OpNoLine)) {
+      ++at;
+    }
+    return at;
+  }
+
   uint32_t helperFunction(Helper h, Stage stage) {
     // Sampled and subgroup-fragment helpers read stage builtins: one per stage.
     bool stageFree = h == Helper::Exact || h == Helper::Subgroup || h == Helper::SubgroupUniform;
@@ -488,19 +505,10 @@ class Injector {
       case Helper::SubgroupFragment:
       case Helper::SubgroupUniform:
       case Helper::SubgroupUniformFragment: {
+        // Helper lanes take part in subgroup operations but must not be
+        // counted, and an atomic from one has no effect: keep them out.
         uint32_t end = 0;
-        if (h == Helper::SubgroupFragment || h == Helper::SubgroupUniformFragment) {
-          // Helper lanes take part in subgroup operations but must not be
-          // counted, and an atomic from one has no effect: keep them out.
-          uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
-          std::vector<uint32_t> load = {var};
-          if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
-          uint32_t isHelper = op(b, spv::Op::OpLoad, tBool(), load);
-          uint32_t body = m_.newId();
-          end = m_.newId();
-          selection(b, isHelper, end, body, end);
-          label(b, body);
-        }
+        if (h == Helper::SubgroupFragment || h == Helper::SubgroupUniformFragment) end = skipHelperLanes(b, stage);
         uint32_t scope = constantU32(kScopeSubgroup);
         if (h == Helper::SubgroupUniform || h == Helper::SubgroupUniformFragment) {
           uint32_t count = op(b, spv::Op::OpGroupNonUniformIAdd, tU32(), {scope, kGroupReduce, one});
@@ -671,17 +679,7 @@ class Injector {
     };
     switch (s.placement) {
       case Placement::AfterInstruction: emitInto(after[s.function][s.instruction]); break;
-      case Placement::EntryStart: {
-        size_t at = 0;
-        while (at < insts.size() && insts[at].opcode() != spv::Op::OpLabel) ++at;
-        ++at;
-        while (at < insts.size() && (insts[at].opcode() == spv::Op::OpVariable ||
-                                     insts[at].opcode() == spv::Op::OpLine || insts[at].opcode() == spv::Op::OpNoLine)) {
-          ++at;
-        }
-        emitInto(before[s.function][at]);
-        break;
-      }
+      case Placement::EntryStart: emitInto(before[s.function][entryStart(insts)]); break;
       case Placement::BeforeReturns:
         for (size_t at = 0; at < insts.size(); ++at) {
           if (insts[at].opcode() == spv::Op::OpReturn) emitInto(before[s.function][at]);
@@ -773,20 +771,11 @@ class Injector {
     uint32_t id = m_.newId();
     b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, 0, fnType});
     label(b, m_.newId());
+    // Helper lanes stay out of the flush altogether: were one the elected
+    // lane, its atomic would have no effect and the subgroup's count would
+    // be lost (NVIDIA elects them: found by the analytic suite on an H100).
     uint32_t end = 0;
-    if (stage == Stage::Fragment && subgroupFlush(stage)) {
-      // Helper lanes stay out of the flush altogether: were one the elected
-      // lane, its atomic would have no effect and the subgroup's count would
-      // be lost (NVIDIA elects them: found by the analytic suite on an H100).
-      uint32_t var = builtin(stage, spv::BuiltIn::HelperInvocation, tBool());
-      std::vector<uint32_t> load = {var};
-      if (vulkanMemoryModel_ && demotes_) load.push_back(1);  // Volatile access
-      uint32_t isHelper = op(b, spv::Op::OpLoad, tBool(), load);
-      uint32_t body = m_.newId();
-      end = m_.newId();
-      selection(b, isHelper, end, body, end);
-      label(b, body);
-    }
+    if (stage == Stage::Fragment && subgroupFlush(stage)) end = skipHelperLanes(b, stage);
     const FlushSlots& slots = flushSlots_[stage];
     for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot);
     for (const auto& [base, length] : slots.arrays) {

@@ -63,7 +63,7 @@ for path in sys.argv[1:]:
             for e in stats.get(which, []):
                 for name, v in e["statistics"].items():
                     # NVIDIA reports 2^36 as the local memory size of every
-                    # pipeline on driver 580: a placeholder, not a size.
+                    # pipeline on driver 580, whatever the shader: not a size.
                     if v >= 2 ** 36:
                         continue
                     if any(k in name.lower() for k in KEYS):

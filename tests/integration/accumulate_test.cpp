@@ -46,6 +46,19 @@ uint64_t sumResource(const PassRun& run, SiteKind kind, const std::string& resou
 
 const gpu::Context* deviceOrSkip(std::string& why) { return testContext(&why); }
 
+// Runs `pass` in every exact mode the device can, handing each run and its label to `check`.
+template <class Pass, class Check>
+void forEachExactMode(const gpu::Context& ctx, Pass& pass, Check check) {
+  for (const auto& m : kExactModes) {
+    if (m.width == CounterWidth::Int64 && !ctx.int64Atomics) continue;
+    auto mode = spirv::parseMode(m.mode);
+    ASSERT_TRUE(mode.ok());
+    auto run = pass.run({*mode, m.width, 1});
+    ASSERT_TRUE(run.ok()) << run.error();
+    check(*run, modeLabel(*mode, m.width));
+  }
+}
+
 class EarlyEnd : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(EarlyEnd, CountsStopWhereTheInvocationEnds) {
@@ -55,20 +68,14 @@ TEST_P(EarlyEnd, CountsStopWhereTheInvocationEnds) {
   for (auto [w, h] : {std::pair<uint32_t, uint32_t>{333, 197}, {157, 91}}) {
     FragmentPass pass(*ctx, w, h, std::nullopt, GetParam());
     const uint64_t all = uint64_t(w) * h, kept = uint64_t(w - 100) * h;
-    for (const auto& m : kExactModes) {
-      if (m.width == CounterWidth::Int64 && !ctx->int64Atomics) continue;
-      auto mode = spirv::parseMode(m.mode);
-      ASSERT_TRUE(mode.ok());
-      auto run = pass.run({*mode, m.width, 1});
-      ASSERT_TRUE(run.ok()) << run.error();
-      const std::string where = std::string(GetParam()) + " " + std::to_string(w) + "x" + std::to_string(h) + " " +
-                                modeLabel(*mode, m.width);
-      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "albedo"), all + kept) << where;
-      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "detail"), all + kept) << where;
-      EXPECT_EQ(sumResource(*run, SiteKind::TextureRead, "mask"), kept) << where;
-      EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::OutputWrite, Stage::Fragment), kept) << where;
-      EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::Invocation, Stage::Fragment), all) << where;
-    }
+    forEachExactMode(*ctx, pass, [&](const PassRun& run, const std::string& label) {
+      const std::string where = std::string(GetParam()) + " " + std::to_string(w) + "x" + std::to_string(h) + " " + label;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "albedo"), all + kept) << where;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "detail"), all + kept) << where;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "mask"), kept) << where;
+      EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::OutputWrite, Stage::Fragment), kept) << where;
+      EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::Invocation, Stage::Fragment), all) << where;
+    });
   }
 }
 
@@ -82,18 +89,12 @@ TEST(LongLoop, SeventyThousandLoadsPerInvocationCountExactly) {
   constexpr uint32_t w = 13, h = 9;  // 117 invocations in bounds of 16 x 16 launched
   constexpr uint64_t kLoads = 70008;  // long_loop.comp.glsl
   ComputePass pass(*ctx, w, h, "long_loop.comp.glsl");
-  for (const auto& m : kExactModes) {
-    if (m.width == CounterWidth::Int64 && !ctx->int64Atomics) continue;
-    auto mode = spirv::parseMode(m.mode);
-    ASSERT_TRUE(mode.ok());
-    auto run = pass.run({*mode, m.width, 1});
-    ASSERT_TRUE(run.ok()) << run.error();
-    const std::string where = modeLabel(*mode, m.width);
-    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::BufferRead, Stage::Compute), uint64_t(w) * h * kLoads)
+  forEachExactMode(*ctx, pass, [&](const PassRun& run, const std::string& where) {
+    EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::BufferRead, Stage::Compute), uint64_t(w) * h * kLoads)
         << where;
-    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::BufferWrite, Stage::Compute), uint64_t(w) * h) << where;
-    EXPECT_EQ(sumKind(run->sites, run->counters, SiteKind::Invocation, Stage::Compute), 16u * 16u) << where;
-  }
+    EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::BufferWrite, Stage::Compute), uint64_t(w) * h) << where;
+    EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::Invocation, Stage::Compute), 16u * 16u) << where;
+  });
 }
 
 }  // namespace
