@@ -12,11 +12,16 @@ int main(int argc, char** argv) {
   auto* instrument = app.add_subcommand("instrument", "Instrument a SPIR-V module and print its site table as JSON");
   instrument->add_option("input", instrumentArgs.input, "SPIR-V module (.spv), or - for standard input")->required();
   instrument->add_option("-o,--output", instrumentArgs.output, "Where to write the instrumented module");
-  instrument->add_option("--mode", instrumentArgs.mode, "exact | subgroup | sampled:N")->capture_default_str();
+  instrument->add_option("--mode", instrumentArgs.mode,
+                         "accumulate | accumulate:subgroup | accumulate:lane | exact | subgroup | sampled:N")
+      ->capture_default_str();
   instrument->add_option("--set", instrumentArgs.set, "Descriptor set of the counter buffer")->capture_default_str();
   instrument->add_option("--binding", instrumentArgs.binding, "Binding of the counter buffer")->capture_default_str();
   instrument->add_option("--first-slot", instrumentArgs.firstSlot, "First counter slot")->capture_default_str();
   instrument->add_option("--width", instrumentArgs.width, "int64 | uint32_pair")->capture_default_str();
+  instrument->add_option("--compute-copies", instrumentArgs.computeCopies,
+                         "accumulate: copies of each compute counter (a power of two, 1 to 256; the reader sums them)")
+      ->capture_default_str();
   instrument->add_flag("--analyze", instrumentArgs.analyzeOnly, "Print the site table without rewriting");
 
   tally::cli::DemoArgs demoArgs;

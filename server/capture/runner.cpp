@@ -415,7 +415,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     progress.current = where + " camera " + std::to_string(c);
     if (options.progress) options.progress(progress);
     SampleMeasure m;
-    for (uint32_t f = 0; f < spec.countedFramesOrAll(); ++f) {
+    for (uint32_t f = 0; f < spec.countedFramesOrDefault(); ++f) {
       const renderers::FrameResult frame = instrumented->renderFrame(camera);
       phases.addFrame(frame, "counted");
       headroom.note(frame);
@@ -432,7 +432,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
       auto timed = phases.scope("final_image");
       image = plain.finalImage();
     }
-    json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrAll());
+    json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrDefault());
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
     // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).

@@ -2,6 +2,7 @@
 // modes x cameras. Parsed with errors that name the field.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@ namespace tally::capture {
 // frame, common/resolution.hpp). The service tightens them further.
 inline constexpr uint32_t kMaxFrames = 1000;
 inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
+inline constexpr uint32_t kDefaultCountedFrames = 2;  // instrumented frames per sample unless the spec says
 inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x modes x cameras)
 
 // One measured variant: a renderer and its canonical options
@@ -44,12 +46,14 @@ struct CaptureSpec {
   std::vector<scenes::Camera> cameras;  // when !autoCameras
   uint32_t frames = kDefaultFrames;
   // Instrumented frames per sample, whose counts are averaged and whose
-  // times give the overhead ratio; 0: as many as `frames` (the timed,
-  // uninstrumented ones). A fixed camera counts the same every frame, so 2
-  // catch a count that varies (the sample says counts_vary) at a tenth of
-  // the counting time of 20.
+  // times give the overhead ratio; 0: kDefaultCountedFrames (or `frames`
+  // if fewer). A fixed camera counts the same every frame, so 2 catch a
+  // count that varies (the sample says counts_vary) at a tenth of the
+  // counting time of 20.
   uint32_t countedFrames = 0;
-  uint32_t countedFramesOrAll() const { return countedFrames == 0 ? frames : countedFrames; }
+  uint32_t countedFramesOrDefault() const {
+    return countedFrames != 0 ? countedFrames : std::min(frames, kDefaultCountedFrames);
+  }
   // One run per mode: "counting" is a mode or an array of modes. The
   // uninstrumented baseline is not a mode: every run times it (frame_ms).
   // Default: accumulate, the cheapest exact mode on lavapipe and the H200

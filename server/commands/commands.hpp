@@ -10,11 +10,12 @@ namespace tally::cli {
 struct InstrumentArgs {
   std::string input;
   std::string output;
-  std::string mode = "exact";
+  std::string mode = "accumulate";
   uint32_t set = 7;
   uint32_t binding = 0;
   uint32_t firstSlot = 0;
   std::string width = "int64";
+  uint32_t computeCopies = 16;
   bool analyzeOnly = false;
 };
 

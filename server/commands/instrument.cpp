@@ -58,6 +58,7 @@ int runInstrument(const InstrumentArgs& args) {
   options.set = args.set;
   options.binding = args.binding;
   options.firstSlot = args.firstSlot;
+  options.computeCopies = args.computeCopies;
   if (args.width == "int64") {
     options.width = spirv::CounterWidth::Int64;
   } else if (args.width == "uint32_pair") {

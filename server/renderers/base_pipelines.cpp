@@ -66,7 +66,8 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     auto compiled = gpu::compileAndInstrument(*ctx_, *source, instrumentOptions);
     if (!compiled) return makeError(file + ": " + compiled.error());
     counterSet_ = instrumentOptions.set;
-    slotCount_ += compiled->result.slotCount;
+    slotCount_ += compiled->result.layout().reserved();
+    if (compiled->result.copies > 1) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
     words = std::move(compiled->words);

@@ -246,6 +246,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     auto bytes = gpu::readBuffer(*ctx_, counters_, 0, VkDeviceSize(slotCount_) * sizeof(uint64_t));
     counters.resize(slotCount_);
     std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
+    for (const auto& layout : copyLayouts_) spirv::foldCopies(counters, layout);
   }
   frame.readbackSeconds = std::chrono::duration<double>(Clock::now() - waited).count();
   const uint32_t depthBytes = gpu::formatBytes(kDepthFormat);
@@ -374,6 +375,7 @@ void RendererBase::destroy() {
   hdr_ = final_ = depth_ = bloom_ = nullptr;
   destroyShadows();
   slotCount_ = 0;
+  copyLayouts_.clear();
   ready_ = false;
   ctx_ = nullptr;
 }

@@ -17,6 +17,7 @@
 #include "gpu/queries.hpp"
 #include "gpu/resources.hpp"
 #include "renderers/gpu_scene.hpp"
+#include "spirv/instrument.hpp"
 #include "renderers/techniques/lod.hpp"
 #include "renderers/pass_counters.hpp"
 #include "renderers/renderer.hpp"
@@ -296,7 +297,8 @@ class RendererBase : public Renderer {
 
   std::vector<Pass> passes_;
   uint32_t counterSet_ = 7;
-  uint32_t slotCount_ = 0;
+  uint32_t slotCount_ = 0;                       // counter slots reserved, copies included
+  std::vector<spirv::CopyLayout> copyLayouts_;   // striped modules, folded after readback
   gpu::Buffer counters_, cameraBuffer_, lightingBuffer_;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout frameLayout_ = VK_NULL_HANDLE, geometryLayout_ = VK_NULL_HANDLE,

@@ -1,5 +1,7 @@
 #include "spirv/inject.hpp"
 
+#include "spirv/cfg.hpp"
+
 #include <algorithm>
 #include <map>
 #include <set>
@@ -56,8 +58,8 @@ const char* helperName(Helper h) {
 class Injector {
  public:
   Injector(Module& m, const DefIndex& defs, const Types& types, const InstrumentOptions& options,
-           std::vector<std::string>& notes)
-      : m_(m), defs_(defs), types_(types), options_(options), notes_(notes) {
+           Instrumented& result)
+      : m_(m), defs_(defs), types_(types), options_(options), result_(result), notes_(result.notes) {
     for (const auto& inst : m_.globals) {
       spv::Op op = inst.opcode();
       if (op == spv::Op::OpConstant) {
@@ -140,7 +142,16 @@ class Injector {
       }
     }
 
+    if (accumulate && flushSlots_.count(Stage::Compute) && options_.computeCopies > 1) {
+      result_.copies = options_.computeCopies;
+      result_.copyStride = (result_.slotCount + kCopyAlignSlots - 1) / kCopyAlignSlots * kCopyAlignSlots;
+    }
     if (accumulate) insertFlushes(scan, before);
+    for (const auto& [stage, sites] : perAccessOnce_) {
+      notes_.push_back("accumulate mode: " + std::to_string(sites) + " " + std::string(toString(stage)) + " site" +
+                       (sites == 1 ? "" : "s") +
+                       " that run at most once per invocation counted per access (their flush would cost as much)");
+    }
 
     // Entry-point interfaces: builtins always, every global from SPIR-V 1.4 on.
     for (const auto& ep : scan.entryPoints) {
@@ -650,6 +661,19 @@ class Injector {
     return op(b, spv::Op::OpSelect, u, {inRange, index, constantU32(length - 1)});
   }
 
+  // Whether the site runs at most once per invocation of its entry point:
+  // counted at entry or at the return, or outside every loop of a function
+  // that runs once.
+  bool runsOnce(const FoundSite& s, const EntryPoint& ep) {
+    if (s.placement != Placement::AfterInstruction) return true;
+    auto [once, fresh] = runsOnce_.try_emplace(s.entryIndex);
+    if (fresh) once->second = functionsRunOnce(m_, defs_, ep.functionIndex);
+    if (s.function < 0 || size_t(s.function) >= once->second.size() || !once->second[s.function]) return false;
+    auto [cycles, first] = cycles_.try_emplace(s.function);
+    if (first) cycles->second = instructionsInCycles(m_.functions[s.function], defs_);
+    return s.instruction < cycles->second.size() && !cycles->second[s.instruction];
+  }
+
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
                       std::vector<std::map<size_t, std::vector<Instruction>>>& after,
@@ -662,6 +686,14 @@ class Injector {
     if (s.dynamicIndex != 0 && length > kAccumulateArrayMax) {
       noteOnce("accumulate mode: descriptor arrays of more than " + std::to_string(kAccumulateArrayMax) +
                " elements indexed at run time are counted per access");
+      return false;
+    }
+    // A site that runs at most once per invocation saves nothing by
+    // accumulating where the flush is an atomic per lane (one add either
+    // way, plus the register's load, store and test), nor where its flush
+    // would reduce every element of an array for one access.
+    if (runsOnce(s, ep) && (!subgroupFlush(ep.stage) || length > 1)) {
+      ++perAccessOnce_[ep.stage];
       return false;
     }
     const auto& insts = m_.functions[s.function].insts;
@@ -732,8 +764,10 @@ class Injector {
     label(b, merge);
   }
 
-  // Flushes one accumulator (a Private u32 pointer) into counter `slot`, then zeroes it.
-  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot) {
+  // Flushes one accumulator (a Private u32 pointer) into counter `slot` (of
+  // this invocation's copy), then zeroes it.
+  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot, uint32_t copyOffset) {
+    uint32_t slotId = copyOffset == 0 ? constantU32(slot) : op(b, spv::Op::OpIAdd, tU32(), {constantU32(slot), copyOffset});
     uint32_t u = tU32(), zero = constantU32(0);
     uint32_t v = op(b, spv::Op::OpLoad, u, {pointer});
     opNoResult(b, spv::Op::OpStore, {pointer, zero});
@@ -750,16 +784,40 @@ class Injector {
       uint32_t go = op(b, spv::Op::OpLogicalAnd, tBool(), {elected, nonZero});
       selection(b, go, add, done, done);
       label(b, add);
-      emitAddWide(b, constantU32(slot), sumLo, sumHi);
+      emitAddWide(b, slotId, sumLo, sumHi);
     } else {
       // Per lane. A helper lane's atomic has no effect (Vulkan), as in exact mode.
       uint32_t nonZero = op(b, spv::Op::OpINotEqual, tBool(), {v, zero});
       selection(b, nonZero, add, done, done);
       label(b, add);
-      emitAdd(b, constantU32(slot), v);
+      emitAdd(b, slotId, v);
     }
     branch(b, done);
     label(b, done);
+  }
+
+  // Compute flushes stripe each slot over result_.copies copies: every
+  // workgroup (and subgroup) of a dispatch flushing into one address
+  // serialises on it, and a compute pass has no fixed-function work to hide
+  // that behind. The reader sums the copies (foldCopies).
+  bool stripes(Stage stage) const { return stage == Stage::Compute && result_.copies > 1; }
+
+  // copy * copyStride, the copy chosen by workgroup and by subgroup (or by
+  // lane, where the flush is per lane). Workgroups resident together are
+  // consecutive in x, so x + 3y + 5z spreads them over the copies.
+  uint32_t copyOffsetOf(Body& b, Stage stage) {
+    uint32_t u = tU32(), v3 = tVec(u, 3);
+    uint32_t id = op(b, spv::Op::OpLoad, v3, {builtin(stage, spv::BuiltIn::WorkgroupId, v3)});
+    uint32_t x = op(b, spv::Op::OpCompositeExtract, u, {id, 0});
+    uint32_t y = op(b, spv::Op::OpCompositeExtract, u, {id, 1});
+    uint32_t z = op(b, spv::Op::OpCompositeExtract, u, {id, 2});
+    uint32_t mix = op(b, spv::Op::OpIAdd, u, {x, op(b, spv::Op::OpIMul, u, {y, constantU32(3)})});
+    mix = op(b, spv::Op::OpIAdd, u, {mix, op(b, spv::Op::OpIMul, u, {z, constantU32(5)})});
+    uint32_t within = subgroupFlush(stage) ? builtin(stage, spv::BuiltIn::SubgroupId, u)
+                                           : builtin(stage, spv::BuiltIn::LocalInvocationIndex, u);
+    mix = op(b, spv::Op::OpIAdd, u, {mix, op(b, spv::Op::OpLoad, u, {within})});
+    uint32_t copy = op(b, spv::Op::OpBitwiseAnd, u, {mix, constantU32(result_.copies - 1)});
+    return op(b, spv::Op::OpIMul, u, {copy, constantU32(result_.copyStride)});
   }
 
   // The stage's flush function: every accumulator its sites use.
@@ -776,13 +834,14 @@ class Injector {
     // be lost (NVIDIA elects them: found by the analytic suite on an H100).
     uint32_t end = 0;
     if (stage == Stage::Fragment && subgroupFlush(stage)) end = skipHelperLanes(b, stage);
+    uint32_t copyOffset = stripes(stage) ? copyOffsetOf(b, stage) : 0;
     const FlushSlots& slots = flushSlots_[stage];
-    for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot);
+    for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot, copyOffset);
     for (const auto& [base, length] : slots.arrays) {
       uint32_t array = arrayAccumulator(base, length);
       for (uint32_t i = 0; i < length; ++i) {
         uint32_t element = op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()), {array, constantU32(i)});
-        flushOne(b, stage, element, base + i);
+        flushOne(b, stage, element, base + i, copyOffset);
       }
     }
     if (end != 0) {
@@ -848,6 +907,7 @@ class Injector {
   const DefIndex& defs_;
   const Types& types_;
   const InstrumentOptions& options_;
+  Instrumented& result_;
   std::vector<std::string>& notes_;
   bool vulkanMemoryModel_ = false;
   bool demotes_ = false;  // the module uses OpDemoteToHelperInvocation
@@ -870,6 +930,9 @@ class Injector {
   std::vector<std::pair<uint32_t, ArrayAccumulator>> arrayAcc_;
   std::vector<uint32_t> accumulators_;      // every Private variable added
   std::map<Stage, uint32_t> flushFunctions_;
+  std::map<uint32_t, std::vector<bool>> runsOnce_;  // entry index -> functions that run once
+  std::map<int, std::vector<bool>> cycles_;         // function -> instructions on a cycle
+  std::map<Stage, uint32_t> perAccessOnce_;         // sites counted per access because they run once
   std::vector<Instruction> newGlobals_, newAnnotations_, newNames_;
   std::vector<Function> newFunctions_;
 };
@@ -878,8 +941,8 @@ class Injector {
 
 std::string injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
                            const std::vector<uint32_t>& slots, const InstrumentOptions& options,
-                           std::vector<std::string>& notes) {
-  return Injector(module, defs, types, options, notes).run(scan, slots);
+                           Instrumented& result) {
+  return Injector(module, defs, types, options, result).run(scan, slots);
 }
 
 }  // namespace tally::spirv

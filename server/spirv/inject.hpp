@@ -33,10 +33,16 @@ struct TileShape {
 };
 TileShape sampledTileShape(uint32_t n);
 
-// Rewrites `module` in place. `slots[i]` is the first slot of scan.sites[i].
-// Returns an error message, or "" on success; appends fallbacks to notes.
+// Copies of a striped counter block start on 128-byte boundaries, so that
+// no two copies of a slot share a cache line.
+constexpr uint32_t kCopyAlignSlots = 16;
+
+// Rewrites `module` in place. `slots[i]` is the first slot of scan.sites[i];
+// result.slotCount is already set. Returns an error message, or "" on
+// success; appends fallbacks to result.notes and sets result.copies and
+// result.copyStride when compute counters are striped.
 std::string injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
                            const std::vector<uint32_t>& slots, const InstrumentOptions& options,
-                           std::vector<std::string>& notes);
+                           Instrumented& result);
 
 }  // namespace tally::spirv

@@ -194,13 +194,14 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     result.sites.push_back(std::move(site));
   }
   result.slotCount = next - options.firstSlot;
+  result.firstSlot = options.firstSlot;
 
   if (!rewrite) {
     result.words.assign(input.begin(), input.end());
     result.versionOut = result.versionIn;
     return result;
   }
-  if (auto error = injectCounters(module, *defs, *types, *scan, slots, options, result.notes); !error.empty()) {
+  if (auto error = injectCounters(module, *defs, *types, *scan, slots, options, result); !error.empty()) {
     return makeError(error);
   }
   result.versionOut = module.version;
@@ -219,11 +220,26 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (options.mode.kind == CountMode::Sampled && options.mode.sampleRate < 2) {
     return makeError("sampled mode needs N >= 2");
   }
+  const uint32_t c = options.computeCopies;
+  if (c == 0 || c > 256 || (c & (c - 1)) != 0) {
+    return makeError("compute counter copies must be a power of two from 1 to 256, not " + std::to_string(c));
+  }
   return run(words, options, true);
 }
 
 Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options) {
   return run(words, options, false);
+}
+
+void foldCopies(std::span<uint64_t> counters, const CopyLayout& l) {
+  for (uint32_t k = 1; k < l.copies; ++k) {
+    for (uint32_t s = 0; s < l.slotCount; ++s) {
+      size_t from = size_t(l.firstSlot) + size_t(k) * l.stride + s;
+      if (from >= counters.size()) return;
+      counters[l.firstSlot + s] += counters[from];
+      counters[from] = 0;
+    }
+  }
 }
 
 nlohmann::json toJson(const Site& s) {
@@ -261,6 +277,9 @@ nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
       {"sites", std::move(sites)},
       {"slot_count", r.slotCount},
       {"first_slot", options.firstSlot},
+      {"copies", r.copies},
+      {"copy_stride", r.copyStride},
+      {"reserved_slots", r.layout().reserved()},
       {"mode", toString(options.mode)},
       {"counters",
        {{"set", options.set},

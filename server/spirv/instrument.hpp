@@ -64,18 +64,42 @@ struct InstrumentOptions {
   // Elsewhere it reduces where the stage has subgroup arithmetic.
   uint32_t autoLaneStages = stageBit(Stage::Vertex) | stageBit(Stage::TessControl) | stageBit(Stage::TessEval) |
                             stageBit(Stage::Geometry) | stageBit(Stage::Fragment);
+  // accumulate mode: compute flushes stripe each slot over this many copies
+  // (a power of two in [1, 256]; 1 turns striping off). See CopyLayout.
+  uint32_t computeCopies = 16;
   // Validate input and output with SPIRV-Tools.
   bool validate = true;
 };
+
+// Where a module's counters lie in the counter buffer. Slot s (in
+// [firstSlot, firstSlot + slotCount)) has `copies` copies, copy k at
+// s + k * stride; the count is their sum (foldCopies). Unstriped modules
+// have one copy and reserve slotCount slots.
+struct CopyLayout {
+  uint32_t firstSlot = 0;
+  uint32_t slotCount = 0;
+  uint32_t copies = 1;
+  uint32_t stride = 0;
+  // Slots the module needs in the buffer, from firstSlot.
+  uint32_t reserved() const { return copies > 1 ? stride * copies : slotCount; }
+};
+
+// Adds every copy into the first one (counters is the whole buffer, from slot 0).
+void foldCopies(std::span<uint64_t> counters, const CopyLayout& layout);
 
 struct Instrumented {
   std::vector<uint32_t> words;   // the rewritten module
   std::vector<Site> sites;       // every site found, in module order
   uint32_t slotCount = 0;        // slots used: [firstSlot, firstSlot + slotCount)
+  uint32_t firstSlot = 0;        // options.firstSlot
+  uint32_t copies = 1;           // >1: compute counters striped (CopyLayout)
+  uint32_t copyStride = 0;       // slots between copies when copies > 1
   uint32_t versionIn = 0;        // SPIR-V version word of the input (0x00010000 = 1.0)
   uint32_t versionOut = 0;       // raised to 1.3 when subgroup mode needs it
   bool inlined = false;          // functions were inlined to resolve resources
   std::vector<std::string> notes;  // fallbacks taken, for the user
+
+  CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride}; }
 };
 
 // Instruments a module. Fails with a one-line reason on invalid or

@@ -16,7 +16,10 @@ TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
   auto spec = parse(R"({"renderers":["deferred","visbuffer"],"resolutions":[[320,180]]})");
   ASSERT_TRUE(spec.ok()) << spec.error();
   EXPECT_EQ(spec->frames, 20u);
-  EXPECT_EQ(spec->countedFramesOrAll(), 20u);  // counted_frames: as many as frames
+  EXPECT_EQ(spec->countedFramesOrDefault(), 2u);  // counted_frames: 2, enough to see a count vary
+  auto one = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":1})");
+  ASSERT_TRUE(one.ok()) << one.error();
+  EXPECT_EQ(one->countedFramesOrDefault(), 1u);  // never more than the timed frames
   EXPECT_EQ(spec->lights, 400u);
   EXPECT_TRUE(spec->autoCameras);
   ASSERT_EQ(spec->modes.size(), 1u);

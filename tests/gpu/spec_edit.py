@@ -56,6 +56,11 @@ def main():
         else:
             spec["resolutions"] = [args.resolution]
     if args.frames:
+        # A spec that counts every frame keeps doing so; one that counts
+        # fewer keeps its count, within the new frames.
+        counted = spec.get("counted_frames")
+        if counted is not None and (counted >= spec.get("frames", 20) or counted > args.frames):
+            spec["counted_frames"] = args.frames
         spec["frames"] = args.frames
     json.dump(spec, sys.stdout, indent=1)
     print()

@@ -97,5 +97,47 @@ TEST(LongLoop, SeventyThousandLoadsPerInvocationCountExactly) {
   });
 }
 
+// Compute counters striped over 16 copies (chosen by workgroup and subgroup
+// or lane) fold to the very counts of one copy, in every slot; and the
+// copies are in use, so striping is live and not a no-op.
+//  - mixed_reads at 157 x 91 (20 x 12 workgroups: x + 3y alone covers every
+//    copy) has no loop: with a per-lane flush every site runs once and is
+//    counted per access, so nothing is flushed and nothing striped;
+//  - long_loop at 13 x 9 (4 workgroups) accumulates in every flush.
+TEST(StripedCopies, FoldToTheCountsOfOneCopy) {
+  std::string why;
+  const gpu::Context* ctx = deviceOrSkip(why);
+  ASSERT_NE(ctx, nullptr) << why;
+  ComputePass mixed(*ctx, 157, 91);
+  ComputePass loop(*ctx, 13, 9, "long_loop.comp.glsl");
+  const CounterWidth width = ctx->int64Atomics ? CounterWidth::Int64 : CounterWidth::Uint32Pair;
+  for (const char* name : {"accumulate", "accumulate:subgroup", "accumulate:lane"}) {
+    auto mode = spirv::parseMode(name);
+    ASSERT_TRUE(mode.ok());
+    const bool lane = std::string(name) == "accumulate:lane";
+    for (ComputePass* pass : {&mixed, &loop}) {
+      const std::string where = std::string(name) + (pass == &mixed ? " mixed_reads" : " long_loop");
+      auto striped = pass->run({*mode, width, 1, {}, 16});
+      auto single = pass->run({*mode, width, 1, {}, 1});
+      ASSERT_TRUE(striped.ok()) << striped.error();
+      ASSERT_TRUE(single.ok()) << single.error();
+      if (pass == &mixed) {
+        EXPECT_EQ(striped->copiesWritten, lane ? 0u : 16u) << where;
+      } else {
+        EXPECT_GT(striped->copiesWritten, 1u) << where;
+      }
+      EXPECT_EQ(single->copiesWritten, 0u) << where << ": one copy is not striped";
+      ASSERT_EQ(striped->sites.size(), single->sites.size());
+      for (const auto& s : single->sites) {
+        for (uint32_t i = 0; i < s.slotCount; ++i) {
+          EXPECT_EQ(striped->counters.at(s.slot + i), single->counters.at(s.slot + i))
+              << where << ": slot " << s.slot + i << " (" << s.resource << ")";
+        }
+      }
+      EXPECT_GT(sumKind(single->sites, single->counters, SiteKind::BufferRead, Stage::Compute), 0u) << where;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tally::test

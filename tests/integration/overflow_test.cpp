@@ -85,14 +85,16 @@ void checkWrap(Pass& pass, const OverflowCase& c, Stage countedStage) {
   ASSERT_TRUE(mode.ok()) << mode.error();
 
   // The same pass from zero: what each slot receives.
-  auto fromZero = pass.run({*mode, c.width, 1, {}});
+  // One copy of each compute counter, so that every slot's flush carries
+  // across the wrap (striped copies would each receive a sixteenth).
+  auto fromZero = pass.run({*mode, c.width, 1, {}, 1});
   ASSERT_TRUE(fromZero.ok()) << fromZero.error();
   const size_t slots = fromZero->counters.size();
   ASSERT_GT(slots, 0u);
 
   std::vector<uint64_t> start(slots);
   for (size_t i = 0; i < slots; ++i) start[i] = startValue(i);
-  auto wrapped = pass.run({*mode, c.width, 1, start});
+  auto wrapped = pass.run({*mode, c.width, 1, start, 1});
   ASSERT_TRUE(wrapped.ok()) << wrapped.error();
   ASSERT_EQ(wrapped->counters.size(), slots);
 

@@ -68,7 +68,8 @@ struct InstrumentedModules {
   std::vector<std::vector<uint32_t>> words;
   std::vector<spirv::Site> sites;
   std::vector<std::string> notes;
-  uint32_t slotCount = 0;
+  uint32_t slotCount = 0;                     // reserved, copies included
+  std::vector<spirv::CopyLayout> striped;     // folded after readback
 };
 
 // Instruments `modules` (stage, words) in order, each from the slot after the
@@ -85,6 +86,7 @@ Result<InstrumentedModules> instrumentAll(
     spirv::InstrumentOptions instrumentOptions =
         gpu::instrumentOptionsFor(ctx, *options.mode, out.slotCount, *words);
     instrumentOptions.width = options.width;
+    if (options.computeCopies != 0) instrumentOptions.computeCopies = options.computeCopies;
     if (auto why = gpu::unsupportedReason(ctx, stage, instrumentOptions); !why.empty()) {
       return makeError(std::string(spirv::toString(stage)) + ": " + why);
     }
@@ -93,9 +95,27 @@ Result<InstrumentedModules> instrumentAll(
     out.words.push_back(result->words);
     out.sites.insert(out.sites.end(), result->sites.begin(), result->sites.end());
     out.notes.insert(out.notes.end(), result->notes.begin(), result->notes.end());
-    out.slotCount += result->slotCount;
+    out.slotCount += result->layout().reserved();
+    if (result->copies > 1) out.striped.push_back(result->layout());
   }
   return out;
+}
+
+// Counts the copies that received counts, then folds them into their slots.
+void foldStriped(const InstrumentedModules& modules, PassRun& run) {
+  for (const auto& l : modules.striped) {
+    uint32_t written = 0;
+    for (uint32_t k = 0; k < l.copies; ++k) {
+      for (uint32_t s = 0; s < l.slotCount; ++s) {
+        if (run.counters[size_t(l.firstSlot) + size_t(k) * l.stride + s] != 0) {
+          ++written;
+          break;
+        }
+      }
+    }
+    run.copiesWritten = std::max(run.copiesWritten, written);
+    spirv::foldCopies(run.counters, l);
+  }
 }
 
 // Counter buffer: 64-bit counters, zeroed by every submission.
@@ -330,6 +350,7 @@ Result<PassRun> FragmentPass::run(const RunOptions& options) {
   run.medianWallMs = medianAfterWarmup(run.wallMs);
   if (statistics.pool != VK_NULL_HANDLE) run.statistics = gpu::readStatistics(ctx_, statistics)[0];
   run.counters = readCounters(ctx_, counters.buffer, modules->slotCount);
+  foldStriped(*modules, run);
   run.sites = std::move(modules->sites);
   run.notes = std::move(modules->notes);
   run.output = gpu::readImage(ctx_, target_, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
@@ -489,6 +510,7 @@ Result<PassRun> ComputePass::run(const RunOptions& options) {
   run.medianWallMs = medianAfterWarmup(run.wallMs);
   if (statistics.pool != VK_NULL_HANDLE) run.statistics = gpu::readStatistics(ctx_, statistics)[0];
   run.counters = readCounters(ctx_, counters.buffer, modules->slotCount);
+  foldStriped(*modules, run);
   run.sites = std::move(modules->sites);
   run.notes = std::move(modules->notes);
   run.output = gpu::readBuffer(ctx_, outputBuffer_);

@@ -33,10 +33,13 @@ struct RunOptions {
   // at initialCounters[i] (slots past the end at 0). Lets a test put a counter
   // next to 2^32 without running 4 billion atomics first.
   std::vector<uint64_t> initialCounters;
+  // accumulate: copies of each compute counter (0: the device default).
+  uint32_t computeCopies = 0;
 };
 
 struct PassRun {
-  std::vector<uint64_t> counters;  // the whole counter buffer
+  std::vector<uint64_t> counters;  // the whole counter buffer, striped copies folded into their slots
+  uint32_t copiesWritten = 0;      // striped modules: the most copies of one that received counts
   std::vector<spirv::Site> sites;  // of every instrumented module
   std::vector<std::string> notes;
   gpu::PipelineStatistics statistics;

@@ -60,7 +60,7 @@ layout(location = 0) out vec4 color;
 void main() { color = texture(tex, vec2(0.5)); }
 )", spirv::Stage::Fragment);
   auto in = write("in.spv", words);
-  for (const char* mode : {"exact", "subgroup", "sampled:16"}) {
+  for (const char* mode : {"accumulate", "accumulate:lane", "exact", "subgroup", "sampled:16"}) {
     CommandResult r = run(in.string() + " -o " + (dir_ / "out.spv").string() + " --mode " + mode + " --set 3 --binding 2");
     ASSERT_EQ(r.status, 0) << r.err;
     auto j = nlohmann::json::parse(r.out);
@@ -81,6 +81,28 @@ void main() { color = texture(tex, vec2(0.5)); }
   }
 }
 
+TEST_F(InstrumentCommand, DefaultsToAccumulateAndReportsStripedComputeCounters) {
+  auto words = test::compileGlsl(R"(#version 450
+layout(local_size_x = 64) in;
+layout(set = 0, binding = 0) buffer Data { uint v[]; };
+void main() { v[gl_GlobalInvocationID.x] += 1u; }
+)", spirv::Stage::Compute);
+  auto in = write("in.spv", words);
+  CommandResult r = run(in.string() + " -o " + (dir_ / "out.spv").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["mode"], "accumulate");
+  const uint32_t slots = j["slot_count"], stride = j["copy_stride"];
+  EXPECT_EQ(j["copies"], 16);
+  EXPECT_EQ(stride, (slots + 15) / 16 * 16);  // whole 128-byte lines
+  EXPECT_EQ(j["reserved_slots"], stride * 16);
+  r = run(in.string() + " -o " + (dir_ / "out.spv").string() + " --compute-copies 1");
+  ASSERT_EQ(r.status, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["copies"], 1);
+  EXPECT_EQ(j["reserved_slots"], j["slot_count"]);
+}
+
 TEST_F(InstrumentCommand, BadInputExitsNonZeroWithOneLine) {
   std::vector<uint32_t> junk = {0x12345678, 1, 2, 3, 4, 5};
   auto in = write("junk.spv", junk);
@@ -93,6 +115,7 @@ TEST_F(InstrumentCommand, BadInputExitsNonZeroWithOneLine) {
       {in.string() + " -o " + (dir_ / "o.spv").string() + " --mode fast", "unknown mode"},
       {in.string() + " -o " + (dir_ / "o.spv").string() + " --width 16", "unknown counter width"},
       {in.string(), "output path is required"},
+      {in.string() + " -o " + (dir_ / "o.spv").string() + " --compute-copies 12", "power of two"},
   };
   for (const auto& c : cases) {
     CommandResult r = run(c.args);

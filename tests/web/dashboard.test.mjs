@@ -521,6 +521,8 @@ describe('dashboard', () => {
     const job = await daemon.get(`/captures/${id}`);
     assert.equal(job.status, 'done');
     assert.deepEqual(job.spec.renderers, ['forward']);
+    assert.equal(job.spec.counting, 'accumulate', 'the form preselects the default mode');
+    assert.ok(!('counted_frames' in job.spec), 'an empty counted-frames field leaves the default');
     assert.deepEqual(job.spec.resolutions, [[64, 36]]);
     const statuses = await page.evaluate(() => window.seenStatuses);
     assert.equal(statuses.at(-1), 'done');
@@ -548,12 +550,16 @@ describe('dashboard', () => {
     }
     await select.selectOption(JSON.stringify('float32'));
     await page.fill('input[name="resolutions"]', '32x18');
-    await page.fill('input[name="frames"]', '1');
+    await page.fill('input[name="frames"]', '2');
+    await page.fill('input[name="counted_frames"]', '1');
+    await page.selectOption('select[name="counting"]', 'exact');
     await page.click('form.capture-form button[type="submit"]');
     const panel = page.locator('.progress-box [data-status="done"]');
     await panel.waitFor({ timeout: kCaptureMs });
     const job = await daemon.get(`/captures/${Number(await panel.getAttribute('data-capture'))}`);
     assert.deepEqual(job.spec.renderers, [{ renderer: 'visbuffer', options: { barycentrics: 'float32' } }]);
+    assert.equal(job.spec.counted_frames, 1);
+    assert.equal(job.spec.counting, 'exact');
     const { runs } = await daemon.get(`/runs?capture=${job.id}`);
     assert.deepEqual(runs.map((r) => r.variant), ['visbuffer barycentrics=float32']);
     assert.deepEqual(errors, []);
@@ -564,10 +570,11 @@ describe('dashboard', () => {
     const { page, errors, close } = await open('#/capture');
     const before = (await daemon.get('/captures?limit=1000')).captures.length;
     const renderers = await page.locator('input[name="renderers"]:checked').evaluateAll((boxes) => boxes.map((b) => b.value));
-    const spec = { renderers, scenes: ['atrium'], cameras: 'auto', counting: 'exact', lights: 400 };
+    const spec = { renderers, scenes: ['atrium'], cameras: 'auto', counting: 'accumulate', lights: 400 };
     const cases = [
       { fill: { resolutions: '64x0', frames: '2' }, spec: { ...spec, resolutions: [[64, 0]], frames: 2 }, input: 'resolutions' },
       { fill: { resolutions: '64x36', frames: '5000' }, spec: { ...spec, resolutions: [[64, 36]], frames: 5000 }, input: 'frames' },
+      { fill: { frames: '4', counted_frames: '5' }, spec: { ...spec, resolutions: [[64, 36]], frames: 4, counted_frames: 5 }, input: 'counted_frames' },
     ];
     for (const k of cases) {
       const expected = await daemon.api('/captures', { method: 'POST', body: k.spec });
@@ -585,7 +592,7 @@ describe('dashboard', () => {
     assert.equal((await daemon.get('/captures?limit=1000')).captures.length, before, 'a refused spec stores no job');
     // The only console lines: Chromium's own notes of the two 400 answers to
     // POST /api/captures. The page itself logs nothing.
-    assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), [['/api/captures', true], ['/api/captures', true]]);
+    assert.deepEqual(errors.map((e) => [new URL(e.url).pathname, /status of 400/.test(e.text)]), cases.map(() => ['/api/captures', true]));
     await close();
   });
 

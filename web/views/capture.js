@@ -74,6 +74,7 @@ function specOf(form) {
     resolutions: parseResolutions(data.get('resolutions')),
     cameras: 'auto',
     frames: numberOr(data.get('frames')),
+    ...(data.get('counted_frames').trim() !== '' ? { counted_frames: numberOr(data.get('counted_frames')) } : {}),
     counting,
     lights: numberOr(data.get('lights')),
   };
@@ -117,7 +118,9 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
   const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
   const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
   const samplingN = h('input', { name: 'sample_n', value: '4', size: 4, 'aria-label': 'Sampling tile size N' });
-  const counting = h('select', { name: 'counting' }, ['exact', 'subgroup', 'sampled'].map((m) => h('option', { value: m }, m === 'sampled' ? 'sampled:N' : m)));
+  // The server's modes, the default (accumulate) first.
+  const counting = h('select', { name: 'counting' },
+    ['accumulate', 'accumulate:subgroup', 'accumulate:lane', 'exact', 'subgroup', 'sampled'].map((m) => h('option', { value: m }, m === 'sampled' ? 'sampled:N' : m)));
   const gltf = scenes.gltf.flatMap((folder) => folder.files);
   const form = h('form', { class: 'capture-form', novalidate: true, 'aria-label': 'New capture' },
     h('fieldset', { dataset: { field: 'renderers' } }, h('legend', {}, 'Renderers'),
@@ -132,7 +135,8 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
         gltf.map((path) => choice('gltf', path, false)))),
     h('div', { class: 'form-grid' },
       field('Resolutions', h('input', { name: 'resolutions', value: '320x180', required: true }), 'WxH, comma-separated'),
-      field('Frames per sample', h('input', { name: 'frames', value: '20', inputmode: 'numeric' }), 'each counted and timed'),
+      field('Frames per sample', h('input', { name: 'frames', value: '20', inputmode: 'numeric' }), 'timed, uninstrumented'),
+      field('Counted frames', h('input', { name: 'counted_frames', value: '', placeholder: '2', inputmode: 'numeric' }), 'instrumented, per sample; empty: 2 (at most the frames)'),
       field('Counting', counting),
       h('label', { class: 'field', dataset: { field: 'counting' } }, h('span', {}, 'N (sampled only)'), samplingN),
       field('Lights', h('input', { name: 'lights', value: '400', inputmode: 'numeric' }), '0 to 400'),

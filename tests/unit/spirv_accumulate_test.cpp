@@ -1,0 +1,171 @@
+// The accumulate mode's choices, read off the instrumented module: which
+// sites accumulate and which are counted per access, and how compute
+// counters are striped over copies. Its counts are checked on a device in
+// tests/integration (accumulate_test, exactness_test, overflow_test).
+#include <string>
+
+#include "spirv/cfg.hpp"
+#include "spirv/inject.hpp"
+#include "spirv_test_util.hpp"
+
+namespace tally::spirv {
+namespace {
+
+using test::compileGlsl;
+using test::disassemble;
+using test::instrumentOk;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// The line after the first one containing `first`.
+std::string lineAfter(const std::string& text, const std::string& first) {
+  auto at = text.find(first);
+  if (at == std::string::npos) return {};
+  auto start = text.find('\n', at) + 1;
+  return text.substr(start, text.find('\n', start) - start);
+}
+
+InstrumentOptions accumulate(const char* mode) {
+  InstrumentOptions o;
+  auto m = parseMode(mode);
+  EXPECT_TRUE(m.ok());
+  o.mode = *m;
+  return o;
+}
+
+// One texture sample outside any loop, one buffer read in a loop.
+const char* kOnceAndLoop = R"(#version 450
+layout(set = 0, binding = 0) uniform sampler2D tex;
+layout(set = 0, binding = 1) readonly buffer Lights { vec4 light[]; };
+layout(push_constant) uniform Push { int count; };
+layout(location = 0) in vec2 uv;
+layout(location = 0) out vec4 color;
+void main() {
+  vec4 c = texture(tex, uv);
+  for (int i = 0; i < count; ++i) c += light[i];
+  color = c;
+}
+)";
+
+TEST(Accumulate, PerLaneFlushCountsSitesThatRunOncePerAccess) {
+  auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate:lane"));
+  std::string dis = disassemble(r.words);
+  // The sample runs once: its flush would be one atomic per lane, as the access is.
+  EXPECT_TRUE(contains(lineAfter(dis, "OpImageSampleImplicitLod"), "%tally_count_exact")) << dis;
+  // Every site but the loop's read is counted per access; that one accumulates.
+  size_t calls = 0;
+  for (size_t at = dis.find("OpFunctionCall %void %tally_count_exact"); at != std::string::npos;
+       at = dis.find("OpFunctionCall %void %tally_count_exact", at + 1)) {
+    ++calls;
+  }
+  EXPECT_EQ(calls + 1, r.sites.size()) << dis;
+  EXPECT_EQ(test::sitesOf(r, SiteKind::BufferRead).size(), 1u);
+  EXPECT_TRUE(contains(dis, "%tally_flush_fragment")) << dis;
+  bool noted = false;
+  for (const auto& n : r.notes) noted = noted || contains(n, "run at most once per invocation counted per access");
+  EXPECT_TRUE(noted);
+}
+
+TEST(Accumulate, SubgroupFlushAccumulatesSitesThatRunOnce) {
+  // A reduction turns a subgroup's once-per-lane atomics into one: worth it.
+  auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate:subgroup"));
+  std::string dis = disassemble(r.words);
+  EXPECT_FALSE(contains(dis, "%tally_count_exact")) << dis;
+  EXPECT_TRUE(contains(dis, "OpGroupNonUniformIAdd")) << dis;
+}
+
+TEST(Accumulate, FunctionsCalledTwiceOrInALoopDoNotRunOnce) {
+  const char* source = R"(#version 450
+layout(set = 0, binding = 0) readonly buffer A { float a[]; };
+layout(set = 0, binding = 1) readonly buffer B { float b[]; };
+layout(set = 0, binding = 2) readonly buffer C { float c[]; };
+layout(set = 0, binding = 3) writeonly buffer Out { float o[]; };
+layout(local_size_x = 64) in;
+float twice(uint i) { return a[i]; }
+float inLoop(uint i) { return b[i]; }
+float once(uint i) { return c[i]; }
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  float s = twice(i) + twice(i + 1u) + once(i);
+  for (uint k = 0u; k < 4u; ++k) s += inLoop(i + k);
+  o[i] = s;
+}
+)";
+  auto words = compileGlsl(source, Stage::Compute);
+  auto module = Module::parse(words);
+  ASSERT_TRUE(module.ok()) << module.error();
+  DefIndex defs(*module);
+  int entry = -1;
+  for (size_t f = 0; f < module->functions.size(); ++f) {
+    if (defs.name(module->functions[f].id()) == "main") entry = int(f);
+  }
+  ASSERT_GE(entry, 0);
+  auto once = functionsRunOnce(*module, defs, entry);
+  for (size_t f = 0; f < module->functions.size(); ++f) {
+    std::string name = defs.name(module->functions[f].id());
+    bool expected = name == "main" || name.rfind("once(", 0) == 0;
+    EXPECT_EQ(once[f], expected) << name;
+  }
+}
+
+const char* kComputeLoop = R"(#version 450
+layout(set = 0, binding = 0) readonly buffer In { float v[]; };
+layout(set = 0, binding = 1) writeonly buffer Out { float o[]; };
+layout(local_size_x = 8, local_size_y = 8) in;
+void main() {
+  uint i = gl_GlobalInvocationID.y * 1024u + gl_GlobalInvocationID.x;
+  float s = 0.0;
+  for (uint k = 0u; k < 16u; ++k) s += v[i + k];
+  o[i] = s;
+}
+)";
+
+TEST(Accumulate, ComputeCountersAreStripedOverCopiesOnTheirOwnCacheLines) {
+  auto r = instrumentOk(compileGlsl(kComputeLoop, Stage::Compute), accumulate("accumulate"));
+  EXPECT_EQ(r.copies, 16u);
+  EXPECT_GE(r.copyStride, r.slotCount);
+  EXPECT_EQ(r.copyStride % kCopyAlignSlots, 0u);
+  EXPECT_EQ(r.layout().reserved(), r.copyStride * 16);
+  std::string dis = disassemble(r.words);
+  EXPECT_TRUE(contains(dis, "BuiltIn WorkgroupId")) << dis;
+  EXPECT_TRUE(contains(dis, "BuiltIn SubgroupId")) << dis;  // the reduced flush: one copy per subgroup
+  auto lane = instrumentOk(compileGlsl(kComputeLoop, Stage::Compute), accumulate("accumulate:lane"));
+  EXPECT_TRUE(contains(disassemble(lane.words), "BuiltIn LocalInvocationIndex"));
+
+  InstrumentOptions one = accumulate("accumulate");
+  one.computeCopies = 1;
+  auto single = instrumentOk(compileGlsl(kComputeLoop, Stage::Compute), one);
+  EXPECT_EQ(single.copies, 1u);
+  EXPECT_EQ(single.layout().reserved(), single.slotCount);
+  // Other modes and other stages keep one copy.
+  EXPECT_EQ(instrumentOk(compileGlsl(kComputeLoop, Stage::Compute), accumulate("exact")).copies, 1u);
+  EXPECT_EQ(instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate")).copies, 1u);
+}
+
+TEST(Accumulate, CopiesMustBeAPowerOfTwo) {
+  for (uint32_t bad : {0u, 3u, 24u, 512u}) {
+    InstrumentOptions o = accumulate("accumulate");
+    o.computeCopies = bad;
+    auto r = instrument(compileGlsl(kComputeLoop, Stage::Compute), o);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_TRUE(contains(r.error(), "power of two")) << r.error();
+  }
+}
+
+TEST(Accumulate, FoldSumsEveryCopyIntoItsSlot) {
+  CopyLayout l{2, 3, 4, 16};
+  std::vector<uint64_t> counters(2 + 16 * 4, 0);
+  counters[0] = 7;  // another module's slot: untouched
+  for (uint32_t k = 0; k < 4; ++k) {
+    for (uint32_t s = 0; s < 3; ++s) counters[2 + k * 16 + s] = (k + 1) * 100 + s;
+  }
+  foldCopies(counters, l);
+  EXPECT_EQ(counters[0], 7u);
+  for (uint32_t s = 0; s < 3; ++s) EXPECT_EQ(counters[2 + s], 1000u + 4 * s) << s;  // 100+200+300+400, +s each
+  for (uint32_t k = 1; k < 4; ++k) {
+    for (uint32_t s = 0; s < 3; ++s) EXPECT_EQ(counters[2 + k * 16 + s], 0u);
+  }
+}
+
+}  // namespace
+}  // namespace tally::spirv
