@@ -136,7 +136,7 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
     h('div', { class: 'form-grid' },
       field('Resolutions', h('input', { name: 'resolutions', value: '320x180', required: true }), 'WxH, comma-separated'),
       field('Frames per sample', h('input', { name: 'frames', value: '20', inputmode: 'numeric' }), 'timed, uninstrumented'),
-      field('Counted frames', h('input', { name: 'counted_frames', value: '', placeholder: '2', inputmode: 'numeric' }), 'instrumented, per sample; empty: 2 (at most the frames)'),
+      field('Counted frames', h('input', { name: 'counted_frames', value: '', placeholder: '2', inputmode: 'numeric' }), 'instrumented frames per sample; left blank, the server counts 2 (never more than the frames)'),
       field('Counting', counting),
       h('label', { class: 'field', dataset: { field: 'counting' } }, h('span', {}, 'N (sampled only)'), samplingN),
       field('Lights', h('input', { name: 'lights', value: '400', inputmode: 'numeric' }), '0 to 400'),
