@@ -56,6 +56,11 @@ struct Access {
   // where a tile-based GPU keeps this traffic on chip (writes of a DONT_CARE
   // attachment, input-attachment reads within the render pass), 0 DRAM bytes.
   bool onChip = false;
+  // Footprint (docs/measurement.md, "Footprint"): distinct bytes this line
+  // touched in the frame, in blocks of RendererOptions::footprintBlockBytes
+  // (the union of every block any access of the line covered). -1 where it
+  // was not measured (footprint off, or a line the model cannot see).
+  int64_t footprintBytes = -1;
 };
 
 struct PassResult {
@@ -240,6 +245,10 @@ struct RendererOptions {
   // fragment pass. False: the fragment pass as it was.
   bool computeShading = false;
   WorkloadOptions workload;  // the compute workloads' parameters (volume-fog, raytrace)
+  // Footprint counting (docs/measurement.md, "Footprint"): 0 off, else the
+  // block size in bytes (32, 64 or 128) of the per-resource bitmaps that
+  // mark which blocks each access touches. Needs instrumented.
+  uint32_t footprintBlockBytes = 0;
 };
 
 class Renderer {
