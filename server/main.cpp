@@ -22,6 +22,10 @@ int main(int argc, char** argv) {
   instrument->add_option("--compute-copies", instrumentArgs.computeCopies,
                          "accumulate: copies of each compute counter (a power of two, 1 to 256; the reader sums them)")
       ->capture_default_str();
+  instrument->add_option("--footprint", instrumentArgs.footprintBlockBytes,
+                         "also mark the blocks each access touches, in blocks of this many bytes (32, 64 or 128; "
+                         "0: off); the table and bitmaps bind at --binding + 1 and + 2")
+      ->capture_default_str();
   instrument->add_flag("--analyze", instrumentArgs.analyzeOnly, "Print the site table without rewriting");
 
   tally::cli::DemoArgs demoArgs;

@@ -59,6 +59,9 @@ int runInstrument(const InstrumentArgs& args) {
   options.binding = args.binding;
   options.firstSlot = args.firstSlot;
   options.computeCopies = args.computeCopies;
+  options.footprintBlockBytes = args.footprintBlockBytes;
+  options.footprintTableBinding = args.binding + 1;
+  options.footprintBitmapBinding = args.binding + 2;
   if (args.width == "int64") {
     options.width = spirv::CounterWidth::Int64;
   } else if (args.width == "uint32_pair") {

@@ -3,8 +3,12 @@
 #include "spirv/cfg.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <map>
+#include <memory>
 #include <set>
+
+#include "spirv/footprint.hpp"
 
 namespace tally::spirv {
 
@@ -111,6 +115,7 @@ class Injector {
       addCapability(spv::Capability::GroupNonUniformBallot);
     }
     declareCounters();
+    if (footprintOn()) declareFootprint();
 
     // Per-function insertions, keyed by instruction index.
     std::vector<std::map<size_t, std::vector<Instruction>>> after(m_.functions.size());
@@ -118,6 +123,7 @@ class Injector {
     for (size_t i = 0; i < scan.sites.size(); ++i) {
       const FoundSite& s = scan.sites[i];
       const EntryPoint& ep = scan.entryPoints[s.entryIndex];
+      if (footprintOn()) footprintSite(i, s, ep, slots[i], after, before);
       if (accumulate && accumulateSite(s, ep, slots[i], after, before)) continue;
       Helper kind = helperFor(ep.stage);
       if (s.dynamicIndex == 0 && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
@@ -158,6 +164,7 @@ class Injector {
       std::set<uint32_t> add(stageBuiltins_[ep.stage].begin(), stageBuiltins_[ep.stage].end());
       if (m_.version >= kVersion14) {
         add.insert(counters_);
+        if (footprintOn()) add.insert({fpTable_, fpBitmap_});
         add.insert(accumulators_.begin(), accumulators_.end());
       }
       Instruction& inst = m_.entryPoints[ep.instIndex];
@@ -890,6 +897,770 @@ class Injector {
     }
   }
 
+  // ---- footprint: mark the blocks each access covers --------------------
+  //
+  // Straight-line code at the site computes what the access touches (a
+  // buffer's byte offset, an image's coordinates and level of detail) and
+  // calls one of the tally_fp_* functions, which read the slot's table entry
+  // (spirv/footprint.hpp) and set the blocks' bits: a load first, and the
+  // atomic OR only where the bit is still clear, so a block touched again
+  // costs a read of a cached word. Branches live in those functions only:
+  // the code at a site never splits the site's block.
+
+  bool footprintOn() const { return options_.footprintBlockBytes != 0; }
+
+  uint32_t tF32v(uint32_t n) { return tVec(tF32(), n); }
+  uint32_t constantI32(int32_t v) { return constant(tI32(), {static_cast<uint32_t>(v)}); }
+  uint32_t constantF32(float v) { return constant(tF32(), {std::bit_cast<uint32_t>(v)}); }
+
+  uint32_t glslImport() {
+    if (glsl_ != 0) return glsl_;
+    for (const auto& inst : m_.imports) {
+      if (inst.opcode() == spv::Op::OpExtInstImport && inst.literalString(2) == "GLSL.std.450") glsl_ = inst.resultId();
+    }
+    if (glsl_ == 0) {
+      glsl_ = m_.newId();
+      std::vector<uint32_t> operands = {glsl_};
+      auto w = stringWords("GLSL.std.450");
+      operands.insert(operands.end(), w.begin(), w.end());
+      m_.imports.emplace_back(spv::Op::OpExtInstImport, std::move(operands));
+    }
+    return glsl_;
+  }
+  // GLSL.std.450 instruction numbers.
+  enum Glsl : uint32_t { RoundEven = 2, Floor = 8, Ceil = 9, Log2 = 30, UMin = 38, FMax = 40, UMax = 41,
+                         FClamp = 43, SClamp = 45, Length = 66 };
+  uint32_t ext(Body& b, uint32_t resultType, Glsl inst, std::vector<uint32_t> args) {
+    args.insert(args.begin(), {glslImport(), static_cast<uint32_t>(inst)});
+    return op(b, spv::Op::OpExtInst, resultType, std::move(args));
+  }
+
+  // Two u32 runtime-array buffers: the table and the bitmaps.
+  void declareFootprint() {
+    bool storageBuffer = m_.version >= kVersion13;
+    uint32_t array = m_.newId();
+    newGlobals_.emplace_back(spv::Op::OpTypeRuntimeArray, std::vector<uint32_t>{array, tU32()});
+    decorate(array, spv::Decoration::ArrayStride, {4});
+    uint32_t block = m_.newId();
+    newGlobals_.emplace_back(spv::Op::OpTypeStruct, std::vector<uint32_t>{block, array});
+    decorate(block, storageBuffer ? spv::Decoration::Block : spv::Decoration::BufferBlock);
+    newAnnotations_.emplace_back(spv::Op::OpMemberDecorate,
+                                 std::vector<uint32_t>{block, 0, static_cast<uint32_t>(spv::Decoration::Offset), 0});
+    name(block, "TallyFootprintWords");
+    uint32_t blockPtr = tPtr(storageClass_, block);
+    auto variable = [&](uint32_t binding, const char* varName) {
+      uint32_t id = m_.newId();
+      newGlobals_.emplace_back(spv::Op::OpVariable,
+                               std::vector<uint32_t>{blockPtr, id, static_cast<uint32_t>(storageClass_)});
+      decorate(id, spv::Decoration::DescriptorSet, {options_.set});
+      decorate(id, spv::Decoration::Binding, {binding});
+      name(id, varName);
+      return id;
+    };
+    fpTable_ = variable(options_.footprintTableBinding, "tally_footprint_table");
+    fpBitmap_ = variable(options_.footprintBitmapBinding, "tally_footprint_bitmap");
+    fpWordPtr_ = tPtr(storageClass_, tU32());
+  }
+
+  uint32_t tableWord(Body& b, uint32_t entry, uint32_t word) {
+    uint32_t index = word == 0 ? entry : op(b, spv::Op::OpIAdd, tU32(), {entry, constantU32(word)});
+    uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpTable_, constantU32(0), index});
+    return op(b, spv::Op::OpLoad, tU32(), {ptr});
+  }
+  uint32_t tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t dynamicOffset) {
+    uint32_t index = op(b, spv::Op::OpIAdd, tU32(), {entry, constantU32(word)});
+    index = op(b, spv::Op::OpIAdd, tU32(), {index, dynamicOffset});
+    uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpTable_, constantU32(0), index});
+    return op(b, spv::Op::OpLoad, tU32(), {ptr});
+  }
+
+  struct FnBuild {
+    Function fn;
+    uint32_t id = 0;
+    std::vector<uint32_t> params;
+  };
+  // A void function of the given parameter types, its first block open.
+  std::unique_ptr<FnBuild> beginFunction(const std::vector<uint32_t>& paramTypes) {
+    auto f = std::make_unique<FnBuild>();
+    std::vector<uint32_t> typeOperands = {tVoid()};
+    typeOperands.insert(typeOperands.end(), paramTypes.begin(), paramTypes.end());
+    uint32_t fnType = type(spv::Op::OpTypeFunction, typeOperands);
+    f->id = m_.newId();
+    f->fn.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), f->id, 0, fnType});
+    for (uint32_t t : paramTypes) {
+      uint32_t p = m_.newId();
+      f->fn.insts.emplace_back(spv::Op::OpFunctionParameter, std::vector<uint32_t>{t, p});
+      f->params.push_back(p);
+    }
+    Body b{f->fn.insts};
+    label(b, m_.newId());
+    return f;
+  }
+  uint32_t endFunction(std::unique_ptr<FnBuild> f, const std::string& fnName) {
+    Body b{f->fn.insts};
+    opNoResult(b, spv::Op::OpReturn, {});
+    b.insts.emplace_back(spv::Op::OpFunctionEnd, std::vector<uint32_t>{});
+    name(f->id, fnName);
+    uint32_t id = f->id;
+    newFunctions_.push_back(std::move(f->fn));
+    return id;
+  }
+  // if (cond) return; the rest of the function continues in a new block.
+  void returnIf(Body& b, uint32_t cond) {
+    uint32_t out = m_.newId(), rest = m_.newId();
+    selection(b, cond, out, rest, rest);
+    label(b, out);
+    opNoResult(b, spv::Op::OpReturn, {});
+    label(b, rest);
+  }
+  // if (cond) { body(b) } and continue after it.
+  template <class F>
+  void when(Body& b, uint32_t cond, F&& body) {
+    uint32_t yes = m_.newId(), merge = m_.newId();
+    selection(b, cond, yes, merge, merge);
+    label(b, yes);
+    body(b);
+    branch(b, merge);
+    label(b, merge);
+  }
+  uint32_t fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args) {
+    args.insert(args.begin(), fn);
+    return op(b, spv::Op::OpFunctionCall, tVoid(), std::move(args));
+  }
+
+  // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
+  // the scratch bit past the bitmap.
+  uint32_t fpMarkFn() {
+    if (fpMark_ != 0) return fpMark_;
+    uint32_t u = tU32();
+    auto f = beginFunction({u, u, u});
+    Body b{f->fn.insts};
+    uint32_t base = f->params[0], cap = f->params[1], block = f->params[2];
+    uint32_t inside = op(b, spv::Op::OpULessThan, tBool(), {block, cap});
+    block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
+    uint32_t word = op(b, spv::Op::OpIAdd, u, {base, op(b, spv::Op::OpShiftRightLogical, u, {block, constantU32(5)})});
+    uint32_t bit = op(b, spv::Op::OpShiftLeftLogical, u,
+                      {constantU32(1), op(b, spv::Op::OpBitwiseAnd, u, {block, constantU32(31)})});
+    uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpBitmap_, constantU32(0), word});
+    uint32_t old = op(b, spv::Op::OpLoad, u, {ptr});
+    uint32_t clear = op(b, spv::Op::OpIEqual, tBool(), {op(b, spv::Op::OpBitwiseAnd, u, {old, bit}), constantU32(0)});
+    when(b, clear, [&](Body& bb) {
+      op(bb, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bit});
+    });
+    fpMark_ = endFunction(std::move(f), "tally_fp_mark");
+    return fpMark_;
+  }
+
+  // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
+  // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
+  uint32_t fpBytesFn() {
+    if (fpBytes_ != 0) return fpBytes_;
+    uint32_t u = tU32();
+    auto f = beginFunction({u, u, u});
+    Body b{f->fn.insts};
+    uint32_t entry = f->params[0], offset = f->params[1], bytes = f->params[2];
+    // The loop counter: a Function variable, declared first.
+    uint32_t counter = m_.newId();
+    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, u), counter,
+                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+    uint32_t kind = tableWord(b, entry, footprint::kKind);
+    uint32_t isBuffer = op(b, spv::Op::OpIEqual, tBool(), {kind, constantU32(uint32_t(footprint::EntryKind::Buffer))});
+    uint32_t isVertex =
+        op(b, spv::Op::OpIEqual, tBool(), {kind, constantU32(uint32_t(footprint::EntryKind::VertexInput))});
+    returnIf(b, op(b, spv::Op::OpLogicalNot, tBool(), {op(b, spv::Op::OpLogicalOr, tBool(), {isBuffer, isVertex})}));
+    uint32_t stride = tableWord(b, entry, footprint::kTexelBytes), attr = tableWord(b, entry, footprint::kWidth);
+    uint32_t vertexOffset = op(b, spv::Op::OpIAdd, u, {op(b, spv::Op::OpIMul, u, {offset, stride}), attr});
+    uint32_t start = op(b, spv::Op::OpSelect, u, {isVertex, vertexOffset, offset});
+    uint32_t shift = constantU32(static_cast<uint32_t>(std::countr_zero(options_.footprintBlockBytes)));
+    uint32_t first = op(b, spv::Op::OpShiftRightLogical, u, {start, shift});
+    uint32_t endByte = op(b, spv::Op::OpIAdd, u, {start, op(b, spv::Op::OpISub, u, {bytes, constantU32(1)})});
+    uint32_t last = op(b, spv::Op::OpShiftRightLogical, u, {endByte, shift});
+    uint32_t base = tableWord(b, entry, footprint::kBase), cap = tableWord(b, entry, footprint::kCapacity);
+    opNoResult(b, spv::Op::OpStore, {counter, first});
+    uint32_t header = m_.newId(), test = m_.newId(), body = m_.newId(), cont = m_.newId(), exit = m_.newId();
+    branch(b, header);
+    label(b, header);
+    opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
+    branch(b, test);
+    label(b, test);
+    uint32_t i = op(b, spv::Op::OpLoad, u, {counter});
+    opNoResult(b, spv::Op::OpBranchConditional, {op(b, spv::Op::OpULessThanEqual, tBool(), {i, last}), body, exit});
+    label(b, body);
+    fnCall(b, fpMarkFn(), {base, cap, i});
+    branch(b, cont);
+    label(b, cont);
+    opNoResult(b, spv::Op::OpStore, {counter, op(b, spv::Op::OpIAdd, u, {i, constantU32(1)})});
+    branch(b, header);
+    label(b, exit);
+    fpBytes_ = endFunction(std::move(f), "tally_fp_bytes");
+    return fpBytes_;
+  }
+
+  // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
+  // Image entry; coordinates outside the level mark nothing.
+  uint32_t fpTexelLevelFn() {
+    if (fpTexelLevel_ != 0) return fpTexelLevel_;
+    uint32_t u = tU32(), i = tI32(), bo = tBool();
+    auto f = beginFunction({u, i, i, i, u});
+    Body b{f->fn.insts};
+    uint32_t entry = f->params[0], x = f->params[1], y = f->params[2], layer = f->params[3];
+    uint32_t level = ext(b, u, UMin, {f->params[4], constantU32(footprint::kMaxLevels - 1)});
+    uint32_t wl = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, footprint::kWidth), level}),
+                                   constantU32(1)});
+    uint32_t hl = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, footprint::kHeight), level}),
+                                   constantU32(1)});
+    uint32_t ux = op(b, spv::Op::OpBitcast, u, {x}), uy = op(b, spv::Op::OpBitcast, u, {y});
+    uint32_t inside = op(b, spv::Op::OpLogicalAnd, bo,
+                         {op(b, spv::Op::OpULessThan, bo, {ux, wl}), op(b, spv::Op::OpULessThan, bo, {uy, hl})});
+    uint32_t tw = tableWord(b, entry, footprint::kTileWidth), th = tableWord(b, entry, footprint::kTileHeight);
+    uint32_t tilesX = op(b, spv::Op::OpUDiv, u, {op(b, spv::Op::OpIAdd, u, {wl, op(b, spv::Op::OpISub, u, {tw, constantU32(1)})}), tw});
+    uint32_t layers = tableWord(b, entry, footprint::kLayers);
+    uint32_t lastLayer = op(b, spv::Op::OpBitcast, i, {op(b, spv::Op::OpISub, u, {layers, constantU32(1)})});
+    uint32_t ul = op(b, spv::Op::OpBitcast, u, {ext(b, i, SClamp, {layer, constantI32(0), lastLayer})});
+    uint32_t block = op(b, spv::Op::OpIMul, u, {ul, tableWord(b, entry, footprint::kLayerBlocks)});
+    block = op(b, spv::Op::OpIAdd, u, {block, tableWordAt(b, entry, footprint::kLevelStart, level)});
+    uint32_t row = op(b, spv::Op::OpIMul, u, {op(b, spv::Op::OpUDiv, u, {uy, th}), tilesX});
+    block = op(b, spv::Op::OpIAdd, u, {block, op(b, spv::Op::OpIAdd, u, {row, op(b, spv::Op::OpUDiv, u, {ux, tw})})});
+    uint32_t cap = tableWord(b, entry, footprint::kCapacity);
+    block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
+    fnCall(b, fpMarkFn(), {tableWord(b, entry, footprint::kBase), cap, block});
+    fpTexelLevel_ = endFunction(std::move(f), "tally_fp_texel_level");
+    return fpTexelLevel_;
+  }
+
+  // tally_fp_texel(entry, x, y, layer, lod): a texel at level `lod` of the
+  // bound view (fetches, storage images, attachments).
+  uint32_t fpTexelFn() {
+    if (fpTexel_ != 0) return fpTexel_;
+    uint32_t u = tU32(), i = tI32();
+    auto f = beginFunction({u, i, i, i, u});
+    Body b{f->fn.insts};
+    uint32_t entry = f->params[0];
+    uint32_t kind = tableWord(b, entry, footprint::kKind);
+    returnIf(b, op(b, spv::Op::OpINotEqual, tBool(), {kind, constantU32(uint32_t(footprint::EntryKind::Image))}));
+    uint32_t lastLevel = op(b, spv::Op::OpISub, u, {tableWord(b, entry, footprint::kLevels), constantU32(1)});
+    uint32_t level = op(b, spv::Op::OpIAdd, u,
+                        {tableWord(b, entry, footprint::kBaseLevel), ext(b, u, UMin, {f->params[4], lastLevel})});
+    fnCall(b, fpTexelLevelFn(), {entry, f->params[1], f->params[2], f->params[3], level});
+    fpTexel_ = endFunction(std::move(f), "tally_fp_texel");
+    return fpTexel_;
+  }
+
+  // The texel coordinate after the sampler's address mode; -1 (nothing)
+  // outside a clamp-to-border image.
+  uint32_t wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode) {
+    uint32_t i = tI32(), bo = tBool();
+    uint32_t n = op(b, spv::Op::OpBitcast, i, {size});
+    uint32_t last = op(b, spv::Op::OpISub, i, {n, constantI32(1)});
+    uint32_t repeat = op(b, spv::Op::OpSMod, i, {c, n});
+    uint32_t twice = op(b, spv::Op::OpIMul, i, {n, constantI32(2)});
+    uint32_t t = op(b, spv::Op::OpSMod, i, {c, twice});
+    uint32_t mirrored = op(b, spv::Op::OpSelect, i,
+                           {op(b, spv::Op::OpSLessThan, bo, {t, n}), t,
+                            op(b, spv::Op::OpISub, i, {op(b, spv::Op::OpISub, i, {twice, constantI32(1)}), t})});
+    uint32_t clamped = ext(b, i, SClamp, {c, constantI32(0), last});
+    uint32_t inside = op(b, spv::Op::OpLogicalAnd, bo,
+                         {op(b, spv::Op::OpSGreaterThanEqual, bo, {c, constantI32(0)}), op(b, spv::Op::OpSLessThan, bo, {c, n})});
+    uint32_t border = op(b, spv::Op::OpSelect, i, {inside, c, constantI32(-1)});
+    uint32_t negative = op(b, spv::Op::OpSLessThan, bo, {c, constantI32(0)});
+    uint32_t folded = op(b, spv::Op::OpSelect, i, {negative, op(b, spv::Op::OpISub, i, {constantI32(-1), c}), c});
+    uint32_t mirrorClamp = ext(b, i, SClamp, {folded, constantI32(0), last});
+    auto is = [&](uint32_t m) { return op(b, spv::Op::OpIEqual, bo, {mode, constantU32(m)}); };
+    uint32_t r = clamped;
+    r = op(b, spv::Op::OpSelect, i, {is(footprint::kRepeat), repeat, r});
+    r = op(b, spv::Op::OpSelect, i, {is(footprint::kMirroredRepeat), mirrored, r});
+    r = op(b, spv::Op::OpSelect, i, {is(footprint::kClampToBorder), border, r});
+    r = op(b, spv::Op::OpSelect, i, {is(footprint::kMirrorClampToEdge), mirrorClamp, r});
+    return r;
+  }
+
+  // tally_fp_sample_level(entry, imageLevel, u, v, layer, linear, offsetX, offsetY):
+  // the texels a nearest (1) or bilinear (2 x 2) filter reads at one level.
+  uint32_t fpSampleLevelFn() {
+    if (fpSampleLevel_ != 0) return fpSampleLevel_;
+    uint32_t u = tU32(), i = tI32(), fl = tF32(), bo = tBool();
+    auto f = beginFunction({u, u, fl, fl, i, bo, i, i});
+    Body b{f->fn.insts};
+    uint32_t entry = f->params[0], level = ext(b, u, UMin, {f->params[1], constantU32(footprint::kMaxLevels - 1)});
+    uint32_t linear = f->params[5];
+    uint32_t sampler = tableWord(b, entry, footprint::kSampler);
+    auto axis = [&](uint32_t coord, uint32_t sizeWord, uint32_t shift, uint32_t offset) {
+      uint32_t size = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, sizeWord), level}),
+                                       constantU32(1)});
+      uint32_t scaled = op(b, spv::Op::OpFMul, fl, {coord, op(b, spv::Op::OpConvertUToF, fl, {size})});
+      scaled = op(b, spv::Op::OpFSub, fl, {scaled, op(b, spv::Op::OpSelect, fl, {linear, constantF32(0.5f), constantF32(0.0f)})});
+      uint32_t c0 = op(b, spv::Op::OpIAdd, i, {op(b, spv::Op::OpConvertFToS, i, {ext(b, fl, Floor, {scaled})}), offset});
+      uint32_t c1 = op(b, spv::Op::OpIAdd, i, {c0, op(b, spv::Op::OpSelect, i, {linear, constantI32(1), constantI32(0)})});
+      uint32_t mode = op(b, spv::Op::OpBitwiseAnd, u,
+                         {op(b, spv::Op::OpShiftRightLogical, u, {sampler, constantU32(shift)}), constantU32(7)});
+      return std::make_pair(wrap(b, c0, size, mode), wrap(b, c1, size, mode));
+    };
+    auto [x0, x1] = axis(f->params[2], footprint::kWidth, footprint::kAddressUShift, f->params[6]);
+    auto [y0, y1] = axis(f->params[3], footprint::kHeight, footprint::kAddressVShift, f->params[7]);
+    uint32_t texel = fpTexelLevelFn(), layer = f->params[4];
+    fnCall(b, texel, {entry, x0, y0, layer, level});
+    when(b, linear, [&](Body& bb) {
+      fnCall(bb, texel, {entry, x1, y0, layer, level});
+      fnCall(bb, texel, {entry, x0, y1, layer, level});
+      fnCall(bb, texel, {entry, x1, y1, layer, level});
+    });
+    fpSampleLevel_ = endFunction(std::move(f), "tally_fp_sample_level");
+    return fpSampleLevel_;
+  }
+
+  // How a sampled read's level of detail is known.
+  enum class Lod : uint32_t {
+    Queried = 0,   // a = OpImageQueryLod's level, b = its lambda (implicit LOD in fragment shaders)
+    Explicit = 1,  // a = lambda (an explicit Lod, or computed from explicit gradients)
+    Gather = 2,    // the base level, bilinear
+  };
+
+  // tally_fp_sample(entry, u, v, layer, lodKind, a, b, offsetX, offsetY):
+  // a filtered read, Vulkan's level selection (magnification at lambda <= 0;
+  // nearest level ceil(d + 0.5) - 1, or both linear levels where the
+  // fraction is non-zero) and filters from the bound sampler.
+  uint32_t fpSampleFn() {
+    if (fpSample_ != 0) return fpSample_;
+    uint32_t u = tU32(), i = tI32(), fl = tF32(), bo = tBool();
+    auto f = beginFunction({u, fl, fl, fl, u, fl, fl, i, i});
+    Body b{f->fn.insts};
+    uint32_t entry = f->params[0], lodKind = f->params[4], a = f->params[5], lam = f->params[6];
+    returnIf(b, op(b, spv::Op::OpINotEqual, bo,
+                   {tableWord(b, entry, footprint::kKind), constantU32(uint32_t(footprint::EntryKind::Image))}));
+    uint32_t sampler = tableWord(b, entry, footprint::kSampler);
+    auto bit = [&](uint32_t mask) {
+      return op(b, spv::Op::OpINotEqual, bo, {op(b, spv::Op::OpBitwiseAnd, u, {sampler, constantU32(mask)}), constantU32(0)});
+    };
+    uint32_t levels = tableWord(b, entry, footprint::kLevels);
+    uint32_t lastLevel = op(b, spv::Op::OpConvertUToF, fl, {op(b, spv::Op::OpISub, u, {levels, constantU32(1)})});
+    uint32_t queried = op(b, spv::Op::OpIEqual, bo, {lodKind, constantU32(uint32_t(Lod::Queried))});
+    uint32_t gather = op(b, spv::Op::OpIEqual, bo, {lodKind, constantU32(uint32_t(Lod::Gather))});
+    uint32_t lambda = op(b, spv::Op::OpSelect, fl, {queried, lam, a});
+    uint32_t d = op(b, spv::Op::OpSelect, fl, {queried, a, ext(b, fl, FClamp, {a, constantF32(0.0f), lastLevel})});
+    uint32_t mag = op(b, spv::Op::OpLogicalOr, bo, {gather, op(b, spv::Op::OpFOrdLessThanEqual, bo, {lambda, constantF32(0.0f)})});
+    uint32_t linear = op(b, spv::Op::OpLogicalOr, bo, {gather, op(b, spv::Op::OpSelect, bo, {mag, bit(footprint::kMagLinear),
+                                                                                            bit(footprint::kMinLinear)})});
+    uint32_t mipLinear = bit(footprint::kMipLinear);
+    uint32_t dFloor = ext(b, fl, Floor, {d});
+    uint32_t nearest = op(b, spv::Op::OpFSub, fl, {ext(b, fl, Ceil, {op(b, spv::Op::OpFAdd, fl, {d, constantF32(0.5f)})}),
+                                                  constantF32(1.0f)});
+    uint32_t l0f = op(b, spv::Op::OpSelect, fl, {mipLinear, dFloor, nearest});
+    l0f = op(b, spv::Op::OpSelect, fl, {mag, constantF32(0.0f), l0f});
+    l0f = ext(b, fl, FClamp, {l0f, constantF32(0.0f), lastLevel});
+    uint32_t fraction = op(b, spv::Op::OpFOrdGreaterThan, bo, {op(b, spv::Op::OpFSub, fl, {d, dFloor}), constantF32(0.0f)});
+    uint32_t below = op(b, spv::Op::OpFOrdLessThanEqual, bo, {op(b, spv::Op::OpFAdd, fl, {l0f, constantF32(1.0f)}), lastLevel});
+    uint32_t second = op(b, spv::Op::OpLogicalAnd, bo, {op(b, spv::Op::OpLogicalNot, bo, {mag}), mipLinear});
+    second = op(b, spv::Op::OpLogicalAnd, bo, {second, op(b, spv::Op::OpLogicalAnd, bo, {fraction, below})});
+    uint32_t base = tableWord(b, entry, footprint::kBaseLevel);
+    uint32_t level0 = op(b, spv::Op::OpIAdd, u, {base, op(b, spv::Op::OpConvertFToU, u, {l0f})});
+    uint32_t lastLayer = op(b, spv::Op::OpBitcast, i, {op(b, spv::Op::OpISub, u, {tableWord(b, entry, footprint::kLayers),
+                                                                               constantU32(1)})});
+    uint32_t layer = ext(b, i, SClamp, {op(b, spv::Op::OpConvertFToS, i, {ext(b, fl, RoundEven, {f->params[3]})}),
+                                        constantI32(0), lastLayer});
+    uint32_t levelFn = fpSampleLevelFn();
+    fnCall(b, levelFn, {entry, level0, f->params[1], f->params[2], layer, linear, f->params[7], f->params[8]});
+    when(b, second, [&](Body& bb) {
+      uint32_t level1 = op(bb, spv::Op::OpIAdd, u, {level0, constantU32(1)});
+      fnCall(bb, levelFn, {entry, level1, f->params[1], f->params[2], layer, linear, f->params[7], f->params[8]});
+    });
+    fpSample_ = endFunction(std::move(f), "tally_fp_sample");
+    return fpSample_;
+  }
+
+  // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
+  uint32_t intAs(Body& b, uint32_t value, bool asSigned) {
+    uint32_t want = asSigned ? tI32() : tU32();
+    const Instruction* t = defs_.def(types_.typeOf(value));
+    if (t == nullptr) {  // created here: a u32 or i32
+      return value;
+    }
+    if (t->opcode() != spv::Op::OpTypeInt) return value;
+    if (t->word(2) != 32) {
+      value = op(b, t->word(3) == 1 ? spv::Op::OpSConvert : spv::Op::OpUConvert, t->word(3) == 1 ? tI32() : tU32(), {value});
+      return (t->word(3) == 1) == asSigned ? value : op(b, spv::Op::OpBitcast, want, {value});
+    }
+    return (t->word(3) == 1) == asSigned ? value : op(b, spv::Op::OpBitcast, want, {value});
+  }
+
+  // Component k of a scalar or vector value (the scalar itself for k = 0).
+  uint32_t component(Body& b, uint32_t value, uint32_t k, uint32_t scalarType) {
+    const Instruction* t = defs_.def(types_.typeOf(value));
+    if (t != nullptr && t->opcode() == spv::Op::OpTypeVector) {
+      return op(b, spv::Op::OpCompositeExtract, t->word(2), {value, k});
+    }
+    (void)scalarType;
+    return value;
+  }
+  uint32_t componentCount(uint32_t value) {
+    const Instruction* t = defs_.def(types_.typeOf(value));
+    return t != nullptr && t->opcode() == spv::Op::OpTypeVector ? t->word(3) : 1;
+  }
+
+  // The byte offset of a buffer pointer from the start of its descriptor's
+  // buffer (the element of a descriptor array), as straight-line code; 0
+  // with `why` set where the chain cannot be followed.
+  uint32_t byteOffset(Body& b, uint32_t pointer, int function, std::string& why) {
+    std::vector<const Instruction*> chain;
+    uint32_t variable = 0;
+    for (int depth = 0; depth < 64 && variable == 0; ++depth) {
+      const Instruction* d = defs_.def(pointer);
+      if (d == nullptr) break;
+      switch (d->opcode()) {
+        case spv::Op::OpVariable: variable = pointer; break;
+        case spv::Op::OpAccessChain:
+        case spv::Op::OpInBoundsAccessChain:
+          if (defs_.functionOf(pointer) != function) {
+            why = "buffer accesses through pointers made in another function";
+            return 0;
+          }
+          chain.push_back(d);
+          pointer = d->word(3);
+          break;
+        case spv::Op::OpCopyObject: pointer = d->word(3); break;
+        default:
+          why = std::string("buffer accesses through ") +
+                (d->opcode() == spv::Op::OpFunctionParameter ? "function parameters" : "pointer arithmetic");
+          return 0;
+      }
+    }
+    if (variable == 0) {
+      why = "buffer accesses whose pointer has no variable";
+      return 0;
+    }
+    std::reverse(chain.begin(), chain.end());
+    uint32_t u = tU32();
+    uint32_t type = types_.pointee(defs_.def(variable)->resultType());
+    bool descriptorArray = false;
+    if (const Instruction* t = defs_.def(type); t && (t->opcode() == spv::Op::OpTypeArray || t->opcode() == spv::Op::OpTypeRuntimeArray)) {
+      descriptorArray = !defs_.decorationValue(type, spv::Decoration::ArrayStride).has_value();
+    }
+    uint64_t constantPart = 0;
+    uint32_t dynamicPart = 0;
+    std::optional<uint32_t> matrixStride;
+    bool rowMajor = false;
+    auto addDynamic = [&](uint32_t index, uint32_t stride) {
+      uint32_t term = op(b, spv::Op::OpIMul, u, {intAs(b, index, false), constantU32(stride)});
+      dynamicPart = dynamicPart == 0 ? term : op(b, spv::Op::OpIAdd, u, {dynamicPart, term});
+    };
+    bool first = true;
+    for (const Instruction* ac : chain) {
+      for (size_t w = 4; w < ac->size(); ++w) {
+        uint32_t index = ac->word(w);
+        const Instruction* t = defs_.def(type);
+        if (t == nullptr) {
+          why = "buffer accesses into an unknown type";
+          return 0;
+        }
+        auto constIndex = types_.constantValue(index);
+        if (first && descriptorArray) {  // the descriptor, not a byte offset
+          type = t->word(2);
+          first = false;
+          continue;
+        }
+        first = false;
+        switch (t->opcode()) {
+          case spv::Op::OpTypeStruct: {
+            if (!constIndex) {
+              why = "buffer accesses with a run-time struct member";
+              return 0;
+            }
+            uint32_t m = static_cast<uint32_t>(*constIndex);
+            constantPart += defs_.memberDecorationValue(type, m, spv::Decoration::Offset).value_or(0);
+            matrixStride = defs_.memberDecorationValue(type, m, spv::Decoration::MatrixStride);
+            rowMajor = false;
+            for (const auto& dec : defs_.memberDecorations(type, m)) {
+              if (dec.kind == spv::Decoration::RowMajor) rowMajor = true;
+            }
+            type = t->word(2 + m);
+            break;
+          }
+          case spv::Op::OpTypeArray:
+          case spv::Op::OpTypeRuntimeArray: {
+            auto stride = defs_.decorationValue(type, spv::Decoration::ArrayStride);
+            if (!stride) {
+              why = "buffer accesses into arrays without an ArrayStride";
+              return 0;
+            }
+            if (constIndex) constantPart += *constIndex * *stride; else addDynamic(index, *stride);
+            type = t->word(2);
+            break;
+          }
+          case spv::Op::OpTypeMatrix: {
+            if (!matrixStride || rowMajor) {
+              why = "buffer accesses to columns of row-major matrices";
+              return 0;
+            }
+            if (constIndex) constantPart += *constIndex * *matrixStride; else addDynamic(index, *matrixStride);
+            type = t->word(2);
+            break;
+          }
+          case spv::Op::OpTypeVector: {
+            uint32_t bytes = types_.byteSize(t->word(2));
+            if (constIndex) constantPart += *constIndex * bytes; else addDynamic(index, bytes);
+            type = t->word(2);
+            break;
+          }
+          default:
+            why = "buffer accesses into an unknown type";
+            return 0;
+        }
+      }
+    }
+    uint32_t offset = constantU32(static_cast<uint32_t>(constantPart));
+    return dynamicPart == 0 ? offset : op(b, spv::Op::OpIAdd, u, {dynamicPart, offset});
+  }
+
+  // The pixel of a fragment invocation: floor(FragCoord.xy) as i32.
+  std::pair<uint32_t, uint32_t> fragmentPixel(Body& b, Stage stage) {
+    uint32_t v4 = tVec(tF32(), 4), i = tI32();
+    uint32_t coord = op(b, spv::Op::OpLoad, v4, {builtin(stage, spv::BuiltIn::FragCoord, v4)});
+    uint32_t x = op(b, spv::Op::OpConvertFToS, i, {ext(b, tF32(), Floor, {op(b, spv::Op::OpCompositeExtract, tF32(), {coord, 0})})});
+    uint32_t y = op(b, spv::Op::OpConvertFToS, i, {ext(b, tF32(), Floor, {op(b, spv::Op::OpCompositeExtract, tF32(), {coord, 1})})});
+    return {x, y};
+  }
+
+  // The image operands of an image instruction from word `at`: operand ids by mask bit.
+  static std::map<uint32_t, std::vector<uint32_t>> imageOperands(const Instruction& inst, size_t at) {
+    std::map<uint32_t, std::vector<uint32_t>> out;
+    if (inst.size() <= at) return out;
+    uint32_t mask = inst.word(at);
+    size_t w = at + 1;
+    for (uint32_t bit = 0; bit < 32; ++bit) {
+      uint32_t m = 1u << bit;
+      if ((mask & m) == 0) continue;
+      uint32_t n = 0;
+      switch (m) {
+        case 0x1: case 0x2: case 0x8: case 0x10: case 0x20: case 0x40: case 0x80: case 0x100: case 0x200:
+        case 0x10000: n = 1; break;
+        case 0x4: n = 2; break;
+        default: n = 0; break;
+      }
+      std::vector<uint32_t> ids;
+      for (uint32_t k = 0; k < n; ++k) ids.push_back(inst.word(w++));
+      out.emplace(m, std::move(ids));
+    }
+    return out;
+  }
+
+  // Integer texel coordinates (x, y, layer) of a 1D or 2D image access.
+  struct TexelCoords {
+    uint32_t x, y, layer;
+  };
+  TexelCoords texelCoords(Body& b, uint32_t coord, uint32_t dim, bool arrayed) {
+    uint32_t i = tI32();
+    auto c = [&](uint32_t k) { return intAs(b, component(b, coord, k, i), true); };
+    bool twoD = dim != uint32_t(spv::Dim::Dim1D);
+    uint32_t x = c(0);
+    uint32_t y = twoD ? c(1) : constantI32(0);
+    uint32_t layer = arrayed ? c(twoD ? 2 : 1) : constantI32(0);
+    return {x, y, layer};
+  }
+
+  // Emits the marking of one site; false (with `why`) where the model does
+  // not cover the access.
+  bool emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage stage, std::string& why) {
+    const Site& site = s.site;
+    uint32_t u = tU32(), i = tI32(), fl = tF32();
+    if (site.kind == SiteKind::OutputWrite) {
+      auto [x, y] = fragmentPixel(b, stage);
+      fnCall(b, fpTexelFn(), {entry, x, y, constantI32(0), constantU32(0)});
+      return true;
+    }
+    if ((site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite) && site.location) {
+      if (stage != Stage::Vertex || site.elementBytes == 0) {
+        why = "vertex inputs of unknown size";
+        return false;
+      }
+      uint32_t vertex = loadIntAsU32(b, builtin(stage, spv::BuiltIn::VertexIndex, tI32(), true));
+      fnCall(b, fpBytesFn(), {entry, vertex, constantU32(site.elementBytes)});
+      return true;
+    }
+    const Instruction& inst = m_.functions[s.function].insts[s.instruction];
+    spv::Op o = inst.opcode();
+    if (site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite) {
+      if (site.elementBytes == 0) {
+        why = "buffer accesses of unknown size";
+        return false;
+      }
+      uint32_t pointer = 0;
+      if (o == spv::Op::OpLoad) pointer = inst.word(3);
+      else if (o == spv::Op::OpStore || o == spv::Op::OpAtomicStore) pointer = inst.word(1);
+      else if (o == spv::Op::OpCopyMemory || o == spv::Op::OpCopyMemorySized)
+        pointer = site.kind == SiteKind::BufferRead ? inst.word(2) : inst.word(1);
+      else pointer = inst.word(3);  // the other atomics
+      uint32_t offset = byteOffset(b, pointer, s.function, why);
+      if (offset == 0) return false;
+      fnCall(b, fpBytesFn(), {entry, offset, constantU32(site.elementBytes)});
+      return true;
+    }
+    // Images: the OpTypeImage behind the accessed image.
+    uint32_t imageValue = 0, coord = 0;
+    size_t operandsAt = 0;
+    if (site.kind == SiteKind::ImageAtomic) {
+      const Instruction* tp = defs_.def(inst.word(3));
+      while (tp != nullptr && tp->opcode() == spv::Op::OpCopyObject) tp = defs_.def(tp->word(3));
+      if (tp == nullptr || tp->opcode() != spv::Op::OpImageTexelPointer) {
+        why = "image atomics through an unknown pointer";
+        return false;
+      }
+      const Instruction* imageType = defs_.def(types_.imageType(types_.pointee(types_.typeOf(tp->word(3)))));
+      if (!texelImage(imageType, why)) return false;
+      TexelCoords c = texelCoords(b, tp->word(4), imageType->word(3), imageType->word(5) != 0);
+      fnCall(b, fpTexelFn(), {entry, c.x, c.y, c.layer, constantU32(0)});
+      return true;
+    }
+    if (site.kind == SiteKind::AttachmentRead) {
+      auto [x, y] = fragmentPixel(b, stage);
+      uint32_t ox = intAs(b, component(b, inst.word(4), 0, i), true);
+      uint32_t oy = intAs(b, component(b, inst.word(4), 1, i), true);
+      fnCall(b, fpTexelFn(), {entry, op(b, spv::Op::OpIAdd, i, {x, ox}), op(b, spv::Op::OpIAdd, i, {y, oy}),
+                              constantI32(0), constantU32(0)});
+      return true;
+    }
+    imageValue = o == spv::Op::OpImageWrite ? inst.word(1) : inst.word(3);
+    coord = o == spv::Op::OpImageWrite ? inst.word(2) : inst.word(4);
+    const Instruction* imageType = defs_.def(types_.imageType(types_.typeOf(imageValue)));
+    if (!texelImage(imageType, why)) return false;
+    const uint32_t dim = imageType->word(3);
+    const bool arrayed = imageType->word(5) != 0;
+    const bool fetch = o == spv::Op::OpImageFetch || o == spv::Op::OpImageSparseFetch;
+    if (o == spv::Op::OpImageWrite || o == spv::Op::OpImageRead || o == spv::Op::OpImageSparseRead || fetch) {
+      TexelCoords c = texelCoords(b, coord, dim, arrayed);
+      uint32_t lod = constantU32(0);
+      if (fetch) {
+        auto ops = imageOperands(inst, 5);
+        if (auto l = ops.find(0x2); l != ops.end()) lod = intAs(b, l->second[0], false);
+        for (uint32_t bit : {0x8u, 0x10u}) {
+          if (auto off = ops.find(bit); off != ops.end()) {
+            c.x = op(b, spv::Op::OpIAdd, i, {c.x, intAs(b, component(b, off->second[0], 0, i), true)});
+            if (dim != uint32_t(spv::Dim::Dim1D)) {
+              c.y = op(b, spv::Op::OpIAdd, i, {c.y, intAs(b, component(b, off->second[0], 1, i), true)});
+            }
+          }
+        }
+      }
+      fnCall(b, fpTexelFn(), {entry, c.x, c.y, c.layer, lod});
+      return true;
+    }
+    // Filtered reads.
+    const std::string& name = site.opcode;
+    const bool dref = name.find("Dref") != std::string::npos;
+    const bool proj = name.find("Proj") != std::string::npos;
+    const bool gather = name.find("Gather") != std::string::npos;
+    const bool implicit = name.find("ImplicitLod") != std::string::npos;
+    operandsAt = (dref || gather) ? 6 : 5;
+    auto ops = imageOperands(inst, operandsAt);
+    if (ops.count(0x20) || ops.count(0x10000)) {
+      why = "gathers with per-texel offsets";
+      return false;
+    }
+    const bool twoD = dim != uint32_t(spv::Dim::Dim1D);
+    uint32_t uc = component(b, coord, 0, fl);
+    uint32_t vc = twoD ? component(b, coord, 1, fl) : constantF32(0.5f);
+    uint32_t layer = arrayed ? component(b, coord, twoD ? 2 : 1, fl) : constantF32(0.0f);
+    if (proj) {
+      uint32_t q = component(b, coord, componentCount(coord) - 1, fl);
+      uc = op(b, spv::Op::OpFDiv, fl, {uc, q});
+      if (twoD) vc = op(b, spv::Op::OpFDiv, fl, {vc, q});
+    }
+    uint32_t lodKind = uint32_t(Lod::Explicit), a = constantF32(0.0f), lambda = constantF32(0.0f);
+    if (gather) {
+      lodKind = uint32_t(Lod::Gather);
+    } else if (auto l = ops.find(0x2); l != ops.end()) {
+      a = l->second[0];
+    } else if (auto g = ops.find(0x4); g != ops.end()) {
+      // lambda = log2(max(|dPdx * size|, |dPdy * size|)) at the view's first level.
+      uint32_t base = tableWord(b, entry, footprint::kBaseLevel);
+      auto size = [&](uint32_t word) {
+        uint32_t n = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, word), base}), constantU32(1)});
+        return op(b, spv::Op::OpConvertUToF, fl, {n});
+      };
+      uint32_t w = size(footprint::kWidth), h = size(footprint::kHeight);
+      auto rho = [&](uint32_t d) {
+        uint32_t dx = op(b, spv::Op::OpFMul, fl, {component(b, d, 0, fl), w});
+        if (!twoD) return ext(b, fl, Length, {dx});
+        uint32_t dy = op(b, spv::Op::OpFMul, fl, {component(b, d, 1, fl), h});
+        return ext(b, fl, Length, {op(b, spv::Op::OpCompositeConstruct, tF32v(2), {dx, dy})});
+      };
+      a = ext(b, fl, Log2, {ext(b, fl, FMax, {rho(g->second[0]), rho(g->second[1])})});
+    } else if (implicit && stage == Stage::Fragment) {
+      addCapability(spv::Capability::ImageQuery);
+      uint32_t queryCoord = twoD ? op(b, spv::Op::OpCompositeConstruct, tF32v(2), {uc, vc}) : uc;
+      uint32_t q = op(b, spv::Op::OpImageQueryLod, tF32v(2), {inst.word(3), queryCoord});
+      a = op(b, spv::Op::OpCompositeExtract, fl, {q, 0});
+      lambda = op(b, spv::Op::OpCompositeExtract, fl, {q, 1});
+      lodKind = uint32_t(Lod::Queried);
+      if (auto bias = ops.find(0x1); bias != ops.end()) {
+        // The shader's bias moves lambda; the level follows it, clamped by the sampler helper.
+        a = op(b, spv::Op::OpFAdd, fl, {lambda, bias->second[0]});
+        lodKind = uint32_t(Lod::Explicit);
+      }
+    }
+    uint32_t ox = constantI32(0), oy = constantI32(0);
+    for (uint32_t bit : {0x8u, 0x10u}) {
+      if (auto off = ops.find(bit); off != ops.end()) {
+        ox = intAs(b, component(b, off->second[0], 0, i), true);
+        if (twoD) oy = intAs(b, component(b, off->second[0], 1, i), true);
+      }
+    }
+    fnCall(b, fpSampleFn(), {entry, uc, vc, layer, constantU32(lodKind), a, lambda, ox, oy});
+    return true;
+  }
+
+  // 1D and 2D images (arrayed or not, any sample count); others are not modelled.
+  bool texelImage(const Instruction* imageType, std::string& why) {
+    if (imageType == nullptr) {
+      why = "accesses to images of unknown type";
+      return false;
+    }
+    auto dim = static_cast<spv::Dim>(imageType->word(3));
+    if (dim == spv::Dim::Dim1D || dim == spv::Dim::Dim2D) return true;
+    static const std::map<spv::Dim, const char*> names = {{spv::Dim::Dim3D, "3D"}, {spv::Dim::Cube, "cube"},
+                                                          {spv::Dim::Rect, "rect"}, {spv::Dim::Buffer, "texel buffer"},
+                                                          {spv::Dim::SubpassData, "subpass"}};
+    auto it = names.find(dim);
+    why = std::string("accesses to ") + (it != names.end() ? it->second : "other") + " images";
+    return false;
+  }
+
+  // Emits the site's marking where its count goes; result_.sites[index].footprint says whether it did.
+  void footprintSite(size_t index, const FoundSite& s, const EntryPoint& ep, uint32_t slotBase,
+                     std::vector<std::map<size_t, std::vector<Instruction>>>& after,
+                     std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
+    if (s.site.kind == SiteKind::Invocation) return;
+    if (s.site.set < 0 && !s.site.location && s.site.kind != SiteKind::OutputWrite) {
+      noteOnce("footprint: " + std::string(toString(s.site.kind)) + " of " + s.site.resource + " not measured");
+      return;
+    }
+    const auto& insts = m_.functions[s.function].insts;
+    std::string why;
+    auto emitInto = [&](std::vector<Instruction>& list) {
+      std::vector<Instruction> code;
+      Body b{code};
+      uint32_t slot = slotValue(s, slotBase, code);
+      uint32_t entry = op(b, spv::Op::OpIMul, tU32(), {slot, constantU32(footprint::kEntryWords)});
+      if (!emitFootprint(b, s, entry, ep.stage, why)) return false;
+      list.insert(list.end(), code.begin(), code.end());
+      return true;
+    };
+    bool done = false;
+    switch (s.placement) {
+      case Placement::AfterInstruction: done = emitInto(after[s.function][s.instruction]); break;
+      case Placement::EntryStart: done = emitInto(before[s.function][entryStart(insts)]); break;
+      case Placement::BeforeReturns:
+        done = true;
+        for (size_t at = 0; at < insts.size() && done; ++at) {
+          if (insts[at].opcode() == spv::Op::OpReturn) done = emitInto(before[s.function][at]);
+        }
+        break;
+    }
+    if (done) {
+      result_.sites[index].footprint = true;
+    } else {
+      noteOnce("footprint: " + why + " not measured");
+    }
+  }
+
   Instruction call(uint32_t helper, uint32_t slot) {
     return Instruction(spv::Op::OpFunctionCall, {tVoid(), m_.newId(), helper, slot});
   }
@@ -935,6 +1706,10 @@ class Injector {
   std::map<Stage, uint32_t> perAccessOnce_;         // sites counted per access because they run once
   std::vector<Instruction> newGlobals_, newAnnotations_, newNames_;
   std::vector<Function> newFunctions_;
+  // footprint
+  uint32_t glsl_ = 0;  // the GLSL.std.450 import
+  uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
+  uint32_t fpMark_ = 0, fpBytes_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
 };
 
 }  // namespace

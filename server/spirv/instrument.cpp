@@ -8,6 +8,7 @@
 #include "spirv/inject.hpp"
 #include "spirv/module.hpp"
 #include "spirv/types.hpp"
+#include "spirv/footprint.hpp"
 #include "spirv/validate.hpp"
 
 namespace tally::spirv {
@@ -141,11 +142,17 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
       if (inst.opcode() != spv::Op::OpVariable) continue;
       auto set = defs.decorationValue(inst.resultId(), spv::Decoration::DescriptorSet);
       auto binding = defs.decorationValue(inst.resultId(), spv::Decoration::Binding);
-      if (set == options.set && binding == options.binding) {
+      std::vector<std::pair<uint32_t, const char*>> needed = {{options.binding, "the counters"}};
+      if (options.footprintBlockBytes != 0) {
+        needed.push_back({options.footprintTableBinding, "the footprint table"});
+        needed.push_back({options.footprintBitmapBinding, "the footprint bitmaps"});
+      }
+      for (const auto& [b, what] : needed) {
+        if (set != options.set || binding != b) continue;
         std::string name = defs.name(inst.resultId());
         return makeError("module already uses descriptor set " + std::to_string(options.set) + " binding " +
-                         std::to_string(options.binding) + (name.empty() ? "" : " ('" + name + "')") +
-                         ", which the counters need; choose another set/binding");
+                         std::to_string(b) + (name.empty() ? "" : " ('" + name + "')") + ", which " + what +
+                         " need; choose another set/binding");
       }
     }
   }
@@ -220,6 +227,15 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (options.mode.kind == CountMode::Sampled && options.mode.sampleRate < 2) {
     return makeError("sampled mode needs N >= 2");
   }
+  if (options.footprintBlockBytes != 0 && !footprint::validBlockBytes(options.footprintBlockBytes)) {
+    return makeError("footprint block size must be 32, 64 or 128 bytes, not " +
+                     std::to_string(options.footprintBlockBytes));
+  }
+  if (options.footprintBlockBytes != 0 &&
+      (options.footprintTableBinding == options.binding || options.footprintBitmapBinding == options.binding ||
+       options.footprintTableBinding == options.footprintBitmapBinding)) {
+    return makeError("the counter, footprint table and footprint bitmap bindings must differ");
+  }
   const uint32_t c = options.computeCopies;
   if (c == 0 || c > 256 || (c & (c - 1)) != 0) {
     return makeError("compute counter copies must be a power of two from 1 to 256, not " + std::to_string(c));
@@ -263,6 +279,7 @@ nlohmann::json toJson(const Site& s) {
   j["element_type"] = s.elementType;
   j["element_bytes"] = s.elementBytes;
   j["opcode"] = s.opcode;
+  if (s.footprint) j["footprint"] = true;
   if (s.line != 0) {
     j["file"] = s.file;
     j["line"] = s.line;
@@ -281,6 +298,13 @@ nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
       {"copy_stride", r.copyStride},
       {"reserved_slots", r.layout().reserved()},
       {"mode", toString(options.mode)},
+      {"footprint",
+       options.footprintBlockBytes == 0
+           ? nlohmann::json(nullptr)
+           : nlohmann::json{{"block_bytes", options.footprintBlockBytes},
+                            {"table_binding", options.footprintTableBinding},
+                            {"bitmap_binding", options.footprintBitmapBinding},
+                            {"entry_words", footprint::kEntryWords}}},
       {"counters",
        {{"set", options.set},
         {"binding", options.binding},

@@ -67,6 +67,15 @@ struct InstrumentOptions {
   // accumulate mode: compute flushes stripe each slot over this many copies
   // (a power of two in [1, 256]; 1 turns striping off). See CopyLayout.
   uint32_t computeCopies = 16;
+  // Footprint (spirv/footprint.hpp, docs/measurement.md): 0 off, else the
+  // block size in bytes (32, 64 or 128). Every access also marks the blocks
+  // it covers in the bitmap of its slot's resource; the table at
+  // footprintTableBinding (an Entry per slot, bound with a dynamic offset
+  // per draw where bindings change) says where that bitmap lies in the
+  // buffer at footprintBitmapBinding and what is bound. Both in `set`.
+  uint32_t footprintBlockBytes = 0;
+  uint32_t footprintTableBinding = 1;
+  uint32_t footprintBitmapBinding = 2;
   // Validate input and output with SPIRV-Tools.
   bool validate = true;
 };

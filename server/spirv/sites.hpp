@@ -47,6 +47,9 @@ struct Site {
   // decides, elementBytes is 0).
   std::string elementType;
   uint32_t elementBytes = 0;
+  // Footprint: the instrumentation marks this site's blocks (false where
+  // footprint is off or the access is one the model does not cover; a note says which).
+  bool footprint = false;
   std::string opcode;  // the instruction that accesses memory, e.g. "OpImageSampleImplicitLod"
   std::string file;    // from OpLine, when present
   uint32_t line = 0;

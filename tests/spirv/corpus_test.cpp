@@ -157,8 +157,10 @@ const char* targetName(glsl::Target t) {
 struct Variant {
   spirv::Mode mode;
   CounterWidth width;
+  uint32_t footprint = 0;  // block bytes, 0 off
   std::string name() const {
-    return spirv::toString(mode) + (width == CounterWidth::Int64 ? "/int64" : "/uint32_pair");
+    return spirv::toString(mode) + (width == CounterWidth::Int64 ? "/int64" : "/uint32_pair") +
+           (footprint != 0 ? "+footprint:" + std::to_string(footprint) : "");
   }
 };
 
@@ -170,6 +172,10 @@ std::vector<Variant> variants() {
     if (!mode.ok()) continue;
     for (auto w : {CounterWidth::Int64, CounterWidth::Uint32Pair}) out.push_back({*mode, w});
   }
+  // Footprint marking beside three counting modes, at each block size.
+  out.push_back({*spirv::parseMode("accumulate"), CounterWidth::Int64, 64});
+  out.push_back({*spirv::parseMode("exact"), CounterWidth::Uint32Pair, 32});
+  out.push_back({*spirv::parseMode("subgroup"), CounterWidth::Int64, 128});
   return out;
 }
 
@@ -263,7 +269,7 @@ TEST_P(CorpusTest, SitesMatchExpectation) {
   ASSERT_EQ(shader.expected.count("invocation"), 1u) << "every shader has an invocation site";
 
   const auto modes = variants();
-  ASSERT_EQ(modes.size(), 14u);
+  ASSERT_EQ(modes.size(), 17u);
   for (auto target : {glsl::Target::Vulkan10, glsl::Target::Vulkan13}) {
     if (target == glsl::Target::Vulkan10 && shader.vulkan13Only) continue;
     SCOPED_TRACE(std::string(targetName(target)));
@@ -278,9 +284,25 @@ TEST_P(CorpusTest, SitesMatchExpectation) {
       spirv::InstrumentOptions options;
       options.mode = variant.mode;
       options.width = variant.width;
+      options.footprintBlockBytes = variant.footprint;
       auto result = spirv::instrument(*words, options);
       ASSERT_TRUE(result.ok()) << shader.file << ": " << result.error();
       const spirv::Instrumented& r = *result;
+      // Footprint: marked sites only with it on; with it on, a site that is
+      // not marked has a note naming what the model does not cover.
+      size_t marked = 0, unmarkedAccesses = 0;
+      for (const auto& s : r.sites) {
+        marked += s.footprint;
+        unmarkedAccesses += !s.footprint && s.kind != SiteKind::Invocation;
+      }
+      if (variant.footprint == 0) {
+        EXPECT_EQ(marked, 0u) << "footprint marks without footprint on";
+      } else if (unmarkedAccesses > 0) {
+        bool noted = std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
+          return n.starts_with("footprint: ") && n.ends_with(" not measured");
+        });
+        EXPECT_TRUE(noted) << unmarkedAccesses << " accesses without footprint and no note saying why";
+      }
 
       // Valid, and really rewritten.
       auto error = spirv::validate(r.words);
