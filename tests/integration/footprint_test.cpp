@@ -1,0 +1,469 @@
+// Footprint on analytic cases: distinct blocks touched, against predictions
+// derived here from the geometry of each case (texture levels, strides,
+// buffer sizes), at every block size. Each case is a small pass built here:
+// a full-screen fragment pass or a compute dispatch, its shaders instrumented
+// with footprint on, its table filled from the sites, its bitmaps counted.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "gpu/footprint.hpp"
+#include "gpu/pipelines.hpp"
+#include "gpu/resources.hpp"
+#include "gpu/shaders.hpp"
+#include "gpu/vk_check.hpp"
+#include "gpu_fixture.hpp"
+#include "renderers/scene_images.hpp"
+#include "spirv/footprint.hpp"
+
+namespace tally::test {
+namespace {
+
+namespace fp = spirv::footprint;
+
+// The tile a block holds for 4-byte texels, written out per block size
+// (docs/measurement.md, "Footprint": as square as powers of two allow, wider than tall).
+struct TileDims {
+  uint32_t w, h;
+};
+TileDims rgba8Tile(uint32_t blockBytes) {
+  switch (blockBytes) {
+    case 32: return {4, 2};   // 8 texels
+    case 64: return {4, 4};   // 16 texels
+    case 128: return {8, 4};  // 32 texels
+  }
+  return {1, 1};
+}
+uint64_t rgba8Blocks(uint32_t width, uint32_t height, uint32_t blockBytes) {
+  TileDims t = rgba8Tile(blockBytes);
+  return uint64_t((width + t.w - 1) / t.w) * ((height + t.h - 1) / t.h);
+}
+
+struct TextureDesc {
+  uint32_t size = 64;  // square, RGBA8, full mip chain
+  VkFilter filter = VK_FILTER_LINEAR;
+  VkSamplerAddressMode address = VK_SAMPLER_ADDRESS_MODE_REPEAT;
+};
+
+struct PassDesc {
+  bool compute = false;
+  std::string source;            // GLSL of the fragment or compute stage
+  uint32_t width = 64, height = 64;  // target, or invocations (x, y) of the dispatch (8 x 8 groups)
+  std::vector<TextureDesc> textures;       // bindings 0..: sampler2D
+  std::vector<VkDeviceSize> buffers;       // then: storage buffers of these sizes
+  uint32_t blockBytes = 64;
+};
+
+// One line per (binding or "target", read or write).
+struct Line {
+  uint64_t requestedBytes = 0;
+  uint64_t blocks = 0;
+};
+struct PassResult {
+  std::map<std::string, Line> lines;
+  std::vector<std::string> notes;
+};
+
+std::string lineKey(const spirv::Site& s) {
+  bool write = s.kind == spirv::SiteKind::BufferWrite || s.kind == spirv::SiteKind::ImageWrite ||
+               s.kind == spirv::SiteKind::OutputWrite;
+  std::string what = s.kind == spirv::SiteKind::OutputWrite ? "target" : "binding " + std::to_string(s.binding);
+  return what + (write ? " write" : " read");
+}
+
+class FootprintPass {
+ public:
+  explicit FootprintPass(const gpu::Context& ctx) : ctx_(ctx) {}
+
+  Result<PassResult> run(const PassDesc& d) {
+    const spirv::Stage stage = d.compute ? spirv::Stage::Compute : spirv::Stage::Fragment;
+    glsl::CompileOptions compile;
+    compile.target = gpu::glslTarget(ctx_);
+    auto main = glsl::compile(d.source, stage, compile);
+    if (!main) return makeError(main.error());
+    std::vector<std::pair<spirv::Stage, std::vector<uint32_t>>> modules = {{stage, *main}};
+    if (!d.compute) {
+      auto vert = glsl::compile(
+          "#version 450\nvoid main() { vec2 p = vec2((gl_VertexIndex << 1) & 2, gl_VertexIndex & 2);\n"
+          "  gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }\n",
+          spirv::Stage::Vertex, compile);
+      if (!vert) return makeError(vert.error());
+      modules.push_back({spirv::Stage::Vertex, *vert});
+    }
+    // Instrument every module into one counter buffer.
+    std::vector<spirv::Site> sites;
+    std::vector<spirv::CopyLayout> layouts;
+    std::vector<std::vector<uint32_t>> words;
+    PassResult out;
+    uint32_t slots = 0;
+    for (auto& [s, w] : modules) {
+      auto options = gpu::instrumentOptionsFor(ctx_, spirv::Mode{spirv::CountMode::Accumulate}, slots, w);
+      options.footprintBlockBytes = d.blockBytes;
+      if (auto why = gpu::unsupportedReason(ctx_, s, options); !why.empty()) return makeError(why);
+      auto r = spirv::instrument(w, options);
+      if (!r) return makeError(r.error());
+      words.push_back(r->words);
+      sites.insert(sites.end(), r->sites.begin(), r->sites.end());
+      out.notes.insert(out.notes.end(), r->notes.begin(), r->notes.end());
+      layouts.push_back(r->layout());
+      slots += r->layout().reserved();
+    }
+    counterSet_ = gpu::instrumentOptionsFor(ctx_, {}).set;
+
+    // Resources.
+    std::vector<renderers::MipImage> textures;
+    std::vector<VkSampler> samplers;
+    std::vector<gpu::Buffer> buffers;
+    gpu::Image target;
+    gpu::Buffer counters;
+    gpu::FootprintTable table;
+    VkDescriptorSetLayout sceneLayout = VK_NULL_HANDLE, emptyLayout = VK_NULL_HANDLE, counterLayout = VK_NULL_HANDLE;
+    VkPipelineLayout pipelineLayout = VK_NULL_HANDLE;
+    VkDescriptorPool pool = VK_NULL_HANDLE;
+    VkRenderPass renderPass = VK_NULL_HANDLE;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    std::vector<VkShaderModule> shaderModules;
+    struct Cleanup {
+      std::function<void()> fn;
+      ~Cleanup() { fn(); }
+    } cleanup{[&] {
+      vkDeviceWaitIdle(ctx_.device);
+      if (pipeline) vkDestroyPipeline(ctx_.device, pipeline, nullptr);
+      for (auto& m : shaderModules) gpu::destroyShaderModule(ctx_, m);
+      if (framebuffer) vkDestroyFramebuffer(ctx_.device, framebuffer, nullptr);
+      if (renderPass) vkDestroyRenderPass(ctx_.device, renderPass, nullptr);
+      if (pool) vkDestroyDescriptorPool(ctx_.device, pool, nullptr);
+      if (pipelineLayout) vkDestroyPipelineLayout(ctx_.device, pipelineLayout, nullptr);
+      for (auto l : {sceneLayout, emptyLayout, counterLayout}) {
+        if (l) vkDestroyDescriptorSetLayout(ctx_.device, l, nullptr);
+      }
+      for (auto& t : textures) renderers::destroyMipImage(ctx_, t);
+      for (auto s : samplers) vkDestroySampler(ctx_.device, s, nullptr);
+      for (auto& b : buffers) gpu::destroyBuffer(ctx_, b);
+      gpu::destroyImage(ctx_, target);
+      gpu::destroyBuffer(ctx_, counters);
+      table.destroy();
+    }};
+
+    for (const auto& t : d.textures) {
+      uint32_t levels = renderers::mipLevels(t.size, t.size);
+      textures.push_back(
+          renderers::createMipImage(ctx_, t.size, t.size, levels, 1, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_VIEW_TYPE_2D));
+      std::vector<uint8_t> texels(size_t(t.size) * t.size * 4);
+      for (size_t i = 0; i < texels.size(); ++i) texels[i] = uint8_t(i * 37 + 11);
+      renderers::uploadWithMips(ctx_, textures.back(), texels);
+      samplers.push_back(gpu::createSampler(ctx_, t.filter, t.address));
+    }
+    for (VkDeviceSize bytes : d.buffers) {
+      buffers.push_back(gpu::createBuffer(ctx_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                          gpu::MemoryUse::DeviceLocal));
+      std::vector<uint8_t> data(bytes);
+      for (size_t i = 0; i < data.size(); ++i) data[i] = uint8_t(i * 13 + 5);
+      gpu::uploadBuffer(ctx_, buffers.back(), data);
+    }
+    counters = gpu::createBuffer(ctx_, VkDeviceSize(std::max(slots, 1u)) * 8,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                     VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                 gpu::MemoryUse::DeviceLocal);
+
+    // The table: one bank; each marked site's slot describes what is bound there.
+    table.configure(d.blockBytes, slots);
+    table.addBank();
+    const uint32_t nTextures = static_cast<uint32_t>(d.textures.size());
+    for (const auto& s : sites) {
+      if (!s.footprint) continue;
+      std::string key = lineKey(s);
+      if (s.kind == spirv::SiteKind::OutputWrite) {
+        fp::ImageGeometry g{d.width, d.height, 1, 1, 4, 0, 1, 0};
+        table.set(0, s.slot, fp::imageEntry(g, d.blockBytes, table.region(key, fp::imageBlocks(g, d.blockBytes))));
+      } else if (s.binding >= 0 && uint32_t(s.binding) < nTextures) {
+        const TextureDesc& t = d.textures[size_t(s.binding)];
+        VkSamplerMipmapMode mip = t.filter == VK_FILTER_LINEAR ? VK_SAMPLER_MIPMAP_MODE_LINEAR : VK_SAMPLER_MIPMAP_MODE_NEAREST;
+        fp::ImageGeometry g{t.size, t.size, renderers::mipLevels(t.size, t.size), 1, 4, 0, 0,
+                            gpu::samplerBits(t.filter, t.filter, mip, t.address, t.address)};
+        table.set(0, s.slot, fp::imageEntry(g, d.blockBytes, table.region(key, fp::imageBlocks(g, d.blockBytes))));
+      } else if (s.binding >= 0) {
+        VkDeviceSize bytes = d.buffers.at(size_t(s.binding) - nTextures);
+        table.set(0, s.slot,
+                  fp::bufferEntry(bytes, d.blockBytes, table.region(key, fp::bufferBlocks(bytes, d.blockBytes))));
+      }
+    }
+    table.create(ctx_);
+
+    // Layouts and sets: set 0 the scene, the counter set the counters, table and bitmaps.
+    std::vector<VkDescriptorSetLayoutBinding> sceneBindings;
+    const VkShaderStageFlags stages = d.compute ? VK_SHADER_STAGE_COMPUTE_BIT : VK_SHADER_STAGE_ALL_GRAPHICS;
+    for (uint32_t i = 0; i < nTextures + d.buffers.size(); ++i) {
+      sceneBindings.push_back({i, i < nTextures ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                               1, stages, nullptr});
+    }
+    sceneLayout = gpu::createDescriptorSetLayout(ctx_, sceneBindings);
+    emptyLayout = gpu::createDescriptorSetLayout(ctx_, {});
+    VkDescriptorSetLayoutBinding counterBindings[] = {
+        {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, stages, nullptr},
+        {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 1, stages, nullptr},
+        {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, stages, nullptr}};
+    counterLayout = gpu::createDescriptorSetLayout(ctx_, counterBindings);
+    std::vector<VkDescriptorSetLayout> setLayouts(counterSet_ + 1, emptyLayout);
+    setLayouts[0] = sceneLayout;
+    setLayouts[counterSet_] = counterLayout;
+    pipelineLayout = gpu::createPipelineLayout(ctx_, setLayouts, 0, 0);
+    VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, std::max(nTextures, 1u)},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, uint32_t(d.buffers.size()) + 2},
+                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 1}};
+    pool = gpu::createDescriptorPool(ctx_, 2, sizes);
+    VkDescriptorSet sceneSet = gpu::allocateDescriptorSet(ctx_, pool, sceneLayout);
+    VkDescriptorSet counterSet = gpu::allocateDescriptorSet(ctx_, pool, counterLayout);
+    std::vector<gpu::DescriptorWrite> writes;
+    for (uint32_t i = 0; i < nTextures; ++i) {
+      gpu::DescriptorWrite w;
+      w.binding = i;
+      w.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      w.image = {samplers[i], textures[i].view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+      writes.push_back(w);
+    }
+    for (uint32_t i = 0; i < d.buffers.size(); ++i) {
+      gpu::DescriptorWrite w;
+      w.binding = nTextures + i;
+      w.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      w.buffer = {buffers[i].buffer, 0, VK_WHOLE_SIZE};
+      writes.push_back(w);
+    }
+    gpu::updateDescriptorSet(ctx_, sceneSet, writes);
+    gpu::DescriptorWrite cw[3];
+    cw[0].binding = 0;
+    cw[0].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    cw[0].buffer = {counters.buffer, 0, VK_WHOLE_SIZE};
+    cw[1].binding = 1;
+    cw[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
+    cw[1].buffer = table.tableInfo();
+    cw[2].binding = 2;
+    cw[2].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    cw[2].buffer = table.bitmapInfo();
+    gpu::updateDescriptorSet(ctx_, counterSet, cw);
+
+    for (const auto& w : words) shaderModules.push_back(gpu::createShaderModule(ctx_, w));
+    if (d.compute) {
+      pipeline = gpu::createComputePipeline(ctx_, shaderModules[0], pipelineLayout);
+    } else {
+      target = gpu::createImage(ctx_, d.width, d.height, VK_FORMAT_R8G8B8A8_UNORM,
+                                VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
+      VkFormat formats[] = {VK_FORMAT_R8G8B8A8_UNORM};
+      renderPass = gpu::createRenderPass(ctx_, formats);
+      VkImageView views[] = {target.view};
+      framebuffer = gpu::createFramebuffer(ctx_, renderPass, views, {d.width, d.height});
+      gpu::GraphicsPipelineDesc g;
+      g.fragment = shaderModules[0];
+      g.vertex = shaderModules[1];
+      g.layout = pipelineLayout;
+      g.renderPass = renderPass;
+      pipeline = gpu::createGraphicsPipeline(ctx_, g);
+    }
+
+    const uint32_t dynamicOffset = table.bankOffset(0);
+    const VkPipelineBindPoint point = d.compute ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS;
+    gpu::submitAndWait(ctx_, [&](VkCommandBuffer cmd) {
+      vkCmdFillBuffer(cmd, counters.buffer, 0, VK_WHOLE_SIZE, 0);
+      table.recordClear(cmd);
+      vkCmdBindPipeline(cmd, point, pipeline);
+      vkCmdBindDescriptorSets(cmd, point, pipelineLayout, 0, 1, &sceneSet, 0, nullptr);
+      vkCmdBindDescriptorSets(cmd, point, pipelineLayout, counterSet_, 1, &counterSet, 1, &dynamicOffset);
+      if (d.compute) {
+        vkCmdDispatch(cmd, (d.width + 7) / 8, (d.height + 7) / 8, 1);
+        return;
+      }
+      VkClearValue clear = {};
+      VkRenderPassBeginInfo begin = {VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+      begin.renderPass = renderPass;
+      begin.framebuffer = framebuffer;
+      begin.renderArea = {{0, 0}, {d.width, d.height}};
+      begin.clearValueCount = 1;
+      begin.pClearValues = &clear;
+      vkCmdBeginRenderPass(cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+      gpu::setViewportAndScissor(cmd, {d.width, d.height});
+      vkCmdDraw(cmd, 3, 1, 0, 0);
+      vkCmdEndRenderPass(cmd);
+    });
+
+    auto bytes = gpu::readBuffer(ctx_, counters, 0, VkDeviceSize(std::max(slots, 1u)) * 8);
+    std::vector<uint64_t> counts(bytes.size() / 8);
+    std::memcpy(counts.data(), bytes.data(), counts.size() * 8);
+    for (const auto& l : layouts) {
+      if (l.copies > 1) spirv::foldCopies(counts, l);
+    }
+    std::vector<uint32_t> bitmap = table.read();
+    std::set<uint32_t> seen;
+    for (const auto& s : sites) {
+      if (s.kind == spirv::SiteKind::Invocation || !seen.insert(s.slot).second) continue;
+      std::string key = lineKey(s);
+      uint64_t element = s.elementBytes != 0 ? s.elementBytes : 4;  // RGBA8 texels and target
+      out.lines[key].requestedBytes += counts[s.slot] * element;
+      out.lines[key].blocks = table.blocks(bitmap, key);
+    }
+    return out;
+  }
+
+ private:
+  const gpu::Context& ctx_;
+  uint32_t counterSet_ = 7;
+};
+
+class Footprint : public ::testing::TestWithParam<uint32_t> {
+ protected:
+  void SetUp() override {
+    std::string error;
+    ctx_ = testContext(&error);
+    if (ctx_ == nullptr) GTEST_SKIP() << "no Vulkan device: " << error;
+  }
+  Result<PassResult> run(PassDesc d) {
+    d.blockBytes = GetParam();
+    return FootprintPass(*ctx_).run(d);
+  }
+  // Every line: footprint bytes (blocks x block bytes) do not exceed requested bytes.
+  void expectBounded(const PassResult& r) {
+    for (const auto& [key, line] : r.lines) {
+      EXPECT_LE(line.blocks * GetParam(), line.requestedBytes) << key;
+    }
+  }
+  const gpu::Context* ctx_ = nullptr;
+};
+
+// A full-screen pass: uv = pixel centre / target size x scale + offset.
+std::string sampleShader(double scale, double offset = 0.0) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "#version 450\n"
+                "layout(set = 0, binding = 0) uniform sampler2D tex;\n"
+                "layout(location = 0) out vec4 color;\n"
+                "void main() {\n"
+                "  vec2 uv = gl_FragCoord.xy / vec2(64.0) * %.9f + %.9f;\n"
+                "  color = texture(tex, uv);\n"
+                "}\n",
+                scale, offset);
+  return buf;
+}
+
+TEST_P(Footprint, TextureAtOneToOneIsLevelZero) {
+  PassDesc d;
+  d.source = sampleShader(1.0);
+  d.textures = {{64}};
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  // lambda = 0: magnification, level 0 (64 x 64), every texel.
+  EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(64, 64, GetParam()));
+  EXPECT_EQ(r->lines["binding 0 read"].requestedBytes, 64u * 64u * 4u);
+  EXPECT_EQ(r->lines["target write"].blocks, rgba8Blocks(64, 64, GetParam()));
+  expectBounded(*r);
+}
+
+TEST_P(Footprint, MagnifiedTextureIsItsBaseLevel) {
+  PassDesc d;
+  d.source = sampleShader(1.0);
+  d.textures = {{32}};  // 32 x 32 over 64 x 64 pixels: lambda = -1
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(32, 32, GetParam()));
+  expectBounded(*r);
+}
+
+TEST_P(Footprint, MinifiedTextureIsBothTrilinearLevels) {
+  PassDesc d;
+  // 128 x 128 at 2^1.5 texels per pixel: lambda = 1.5, levels 1 (64^2) and 2 (32^2), each covered
+  // entirely (the uvs span 1.41 repeats).
+  d.source = sampleShader(std::pow(2.0, 1.5) * 64.0 / 128.0);
+  d.textures = {{128}};
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(64, 64, GetParam()) + rgba8Blocks(32, 32, GetParam()));
+  // Here the blocks hold more bytes (20480) than were requested (one 4-byte
+  // texel per sample, 16384): trilinear filtering reads 8 texels a sample.
+  // A line reports the smaller of the two (docs/measurement.md).
+  EXPECT_GT(r->lines["binding 0 read"].blocks * GetParam(), r->lines["binding 0 read"].requestedBytes);
+}
+
+TEST_P(Footprint, NearestMinificationIsOneLevel) {
+  PassDesc d;
+  d.source = sampleShader(std::pow(2.0, 1.25) * 64.0 / 128.0);  // lambda = 1.25: nearest level 1
+  d.textures = {{128, VK_FILTER_NEAREST}};
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(64, 64, GetParam()));
+  expectBounded(*r);
+}
+
+TEST_P(Footprint, VisiblePartOfAMagnifiedTexture) {
+  PassDesc d;
+  // A quarter of a 64 x 64 texture over the target (lambda = -2), clamped at
+  // the edges: bilinear reads texels 0..16 in x and y (u * 64 - 0.5 spans
+  // -0.375 .. 15.375: the pairs (i, i + 1) cover -1..16, -1 clamps to 0).
+  d.source = sampleShader(0.25);
+  d.textures = {{64, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE}};
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(17, 17, GetParam()));
+  expectBounded(*r);
+}
+
+TEST_P(Footprint, BufferReadAtAStride) {
+  for (uint32_t strideWords : {1u, 3u, 16u, 40u}) {
+    SCOPED_TRACE("stride " + std::to_string(strideWords * 4) + " bytes");
+    const uint32_t n = 32 * 32;  // invocations, one read each
+    PassDesc d;
+    d.compute = true;
+    d.width = 32;
+    d.height = 32;
+    d.buffers = {VkDeviceSize(n) * strideWords * 4, VkDeviceSize(n) * 4};
+    d.source = "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+               "layout(set = 0, binding = 0) readonly buffer In { uint data[]; } src;\n"
+               "layout(set = 0, binding = 1) writeonly buffer Out { uint data[]; } dst;\n"
+               "void main() {\n"
+               "  uint i = gl_GlobalInvocationID.y * 32u + gl_GlobalInvocationID.x;\n"
+               "  dst.data[i] = src.data[i * " + std::to_string(strideWords) + "u];\n"
+               "}\n";
+    auto r = run(d);
+    ASSERT_TRUE(r.ok()) << r.error();
+    std::set<uint64_t> blocks;
+    for (uint64_t i = 0; i < n; ++i) blocks.insert(i * strideWords * 4 / GetParam());
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, blocks.size());
+    EXPECT_EQ(r->lines["binding 0 read"].requestedBytes, uint64_t(n) * 4);
+    EXPECT_EQ(r->lines["binding 1 write"].blocks, uint64_t(n) * 4 / GetParam());
+    // A stride wider than the element touches more block bytes than it
+    // requests (a line reports the smaller: docs/measurement.md); dense, never.
+    if (strideWords == 1) expectBounded(*r);
+  }
+}
+
+TEST_P(Footprint, LightBufferReadByEveryPixelCountsOnce) {
+  PassDesc d;
+  const uint32_t lights = 40;  // 32 bytes each: two vec4
+  d.buffers = {VkDeviceSize(lights) * 32};
+  d.textures = {};
+  d.source = "#version 450\n"
+             "layout(set = 0, binding = 0) readonly buffer Lights { vec4 v[]; } lights;\n"
+             "layout(location = 0) out vec4 color;\n"
+             "void main() {\n"
+             "  vec4 sum = vec4(0.0);\n"
+             "  for (int i = 0; i < " + std::to_string(lights) + "; ++i) sum += lights.v[2 * i] * lights.v[2 * i + 1];\n"
+             "  color = sum;\n"
+             "}\n";
+  auto r = run(d);
+  ASSERT_TRUE(r.ok()) << r.error();
+  const Line& l = r->lines["binding 0 read"];
+  EXPECT_EQ(l.blocks, uint64_t(lights) * 32 / GetParam());
+  EXPECT_EQ(l.requestedBytes, uint64_t(64) * 64 * lights * 32);
+  expectBounded(*r);
+}
+
+INSTANTIATE_TEST_SUITE_P(BlockBytes, Footprint, ::testing::Values(32u, 64u, 128u),
+                         [](const ::testing::TestParamInfo<uint32_t>& info) {
+                           return std::to_string(info.param) + "B";
+                         });
+
+}  // namespace
+}  // namespace tally::test
