@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/result.hpp"
+#include "gpu/resource_log.hpp"
 
 namespace tally::gpu {
 
@@ -26,6 +28,8 @@ struct ContextOptions {
 };
 
 struct Context {
+  // What was created and written into descriptor sets (the footprint table reads it).
+  std::shared_ptr<ResourceLog> log = std::make_shared<ResourceLog>();
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
   VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;

@@ -68,6 +68,8 @@ void updateDescriptorSet(const Context& ctx, VkDescriptorSet set, std::span<cons
       default: write.pImageInfo = &w.image; break;
     }
     vkWrites.push_back(write);
+    ctx.log->write(set, w.binding, w.arrayElement,
+                   {w.type, w.image.imageView, w.image.sampler, w.buffer.buffer, w.buffer.offset, w.buffer.range});
   }
   vkUpdateDescriptorSets(ctx.device, static_cast<uint32_t>(vkWrites.size()), vkWrites.data(), 0, nullptr);
 }
@@ -84,6 +86,7 @@ VkSampler createSampler(const Context& ctx, VkFilter filter, VkSamplerAddressMod
   info.maxLod = VK_LOD_CLAMP_NONE;
   VkSampler sampler = VK_NULL_HANDLE;
   VK_CHECK(vkCreateSampler(ctx.device, &info, nullptr, &sampler));
+  ctx.log->sampler(sampler, info);
   return sampler;
 }
 

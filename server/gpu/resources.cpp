@@ -150,6 +150,7 @@ Buffer createBuffer(const Context& ctx, VkDeviceSize size, VkBufferUsageFlags us
   info.usage = usage;
   info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VK_CHECK(vkCreateBuffer(ctx.device, &info, nullptr, &result.buffer));
+  ctx.log->buffer(result.buffer, size);
   try {
     VkMemoryRequirements requirements;
     vkGetBufferMemoryRequirements(ctx.device, result.buffer, &requirements);
@@ -202,6 +203,7 @@ Image createImage(const Context& ctx, uint32_t width, uint32_t height, VkFormat 
     viewInfo.format = format;
     viewInfo.subresourceRange = {result.aspect, 0, 1, 0, 1};
     VK_CHECK(vkCreateImageView(ctx.device, &viewInfo, nullptr, &result.view));
+    ctx.log->view(result.view, info, viewInfo);
   } catch (...) {
     destroyImage(ctx, result);
     throw;

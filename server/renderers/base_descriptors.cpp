@@ -54,14 +54,27 @@ void RendererBase::writeStorageImage(VkDescriptorSet set, uint32_t binding, VkIm
 
 void RendererBase::bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout,
                               VkDescriptorSet material, VkDescriptorSet passInput, VkDescriptorSet geometry) {
+  auto& bound = boundSets_[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
   auto bind = [&](uint32_t index, VkDescriptorSet set) {
-    if (set != VK_NULL_HANDLE) vkCmdBindDescriptorSets(cmd, point, layout, index, 1, &set, 0, nullptr);
+    if (set == VK_NULL_HANDLE) return;
+    vkCmdBindDescriptorSets(cmd, point, layout, index, 1, &set, 0, nullptr);
+    if (index < bound.size()) bound[index] = set;
   };
   bind(shaders::kSetFrame, frameSet_);
   bind(shaders::kSetMaterial, material);
   bind(shaders::kSetGeometry, geometry != VK_NULL_HANDLE ? geometry : geometrySet_);
   bind(shaders::kSetPassInput, passInput);
-  bind(counterSet_, counterDescriptorSet_);
+  bindCounterSet(cmd, point, layout);
+}
+
+void RendererBase::bindCounterSet(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout) {
+  if (counterDescriptorSet_ == VK_NULL_HANDLE) return;
+  if (!footprintOn()) {
+    vkCmdBindDescriptorSets(cmd, point, layout, counterSet_, 1, &counterDescriptorSet_, 0, nullptr);
+    return;
+  }
+  uint32_t offset = footprint_.bankOffset(footprintBank(point));
+  vkCmdBindDescriptorSets(cmd, point, layout, counterSet_, 1, &counterDescriptorSet_, 1, &offset);
 }
 
 VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials, const gpu::Buffer& materialExtras) {

@@ -62,6 +62,10 @@ void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipeline
     if (materialSets) {
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, shaders::kSetMaterial, 1,
                               &materialSets_[d.material], 0, nullptr);
+      if (footprintOn()) {  // the draw's maps: its own bank of the footprint table
+        boundSets_[0][shaders::kSetMaterial] = materialSets_[d.material];
+        bindCounterSet(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout);
+      }
     }
     shaders::DrawPush push = {i, d.material};
     vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push,

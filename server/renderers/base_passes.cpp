@@ -200,6 +200,7 @@ VkImageView RendererBase::depthOnlyView() {
     view.format = depth_->format;
     view.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
     VK_CHECK(vkCreateImageView(ctx_->device, &view, nullptr, &depthOnlyView_));
+    ctx_->log->view(depthOnlyView_, {depth_->extent.width, depth_->extent.height, 1, 0, 1, 1, 4, VK_IMAGE_VIEW_TYPE_2D});
   }
   return depthOnlyView_;
 }

@@ -60,6 +60,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
   std::vector<uint32_t> words;
   if (options_.instrumented) {
     auto instrumentOptions = gpu::instrumentOptionsFor(*ctx_, options_.counting, slotCount_);
+    instrumentOptions.footprintBlockBytes = options_.footprintBlockBytes;
     if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
       return makeError(file + ": " + why);
     }
@@ -106,6 +107,14 @@ VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
     if (auto it = modulePass_.find(m); it != modulePass_.end()) {
       passPipelines_.emplace_back(it->second, pipelines_.back());
       break;
+    }
+  }
+  // Where each vertex attribute comes from (footprint of vertex inputs).
+  if (auto it = modulePass_.find(desc.vertex); it != modulePass_.end()) {
+    for (const auto& a : desc.vertexAttributes) {
+      for (const auto& b : desc.vertexBindings) {
+        if (b.binding == a.binding) vertexInputs_[it->second][a.location] = {a.binding, a.offset, b.stride};
+      }
     }
   }
   return pipelines_.back();

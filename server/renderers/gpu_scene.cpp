@@ -127,6 +127,7 @@ VkSampler GpuScene::samplerFor(const scenes::Sampler& s) {
   info.maxLod = s.mipmaps ? VK_LOD_CLAMP_NONE : 0.25f;
   VkSampler sampler = VK_NULL_HANDLE;
   VK_CHECK(vkCreateSampler(ctx_->device, &info, nullptr, &sampler));
+  ctx_->log->sampler(sampler, info);
   samplers_[s] = sampler;
   return sampler;
 }
@@ -225,6 +226,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
       VK_SAMPLER_ADDRESS_MODE_REPEAT;  // glTF's default sampler; the procedural maps repeat
   defaults.maxLod = VK_LOD_CLAMP_NONE;
   VK_CHECK(vkCreateSampler(ctx.device, &defaults, nullptr, &sampler_));
+  ctx.log->sampler(sampler_, defaults);
   emissiveDummy_ = createMipImage(ctx, 1, 1, 1, 1, VK_FORMAT_R8G8B8A8_SRGB, VK_IMAGE_VIEW_TYPE_2D);
   uploadWithMips(ctx, emissiveDummy_, kDummyTexels[0]);  // white: the emissive factor alone
   std::vector<shaders::MaterialExtra> extras;
@@ -410,6 +412,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   VkSamplerCreateInfo info = defaults;
   info.addressModeU = info.addressModeV = info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
   VK_CHECK(vkCreateSampler(ctx.device, &info, nullptr, &skySampler_));
+  ctx.log->sampler(skySampler_, info);
   return true;
 }
 

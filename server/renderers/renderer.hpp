@@ -61,6 +61,9 @@ struct Access {
   // (the union of every block any access of the line covered). -1 where it
   // was not measured (footprint off, or a line the model cannot see).
   int64_t footprintBytes = -1;
+  // The blocks behind footprintBytes (x the block size may exceed bytes:
+  // footprintBytes is the smaller of the two). -1 where not measured.
+  int64_t footprintBlocks = -1;
 };
 
 struct PassResult {

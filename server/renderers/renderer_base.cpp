@@ -38,7 +38,8 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 6 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 48},
-        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16}};
+        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 2}};
     pool_ = gpu::createDescriptorPool(ctx, materials + 32, sizes);
     using T = VkDescriptorType;
     const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
@@ -49,7 +50,10 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     // draws, materials, vertices, indices; vertex_attributes, material_extras (glTF features)
     geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
     emptyLayout_ = setLayout({});
-    counterLayout_ = setLayout({ssbo});
+    // The counters; with footprint, the table (a bank per binding of the set) and the bitmaps.
+    counterLayout_ = options.instrumented && options.footprintBlockBytes != 0
+                         ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
+                         : setLayout({ssbo});
     // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
     const bool emissiveMaps = scene.features().emissiveMaps;
     materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
@@ -209,10 +213,13 @@ void RendererBase::recordAll(VkCommandBuffer cmd) {
   barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
   vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1,
                        &barrier, 0, nullptr, 0, nullptr);
+  if (footprint_.created()) footprint_.recordClear(cmd);
   if (timestamps_.pool != VK_NULL_HANDLE) gpu::resetTimestamps(cmd, timestamps_);
   if (statistics_.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics_);
   for (uint32_t i = 0; i < passes_.size(); ++i) {
     passes_[i].indicesDrawn = 0;
+    recordingPass_ = i;
+    boundSets_ = {};
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps_, i);
     passes_[i].record(cmd);
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassEnd(cmd, timestamps_, i);
@@ -231,6 +238,8 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
   gpu::uploadBuffer(*ctx_, cameraBuffer_, {reinterpret_cast<const uint8_t*>(&c), sizeof c});
   if (lod_) lod_->select(camera, extent_);
 
+  if (footprintOn() && !footprintReady_) discoverFootprint();
+
   using Clock = std::chrono::steady_clock;
   auto submitted = Clock::now();
   gpu::submitAndWait(*ctx_, [&](VkCommandBuffer cmd) { recordAll(cmd); });
@@ -248,6 +257,8 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
     for (const auto& layout : copyLayouts_) spirv::foldCopies(counters, layout);
   }
+  std::vector<uint32_t> bitmap;
+  if (footprintReady_) bitmap = footprint_.read();
   frame.readbackSeconds = std::chrono::duration<double>(Clock::now() - waited).count();
   const uint32_t depthBytes = gpu::formatBytes(kDepthFormat);
   for (uint32_t i = 0; i < passes_.size(); ++i) {
@@ -266,6 +277,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       r.accesses = std::move(counts.accesses);
       r.maxSlotCount = counts.maxSlotCount;
       r.maxSlotResource = std::move(counts.maxSlotResource);
+      if (footprintReady_) attributeFootprint(i, r.accesses, bitmap);
       if (p.indexFetches && p.indicesDrawn > 0) {
         addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
       }
@@ -336,6 +348,12 @@ void RendererBase::destroy() {
   const gpu::Context& ctx = *ctx_;
   vkDeviceWaitIdle(ctx.device);
   destroyPasses();
+  footprint_.destroy();
+  footprintReady_ = false;
+  banks_.clear();
+  footprintRegions_.clear();
+  unmeasuredLines_.clear();
+  vertexInputs_.clear();
   lod_.reset();
   if (packedVertices_) gpu::destroyBuffer(ctx, packedVertices_->buffer);
   packedVertices_.reset();

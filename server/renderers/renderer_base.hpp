@@ -5,6 +5,7 @@
 // buffer for all passes. A renderer adds its own passes in setupPasses().
 #pragma once
 
+#include <array>
 #include <deque>
 #include <functional>
 #include <optional>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "gpu/footprint.hpp"
 #include "gpu/pipelines.hpp"
 #include "gpu/queries.hpp"
 #include "gpu/resources.hpp"
@@ -294,6 +296,29 @@ class RendererBase : public Renderer {
   void shadowBindings(PassBindings& bindings) const;
   ShadowState shadow_;
   void recordAll(VkCommandBuffer cmd);
+
+  // Footprint (options_.footprintBlockBytes > 0; base_footprint.cpp). The
+  // first frame records once without submitting to learn which descriptor
+  // sets each pass binds (a bank of the table per pass and combination of
+  // sets); the table is then built from the sites and the descriptors
+  // written, and every bind of the counter set selects its bank.
+  bool footprintOn() const { return options_.instrumented && options_.footprintBlockBytes != 0; }
+  void discoverFootprint();
+  uint32_t footprintBank(VkPipelineBindPoint point);
+  void fillFootprintBank(uint32_t bank, uint32_t passIndex, VkPipelineBindPoint point);
+  void bindCounterSet(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout);
+  void attributeFootprint(uint32_t passIndex, std::vector<Access>& accesses, const std::vector<uint32_t>& bitmap) const;
+  gpu::FootprintTable footprint_;
+  bool footprintReady_ = false, footprintDiscovering_ = false;
+  uint32_t recordingPass_ = 0;
+  std::array<std::array<VkDescriptorSet, 8>, 2> boundSets_{};  // graphics, compute: the sets bound now
+  std::map<std::pair<uint32_t, std::array<VkDescriptorSet, 8>>, uint32_t> banks_;
+  std::map<std::string, std::set<std::string>> footprintRegions_;  // line key -> its regions
+  std::set<std::string> unmeasuredLines_;                            // a site of the line is not marked
+  struct VertexInput {
+    uint32_t binding = 0, offset = 0, stride = 0;
+  };
+  std::map<uint32_t, std::map<uint32_t, VertexInput>> vertexInputs_;  // pass -> location -> input
 
   std::vector<Pass> passes_;
   uint32_t counterSet_ = 7;

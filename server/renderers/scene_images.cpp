@@ -81,6 +81,7 @@ MipImage createMipImage(const gpu::Context& ctx, uint32_t width, uint32_t height
   view.format = format;
   view.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, levels, 0, layers};
   VK_CHECK(vkCreateImageView(ctx.device, &view, nullptr, &result.view));
+  ctx.log->view(result.view, info, view);
   return result;
 }
 

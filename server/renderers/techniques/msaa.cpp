@@ -101,6 +101,7 @@ VkImageView depthAspectView(const gpu::Context& ctx, const gpu::Image& image) {
   view.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
   VkImageView out = VK_NULL_HANDLE;
   VK_CHECK(vkCreateImageView(ctx.device, &view, nullptr, &out));
+  ctx.log->view(out, {image.extent.width, image.extent.height, 1, 0, 1, 1, 4, VK_IMAGE_VIEW_TYPE_2D});
   return out;
 }
 

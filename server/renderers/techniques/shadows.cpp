@@ -139,6 +139,7 @@ Result<bool> RendererBase::setupShadows() {
   sampler.maxLod = 0.0f;
   sampler.borderColor = VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE;
   VK_CHECK(vkCreateSampler(ctx_->device, &sampler, nullptr, &shadow_.sampler));
+  ctx_->log->sampler(shadow_.sampler, sampler);
 
   const shaders::Shadow uniform = shadowUniform(scene_->bounds(), o);
   shadow_.uniform = gpu::createBuffer(*ctx_, sizeof uniform, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, gpu::MemoryUse::Upload);
