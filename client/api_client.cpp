@@ -521,25 +521,27 @@ CompareView compareView(const json& comparison) {
     if (!values.empty())
       v.rows.push_back({std::move(pass), std::move(resource), std::move(metric), std::move(values)});
   };
-  // Footprint rows only where a compared run has a footprint anywhere.
+  // Footprint rows only where a compared run has a footprint anywhere; then
+  // the bytes rows say which bytes they are: "requested" beside "footprint".
   bool footprint = false;
   for (const auto& c : comparedList(comparison, "total_footprint_bytes")) footprint = footprint || c.value;
+  const std::string requested = footprint ? "requested" : "bytes";
   auto addFootprint = [&](const std::string& pass, const std::string& resource, const json& at) {
     if (!footprint) return;
-    add(pass, resource, "footprint bytes", comparedList(at, "footprint_bytes"));
+    add(pass, resource, "footprint", comparedList(at, "footprint_bytes"));
     add(pass, resource, "reuse", comparedList(at, "reuse"));
   };
   add("(frame)", "", "ms", comparedList(comparison, "frame_ms"));
-  add("(frame)", "(all)", "requested bytes", comparedList(comparison, "total_bytes"));
+  add("(frame)", "(all)", requested, comparedList(comparison, "total_bytes"));
   if (footprint) {
-    add("(frame)", "(all)", "footprint bytes", comparedList(comparison, "total_footprint_bytes"));
+    add("(frame)", "(all)", "footprint", comparedList(comparison, "total_footprint_bytes"));
     add("(frame)", "(all)", "reuse", comparedList(comparison, "reuse"));
   }
   for (const auto& p : array(comparison, "passes")) {
     std::string name = str(p, "pass");
     if (name.empty()) name = str(p, "name");
     add(name, "", "ms", comparedList(p, "gpu_ms"));
-    add(name, "(all)", "requested bytes", comparedList(p, "bytes"));
+    add(name, "(all)", requested, comparedList(p, "bytes"));
     addFootprint(name, "(all)", p);
     add(name, "", "invocations", comparedList(p, "fragment_invocations"));
   }
@@ -548,7 +550,7 @@ CompareView compareView(const json& comparison) {
     if (name.empty()) name = str(r, "name");
     std::string access = str(r, "access");
     std::string label = access.empty() ? name : name + " (" + access + ")";
-    add("(all passes)", label, "requested bytes", comparedList(r, "bytes"));
+    add("(all passes)", label, requested, comparedList(r, "bytes"));
     addFootprint("(all passes)", label, r);
   }
   return v;

@@ -170,7 +170,8 @@ struct ComparedView {
   std::optional<double> value, delta, ratio;
 };
 struct CompareRow {
-  // metric: "ms", "requested bytes", "footprint bytes", "reuse", "count", "invocations"
+  // metric: "ms", "bytes" ("requested" beside "footprint" and "reuse" where a
+  // compared run has a footprint), "count", "invocations"
   std::string pass, resource, metric;
   std::vector<ComparedView> values;    // one per run
 };

@@ -391,7 +391,7 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
   }
   Table t(columns);
   for (const auto& row : c.rows) {
-    bool bytes = row.metric == "requested bytes" || row.metric == "footprint bytes";
+    bool bytes = row.metric == "bytes" || row.metric == "requested" || row.metric == "footprint";
     auto value = [&](std::optional<double> v) {
       if (bytes) return humanBytes(v);
       if (row.metric == "ms") return fixed(v, 3);

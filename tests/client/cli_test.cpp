@@ -227,16 +227,18 @@ TEST_F(TallyCli, RunsAndCompareShowFootprintBesideRequestedBytes) {
   Outcome cmp = tally("--server " + fake.url() + " compare 18 12");
   ASSERT_EQ(cmp.rc, 0) << cmp.err;
   // Each quantity names its bytes; footprint rows for the run that has one, "-" for the other.
-  EXPECT_NE(cmp.out.find("(frame)       (all)                         requested bytes    4.00 MiB  2.00 MiB  -2.00 MiB     0.50x\n"), std::string::npos) << cmp.out;
-  EXPECT_NE(cmp.out.find("(frame)       (all)                         footprint bytes    1.00 MiB         -          -         -\n"), std::string::npos) << cmp.out;
-  EXPECT_NE(cmp.out.find("(all passes)  material_maps.diffuse (read)  reuse                 8.00x         -"), std::string::npos) << cmp.out;
-  EXPECT_NE(cmp.out.find("gbuffer       (all)                         footprint bytes  512.00 KiB"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("(frame)       (all)                         requested      4.00 MiB  2.00 MiB  -2.00 MiB     0.50x\n"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("(frame)       (all)                         footprint      1.00 MiB         -          -         -\n"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("(all passes)  material_maps.diffuse (read)  reuse             8.00x         -"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("gbuffer       (all)                         footprint    512.00 KiB"), std::string::npos) << cmp.out;
+  EXPECT_EQ(cmp.out.find(" bytes "), std::string::npos) << cmp.out;  // every bytes row says which
 
-  // Runs without footprint anywhere: no footprint rows, bytes named "requested".
+  // Runs without footprint anywhere: no footprint rows, the bytes rows as they were.
   Outcome plain = tally("--server " + fake.url() + " compare 12 15");
   ASSERT_EQ(plain.rc, 0) << plain.err;
   EXPECT_EQ(plain.out.find("footprint"), std::string::npos) << plain.out;
-  EXPECT_NE(plain.out.find("requested bytes"), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.out.find("requested"), std::string::npos) << plain.out;
+  EXPECT_NE(plain.out.find("(frame)       (all)                   bytes          4.00 MiB"), std::string::npos) << plain.out;
 }
 
 TEST_F(TallyCli, ServerErrorGivesMessageAndExit1) {
