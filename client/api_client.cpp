@@ -345,6 +345,9 @@ RunView runView(const json& run) {
   if (auto s = runNum(run, {"samples", "sample_count"})) v.samples = static_cast<int64_t>(*s);
   v.frameMs = runNum(run, {"frame_ms", "mean_frame_ms"});
   v.bytes = runNum(run, {"bytes", "mean_bytes"});
+  v.footprintBlockBytes = integer(run, "footprint_block_bytes");
+  v.footprintBytes = runNum(run, {"footprint_bytes", "mean_footprint_bytes"});
+  v.reuse = runNum(run, {"reuse", "mean_reuse"});
   return v;
 }
 
@@ -372,6 +375,8 @@ SampleView sampleView(const json& sample) {
   v.bytes = num(sample, "bytes");
   v.bytesRead = num(sample, "bytes_read");
   v.bytesWritten = num(sample, "bytes_written");
+  v.footprintBytes = num(sample, "footprint_bytes");
+  v.reuse = num(sample, "reuse");
   if (const json* e = field(sample, "image_error"); e && e->is_object()) {
     v.psnr = num(*e, "psnr");
     v.against = str(*e, "against");
@@ -403,6 +408,21 @@ std::pair<double, double> sampleReadWrite(const json& sample) {
     }
   }
   return {read, written};
+}
+
+std::vector<LineView> runLines(const json& run) {
+  std::vector<LineView> lines;
+  for (const auto& pass : array(run, "passes")) {
+    auto counters = array(pass, "resources");
+    if (counters.empty()) counters = array(pass, "counters");
+    for (const auto& c : counters) {
+      std::string name = str(c, "name");
+      if (name.empty()) name = str(c, "resource");
+      lines.push_back({str(pass, "name"), name, str(c, "access"), num(c, "bytes"), num(c, "footprint_bytes"),
+                       num(c, "reuse")});
+    }
+  }
+  return lines;
 }
 
 SweepView sweepView(const json& sweep) {
@@ -501,13 +521,28 @@ CompareView compareView(const json& comparison) {
     if (!values.empty())
       v.rows.push_back({std::move(pass), std::move(resource), std::move(metric), std::move(values)});
   };
+  // Footprint rows only where a compared run has a footprint anywhere; then
+  // the bytes rows say which bytes they are: "requested" beside "footprint".
+  bool footprint = false;
+  for (const auto& c : comparedList(comparison, "total_footprint_bytes")) footprint = footprint || c.value;
+  const std::string requested = footprint ? "requested" : "bytes";
+  auto addFootprint = [&](const std::string& pass, const std::string& resource, const json& at) {
+    if (!footprint) return;
+    add(pass, resource, "footprint", comparedList(at, "footprint_bytes"));
+    add(pass, resource, "reuse", comparedList(at, "reuse"));
+  };
   add("(frame)", "", "ms", comparedList(comparison, "frame_ms"));
-  add("(frame)", "(all)", "bytes", comparedList(comparison, "total_bytes"));
+  add("(frame)", "(all)", requested, comparedList(comparison, "total_bytes"));
+  if (footprint) {
+    add("(frame)", "(all)", "footprint", comparedList(comparison, "total_footprint_bytes"));
+    add("(frame)", "(all)", "reuse", comparedList(comparison, "reuse"));
+  }
   for (const auto& p : array(comparison, "passes")) {
     std::string name = str(p, "pass");
     if (name.empty()) name = str(p, "name");
     add(name, "", "ms", comparedList(p, "gpu_ms"));
-    add(name, "(all)", "bytes", comparedList(p, "bytes"));
+    add(name, "(all)", requested, comparedList(p, "bytes"));
+    addFootprint(name, "(all)", p);
     add(name, "", "invocations", comparedList(p, "fragment_invocations"));
   }
   for (const auto& r : array(comparison, "resources")) {
@@ -515,7 +550,8 @@ CompareView compareView(const json& comparison) {
     if (name.empty()) name = str(r, "name");
     std::string access = str(r, "access");
     std::string label = access.empty() ? name : name + " (" + access + ")";
-    add("(all passes)", label, "bytes", comparedList(r, "bytes"));
+    add("(all passes)", label, requested, comparedList(r, "bytes"));
+    addFootprint("(all passes)", label, r);
   }
   return v;
 }

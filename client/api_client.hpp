@@ -129,7 +129,12 @@ struct RunView {
   std::string variant;
   nlohmann::json options = nlohmann::json::object();
   std::optional<int64_t> width, height, samples, lights, renderTargetBytes;
-  std::optional<double> frameMs, bytes;  // means over the run's samples
+  std::optional<double> frameMs, bytes;  // means over the run's samples; bytes: requested bytes
+  // Footprint: the block size (empty: off), the mean footprint per frame and
+  // mean reuse (requested / footprint) over the samples; empty without footprint.
+  std::optional<int64_t> footprintBlockBytes;
+  std::optional<double> footprintBytes, reuse;
+  bool hasFootprint() const { return footprintBytes.has_value(); }
 };
 RunView runView(const json& run);
 std::vector<json> runList(const json& page);  // the "runs" array
@@ -138,6 +143,7 @@ std::string nextCursor(const json& page);     // empty at the end
 struct SampleView {
   std::string id, camera;  // camera: label or index
   std::optional<double> skyFraction, frameMs, overhead, psnr, bytes, bytesRead, bytesWritten;
+  std::optional<double> footprintBytes, reuse;  // empty without footprint
   bool identical = false;  // image equal to the reference renderer's
   std::string against;     // reference renderer of image_error
   // variant_error: the image against the run's reference variant (absent for
@@ -151,12 +157,22 @@ std::vector<json> sampleList(const json& page);  // the "samples" array
 // Bytes read and written per frame over a full sample's passes and counters.
 std::pair<double, double> sampleReadWrite(const json& sample);
 
+// One line of a run's passes (GET /api/runs/{id} "passes"): requested bytes,
+// footprint and reuse per frame.
+struct LineView {
+  std::string pass, resource, access;
+  std::optional<double> bytes, footprintBytes, reuse;
+};
+std::vector<LineView> runLines(const json& run);
+
 // One compared quantity for one run (against the first run).
 struct ComparedView {
   std::optional<double> value, delta, ratio;
 };
 struct CompareRow {
-  std::string pass, resource, metric;  // metric: "ms", "bytes", "count", "invocations"
+  // metric: "ms", "bytes" ("requested" beside "footprint" and "reuse" where a
+  // compared run has a footprint), "count", "invocations"
+  std::string pass, resource, metric;
   std::vector<ComparedView> values;    // one per run
 };
 struct CompareView {

@@ -222,24 +222,37 @@ int runCancel(ApiClient& api, const std::string& id, Io& io) {
 
 int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
   auto res = args.all ? api.listAllRuns(args.filters, args.limit) : api.listRuns(args.filters, args.limit);
-  return printListing(io, res, args.all, "runs",
-                      {{"ID", Align::Right},
-                       {"CAPTURE", Align::Right},
-                       {"RENDERER"},
-                       {"SCENE"},
-                       {"SIZE", Align::Right},
-                       {"DEVICE"},
-                       {"SAMPLES", Align::Right},
-                       {"FRAME MS", Align::Right},
-                       {"BYTES/FRAME", Align::Right}},
-                      [](const json& page, Table& t) {
-                        for (const auto& run : runList(page)) {
-                          RunView r = runView(run);
-                          t.addRow({r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
-                                    r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3),
-                                    humanBytes(r.bytes)});
-                        }
-                      });
+  // A page with footprint runs says which bytes are which: requested beside footprint.
+  bool footprint = false;
+  if (res) {
+    for (const auto& run : runList(*res)) footprint = footprint || runView(run).hasFootprint();
+  }
+  std::vector<Table::Column> columns = {{"ID", Align::Right},
+                                        {"CAPTURE", Align::Right},
+                                        {"RENDERER"},
+                                        {"SCENE"},
+                                        {"SIZE", Align::Right},
+                                        {"DEVICE"},
+                                        {"SAMPLES", Align::Right},
+                                        {"FRAME MS", Align::Right},
+                                        {footprint ? "REQUESTED/FRAME" : "BYTES/FRAME", Align::Right}};
+  if (footprint) {
+    columns.push_back({"FOOTPRINT/FRAME", Align::Right});
+    columns.push_back({"REUSE", Align::Right});
+  }
+  return printListing(io, res, args.all, "runs", columns, [footprint](const json& page, Table& t) {
+    for (const auto& run : runList(page)) {
+      RunView r = runView(run);
+      std::vector<std::string> row = {r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
+                                      r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3),
+                                      humanBytes(r.bytes)};
+      if (footprint) {
+        row.push_back(humanBytes(r.footprintBytes));
+        row.push_back(ratio(r.reuse));
+      }
+      t.addRow(row);
+    }
+  });
 }
 
 int runShow(ApiClient& api, const std::string& runId, Io& io) {
@@ -262,6 +275,7 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   }
   io.out << "device: " << orMissing(r.device) << "   capture: " << orMissing(r.capture);
   if (!r.counting.empty()) io.out << "   counting: " << r.counting;
+  if (r.footprintBlockBytes) io.out << "   footprint: " << *r.footprintBlockBytes << "-byte blocks";
   if (r.lights) io.out << "   lights: " << *r.lights;
   if (r.renderTargetBytes)
     io.out << "   render targets: " << humanBytes(static_cast<double>(*r.renderTargetBytes));
@@ -280,15 +294,25 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
 
   // A variant's error against its reference variant gets a column where any sample has one.
   bool variantErrors = false;
-  for (const auto& sample : sampleList(*samples)) variantErrors = variantErrors || sampleView(sample).hasVariantError;
+  // Footprint: requested bytes beside the footprint and reuse, where any sample has one.
+  bool footprint = r.hasFootprint();
+  for (const auto& sample : sampleList(*samples)) {
+    SampleView s = sampleView(sample);
+    variantErrors = variantErrors || s.hasVariantError;
+    footprint = footprint || s.footprintBytes.has_value();
+  }
   std::vector<Table::Column> columns = {{"CAMERA"},
                                         {"SKY", Align::Right},
                                         {"FRAME MS", Align::Right},
                                         {"OVERHEAD", Align::Right},
                                         {"IMAGE ERROR", Align::Right}};
   if (variantErrors) columns.push_back({"VARIANT ERROR", Align::Right});
-  columns.push_back({"READ/FRAME", Align::Right});
-  columns.push_back({"WRITTEN/FRAME", Align::Right});
+  columns.push_back({footprint ? "REQUESTED READ/FRAME" : "READ/FRAME", Align::Right});
+  columns.push_back({footprint ? "REQUESTED WRITTEN/FRAME" : "WRITTEN/FRAME", Align::Right});
+  if (footprint) {
+    columns.push_back({"FOOTPRINT/FRAME", Align::Right});
+    columns.push_back({"REUSE", Align::Right});
+  }
   Table t(columns);
   for (const auto& sample : sampleList(*samples)) {
     SampleView s = sampleView(sample);
@@ -315,9 +339,28 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     }
     row.push_back(humanBytes(read));
     row.push_back(humanBytes(written));
+    if (footprint) {
+      row.push_back(humanBytes(s.footprintBytes));
+      row.push_back(ratio(s.reuse));
+    }
     t.addRow(row);
   }
   t.print(io.out);
+  if (footprint) {
+    // Per line, averaged over the samples: what each pass asked for against
+    // the distinct bytes it touched.
+    io.out << '\n';
+    Table lines({{"PASS"},
+                 {"RESOURCE"},
+                 {"ACCESS"},
+                 {"REQUESTED/FRAME", Align::Right},
+                 {"FOOTPRINT/FRAME", Align::Right},
+                 {"REUSE", Align::Right}});
+    for (const auto& l : runLines(*run)) {
+      lines.addRow({l.pass, l.resource, l.access, humanBytes(l.bytes), humanBytes(l.footprintBytes), ratio(l.reuse)});
+    }
+    lines.print(io.out);
+  }
   return 0;
 }
 
@@ -348,14 +391,16 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
   }
   Table t(columns);
   for (const auto& row : c.rows) {
+    bool bytes = row.metric == "bytes" || row.metric == "requested" || row.metric == "footprint";
     auto value = [&](std::optional<double> v) {
-      if (row.metric == "bytes") return humanBytes(v);
+      if (bytes) return humanBytes(v);
       if (row.metric == "ms") return fixed(v, 3);
+      if (row.metric == "reuse") return ratio(v);
       return fixed(v, 0);
     };
     auto delta = [&](std::optional<double> v) {
-      if (row.metric == "bytes") return signedBytes(v);
-      return signedFixed(v, row.metric == "ms" ? 3 : 0);
+      if (bytes) return signedBytes(v);
+      return signedFixed(v, row.metric == "ms" ? 3 : row.metric == "reuse" ? 2 : 0);
     };
     std::vector<std::string> cells = {row.pass, row.resource, row.metric};
     for (size_t i = 0; i < names.size(); ++i)

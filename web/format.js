@@ -44,7 +44,7 @@ export const date = (iso) => (iso ? iso.slice(0, 16).replace('T', ' ') : '–');
 export const variant = (run) => run.variant || run.renderer;
 
 // "deferred · atrium · 320×180 (#12)": how a run is named in legends.
-export const runLabel = (run) => `${variant(run)} · ${run.scene} · ${resolution(run)}${run.counting !== 'exact' ? ` · ${run.counting}` : ''} (#${run.id})`;
+export const runLabel = (run) => `${variant(run)} · ${run.scene} · ${resolution(run)}${run.counting !== 'exact' ? ` · ${run.counting}` : ''}${run.footprint_block_bytes ? ` + footprint ${run.footprint_block_bytes}` : ''} (#${run.id})`;
 
 // The run's image error against forward in a few words.
 export function imageError(run) {

@@ -1,5 +1,7 @@
 #include "capture/runner.hpp"
 
+#include "capture/sample.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cctype>
@@ -57,148 +59,6 @@ std::string sceneName(const json& spec, const scenes::Scene& scene) {
     return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
   }
   return scene.name;
-}
-
-// Accumulates one (pass, resource, direction) over frames.
-struct Line {
-  std::string pass, resource, source;
-  bool write = false;
-  bool onChip = false;  // Access::onChip (the tile-memory model)
-  std::vector<double> counts, bytes;
-};
-
-struct PassTimes {
-  std::vector<double> ms;
-};
-
-// F instrumented frames: counts per frame; F uninstrumented frames: times.
-struct SampleMeasure {
-  std::vector<std::string> passOrder;
-  std::map<std::pair<std::string, std::string>, Line> lines;  // key: pass + "\x1f" + resource + direction
-  std::vector<std::string> lineOrder;
-  std::map<std::string, std::vector<double>> fragmentInvocations, statistic, instrumentedMs, plainMs;
-  // Passes that dispatch compute work only.
-  std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
-  std::vector<double> frameMs, instrumentedFrameMs;
-};
-
-void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
-  double total = 0;
-  for (const auto& pass : frame.passes) {
-    if (std::find(m.passOrder.begin(), m.passOrder.end(), pass.name) == m.passOrder.end()) {
-      m.passOrder.push_back(pass.name);
-    }
-    m.fragmentInvocations[pass.name].push_back(double(pass.fragmentInvocations));
-    if (pass.fragmentInvocationsStatistic >= 0) m.statistic[pass.name].push_back(double(pass.fragmentInvocationsStatistic));
-    if (pass.computeInvocations > 0 || pass.computeInvocationsStatistic > 0) {
-      m.computeInvocations[pass.name].push_back(double(pass.computeInvocations));
-      if (pass.computeInvocationsStatistic >= 0) {
-        m.computeStatistic[pass.name].push_back(double(pass.computeInvocationsStatistic));
-      }
-    }
-    m.instrumentedMs[pass.name].push_back(pass.gpuMs);
-    total += pass.gpuMs;
-    for (const auto& a : pass.accesses) {
-      // One line per (pass, resource, access, source): a counted and a
-      // derived line on one resource (the visibility pass's index reads)
-      // stay apart, not averaged into one.
-      auto key = std::make_pair(pass.name, a.resource + (a.write ? "\x1fw\x1f" : "\x1fr\x1f") + a.source);
-      auto [it, inserted] = m.lines.try_emplace(key);
-      if (inserted) {
-        it->second.pass = pass.name;
-        it->second.resource = a.resource;
-        it->second.write = a.write;
-        it->second.source = a.source;
-        it->second.onChip = a.onChip;
-      }
-      it->second.counts.push_back(double(a.count));
-      it->second.bytes.push_back(double(a.bytes));
-    }
-  }
-  m.instrumentedFrameMs.push_back(total);
-}
-
-void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
-  double total = 0;
-  for (const auto& pass : frame.passes) {
-    m.plainMs[pass.name].push_back(pass.gpuMs);
-    total += pass.gpuMs;
-  }
-  m.frameMs.push_back(total);
-}
-
-json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources, uint32_t frames,
-                uint32_t countedFrames) {
-  std::map<std::string, const renderers::ResourceInfo*> byName;
-  for (const auto& r : resources) byName[r.name] = &r;
-  json passes = json::array();
-  double sampleBytes = 0, sampleDram = 0;
-  for (const auto& name : m.passOrder) {
-    Spread plain = spreadOf(m.plainMs.count(name) ? m.plainMs.at(name) : std::vector<double>{});
-    Spread instrumented = spreadOf(m.instrumentedMs.at(name));
-    json pass = {
-        {"name", name},
-        {"gpu_ms", plain.median},
-        {"gpu_ms_spread", toJson(plain)},
-        {"gpu_ms_instrumented", instrumented.median},
-        {"overhead_ratio", plain.median > 0 ? instrumented.median / plain.median : 0.0},
-        {"fragment_invocations", spreadOf(m.fragmentInvocations.at(name)).mean},
-    };
-    if (m.statistic.count(name)) pass["fragment_invocations_statistic"] = spreadOf(m.statistic.at(name)).mean;
-    if (m.computeInvocations.count(name)) {
-      pass["compute_invocations"] = spreadOf(m.computeInvocations.at(name)).mean;
-    }
-    if (m.computeStatistic.count(name)) {
-      pass["compute_invocations_statistic"] = spreadOf(m.computeStatistic.at(name)).mean;
-    }
-    json lines = json::array();
-    double passBytes = 0, passDram = 0;
-    for (const auto& [key, line] : m.lines) {
-      if (line.pass != name) continue;
-      auto info = byName.find(line.resource);
-      Spread count = spreadOf(line.counts), bytes = spreadOf(line.bytes);
-      json r = {
-          {"name", line.resource},
-          {"format", info != byName.end() ? json(info->second->formatName) : json(nullptr)},
-          {"kind", info != byName.end() ? json(std::string(renderers::toString(info->second->kind))) : json(nullptr)},
-          {"access", line.write ? "write" : "read"},
-          {"count", count.mean},   // per frame, averaged over the sample's frames
-          {"bytes", bytes.mean},
-          {"count_spread", toJson(count)},
-          {"source", line.source},
-          // The tile-memory model (docs/measurement.md, "Byte models"): 0 DRAM bytes.
-          {"on_chip", line.onChip},
-      };
-      passBytes += bytes.mean;
-      if (!line.onChip) passDram += bytes.mean;
-      lines.push_back(std::move(r));
-    }
-    pass["resources"] = std::move(lines);
-    pass["bytes"] = passBytes;                 // the immediate-mode model: every line
-    pass["bytes_tile_model"] = passDram;       // the tile-memory model: lines not on chip
-    sampleBytes += passBytes;
-    sampleDram += passDram;
-    passes.push_back(std::move(pass));
-  }
-  Spread frame = spreadOf(m.frameMs), instrumentedFrame = spreadOf(m.instrumentedFrameMs);
-  // A fixed camera counts the same every frame; a count that varies across
-  // the counted frames (non-deterministic work, or a driver fault) is flagged.
-  bool countsVary = false;
-  for (const auto& [key, line] : m.lines) {
-    for (double c : line.counts) countsVary = countsVary || c != line.counts.front();
-  }
-  return {
-      {"frames", frames},
-      {"counted_frames", countedFrames},
-      {"counts_vary", countsVary},
-      {"frame_ms", frame.median},
-      {"frame_ms_spread", toJson(frame)},
-      {"frame_ms_instrumented", instrumentedFrame.median},
-      {"overhead_ratio", frame.median > 0 ? instrumentedFrame.median / frame.median : 0.0},
-      {"bytes", sampleBytes},
-      {"bytes_tile_model", sampleDram},
-      {"passes", std::move(passes)},
-  };
 }
 
 json resourcesJson(const std::vector<renderers::ResourceInfo>& resources) {
@@ -389,6 +249,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
   auto& instrumented = *made;
   renderers::RendererOptions ro{{res.width, res.height}, true, mode, spec.lights};
   renderers::applyOptions(variant.options, ro);
+  ro.footprintBlockBytes = spec.footprintBlockBytes;  // counted frames only: the plain twin stays as it is
   auto ok = timedSetup(phases, *instrumented, ctx, gpuScene, ro);
   if (!ok) return makeError(where + ": " + ok.error());
   json run = {{"renderer", rendererName},
@@ -399,6 +260,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
               {"width", res.width},
               {"height", res.height},
               {"counting", spirv::toString(mode)},
+              // The footprint's block size in bytes (docs/result-schema.md); null: footprint off.
+              {"footprint_block_bytes", spec.footprintBlockBytes ? json(spec.footprintBlockBytes) : json(nullptr)},
               {"lights", spec.lights},
               {"notes", runNotes(*instrumented, scene)},
               {"resources", resourcesJson(instrumented->resources())},
@@ -507,6 +370,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
       renderers::RendererOptions ro{{spec.resolutions.front().width, spec.resolutions.front().height}, true,
                                     spec.modes.front(), spec.lights};
       renderers::applyOptions(variant.options, ro);
+      ro.footprintBlockBytes = spec.footprintBlockBytes;
       if (std::string why = renderers::sceneRefusal(variant.name, loaded[i], ro); !why.empty())
         return makeError("scenes[" + std::to_string(i) + "] (" + sceneName(spec.scenes[i], loaded[i]) + "): " + why);
     }

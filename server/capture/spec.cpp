@@ -53,12 +53,13 @@ RendererVariant RendererVariant::reference() const {
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
-                                                 "frames",    "counted_frames", "counting", "lights"};
+                                                 "frames",    "counted_frames", "counting", "lights",
+                                                 "footprint"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
                         "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights)");
+                        "counted_frames, counting, lights, footprint)");
     }
   }
   CaptureSpec spec;
@@ -221,6 +222,19 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
     if (!lights) return makeError(lights.error());
     spec.lights = *lights;
+  }
+
+  if (j.contains("footprint")) {
+    // true: the default block size; false: off; else a block size in bytes.
+    const auto& footprint = j["footprint"];
+    if (footprint.is_boolean()) {
+      spec.footprintBlockBytes = footprint.get<bool>() ? kDefaultFootprintBlockBytes : 0;
+    } else if (footprint.is_number_integer() &&
+               (footprint.get<int64_t>() == 32 || footprint.get<int64_t>() == 64 || footprint.get<int64_t>() == 128)) {
+      spec.footprintBlockBytes = static_cast<uint32_t>(footprint.get<int64_t>());
+    } else {
+      return fieldError("footprint", "must be true, false or a block size of 32, 64 or 128 bytes, got " + show(footprint));
+    }
   }
 
   size_t camerasPerScene = spec.autoCameras ? 10 : spec.cameras.size();

@@ -22,6 +22,8 @@ inline constexpr uint32_t kMaxFrames = 1000;
 inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
 inline constexpr uint32_t kDefaultCountedFrames = 2;  // instrumented frames per sample unless the spec says
 inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x modes x cameras)
+// "footprint": true is this block size; an integer must be one of 32, 64, 128.
+inline constexpr uint32_t kDefaultFootprintBlockBytes = 64;
 
 // One measured variant: a renderer and its canonical options
 // (renderers::canonicalOptions: defaults dropped, {} for the renderer as it is).
@@ -60,6 +62,11 @@ struct CaptureSpec {
   // (docs/accuracy.md, "The accumulate mode").
   std::vector<spirv::Mode> modes = {spirv::Mode{spirv::CountMode::Accumulate}};
   uint32_t lights = 400;  // as in the founding study
+  // Footprint counting (docs/measurement.md, "Footprint"; the spec's
+  // "footprint"): 0 off, else the block size in bytes (32, 64 or 128) of the
+  // bitmaps that mark the distinct blocks each line touches. Instrumented
+  // runs only (renderers::RendererOptions::footprintBlockBytes).
+  uint32_t footprintBlockBytes = 0;
   nlohmann::json source;  // the spec as given, stored with the result
 
   size_t sampleCount(size_t camerasPerScene) const {

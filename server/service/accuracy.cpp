@@ -120,6 +120,8 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
               {"device", r.deviceName},
               {"lights", r.lights},
               {"counting", r.counting},
+              // Footprint counting costs time of its own: its runs are points of their own.
+              {"footprint_block_bytes", r.footprintBlockBytes ? json(*r.footprintBlockBytes) : json(nullptr)},
               {"created_at", r.createdAt},
               {"sample_count", static_cast<int64_t>(run.samples.size())}};
     std::string why;

@@ -1,5 +1,6 @@
 #include "service/service.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <memory>
@@ -153,6 +154,13 @@ json opt(const std::optional<T>& v) {
   return v ? json(*v) : json(nullptr);
 }
 
+// Reuse: requested bytes over the footprint of the same lines (how many
+// times each distinct byte was asked for); null without a footprint or at 0.
+json reuseJson(std::optional<double> requested, std::optional<double> footprint) {
+  if (!footprint || *footprint <= 0) return nullptr;
+  return requested.value_or(0) / *footprint;
+}
+
 json jobJson(const store::Job& j) {
   return {{"id", j.id},
           {"status", store::toString(j.status)},
@@ -178,6 +186,7 @@ json runRowJson(const store::RunRow& r) {
           {"width", r.width},
           {"height", r.height},
           {"counting", r.counting},
+          {"footprint_block_bytes", opt(r.footprintBlockBytes)},
           {"lights", r.lights},
           {"render_target_bytes", opt(r.renderTargetBytes)},
           {"notes", r.notes},
@@ -187,6 +196,8 @@ json runRowJson(const store::RunRow& r) {
           {"sample_count", r.sampleCount},
           {"mean_frame_ms", opt(r.meanFrameMs)},
           {"mean_bytes", opt(r.meanBytes)},
+          {"mean_footprint_bytes", opt(r.meanFootprintBytes)},
+          {"mean_reuse", reuseJson(r.meanFootprintRequestedBytes, r.meanFootprintBytes)},
           {"mean_frame_ms_instrumented", opt(r.meanFrameMsInstrumented)},
           {"mean_overhead_ratio", opt(r.meanOverheadRatio)},
           {"image_error", r.imageCompared == 0 ? json(nullptr)
@@ -228,6 +239,8 @@ json sampleRowJson(const store::SampleRow& s) {
             {"bytes", s.bytes},
             {"bytes_read", s.bytesRead},
             {"bytes_written", s.bytesWritten},
+            {"footprint_bytes", opt(s.footprintBytes)},
+            {"reuse", reuseJson(s.footprintRequestedBytes, s.footprintBytes)},
             {"image_error", nullptr},
             {"variant_error", nullptr},
             {"extras", s.extras},
@@ -252,6 +265,8 @@ json sampleRowJson(const store::SampleRow& s) {
 
 json passJson(const store::Pass& p) {
   json resources = json::array();
+  double bytes = 0;
+  std::optional<double> footprint, footprintRequested;  // over the lines that have a footprint
   for (const auto& c : p.counters) {
     resources.push_back({{"name", c.resource},
                          {"kind", opt(c.kind)},
@@ -259,8 +274,15 @@ json passJson(const store::Pass& p) {
                          {"access", c.access},
                          {"count", c.count},
                          {"bytes", c.bytes},
+                         {"footprint_bytes", opt(c.footprintBytes)},
+                         {"reuse", reuseJson(c.bytes, c.footprintBytes)},
                          {"count_spread", c.countSpread},
                          {"source", c.source}});
+    bytes += c.bytes;
+    if (c.footprintBytes) {
+      footprint = footprint.value_or(0) + *c.footprintBytes;
+      footprintRequested = footprintRequested.value_or(0) + c.bytes;
+    }
   }
   return {{"name", p.name},
           {"gpu_ms", p.gpuMs},
@@ -271,6 +293,9 @@ json passJson(const store::Pass& p) {
           {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
           {"compute_invocations", opt(p.computeInvocations)},
           {"compute_invocations_statistic", opt(p.computeInvocationsStatistic)},
+          {"bytes", bytes},
+          {"footprint_bytes", opt(footprint)},
+          {"reuse", reuseJson(footprintRequested, footprint)},
           {"resources", resources}};
 }
 
@@ -287,17 +312,23 @@ json comparisonJson(const store::Comparison& c) {
     passes.push_back({{"pass", p.pass},
                       {"gpu_ms", comparedJson(p.gpuMs)},
                       {"bytes", comparedJson(p.bytes)},
+                      {"footprint_bytes", comparedJson(p.footprintBytes)},
+                      {"reuse", comparedJson(p.reuse)},
                       {"fragment_invocations", comparedJson(p.fragmentInvocations)}});
   }
   for (const auto& r : c.resources) {
     resources.push_back({{"resource", r.resource},
                          {"access", r.access},
                          {"count", comparedJson(r.count)},
-                         {"bytes", comparedJson(r.bytes)}});
+                         {"bytes", comparedJson(r.bytes)},
+                         {"footprint_bytes", comparedJson(r.footprintBytes)},
+                         {"reuse", comparedJson(r.reuse)}});
   }
   return {{"runs", runs},
           {"frame_ms", comparedJson(c.frameMs)},
           {"total_bytes", comparedJson(c.totalBytes)},
+          {"total_footprint_bytes", comparedJson(c.totalFootprintBytes)},
+          {"reuse", comparedJson(c.reuse)},
           {"passes", passes},
           {"resources", resources}};
 }
@@ -652,20 +683,32 @@ Response exportRuns(ServiceContext& ctx, const Request& req) {
                      {"resource", r.resource},
                      {"access", r.access},
                      {"count", r.count},
-                     {"bytes", r.bytes}});
+                     {"bytes", r.bytes},
+                     {"footprint_bytes", opt(r.footprintBytes)},
+                     {"reuse", reuseJson(r.footprintRequestedBytes, r.footprintBytes)}});
     }
     return Response::ok({{"rows", out}});
   }
-  std::string csv = "run,renderer,scene,width,height,device,pass,resource,access,count,bytes\r\n";
+  // bytes: requested. Where any row has a footprint, two more columns follow,
+  // footprint_bytes and reuse (empty where not measured); an export without
+  // footprint keeps the columns it always had.
+  bool footprint = std::any_of(rows.begin(), rows.end(), [](const store::ExportRow& r) { return r.footprintBytes.has_value(); });
+  std::string csv = std::string("run,renderer,scene,width,height,device,pass,resource,access,count,bytes") +
+                    (footprint ? ",footprint_bytes,reuse" : "") + "\r\n";
   auto num = [](double v) {
     json j = v;  // shortest round-trip text
     return j.dump();
   };
+  auto optNum = [](const json& v) { return v.is_null() ? std::string() : v.dump(); };
   for (const auto& r : rows) {
     csv += std::to_string(r.runId) + "," + csvCell(r.renderer) + "," + csvCell(r.scene) + "," +
            std::to_string(r.width) + "," + std::to_string(r.height) + "," + csvCell(r.device) + "," +
            csvCell(r.pass) + "," + csvCell(r.resource) + "," + csvCell(r.access) + "," + num(r.count) + "," +
-           num(r.bytes) + "\r\n";
+           num(r.bytes) +
+           (footprint ? "," + optNum(opt(r.footprintBytes)) + "," +
+                            optNum(reuseJson(r.footprintRequestedBytes, r.footprintBytes))
+                      : std::string()) +
+           "\r\n";
   }
   Response resp = Response::raw(std::move(csv), "text/csv; charset=utf-8");
   resp.headers.emplace_back("Content-Disposition", "attachment; filename=\"tally-export.csv\"");

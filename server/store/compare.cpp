@@ -10,19 +10,35 @@ using detail::guarded;
 
 namespace {
 
+// A footprint and the requested bytes of the same counters, summed; empty
+// where no counter has a footprint.
+struct FootprintSums {
+  std::optional<double> footprint, requested;
+  void add(const FootprintSums& other) {
+    if (!other.footprint) return;
+    footprint = footprint.value_or(0) + *other.footprint;
+    requested = requested.value_or(0) + other.requested.value_or(0);
+  }
+};
+
 struct RunTotals {
   int samples = 0;
   std::optional<double> frameMs;
   double totalBytes = 0;
-  // pass name -> (gpu_ms, bytes, fragment invocations), summed over samples
+  FootprintSums totalFootprint;
+  // pass name -> (gpu_ms, bytes, fragment invocations, footprint), summed over samples
   struct PassSums {
     double gpuMs = 0, bytes = 0;
     std::optional<double> fragments;
+    FootprintSums footprint;
+  };
+  struct ResourceSums {
+    double count = 0, bytes = 0;
+    FootprintSums footprint;
   };
   std::vector<std::string> passOrder;
   std::map<std::string, PassSums> passes;
-  std::map<std::pair<std::string, std::string>, std::pair<double, double>>
-      resources;  // (name, access) -> count, bytes
+  std::map<std::pair<std::string, std::string>, ResourceSums> resources;  // (name, access)
 };
 
 RunTotals totalsOf(sqlite3* db, int64_t runId) {
@@ -34,24 +50,30 @@ RunTotals totalsOf(sqlite3* db, int64_t runId) {
   t.frameMs = frame.getOptDouble(1);
   Statement passes(db,
                    "SELECT p.name, SUM(p.gpu_ms), SUM(p.fragment_invocations), "
-                   "SUM((SELECT TOTAL(c.bytes) FROM counters c WHERE c.pass_id = p.id)) "
+                   "SUM((SELECT TOTAL(c.bytes) FROM counters c WHERE c.pass_id = p.id)), "
+                   "SUM((SELECT SUM(c.footprint_bytes) FROM counters c WHERE c.pass_id = p.id)), "
+                   "SUM((SELECT SUM(c.bytes) FROM counters c WHERE c.pass_id = p.id AND c.footprint_bytes IS NOT NULL)) "
                    "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
                    "GROUP BY p.name ORDER BY MIN(p.position), p.name");
   passes.bind(1, runId);
   while (passes.step()) {
     std::string name = passes.getText(0);
     t.passOrder.push_back(name);
-    t.passes[name] = {passes.getDouble(1), passes.getDouble(3), passes.getOptDouble(2)};
+    t.passes[name] = {passes.getDouble(1), passes.getDouble(3), passes.getOptDouble(2),
+                      FootprintSums{passes.getOptDouble(4), passes.getOptDouble(5)}};
   }
   Statement resources(db,
-                      "SELECT c.resource, c.access, SUM(c.count), SUM(c.bytes) FROM counters c "
+                      "SELECT c.resource, c.access, SUM(c.count), SUM(c.bytes), SUM(c.footprint_bytes), "
+                      "SUM(CASE WHEN c.footprint_bytes IS NOT NULL THEN c.bytes END) FROM counters c "
                       "JOIN passes p ON p.id = c.pass_id JOIN samples s ON s.id = p.sample_id "
                       "WHERE s.run_id = ?1 GROUP BY c.resource, c.access");
   resources.bind(1, runId);
   while (resources.step()) {
-    t.resources[{resources.getText(0), resources.getText(1)}] = {resources.getDouble(2),
-                                                                 resources.getDouble(3)};
-    t.totalBytes += resources.getDouble(3);
+    RunTotals::ResourceSums sums{resources.getDouble(2), resources.getDouble(3),
+                                 FootprintSums{resources.getOptDouble(4), resources.getOptDouble(5)}};
+    t.totalBytes += sums.bytes;
+    t.totalFootprint.add(sums.footprint);
+    t.resources[{resources.getText(0), resources.getText(1)}] = sums;
   }
   return t;
 }
@@ -73,6 +95,17 @@ std::vector<Compared> against(const std::vector<std::optional<double>>& values) 
 
 std::optional<double> average(double sum, int samples) {
   return samples > 0 ? std::optional<double>(sum / samples) : std::nullopt;
+}
+
+std::optional<double> average(std::optional<double> sum, int samples) {
+  return sum ? average(*sum, samples) : std::nullopt;
+}
+
+// Requested bytes / footprint of the same counters; empty without a
+// footprint, or at a footprint of 0.
+std::optional<double> reuseOf(const FootprintSums& f) {
+  if (!f.footprint || *f.footprint <= 0) return std::nullopt;
+  return f.requested.value_or(0) / *f.footprint;
 }
 
 }  // namespace
@@ -99,13 +132,17 @@ Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
     }
     tx.commit();
 
-    std::vector<std::optional<double>> frame, bytes;
+    std::vector<std::optional<double>> frame, bytes, footprint, reuse;
     for (const auto& t : totals) {
       frame.push_back(t.frameMs);
       bytes.push_back(average(t.totalBytes, t.samples));
+      footprint.push_back(average(t.totalFootprint.footprint, t.samples));
+      reuse.push_back(reuseOf(t.totalFootprint));
     }
     out.frameMs = against(frame);
     out.totalBytes = against(bytes);
+    out.totalFootprintBytes = against(footprint);
+    out.reuse = against(reuse);
 
     std::vector<std::string> passOrder;  // the first run's order, then passes only later runs have
     for (const auto& t : totals) {
@@ -114,20 +151,25 @@ Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
       }
     }
     for (const auto& name : passOrder) {
-      std::vector<std::optional<double>> gpu, passBytes, fragments;
+      std::vector<std::optional<double>> gpu, passBytes, fragments, passFootprint, passReuse;
       for (const auto& t : totals) {
         auto it = t.passes.find(name);
         if (it == t.passes.end()) {
           gpu.emplace_back();
           passBytes.emplace_back();
           fragments.emplace_back();
+          passFootprint.emplace_back();
+          passReuse.emplace_back();
           continue;
         }
         gpu.push_back(average(it->second.gpuMs, t.samples));
         passBytes.push_back(average(it->second.bytes, t.samples));
         fragments.push_back(it->second.fragments ? average(*it->second.fragments, t.samples) : std::nullopt);
+        passFootprint.push_back(average(it->second.footprint.footprint, t.samples));
+        passReuse.push_back(reuseOf(it->second.footprint));
       }
-      out.passes.push_back(PassComparison{name, against(gpu), against(passBytes), against(fragments)});
+      out.passes.push_back(PassComparison{name, against(gpu), against(passBytes), against(fragments),
+                                          against(passFootprint), against(passReuse)});
     }
 
     std::set<std::pair<std::string, std::string>> keys;
@@ -135,15 +177,17 @@ Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
       for (const auto& [key, sums] : t.resources) keys.insert(key);
     }
     for (const auto& key : keys) {
-      std::vector<std::optional<double>> count, resourceBytes;
+      std::vector<std::optional<double>> count, resourceBytes, resourceFootprint, resourceReuse;
       for (const auto& t : totals) {
         auto it = t.resources.find(key);
-        count.push_back(it == t.resources.end() ? std::nullopt : average(it->second.first, t.samples));
-        resourceBytes.push_back(it == t.resources.end() ? std::nullopt
-                                                        : average(it->second.second, t.samples));
+        bool has = it != t.resources.end();
+        count.push_back(has ? average(it->second.count, t.samples) : std::nullopt);
+        resourceBytes.push_back(has ? average(it->second.bytes, t.samples) : std::nullopt);
+        resourceFootprint.push_back(has ? average(it->second.footprint.footprint, t.samples) : std::nullopt);
+        resourceReuse.push_back(has ? reuseOf(it->second.footprint) : std::nullopt);
       }
-      out.resources.push_back(
-          ResourceComparison{key.first, key.second, against(count), against(resourceBytes)});
+      out.resources.push_back(ResourceComparison{key.first, key.second, against(count), against(resourceBytes),
+                                                 against(resourceFootprint), against(resourceReuse)});
     }
     return out;
   });
@@ -176,7 +220,7 @@ Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
     }
     Statement counters(db_,
                        "SELECT p.name, c.resource, c.kind, c.format, c.access, SUM(c.count), SUM(c.bytes), "
-                       "c.source FROM counters c JOIN passes p ON p.id = c.pass_id "
+                       "c.source, SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = c.pass_id "
                        "JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
                        "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
     counters.bind(1, runId);
@@ -184,7 +228,7 @@ Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
       out[byName.at(counters.getText(0))].counters.push_back(
           Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
                   counters.getDouble(5) / samples, counters.getDouble(6) / samples, nullptr,
-                  counters.getText(7)});
+                  counters.getText(7), mean(counters.getOptDouble(8))});
     }
     tx.commit();
     return out;
@@ -198,7 +242,10 @@ Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
     std::string sql =
         "SELECT r.id, r.renderer, sc.name, r.width, r.height, d.name, p.name, c.resource, c.access, "
         "SUM(c.count) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id), "
-        "SUM(c.bytes) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id) "
+        "SUM(c.bytes) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id), "
+        "SUM(c.footprint_bytes) / (SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id), "
+        "SUM(CASE WHEN c.footprint_bytes IS NOT NULL THEN c.bytes END) / "
+        "(SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id) "
         "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
         "JOIN samples s ON s.run_id = r.id JOIN passes p ON p.sample_id = s.id JOIN counters c ON c.pass_id "
         "= p.id "
@@ -212,7 +259,8 @@ Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
       rows.push_back(ExportRow{query.getInt(0), query.getText(1), query.getText(2),
                                static_cast<int>(query.getInt(3)), static_cast<int>(query.getInt(4)),
                                query.getText(5), query.getText(6), query.getText(7), query.getText(8),
-                               query.getDouble(9), query.getDouble(10)});
+                               query.getDouble(9), query.getDouble(10), query.getOptDouble(11),
+                               query.getOptDouble(12)});
     }
     return rows;
   });

@@ -110,8 +110,9 @@ struct Inserter {
               "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id"),
         run(db,
             "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
-            "render_target_bytes, notes, shaders, counter_headroom, options, variant, tally_version, tally_commit) "
-            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)"),
+            "render_target_bytes, notes, shaders, counter_headroom, options, variant, tally_version, tally_commit, "
+            "footprint_block_bytes) "
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)"),
         resource(
             db,
             "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
@@ -133,11 +134,16 @@ struct Inserter {
              "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
         counter(db,
                 "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
-                "count_spread, source) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)"),
+                "count_spread, source, footprint_bytes) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
         sampleBytes(
             db,
             "UPDATE samples SET bytes = (SELECT TOTAL(c.bytes) FROM counters c JOIN passes p ON p.id = "
-            "c.pass_id WHERE p.sample_id = ?1) WHERE id = ?1") {}
+            "c.pass_id WHERE p.sample_id = ?1), "
+            // SUM: NULL when no line has a footprint.
+            "footprint_bytes = (SELECT SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = "
+            "c.pass_id WHERE p.sample_id = ?1), "
+            "footprint_requested_bytes = (SELECT SUM(c.bytes) FROM counters c JOIN passes p ON p.id = "
+            "c.pass_id WHERE p.sample_id = ?1 AND c.footprint_bytes IS NOT NULL) WHERE id = ?1") {}
   sqlite3* db;
   Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes;
   int64_t lastId() const { return sqlite3_last_insert_rowid(db); }
@@ -185,6 +191,9 @@ void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::s
     std::string access = text(counter, "access", at);
     if (access != "read" && access != "write")
       bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
+    // Absent (or null) where the line's footprint was not measured.
+    std::optional<double> footprint = optNumber(counter, "footprint_bytes", at);
+    if (footprint && *footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
     in.counter.reset();
     in.counter.bind(1, passId)
         .bind(2, static_cast<int64_t>(c))
@@ -195,7 +204,8 @@ void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::s
         .bind(7, number(counter, "count", at))
         .bind(8, number(counter, "bytes", at))
         .bind(9, optJson(counter, "count_spread"))
-        .bind(10, text(counter, "source", at));
+        .bind(10, text(counter, "source", at))
+        .bind(11, footprint);
     in.counter.run();
   }
 }
@@ -367,6 +377,10 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
     if (!h->is_object()) bad(path + ".counter_headroom", "must be an object");
     headroom = *h;
   }
+  // The footprint's block size; absent or null when footprint was off.
+  std::optional<int64_t> footprintBlock = optInteger(run, "footprint_block_bytes", path);
+  if (footprintBlock && *footprintBlock != 32 && *footprintBlock != 64 && *footprintBlock != 128)
+    bad(path + ".footprint_block_bytes", "must be 32, 64 or 128, got " + std::to_string(*footprintBlock));
   in.run.reset();
   in.run.bind(1, jobId)
       .bind(2, deviceId)
@@ -383,7 +397,8 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(13, optObject(run, "options", path))
       .bind(14, optText(run, "variant", path).value_or(text(run, "renderer", path)))
       .bind(15, build.version)
-      .bind(16, build.commit);
+      .bind(16, build.commit)
+      .bind(17, footprintBlock);
   in.run.run();
   int64_t runId = in.lastId();
   insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");

@@ -23,7 +23,9 @@ const char* const kRunSelect =
     "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id AND s.image_identical = 1), "
     "(SELECT AVG(s.psnr) FROM samples s WHERE s.run_id = r.id), "
     "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
-    "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit "
+    "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
+    "(SELECT AVG(s.footprint_bytes) FROM samples s WHERE s.run_id = r.id), "
+    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id) "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -55,6 +57,9 @@ RunRow readRunRow(const Statement& row) {
   run.variant = row.getText(24);
   run.tallyVersion = row.getOptText(25);
   run.tallyCommit = row.getOptText(26);
+  run.footprintBlockBytes = row.getOptInt(27);
+  run.meanFootprintBytes = row.getOptDouble(28);
+  run.meanFootprintRequestedBytes = row.getOptDouble(29);
   return run;
 }
 
@@ -111,7 +116,8 @@ const char* const kSampleColumns =
     "WHERE p.sample_id = samples.id AND c.access = 'read'), "
     "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
     "WHERE p.sample_id = samples.id AND c.access = 'write'), "
-    "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs";
+    "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs, "
+    "footprint_bytes, footprint_requested_bytes";
 
 SampleRow readSampleRow(const Statement& row) {
   SampleRow s;
@@ -149,6 +155,8 @@ SampleRow readSampleRow(const Statement& row) {
     e.meanAbs = row.getDouble(25);
     s.variantError = e;
   }
+  s.footprintBytes = row.getOptDouble(26);
+  s.footprintRequestedBytes = row.getOptDouble(27);
   return s;
 }
 
@@ -284,13 +292,14 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
     Statement counters(
         db_,
         "SELECT c.pass_id, c.resource, c.kind, c.format, c.access, c.count, c.bytes, c.count_spread, "
-        "c.source FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = ?1 "
+        "c.source, c.footprint_bytes FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = ?1 "
         "ORDER BY p.position, c.position");
     counters.bind(1, sampleId);
     while (counters.step()) {
       sample.passes[byId.at(counters.getInt(0))].counters.push_back(
           Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
-                  counters.getDouble(5), counters.getDouble(6), counters.getJson(7), counters.getText(8)});
+                  counters.getDouble(5), counters.getDouble(6), counters.getJson(7), counters.getText(8),
+                  counters.getOptDouble(9)});
     }
     tx.commit();
     return std::optional<Sample>(std::move(sample));

@@ -136,6 +136,12 @@ struct RunRow {
   std::string variant;
   // The Tally build that made the run; absent for runs stored before 0005.
   std::optional<std::string> tallyVersion, tallyCommit;
+  // Footprint (0006): the block size the run counted it in (absent: off, or
+  // stored before), and over the samples that have one, the mean footprint
+  // per frame and the mean requested bytes of the lines that have a footprint
+  // (reuse = footprintRequested / footprint). Absent when no sample has one.
+  std::optional<int64_t> footprintBlockBytes;
+  std::optional<double> meanFootprintBytes, meanFootprintRequestedBytes;
 };
 
 struct RunPage {
@@ -183,6 +189,9 @@ struct SampleRow {
   bool hasScreenshot = false;
   nlohmann::json extras = nlohmann::json::object();  // technique measurements of the sample
   std::optional<ImageError> variantError;  // against the run's reference variant
+  // The footprint of the sample's lines that have one, and those lines'
+  // requested bytes, per frame; absent when no line has a footprint.
+  std::optional<double> footprintBytes, footprintRequestedBytes;
 };
 
 struct Counter {
@@ -193,6 +202,7 @@ struct Counter {
   double bytes = 0;    // per frame
   nlohmann::json countSpread;
   std::string source;  // counter | derived
+  std::optional<double> footprintBytes;  // distinct bytes touched per frame; absent where not measured
 };
 
 struct Pass {
@@ -262,21 +272,29 @@ struct Compared {
 struct PassComparison {
   std::string pass;
   std::vector<Compared> gpuMs;
-  std::vector<Compared> bytes;  // all of the pass's counters
+  std::vector<Compared> bytes;  // all of the pass's counters (requested bytes)
   std::vector<Compared> fragmentInvocations;
+  // The footprint of the counters that have one (absent for a run without),
+  // and reuse: those counters' requested bytes / their footprint.
+  std::vector<Compared> footprintBytes;
+  std::vector<Compared> reuse;
 };
 
 struct ResourceComparison {
   std::string resource;
   std::string access;  // read | write
   std::vector<Compared> count;
-  std::vector<Compared> bytes;  // summed over passes
+  std::vector<Compared> bytes;  // summed over passes (requested bytes)
+  std::vector<Compared> footprintBytes;  // summed over passes; absent for a run without
+  std::vector<Compared> reuse;           // as PassComparison's
 };
 
 struct Comparison {
   std::vector<RunRow> runs;
   std::vector<Compared> frameMs;
   std::vector<Compared> totalBytes;
+  std::vector<Compared> totalFootprintBytes;  // every counter that has one; absent for a run without
+  std::vector<Compared> reuse;                // those counters' requested bytes / their footprint
   std::vector<PassComparison> passes;         // first run's frame order, then others' new passes
   std::vector<ResourceComparison> resources;  // by resource name, then access
 };
@@ -289,6 +307,9 @@ struct ExportRow {
   int width = 0, height = 0;
   std::string device, pass, resource, access;
   double count = 0, bytes = 0;
+  // The footprint of the row's counters that have one, and their requested
+  // bytes (reuse = footprintRequestedBytes / footprintBytes); absent without.
+  std::optional<double> footprintBytes, footprintRequestedBytes;
 };
 
 // ---- the store ----------------------------------------------------------------

@@ -45,6 +45,23 @@ TEST(CaptureSpec, FullSpec) {
   EXPECT_EQ(spec->lights, 32u);
 }
 
+// "footprint": absent or false is off (0), true the default block of 64
+// bytes, 32, 64 or 128 that block size.
+TEST(CaptureSpec, FootprintBlockSize) {
+  struct Case {
+    const char* footprint;  // nullptr: absent
+    uint32_t blockBytes;
+  };
+  for (const Case& c : {Case{nullptr, 0}, Case{"false", 0}, Case{"true", 64}, Case{"32", 32}, Case{"64", 64},
+                        Case{"128", 128}}) {
+    std::string text = R"({"renderers":["forward"],"resolutions":[[8,8]])";
+    if (c.footprint) text += std::string(R"(,"footprint":)") + c.footprint;
+    auto spec = parse(text + "}");
+    ASSERT_TRUE(spec.ok()) << spec.error();
+    EXPECT_EQ(spec->footprintBlockBytes, c.blockBytes) << (c.footprint ? c.footprint : "absent");
+  }
+}
+
 TEST(CaptureSpec, CountingModesAreAMatrixDimension) {
   auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[[32,18]],
     "counting":["exact","subgroup","sampled:4","sampled:64"]})");
@@ -102,6 +119,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})", "counting: must be a mode or a non-empty array"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"},
+        // Footprint: a flag or one of the three block sizes.
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":48})",
+                "footprint: must be true, false or a block size of 32, 64 or 128 bytes, got 48"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":"64"})",
+                "footprint: must be true, false or a block size of 32, 64 or 128 bytes, got \"64\""},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":64.5})", "footprint: must be true, false"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":null})", "footprint: must be true, false"},
         // Variants: {"renderer", "options"} entries.
         BadCase{R"({"renderers":[{"options":{}}],"resolutions":[[8,8]]})", "renderers[0].renderer: required"},
         BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})", "renderers[0].renderer: unknown renderer 'fwd'"},

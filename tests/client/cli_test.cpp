@@ -189,6 +189,58 @@ TEST_F(TallyCli, CompareTable) {
   EXPECT_EQ(five.rc, 2);
 }
 
+// Footprint: a run counted with it shows its block size, requested bytes
+// beside footprint and reuse per camera and per line, headed "REQUESTED" and
+// "FOOTPRINT"; a run without keeps its table as it was.
+TEST_F(TallyCli, ShowHasFootprintColumnsWhenTheRunHasFootprint) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " show 18");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("footprint: 64-byte blocks"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("REQUESTED READ/FRAME"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("REQUESTED WRITTEN/FRAME"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("FOOTPRINT/FRAME"), std::string::npos) << r.out;
+  // Camera 0: 1.00 KiB of footprint, reuse 2.50x; camera 1: 512 B, 4.00x.
+  EXPECT_NE(r.out.find("1.00 KiB  2.50x\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("512 B  4.00x\n"), std::string::npos) << r.out;
+  // The line table: 2 MiB requested of 512 KiB touched, 4x; the depth line has no footprint.
+  EXPECT_NE(r.out.find("gbuffer  material_maps.diffuse  read   "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("2.00 MiB       512.00 KiB  4.00x\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("4.00 KiB                -      -\n"), std::string::npos) << r.out;
+
+  Outcome plain = tally("--server " + fake.url() + " show 12");
+  ASSERT_EQ(plain.rc, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("FOOTPRINT"), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.out.find("REQUESTED"), std::string::npos) << plain.out;
+  EXPECT_NE(plain.out.find("READ/FRAME"), std::string::npos) << plain.out;
+}
+
+TEST_F(TallyCli, RunsAndCompareShowFootprintBesideRequestedBytes) {
+  FakeTallyd fake;
+  Outcome runs = tally("--server " + fake.url() + " runs --capture 18");
+  ASSERT_EQ(runs.rc, 0) << runs.err;
+  EXPECT_NE(runs.out.find("REQUESTED/FRAME"), std::string::npos) << runs.out;
+  EXPECT_NE(runs.out.find("FOOTPRINT/FRAME"), std::string::npos) << runs.out;
+  EXPECT_NE(runs.out.find("3.00 MiB         1.00 MiB  3.00x\n"), std::string::npos) << runs.out;  // run 18
+  EXPECT_NE(runs.out.find("3.00 MiB                -      -\n"), std::string::npos) << runs.out;  // run 12: none
+
+  Outcome cmp = tally("--server " + fake.url() + " compare 18 12");
+  ASSERT_EQ(cmp.rc, 0) << cmp.err;
+  // Each quantity names its bytes; footprint rows for the run that has one, "-" for the other.
+  EXPECT_NE(cmp.out.find("(frame)       (all)                         requested      4.00 MiB  2.00 MiB  -2.00 MiB     0.50x\n"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("(frame)       (all)                         footprint      1.00 MiB         -          -         -\n"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("(all passes)  material_maps.diffuse (read)  reuse             8.00x         -"), std::string::npos) << cmp.out;
+  EXPECT_NE(cmp.out.find("gbuffer       (all)                         footprint    512.00 KiB"), std::string::npos) << cmp.out;
+  EXPECT_EQ(cmp.out.find(" bytes "), std::string::npos) << cmp.out;  // every bytes row says which
+
+  // Runs without footprint anywhere: no footprint rows, the bytes rows as they were.
+  Outcome plain = tally("--server " + fake.url() + " compare 12 15");
+  ASSERT_EQ(plain.rc, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("footprint"), std::string::npos) << plain.out;
+  EXPECT_EQ(plain.out.find("requested"), std::string::npos) << plain.out;
+  EXPECT_NE(plain.out.find("(frame)       (all)                   bytes          4.00 MiB"), std::string::npos) << plain.out;
+}
+
 TEST_F(TallyCli, ServerErrorGivesMessageAndExit1) {
   FakeTallyd fake;
   Outcome r = tally("--server " + fake.url() + " compare 12 99");

@@ -54,6 +54,26 @@ inline json variantRunJson(int id) {
   return run;
 }
 
+// Run 18: counted with footprint (64-byte blocks): its mean footprint and
+// reuse, and per line (in "passes") the requested bytes beside the footprint.
+inline json footprintRunJson(int id) {
+  json run = runJson(id, "deferred", 320);
+  run["counting"] = "accumulate";
+  run["footprint_block_bytes"] = 64;
+  run["mean_footprint_bytes"] = 1048576.0;
+  run["mean_reuse"] = 3.0;
+  run["passes"] = {{{"name", "gbuffer"},
+                    {"resources",
+                     {{{"name", "material_maps.diffuse"},
+                       {"access", "read"},
+                       {"bytes", 2097152.0},
+                       {"footprint_bytes", 524288.0},
+                       {"reuse", 4.0}},
+                      {{"name", "depth"}, {"access", "write"}, {"bytes", 4096.0}, {"footprint_bytes", nullptr},
+                       {"reuse", nullptr}}}}}};
+  return run;
+}
+
 class FakeTallyd {
  public:
   // port 0: an ephemeral port; else that port (to stand in for a restarted daemon).
@@ -134,6 +154,8 @@ class FakeTallyd {
       std::string cursor = req.get_param_value("cursor");
       if (req.has_param("variant"))
         return reply(res, {{"runs", {variantRunJson(16)}}, {"next_cursor", nullptr}});
+      if (req.get_param_value("capture") == "18")
+        return reply(res, {{"runs", {footprintRunJson(18), runJson(12, "deferred", 320)}}, {"next_cursor", nullptr}});
       if (cursor.empty())
         return reply(res, {{"runs", {runJson(15, "visbuffer", 320), runJson(12, "deferred", 320)}},
                            {"next_cursor", "r9"}});
@@ -145,6 +167,7 @@ class FakeTallyd {
       int id = std::stoi(req.matches[1]);
       if (id == 404) return reply(res, apiError("not_found", "run 404 not found"), 404);
       if (id == 16) return reply(res, variantRunJson(id));
+      if (id == 18) return reply(res, footprintRunJson(id));
       if (id == 17) {  // a user's glTF scene: the loader's notes and the renderer's
         json run = runJson(id, "forward", 320);
         run["scene"] = "ToyCar";
@@ -170,6 +193,13 @@ class FakeTallyd {
                      {"overhead_ratio", 1.02},
                      {"bytes", 2048.0},
                      {"image_error", {{"against", "forward"}, {"psnr", nullptr}, {"identical", true}}}}}}};
+      if (std::string(req.matches[1]) == "18") {
+        // Footprint of each camera beside its requested bytes.
+        samples["samples"][0]["footprint_bytes"] = 1024.0;
+        samples["samples"][0]["reuse"] = 2.5;
+        samples["samples"][1]["footprint_bytes"] = 512.0;
+        samples["samples"][1]["reuse"] = 4.0;
+      }
       if (std::string(req.matches[1]) == "16") {
         // The variant's samples: their image against the reference variant's.
         samples["samples"][0]["variant_error"] = {{"against", "visbuffer barycentrics=float32"}, {"psnr", 37.5},
@@ -201,6 +231,32 @@ class FakeTallyd {
         return json::array({{{"value", v0}, {"delta", 0.0}, {"ratio", 1.0}},
                             {{"value", v1}, {"delta", v1 - v0}, {"ratio", v1 / v0}}});
       };
+      if (runs == "18,12") {
+        // Footprint on the first run only: the second's footprint and reuse are null.
+        auto first = [](double v0) {
+          return json::array({{{"value", v0}, {"delta", 0.0}, {"ratio", 1.0}},
+                              {{"value", nullptr}, {"delta", nullptr}, {"ratio", nullptr}}});
+        };
+        return reply(res, {{"runs", {footprintRunJson(18), runJson(12, "deferred", 320)}},
+                           {"frame_ms", c(2.0, 1.5)},
+                           {"total_bytes", c(4194304, 2097152)},
+                           {"total_footprint_bytes", first(1048576)},
+                           {"reuse", first(4.0)},
+                           {"passes",
+                            {{{"pass", "gbuffer"},
+                              {"gpu_ms", c(0.8, 0.4)},
+                              {"bytes", c(2097152, 1048576)},
+                              {"footprint_bytes", first(524288)},
+                              {"reuse", first(4.0)},
+                              {"fragment_invocations", c(61234, 57600)}}}},
+                           {"resources",
+                            {{{"resource", "material_maps.diffuse"},
+                              {"access", "read"},
+                              {"count", c(57600, 57600)},
+                              {"bytes", c(2097152, 1048576)},
+                              {"footprint_bytes", first(262144)},
+                              {"reuse", first(8.0)}}}}});
+      }
       reply(res, {{"runs", {runJson(12, "deferred", 320), runJson(15, "visbuffer", 320)}},
                   {"frame_ms", c(2.0, 1.5)},
                   {"total_bytes", c(4194304, 2097152)},

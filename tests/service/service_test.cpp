@@ -12,6 +12,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include "daemon.hpp"
 #include "store/store.hpp"
@@ -176,6 +177,134 @@ TEST_F(ServiceTest, CaptureQueryCompareExport) {
   EXPECT_EQ(d.request("GET", "/api/renderers").status, 200);
 }
 
+// Footprint end to end: "footprint": 64 reaches the stored run as its block
+// size; footprint values put on its lines (as the counting will measure them:
+// here half of each counted line's requested bytes, so reuse is 2) come back
+// from every route beside the requested bytes, and a run without footprint
+// reads null there.
+TEST_F(ServiceTest, FootprintReachesTheRunCompareAndExportRoutes) {
+  Daemon& d = *daemon_;
+  json spec = tinySpec();
+  spec["renderers"] = {"deferred"};
+  spec["counting"] = {"accumulate", "exact"};
+  spec["footprint"] = 64;
+  Reply posted = d.request("POST", "/api/captures", spec.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t job = posted.j()["id"];
+  ASSERT_EQ(d.waitFinished(job).value("status", ""), "done");
+  Reply runs = d.request("GET", "/api/runs?capture=" + std::to_string(job));
+  ASSERT_EQ(runs.status, 200);
+  ASSERT_EQ(runs.j()["runs"].size(), 2u);
+  int64_t fp = 0, plain = 0;
+  json runList = runs.j();
+  for (const auto& r : runList["runs"]) {
+    EXPECT_EQ(r["footprint_block_bytes"], 64) << r.dump();  // every instrumented run of the spec
+    (r["counting"] == "accumulate" ? fp : plain) = r["id"].get<int64_t>();
+  }
+  ASSERT_TRUE(fp && plain) << runs.body;
+
+  // The lines' footprints, written as ingest stores them; the exact run keeps none.
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir_ / "tally.db").c_str(), &db), SQLITE_OK);
+    sqlite3_busy_timeout(db, 5000);
+    std::string run = std::to_string(fp);
+    std::string sql =
+        "UPDATE counters SET footprint_bytes = bytes / 2 WHERE source = 'counter' AND pass_id IN "
+        "(SELECT p.id FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = " + run + ");"
+        "UPDATE samples SET footprint_bytes = (SELECT SUM(c.footprint_bytes) FROM counters c JOIN passes p "
+        "ON p.id = c.pass_id WHERE p.sample_id = samples.id), footprint_requested_bytes = (SELECT SUM(c.bytes) "
+        "FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = samples.id AND c.footprint_bytes "
+        "IS NOT NULL) WHERE run_id = " + run + ";"
+        "UPDATE runs SET footprint_block_bytes = NULL WHERE id = " + std::to_string(plain) + ";";
+    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    sqlite3_close(db);
+  }
+
+  Reply run = d.request("GET", "/api/runs/" + std::to_string(fp));
+  ASSERT_EQ(run.status, 200) << run.body;
+  json r = run.j();
+  EXPECT_EQ(r["footprint_block_bytes"], 64);
+  double counted = 0;  // requested bytes of the counted lines, per frame
+  int lines = 0;
+  for (const auto& pass : r["passes"]) {
+    double passCounted = 0;
+    for (const auto& line : pass["resources"]) {
+      if (line["source"] == "counter") {
+        EXPECT_DOUBLE_EQ(line["footprint_bytes"].get<double>(), line["bytes"].get<double>() / 2) << line.dump();
+        if (line["bytes"].get<double>() > 0) EXPECT_DOUBLE_EQ(line["reuse"].get<double>(), 2.0) << line.dump();
+        passCounted += line["bytes"].get<double>();
+        ++lines;
+      } else {
+        EXPECT_TRUE(line["footprint_bytes"].is_null()) << line.dump();
+        EXPECT_TRUE(line["reuse"].is_null()) << line.dump();
+      }
+    }
+    if (passCounted > 0) {
+      EXPECT_DOUBLE_EQ(pass["footprint_bytes"].get<double>(), passCounted / 2) << pass["name"];
+      EXPECT_DOUBLE_EQ(pass["reuse"].get<double>(), 2.0) << pass["name"];
+    }
+    counted += passCounted;
+  }
+  ASSERT_GT(lines, 0);
+  ASSERT_GT(counted, 0);
+  EXPECT_DOUBLE_EQ(r["mean_footprint_bytes"].get<double>(), counted / 2);
+  EXPECT_DOUBLE_EQ(r["mean_reuse"].get<double>(), 2.0);
+  EXPECT_GT(r["mean_bytes"].get<double>(), r["mean_footprint_bytes"].get<double>());
+
+  Reply samples = d.request("GET", "/api/runs/" + std::to_string(fp) + "/samples");
+  ASSERT_EQ(samples.status, 200);
+  ASSERT_EQ(samples.j()["samples"].size(), 1u);
+  EXPECT_DOUBLE_EQ(samples.j()["samples"][0]["footprint_bytes"].get<double>(), counted / 2);
+  EXPECT_DOUBLE_EQ(samples.j()["samples"][0]["reuse"].get<double>(), 2.0);
+
+  Reply cmp = d.request("GET", "/api/compare?runs=" + std::to_string(fp) + "," + std::to_string(plain));
+  ASSERT_EQ(cmp.status, 200) << cmp.body;
+  json c = cmp.j();
+  EXPECT_DOUBLE_EQ(c["total_footprint_bytes"][0]["value"].get<double>(), counted / 2);
+  EXPECT_TRUE(c["total_footprint_bytes"][1]["value"].is_null());
+  EXPECT_DOUBLE_EQ(c["reuse"][0]["value"].get<double>(), 2.0);
+  EXPECT_TRUE(c["reuse"][1]["value"].is_null());
+  // Requested bytes: the same counts in both modes (accumulate is exact).
+  EXPECT_DOUBLE_EQ(c["total_bytes"][1]["ratio"].get<double>(), 1.0);
+  for (const auto& pass : c["passes"]) {
+    ASSERT_EQ(pass["footprint_bytes"].size(), 2u);
+    EXPECT_TRUE(pass["footprint_bytes"][1]["value"].is_null());
+  }
+  for (const auto& res : c["resources"]) {
+    if (!res["footprint_bytes"][0]["value"].is_null() && res["bytes"][0]["value"].get<double>() > 0) {
+      EXPECT_DOUBLE_EQ(res["reuse"][0]["value"].get<double>(), 2.0) << res.dump();
+    }
+  }
+
+  Reply exported = d.request("GET", "/api/export?format=json&runs=" + std::to_string(fp) + "," + std::to_string(plain));
+  ASSERT_EQ(exported.status, 200);
+  int withFootprint = 0;
+  json rows = exported.j();
+  for (const auto& row : rows["rows"]) {
+    if (row["run"] == plain) {
+      EXPECT_TRUE(row["footprint_bytes"].is_null()) << row.dump();
+    } else if (!row["footprint_bytes"].is_null() && row["bytes"].get<double>() > 0) {
+      EXPECT_DOUBLE_EQ(row["reuse"].get<double>(), 2.0) << row.dump();
+      ++withFootprint;
+    }
+  }
+  EXPECT_GT(withFootprint, 0);
+  Reply csv = d.request("GET", "/api/export?format=csv&runs=" + std::to_string(fp));
+  ASSERT_EQ(csv.status, 200);
+  // With footprint rows, two columns follow the requested bytes.
+  EXPECT_EQ(csv.body.substr(0, csv.body.find('\n')),
+            "run,renderer,scene,width,height,device,pass,resource,access,count,bytes,footprint_bytes,reuse\r");
+  EXPECT_NE(csv.body.find(",256.0,2.0\r\n"), std::string::npos) << csv.body;  // footprint, then reuse: the last columns
+  EXPECT_NE(csv.body.find(",,\r\n"), std::string::npos) << csv.body;  // the derived depth line: empty cells
+
+  // The accuracy rows name the block size: footprint runs are points of their own.
+  Reply accuracy = d.request("GET", "/api/accuracy?capture=" + std::to_string(job));
+  ASSERT_EQ(accuracy.status, 200);
+  ASSERT_EQ(accuracy.j()["rows"].size(), 1u);
+  EXPECT_EQ(accuracy.j()["rows"][0]["footprint_block_bytes"], 64);
+}
+
 TEST_F(ServiceTest, CancelARunningCaptureKillsItsChild) {
   Daemon& d = *daemon_;
   Reply posted = d.request("POST", "/api/captures", longSpec().dump());  // still running when cancelled
@@ -248,6 +377,7 @@ TEST_F(ServiceTest, BadRequestsNameTheField) {
       {"renderers not an array", "POST", "/api/captures", with("renderers", "forward"), 400, "invalid_field", "renderers"},
       {"renderer not a string", "POST", "/api/captures", with("renderers", {1}), 400, "invalid_field", "renderers[0]"},
       {"unknown renderer", "POST", "/api/captures", with("renderers", {"warp"}), 400, "invalid_field", "renderers[0]"},
+      {"footprint block size not allowed", "POST", "/api/captures", with("footprint", 48), 400, "invalid_field", "footprint"},
       {"option value not allowed", "POST", "/api/captures",
        with("renderers", {{{"renderer", "visbuffer"}, {"options", {{"barycentrics", "half"}}}}}), 400, "invalid_field",
        "renderers[0].options.barycentrics"},

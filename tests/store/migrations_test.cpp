@@ -268,6 +268,82 @@ TEST(Migrations, VersionTwoWithDataUpgradesToVariantsKeepingEverything) {
   EXPECT_EQ(*integrity, "ok");
 }
 
+// A database of schema 5 (runs with their build) holding a run, a sample,
+// a pass and a line upgrades to 6 (0006_footprint): every row and value kept,
+// the new footprint columns NULL, so the run reads as one without footprint;
+// the block size's check holds for new values.
+TEST(Migrations, VersionFiveWithDataUpgradesToFootprintKeepingEverything) {
+  TempDb db;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(db.path().c_str(), &raw), SQLITE_OK);
+    auto fifth = migrate(raw, embeddedMigrations().first(5));
+    ASSERT_TRUE(fifth) << fifth.error();
+    ASSERT_EQ(*fifth, 5);
+    const char* rows =
+        "INSERT INTO devices (id, fingerprint, name, vendor, driver, api_version) "
+        "VALUES (1, 'llvmpipe', 'llvmpipe', '0x10005', 'Mesa', '1.3');"
+        "INSERT INTO scenes (id, name, params) VALUES (1, 'atrium', '{}');"
+        "INSERT INTO jobs (id, status, spec) VALUES (1, 'done', '{\"renderers\":[\"deferred\"]}');"
+        "INSERT INTO runs (id, job_id, device_id, renderer, scene_id, width, height, counting, lights, variant, "
+        "tally_version, tally_commit) VALUES (1, 1, 1, 'deferred', 1, 64, 36, 'accumulate', 4, 'deferred', "
+        "'0.1.0', '7eabc68a1b2c');"
+        "INSERT INTO samples (id, run_id, camera_index, camera, frame_ms, bytes) VALUES (1, 1, 0, '{}', 1.5, 96);"
+        "INSERT INTO passes (id, sample_id, position, name, gpu_ms) VALUES (1, 1, 0, 'gbuffer', 1.25);"
+        "INSERT INTO counters (pass_id, position, resource, access, count, bytes, source) "
+        "VALUES (1, 0, 'depth', 'write', 24, 96, 'counter');";
+    ASSERT_EQ(sqlite3_exec(raw, rows, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(raw);
+    sqlite3_close(raw);
+  }
+  ASSERT_EQ(userVersion(db.path()), 5);
+
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_GE(store->schemaVersion(), 6);
+  for (const char* table : {"runs", "samples", "passes", "counters"}) {
+    EXPECT_EQ(scalar(*store, std::string("SELECT COUNT(*) FROM ") + table), 1) << table;
+  }
+  for (const char* column : {"runs.footprint_block_bytes", "counters.footprint_bytes", "samples.footprint_bytes",
+                             "samples.footprint_requested_bytes"}) {
+    std::string name(column);
+    std::string table = name.substr(0, name.find('.')), col = name.substr(name.find('.') + 1);
+    EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pragma_table_info('" + table + "') WHERE name = '" + col + "'"), 1)
+        << column;
+    EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM " + table + " WHERE " + col + " IS NULL"), 1) << column;
+  }
+  auto run = store->getRun(1);
+  ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
+  EXPECT_EQ((*run)->row.tallyVersion, "0.1.0");  // 0005's columns kept
+  EXPECT_EQ((*run)->row.counting, "accumulate");
+  EXPECT_FALSE((*run)->row.footprintBlockBytes);
+  EXPECT_FALSE((*run)->row.meanFootprintBytes);
+  ASSERT_TRUE((*run)->row.meanBytes);
+  EXPECT_EQ(*(*run)->row.meanBytes, 96);
+  auto samples = store->listSamples(1);
+  ASSERT_TRUE(samples) << samples.error();
+  ASSERT_EQ(samples->size(), 1u);
+  EXPECT_EQ((*samples)[0].bytes, 96);
+  EXPECT_FALSE((*samples)[0].footprintBytes);
+  auto sample = store->getSample(1);
+  ASSERT_TRUE(sample && sample->has_value());
+  ASSERT_EQ((*sample)->passes.size(), 1u);
+  ASSERT_EQ((*sample)->passes[0].counters.size(), 1u);
+  EXPECT_EQ((*sample)->passes[0].counters[0].bytes, 96);
+  EXPECT_FALSE((*sample)->passes[0].counters[0].footprintBytes);
+  // The new columns' checks: a block size of 32, 64 or 128 only, no negative footprint.
+  EXPECT_EQ(sqlite3_exec(store->handle(), "UPDATE runs SET footprint_block_bytes = 64 WHERE id = 1", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  for (const char* bad : {"UPDATE runs SET footprint_block_bytes = 48 WHERE id = 1",
+                          "UPDATE counters SET footprint_bytes = -1"}) {
+    EXPECT_NE(sqlite3_exec(store->handle(), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
+  }
+  EXPECT_EQ(scalar(*store, "SELECT footprint_block_bytes FROM runs WHERE id = 1"), 64);
+  auto integrity = store->integrityCheck();
+  ASSERT_TRUE(integrity);
+  EXPECT_EQ(*integrity, "ok");
+}
+
 TEST(Migrations, ReaderNeedsAMigratedDatabase) {
   TempDb db;
   auto missing = Store::open(db.path(), {.readOnly = true});

@@ -12,6 +12,7 @@
 // Environment (tests/web/run.sh sets it): TALLYD, TALLY_WEB_ROOT,
 // TALLY_SCREENSHOTS, CHROMIUM.
 import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
 import { mkdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { after, before, describe, test } from 'node:test';
@@ -743,6 +744,164 @@ describe('dashboard', () => {
     assert.deepEqual(await page.locator('[data-scene-notes] li').allTextContents(), [note]);
     await screenshot(page, 'run-notes');
     assert.deepEqual(errors, []);
+    await close();
+  });
+  test('footprint: the run and compare views switch their byte charts between requested and footprint; accuracy draws it apart', async () => {
+    // A run counted with footprint on (64-byte blocks), captured like any other ...
+    const job = await daemon.capture({ renderers: ['deferred'], resolutions: [[64, 36]], frames: 2, footprint: 64 }, kCaptureMs);
+    const { runs } = await daemon.get(`/runs?capture=${job.id}`);
+    assert.equal(runs.length, 1);
+    const id = runs[0].id;
+    assert.equal(runs[0].footprint_block_bytes, 64, 'the spec\'s block size reaches the stored run');
+    // ... whose lines' footprints are stored as the counting measures them:
+    // each counted line touches a half, a third or a quarter of the bytes it
+    // requests (reuse 2, 3, 4), derived lines have none; the samples' sums
+    // as ingest keeps them.
+    execFileSync('python3', ['-c', `
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1], timeout=30)
+run = int(sys.argv[2])
+with db:
+    db.execute("UPDATE counters SET footprint_bytes = bytes / (2 + position % 3) WHERE source = 'counter' AND pass_id IN "
+               "(SELECT p.id FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?)", (run,))
+    db.execute("UPDATE samples SET footprint_bytes = (SELECT SUM(c.footprint_bytes) FROM counters c JOIN passes p "
+               "ON p.id = c.pass_id WHERE p.sample_id = samples.id), footprint_requested_bytes = (SELECT SUM(c.bytes) "
+               "FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = samples.id AND "
+               "c.footprint_bytes IS NOT NULL) WHERE run_id = ?", (run,))
+`, join(daemon.dir, 'tally.db'), String(id)]);
+    const run = await daemon.get(`/runs/${id}`);
+    const { samples } = await daemon.get(`/runs/${id}/samples`);
+    const details = await Promise.all(samples.map((s) => daemon.get(`/samples/${s.id}`)));
+    const lines = run.passes.flatMap((p) => p.resources);
+    assert.ok(lines.some((l) => l.footprint_bytes !== null && l.footprint_bytes < l.bytes), 'counted lines have a footprint below their bytes');
+    for (const l of lines.filter((x) => x.footprint_bytes > 0)) assertClose(l.reuse, l.bytes / l.footprint_bytes, `${l.name} reuse`);
+    assert.ok(run.mean_footprint_bytes > 0 && run.mean_footprint_bytes < run.mean_bytes);
+
+    // Per pass and resource: the sum of the lines' footprints (null where none has one).
+    const expected = (access, key) => (name) => run.passes.map((p) => {
+      const mine = p.resources.filter((r) => r.name === name && r.access === access && r[key] !== null);
+      return mine.length ? mine.reduce((a, r) => a + r[key], 0) : null;
+    });
+    const checkPassCharts = async (page, key) => {
+      for (const access of ['read', 'write']) {
+        const c = await chart(page, `pass-resource-${access}`);
+        for (const d of c.datasets) {
+          expected(access, key)(d.label).forEach((v, i) => {
+            if (v === null) assert.equal(d.data[i], null, `${key} ${access} ${d.label} pass ${i}`);
+            else assertClose(d.data[i], v, `${key} ${access} ${d.label} pass ${i}`);
+          });
+        }
+      }
+    };
+    const { page, errors, close } = await open(`#/runs/${id}`);
+    assert.equal(await page.locator('[data-footprint-block]').textContent(), 'footprint in 64-byte blocks');
+    await checkPassCharts(page, 'bytes');
+    const footprintRadio = page.locator('[data-measure-switch="run-measure"] input[value="footprint"]');
+    assert.equal(await footprintRadio.isDisabled(), false);
+    await footprintRadio.check();
+    await checkPassCharts(page, 'footprint_bytes');
+    const readChart = await chart(page, 'pass-resource-read');
+    assert.ok(readChart.datasets.some((d) => d.data.some((v) => v > 0)), 'the footprint chart has values');
+    assert.match(readChart.datasets.length ? (await page.locator('[data-chart="pass-resource-read"] figcaption strong').textContent()) : '', /^Footprint read per frame/);
+    // Per camera: each sample's footprint read and written, from its lines.
+    const perSample = await chart(page, 'per-sample');
+    const byAccess = (d, access) => {
+      const mine = d.passes.flatMap((p) => p.resources).filter((r) => r.access === access && r.footprint_bytes !== null);
+      return mine.length ? mine.reduce((a, r) => a + r.footprint_bytes, 0) : null;
+    };
+    const same = (actual, wanted, what) => (wanted === null ? assert.equal(actual, null, what) : assertClose(actual, wanted, what));
+    details.forEach((d, i) => {
+      same(perSample.datasets[0].data[i], byAccess(d, 'read'), `sample ${i} footprint read`);
+      same(perSample.datasets[1].data[i], byAccess(d, 'write'), `sample ${i} footprint written`);
+      assertClose((byAccess(d, 'read') ?? 0) + (byAccess(d, 'write') ?? 0), samples[i].footprint_bytes, `sample ${i} footprint total`);
+    });
+    assert.ok(byAccess(details[0], 'read') > 0);
+    // The data table beside the chart follows the switch.
+    const tableValues = await page.locator('[data-chart-table="per-sample"] tbody tr').evaluateAll((rows) => rows.map((r) => [...r.querySelectorAll('td')].map((td) => Number(td.dataset.value))));
+    details.forEach((d, i) => assertClose(tableValues[i][0], byAccess(d, 'read'), `table sample ${i}`));
+    assertClose(samples.reduce((a, x) => a + x.footprint_bytes, 0) / samples.length, run.mean_footprint_bytes, 'the run\'s mean footprint');
+    // Tables show both: per pass requested bytes, footprint and reuse; per sample the same.
+    const passFootprints = await page.locator('[data-table="passes"] tbody tr').evaluateAll((rows) => rows.map((r) => r.querySelectorAll('td')[7].querySelector('span').dataset.value));
+    assert.deepEqual(passFootprints, run.passes.map((p) => (p.footprint_bytes === null ? '' : String(p.footprint_bytes))));
+    const lineReuse = await page.locator('[data-table="lines"] tbody tr').evaluateAll((rows) => rows.map((r) => r.querySelectorAll('td')[6].querySelector('span').dataset.value));
+    assert.deepEqual(lineReuse, lines.map((l) => (l.reuse === null ? '' : String(l.reuse))));
+    assert.equal(await page.locator('[data-tile="reuse"] .value').textContent(), `×${run.mean_reuse.toFixed(2)}`);
+    await screenshot(page, 'run-footprint');
+    // And back: requested bytes again.
+    await page.locator('[data-measure-switch="run-measure"] input[value="requested"]').check();
+    await checkPassCharts(page, 'bytes');
+    assert.deepEqual((await chart(page, 'per-sample')).datasets[0].data, samples.map((s) => s.bytes_read));
+    assert.deepEqual(errors, []);
+    await close();
+
+    // A run without footprint: the switch offers none, and says why.
+    const plain = runOf('deferred', 64);
+    const other = await open(`#/runs/${plain.id}`);
+    const disabled = other.page.locator('[data-measure-switch="run-measure"] input[value="footprint"]');
+    assert.equal(await disabled.isDisabled(), true);
+    assert.match(await other.page.locator('[data-measure-switch="run-measure"] label[data-measure="footprint"]').getAttribute('title'), /no footprint/);
+    assert.deepEqual(other.errors, []);
+    await other.close();
+
+    // Compare: the footprint run against the exact one without footprint.
+    const c = await daemon.get(`/compare?runs=${id},${plain.id}`);
+    assert.ok(c.total_footprint_bytes[0].value > 0);
+    assert.equal(c.total_footprint_bytes[1].value, null);
+    const cmp = await open(`#/compare?runs=${id},${plain.id}`);
+    const resourceData = async () => (await chart(cmp.page, 'compare-resources')).datasets.map((d) => d.data);
+    assert.deepEqual(await resourceData(), [0, 1].map((i) => c.resources.map((r) => r.bytes[i].value)));
+    await cmp.page.locator('[data-measure-switch="compare-measure"] input[value="footprint"]').check();
+    assert.deepEqual(await resourceData(), [0, 1].map((i) => c.resources.map((r) => r.footprint_bytes[i].value)));
+    const passBytes = await chart(cmp.page, 'compare-pass-bytes');
+    assert.deepEqual(passBytes.datasets[0].data, c.passes.map((p) => p.footprint_bytes[0].value));
+    const totals = await chart(cmp.page, 'compare-bytes');
+    const sumOf = (access) => c.resources.filter((r) => r.access === access && r.footprint_bytes[0].value !== null).reduce((a, r) => a + r.footprint_bytes[0].value, 0);
+    assertClose(totals.datasets[0].data[0], sumOf('read'), 'footprint read of the first run');
+    assertClose(totals.datasets[1].data[0], sumOf('write'), 'footprint written of the first run');
+    assert.deepEqual([totals.datasets[0].data[1], totals.datasets[1].data[1]], [null, null], 'no footprint for the second run');
+    // The totals table shows both, with the API's reuse.
+    assert.equal(Number(await cmp.page.locator('[data-table="totals"] tr[data-row="total_footprint_bytes"] td').first().getAttribute('data-value')), c.total_footprint_bytes[0].value);
+    assert.equal(Number(await cmp.page.locator('[data-table="totals"] tr[data-row="reuse"] td').first().getAttribute('data-value')), c.reuse[0].value);
+    // Scaling: the footprint run is a series of its own, apart from the accumulate runs without.
+    const scalingSeries = await chart(cmp.page, 'scaling-bytes');
+    assert.deepEqual(scalingSeries.datasets.find((d) => d.label === 'deferred (accumulate + footprint 64)')?.data.map((p) => p.run), [id]);
+    await screenshot(cmp.page, 'compare-footprint');
+    assert.deepEqual(cmp.errors, []);
+    await cmp.close();
+
+    // Speed against accuracy: the run is a point of its own, "accumulate + footprint 64".
+    const acc = await open('#/accuracy?error=counting&cost=overhead');
+    const points = await chart(acc.page, 'accuracy');
+    const series = points.datasets.find((d) => d.label === 'accumulate + footprint 64');
+    assert.ok(series, `a series of its own among ${points.datasets.map((d) => d.label)}`);
+    assert.deepEqual(series.data.map((p) => p.run), [id]);
+    assert.ok(!points.datasets.find((d) => d.label === 'accumulate').data.some((p) => p.run === id));
+    assert.deepEqual(acc.errors, []);
+    await acc.close();
+  });
+
+  test('capture form: the footprint select puts the block size in the spec, off by default', async () => {
+    const { page, close } = await open('#/capture');
+    assert.equal(await page.locator('select[name="footprint"]').inputValue(), 'off');
+    assert.deepEqual(await page.locator('select[name="footprint"] option').evaluateAll((os) => os.map((o) => o.value)), ['off', '32', '64', '128']);
+    const posted = [];
+    await page.route('**/api/captures', async (route) => {
+      if (route.request().method() !== 'POST') return route.continue();
+      posted.push(route.request().postDataJSON());
+      // Refused, so that nothing runs: the spec is what this test reads.
+      return route.fulfill({ status: 400, contentType: 'application/json', body: JSON.stringify({ error: { code: 'invalid_field', message: 'footprint: refused by the test', field: 'footprint' } }) });
+    });
+    await page.click('form.capture-form button[type="submit"]');
+    await page.locator('.form-error .panel.error').waitFor({ timeout: kViewMs });
+    await page.selectOption('select[name="footprint"]', '32');
+    await page.click('form.capture-form button[type="submit"]');
+    for (let i = 0; i < 200 && posted.length < 2; ++i) await new Promise((resolve) => setTimeout(resolve, 50));
+    assert.equal(posted.length, 2);
+    assert.ok(!('footprint' in posted[0]), 'off leaves the key out');
+    assert.equal(posted[1].footprint, 32);
+    // The server's error lands beside the select.
+    await page.locator('[data-field="footprint"] .field-error').waitFor({ timeout: kViewMs });
+    assert.equal(await page.locator('[data-field="footprint"] .field-error').textContent(), 'footprint: refused by the test');
     await close();
   });
 });

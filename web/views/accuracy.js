@@ -32,6 +32,10 @@ const kMetrics = {
 // One point per accuracy row with a reference, and one per exact reference
 // (error 0). Overhead ratios come from the rows (medians over samples); frame
 // times from the run rows.
+// A counting mode with footprint counting on is a point of its own (it costs
+// more): "accumulate + footprint 64".
+const withFootprint = (label, blockBytes) => (blockBytes ? `${label} + footprint ${blockBytes}` : label);
+
 function countingPoints(rows, runs, metric, costName) {
   const byId = new Map(runs.map((r) => [r.id, r]));
   const runOf = (id, row, counting) => byId.get(id) || { id, renderer: row.renderer, variant: row.variant, options: row.options, scene: row.scene, width: row.width, height: row.height, counting };
@@ -41,10 +45,10 @@ function countingPoints(rows, runs, metric, costName) {
   for (const row of rows) {
     if (row.reference === null) continue;
     const cost = costName === 'overhead' ? row.overhead_ratio : frameCost(row.run);
-    if (cost !== null) points.push({ run: runOf(row.run, row, row.counting), group: row.counting, error: row[metric.field], worst: row.worst_resource, cost });
+    if (cost !== null) points.push({ run: runOf(row.run, row, row.counting), group: withFootprint(row.counting, row.footprint_block_bytes), error: row[metric.field], worst: row.worst_resource, cost });
     const refCost = costName === 'overhead' ? row.reference_overhead_ratio : frameCost(row.reference);
     if (!references.has(row.reference) && refCost !== null) {
-      references.set(row.reference, { run: runOf(row.reference, row, 'exact'), group: 'exact', error: 0, worst: null, cost: refCost });
+      references.set(row.reference, { run: runOf(row.reference, row, 'exact'), group: withFootprint('exact', byId.get(row.reference)?.footprint_block_bytes), error: 0, worst: null, cost: refCost });
     }
   }
   return [...points, ...references.values()];
@@ -58,7 +62,7 @@ function imagePoints(runs, cost) {
   const identicalAt = Math.ceil((finite.length ? Math.max(...finite) : 50) + 10);
   const points = compared.map((r) => {
     const identical = r.image_error.mean_psnr === null;
-    return { run: r, group: fmt.variant(r), error: identical ? identicalAt : r.image_error.mean_psnr, identical, cost: cost(r) };
+    return { run: r, group: withFootprint(fmt.variant(r), r.footprint_block_bytes), error: identical ? identicalAt : r.image_error.mean_psnr, identical, cost: cost(r) };
   });
   return { points, identicalAt };
 }
@@ -100,7 +104,7 @@ function pointTable(points, front, errorLabel, errorText, costFormat) {
     h('thead', {}, h('tr', {}, ['Run', 'Renderer', 'Scene', 'Resolution', 'Counting', errorLabel, 'Cost', 'Pareto front'].map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, points.map((p) => h('tr', { dataset: { run: p.run.id, error: p.identical ? 'identical' : p.error, cost: p.cost, front: front.has(p) } },
       h('td', {}, h('a', { href: `#/runs/${p.run.id}` }, `#${p.run.id}`)),
-      h('td', {}, fmt.variant(p.run)), h('td', {}, p.run.scene), h('td', {}, fmt.resolution(p.run)), h('td', {}, p.run.counting),
+      h('td', {}, fmt.variant(p.run)), h('td', {}, p.run.scene), h('td', {}, fmt.resolution(p.run)), h('td', {}, withFootprint(p.run.counting, p.run.footprint_block_bytes)),
       h('td', { class: 'num' }, errorText(p)), h('td', { class: 'num' }, costFormat(p.cost)),
       h('td', {}, front.has(p) ? 'yes' : ''))))));
 }

@@ -77,6 +77,8 @@ function specOf(form) {
     ...(data.get('counted_frames').trim() !== '' ? { counted_frames: numberOr(data.get('counted_frames')) } : {}),
     counting,
     lights: numberOr(data.get('lights')),
+    // Footprint: off leaves the key out (the server's default); else the block size.
+    ...(data.get('footprint') !== 'off' ? { footprint: Number(data.get('footprint')) } : {}),
   };
 }
 
@@ -140,6 +142,9 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
       field('Counting', counting),
       h('label', { class: 'field', dataset: { field: 'counting' } }, h('span', {}, 'N (sampled only)'), samplingN),
       field('Lights', h('input', { name: 'lights', value: '400', inputmode: 'numeric' }), '0 to 400'),
+      field('Footprint', h('select', { name: 'footprint' }, [['off', 'off'], ['32', '32 B blocks'], ['64', '64 B blocks'], ['128', '128 B blocks']]
+        .map(([value, text]) => h('option', { value, selected: value === 'off' }, text))),
+      'distinct bytes touched per line, beside the requested bytes; counted frames cost more'),
       h('div', { class: 'field' }, h('span', {}, 'Cameras'), h('span', {}, 'auto: 10 per scene'))),
     h('button', { type: 'submit' }, 'Start capture'),
     h('div', { class: 'form-error', role: 'alert' }));

@@ -5,7 +5,7 @@
 // spread across repeated captures of each run's configuration (/api/repeats),
 // and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
-import { barChart, xyChart } from '../charts.js';
+import { barChart, destroyCharts, xyChart } from '../charts.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
 
@@ -23,64 +23,120 @@ function comparedTable(runs, rows, label) {
     h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format))))));
 }
 
-// Bytes read and written per frame for each run, from the per-resource rows.
-function byAccess(comparison, access) {
-  return comparison.runs.map((_, i) => comparison.resources
-    .filter((r) => r.access === access)
-    .reduce((sum, r) => sum + (r.bytes[i].value ?? 0), 0));
+// The two byte measures: requested bytes ("bytes") and footprint
+// ("footprint_bytes": distinct bytes touched; null for a run without).
+const kMeasures = {
+  requested: { key: 'bytes', noun: 'Requested bytes' },
+  footprint: { key: 'footprint_bytes', noun: 'Footprint' },
+};
+
+// Bytes read and written per frame for each run, from the per-resource rows
+// (requested bytes, or footprint: null for a run with none).
+function byAccess(comparison, access, key = 'bytes') {
+  return comparison.runs.map((_, i) => {
+    const values = comparison.resources.filter((r) => r.access === access).map((r) => r[key][i].value);
+    if (key !== 'bytes' && values.every((v) => v === null)) return null;
+    return values.reduce((sum, v) => sum + (v ?? 0), 0);
+  });
+}
+
+const anyFootprint = (c) => c.total_footprint_bytes.some((v) => v.value !== null);
+const reuseText = (v) => `×${v.toFixed(2)}`;
+
+// "requested | footprint" for the byte charts; footprint disabled (with the
+// reason as its tooltip) when no compared run has one.
+function measureSwitch(name, available, onChange) {
+  const why = 'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).';
+  const option = (value, text, enabled) => h('label', { title: enabled ? null : why, dataset: { measure: value } },
+    h('input', { type: 'radio', name, value, checked: value === 'requested', disabled: !enabled }), ` ${text}`);
+  const box = h('div', { class: 'measure-switch', role: 'radiogroup', 'aria-label': 'Bytes shown', dataset: { measureSwitch: name } },
+    h('span', { class: 'muted' }, 'Bytes: '), option('requested', 'requested', true), ' | ', option('footprint', 'footprint', available));
+  box.addEventListener('change', (e) => onChange(e.target.value));
+  return box;
 }
 
 function against(values) {
   return values.map((v) => ({ value: v, delta: v - values[0], ratio: values[0] ? v / values[0] : null }));
 }
 
-function totals(page, c) {
+function totals(page, c, bytesBox) {
   const rows = [
-    { key: 'total_bytes', label: 'Bytes per frame', values: c.total_bytes, format: fmt.bytes },
+    { key: 'total_bytes', label: 'Requested bytes per frame', values: c.total_bytes, format: fmt.bytes },
     { key: 'read_bytes', label: 'read', values: against(byAccess(c, 'read')), format: fmt.bytes },
     { key: 'written_bytes', label: 'written', values: against(byAccess(c, 'write')), format: fmt.bytes },
+    ...(anyFootprint(c)
+      ? [{ key: 'total_footprint_bytes', label: 'Footprint per frame', values: c.total_footprint_bytes, format: fmt.bytes },
+        { key: 'reuse', label: 'Reuse (requested / footprint)', values: c.reuse, format: reuseText }]
+      : []),
     { key: 'frame_ms', label: 'Frame time', values: c.frame_ms, format: fmt.ms },
   ];
   page.append(h('h2', {}, 'Totals'), comparedTable(c.runs, rows, 'totals'));
   const box = h('div', { class: 'charts' });
   page.append(box);
   const labels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
-  barChart(box, {
-    id: 'compare-bytes', title: 'Bytes per frame', labels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
-    datasets: [{ label: 'read', data: byAccess(c, 'read') }, { label: 'written', data: byAccess(c, 'write') }],
-  });
+  box.append(bytesBox);
   barChart(box, {
     id: 'compare-frame-ms', title: 'Frame time', labels, labelHeader: 'Run', format: fmt.ms,
     datasets: [{ label: 'frame time', data: c.frame_ms.map((v) => v.value) }],
   });
 }
 
-function perResource(page, c) {
-  const labels = c.resources.map((r) => `${r.resource} (${r.access})`);
-  page.append(h('h2', {}, 'Per resource'));
-  const fig = h('div', {});
-  page.append(fig);
-  barChart(fig, {
-    id: 'compare-resources', title: 'Bytes per frame by resource', caption: 'summed over passes',
-    labels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.resources.map((res) => res.bytes[i].value) })),
+// The byte charts of one measure: per run (read and written stacked), per
+// resource and per pass. Redrawn when the switch changes.
+function byteCharts(c, measure, boxes) {
+  const { key, noun } = kMeasures[measure];
+  for (const box of Object.values(boxes)) {
+    destroyCharts(box);
+    box.replaceChildren();
+    box.dataset.measure = measure;
+  }
+  const runLabels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
+  barChart(boxes.totals, {
+    id: 'compare-bytes', title: `${noun} per frame`, labels: runLabels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
+    datasets: [{ label: 'read', data: byAccess(c, 'read', key) }, { label: 'written', data: byAccess(c, 'write', key) }],
   });
-  fig.querySelector('.chart-box').style.height = `${Math.max(330, 18 * labels.length * Math.min(c.runs.length, 3))}px`;
-  page.append(h('details', {}, h('summary', {}, 'Per resource: values, deltas and ratios'),
-    comparedTable(c.runs, c.resources.map((r) => ({ key: `${r.resource}|${r.access}`, label: `${r.resource} (${r.access})`, values: r.bytes, format: fmt.bytes })), 'resources')));
+  const resourceLabels = c.resources.map((r) => `${r.resource} (${r.access})`);
+  barChart(boxes.resources, {
+    id: 'compare-resources', title: `${noun} per frame by resource`, caption: 'summed over passes',
+    labels: resourceLabels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
+    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.resources.map((res) => res[key][i].value) })),
+  });
+  boxes.resources.querySelector('.chart-box').style.height = `${Math.max(330, 18 * resourceLabels.length * Math.min(c.runs.length, 3))}px`;
+  barChart(boxes.passes, {
+    id: 'compare-pass-bytes', title: `${noun} per frame by pass`, labels: c.passes.map((p) => p.pass), labelHeader: 'Pass', logSwitch: true, format: fmt.bytes,
+    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) })),
+  });
 }
 
-function perPass(page, c) {
+function perResource(page, c, box) {
+  page.append(h('h2', {}, 'Per resource'), box);
+  const footprint = anyFootprint(c);
+  page.append(h('details', {}, h('summary', {}, 'Per resource: values, deltas and ratios'),
+    comparedTable(c.runs, c.resources.flatMap((r) => [
+      { key: `${r.resource}|${r.access}`, label: `${r.resource} (${r.access})${footprint ? ' requested' : ''}`, values: r.bytes, format: fmt.bytes },
+      ...(footprint
+        ? [{ key: `${r.resource}|${r.access}|footprint`, label: `${r.resource} (${r.access}) footprint`, values: r.footprint_bytes, format: fmt.bytes },
+          { key: `${r.resource}|${r.access}|reuse`, label: `${r.resource} (${r.access}) reuse`, values: r.reuse, format: reuseText }]
+        : []),
+    ]), 'resources')));
+}
+
+function perPass(page, c, bytesBox) {
   const labels = c.passes.map((p) => p.pass);
   page.append(h('h2', {}, 'Per pass'));
   const box = h('div', { class: 'charts' });
   page.append(box);
+  box.append(bytesBox);
   const series = (key) => c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
-  barChart(box, { id: 'compare-pass-bytes', title: 'Bytes per frame by pass', labels, labelHeader: 'Pass', logSwitch: true, format: fmt.bytes, datasets: series('bytes') });
   barChart(box, { id: 'compare-pass-ms', title: 'GPU time by pass', labels, labelHeader: 'Pass', format: fmt.ms, datasets: series('gpu_ms') });
+  const footprint = anyFootprint(c);
   page.append(h('details', {}, h('summary', {}, 'Per pass: values, deltas and ratios'),
     comparedTable(c.runs, c.passes.flatMap((p) => [
-      { key: `${p.pass}|bytes`, label: `${p.pass} bytes`, values: p.bytes, format: fmt.bytes },
+      { key: `${p.pass}|bytes`, label: `${p.pass} requested bytes`, values: p.bytes, format: fmt.bytes },
+      ...(footprint
+        ? [{ key: `${p.pass}|footprint_bytes`, label: `${p.pass} footprint`, values: p.footprint_bytes, format: fmt.bytes },
+          { key: `${p.pass}|reuse`, label: `${p.pass} reuse`, values: p.reuse, format: reuseText }]
+        : []),
       { key: `${p.pass}|gpu_ms`, label: `${p.pass} time`, values: p.gpu_ms, format: fmt.ms },
     ]), 'passes')));
 }
@@ -91,7 +147,7 @@ function perPass(page, c) {
 async function scalingSeries(runs, signal) {
   const byKey = new Map();  // one series per variant, counting mode, scene, device, lights
   for (const run of runs) {
-    const key = `${fmt.variant(run)}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}`;
+    const key = `${fmt.variant(run)}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}|${run.footprint_block_bytes ?? ''}`;
     if (!byKey.has(key)) byKey.set(key, run);
   }
   return Promise.all([...byKey.values()].map(async (run) => {
@@ -100,10 +156,12 @@ async function scalingSeries(runs, signal) {
     const newest = new Map();  // "WxH" -> run; the list is newest first
     for (const r of found) {
       if (r.counting !== run.counting || r.lights !== run.lights || JSON.stringify(r.scene_params) !== JSON.stringify(run.scene_params)) continue;
+      if ((r.footprint_block_bytes ?? null) !== (run.footprint_block_bytes ?? null)) continue;  // footprint runs are a series of their own
       if (!newest.has(fmt.resolution(r))) newest.set(fmt.resolution(r), r);
     }
     const points = [...newest.values()].sort((a, b) => a.width * a.height - b.width * b.height);
-    return { label: `${fmt.variant(run)}${run.counting !== 'exact' ? ` (${run.counting})` : ''}`, points };
+    const footprint = run.footprint_block_bytes ? ` + footprint ${run.footprint_block_bytes}` : '';
+    return { label: `${fmt.variant(run)}${run.counting !== 'exact' || footprint ? ` (${run.counting}${footprint})` : ''}`, points };
   }));
 }
 
@@ -290,9 +348,13 @@ export async function render(page, { query, signal }) {
   page.append(h('ul', { class: 'meta' }, c.runs.map((r, i) => h('li', {},
     `${i === 0 ? 'reference ' : ''}`, h('a', { href: `#/runs/${r.id}` }, fmt.runLabel(r)), ` on ${r.device}`))),
   h('p', {}, h('a', { href: `#/runs?select=${ids.join(',')}` }, 'Change the selection')));
-  totals(page, c);
-  perResource(page, c);
-  perPass(page, c);
+  // One switch draws every byte chart below in requested bytes or footprint.
+  const boxes = { totals: h('div', {}), resources: h('div', {}), passes: h('div', {}) };
+  page.append(measureSwitch('compare-measure', anyFootprint(c), (measure) => byteCharts(c, measure, boxes)));
+  totals(page, c, boxes.totals);
+  perResource(page, c, boxes.resources);
+  perPass(page, c, boxes.passes);
+  byteCharts(c, 'requested', boxes);
   // Both need more requests: fetch them side by side, each into its own section.
   const [repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section')];
   page.append(repeatSection, scalingSection, imageSection);

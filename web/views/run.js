@@ -6,39 +6,65 @@
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
 import { get, imageSource } from '../api.js';
-import { barChart, color } from '../charts.js';
+import { barChart, color, destroyCharts } from '../charts.js';
 import { h, table } from '../dom.js';
 import * as fmt from '../format.js';
 
 const tile = (label, value, key) => h('div', { class: 'tile', dataset: { tile: key } },
   h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
 
+// The two byte measures (docs/result-schema.md): requested bytes (count x
+// element size, "bytes") and footprint (distinct bytes touched, in blocks;
+// "footprint_bytes", null where not measured).
+const kMeasures = {
+  requested: { key: 'bytes', noun: 'Requested bytes' },
+  footprint: { key: 'footprint_bytes', noun: 'Footprint' },
+};
+
 // bytes[pass][resource] for one access, and the resources in first-seen order.
-function trafficBy(passes, access) {
+// A line without the measure (no footprint) adds nothing; a resource none of
+// whose lines has it stays out of the pass's sums (null in the chart).
+function trafficBy(passes, access, key = 'bytes') {
   const resources = [];
   const byPass = passes.map((p) => {
     const sums = {};
     for (const r of p.resources) {
       if (r.access !== access) continue;
       if (!resources.includes(r.name)) resources.push(r.name);
-      sums[r.name] = (sums[r.name] || 0) + r.bytes;
+      if (r[key] === null || r[key] === undefined) continue;
+      sums[r.name] = (sums[r.name] || 0) + r[key];
     }
     return sums;
   });
   return { resources, byPass };
 }
 
-function passResourceCharts(parent, run) {
+const hasFootprint = (run) => run.mean_footprint_bytes !== null && run.mean_footprint_bytes !== undefined;
+
+// "requested | footprint": which bytes the charts under it draw. Footprint is
+// disabled (with the reason as its tooltip) for a run without one.
+function measureSwitch(name, available, onChange) {
+  const why = 'This run has no footprint: capture it with "footprint" on (the capture form\'s Footprint select).';
+  const option = (value, text, enabled) => h('label', { title: enabled ? null : why, dataset: { measure: value } },
+    h('input', { type: 'radio', name, value, checked: value === 'requested', disabled: !enabled }), ` ${text}`);
+  const box = h('div', { class: 'measure-switch', role: 'radiogroup', 'aria-label': 'Bytes shown', dataset: { measureSwitch: name } },
+    h('span', { class: 'muted' }, 'Bytes: '), option('requested', 'requested', true), ' | ', option('footprint', 'footprint', available));
+  box.addEventListener('change', (e) => onChange(e.target.value));
+  return box;
+}
+
+function passResourceCharts(parent, run, measure = 'requested') {
+  const { key, noun } = kMeasures[measure];
   const labels = run.passes.map((p) => p.name);
   const all = [...new Set(run.passes.flatMap((p) => p.resources.map((r) => r.name)))];  // one colour per resource
-  const box = h('div', { class: 'charts' });
+  const box = h('div', { class: 'charts', dataset: { measure } });
   parent.append(box);
-  for (const [access, title] of [['read', 'Bytes read per frame'], ['write', 'Bytes written per frame']]) {
-    const { resources, byPass } = trafficBy(run.passes, access);
+  for (const [access, title] of [['read', `${noun} read per frame`], ['write', `${noun} written per frame`]]) {
+    const { resources, byPass } = trafficBy(run.passes, access, key);
     barChart(box, {
       id: `pass-resource-${access}`,
       title,
-      caption: 'per pass, stacked by resource; averaged over the samples. Click a resource to hide it.',
+      caption: `per pass, stacked by resource; averaged over the samples${measure === 'footprint' ? ` (distinct bytes touched, ${run.footprint_block_bytes}-byte blocks; lines without one are left out)` : ''}. Click a resource to hide it.`,
       labels,
       labelHeader: 'Pass',
       stacked: true,
@@ -56,17 +82,24 @@ function cameraLabel(s) {
   return s.sky_fraction === null ? `cam ${s.camera_index}` : `cam ${s.camera_index} (${Math.round(100 * s.sky_fraction)}% sky)`;
 }
 
-function perSampleChart(parent, samples) {
+// A sample's footprint read and written, from its lines (the sample list carries the total only).
+function footprintByAccess(detail, access) {
+  const lines = detail.passes.flatMap((p) => p.resources).filter((r) => r.access === access && r.footprint_bytes !== null);
+  return lines.length ? lines.reduce((sum, r) => sum + r.footprint_bytes, 0) : null;
+}
+
+function perSampleChart(parent, samples, details, measure = 'requested') {
+  const footprint = measure === 'footprint';
   barChart(parent, {
     id: 'per-sample',
-    title: 'Bytes per frame, per camera',
+    title: `${kMeasures[measure].noun} per frame, per camera`,
     caption: 'read on the left axis, written on the right',
     labels: samples.map(cameraLabel),
     labelHeader: 'Camera',
     format: fmt.bytes,
     datasets: [
-      { label: 'read', data: samples.map((s) => s.bytes_read), yAxisID: 'y' },
-      { label: 'written', data: samples.map((s) => s.bytes_written), yAxisID: 'y2' },
+      { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y' },
+      { label: 'written', data: footprint ? details.map((d) => footprintByAccess(d, 'write')) : samples.map((s) => s.bytes_written), yAxisID: 'y2' },
     ],
     yTitle: 'read',
     axes: { y2: { position: 'right', beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: 'written' }, ticks: { callback: (v) => fmt.bytes(v) } } },
@@ -125,8 +158,36 @@ function passTable(run, iqr) {
     { label: 'Counted', className: 'num', value: (p) => fmt.ms(p.gpu_ms_instrumented) },
     { label: 'Overhead', className: 'num', value: (p) => fmt.ratio(p.overhead_ratio) },
     { label: 'Fragment invocations', className: 'num', value: (p) => fmt.count(p.fragment_invocations) },
-    { label: 'Bytes', className: 'num', value: (p) => fmt.bytes(p.resources.reduce((sum, r) => sum + r.bytes, 0)) },
+    { label: 'Requested bytes', className: 'num', value: (p) => fmt.bytes(p.resources.reduce((sum, r) => sum + r.bytes, 0)) },
+    ...(hasFootprint(run)
+      ? [{ label: 'Footprint', className: 'num', value: (p) => valueCell(p.footprint_bytes, fmt.bytes) },
+        { label: 'Reuse', className: 'num', value: (p) => valueCell(p.reuse, reuseText) }]
+      : []),
   ], run.passes, { 'aria-label': 'Passes', dataset: { table: 'passes' } });
+}
+
+// "×2.50": requested bytes per footprint byte.
+const reuseText = (v) => `×${v.toFixed(2)}`;
+
+// A number with its raw value in data-value ('' for none), for readers and tests.
+function valueCell(v, format) {
+  const none = v === null || v === undefined;
+  return h('span', { dataset: { value: none ? '' : String(v) } }, none ? '–' : format(v));
+}
+
+// Every line (pass x resource x access x source): requested bytes beside its
+// footprint and reuse, per frame, averaged over the samples.
+function lineTable(run) {
+  const lines = run.passes.flatMap((p) => p.resources.map((r) => ({ pass: p.name, ...r })));
+  return table([
+    { label: 'Pass', value: (l) => l.pass },
+    { label: 'Resource', value: (l) => l.name },
+    { label: 'Access', value: (l) => l.access },
+    { label: 'Source', value: (l) => l.source },
+    { label: 'Requested bytes', className: 'num', value: (l) => valueCell(l.bytes, fmt.bytes) },
+    { label: 'Footprint', className: 'num', value: (l) => valueCell(l.footprint_bytes, fmt.bytes) },
+    { label: 'Reuse', className: 'num', value: (l) => valueCell(l.reuse, reuseText) },
+  ], lines, { 'aria-label': 'Lines', dataset: { table: 'lines' } });
 }
 
 function errorText(e) {
@@ -178,8 +239,12 @@ function sampleTable(samples) {
     { label: 'IQR', className: 'num', value: (s) => fmt.ms(s.frame_ms_spread ? s.frame_ms_spread.iqr : null) },
     { label: 'q1–q3', className: 'num', value: (s) => (s.frame_ms_spread ? `${fmt.ms(s.frame_ms_spread.q1)}–${fmt.ms(s.frame_ms_spread.q3)}` : '–') },
     { label: 'Overhead', className: 'num', value: (s) => fmt.ratio(s.overhead_ratio) },
-    { label: 'Read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
-    { label: 'Written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
+    { label: 'Requested read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
+    { label: 'Requested written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
+    ...(samples.some((s) => s.footprint_bytes !== null && s.footprint_bytes !== undefined)
+      ? [{ label: 'Footprint', className: 'num', value: (s) => valueCell(s.footprint_bytes, fmt.bytes) },
+        { label: 'Reuse', className: 'num', value: (s) => valueCell(s.reuse, reuseText) }]
+      : []),
     { label: 'Image vs forward', className: 'num', value: imageErrorText },
     ...(samples.some((s) => s.variant_error)
       ? [{ label: 'Image vs reference variant', className: 'num', value: (s) => h('span', { dataset: { variantError: s.variant_error ? String(s.variant_error.psnr) : 'none' } }, errorText(s.variant_error)) }]
@@ -260,6 +325,7 @@ export async function render(page, { params, signal }) {
       optionsText(run.options) ? h('li', { dataset: { options: '' } }, `options: ${optionsText(run.options)}`) : null,
       h('li', {}, run.device),
       h('li', {}, `counting ${run.counting}`),
+      run.footprint_block_bytes ? h('li', { dataset: { footprintBlock: String(run.footprint_block_bytes) } }, `footprint in ${run.footprint_block_bytes}-byte blocks`) : null,
       h('li', {}, `${run.lights} lights`),
       h('li', {}, `${run.sample_count} samples`),
       h('li', {}, `${fmt.date(run.created_at)} UTC`),
@@ -273,17 +339,30 @@ export async function render(page, { params, signal }) {
       tile('Image error vs forward', fmt.imageError(run), 'image-error'),
       tile('Read per frame', fmt.bytes(read), 'read'),
       tile('Written per frame', fmt.bytes(written), 'written'),
+      ...(hasFootprint(run)
+        ? [tile('Footprint per frame', fmt.bytes(run.mean_footprint_bytes), 'footprint'),
+          tile('Reuse (requested / footprint)', run.mean_reuse === null ? '–' : reuseText(run.mean_reuse), 'reuse')]
+        : []),
       tile('Render targets', fmt.bytes(run.render_target_bytes), 'render-targets')));
 
   const notes = notesSection(run);
   if (notes) page.append(h('h2', {}, 'Notes'), notes);
   page.append(h('h2', {}, 'Counter headroom'), headroomSection(run));
 
-  page.append(h('h2', {}, 'Traffic per pass and resource'));
-  passResourceCharts(page, run);
-
-  page.append(h('h2', {}, 'Per camera'));
-  perSampleChart(page, samples);
+  // The byte charts draw requested bytes or the footprint: one switch for both sections.
+  const traffic = h('div', {});
+  const cameraBytes = h('div', {});
+  const draw = (measure) => {
+    destroyCharts(traffic);
+    destroyCharts(cameraBytes);
+    traffic.replaceChildren();
+    cameraBytes.replaceChildren();
+    passResourceCharts(traffic, run, measure);
+    perSampleChart(cameraBytes, samples, details, measure);
+  };
+  page.append(h('h2', {}, 'Traffic per pass and resource'), measureSwitch('run-measure', hasFootprint(run), draw), traffic);
+  page.append(h('h2', {}, 'Per camera'), cameraBytes);
+  draw('requested');
   frameTimeChart(page, samples);
 
   page.append(h('h2', {}, 'Frame time per pass'));
@@ -294,6 +373,9 @@ export async function render(page, { params, signal }) {
 
   page.append(h('h2', {}, 'Screenshots'), gallery(run, samples, signal));
   page.append(h('h2', {}, 'Samples'), sampleTable(samples));
+  page.append(hasFootprint(run)
+    ? h('div', {}, h('h2', {}, 'Lines: requested bytes and footprint'), lineTable(run))
+    : h('details', {}, h('summary', {}, h('h2', { class: 'inline' }, 'Lines')), lineTable(run)));
   const extras = extrasSection(samples);
   if (extras) page.append(h('h2', {}, 'Technique measurements'), extras);
   page.append(h('details', {}, h('summary', {}, h('h2', { class: 'inline' }, 'Resources')), resourceTable(run)));

@@ -1,0 +1,54 @@
+// One sample's measurements: the counted frames' lines (pass x resource x
+// access x source) and the timed frames' pass times, gathered frame by frame
+// and turned into the sample's JSON (docs/result-schema.md, "Result").
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "renderers/renderer.hpp"
+
+namespace tally::capture {
+
+// Accumulates one (pass, resource, direction) over frames.
+struct Line {
+  std::string pass, resource, source;
+  bool write = false;
+  bool onChip = false;  // Access::onChip (the tile-memory model)
+  std::vector<double> counts, bytes;
+  // Access::footprintBytes of the frames that measured it (>= 0); empty
+  // where no frame did (footprint off, or a line the model cannot see).
+  std::vector<double> footprint;
+};
+
+// F instrumented frames: counts per frame; F uninstrumented frames: times.
+struct SampleMeasure {
+  std::vector<std::string> passOrder;
+  std::map<std::pair<std::string, std::string>, Line> lines;  // key: pass + "\x1f" + resource + direction
+  std::map<std::string, std::vector<double>> fragmentInvocations, statistic, instrumentedMs, plainMs;
+  // Passes that dispatch compute work only.
+  std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
+  std::vector<double> frameMs, instrumentedFrameMs;
+};
+
+// A counted frame: its lines' counts, bytes and footprints, its pass times.
+void addCounts(SampleMeasure& m, const renderers::FrameResult& frame);
+// An uninstrumented frame: its pass times.
+void addTimes(SampleMeasure& m, const renderers::FrameResult& frame);
+
+// The sample's JSON (frames, times, passes with their lines), without the
+// camera, images and extras the runner adds. Each line has "bytes" (the
+// requested bytes: count x element size) and, where the counted frames
+// measured it, "footprint_bytes" (the distinct bytes touched, mean over the
+// frames that measured it) and "reuse" (bytes / footprint_bytes; null for a
+// footprint of 0). Passes and the sample sum "footprint_bytes" over their
+// lines that have one (absent where none has).
+nlohmann::json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources,
+                          uint32_t frames, uint32_t countedFrames);
+
+}  // namespace tally::capture
