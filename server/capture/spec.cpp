@@ -53,12 +53,13 @@ RendererVariant RendererVariant::reference() const {
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
-                                                 "frames",    "counted_frames", "counting", "lights"};
+                                                 "frames",    "counted_frames", "counting", "lights",
+                                                 "ceilings"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
                         "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights)");
+                        "counted_frames, counting, lights, ceilings)");
     }
   }
   CaptureSpec spec;
@@ -221,6 +222,10 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
     if (!lights) return makeError(lights.error());
     spec.lights = *lights;
+  }
+  if (j.contains("ceilings")) {
+    if (!j["ceilings"].is_boolean()) return fieldError("ceilings", "must be true or false, got " + show(j["ceilings"]));
+    spec.ceilings = j["ceilings"].get<bool>();
   }
 
   size_t camerasPerScene = spec.autoCameras ? 10 : spec.cameras.size();

@@ -60,6 +60,10 @@ struct CaptureSpec {
   // (docs/accuracy.md, "The accumulate mode").
   std::vector<spirv::Mode> modes = {spirv::Mode{spirv::CountMode::Accumulate}};
   uint32_t lights = 400;  // as in the founding study
+  // Measure the device's ceilings (gpu/ceilings.hpp) at the capture's start
+  // for the roofline; "ceilings": false skips them (and every pass's
+  // roofline then has null fractions of peak).
+  bool ceilings = true;
   nlohmann::json source;  // the spec as given, stored with the result
 
   size_t sampleCount(size_t camerasPerScene) const {

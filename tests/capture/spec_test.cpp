@@ -22,6 +22,10 @@ TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
   EXPECT_EQ(one->countedFramesOrDefault(), 1u);  // never more than the timed frames
   EXPECT_EQ(spec->lights, 400u);
   EXPECT_TRUE(spec->autoCameras);
+  EXPECT_TRUE(spec->ceilings);  // measured unless the spec says "ceilings": false
+  auto skip = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":false})");
+  ASSERT_TRUE(skip.ok()) << skip.error();
+  EXPECT_FALSE(skip->ceilings);
   ASSERT_EQ(spec->modes.size(), 1u);
   // Not the study's: accumulate, the cheapest exact mode (docs/accuracy.md).
   EXPECT_EQ(spirv::toString(spec->modes[0]), "accumulate");
@@ -102,6 +106,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})", "counting: must be a mode or a non-empty array"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":"yes"})", "ceilings: must be true or false, got \"yes\""},
         // Variants: {"renderer", "options"} entries.
         BadCase{R"({"renderers":[{"options":{}}],"resolutions":[[8,8]]})", "renderers[0].renderer: required"},
         BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})", "renderers[0].renderer: unknown renderer 'fwd'"},
