@@ -247,7 +247,7 @@ nlohmann::json toJson(const Ceilings& c) {
       {"ridge_intensity", c.bandwidthBytesPerS > 0 ? c.arithmeticOpsPerS / c.bandwidthBytesPerS : 0.0},
       {"copy_bytes", c.copyBytes},
       {"method",
-       {{"bandwidth", "compute copy of copy_bytes into a second buffer, 16 bytes per element, grid-stride; "
+       {{"bandwidth", "compute copy of copy_bytes into a second buffer, 16 bytes per element, 4 elements per invocation; "
                       "bytes = read + written; the fastest of the repetitions after one warm-up"},
         {"arithmetic", "8 independent vec4 multiply-add chains per invocation; 2 ops per multiply-add per "
                        "component; the fastest of the repetitions"},

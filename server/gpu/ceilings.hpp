@@ -36,7 +36,7 @@ struct Ceilings {
 
 // The copy size for this device: well past any last-level cache on a GPU
 // (256 MiB per buffer on a discrete GPU, 128 MiB on an integrated one) but
-// small on a CPU implementation (lavapipe: 32 MiB), where the copy runs on
+// small on a CPU implementation (lavapipe: 64 MiB, past a 32 MiB host L3), where the copy runs on
 // the host's cores and must stay fast; at most an eighth of the largest
 // device-local heap.
 uint64_t copyBytesFor(const Context& ctx);
