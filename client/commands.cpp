@@ -282,6 +282,22 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   if (!r.tallyVersion.empty() || !r.tallyCommit.empty())
     io.out << "   built by: tally " << orMissing(r.tallyVersion) << " (commit " << orMissing(r.tallyCommit) << ")";
   io.out << "\n";
+  // The device's ceilings measured by the run's capture (the roofline's).
+  if (run->contains("ceilings") && (*run)["ceilings"].is_object()) {
+    const json& c = (*run)["ceilings"];
+    auto rate = [](const json& v, const char* unit) {
+      if (!v.is_number()) return std::string(kMissing);
+      double x = v.get<double>();
+      const char* prefix = x >= 1e12 ? "T" : x >= 1e9 ? "G" : x >= 1e6 ? "M" : "";
+      double scale = x >= 1e12 ? 1e12 : x >= 1e9 ? 1e9 : x >= 1e6 ? 1e6 : 1;
+      return fixed(x / scale, 1) + " " + prefix + unit;
+    };
+    io.out << "ceilings: bandwidth " << rate(c.value("bandwidth_bytes_per_s", json()), "B/s") << "   arithmetic "
+           << rate(c.value("arithmetic_ops_per_s", json()), "op/s");
+    if (c.contains("copy_bytes") && c["copy_bytes"].is_number())
+      io.out << "   (copy of " << humanBytes(c["copy_bytes"].get<double>()) << ")";
+    io.out << "\n";
+  }
   // What the scene's loader simplified or ignored, then the renderer's choices.
   const json notes = run->contains("notes") && (*run)["notes"].is_object() ? (*run)["notes"] : json::object();
   if (notes.contains("scene") && notes["scene"].is_array()) {

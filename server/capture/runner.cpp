@@ -19,6 +19,7 @@
 #include "analysis/image.hpp"
 #include "analysis/stats.hpp"
 #include "common/version.hpp"
+#include "gpu/ceilings.hpp"
 #include "gpu/context.hpp"
 #include "gpu/shaders.hpp"
 #include "gpu/vk_check.hpp"
@@ -59,6 +60,74 @@ std::string sceneName(const json& spec, const scenes::Scene& scene) {
     return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
   }
   return scene.name;
+}
+
+// A number from `j[key]`, or nullopt where it is absent or null.
+std::optional<double> numberAt(const json& j, const char* key) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return std::nullopt;
+  return it->get<double>();
+}
+
+json orNull(std::optional<double> v) { return v ? json(*v) : json(nullptr); }
+
+// Each pass's "roofline" (docs/result-schema.md): its estimated arithmetic
+// against its bytes (requested: every counted line; footprint: the distinct
+// bytes, where the lines carry footprint_bytes) and its uninstrumented time,
+// and where that puts it against the device's ceilings (null without them).
+void addRoofline(json& sample, const SampleMeasure& m, const json& ceilings) {
+  const auto peakBandwidth = ceilings.is_object() ? numberAt(ceilings, "bandwidth_bytes_per_s") : std::nullopt;
+  const auto peakOps = ceilings.is_object() ? numberAt(ceilings, "arithmetic_ops_per_s") : std::nullopt;
+  for (auto& pass : sample["passes"]) {
+    const std::string name = pass["name"].get<std::string>();
+    std::optional<double> ops;
+    if (auto it = m.arithmeticOps.find(name); it != m.arithmeticOps.end() && !it->second.empty()) {
+      ops = spreadOf(it->second).mean;
+    }
+    const double bytes = numberAt(pass, "bytes").value_or(0);
+    // The pass's footprint, or the sum of its lines' where every line has one.
+    std::optional<double> footprint = numberAt(pass, "footprint_bytes");
+    if (!footprint && !pass["resources"].empty()) {
+      double sum = 0;
+      bool all = true;
+      for (const auto& line : pass["resources"]) {
+        auto f = numberAt(line, "footprint_bytes");
+        all = all && f.has_value();
+        sum += f.value_or(0);
+      }
+      if (all) footprint = sum;
+    }
+    const double seconds = numberAt(pass, "gpu_ms").value_or(0) * 1e-3;
+    auto ratio = [](std::optional<double> a, std::optional<double> b) -> std::optional<double> {
+      if (!a || !b || *b <= 0) return std::nullopt;
+      return *a / *b;
+    };
+    const auto secondsOpt = seconds > 0 ? std::optional<double>(seconds) : std::nullopt;
+    const auto intensity = ratio(ops, bytes), intensityFootprint = ratio(ops, footprint);
+    const auto bandwidth = ratio(bytes, secondsOpt), bandwidthFootprint = ratio(footprint, secondsOpt);
+    const auto opsPerS = ratio(ops, secondsOpt);
+    std::optional<double> attainable;
+    if (intensity && peakBandwidth && peakOps) attainable = std::min(*peakOps, *intensity * *peakBandwidth);
+    json bound = nullptr;
+    if (intensity && peakBandwidth && peakOps && *peakBandwidth > 0) {
+      bound = *intensity < *peakOps / *peakBandwidth ? "memory" : "compute";
+    }
+    pass["roofline"] = {
+        {"arithmetic_ops", orNull(ops)},
+        {"bytes_requested", bytes},
+        {"footprint_bytes", orNull(footprint)},
+        {"intensity_requested", orNull(intensity)},
+        {"intensity_footprint", orNull(intensityFootprint)},
+        {"ops_per_s", orNull(opsPerS)},
+        {"bandwidth_requested", orNull(bandwidth)},
+        {"bandwidth_footprint", orNull(bandwidthFootprint)},
+        {"fraction_of_peak_bandwidth", orNull(ratio(bandwidth, peakBandwidth))},
+        {"fraction_of_peak_bandwidth_footprint", orNull(ratio(bandwidthFootprint, peakBandwidth))},
+        {"fraction_of_peak_arithmetic", orNull(ratio(opsPerS, peakOps))},
+        {"attainable_ops_per_s", orNull(attainable)},
+        {"bound", bound},
+    };
+  }
 }
 
 json resourcesJson(const std::vector<renderers::ResourceInfo>& resources) {
@@ -241,7 +310,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
                     const std::string& name, const scenes::Scene& scene, const Resolution& res,
                     const std::vector<scenes::Camera>& cameras, const References& references,
                     const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress,
-                    Phases& phases, ScreenshotWriter& screenshots) {
+                    Phases& phases, ScreenshotWriter& screenshots, const json& ceilings) {
   const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
   auto made = renderers::makeRenderer(rendererName);
@@ -296,6 +365,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
       image = plain.finalImage();
     }
     json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrDefault());
+    addRoofline(sample, m, ceilings);
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
     // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
@@ -354,6 +424,17 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
                  {"shaders", shaderHashes()},
                  {"runs", json::array()}};
   if (!options.screenshotDir.empty()) std::filesystem::create_directories(options.screenshotDir);
+  // The device's ceilings for the roofline, first (docs/measurement.md,
+  // "Device ceilings"). A failure leaves them null with the reason; the
+  // capture goes on.
+  if (spec.ceilings) {
+    auto timed = phases.scope("ceilings");
+    auto dir = renderers::shaderDirectory();
+    auto ceilings = dir ? gpu::measureCeilings(ctx, *dir) : Result<gpu::Ceilings>(makeError(dir.error()));
+    result["device"]["ceilings"] = ceilings ? gpu::toJson(*ceilings) : json(nullptr);
+    if (!ceilings) result["device"]["ceilings_error"] = ceilings.error();
+  }
+  const json ceilings = result["device"].value("ceilings", json(nullptr));
 
   // Load every scene first: a bad file fails the capture before any GPU time is spent.
   std::vector<scenes::Scene> loaded;
@@ -423,7 +504,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
           auto done = runOne(ctx, gpuScene, **plain, variant, mode, where, name, loaded[s], res, cameras[s],
-                             references, spec, options, progress, phases, screenshots);
+                             references, spec, options, progress, phases, screenshots, ceilings);
           if (!done) {
             (*plain)->destroy();
             return makeError(done.error());

@@ -34,6 +34,7 @@ struct SampleMeasure {
   // Passes that dispatch compute work only.
   std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
   std::vector<double> frameMs, instrumentedFrameMs;
+  std::map<std::string, std::vector<double>> arithmeticOps;  // per pass, where known (PassResult::arithmeticOps)
 };
 
 // A counted frame: its lines' counts, bytes and footprints, its pass times.

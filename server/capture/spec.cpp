@@ -54,12 +54,12 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
                                                  "frames",    "counted_frames", "counting", "lights",
-                                                 "footprint"};
+                                                 "footprint", "ceilings"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
                         "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights, footprint)");
+                        "counted_frames, counting, lights, footprint, ceilings)");
     }
   }
   CaptureSpec spec;
@@ -222,6 +222,10 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
     if (!lights) return makeError(lights.error());
     spec.lights = *lights;
+  }
+  if (j.contains("ceilings")) {
+    if (!j["ceilings"].is_boolean()) return fieldError("ceilings", "must be true or false, got " + show(j["ceilings"]));
+    spec.ceilings = j["ceilings"].get<bool>();
   }
 
   if (j.contains("footprint")) {

@@ -67,6 +67,10 @@ struct CaptureSpec {
   // bitmaps that mark the distinct blocks each line touches. Instrumented
   // runs only (renderers::RendererOptions::footprintBlockBytes).
   uint32_t footprintBlockBytes = 0;
+  // Measure the device's ceilings (gpu/ceilings.hpp) at the capture's start
+  // for the roofline; "ceilings": false skips them (and every pass's
+  // roofline then has null fractions of peak).
+  bool ceilings = true;
   nlohmann::json source;  // the spec as given, stored with the result
 
   size_t sampleCount(size_t camerasPerScene) const {

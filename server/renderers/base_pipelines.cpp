@@ -71,6 +71,12 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     if (compiled->result.copies > 1) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
+    for (const auto& site : compiled->result.sites) {  // the roofline's arithmetic estimate
+      if (site.kind != spirv::SiteKind::Invocation) continue;
+      for (const auto& e : compiled->result.arithmetic) {
+        if (e.entryPoint == site.entryPoint) passes_[passIndex].arithmetic.emplace_back(site.slot, e.ops.total());
+      }
+    }
     words = std::move(compiled->words);
   } else {
     auto compiled = gpu::compileShader(*source);

@@ -278,6 +278,12 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       r.maxSlotCount = counts.maxSlotCount;
       r.maxSlotResource = std::move(counts.maxSlotResource);
       if (footprintReady_) attributeFootprint(i, r.accesses, bitmap);
+      if (!p.arithmetic.empty()) {
+        r.arithmeticOps = 0;
+        for (const auto& [slot, perInvocation] : p.arithmetic) {
+          r.arithmeticOps += int64_t(perInvocation * (slot < counters.size() ? counters[slot] : 0));
+        }
+      }
       if (p.indexFetches && p.indicesDrawn > 0) {
         addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
       }

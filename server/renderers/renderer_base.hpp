@@ -74,6 +74,9 @@ class RendererBase : public Renderer {
     std::function<void(VkCommandBuffer)> record;
     PassBindings bindings;
     std::vector<spirv::Site> sites;
+    // Per instrumented shader: its invocation counter slot and its static
+    // arithmetic per invocation (PassResult::arithmeticOps).
+    std::vector<std::pair<uint32_t, uint64_t>> arithmetic;
     std::string depthWrite;     // resource whose depth/stencil the pass writes ("" none)
     // Tile-memory model: resources whose traffic in this pass a tile-based GPU
     // keeps on chip (DONT_CARE attachments, input attachments of the render

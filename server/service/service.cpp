@@ -559,6 +559,7 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   j["resources"] = resources;
   j["shaders"] = run->shaders;
   j["counter_headroom"] = run->counterHeadroom;
+  j["ceilings"] = run->ceilings;  // the roofline's device ceilings (docs/measurement.md)
   json passes = json::array();
   for (const auto& p : check(reader(ctx).runPasses(id))) passes.push_back(passJson(p));
   j["passes"] = passes;

@@ -134,6 +134,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   Instrumented result;
   result.versionIn = parsed->version;
   Module module = std::move(parsed).value();
+  result.arithmetic = countArithmetic(module);  // before inlining and counters
 
   // Refuse a module that already uses the counter binding.
   {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/result.hpp"
+#include "spirv/arith.hpp"
 #include "spirv/sites.hpp"
 
 namespace tally::spirv {
@@ -107,6 +108,9 @@ struct Instrumented {
   uint32_t versionOut = 0;       // raised to 1.3 when subgroup mode needs it
   bool inlined = false;          // functions were inlined to resolve resources
   std::vector<std::string> notes;  // fallbacks taken, for the user
+  // Arithmetic per invocation of each entry point, counted on the input
+  // module (the counters' own instructions excluded): spirv/arith.hpp.
+  std::vector<EntryArithmetic> arithmetic;
 
   CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride}; }
 };

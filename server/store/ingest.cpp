@@ -146,6 +146,7 @@ struct Inserter {
             "c.pass_id WHERE p.sample_id = ?1 AND c.footprint_bytes IS NOT NULL) WHERE id = ?1") {}
   sqlite3* db;
   Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes;
+  nlohmann::json ceilings;  // the capture's device.ceilings (null when not measured)
   int64_t lastId() const { return sqlite3_last_insert_rowid(db); }
 };
 
@@ -273,6 +274,28 @@ ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const s
   return out;
 }
 
+// The sample's extras, with "roofline" added where its passes carry one: the
+// capture's ceilings and each pass's roofline with its time, kept per run
+// (the device row holds only the latest capture's device object) and without
+// columns of their own (docs/result-schema.md, "extras.roofline").
+json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
+  const json* passes = find(sample, "passes");
+  if (!passes || !passes->is_array()) return extras;
+  json byPass = json::object();
+  for (const auto& pass : *passes) {
+    const json* roofline = pass.is_object() ? find(pass, "roofline") : nullptr;
+    const json* name = pass.is_object() ? find(pass, "name") : nullptr;
+    if (!roofline || !roofline->is_object() || !name || !name->is_string()) continue;
+    json entry = *roofline;
+    if (const json* ms = find(pass, "gpu_ms")) entry["gpu_ms"] = *ms;
+    byPass[name->get<std::string>()] = std::move(entry);
+  }
+  if (byPass.empty()) return extras;
+  if (!extras.is_object()) extras = json::object();
+  extras["roofline"] = {{"ceilings", ceilings.is_object() ? ceilings : json(nullptr)}, {"passes", std::move(byPass)}};
+  return extras;
+}
+
 void insertSamples(Inserter& in, int64_t runId, const json& run, const std::string& path,
                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   const json& samples = array(run, "samples", path);
@@ -308,7 +331,7 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
         .bind(14, image.maxAbs)
         .bind(15, image.meanAbs)
         .bind(16, screenshotId)
-        .bind(17, optObject(sample, "extras", at))
+        .bind(17, extrasWithRoofline(optObject(sample, "extras", at), sample, in.ceilings))
         .bind(18, variant.against)
         .bind(19, variant.identical)
         .bind(20, variant.psnr)
@@ -560,6 +583,9 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
 
     Inserter in(db_);
     int64_t deviceId = insertDevice(in, result);
+    if (const json* device = find(result, "device"); device && device->is_object()) {
+      if (const json* c = find(*device, "ceilings"); c && c->is_object()) in.ceilings = *c;
+    }
     json shaders = optObject(result, "shaders", "result");
     Build build = buildOf(result);
     const json* runs = find(result, "runs");

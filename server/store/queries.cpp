@@ -232,6 +232,11 @@ Result<std::optional<Run>> Store::getRun(int64_t runId) {
       run.shaders = device.getJson(7);
       run.counterHeadroom = device.getJson(8);
     }
+    Statement ceilings(db_,
+                       "SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = ?1 AND "
+                       "json_type(extras, '$.roofline.ceilings') = 'object' ORDER BY camera_index LIMIT 1");
+    ceilings.bind(1, runId);
+    run.ceilings = ceilings.step() ? ceilings.getJson(0) : nlohmann::json(nullptr);
     Statement resources(
         db_,
         "SELECT name, kind, format, element_bytes, width, height, allocation_bytes, format_bytes, "

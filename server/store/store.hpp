@@ -162,6 +162,9 @@ struct Run {
   std::vector<RunResource> resources;  // in the result's order
   nlohmann::json shaders;              // shader source hashes of the capture
   nlohmann::json counterHeadroom;      // the result's counter_headroom; null when not stored
+  // The device's ceilings measured by the run's capture (its samples'
+  // extras.roofline.ceilings); null when not measured or not stored.
+  nlohmann::json ceilings;
 };
 
 struct ImageError {

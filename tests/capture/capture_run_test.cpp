@@ -14,11 +14,13 @@
 
 #include "analysis/image.hpp"
 #include "capture/runner.hpp"
+#include "gpu/glsl.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
+#include "spirv/arith.hpp"
 
 namespace tally {
 namespace {
@@ -221,6 +223,96 @@ TEST_F(CaptureRun, VariantsCarryOptionsAndTheirImageError) {
   }
   EXPECT_EQ(error["max_abs"].get<int>(), expected->maxAbs);
   EXPECT_DOUBLE_EQ(error["mean_abs"].get<double>(), expected->meanAbs);
+}
+
+// The static arithmetic of one shader file from shaders/ (no defines), per invocation.
+uint64_t staticOps(const std::string& file) {
+  auto dir = renderers::shaderDirectory();
+  EXPECT_TRUE(dir.ok());
+  std::ifstream in(*dir + "/" + file);
+  std::stringstream text;
+  text << in.rdbuf();
+  glsl::CompileOptions options;
+  options.fileName = file;
+  options.includeDirs = {*dir};
+  auto stage = glsl::stageFromFileName(file);
+  auto words = glsl::compile(text.str(), *stage, options);
+  EXPECT_TRUE(words.ok()) << (words.ok() ? "" : words.error());
+  auto counted = spirv::countArithmetic(*words);
+  EXPECT_TRUE(counted.ok() && counted->size() == 1);
+  return (*counted)[0].ops.total();
+}
+
+// The roofline (docs/result-schema.md): the device's ceilings, and per pass
+// its arithmetic estimate (the shaders' static counts x their counted
+// invocations) against its bytes and uninstrumented time.
+TEST_F(CaptureRun, RooflinePerPass) {
+  json spec = {{"renderers", {"deferred"}},
+               {"scenes", {{{"name", "planes"}, {"layers", 2}, {"order", "back-to-front"}}}},
+               {"resolutions", {{64, 36}}},
+               {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}, {"fov_deg", 60}}}},
+               {"frames", 2},
+               {"counted_frames", 1},
+               {"lights", 4}};
+  fs::path out = dir_ / "roofline.json";
+  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
+  json result = json::parse(slurp(out));
+  const json& c = result["device"]["ceilings"];
+  ASSERT_TRUE(c.is_object()) << result["device"].dump();
+  const double peakBandwidth = c["bandwidth_bytes_per_s"].get<double>();
+  const double peakOps = c["arithmetic_ops_per_s"].get<double>();
+  EXPECT_GT(peakBandwidth, 0.0);
+  EXPECT_GT(peakOps, 0.0);
+  EXPECT_GE(c["copy_bytes"].get<uint64_t>(), 1u << 20);
+  EXPECT_TRUE(result["timing"].contains("ceilings"));
+
+  const json& sample = result["runs"][0]["samples"][0];
+  std::map<std::string, const json*> byName;
+  for (const auto& pass : sample["passes"]) {
+    byName[pass["name"].get<std::string>()] = &pass;
+    const json& r = pass["roofline"];
+    ASSERT_TRUE(r.is_object()) << pass["name"];
+    ASSERT_TRUE(r["arithmetic_ops"].is_number()) << pass["name"];
+    const double ops = r["arithmetic_ops"].get<double>(), bytes = pass["bytes"].get<double>();
+    const double seconds = pass["gpu_ms"].get<double>() * 1e-3;
+    EXPECT_DOUBLE_EQ(r["bytes_requested"].get<double>(), bytes);
+    // No footprint is measured here: its figures stay null.
+    EXPECT_TRUE(r["footprint_bytes"].is_null());
+    EXPECT_TRUE(r["intensity_footprint"].is_null());
+    EXPECT_TRUE(r["bandwidth_footprint"].is_null());
+    if (bytes > 0) {
+      EXPECT_DOUBLE_EQ(r["intensity_requested"].get<double>(), ops / bytes) << pass["name"];
+    }
+    if (seconds > 0 && bytes > 0) {
+      EXPECT_DOUBLE_EQ(r["bandwidth_requested"].get<double>(), bytes / seconds);
+      EXPECT_DOUBLE_EQ(r["fraction_of_peak_bandwidth"].get<double>(), bytes / seconds / peakBandwidth);
+      EXPECT_DOUBLE_EQ(r["ops_per_s"].get<double>(), ops / seconds);
+      EXPECT_DOUBLE_EQ(r["fraction_of_peak_arithmetic"].get<double>(), ops / seconds / peakOps);
+      const double intensity = ops / bytes;
+      EXPECT_EQ(r["bound"], intensity < peakOps / peakBandwidth ? "memory" : "compute");
+    }
+  }
+  // tonemap: fullscreen.vert on the triangle's 3 vertices, tonemap.frag on
+  // every pixel (its counted fragment invocations).
+  ASSERT_TRUE(byName.count("tonemap"));
+  const json& tonemap = *byName["tonemap"];
+  EXPECT_EQ(tonemap["fragment_invocations"].get<double>(), 64.0 * 36.0);
+  const double expected = double(staticOps("tonemap.frag.glsl")) * 64 * 36 + double(staticOps("fullscreen.vert.glsl")) * 3;
+  EXPECT_GT(expected, 64.0 * 36.0);
+  EXPECT_DOUBLE_EQ(tonemap["roofline"]["arithmetic_ops"].get<double>(), expected);
+
+  // "ceilings": false skips them: no ceilings, arithmetic still estimated,
+  // fractions of peak null.
+  spec["ceilings"] = false;
+  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
+  result = json::parse(slurp(out));
+  EXPECT_FALSE(result["device"].contains("ceilings"));
+  EXPECT_FALSE(result["timing"].contains("ceilings"));
+  for (const auto& pass : result["runs"][0]["samples"][0]["passes"]) {
+    EXPECT_TRUE(pass["roofline"]["arithmetic_ops"].is_number());
+    EXPECT_TRUE(pass["roofline"]["fraction_of_peak_bandwidth"].is_null());
+    EXPECT_TRUE(pass["roofline"]["bound"].is_null());
+  }
 }
 
 TEST_F(CaptureRun, BadSpecNamesTheFieldAndWritesNothing) {

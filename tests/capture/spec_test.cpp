@@ -22,6 +22,10 @@ TEST(CaptureSpec, DefaultsFollowTheFoundingStudy) {
   EXPECT_EQ(one->countedFramesOrDefault(), 1u);  // never more than the timed frames
   EXPECT_EQ(spec->lights, 400u);
   EXPECT_TRUE(spec->autoCameras);
+  EXPECT_TRUE(spec->ceilings);  // measured unless the spec says "ceilings": false
+  auto skip = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":false})");
+  ASSERT_TRUE(skip.ok()) << skip.error();
+  EXPECT_FALSE(skip->ceilings);
   ASSERT_EQ(spec->modes.size(), 1u);
   // Not the study's: accumulate, the cheapest exact mode (docs/accuracy.md).
   EXPECT_EQ(spirv::toString(spec->modes[0]), "accumulate");
@@ -126,6 +130,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "footprint: must be true, false or a block size of 32, 64 or 128 bytes, got \"64\""},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":64.5})", "footprint: must be true, false"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":null})", "footprint: must be true, false"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":"yes"})", "ceilings: must be true or false, got \"yes\""},
         // Variants: {"renderer", "options"} entries.
         BadCase{R"({"renderers":[{"options":{}}],"resolutions":[[8,8]]})", "renderers[0].renderer: required"},
         BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})", "renderers[0].renderer: unknown renderer 'fwd'"},

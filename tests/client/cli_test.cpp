@@ -146,6 +146,18 @@ TEST_F(TallyCli, ShowPrintsTheScenesAndTheRenderersNotes) {
   EXPECT_EQ(plain.out.find("note:"), std::string::npos) << plain.out;
 }
 
+// The device's ceilings measured by the run's capture (the roofline's), in
+// SI units; none where the run has none.
+TEST_F(TallyCli, ShowPrintsTheCeilings) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " show 18");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("ceilings: bandwidth 5.3 GB/s   arithmetic 123.4 Gop/s   (copy of 64.00 MiB)\n"),
+            std::string::npos) << r.out;
+  Outcome plain = tally("--server " + fake.url() + " show 12");
+  EXPECT_EQ(plain.out.find("ceilings:"), std::string::npos) << plain.out;
+}
+
 // Variants: the runs table's renderer column and `show` carry the variant
 // label; `show` lists the options and each sample's error against the
 // reference variant; --variant is passed through as the filter.

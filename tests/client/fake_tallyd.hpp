@@ -175,6 +175,12 @@ class FakeTallyd {
                         {"zprepass_fragment_shader", "counting_only"}};
         return reply(res, run);
       }
+      if (id == 18) {  // a run whose capture measured the device's ceilings
+        json run = runJson(id, "deferred", 320);
+        run["ceilings"] = {{"bandwidth_bytes_per_s", 5.3e9}, {"arithmetic_ops_per_s", 1.234e11},
+                           {"ridge_intensity", 23.5}, {"copy_bytes", 67108864}, {"method", json::object()}};
+        return reply(res, run);
+      }
       reply(res, runJson(id, "deferred", 320));
     });
     server_.Get(R"(/api/runs/(\d+)/samples)", [reply](const httplib::Request& req, httplib::Response& res) {

@@ -166,6 +166,48 @@ TEST_F(Ingest, MissingThingsAreEmptyNotErrors) {
   EXPECT_TRUE(samples->empty());
 }
 
+// The roofline: device.ceilings and each pass's roofline reach the sample's
+// extras.roofline (per run: the device row keeps only the latest device
+// object), and getRun returns the run's ceilings; runs without them get null.
+TEST_F(Ingest, RooflineIsKeptPerRun) {
+  int64_t first = newJob();
+  Capture c = realisticCapture();
+  json ceilings = {{"bandwidth_bytes_per_s", 5.0e9}, {"arithmetic_ops_per_s", 6.0e10}, {"ridge_intensity", 12.0},
+                   {"copy_bytes", 67108864}, {"method", {{"timing", "timestamps"}}}};
+  c.result["device"]["ceilings"] = ceilings;
+  json& pass = c.result["runs"][0]["samples"][0]["passes"][0];
+  pass["roofline"] = {{"arithmetic_ops", 1.5e6}, {"bytes_requested", pass["bytes"].is_number() ? pass["bytes"] : json(1e5)},
+                      {"fraction_of_peak_bandwidth", 0.25}};
+  EXPECT_EQ(ingest(first, c), 2);
+  // A second capture on the same device, without ceilings or rooflines.
+  int64_t second = newJob();
+  EXPECT_EQ(ingest(second, realisticCapture()), 2);
+
+  auto firstRuns = store_->listRuns({.jobId = first}, {});
+  ASSERT_TRUE(firstRuns) << firstRuns.error();
+  const RunRow& withRoofline = firstRuns->runs[1];  // newest first: runs[0] of the result is last
+  auto run = store_->getRun(withRoofline.id);
+  ASSERT_TRUE(run && run->has_value());
+  EXPECT_EQ((*run)->ceilings, ceilings);
+  auto samples = store_->listSamples(withRoofline.id);
+  ASSERT_TRUE(samples) << samples.error();
+  const json& roofline = (*samples)[0].extras["roofline"];
+  EXPECT_EQ(roofline["ceilings"], ceilings);
+  const std::string name = pass["name"];
+  EXPECT_EQ(roofline["passes"][name]["arithmetic_ops"], 1.5e6);
+  EXPECT_EQ(roofline["passes"][name]["fraction_of_peak_bandwidth"], 0.25);
+  EXPECT_EQ(roofline["passes"][name]["gpu_ms"], pass["gpu_ms"]);
+  EXPECT_EQ(roofline["passes"].size(), 1u);  // only the pass that had one
+  // The sample without a roofline pass keeps its extras as they were.
+  EXPECT_FALSE((*samples)[1].extras.contains("roofline"));
+
+  auto secondRuns = store_->listRuns({.jobId = second}, {});
+  ASSERT_TRUE(secondRuns);
+  auto plain = store_->getRun(secondRuns->runs[1].id);
+  ASSERT_TRUE(plain && plain->has_value());
+  EXPECT_TRUE((*plain)->ceilings.is_null());
+}
+
 TEST_F(Ingest, SampleWithoutScreenshotOrImageError) {
   int64_t jobId = newJob();
   Capture c = realisticCapture();

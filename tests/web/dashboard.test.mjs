@@ -690,6 +690,82 @@ describe('dashboard', () => {
     await close();
   });
 
+  test('roofline: one point per pass against the run\'s ceilings; compare shows each pass\'s share of the bandwidth ceiling', async () => {
+    const run = await daemon.get(`/runs/${runOf('deferred', 128).id}`);
+    const ceilings = run.ceilings;
+    assert.ok(ceilings && ceilings.bandwidth_bytes_per_s > 0 && ceilings.arithmetic_ops_per_s > 0, 'the capture measured ceilings');
+    const { samples } = await daemon.get(`/runs/${run.id}/samples`);
+    const names = run.passes.map((p) => p.name);
+    for (const s of samples) assert.deepEqual(Object.keys(s.extras.roofline.passes).sort(), [...names].sort());
+    const { page, errors, close } = await open(`#/runs/${run.id}`);
+    const c = await chart(page, 'roofline');
+    assert.ok(c, 'the roofline chart is drawn');
+    const requested = c.datasets.find((d) => d.label === 'requested bytes');
+    assert.equal(requested.data.length, names.length, 'one point per pass');
+    assert.deepEqual(requested.data.map((p) => p.pass).sort(), [...names].sort());
+    for (const name of names) {
+      const list = samples.map((s) => s.extras.roofline.passes[name]);
+      const ops = mean(list.map((r) => r.arithmetic_ops));
+      const bytes = mean(list.map((r) => r.bytes_requested));
+      const seconds = mean(list.map((r) => r.gpu_ms)) / 1e3;
+      assert.ok(ops > 0 && bytes > 0 && seconds > 0, `${name}: arithmetic, bytes and time`);
+      const point = requested.data.find((p) => p.pass === name);
+      assertClose(point.x, ops / bytes, `${name} intensity`);
+      assertClose(point.y, ops / seconds, `${name} ops/s`);
+    }
+    // No footprint is measured by these captures: no footprint series.
+    assert.equal(c.datasets.find((d) => d.label === 'footprint bytes'), undefined);
+    // The bandwidth ceiling is the line y = bandwidth x up to the ridge, the arithmetic one flat from there.
+    const slope = c.datasets.find((d) => d.label === 'bandwidth ceiling').data;
+    assertClose(slope[0].y / slope[0].x, ceilings.bandwidth_bytes_per_s, 'bandwidth ceiling slope');
+    assertClose(slope[1].y, ceilings.arithmetic_ops_per_s, 'bandwidth ceiling meets the arithmetic one');
+    const flat = c.datasets.find((d) => d.label === 'arithmetic ceiling').data;
+    assert.deepEqual(flat.map((p) => p.y), [ceilings.arithmetic_ops_per_s, ceilings.arithmetic_ops_per_s]);
+    assertClose(flat[0].x, ceilings.arithmetic_ops_per_s / ceilings.bandwidth_bytes_per_s, 'ridge');
+    // Both axes are logarithmic, and a point's tooltip names its pass.
+    const view = await page.evaluate(() => {
+      const ch = window.Chart.getChart(document.querySelector('[data-chart="roofline"] canvas'));
+      const d = ch.data.datasets[0];
+      return { x: ch.options.scales.x.type, y: ch.options.scales.y.type, tooltip: ch.options.plugins.tooltip.callbacks.label({ dataset: d, raw: d.data[0] }), pass: d.data[0].pass };
+    });
+    assert.equal(view.x, 'logarithmic');
+    assert.equal(view.y, 'logarithmic');
+    assert.ok(view.tooltip.startsWith(`${view.pass} (requested bytes)`), view.tooltip);
+    assert.deepEqual(errors, []);
+    await screenshot(page, 'run-roofline-wide');
+    await close();
+
+    // Compare: per pass and run, bytes / (gpu_ms / 1000) / that run's bandwidth ceiling.
+    const ids = [run.id, runOf('visbuffer', 128).id];
+    const compared = await daemon.get(`/compare?runs=${ids.join(',')}`);
+    const ceilingOf = await Promise.all(ids.map(async (id) => (await daemon.get(`/runs/${id}`)).ceilings.bandwidth_bytes_per_s));
+    const cmp = await open(`#/compare?runs=${ids.join(',')}`);
+    const cells = await cmp.page.locator('[data-table="bandwidth-fraction"] td').evaluateAll((tds) => tds.map((td) => ({ run: Number(td.dataset.run), fraction: td.dataset.fraction, text: td.textContent })));
+    assert.equal(cells.length, compared.passes.length * ids.length);
+    let k = 0;
+    for (const p of compared.passes) {
+      ids.forEach((id, i) => {
+        const cell = cells[k++];
+        assert.equal(cell.run, id);
+        const bytes = p.bytes[i].value, ms = p.gpu_ms[i].value;
+        if (bytes === null || !ms) {
+          assert.equal(cell.fraction, '', `${p.pass} of run ${id} has no fraction`);
+          return;
+        }
+        const expected = bytes / (ms / 1e3) / ceilingOf[i];
+        assertClose(Number(cell.fraction), expected, `${p.pass} of run ${id}`);
+        assert.ok(expected > 0);
+        assert.match(cell.text, / %$/);
+      });
+    }
+    const bars = await chart(cmp.page, 'compare-pass-bandwidth-fraction');
+    assert.equal(bars.datasets.length, ids.length);
+    assert.deepEqual(bars.labels, compared.passes.map((p) => p.pass));
+    assert.deepEqual(cmp.errors, []);
+    await screenshot(cmp.page, 'compare-bandwidth-fraction-wide');
+    await cmp.close();
+  });
+
   test('capture form: a sweep spec starts a sweep; a bad one shows the server\'s field', async () => {
     const { page, errors, close } = await open('#/capture');
     await page.click('details.sweep-box summary');

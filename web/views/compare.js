@@ -141,6 +141,41 @@ function perPass(page, c, bytesBox) {
     ]), 'passes')));
 }
 
+// Each pass's achieved bandwidth (its bytes per frame over its uninstrumented
+// GPU time, both averaged over the run's samples) as a fraction of the
+// bandwidth ceiling measured by that run's capture (GET /runs/{id}
+// "ceilings"; null for runs without one).
+async function bandwidthFractions(page, c, signal) {
+  const runs = await Promise.all(c.runs.map((r) => get(`/runs/${r.id}`, signal)));
+  const ceiling = runs.map((r) => (r.ceilings ? r.ceilings.bandwidth_bytes_per_s : null));
+  const fraction = (p, i) => {
+    const bytes = p.bytes[i].value, ms = p.gpu_ms[i].value;
+    return ceiling[i] && bytes !== null && ms ? bytes / (ms / 1e3) / ceiling[i] : null;
+  };
+  page.append(h('h2', {}, 'Share of the bandwidth ceiling per pass'));
+  if (ceiling.every((v) => v === null)) {
+    page.append(h('p', { class: 'panel muted', dataset: { bandwidthFraction: 'none' } }, 'None of these runs has measured device ceilings.'));
+    return;
+  }
+  const labels = c.passes.map((p) => p.pass);
+  const box = h('div', { class: 'charts' });
+  page.append(box);
+  barChart(box, {
+    id: 'compare-pass-bandwidth-fraction', title: 'Achieved fraction of the bandwidth ceiling',
+    caption: "bytes per frame (requested) over the pass's GPU time, against the ceiling each run's capture measured",
+    labels, labelHeader: 'Pass', format: fmt.percent,
+    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => fraction(p, i)) })),
+  });
+  page.append(h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Bandwidth fraction', dataset: { table: 'bandwidth-fraction' } },
+    h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'Pass'), c.runs.map((r, i) => h('th', { scope: 'col', class: 'num' },
+      `${fmt.variant(r)} #${r.id}`, h('div', { class: 'muted' }, ceiling[i] ? `ceiling ${fmt.bytes(ceiling[i])}/s` : 'no ceiling'))))),
+    h('tbody', {}, c.passes.map((p) => h('tr', { dataset: { row: p.pass } }, h('th', { scope: 'row' }, p.pass),
+      c.runs.map((r, i) => {
+        const f = fraction(p, i);
+        return h('td', { class: 'num', dataset: { run: r.id, fraction: f === null ? '' : String(f) } }, fmt.percent(f));
+      })))))));
+}
+
 // For each compared run's variant: the newest run at every resolution with
 // the same scene, device, counting mode and light count. Variants of one
 // renderer are series of their own.
@@ -356,7 +391,8 @@ export async function render(page, { query, signal }) {
   perPass(page, c, boxes.passes);
   byteCharts(c, 'requested', boxes);
   // Both need more requests: fetch them side by side, each into its own section.
-  const [repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section')];
-  page.append(repeatSection, scalingSection, imageSection);
-  await Promise.all([repeats(repeatSection, c, signal), scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
+  const [fractionSection, repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section'), h('section')];
+  page.append(fractionSection, repeatSection, scalingSection, imageSection);
+  await Promise.all([bandwidthFractions(fractionSection, c, signal), repeats(repeatSection, c, signal),
+    scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
 }
