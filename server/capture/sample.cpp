@@ -44,6 +44,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
       it->second.bytes.push_back(double(a.bytes));
       // -1: not measured (footprint off, or a line the model cannot see).
       if (a.footprintBytes >= 0) it->second.footprint.push_back(double(a.footprintBytes));
+      if (a.footprintBytes >= 0 && a.footprintBlocks >= 0) it->second.footprintBlocks.push_back(double(a.footprintBlocks));
     }
   }
   m.instrumentedFrameMs.push_back(total);
@@ -110,6 +111,9 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
         double footprint = spreadOf(line.footprint).mean;
         r["footprint_bytes"] = footprint;
         r["reuse"] = footprint > 0 ? json(bytes.mean / footprint) : json(nullptr);
+        // The blocks behind it: x the block size, the strict bound, which
+        // exceeds the requested bytes where accesses are sparser than a block.
+        if (!line.footprintBlocks.empty()) r["footprint_blocks"] = spreadOf(line.footprintBlocks).mean;
         passFootprint += footprint;
         passHasFootprint = true;
       }

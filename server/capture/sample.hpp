@@ -24,6 +24,7 @@ struct Line {
   // Access::footprintBytes of the frames that measured it (>= 0); empty
   // where no frame did (footprint off, or a line the model cannot see).
   std::vector<double> footprint;
+  std::vector<double> footprintBlocks;  // Access::footprintBlocks of the same frames
 };
 
 // F instrumented frames: counts per frame; F uninstrumented frames: times.

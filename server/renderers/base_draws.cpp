@@ -72,6 +72,7 @@ void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipeline
                        &push);
     vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
     passes_[passIndex].indicesDrawn += d.indexCount;
+    passes_[passIndex].indexRanges.emplace_back(d.firstIndex, d.indexCount);
   }
 }
 

@@ -169,6 +169,30 @@ void RendererBase::fillFootprintBank(uint32_t bank, uint32_t passIndex, VkPipeli
   }
 }
 
+void RendererBase::indexFootprint(const Pass& pass, std::vector<Access>& accesses) const {
+  // Every index of a drawn range is fetched (32-bit indices): the blocks of
+  // the union of the byte ranges.
+  const uint64_t block = footprint_.blockBytes();
+  std::vector<std::pair<uint64_t, uint64_t>> blocks;  // [first, last] block of each range
+  for (const auto& [first, count] : pass.indexRanges) {
+    if (count == 0) continue;
+    uint64_t begin = uint64_t(first) * 4, end = (uint64_t(first) + count) * 4 - 1;
+    blocks.emplace_back(begin / block, end / block);
+  }
+  std::sort(blocks.begin(), blocks.end());
+  uint64_t total = 0, next = 0;  // blocks counted, and the first block not yet counted
+  for (const auto& [a, b] : blocks) {
+    uint64_t from = std::max(a, next);
+    if (b >= from) total += b - from + 1;
+    next = std::max(next, b + 1);
+  }
+  for (auto& a : accesses) {
+    if (a.resource != "indices" || a.write || a.source != "derived") continue;
+    a.footprintBlocks = int64_t(total);
+    a.footprintBytes = int64_t(std::min<uint64_t>(total * block, a.bytes));
+  }
+}
+
 void RendererBase::attributeFootprint(uint32_t passIndex, std::vector<Access>& accesses,
                                       const std::vector<uint32_t>& bitmap) const {
   for (auto& a : accesses) {

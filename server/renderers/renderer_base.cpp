@@ -218,6 +218,7 @@ void RendererBase::recordAll(VkCommandBuffer cmd) {
   if (statistics_.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics_);
   for (uint32_t i = 0; i < passes_.size(); ++i) {
     passes_[i].indicesDrawn = 0;
+    passes_[i].indexRanges.clear();
     recordingPass_ = i;
     boundSets_ = {};
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps_, i);
@@ -286,6 +287,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       }
       if (p.indexFetches && p.indicesDrawn > 0) {
         addAccess(r.accesses, "indices", false, p.indicesDrawn, sizeof(uint32_t), "derived");
+        if (footprintReady_) indexFootprint(p, r.accesses);
       }
       if (!p.depthWrite.empty()) {
         // The written target's texel ("depth": D32_S8; "shadow_map": D32_SFLOAT).

@@ -83,6 +83,7 @@ class RendererBase : public Renderer {
     // pass); their lines get Access::onChip (renderers/techniques/tile_memory.hpp).
     std::set<std::string> onChip;
     uint64_t indicesDrawn = 0;  // this frame, by drawScene
+    std::vector<std::pair<uint32_t, uint32_t>> indexRanges;  // (first index, count) drawn this frame
     bool indexFetches = false;  // derive "indices" reads from indicesDrawn
   };
 
@@ -310,6 +311,8 @@ class RendererBase : public Renderer {
   uint32_t footprintBank(VkPipelineBindPoint point);
   void fillFootprintBank(uint32_t bank, uint32_t passIndex, VkPipelineBindPoint point);
   void bindCounterSet(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout);
+  // The derived "indices" line's footprint: the blocks of the index ranges drawn.
+  void indexFootprint(const Pass& pass, std::vector<Access>& accesses) const;
   void attributeFootprint(uint32_t passIndex, std::vector<Access>& accesses, const std::vector<uint32_t>& bitmap) const;
   gpu::FootprintTable footprint_;
   bool footprintReady_ = false, footprintDiscovering_ = false;

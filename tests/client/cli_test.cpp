@@ -150,7 +150,7 @@ TEST_F(TallyCli, ShowPrintsTheScenesAndTheRenderersNotes) {
 // SI units; none where the run has none.
 TEST_F(TallyCli, ShowPrintsTheCeilings) {
   FakeTallyd fake;
-  Outcome r = tally("--server " + fake.url() + " show 18");
+  Outcome r = tally("--server " + fake.url() + " show 19");
   ASSERT_EQ(r.rc, 0) << r.err;
   EXPECT_NE(r.out.find("ceilings: bandwidth 5.3 GB/s   arithmetic 123.4 Gop/s   (copy of 64.00 MiB)\n"),
             std::string::npos) << r.out;

@@ -175,7 +175,7 @@ class FakeTallyd {
                         {"zprepass_fragment_shader", "counting_only"}};
         return reply(res, run);
       }
-      if (id == 18) {  // a run whose capture measured the device's ceilings
+      if (id == 19) {  // a run whose capture measured the device's ceilings
         json run = runJson(id, "deferred", 320);
         run["ceilings"] = {{"bandwidth_bytes_per_s", 5.3e9}, {"arithmetic_ops_per_s", 1.234e11},
                            {"ridge_intensity", 23.5}, {"copy_bytes", 67108864}, {"method", json::object()}};

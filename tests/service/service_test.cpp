@@ -203,7 +203,9 @@ TEST_F(ServiceTest, FootprintReachesTheRunCompareAndExportRoutes) {
   }
   ASSERT_TRUE(fp && plain) << runs.body;
 
-  // The lines' footprints, written as ingest stores them; the exact run keeps none.
+  // Known footprints (half of each counted line's bytes) written as ingest
+  // stores them, so that every route can be checked against them; the
+  // exact run's are removed.
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir_ / "tally.db").c_str(), &db), SQLITE_OK);
@@ -216,7 +218,12 @@ TEST_F(ServiceTest, FootprintReachesTheRunCompareAndExportRoutes) {
         "ON p.id = c.pass_id WHERE p.sample_id = samples.id), footprint_requested_bytes = (SELECT SUM(c.bytes) "
         "FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = samples.id AND c.footprint_bytes "
         "IS NOT NULL) WHERE run_id = " + run + ";"
-        "UPDATE runs SET footprint_block_bytes = NULL WHERE id = " + std::to_string(plain) + ";";
+        "UPDATE runs SET footprint_block_bytes = NULL WHERE id = " + std::to_string(plain) + ";"
+        // The other run as if captured without footprint.
+        "UPDATE counters SET footprint_bytes = NULL WHERE pass_id IN (SELECT p.id FROM passes p JOIN samples s "
+        "ON s.id = p.sample_id WHERE s.run_id = " + std::to_string(plain) + ");"
+        "UPDATE samples SET footprint_bytes = NULL, footprint_requested_bytes = NULL WHERE run_id = " +
+        std::to_string(plain) + ";";
     ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     sqlite3_close(db);
   }
