@@ -32,3 +32,14 @@ export function table(columns, rows, attrs = {}) {
       h('thead', {}, h('tr', {}, columns.map((c) => h('th', { scope: 'col', class: c.className }, c.label)))),
       h('tbody', {}, rows.map((row) => h('tr', {}, columns.map((c) => h('td', { class: c.className }, c.value(row))))))));
 }
+
+// "requested | footprint": which bytes the byte charts under it draw.
+// Footprint is disabled, with `why` as its tooltip, where there is none.
+export function measureSwitch(name, available, why, onChange) {
+  const option = (value, text, enabled) => h('label', { title: enabled ? null : why, dataset: { measure: value } },
+    h('input', { type: 'radio', name, value, checked: value === 'requested', disabled: !enabled }), ` ${text}`);
+  const box = h('div', { class: 'measure-switch', role: 'radiogroup', 'aria-label': 'Bytes shown', dataset: { measureSwitch: name } },
+    h('span', { class: 'muted' }, 'Bytes: '), option('requested', 'requested', true), ' | ', option('footprint', 'footprint', available));
+  box.addEventListener('change', (e) => onChange(e.target.value));
+  return box;
+}

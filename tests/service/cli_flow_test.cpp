@@ -495,10 +495,15 @@ void CliFlow::checkShow(Db& db, const DbRun& run) {
                         build[0][1].get<std::string>() + ")"),
             std::string::npos)
       << out[1];
-  // out[2] is blank, out[3] the titles: CAMERA SKY FRAME-MS OVERHEAD IMAGE-ERROR READ/FRAME WRITTEN/FRAME
+  // Then lines about the run (the device's ceilings where measured), a blank
+  // line and the titles: CAMERA SKY FRAME-MS OVERHEAD IMAGE-ERROR READ/FRAME WRITTEN/FRAME
+  size_t titles = 2;
+  while (titles < out.size() && out[titles].rfind("CAMERA", 0) != 0) ++titles;
+  ASSERT_GE(out.size(), titles + 1 + samples.size()) << table.out;
+  EXPECT_TRUE(out[titles - 1].empty()) << table.out;
   for (size_t i = 0; i < samples.size(); ++i) {
-    auto c = cells(out[4 + i]);
-    ASSERT_EQ(c.size(), 7u) << out[4 + i];
+    auto c = cells(out[titles + 1 + i]);
+    ASSERT_EQ(c.size(), 7u) << out[titles + 1 + i];
     if (samples[i][3].is_null()) {
       EXPECT_EQ(c[1], "-");
     } else {

@@ -6,7 +6,7 @@
 // and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
 import { barChart, destroyCharts, xyChart } from '../charts.js';
-import { h } from '../dom.js';
+import { h, measureSwitch } from '../dom.js';
 import * as fmt from '../format.js';
 
 // "value (Δ delta, ×ratio)" cells for one quantity of every run; the first run is the reference.
@@ -43,17 +43,6 @@ function byAccess(comparison, access, key = 'bytes') {
 const anyFootprint = (c) => c.total_footprint_bytes.some((v) => v.value !== null);
 const reuseText = (v) => `×${v.toFixed(2)}`;
 
-// "requested | footprint" for the byte charts; footprint disabled (with the
-// reason as its tooltip) when no compared run has one.
-function measureSwitch(name, available, onChange) {
-  const why = 'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).';
-  const option = (value, text, enabled) => h('label', { title: enabled ? null : why, dataset: { measure: value } },
-    h('input', { type: 'radio', name, value, checked: value === 'requested', disabled: !enabled }), ` ${text}`);
-  const box = h('div', { class: 'measure-switch', role: 'radiogroup', 'aria-label': 'Bytes shown', dataset: { measureSwitch: name } },
-    h('span', { class: 'muted' }, 'Bytes: '), option('requested', 'requested', true), ' | ', option('footprint', 'footprint', available));
-  box.addEventListener('change', (e) => onChange(e.target.value));
-  return box;
-}
 
 function against(values) {
   return values.map((v) => ({ value: v, delta: v - values[0], ratio: values[0] ? v / values[0] : null }));
@@ -385,7 +374,8 @@ export async function render(page, { query, signal }) {
   h('p', {}, h('a', { href: `#/runs?select=${ids.join(',')}` }, 'Change the selection')));
   // One switch draws every byte chart below in requested bytes or footprint.
   const boxes = { totals: h('div', {}), resources: h('div', {}), passes: h('div', {}) };
-  page.append(measureSwitch('compare-measure', anyFootprint(c), (measure) => byteCharts(c, measure, boxes)));
+  page.append(measureSwitch('compare-measure', anyFootprint(c),
+    'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).', (measure) => byteCharts(c, measure, boxes)));
   totals(page, c, boxes.totals);
   perResource(page, c, boxes.resources);
   perPass(page, c, boxes.passes);

@@ -7,7 +7,7 @@
 // the samples), its samples, and each sample (its passes' spreads).
 import { get, imageSource } from '../api.js';
 import { barChart, color, destroyCharts, xyChart } from '../charts.js';
-import { h, table } from '../dom.js';
+import { h, measureSwitch, table } from '../dom.js';
 import * as fmt from '../format.js';
 
 const tile = (label, value, key) => h('div', { class: 'tile', dataset: { tile: key } },
@@ -41,17 +41,6 @@ function trafficBy(passes, access, key = 'bytes') {
 
 const hasFootprint = (run) => run.mean_footprint_bytes !== null && run.mean_footprint_bytes !== undefined;
 
-// "requested | footprint": which bytes the charts under it draw. Footprint is
-// disabled (with the reason as its tooltip) for a run without one.
-function measureSwitch(name, available, onChange) {
-  const why = 'This run has no footprint: capture it with "footprint" on (the capture form\'s Footprint select).';
-  const option = (value, text, enabled) => h('label', { title: enabled ? null : why, dataset: { measure: value } },
-    h('input', { type: 'radio', name, value, checked: value === 'requested', disabled: !enabled }), ` ${text}`);
-  const box = h('div', { class: 'measure-switch', role: 'radiogroup', 'aria-label': 'Bytes shown', dataset: { measureSwitch: name } },
-    h('span', { class: 'muted' }, 'Bytes: '), option('requested', 'requested', true), ' | ', option('footprint', 'footprint', available));
-  box.addEventListener('change', (e) => onChange(e.target.value));
-  return box;
-}
 
 function passResourceCharts(parent, run, measure = 'requested') {
   const { key, noun } = kMeasures[measure];
@@ -460,7 +449,8 @@ export async function render(page, { params, signal }) {
     passResourceCharts(traffic, run, measure);
     perSampleChart(cameraBytes, samples, details, measure);
   };
-  page.append(h('h2', {}, 'Traffic per pass and resource'), measureSwitch('run-measure', hasFootprint(run), draw), traffic);
+  page.append(h('h2', {}, 'Traffic per pass and resource'), measureSwitch('run-measure', hasFootprint(run),
+    'This run has no footprint: capture it with "footprint" on (the capture form\'s Footprint select).', draw), traffic);
   page.append(h('h2', {}, 'Per camera'), cameraBytes);
   draw('requested');
   frameTimeChart(page, samples);
