@@ -114,6 +114,8 @@ void addRoofline(json& sample, const SampleMeasure& m, const json& ceilings) {
     }
     pass["roofline"] = {
         {"arithmetic_ops", orNull(ops)},
+        // "counted": executed operations (accumulate mode); "estimated": the static count x invocations.
+        {"arithmetic", ops ? json(m.arithmeticCounted.count(name) ? "counted" : "estimated") : json(nullptr)},
         {"bytes_requested", bytes},
         {"footprint_bytes", orNull(footprint)},
         {"intensity_requested", orNull(intensity)},

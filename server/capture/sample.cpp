@@ -26,6 +26,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
     }
     m.instrumentedMs[pass.name].push_back(pass.gpuMs);
     if (pass.arithmeticOps >= 0) m.arithmeticOps[pass.name].push_back(double(pass.arithmeticOps));
+    if (pass.arithmeticCounted) m.arithmeticCounted.insert(pass.name);
     total += pass.gpuMs;
     for (const auto& a : pass.accesses) {
       // One line per (pass, resource, access, source): a counted and a

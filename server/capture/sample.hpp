@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,6 +37,7 @@ struct SampleMeasure {
   std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
   std::vector<double> frameMs, instrumentedFrameMs;
   std::map<std::string, std::vector<double>> arithmeticOps;  // per pass, where known (PassResult::arithmeticOps)
+  std::set<std::string> arithmeticCounted;                    // passes whose arithmetic was counted, not estimated
 };
 
 // A counted frame: its lines' counts, bytes and footprints, its pass times.

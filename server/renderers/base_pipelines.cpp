@@ -61,6 +61,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
   if (options_.instrumented) {
     auto instrumentOptions = gpu::instrumentOptionsFor(*ctx_, options_.counting, slotCount_);
     instrumentOptions.footprintBlockBytes = options_.footprintBlockBytes;
+    instrumentOptions.countArithmetic = true;  // in accumulate mode: executed arithmetic for the roofline
     if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
       return makeError(file + ": " + why);
     }
@@ -71,8 +72,12 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     if (compiled->result.copies > 1) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
-    for (const auto& site : compiled->result.sites) {  // the roofline's arithmetic estimate
-      if (site.kind != spirv::SiteKind::Invocation) continue;
+    if (compiled->result.arithmeticSlot >= 0) {  // the roofline's arithmetic, counted as executed
+      passes_[passIndex].arithmetic.emplace_back(uint32_t(compiled->result.arithmeticSlot), 1);
+      passes_[passIndex].arithmeticCounted = true;
+    }
+    for (const auto& site : compiled->result.sites) {  // else the static estimate per invocation
+      if (site.kind != spirv::SiteKind::Invocation || compiled->result.arithmeticSlot >= 0) continue;
       for (const auto& e : compiled->result.arithmetic) {
         if (e.entryPoint == site.entryPoint) passes_[passIndex].arithmetic.emplace_back(site.slot, e.ops.total());
       }

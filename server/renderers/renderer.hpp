@@ -76,11 +76,13 @@ struct PassResult {
   std::vector<Access> accesses;
   uint64_t maxSlotCount = 0;    // the largest single counter slot this frame (0 uninstrumented)
   std::string maxSlotResource;  // what that slot counts
-  // Arithmetic operations this frame, an estimate (docs/measurement.md,
-  // "Arithmetic per pass"): each shader's static count per invocation
+  // Arithmetic operations this frame (docs/measurement.md, "Arithmetic per
+  // pass"): counted as executed in the accumulate mode (arithmeticCounted),
+  // else an estimate: each shader's static count per invocation
   // (spirv/arith.hpp) x its counted invocations, summed over the pass's
   // shaders. -1 where unknown (uninstrumented frames, no shader).
   int64_t arithmeticOps = -1;
+  bool arithmeticCounted = false;
 };
 
 struct FrameResult {

@@ -281,6 +281,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       if (footprintReady_) attributeFootprint(i, r.accesses, bitmap);
       if (!p.arithmetic.empty()) {
         r.arithmeticOps = 0;
+        r.arithmeticCounted = p.arithmeticCounted;
         for (const auto& [slot, perInvocation] : p.arithmetic) {
           r.arithmeticOps += int64_t(perInvocation * (slot < counters.size() ? counters[slot] : 0));
         }

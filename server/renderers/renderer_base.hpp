@@ -76,7 +76,10 @@ class RendererBase : public Renderer {
     std::vector<spirv::Site> sites;
     // Per instrumented shader: its invocation counter slot and its static
     // arithmetic per invocation (PassResult::arithmeticOps).
+    // A shader whose executed arithmetic was counted (accumulate mode) has
+    // its arithmetic slot with 1: the counter is the operations themselves.
     std::vector<std::pair<uint32_t, uint64_t>> arithmetic;
+    bool arithmeticCounted = false;  // some shader's arithmetic is counted, not estimated
     std::string depthWrite;     // resource whose depth/stencil the pass writes ("" none)
     // Tile-memory model: resources whose traffic in this pass a tile-based GPU
     // keeps on chip (DONT_CARE attachments, input attachments of the render

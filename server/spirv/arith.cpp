@@ -50,6 +50,18 @@ class Counter {
     }
   }
 
+  std::vector<std::vector<uint32_t>> perInstruction() const {
+    std::vector<std::vector<uint32_t>> out(module_.functions.size());
+    for (size_t f = 0; f < module_.functions.size(); ++f) {
+      for (const auto& inst : module_.functions[f].insts) {
+        ArithmeticCount c;
+        add(inst, c);
+        out[f].push_back(static_cast<uint32_t>(c.total()));
+      }
+    }
+    return out;
+  }
+
   std::vector<EntryArithmetic> run() {
     std::vector<EntryArithmetic> out;
     for (const auto& ep : module_.entryPoints) {
@@ -148,6 +160,10 @@ class Counter {
 }  // namespace
 
 std::vector<EntryArithmetic> countArithmetic(const Module& module) { return Counter(module).run(); }
+
+std::vector<std::vector<uint32_t>> arithmeticPerInstruction(const Module& module) {
+  return Counter(module).perInstruction();
+}
 
 Result<std::vector<EntryArithmetic>> countArithmetic(std::span<const uint32_t> words) {
   auto module = Module::parse(words);

@@ -41,6 +41,11 @@ struct EntryArithmetic {
   ArithmeticCount ops;     // per invocation
 };
 
+// Operations of each instruction of each function (module order), as the
+// estimate counts them; calls count 0 (the callee's instructions count
+// where they execute). For counting executed arithmetic per block.
+std::vector<std::vector<uint32_t>> arithmeticPerInstruction(const Module& module);
+
 // One count per entry point, in OpEntryPoint order.
 std::vector<EntryArithmetic> countArithmetic(const Module& module);
 Result<std::vector<EntryArithmetic>> countArithmetic(std::span<const uint32_t> words);

@@ -1,5 +1,6 @@
 #include "spirv/inject.hpp"
 
+#include "spirv/arith.hpp"
 #include "spirv/cfg.hpp"
 
 #include <algorithm>
@@ -148,6 +149,7 @@ class Injector {
       }
     }
 
+    if (accumulate && result_.arithmeticSlot >= 0) countExecutedArithmetic(scan, before);
     if (accumulate && flushSlots_.count(Stage::Compute) && options_.computeCopies > 1) {
       result_.copies = options_.computeCopies;
       result_.copyStride = (result_.slotCount + kCopyAlignSlots - 1) / kCopyAlignSlots * kCopyAlignSlots;
@@ -863,6 +865,52 @@ class Injector {
     return id;
   }
 
+  // Executed arithmetic: at the top of every block of every function an
+  // accumulating entry point reaches, the block's operations (arith.hpp)
+  // added to one register, flushed by each stage into the arithmetic slot.
+  void countExecutedArithmetic(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
+    const uint32_t slot = static_cast<uint32_t>(result_.arithmeticSlot);
+    const auto weights = arithmeticPerInstruction(m_);
+    std::map<uint32_t, int> byId;
+    for (size_t f = 0; f < m_.functions.size(); ++f) byId[m_.functions[f].id()] = static_cast<int>(f);
+    std::set<int> reached;
+    for (const auto& ep : scan.entryPoints) {
+      if (!accumulates(ep.stage)) continue;
+      flushSlots_[ep.stage].scalars.insert(slot);
+      std::vector<int> work = {ep.functionIndex};
+      while (!work.empty()) {
+        int f = work.back();
+        work.pop_back();
+        if (f < 0 || !reached.insert(f).second) continue;
+        for (const auto& inst : m_.functions[f].insts) {
+          if (inst.opcode() == spv::Op::OpFunctionCall) {
+            if (auto it = byId.find(inst.word(3)); it != byId.end()) work.push_back(it->second);
+          }
+        }
+      }
+    }
+    const uint32_t acc = scalarAccumulator(slot);
+    for (int f : reached) {
+      const auto& insts = m_.functions[f].insts;
+      for (size_t at = 0; at < insts.size(); ++at) {
+        if (insts[at].opcode() != spv::Op::OpLabel) continue;
+        uint64_t ops = 0;
+        size_t end = at + 1;
+        for (; end < insts.size() && insts[end].opcode() != spv::Op::OpLabel; ++end) ops += weights[f][end];
+        if (ops == 0) continue;
+        size_t into = at + 1;
+        while (into < end && (insts[into].opcode() == spv::Op::OpPhi || insts[into].opcode() == spv::Op::OpVariable ||
+                              insts[into].opcode() == spv::Op::OpLine || insts[into].opcode() == spv::Op::OpNoLine)) {
+          ++into;
+        }
+        Body b{before[f][into]};
+        uint32_t v = op(b, spv::Op::OpLoad, tU32(), {acc});
+        uint32_t w = op(b, spv::Op::OpIAdd, tU32(), {v, constantU32(static_cast<uint32_t>(std::min<uint64_t>(ops, 0xffffffffu)))});
+        opNoResult(b, spv::Op::OpStore, {acc, w});
+      }
+    }
+  }
+
   // Calls each stage's flush where its invocations end.
   void insertFlushes(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
     // Functions by id, and the stage of the entry points that reach each.
@@ -1053,16 +1101,20 @@ class Injector {
 
   // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
   // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
-  uint32_t fpBytesFn() {
-    if (fpBytes_ != 0) return fpBytes_;
+  uint32_t fpBytesFn(bool shortRange) {
+    uint32_t& cached = shortRange ? fpBytesShort_ : fpBytes_;
+    if (cached != 0) return cached;
     uint32_t u = tU32();
     auto f = beginFunction({u, u, u});
     Body b{f->fn.insts};
     uint32_t entry = f->params[0], offset = f->params[1], bytes = f->params[2];
     // The loop counter: a Function variable, declared first.
-    uint32_t counter = m_.newId();
-    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, u), counter,
-                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+    uint32_t counter = 0;
+    if (!shortRange) {
+      counter = m_.newId();
+      b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, u), counter,
+                                                                       static_cast<uint32_t>(spv::StorageClass::Function)});
+    }
     uint32_t kind = tableWord(b, entry, footprint::kKind);
     uint32_t isBuffer = op(b, spv::Op::OpIEqual, tBool(), {kind, constantU32(uint32_t(footprint::EntryKind::Buffer))});
     uint32_t isVertex =
@@ -1076,6 +1128,17 @@ class Injector {
     uint32_t endByte = op(b, spv::Op::OpIAdd, u, {start, op(b, spv::Op::OpISub, u, {bytes, constantU32(1)})});
     uint32_t last = op(b, spv::Op::OpShiftRightLogical, u, {endByte, shift});
     uint32_t base = tableWord(b, entry, footprint::kBase), cap = tableWord(b, entry, footprint::kCapacity);
+    if (shortRange) {
+      // At most three blocks (bytes <= 2 x block + 1): first, the next, last;
+      // no loop, which compilers (lavapipe's LLVM) analyse far faster inside
+      // the shader's own loops.
+      uint32_t second = ext(b, u, UMin, {op(b, spv::Op::OpIAdd, u, {first, constantU32(1)}), last});
+      fnCall(b, fpMarkFn(), {base, cap, first});
+      fnCall(b, fpMarkFn(), {base, cap, second});
+      fnCall(b, fpMarkFn(), {base, cap, last});
+      cached = endFunction(std::move(f), "tally_fp_bytes_short");
+      return cached;
+    }
     opNoResult(b, spv::Op::OpStore, {counter, first});
     uint32_t header = m_.newId(), test = m_.newId(), body = m_.newId(), cont = m_.newId(), exit = m_.newId();
     branch(b, header);
@@ -1092,8 +1155,8 @@ class Injector {
     opNoResult(b, spv::Op::OpStore, {counter, op(b, spv::Op::OpIAdd, u, {i, constantU32(1)})});
     branch(b, header);
     label(b, exit);
-    fpBytes_ = endFunction(std::move(f), "tally_fp_bytes");
-    return fpBytes_;
+    cached = endFunction(std::move(f), "tally_fp_bytes");
+    return cached;
   }
 
   // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
@@ -1472,7 +1535,7 @@ class Injector {
         return false;
       }
       uint32_t vertex = loadIntAsU32(b, builtin(stage, spv::BuiltIn::VertexIndex, tI32(), true));
-      fnCall(b, fpBytesFn(), {entry, vertex, constantU32(site.elementBytes)});
+      fnCall(b, fpBytesFn(site.elementBytes <= 2 * options_.footprintBlockBytes + 1), {entry, vertex, constantU32(site.elementBytes)});
       return true;
     }
     const Instruction& inst = m_.functions[s.function].insts[s.instruction];
@@ -1490,7 +1553,7 @@ class Injector {
       else pointer = inst.word(3);  // the other atomics
       uint32_t offset = byteOffset(b, pointer, s.function, why);
       if (offset == 0) return false;
-      fnCall(b, fpBytesFn(), {entry, offset, constantU32(site.elementBytes)});
+      fnCall(b, fpBytesFn(site.elementBytes <= 2 * options_.footprintBlockBytes + 1), {entry, offset, constantU32(site.elementBytes)});
       return true;
     }
     // Images: the OpTypeImage behind the accessed image.
@@ -1709,7 +1772,7 @@ class Injector {
   // footprint
   uint32_t glsl_ = 0;  // the GLSL.std.450 import
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
-  uint32_t fpMark_ = 0, fpBytes_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
+  uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
 };
 
 }  // namespace

@@ -201,6 +201,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     site.slotCount = it->second.second;
     result.sites.push_back(std::move(site));
   }
+  if (rewrite && options.countArithmetic && options.mode.kind == CountMode::Accumulate) result.arithmeticSlot = next++;
   result.slotCount = next - options.firstSlot;
   result.firstSlot = options.firstSlot;
 

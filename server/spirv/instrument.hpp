@@ -77,6 +77,10 @@ struct InstrumentOptions {
   uint32_t footprintBlockBytes = 0;
   uint32_t footprintTableBinding = 1;
   uint32_t footprintBitmapBinding = 2;
+  // accumulate mode: also count the arithmetic the invocations execute
+  // (each block adds its operations, as spirv/arith.hpp counts them, to a
+  // register flushed with the others into Instrumented::arithmeticSlot).
+  bool countArithmetic = false;
   // Validate input and output with SPIRV-Tools.
   bool validate = true;
 };
@@ -111,6 +115,9 @@ struct Instrumented {
   // Arithmetic per invocation of each entry point, counted on the input
   // module (the counters' own instructions excluded): spirv/arith.hpp.
   std::vector<EntryArithmetic> arithmetic;
+  // countArithmetic: the slot holding the executed operations of every
+  // invocation of the module (all entry points); -1 where not counted.
+  int64_t arithmeticSlot = -1;
 
   CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride}; }
 };

@@ -57,6 +57,7 @@ struct PassDesc {
   std::vector<TextureDesc> textures;       // bindings 0..: sampler2D
   std::vector<VkDeviceSize> buffers;       // then: storage buffers of these sizes
   uint32_t blockBytes = 64;
+  bool countArithmetic = false;  // InstrumentOptions::countArithmetic
 };
 
 // One line per (binding or "target", read or write).
@@ -67,6 +68,7 @@ struct Line {
 struct PassResult {
   std::map<std::string, Line> lines;
   std::vector<std::string> notes;
+  uint64_t arithmetic = 0;  // the arithmetic slots, summed (countArithmetic)
 };
 
 std::string lineKey(const spirv::Site& s) {
@@ -99,11 +101,13 @@ class FootprintPass {
     std::vector<spirv::Site> sites;
     std::vector<spirv::CopyLayout> layouts;
     std::vector<std::vector<uint32_t>> words;
+    std::vector<uint32_t> arithmeticSlots;
     PassResult out;
     uint32_t slots = 0;
     for (auto& [s, w] : modules) {
       auto options = gpu::instrumentOptionsFor(ctx_, spirv::Mode{spirv::CountMode::Accumulate}, slots, w);
       options.footprintBlockBytes = d.blockBytes;
+      options.countArithmetic = d.countArithmetic;
       if (auto why = gpu::unsupportedReason(ctx_, s, options); !why.empty()) return makeError(why);
       auto r = spirv::instrument(w, options);
       if (!r) return makeError(r.error());
@@ -111,6 +115,7 @@ class FootprintPass {
       sites.insert(sites.end(), r->sites.begin(), r->sites.end());
       out.notes.insert(out.notes.end(), r->notes.begin(), r->notes.end());
       layouts.push_back(r->layout());
+      if (r->arithmeticSlot >= 0) arithmeticSlots.push_back(uint32_t(r->arithmeticSlot));
       slots += r->layout().reserved();
     }
     counterSet_ = gpu::instrumentOptionsFor(ctx_, {}).set;
@@ -297,6 +302,7 @@ class FootprintPass {
     for (const auto& l : layouts) {
       if (l.copies > 1) spirv::foldCopies(counts, l);
     }
+    for (uint32_t slot : arithmeticSlots) out.arithmetic += counts[slot];
     std::vector<uint32_t> bitmap = table.read();
     std::set<uint32_t> seen;
     for (const auto& s : sites) {
@@ -458,6 +464,42 @@ TEST_P(Footprint, LightBufferReadByEveryPixelCountsOnce) {
   EXPECT_EQ(l.blocks, uint64_t(lights) * 32 / GetParam());
   EXPECT_EQ(l.requestedBytes, uint64_t(64) * 64 * lights * 32);
   expectBounded(*r);
+}
+
+// Executed arithmetic (the roofline's operations in the accumulate mode):
+// two runs of a loop that differ only in their trip count differ by the
+// extra iterations x the loop body's operations x the invocations. The body
+// x = x * 1.0001 + 0.5; ++k is, read from the source, an OpFMul, an OpFAdd
+// and an OpIAdd: 3 operations (the comparison k < N counts none).
+TEST(ExecutedArithmetic, LoopTripsTimesTheBody) {
+  std::string error;
+  const gpu::Context* ctx = testContext(&error);
+  if (ctx == nullptr) GTEST_SKIP() << "no Vulkan device: " << error;
+  auto shader = [](int trips) {
+    return "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+           "layout(set = 0, binding = 0) writeonly buffer Out { float data[]; } dst;\n"
+           "void main() {\n"
+           "  uint i = gl_GlobalInvocationID.y * 32u + gl_GlobalInvocationID.x;\n"
+           "  float x = float(i);\n"
+           "  for (int k = 0; k < " + std::to_string(trips) + "; ++k) x = x * 1.0001 + 0.5;\n"
+           "  dst.data[i] = x;\n"
+           "}\n";
+  };
+  uint64_t counted[2] = {0, 0};
+  const int trips[2] = {10, 47};
+  for (int t = 0; t < 2; ++t) {
+    PassDesc d;
+    d.compute = true;
+    d.width = d.height = 32;
+    d.buffers = {32 * 32 * 4};
+    d.source = shader(trips[t]);
+    d.countArithmetic = true;
+    auto r = FootprintPass(*ctx).run(d);
+    ASSERT_TRUE(r.ok()) << r.error();
+    counted[t] = r->arithmetic;
+    EXPECT_GT(counted[t], uint64_t(trips[t]) * 3 * 32 * 32) << "at least the loop's operations";
+  }
+  EXPECT_EQ(counted[1] - counted[0], uint64_t(trips[1] - trips[0]) * 3 * 32 * 32);
 }
 
 INSTANTIATE_TEST_SUITE_P(BlockBytes, Footprint, ::testing::Values(32u, 64u, 128u),

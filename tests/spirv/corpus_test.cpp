@@ -158,9 +158,10 @@ struct Variant {
   spirv::Mode mode;
   CounterWidth width;
   uint32_t footprint = 0;  // block bytes, 0 off
+  bool arithmetic = false;  // InstrumentOptions::countArithmetic
   std::string name() const {
     return spirv::toString(mode) + (width == CounterWidth::Int64 ? "/int64" : "/uint32_pair") +
-           (footprint != 0 ? "+footprint:" + std::to_string(footprint) : "");
+           (footprint != 0 ? "+footprint:" + std::to_string(footprint) : "") + (arithmetic ? "+arithmetic" : "");
   }
 };
 
@@ -173,7 +174,7 @@ std::vector<Variant> variants() {
     for (auto w : {CounterWidth::Int64, CounterWidth::Uint32Pair}) out.push_back({*mode, w});
   }
   // Footprint marking beside three counting modes, at each block size.
-  out.push_back({*spirv::parseMode("accumulate"), CounterWidth::Int64, 64});
+  out.push_back({*spirv::parseMode("accumulate"), CounterWidth::Int64, 64, true});
   out.push_back({*spirv::parseMode("exact"), CounterWidth::Uint32Pair, 32});
   out.push_back({*spirv::parseMode("subgroup"), CounterWidth::Int64, 128});
   return out;
@@ -285,6 +286,7 @@ TEST_P(CorpusTest, SitesMatchExpectation) {
       options.mode = variant.mode;
       options.width = variant.width;
       options.footprintBlockBytes = variant.footprint;
+      options.countArithmetic = variant.arithmetic;
       auto result = spirv::instrument(*words, options);
       ASSERT_TRUE(result.ok()) << shader.file << ": " << result.error();
       const spirv::Instrumented& r = *result;

@@ -221,10 +221,18 @@ function rooflinePasses(samples) {
     const footprint = mean(list, 'footprint_bytes');
     const seconds = mean(list, 'gpu_ms') === null ? null : mean(list, 'gpu_ms') / 1e3;
     const per = (a, b) => (a !== null && b ? a / b : null);
-    return { name, ops, bytes, footprint, seconds,
+    // "counted" (executed operations, the accumulate mode) where every sample counted them, else an estimate.
+    const counted = list.every((r) => r.arithmetic === 'counted');
+    return { name, ops, bytes, footprint, seconds, counted,
       intensity: per(ops, bytes), intensityFootprint: per(ops, footprint), rate: per(ops, seconds),
       bandwidth: per(bytes, seconds), bandwidthFootprint: per(footprint, seconds) };
   });
+}
+
+// How the passes' arithmetic was obtained, for the chart's caption.
+function arithmeticNote(passes) {
+  if (passes.every((p) => p.counted)) return 'Arithmetic is counted as executed.';
+  return 'Arithmetic is a static estimate (loops counted once) where it was not counted (modes other than accumulate).';
 }
 
 // Log-log roofline: x arithmetic intensity (ops per byte), y ops per second;
@@ -256,7 +264,7 @@ function rooflineSection(run, samples) {
   }
   const dataTable = table([
     { label: 'Pass', value: (p) => p.name },
-    { label: 'Arithmetic (estimate)', className: 'num', value: (p) => si(p.ops, 'op') },
+    { label: 'Arithmetic', className: 'num', value: (p) => `${si(p.ops, 'op')}${p.counted ? '' : ' (estimate)'}` },
     { label: 'Bytes', className: 'num', value: (p) => fmt.bytes(p.bytes) },
     { label: 'Footprint', className: 'num', value: (p) => (p.footprint === null ? '–' : fmt.bytes(p.footprint)) },
     { label: 'Ops per byte', className: 'num', value: (p) => (p.intensity === null ? '–' : p.intensity.toPrecision(3)) },
@@ -270,8 +278,8 @@ function rooflineSection(run, samples) {
     id: 'roofline',
     title: 'Roofline',
     caption: c
-      ? `per pass, averaged over the samples; ceilings measured at the capture's start: ${si(c.bandwidth_bytes_per_s, 'B/s')}, ${si(c.arithmetic_ops_per_s, 'op/s')}. Arithmetic is a static estimate (loops counted once).`
-      : 'per pass, averaged over the samples; no ceilings were measured for this capture. Arithmetic is a static estimate (loops counted once).',
+      ? `per pass, averaged over the samples; ceilings measured at the capture's start: ${si(c.bandwidth_bytes_per_s, 'B/s')}, ${si(c.arithmetic_ops_per_s, 'op/s')}. ${arithmeticNote(passes)}`
+      : `per pass, averaged over the samples; no ceilings were measured for this capture. ${arithmeticNote(passes)}`,
     // A log axis ticks 1-9 per decade: label the decades only.
     x: { title: 'arithmetic intensity (ops per byte)', type: 'logarithmic', format: decades('') },
     y: { title: 'ops per second', type: 'logarithmic', format: decades('op/s') },
