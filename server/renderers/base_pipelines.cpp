@@ -61,7 +61,11 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
   if (options_.instrumented) {
     auto instrumentOptions = gpu::instrumentOptionsFor(*ctx_, options_.counting, slotCount_);
     instrumentOptions.footprintBlockBytes = options_.footprintBlockBytes;
-    instrumentOptions.countArithmetic = true;  // in accumulate mode: executed arithmetic for the roofline
+    // Executed arithmetic for the roofline (accumulate mode) where the
+    // capture asks about memory (footprint on): it costs a register add per
+    // block, 1.10-1.14x per frame on Sponza against 1.02-1.03x without
+    // (docs/accuracy.md); elsewhere the arithmetic is the static estimate.
+    instrumentOptions.countArithmetic = options_.footprintBlockBytes != 0;
     if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
       return makeError(file + ": " + why);
     }
