@@ -83,6 +83,17 @@ void FootprintTable::destroy() {
   ctx_ = nullptr;
 }
 
+std::array<DescriptorWrite, 2> FootprintTable::descriptorWrites(uint32_t tableBinding, uint32_t bitmapBinding) const {
+  std::array<DescriptorWrite, 2> w;
+  w[0].binding = tableBinding;
+  w[0].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
+  w[0].buffer = tableInfo();
+  w[1].binding = bitmapBinding;
+  w[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  w[1].buffer = bitmapInfo();
+  return w;
+}
+
 void FootprintTable::recordClear(VkCommandBuffer cmd) const {
   vkCmdFillBuffer(cmd, bitmaps_.buffer, 0, VK_WHOLE_SIZE, 0);
   VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};

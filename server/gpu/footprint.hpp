@@ -5,12 +5,14 @@
 // clears the bitmaps; the reader counts each region's bits.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "gpu/context.hpp"
+#include "gpu/pipelines.hpp"
 #include "gpu/resources.hpp"
 #include "spirv/footprint.hpp"
 
@@ -50,6 +52,8 @@ class FootprintTable {
   VkDescriptorBufferInfo tableInfo() const { return {table_.buffer, 0, bankStride_}; }
   VkDescriptorBufferInfo bitmapInfo() const { return {bitmaps_.buffer, 0, VK_WHOLE_SIZE}; }
   uint32_t bankOffset(uint32_t bank) const { return bank * bankStride_; }
+  // Both descriptors, for a set whose table and bitmap bindings are these.
+  std::array<DescriptorWrite, 2> descriptorWrites(uint32_t tableBinding, uint32_t bitmapBinding) const;
 
   // Clears the bitmaps (transfer, then a barrier to every shader stage).
   void recordClear(VkCommandBuffer cmd) const;

@@ -40,20 +40,7 @@ void RendererBase::discoverFootprint() {
     const Pass& pass = passes_[p];
     for (const auto& s : pass.sites) {
       if (s.kind == spirv::SiteKind::Invocation || s.footprint) continue;
-      // The line names attributeCounters gives this site's slots.
-      std::vector<std::string> names;
-      if (s.kind == spirv::SiteKind::OutputWrite && s.location) {
-        auto it = pass.bindings.outputs.find(*s.location);
-        names.push_back(it != pass.bindings.outputs.end() ? it->second : "output " + std::to_string(*s.location));
-      } else if (s.location) {
-        auto at = pass.bindings.vertexInputsAt.find(*s.location);
-        names.push_back(at != pass.bindings.vertexInputsAt.end() ? at->second : pass.bindings.vertexInputs);
-      } else if (auto it = pass.bindings.bindings.find({s.set, s.binding}); it != pass.bindings.bindings.end()) {
-        names = it->second;
-      } else {
-        names.push_back(s.resource.empty() ? "unresolved" : s.resource);
-      }
-      for (const auto& n : names) unmeasuredLines_.insert(lineKey(p, n, writes(s.kind)));
+      for (const auto& n : lineNames(s, pass.bindings)) unmeasuredLines_.insert(lineKey(p, n, writes(s.kind)));
     }
   }
   // Record once, unsubmitted: every bind of the counter set creates its bank.
@@ -73,14 +60,8 @@ void RendererBase::discoverFootprint() {
   footprintDiscovering_ = false;
 
   footprint_.create(*ctx_);
-  gpu::DescriptorWrite w[2];
-  w[0].binding = 1;
-  w[0].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
-  w[0].buffer = footprint_.tableInfo();
-  w[1].binding = 2;
-  w[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  w[1].buffer = footprint_.bitmapInfo();
-  gpu::updateDescriptorSet(*ctx_, counterDescriptorSet_, w);
+  auto writes = footprint_.descriptorWrites(1, 2);
+  gpu::updateDescriptorSet(*ctx_, counterDescriptorSet_, writes);
   footprintReady_ = true;
 }
 
@@ -113,13 +94,12 @@ void RendererBase::fillFootprintBank(uint32_t bank, uint32_t passIndex, VkPipeli
   for (const auto& s : pass.sites) {
     if (!s.footprint) continue;
     const bool write = writes(s.kind);
+    const std::vector<std::string> names = lineNames(s, pass.bindings);
     if (s.kind == spirv::SiteKind::OutputWrite) {
-      auto it = s.location ? pass.bindings.outputs.find(*s.location) : pass.bindings.outputs.end();
-      if (it == pass.bindings.outputs.end()) continue;
-      const ResourceInfo* r = info(it->second);
+      const ResourceInfo* r = info(names[0]);
       if (r == nullptr || r->width == 0) continue;
       fp::ImageGeometry g{r->width, r->height, 1, 1, r->elementBytes * std::max(r->samples, 1u), 0, 1, 0};
-      std::string line = lineKey(passIndex, it->second, true);
+      std::string line = lineKey(passIndex, names[0], true);
       footprint_.set(bank, s.slot, fp::imageEntry(g, block, addRegion(line, "target", fp::imageBlocks(g, block))));
       continue;
     }
@@ -131,21 +111,16 @@ void RendererBase::fillFootprintBank(uint32_t bank, uint32_t passIndex, VkPipeli
       const gpu::Buffer& buffer = in->second.binding == 0 ? vertexBuffer() : scene_->attributeBuffer();
       auto bytes = log.buffer(buffer.buffer);
       if (!bytes) continue;
-      auto at = pass.bindings.vertexInputsAt.find(*s.location);
-      const std::string& name = at != pass.bindings.vertexInputsAt.end() ? at->second : pass.bindings.vertexInputs;
-      std::string line = lineKey(passIndex, name, false);
+      std::string line = lineKey(passIndex, names[0], false);
       uint32_t base = addRegion(line, handleKey("buffer", buffer.buffer), fp::bufferBlocks(*bytes, block));
       footprint_.set(bank, s.slot, fp::vertexInputEntry(*bytes, in->second.stride, in->second.offset, block, base));
       continue;
     }
     if (s.set < 0 || size_t(s.set) >= bound.size() || bound[size_t(s.set)] == VK_NULL_HANDLE) continue;
     VkDescriptorSet set = bound[size_t(s.set)];
-    std::vector<std::string> names;
-    if (auto it = pass.bindings.bindings.find({s.set, s.binding}); it != pass.bindings.bindings.end()) names = it->second;
-    if (names.empty()) names.push_back(s.resource.empty() ? "unresolved" : s.resource);
     for (uint32_t i = 0; i < std::max(s.slotCount, 1u); ++i) {
       uint32_t element = s.slotCount > 1 ? i : s.index.value_or(0);
-      const std::string& name = names.size() > 1 ? names[std::min<size_t>(element, names.size() - 1)] : names[0];
+      const std::string& name = elementName(names, element);
       const gpu::LoggedDescriptor* d = log.written(set, uint32_t(s.binding), element);
       if (d == nullptr) continue;
       std::string line = lineKey(passIndex, name, write);

@@ -19,6 +19,25 @@ uint64_t slotValue(const std::vector<uint64_t>& counters, uint32_t slot) {
 
 }  // namespace
 
+std::vector<std::string> lineNames(const spirv::Site& site, const PassBindings& bindings) {
+  if (site.kind == spirv::SiteKind::OutputWrite) {
+    auto it = site.location ? bindings.outputs.find(*site.location) : bindings.outputs.end();
+    return {it != bindings.outputs.end() ? it->second : "output " + std::to_string(site.location.value_or(0))};
+  }
+  if (site.kind == spirv::SiteKind::BufferRead && site.location) {  // a vertex attribute
+    auto at = bindings.vertexInputsAt.find(uint32_t(*site.location));
+    return {at != bindings.vertexInputsAt.end() ? at->second : bindings.vertexInputs};
+  }
+  std::vector<std::string> names;
+  if (auto it = bindings.bindings.find({site.set, site.binding}); it != bindings.bindings.end()) names = it->second;
+  if (names.empty()) names.push_back(site.resource.empty() ? "unresolved" : site.resource);
+  return names;
+}
+
+const std::string& elementName(const std::vector<std::string>& names, size_t element) {
+  return names.size() > 1 ? names[std::min(element, names.size() - 1)] : names[0];
+}
+
 void addAccess(std::vector<Access>& accesses, const std::string& resource, bool write, uint64_t count,
                uint64_t elementBytes, const std::string& source) {
   auto it = std::find_if(accesses.begin(), accesses.end(), [&](const Access& a) {
@@ -63,9 +82,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       continue;
     }
     if (site.kind == SiteKind::OutputWrite) {
-      auto it = site.location ? bindings.outputs.find(*site.location) : bindings.outputs.end();
-      std::string name =
-          it != bindings.outputs.end() ? it->second : "output " + std::to_string(site.location.value_or(0));
+      const std::string name = lineNames(site, bindings)[0];
       addAccess(out.accesses, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes),
                 "counter");
       noteSlot(slotValue(counters, site.slot), name);
@@ -75,22 +92,18 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
                        site.kind == SiteKind::ImageAtomic;
     const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
     if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
-      auto at = bindings.vertexInputsAt.find(uint32_t(*site.location));
-      const std::string& buffer = at != bindings.vertexInputsAt.end() ? at->second : bindings.vertexInputs;
+      const std::string buffer = lineNames(site, bindings)[0];
       addAccess(out.accesses, buffer, false, slotValue(counters, site.slot), site.elementBytes, "counter");
       noteSlot(slotValue(counters, site.slot), buffer);
       continue;
     }
-    auto it = bindings.bindings.find({site.set, site.binding});
-    std::vector<std::string> names;
-    if (it != bindings.bindings.end()) names = it->second;
-    if (names.empty()) names.push_back(site.resource.empty() ? "unresolved" : site.resource);
+    const std::vector<std::string> names = lineNames(site, bindings);
     for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
       uint64_t n = slotValue(counters, site.slot + i);
       if (n == 0 && site.slotCount > 1) continue;
       // A dynamic index: element i; a constant index: that element; else the binding.
       size_t element = site.slotCount > 1 ? i : site.index.value_or(0);
-      const std::string& name = names.size() > 1 ? names[std::min(element, names.size() - 1)] : names[0];
+      const std::string& name = elementName(names, element);
       uint64_t bytes = isBuffer ? site.elementBytes : bytesOf(name, site.elementBytes);
       if (auto o = bindings.elementBytes.find({site.set, site.binding}); o != bindings.elementBytes.end()) {
         bytes = o->second;

@@ -42,6 +42,14 @@ struct PassCounts {
   std::string maxSlotResource;
 };
 
+// The line names a site's slots count for: the attachment at an output's
+// Location, the vertex buffer behind an attribute, the resources bound at
+// the site's (set, binding) (one per array element where the pass named
+// them so), else the site's own resource name.
+std::vector<std::string> lineNames(const spirv::Site& site, const PassBindings& bindings);
+// The name of descriptor array element `element` among lineNames().
+const std::string& elementName(const std::vector<std::string>& names, size_t element);
+
 // `counters` is the whole counter buffer (a site's slots index it directly).
 // Resources missing from `resources` fall back to the site's element bytes.
 PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,

@@ -245,12 +245,9 @@ class FootprintPass {
     cw[0].binding = 0;
     cw[0].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     cw[0].buffer = {counters.buffer, 0, VK_WHOLE_SIZE};
-    cw[1].binding = 1;
-    cw[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
-    cw[1].buffer = table.tableInfo();
-    cw[2].binding = 2;
-    cw[2].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    cw[2].buffer = table.bitmapInfo();
+    auto fw = table.descriptorWrites(1, 2);
+    cw[1] = fw[0];
+    cw[2] = fw[1];
     gpu::updateDescriptorSet(ctx_, counterSet, cw);
 
     for (const auto& w : words) shaderModules.push_back(gpu::createShaderModule(ctx_, w));
