@@ -29,19 +29,6 @@ glsl::Target glslTarget(const Context& ctx) {
   return glsl::Target::Vulkan10;
 }
 
-namespace {
-bool usesDemote(std::span<const uint32_t> module) {
-  constexpr uint32_t kOpDemoteToHelperInvocation = 5380;
-  for (size_t at = 5; at < module.size();) {
-    uint32_t count = module[at] >> 16;
-    if ((module[at] & 0xffffu) == kOpDemoteToHelperInvocation) return true;
-    if (count == 0) break;
-    at += count;
-  }
-  return false;
-}
-}  // namespace
-
 spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mode, uint32_t firstSlot,
                                               std::span<const uint32_t> module) {
   spirv::InstrumentOptions options;
@@ -64,7 +51,7 @@ spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mo
   options.set = std::min<uint32_t>(options.set, ctx.limits.maxBoundDescriptorSets - 1);
   // Subgroup mode reads HelperInvocation volatile in modules that demote,
   // which Mesa 22.3's lavapipe cannot compile: count those exactly there.
-  if (ctx.volatileHelperInvocationCrashes && usesDemote(module)) {
+  if (ctx.volatileHelperInvocationCrashes && spirv::usesDemote(module)) {
     options.subgroupStages &= ~spirv::stageBit(spirv::Stage::Fragment);
   }
   return options;

@@ -249,6 +249,17 @@ Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOp
   return run(words, options, false);
 }
 
+bool usesDemote(std::span<const uint32_t> words) {
+  constexpr uint32_t kOpDemoteToHelperInvocation = 5380;
+  for (size_t at = 5; at < words.size();) {
+    const uint32_t count = words[at] >> 16;
+    if ((words[at] & 0xffffu) == kOpDemoteToHelperInvocation) return true;
+    if (count == 0) break;
+    at += count;
+  }
+  return false;
+}
+
 void foldCopies(std::span<uint64_t> counters, const CopyLayout& l) {
   for (uint32_t k = 1; k < l.copies; ++k) {
     for (uint32_t s = 0; s < l.slotCount; ++s) {

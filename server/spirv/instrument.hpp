@@ -132,6 +132,11 @@ Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOp
 nlohmann::json toJson(const Site& site);
 nlohmann::json toJson(const Instrumented& result, const InstrumentOptions& options);
 
+// Whether the module demotes fragments to helpers (OpDemoteToHelperInvocation):
+// Mesa 22.3's lavapipe cannot compile subgroup reductions that read
+// HelperInvocation volatile in such modules.
+bool usesDemote(std::span<const uint32_t> words);
+
 // Bytes read as a little-endian buffer of uint32 words, with a clear error for
 // sizes that are not a whole number of words.
 Result<std::vector<uint32_t>> wordsFromBytes(std::span<const uint8_t> bytes);

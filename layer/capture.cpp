@@ -1,0 +1,838 @@
+// The layer's counting: the counter buffer and its regions, binding the
+// counter set at each draw, reading counters and queries back after each
+// submission, frames, and the output file (docs/layer.md).
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "names.hpp"
+#include "state.hpp"
+
+namespace tally::layer {
+
+namespace {
+
+void log(const std::string& line) { std::fprintf(stderr, "tally layer: %s\n", line.c_str()); }
+
+bool parseCount(const char* name, uint32_t low, uint32_t high, uint32_t& out, std::string& error) {
+  const char* text = std::getenv(name);
+  if (text == nullptr || *text == '\0') return true;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(text, &end, 10);
+  if (*end != '\0' || v < low || v > high) {
+    error = std::string(name) + ": must be an integer between " + std::to_string(low) + " and " +
+            std::to_string(high) + ", got '" + text + "'";
+    return false;
+  }
+  out = uint32_t(v);
+  return true;
+}
+
+uint32_t stageMask(VkShaderStageFlags stages) {
+  using spirv::Stage;
+  uint32_t mask = 0;
+  const std::pair<VkShaderStageFlagBits, Stage> map[] = {
+      {VK_SHADER_STAGE_VERTEX_BIT, Stage::Vertex},
+      {VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT, Stage::TessControl},
+      {VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT, Stage::TessEval},
+      {VK_SHADER_STAGE_GEOMETRY_BIT, Stage::Geometry},
+      {VK_SHADER_STAGE_FRAGMENT_BIT, Stage::Fragment},
+      {VK_SHADER_STAGE_COMPUTE_BIT, Stage::Compute},
+      {VK_SHADER_STAGE_TASK_BIT_EXT, Stage::Task},
+      {VK_SHADER_STAGE_MESH_BIT_EXT, Stage::Mesh}};
+  for (const auto& [bit, stage] : map) {
+    if (stages & bit) mask |= spirv::stageBit(stage);
+  }
+  return mask;
+}
+
+uint32_t memoryType(const DeviceState& dev, uint32_t bits, VkMemoryPropertyFlags required,
+                    VkMemoryPropertyFlags preferred) {
+  uint32_t fallback = UINT32_MAX;
+  for (uint32_t i = 0; i < dev.memory.memoryTypeCount; ++i) {
+    const auto flags = dev.memory.memoryTypes[i].propertyFlags;
+    if (!(bits & (1u << i)) || (flags & required) != required) continue;
+    if ((flags & preferred) == preferred) return i;
+    if (fallback == UINT32_MAX) fallback = i;
+  }
+  return fallback;
+}
+
+bool createBuffer(DeviceState& dev, VkDeviceSize size, VkBufferUsageFlags usage, VkMemoryPropertyFlags required,
+                  VkMemoryPropertyFlags preferred, VkBuffer& buffer, VkDeviceMemory& memory) {
+  VkBufferCreateInfo info = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = size;
+  info.usage = usage;
+  if (dev.d.CreateBuffer(dev.device, &info, nullptr, &buffer) != VK_SUCCESS) return false;
+  VkMemoryRequirements req{};
+  dev.d.GetBufferMemoryRequirements(dev.device, buffer, &req);
+  VkMemoryAllocateInfo alloc = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  alloc.allocationSize = req.size;
+  alloc.memoryTypeIndex = memoryType(dev, req.memoryTypeBits, required, preferred);
+  if (alloc.memoryTypeIndex == UINT32_MAX || dev.d.AllocateMemory(dev.device, &alloc, nullptr, &memory) != VK_SUCCESS) {
+    dev.d.DestroyBuffer(dev.device, buffer, nullptr);
+    buffer = VK_NULL_HANDLE;
+    return false;
+  }
+  dev.d.BindBufferMemory(dev.device, buffer, memory, 0);
+  return true;
+}
+
+VkCommandPool ownPool(DeviceState& dev, uint32_t family) {
+  auto it = dev.ownPools.find(family);
+  if (it != dev.ownPools.end()) return it->second;
+  VkCommandPoolCreateInfo info = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  info.queueFamilyIndex = family;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  dev.d.CreateCommandPool(dev.device, &info, nullptr, &pool);
+  dev.ownPools[family] = pool;
+  return pool;
+}
+
+VkCommandBuffer ownCommandBuffer(DeviceState& dev, VkCommandPool pool) {
+  VkCommandBufferAllocateInfo info = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  info.commandPool = pool;
+  info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  info.commandBufferCount = 1;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  if (dev.d.AllocateCommandBuffers(dev.device, &info, &cmd) != VK_SUCCESS) return VK_NULL_HANDLE;
+  // A command buffer the layer made itself carries no dispatch pointer until the loader sets it.
+  if (dev.setLoaderData != nullptr) dev.setLoaderData(dev.device, cmd);
+  return cmd;
+}
+
+void memoryBarrier(DeviceState& dev, VkCommandBuffer cmd, VkPipelineStageFlags src, VkAccessFlags srcAccess,
+                   VkPipelineStageFlags dst, VkAccessFlags dstAccess) {
+  VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  barrier.srcAccessMask = srcAccess;
+  barrier.dstAccessMask = dstAccess;
+  dev.d.CmdPipelineBarrier(cmd, src, dst, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+}
+
+}  // namespace
+
+const char* toString(Kind kind) {
+  switch (kind) {
+    case Kind::Texture: return "texture";
+    case Kind::Attachment: return "attachment";
+    case Kind::Depth: return "depth";
+    case Kind::Buffer: return "buffer";
+  }
+  return "buffer";
+}
+
+std::string Resource::displayName() const {
+  if (!name.empty()) return name;
+  if (!image) return "buffer " + hexHandle(handle) + " (" + std::to_string(size) + " B)";
+  return std::string(toString(kind)) + " " + hexHandle(handle) + " " + formatName(format) + " " +
+         std::to_string(width) + "x" + std::to_string(height);
+}
+
+Config Config::fromEnvironment() {
+  Config c;
+  if (const char* out = std::getenv("TALLY_LAYER_OUTPUT")) c.output = out;
+  std::string error;
+  parseCount("TALLY_LAYER_FRAMES", 1, 100000, c.frames, error) &&
+      parseCount("TALLY_LAYER_SKIP_FRAMES", 0, 10000000, c.skipFrames, error) &&
+      parseCount("TALLY_LAYER_FRAME_SUBMITS", 0, 100000, c.frameSubmits, error);
+  if (const char* mode = std::getenv("TALLY_LAYER_COUNTING"); mode != nullptr && *mode != '\0' && error.empty()) {
+    auto parsed = spirv::parseMode(mode);
+    if (!parsed) {
+      error = std::string("TALLY_LAYER_COUNTING: ") + parsed.error();
+    } else if (parsed->kind == spirv::CountMode::Sampled) {
+      error = "TALLY_LAYER_COUNTING: sampled modes are not offered by the layer (exact or accumulate)";
+    } else {
+      c.mode = *parsed;
+    }
+  }
+  c.error = error;
+  return c;
+}
+
+void setupCounting(DeviceState& dev) {
+  std::lock_guard lock(dev.mutex);
+  auto refuse = [&](const std::string& why) {
+    dev.counting = false;
+    dev.notCounting = why;
+    log("not counting: " + why);
+  };
+  if (!dev.config.error.empty()) return refuse(dev.config.error);
+  if (dev.properties.apiVersion < VK_API_VERSION_1_1) return refuse("the device offers Vulkan 1.0; counting needs 1.1");
+  if (dev.queueFamilies.empty()) return refuse("the application created no graphics or compute queue");
+
+  dev.counterSet = std::min<uint32_t>(dev.properties.limits.maxBoundDescriptorSets, 32) - 1;
+  auto& o = dev.instrumentOptions;
+  o.mode = dev.config.mode;
+  o.set = dev.counterSet;
+  o.binding = 0;
+  // 32-bit atomics in pairs: no 64-bit features asked of the application's device.
+  o.width = spirv::CounterWidth::Uint32Pair;
+  if (dev.instance->getProperties2 != nullptr) {
+    VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};
+    dev.instance->getProperties2(dev.physical, &props2);
+    constexpr VkSubgroupFeatureFlags kNeeded =
+        VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+    o.subgroupStages = (subgroup.supportedOperations & kNeeded) == kNeeded ? stageMask(subgroup.supportedStages) : 0;
+  }
+  // As the built-in renderers choose (gpu::instrumentOptionsFor): per lane in
+  // NVIDIA's graphics stages, reduced elsewhere.
+  constexpr uint32_t kNvidia = 0x10DE;
+  if (dev.properties.vendorID != kNvidia) o.autoLaneStages = 0;
+
+  VkDescriptorSetLayoutBinding binding = {};
+  binding.binding = 0;
+  binding.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
+  binding.descriptorCount = 1;
+  binding.stageFlags = VK_SHADER_STAGE_ALL;
+  VkDescriptorSetLayoutCreateInfo layoutInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  layoutInfo.bindingCount = 1;
+  layoutInfo.pBindings = &binding;
+  dev.d.CreateDescriptorSetLayout(dev.device, &layoutInfo, nullptr, &dev.counterSetLayout);
+  VkDescriptorSetLayoutCreateInfo emptyInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  dev.d.CreateDescriptorSetLayout(dev.device, &emptyInfo, nullptr, &dev.emptySetLayout);
+  VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 1};
+  VkDescriptorPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  poolInfo.maxSets = 1;
+  poolInfo.poolSizeCount = 1;
+  poolInfo.pPoolSizes = &size;
+  dev.d.CreateDescriptorPool(dev.device, &poolInfo, nullptr, &dev.descriptorPool);
+  VkDescriptorSetAllocateInfo setInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  setInfo.descriptorPool = dev.descriptorPool;
+  setInfo.descriptorSetCount = 1;
+  setInfo.pSetLayouts = &dev.counterSetLayout;
+  if (dev.counterSetLayout == VK_NULL_HANDLE || dev.emptySetLayout == VK_NULL_HANDLE ||
+      dev.d.AllocateDescriptorSets(dev.device, &setInfo, &dev.counterDescriptorSet) != VK_SUCCESS) {
+    return refuse("could not create the counter descriptor set");
+  }
+
+  // The arena of regions (the first is a sink that draws bind when the arena
+  // is full: counted there, never read) plus one region's range of slack.
+  dev.alignment = std::max<VkDeviceSize>(dev.properties.limits.minStorageBufferOffsetAlignment, 64);
+  dev.regionRange = std::min<VkDeviceSize>(1u << 20, dev.properties.limits.maxStorageBufferRange);
+  dev.arenaBytes = 64u << 20;
+  if (!createBuffer(dev, dev.arenaBytes + dev.regionRange,
+                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                        VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                    0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, dev.counterBuffer, dev.counterMemory)) {
+    return refuse("could not allocate the counter buffer");
+  }
+  dev.arenaNext = (dev.regionRange + dev.alignment - 1) / dev.alignment * dev.alignment;
+  VkDescriptorBufferInfo bufferInfo = {dev.counterBuffer, 0, dev.regionRange};
+  VkWriteDescriptorSet write = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  write.dstSet = dev.counterDescriptorSet;
+  write.descriptorCount = 1;
+  write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
+  write.pBufferInfo = &bufferInfo;
+  dev.d.UpdateDescriptorSets(dev.device, 1, &write, 0, nullptr);
+
+  // Counters start at zero.
+  auto [queue, family] = *dev.queueFamilies.begin();
+  VkCommandBuffer cmd = ownCommandBuffer(dev, ownPool(dev, family));
+  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  dev.d.BeginCommandBuffer(cmd, &begin);
+  dev.d.CmdFillBuffer(cmd, dev.counterBuffer, 0, VK_WHOLE_SIZE, 0);
+  memoryBarrier(dev, cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+  dev.d.EndCommandBuffer(cmd);
+  VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd;
+  dev.d.QueueSubmit(queue, 1, &submit, VK_NULL_HANDLE);
+  dev.d.QueueWaitIdle(queue);
+  dev.d.FreeCommandBuffers(dev.device, ownPool(dev, family), 1, &cmd);
+  dev.counting = true;
+  log(std::string("counting ") + spirv::toString(o.mode) + " on " + dev.properties.deviceName + ", descriptor set " +
+      std::to_string(dev.counterSet) + (dev.config.output.empty() ? "" : ", output " + dev.config.output));
+}
+
+void destroyCounting(DeviceState& dev) {
+  for (auto& h : dev.pending) dev.idle.push_back(std::move(h));
+  dev.pending.clear();
+  for (auto& h : dev.idle) {
+    if (h->fence != VK_NULL_HANDLE) dev.d.DestroyFence(dev.device, h->fence, nullptr);
+    if (h->buffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, h->buffer, nullptr);
+    if (h->memory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, h->memory, nullptr);
+  }
+  dev.idle.clear();
+  for (auto& [handle, cb] : dev.commandBuffers) {
+    if (cb->timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb->timestampPool, nullptr);
+    if (cb->statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb->statisticsPool, nullptr);
+  }
+  for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
+  if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
+  if (dev.counterMemory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, dev.counterMemory, nullptr);
+  if (dev.descriptorPool != VK_NULL_HANDLE) dev.d.DestroyDescriptorPool(dev.device, dev.descriptorPool, nullptr);
+  if (dev.counterSetLayout != VK_NULL_HANDLE) dev.d.DestroyDescriptorSetLayout(dev.device, dev.counterSetLayout, nullptr);
+  if (dev.emptySetLayout != VK_NULL_HANDLE) dev.d.DestroyDescriptorSetLayout(dev.device, dev.emptySetLayout, nullptr);
+  dev.counting = false;
+}
+
+void releaseRegions(DeviceState& dev, CommandBufferState& cb) {
+  for (const auto& r : cb.regions) {
+    if (r.owned && r.offset != 0) dev.freeRegions[r.bytes].push_back(r.offset);
+  }
+}
+
+namespace {
+
+// What a site's slot `i` counts at this draw.
+Bound resolveSlot(const DeviceState& dev, const CommandBufferState& cb, const CommandBufferState::BindPoint& bp,
+                  const PipelineInfo& pipeline, const spirv::Site& site, uint32_t i) {
+  using spirv::SiteKind;
+  if (site.kind == SiteKind::OutputWrite) {
+    const uint32_t location = site.location.value_or(0);
+    return location < cb.colorAttachments.size() ? cb.colorAttachments[location] : Bound{};
+  }
+  if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
+    auto b = pipeline.vertexLocationBinding.find(*site.location);
+    if (b == pipeline.vertexLocationBinding.end()) return {};
+    auto v = cb.vertexBuffers.find(b->second);
+    return v == cb.vertexBuffers.end() ? Bound{} : Bound{v->second};
+  }
+  if (site.set < 0 || site.binding < 0 || site.set >= int64_t(bp.sets.size())) return {};
+  auto set = dev.sets.find(bp.sets[size_t(site.set)]);
+  if (set == dev.sets.end()) return {};
+  auto binding = set->second.bindings.find(uint32_t(site.binding));
+  if (binding == set->second.bindings.end()) return {};
+  const size_t element = site.slotCount > 1 ? i : site.index.value_or(0);
+  return element < binding->second.size() ? binding->second[element] : Bound{};
+}
+
+VkDeviceSize allocateRegion(DeviceState& dev, VkDeviceSize bytes) {
+  auto& free = dev.freeRegions[bytes];
+  if (!free.empty()) {
+    VkDeviceSize offset = free.back();
+    free.pop_back();
+    return offset;
+  }
+  if (dev.arenaNext + bytes > dev.arenaBytes) return 0;  // the sink
+  VkDeviceSize offset = dev.arenaNext;
+  dev.arenaNext += bytes;
+  return offset;
+}
+
+}  // namespace
+
+void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch) {
+  auto& bp = cb.bind[bindPointIndex];
+  if (!bp.pipeline || !bp.pipeline->counted) return;
+  const PipelineInfo& pipeline = *bp.pipeline;
+  std::vector<Bound> slots(pipeline.slots);
+  std::vector<uint64_t> key;
+  key.reserve(pipeline.slots * 2);
+  std::vector<bool> seen(pipeline.slots, false);
+  for (const auto& site : pipeline.sites) {
+    if (site.kind == spirv::SiteKind::Invocation) continue;
+    for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
+      const uint32_t slot = site.slot + i;
+      if (slot >= slots.size() || seen[slot]) continue;
+      seen[slot] = true;
+      slots[slot] = resolveSlot(dev, cb, bp, pipeline, site, i);
+      key.push_back(slot);
+      key.push_back(slots[slot].resource);
+      key.push_back(uint64_t(slots[slot].format) << 32 | slots[slot].aspect);
+    }
+  }
+  const uint32_t pass = cb.secondary ? 0 : uint32_t(std::max(cb.currentPass, 0));
+  auto index = std::make_tuple(pass, pipeline.handle, std::move(key));
+  VkDeviceSize offset = 0;
+  if (auto it = cb.regionIndex.find(index); it != cb.regionIndex.end()) {
+    offset = cb.regions[it->second].offset;
+  } else {
+    const VkDeviceSize bytes = (VkDeviceSize(pipeline.slots) * 8 + dev.alignment - 1) / dev.alignment * dev.alignment;
+    offset = allocateRegion(dev, bytes);
+    if (offset == 0) {
+      if (!cb.overflowNoted) dev.notes.insert("the counter arena is full: some draws were not counted");
+      cb.overflowNoted = true;
+    } else {
+      Region region;
+      region.offset = offset;
+      region.bytes = bytes;
+      region.pipeline = bp.pipeline;
+      region.slotResources = std::move(slots);
+      region.pass = pass;
+      cb.regions.push_back(std::move(region));
+      cb.regionIndex.emplace(std::move(index), cb.regions.size() - 1);
+    }
+  }
+  if (bp.dirty || bp.boundOffset != offset) {
+    const uint32_t dynamicOffset = uint32_t(offset);
+    dev.d.CmdBindDescriptorSets(cb.handle, isDispatch ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
+                                pipeline.layout, dev.counterSet, 1, &dev.counterDescriptorSet, 1, &dynamicOffset);
+    bp.boundOffset = offset;
+    bp.dirty = false;
+  }
+}
+
+namespace {
+
+bool inRange(const DeviceState& dev, uint64_t frame) {
+  return frame >= dev.config.skipFrames && frame < uint64_t(dev.config.skipFrames) + dev.config.frames;
+}
+
+void addLine(PassRecord& pass, const std::string& name, bool write, const std::string& source, uint64_t count,
+             uint64_t bytes, const std::string& kind, const std::string& format) {
+  auto& line = pass.lines[{name, write, source}];
+  line.count += count;
+  line.bytes += count * bytes;
+  line.kind = kind;
+  line.format = format;
+}
+
+// Adds a region's counters to its pass, attributing each slot as the
+// built-in renderers do (renderers/pass_counters.cpp): sites sharing a slot
+// count once.
+void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_t> counters, PassRecord& pass) {
+  const PipelineInfo& pipeline = *region.pipeline;
+  for (const auto& layout : pipeline.foldLayouts) spirv::foldCopies(counters, layout);
+  std::set<uint32_t> seen;
+  for (const auto& site : pipeline.sites) {
+    using spirv::SiteKind;
+    if (!seen.insert(site.slot).second) continue;
+    auto value = [&](uint32_t slot) { return slot < counters.size() ? counters[slot] : 0; };
+    if (site.kind == SiteKind::Invocation) {
+      const uint64_t n = value(site.slot);
+      if (site.stage == spirv::Stage::Fragment) pass.fragmentInvocations += n;
+      if (site.stage == spirv::Stage::Vertex) pass.vertexInvocations += n;
+      if (site.stage == spirv::Stage::Compute) pass.computeInvocations += n;
+      continue;
+    }
+    const bool write = site.kind == SiteKind::BufferWrite || site.kind == SiteKind::ImageWrite ||
+                       site.kind == SiteKind::ImageAtomic || site.kind == SiteKind::OutputWrite;
+    const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
+    for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
+      const uint32_t slot = site.slot + i;
+      const uint64_t n = value(slot);
+      if (n == 0 && site.slotCount > 1) continue;
+      const Bound bound = slot < region.slotResources.size() ? region.slotResources[slot] : Bound{};
+      std::string name, kind = isBuffer ? "buffer" : "texture", format;
+      uint64_t bytes = site.elementBytes;
+      auto r = dev.resources.find(bound.resource);
+      if (r != dev.resources.end()) {
+        name = r->second.displayName();
+        kind = toString(r->second.kind);
+        if (r->second.image) {
+          const VkFormat f = bound.format != VK_FORMAT_UNDEFINED ? bound.format : r->second.format;
+          format = formatName(r->second.format);
+          if (!isBuffer && formatBytes(f, bound.aspect) != 0) bytes = formatBytes(f, bound.aspect);
+        }
+      } else if (site.kind == SiteKind::OutputWrite) {
+        name = "output " + std::to_string(site.location.value_or(0));
+        kind = "attachment";
+      } else if (site.location) {
+        name = "vertex input " + std::to_string(*site.location);
+        kind = "buffer";
+      } else {
+        name = site.set >= 0 ? "set " + std::to_string(site.set) + " binding " + std::to_string(site.binding)
+                             : (site.resource.empty() ? "unresolved" : site.resource);
+      }
+      addLine(pass, name, write, "counter", n, bytes, kind, format);
+    }
+  }
+}
+
+void processHarvest(DeviceState& dev, Harvest& h) {
+  auto frame = dev.frames.find(h.frame);
+  if (frame == dev.frames.end() || dev.written) return;
+  const auto* base = static_cast<const uint8_t*>(h.mapped);
+  const double period = dev.properties.limits.timestampPeriod;
+  for (const auto& part : h.parts) {
+    const size_t first = frame->second.passes.size();
+    std::vector<uint64_t> timestamps(part.timestamps), statistics(size_t(part.statistics) * 3);
+    std::memcpy(timestamps.data(), base + part.timestampsAt, timestamps.size() * 8);
+    std::memcpy(statistics.data(), base + part.statisticsAt, statistics.size() * 8);
+    for (const auto& scope : part.passes) {
+      PassRecord pass;
+      pass.name = scope.label;
+      pass.draws = scope.draws;
+      pass.dispatches = scope.dispatches;
+      if (scope.timestampBegin != UINT32_MAX && scope.timestampBegin + 1 < timestamps.size()) {
+        const uint64_t begin = timestamps[scope.timestampBegin], end = timestamps[scope.timestampBegin + 1];
+        pass.gpuMs = end >= begin ? double(end - begin) * period / 1e6 : 0.0;
+        pass.timed = true;
+      }
+      if (!scope.statisticQueries.empty()) {
+        pass.vertexStatistic = pass.fragmentStatistic = pass.computeStatistic = 0;
+        for (uint32_t q : scope.statisticQueries) {
+          if (size_t(q) * 3 + 2 >= statistics.size()) continue;
+          pass.vertexStatistic += int64_t(statistics[q * 3]);
+          pass.fragmentStatistic += int64_t(statistics[q * 3 + 1]);
+          pass.computeStatistic += int64_t(statistics[q * 3 + 2]);
+        }
+      }
+      for (const auto& [key, indices] : scope.indexReads) {
+        auto r = dev.resources.find(key.first);
+        addLine(pass, r != dev.resources.end() ? r->second.displayName() : "index buffer", false, "derived", indices,
+                key.second, "buffer", "");
+      }
+      // Unnamed passes take their kind and their place among the frame's passes of that kind.
+      if (pass.name.empty()) {
+        size_t n = 0;
+        for (const auto& p : frame->second.passes) n += p.name.rfind(scope.kind + " ", 0) == 0 ? 1 : 0;
+        pass.name = scope.kind + " " + std::to_string(n);
+      }
+      frame->second.passes.push_back(std::move(pass));
+    }
+    for (size_t r = 0; r < part.regions.size(); ++r) {
+      const Region& region = part.regions[r];
+      std::vector<uint64_t> counters(region.pipeline->slots);
+      std::memcpy(counters.data(), base + part.regionAt[r], counters.size() * 8);
+      if (first + region.pass < frame->second.passes.size()) {
+        attributeRegion(dev, region, std::move(counters), frame->second.passes[first + region.pass]);
+      }
+    }
+  }
+}
+
+// Reads back every finished harvest; with `waitFrame`, first waits for those
+// of frames up to it.
+void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
+  for (auto it = dev.pending.begin(); it != dev.pending.end();) {
+    Harvest& h = **it;
+    VkResult status = dev.d.GetFenceStatus(dev.device, h.fence);
+    if (status == VK_NOT_READY && waitFrame && h.frame <= *waitFrame) {
+      status = dev.d.WaitForFences(dev.device, 1, &h.fence, VK_TRUE, UINT64_MAX);
+    }
+    if (status != VK_SUCCESS) {
+      if (status != VK_NOT_READY) {  // device lost: nothing more will arrive
+        dev.notes.insert("a readback failed (VkResult " + std::to_string(int(status)) + ")");
+        if (auto f = dev.frames.find(h.frame); f != dev.frames.end() && f->second.pendingHarvests > 0) {
+          --f->second.pendingHarvests;
+        }
+        dev.idle.push_back(std::move(*it));
+        it = dev.pending.erase(it);
+        continue;
+      }
+      ++it;
+      continue;
+    }
+    processHarvest(dev, h);
+    if (auto f = dev.frames.find(h.frame); f != dev.frames.end() && f->second.pendingHarvests > 0) {
+      --f->second.pendingHarvests;
+    }
+    h.parts.clear();
+    dev.idle.push_back(std::move(*it));
+    it = dev.pending.erase(it);
+  }
+}
+
+uint32_t framesFinished(const DeviceState& dev) {
+  uint32_t n = 0;
+  for (const auto& [index, f] : dev.frames) n += f.closed && f.pendingHarvests == 0 ? 1 : 0;
+  return n;
+}
+
+void writeOutput(DeviceState& dev, bool complete) {
+  if (dev.written || dev.config.output.empty()) return;
+  dev.written = true;
+  const std::string tmp = dev.config.output + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << outputJson(dev, complete).dump(1) << "\n";
+    if (!out) {
+      log("cannot write " + tmp);
+      return;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, dev.config.output, ec);
+  if (ec) log("cannot rename " + tmp + ": " + ec.message());
+  log("wrote " + dev.config.output + " (" + std::to_string(framesFinished(dev)) + " frames" +
+      (complete ? ")" : ", incomplete)"));
+}
+
+Harvest* takeHarvest(DeviceState& dev, VkDeviceSize bytes, uint32_t family) {
+  std::unique_ptr<Harvest> h;
+  for (auto it = dev.idle.begin(); it != dev.idle.end(); ++it) {
+    if ((*it)->pool == ownPool(dev, family)) {
+      h = std::move(*it);
+      dev.idle.erase(it);
+      break;
+    }
+  }
+  if (!h) {
+    h = std::make_unique<Harvest>();
+    h->pool = ownPool(dev, family);
+    h->cmd = ownCommandBuffer(dev, h->pool);
+    VkFenceCreateInfo fence = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    dev.d.CreateFence(dev.device, &fence, nullptr, &h->fence);
+  } else {
+    dev.d.ResetFences(dev.device, 1, &h->fence);
+  }
+  VkDeviceSize have = 0;
+  if (h->buffer != VK_NULL_HANDLE) {
+    VkMemoryRequirements req{};
+    dev.d.GetBufferMemoryRequirements(dev.device, h->buffer, &req);
+    have = req.size;
+  }
+  if (have < bytes) {
+    if (h->buffer != VK_NULL_HANDLE) {
+      dev.d.UnmapMemory(dev.device, h->memory);
+      dev.d.DestroyBuffer(dev.device, h->buffer, nullptr);
+      dev.d.FreeMemory(dev.device, h->memory, nullptr);
+    }
+    const VkDeviceSize size = std::max<VkDeviceSize>(bytes * 2, 64 * 1024);
+    if (!createBuffer(dev, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                      VK_MEMORY_PROPERTY_HOST_CACHED_BIT, h->buffer, h->memory)) {
+      h->buffer = VK_NULL_HANDLE;
+      dev.idle.push_back(std::move(h));
+      return nullptr;
+    }
+    dev.d.MapMemory(dev.device, h->memory, 0, VK_WHOLE_SIZE, 0, &h->mapped);
+  }
+  dev.pending.push_back(std::move(h));
+  return dev.pending.back().get();
+}
+
+}  // namespace
+
+void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
+  if (!dev.counting) return;
+  collect(dev, std::nullopt);
+  std::vector<Harvest::Part> parts;
+  VkDeviceSize at = 0;
+  std::vector<const CommandBufferState*> sources;
+  for (VkCommandBuffer cmd : submitted) {
+    auto it = dev.commandBuffers.find(cmd);
+    if (it == dev.commandBuffers.end() || it->second->secondary) continue;
+    const CommandBufferState& cb = *it->second;
+    if (cb.passes.empty() && cb.regions.empty()) continue;
+    Harvest::Part part;
+    part.passes = cb.passes;
+    part.regions = cb.regions;
+    for (const auto& r : cb.regions) {
+      part.regionAt.push_back(at);
+      at += VkDeviceSize(r.pipeline->slots) * 8;
+    }
+    part.timestampsAt = at;
+    part.timestamps = cb.timestampsUsed;
+    at += VkDeviceSize(cb.timestampsUsed) * 8;
+    part.statisticsAt = at;
+    part.statistics = cb.statisticsUsed;
+    at += VkDeviceSize(cb.statisticsUsed) * 24;
+    parts.push_back(std::move(part));
+    sources.push_back(&cb);
+  }
+  if (parts.empty()) return;  // no draw, no dispatch: not part of any frame's work
+
+  auto family = dev.queueFamilies.find(queue);
+  Harvest* h = family == dev.queueFamilies.end() ? nullptr : takeHarvest(dev, std::max<VkDeviceSize>(at, 8), family->second);
+  if (h == nullptr) {
+    dev.notes.insert("a submission's counters could not be read back (no readback buffer)");
+    return;
+  }
+  h->frame = dev.frame;
+  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  dev.d.BeginCommandBuffer(h->cmd, &begin);
+  // Everything the submission wrote is visible to the copies, which then
+  // zero the regions for the next submission.
+  memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_MEMORY_WRITE_BIT,
+                VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const auto& part = parts[p];
+    std::vector<VkBufferCopy> copies;
+    for (size_t r = 0; r < part.regions.size(); ++r) {
+      copies.push_back({part.regions[r].offset, part.regionAt[r], VkDeviceSize(part.regions[r].pipeline->slots) * 8});
+    }
+    if (!copies.empty()) dev.d.CmdCopyBuffer(h->cmd, dev.counterBuffer, h->buffer, uint32_t(copies.size()), copies.data());
+    const CommandBufferState& cb = *sources[p];
+    if (part.timestamps > 0) {
+      dev.d.CmdCopyQueryPoolResults(h->cmd, cb.timestampPool, 0, part.timestamps, h->buffer, part.timestampsAt, 8,
+                                    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+    }
+    if (part.statistics > 0) {
+      dev.d.CmdCopyQueryPoolResults(h->cmd, cb.statisticsPool, 0, part.statistics, h->buffer, part.statisticsAt, 24,
+                                    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+    }
+  }
+  memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                VK_ACCESS_TRANSFER_WRITE_BIT);
+  for (const auto& part : parts) {
+    for (const auto& r : part.regions) {
+      dev.d.CmdFillBuffer(h->cmd, dev.counterBuffer, r.offset, VkDeviceSize(r.pipeline->slots) * 8, 0);
+    }
+  }
+  memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT,
+                VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_HOST_READ_BIT);
+  dev.d.EndCommandBuffer(h->cmd);
+  VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &h->cmd;
+  if (dev.d.QueueSubmit(queue, 1, &submit, h->fence) != VK_SUCCESS) {
+    dev.notes.insert("a readback submission failed");
+    dev.idle.push_back(std::move(dev.pending.back()));
+    dev.pending.pop_back();
+    return;
+  }
+  h->parts = std::move(parts);
+  if (inRange(dev, dev.frame) && !dev.written) {
+    auto& frame = dev.frames[dev.frame];
+    frame.index = dev.frame;
+    frame.submissions += 1;
+    frame.pendingHarvests += 1;
+  }
+  if (dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
+}
+
+void endFrame(DeviceState& dev) {
+  if (!dev.counting) return;
+  if (auto f = dev.frames.find(dev.frame); f != dev.frames.end()) f->second.closed = true;
+  ++dev.frame;
+  dev.frameWorkSubmits = 0;
+  // Stall at most one frame: the frame before the one just ended must be read back now.
+  if (dev.frame >= 2) collect(dev, dev.frame - 2);
+  collect(dev, std::nullopt);
+  if (!dev.written && framesFinished(dev) >= dev.config.frames) writeOutput(dev, true);
+}
+
+void finish(DeviceState& dev, bool complete) {
+  if (!dev.counting && dev.config.output.empty()) return;
+  collect(dev, UINT64_MAX);
+  if (auto f = dev.frames.find(dev.frame); f != dev.frames.end() && dev.config.frameSubmits == 0) {
+    f->second.closed = true;  // the last frame, cut short by the application's end
+  }
+  if (dev.written) return;
+  writeOutput(dev, complete || framesFinished(dev) >= dev.config.frames);
+}
+
+nlohmann::json outputJson(DeviceState& dev, bool complete) {
+  using nlohmann::json;
+  char vendor[16];
+  std::snprintf(vendor, sizeof vendor, "0x%X", dev.properties.vendorID);
+  char deviceId[16];
+  std::snprintf(deviceId, sizeof deviceId, "0x%X", dev.properties.deviceID);
+  const uint32_t api = dev.properties.apiVersion;
+  std::string executable;
+  {
+    std::error_code ec;
+    executable = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+  }
+  std::string appName = dev.instance->applicationName;
+  if (appName.empty()) appName = std::filesystem::path(executable).filename().string();
+  bool timestamps = false;
+  for (const auto& f : dev.families) timestamps = timestamps || f.timestampValidBits > 0;
+  json out = {
+      {"complete", complete},
+      {"layer",
+       {{"name", "VK_LAYER_TALLY_counters"},
+        {"version", "0.1.0"},
+        {"counting", spirv::toString(dev.config.mode)},
+        {"descriptor_set", dev.counterSet},
+        {"frame_delimiter",
+         dev.config.frameSubmits == 0 ? std::string("present") : "submits:" + std::to_string(dev.config.frameSubmits)},
+        {"skip_frames", dev.config.skipFrames},
+        {"counting_enabled", dev.counting},
+        {"not_counting", dev.notCounting}}},
+      {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},
+      {"device",
+       {{"name", dev.properties.deviceName},
+        {"vendorID", vendor},
+        {"deviceID", deviceId},
+        {"driverInfo", dev.driverInfo},
+        {"apiVersion", std::to_string(VK_API_VERSION_MAJOR(api)) + "." + std::to_string(VK_API_VERSION_MINOR(api)) +
+                           "." + std::to_string(VK_API_VERSION_PATCH(api))},
+        {"timestamps", timestamps},
+        {"pipeline_statistics", dev.statistics}}},
+  };
+  // The extent: the swapchain's, else the largest colour attachment seen.
+  VkExtent2D extent = dev.extent;
+  std::map<std::string, const Resource*> used;
+  json frames = json::array();
+  for (const auto& [index, frame] : dev.frames) {
+    if (!frame.closed || frame.pendingHarvests > 0) continue;
+    // Passes of one name (a label around several render pass instances) are one pass.
+    std::vector<PassRecord> merged;
+    for (const auto& p : frame.passes) {
+      auto it = std::find_if(merged.begin(), merged.end(), [&](const PassRecord& m) { return m.name == p.name; });
+      if (it == merged.end()) {
+        merged.push_back(p);
+        continue;
+      }
+      it->gpuMs += p.gpuMs;
+      it->timed = it->timed || p.timed;
+      it->draws += p.draws;
+      it->dispatches += p.dispatches;
+      it->fragmentInvocations += p.fragmentInvocations;
+      it->vertexInvocations += p.vertexInvocations;
+      it->computeInvocations += p.computeInvocations;
+      auto addStat = [](int64_t& into, int64_t v) {
+        if (v >= 0) into = std::max<int64_t>(into, 0) + v;
+      };
+      addStat(it->fragmentStatistic, p.fragmentStatistic);
+      addStat(it->vertexStatistic, p.vertexStatistic);
+      addStat(it->computeStatistic, p.computeStatistic);
+      for (const auto& [key, line] : p.lines) {
+        auto& into = it->lines[key];
+        into.count += line.count;
+        into.bytes += line.bytes;
+        into.kind = line.kind;
+        into.format = line.format;
+      }
+    }
+    json passes = json::array();
+    double frameMs = 0;
+    for (const auto& p : merged) {
+      json resources = json::array();
+      for (const auto& [key, line] : p.lines) {
+        const auto& [name, write, source] = key;
+        resources.push_back({{"name", name},
+                             {"kind", line.kind},
+                             {"format", line.format},
+                             {"access", write ? "write" : "read"},
+                             {"count", line.count},
+                             {"bytes", line.bytes},
+                             {"source", source}});
+        used[name] = nullptr;
+      }
+      frameMs += p.timed ? p.gpuMs : 0;
+      passes.push_back({{"name", p.name},
+                        {"gpu_ms", p.timed ? p.gpuMs : -1.0},
+                        {"draws", p.draws},
+                        {"dispatches", p.dispatches},
+                        {"fragment_invocations", p.fragmentInvocations},
+                        {"fragment_invocations_statistic", p.fragmentStatistic},
+                        {"vertex_invocations", p.vertexInvocations},
+                        {"vertex_invocations_statistic", p.vertexStatistic},
+                        {"compute_invocations", p.computeInvocations},
+                        {"compute_invocations_statistic", p.computeStatistic},
+                        {"resources", std::move(resources)}});
+    }
+    frames.push_back({{"index", index}, {"submissions", frame.submissions}, {"frame_ms", frameMs}, {"passes", passes}});
+  }
+  json resources = json::array();
+  std::set<std::string> listed;
+  for (const auto& [handle, r] : dev.resources) {
+    const std::string name = r.displayName();
+    if (!used.count(name) || !listed.insert(name).second) continue;
+    if (extent.width == 0 && r.kind == Kind::Attachment && uint64_t(r.width) * r.height > 0) {
+      extent = {r.width, r.height};
+    }
+    resources.push_back({{"name", name},
+                         {"kind", toString(r.kind)},
+                         {"format", r.image ? formatName(r.format) : ""},
+                         {"element_bytes", r.image ? formatBytes(r.format) : 0},
+                         {"width", r.width},
+                         {"height", r.height},
+                         {"samples", r.samples},
+                         {"allocation_bytes", r.size},
+                         {"usage", r.usage},
+                         {"memory", ""}});
+  }
+  out["extent"] = {extent.width, extent.height};
+  out["resources"] = std::move(resources);
+  out["shaders"] = dev.shaderReports;
+  out["notes"] = json(std::vector<std::string>(dev.notes.begin(), dev.notes.end()));
+  out["frames"] = std::move(frames);
+  return out;
+}
+
+}  // namespace tally::layer

@@ -1,0 +1,1551 @@
+// VK_LAYER_TALLY_counters: the loader interface and every intercepted call.
+// What each call records, and how the counts are attributed, is described in
+// docs/layer.md; capture.cpp holds the counter regions, the readback and the
+// output.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string_view>
+
+#include "names.hpp"
+#include "state.hpp"
+
+namespace tally::layer {
+namespace {
+
+std::mutex g_mutex;  // guards the two maps below (each device has its own mutex for its state)
+std::unordered_map<void*, std::unique_ptr<InstanceState>> g_instances;
+std::unordered_map<void*, std::unique_ptr<DeviceState>> g_devices;
+
+InstanceState* instanceOf(const void* handle) {
+  std::lock_guard lock(g_mutex);
+  auto it = g_instances.find(dispatchKey(handle));
+  return it == g_instances.end() ? nullptr : it->second.get();
+}
+DeviceState* deviceOf(const void* handle) {
+  std::lock_guard lock(g_mutex);
+  auto it = g_devices.find(dispatchKey(handle));
+  return it == g_devices.end() ? nullptr : it->second.get();
+}
+
+CommandBufferState* cbState(DeviceState& dev, VkCommandBuffer cb) {
+  auto it = dev.commandBuffers.find(cb);
+  return it == dev.commandBuffers.end() ? nullptr : it->second.get();
+}
+
+void log(const std::string& line) { std::fprintf(stderr, "tally layer: %s\n", line.c_str()); }
+
+// ---------------------------------------------------------------- instance
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateInstance(const VkInstanceCreateInfo* info, const VkAllocationCallbacks* alloc,
+                                              VkInstance* instance) {
+  auto* chain = static_cast<const VkLayerInstanceCreateInfo*>(info->pNext);
+  while (chain != nullptr && !(chain->sType == VK_STRUCTURE_TYPE_LOADER_INSTANCE_CREATE_INFO &&
+                               chain->function == VK_LAYER_LINK_INFO)) {
+    chain = static_cast<const VkLayerInstanceCreateInfo*>(chain->pNext);
+  }
+  if (chain == nullptr) return VK_ERROR_INITIALIZATION_FAILED;
+  PFN_vkGetInstanceProcAddr gipa = chain->u.pLayerInfo->pfnNextGetInstanceProcAddr;
+  const_cast<VkLayerInstanceCreateInfo*>(chain)->u.pLayerInfo = chain->u.pLayerInfo->pNext;
+  auto create = reinterpret_cast<PFN_vkCreateInstance>(gipa(VK_NULL_HANDLE, "vkCreateInstance"));
+
+  // Counting needs Vulkan 1.1 (subgroup operations, SPIR-V 1.3): a 1.0
+  // application gets a 1.1 instance, which changes nothing it can observe.
+  VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  if (info->pApplicationInfo != nullptr) app = *info->pApplicationInfo;
+  if (app.apiVersion < VK_API_VERSION_1_1) app.apiVersion = VK_API_VERSION_1_1;
+  VkInstanceCreateInfo patched = *info;
+  patched.pApplicationInfo = &app;
+  VkResult result = create(&patched, alloc, instance);
+  if (result != VK_SUCCESS) return result;
+
+  auto state = std::make_unique<InstanceState>();
+  state->instance = *instance;
+  state->gipa = gipa;
+  state->apiVersion = app.apiVersion;
+  if (app.pApplicationName != nullptr) state->applicationName = app.pApplicationName;
+  if (app.pEngineName != nullptr) state->engineName = app.pEngineName;
+#define TALLY_LOAD(member, name) state->member = reinterpret_cast<decltype(state->member)>(gipa(*instance, name))
+  TALLY_LOAD(destroyInstance, "vkDestroyInstance");
+  TALLY_LOAD(getProperties, "vkGetPhysicalDeviceProperties");
+  TALLY_LOAD(getProperties2, "vkGetPhysicalDeviceProperties2");
+  TALLY_LOAD(getFeatures, "vkGetPhysicalDeviceFeatures");
+  TALLY_LOAD(getMemoryProperties, "vkGetPhysicalDeviceMemoryProperties");
+  TALLY_LOAD(getQueueFamilies, "vkGetPhysicalDeviceQueueFamilyProperties");
+#undef TALLY_LOAD
+  std::lock_guard lock(g_mutex);
+  g_instances[dispatchKey(*instance)] = std::move(state);
+  return VK_SUCCESS;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyInstance(VkInstance instance, const VkAllocationCallbacks* alloc) {
+  if (instance == VK_NULL_HANDLE) return;
+  std::unique_ptr<InstanceState> state;
+  {
+    std::lock_guard lock(g_mutex);
+    auto it = g_instances.find(dispatchKey(instance));
+    if (it == g_instances.end()) return;
+    state = std::move(it->second);
+    g_instances.erase(it);
+  }
+  state->destroyInstance(instance, alloc);
+}
+
+// ---------------------------------------------------------------- device
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkDeviceCreateInfo* info,
+                                            const VkAllocationCallbacks* alloc, VkDevice* device) {
+  InstanceState* inst = instanceOf(physical);
+  if (inst == nullptr) return VK_ERROR_INITIALIZATION_FAILED;
+  auto* link = static_cast<const VkLayerDeviceCreateInfo*>(info->pNext);
+  while (link != nullptr && !(link->sType == VK_STRUCTURE_TYPE_LOADER_DEVICE_CREATE_INFO &&
+                              link->function == VK_LAYER_LINK_INFO)) {
+    link = static_cast<const VkLayerDeviceCreateInfo*>(link->pNext);
+  }
+  if (link == nullptr) return VK_ERROR_INITIALIZATION_FAILED;
+  PFN_vkGetInstanceProcAddr gipa = link->u.pLayerInfo->pfnNextGetInstanceProcAddr;
+  PFN_vkGetDeviceProcAddr gdpa = link->u.pLayerInfo->pfnNextGetDeviceProcAddr;
+  const_cast<VkLayerDeviceCreateInfo*>(link)->u.pLayerInfo = link->u.pLayerInfo->pNext;
+  PFN_vkSetDeviceLoaderData setLoaderData = nullptr;
+  for (auto* p = static_cast<const VkLayerDeviceCreateInfo*>(info->pNext); p != nullptr;
+       p = static_cast<const VkLayerDeviceCreateInfo*>(p->pNext)) {
+    if (p->sType == VK_STRUCTURE_TYPE_LOADER_DEVICE_CREATE_INFO && p->function == VK_LOADER_DATA_CALLBACK) {
+      setLoaderData = p->u.pfnSetDeviceLoaderData;
+    }
+  }
+  auto create = reinterpret_cast<PFN_vkCreateDevice>(gipa(inst->instance, "vkCreateDevice"));
+
+  // The features counting needs, where the device has them: stores and
+  // atomics in fragment and vertex stages, and pipeline statistics. Patched
+  // in place for the call and restored after it.
+  VkPhysicalDeviceFeatures supported{};
+  inst->getFeatures(physical, &supported);
+  VkPhysicalDeviceFeatures* features = const_cast<VkPhysicalDeviceFeatures*>(info->pEnabledFeatures);
+  for (auto* p = static_cast<VkBaseOutStructure*>(const_cast<void*>(info->pNext)); p != nullptr; p = p->pNext) {
+    if (p->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2) {
+      features = &reinterpret_cast<VkPhysicalDeviceFeatures2*>(p)->features;
+    }
+  }
+  VkPhysicalDeviceFeatures own{};
+  VkDeviceCreateInfo patched = *info;
+  if (features == nullptr) {
+    features = &own;
+    patched.pEnabledFeatures = &own;
+  }
+  const VkPhysicalDeviceFeatures saved = *features;
+  features->fragmentStoresAndAtomics |= supported.fragmentStoresAndAtomics;
+  features->vertexPipelineStoresAndAtomics |= supported.vertexPipelineStoresAndAtomics;
+  features->pipelineStatisticsQuery |= supported.pipelineStatisticsQuery;
+  const VkPhysicalDeviceFeatures enabled = *features;
+  VkResult result = create(physical, &patched, alloc, device);
+  if (features != &own) *features = saved;
+  if (result != VK_SUCCESS) return result;
+
+  auto dev = std::make_unique<DeviceState>();
+  dev->device = *device;
+  dev->physical = physical;
+  dev->instance = inst;
+  dev->setLoaderData = setLoaderData;
+  dev->config = Config::fromEnvironment();
+#define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(*device, "vk" #name));
+  TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
+#undef TALLY_LAYER_LOAD
+  // Dynamic rendering and submit2 under their extension names on 1.2 devices.
+  if (dev->d.CmdBeginRendering == nullptr) {
+    dev->d.CmdBeginRendering = reinterpret_cast<PFN_vkCmdBeginRendering>(gdpa(*device, "vkCmdBeginRenderingKHR"));
+    dev->d.CmdEndRendering = reinterpret_cast<PFN_vkCmdEndRendering>(gdpa(*device, "vkCmdEndRenderingKHR"));
+  }
+  if (dev->d.QueueSubmit2 == nullptr) {
+    dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
+  }
+  inst->getProperties(physical, &dev->properties);
+  inst->getMemoryProperties(physical, &dev->memory);
+  uint32_t familyCount = 0;
+  inst->getQueueFamilies(physical, &familyCount, nullptr);
+  dev->families.resize(familyCount);
+  inst->getQueueFamilies(physical, &familyCount, dev->families.data());
+  dev->fragmentStores = enabled.fragmentStoresAndAtomics;
+  dev->vertexStores = enabled.vertexPipelineStoresAndAtomics;
+  dev->statistics = enabled.pipelineStatisticsQuery;
+  if (inst->getProperties2 != nullptr) {
+    VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &driver};
+    inst->getProperties2(physical, &props2);
+    dev->driverInfo = std::string(driver.driverName) + " " + driver.driverInfo;
+    dev->llvmpipe = driver.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+  }
+  // A queue the application asked for, for the layer's own set-up work.
+  VkQueue setupQueue = VK_NULL_HANDLE;
+  uint32_t setupFamily = 0;
+  for (uint32_t i = 0; i < info->queueCreateInfoCount && setupQueue == VK_NULL_HANDLE; ++i) {
+    const auto& q = info->pQueueCreateInfos[i];
+    if (q.flags != 0 || q.queueCount == 0) continue;  // protected queues come from vkGetDeviceQueue2 only
+    if (!(dev->families[q.queueFamilyIndex].queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT))) continue;
+    dev->d.GetDeviceQueue(*device, q.queueFamilyIndex, 0, &setupQueue);
+    setupFamily = q.queueFamilyIndex;
+  }
+  DeviceState* raw = dev.get();
+  {
+    std::lock_guard lock(g_mutex);
+    g_devices[dispatchKey(*device)] = std::move(dev);
+  }
+  if (setupQueue != VK_NULL_HANDLE) {
+    if (raw->setLoaderData != nullptr) raw->setLoaderData(*device, setupQueue);
+    raw->queueFamilies[setupQueue] = setupFamily;
+  }
+  setupCounting(*raw);
+  return VK_SUCCESS;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCallbacks* alloc) {
+  if (device == VK_NULL_HANDLE) return;
+  DeviceState* dev = deviceOf(device);
+  if (dev == nullptr) return;
+  dev->d.DeviceWaitIdle(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    finish(*dev, false);
+    destroyCounting(*dev);
+  }
+  PFN_vkDestroyDevice destroy = dev->d.DestroyDevice;
+  {
+    std::lock_guard lock(g_mutex);
+    g_devices.erase(dispatchKey(device));
+  }
+  destroy(device, alloc);
+}
+
+VKAPI_ATTR void VKAPI_CALL GetDeviceQueue(VkDevice device, uint32_t family, uint32_t index, VkQueue* queue) {
+  DeviceState* dev = deviceOf(device);
+  dev->d.GetDeviceQueue(device, family, index, queue);
+  std::lock_guard lock(dev->mutex);
+  dev->queueFamilies[*queue] = family;
+}
+
+VKAPI_ATTR void VKAPI_CALL GetDeviceQueue2(VkDevice device, const VkDeviceQueueInfo2* info, VkQueue* queue) {
+  DeviceState* dev = deviceOf(device);
+  dev->d.GetDeviceQueue2(device, info, queue);
+  std::lock_guard lock(dev->mutex);
+  dev->queueFamilies[*queue] = info->queueFamilyIndex;
+}
+
+// ---------------------------------------------------------------- resources
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateImage(VkDevice device, const VkImageCreateInfo* info,
+                                           const VkAllocationCallbacks* alloc, VkImage* image) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateImage(device, info, alloc, image);
+  if (result != VK_SUCCESS) return result;
+  Resource r;
+  r.handle = u64(*image);
+  r.image = true;
+  r.kind = (info->usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT) ? Kind::Depth
+           : (info->usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)       ? Kind::Attachment
+                                                                        : Kind::Texture;
+  r.format = info->format;
+  r.width = info->extent.width;
+  r.height = info->extent.height;
+  r.samples = info->samples;
+  r.usage = imageUsageName(info->usage);
+  VkMemoryRequirements req{};
+  dev->d.GetImageMemoryRequirements(device, *image, &req);
+  r.size = req.size;
+  std::lock_guard lock(dev->mutex);
+  dev->resources[r.handle] = r;
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice device, const VkBufferCreateInfo* info,
+                                            const VkAllocationCallbacks* alloc, VkBuffer* buffer) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateBuffer(device, info, alloc, buffer);
+  if (result != VK_SUCCESS) return result;
+  Resource r;
+  r.handle = u64(*buffer);
+  r.size = info->size;
+  r.usage = bufferUsageName(info->usage);
+  std::lock_guard lock(dev->mutex);
+  dev->resources[r.handle] = r;
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateImageView(VkDevice device, const VkImageViewCreateInfo* info,
+                                               const VkAllocationCallbacks* alloc, VkImageView* view) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateImageView(device, info, alloc, view);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  dev->views[u64(*view)] = {u64(info->image), info->format, info->subresourceRange.aspectMask};
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateBufferView(VkDevice device, const VkBufferViewCreateInfo* info,
+                                                const VkAllocationCallbacks* alloc, VkBufferView* view) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateBufferView(device, info, alloc, view);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  dev->bufferViews[u64(*view)] = u64(info->buffer);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL SetDebugUtilsObjectNameEXT(VkDevice device, const VkDebugUtilsObjectNameInfoEXT* info) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.SetDebugUtilsObjectNameEXT != nullptr ? dev->d.SetDebugUtilsObjectNameEXT(device, info)
+                                                                  : VK_SUCCESS;
+  std::lock_guard lock(dev->mutex);
+  const std::string name = info->pObjectName != nullptr ? info->pObjectName : "";
+  if (auto it = dev->resources.find(info->objectHandle); it != dev->resources.end()) it->second.name = name;
+  if (auto it = dev->shaders.find(info->objectHandle); it != dev->shaders.end()) it->second.name = name;
+  if (auto it = dev->pipelines.find(info->objectHandle); it != dev->pipelines.end()) it->second->name = name;
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateSwapchainKHR(VkDevice device, const VkSwapchainCreateInfoKHR* info,
+                                                  const VkAllocationCallbacks* alloc, VkSwapchainKHR* swapchain) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateSwapchainKHR(device, info, alloc, swapchain);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  dev->swapchains[u64(*swapchain)] = {info->imageFormat, info->imageExtent};
+  dev->extent = info->imageExtent;
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL GetSwapchainImagesKHR(VkDevice device, VkSwapchainKHR swapchain, uint32_t* count,
+                                                     VkImage* images) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.GetSwapchainImagesKHR(device, swapchain, count, images);
+  if (images == nullptr || (result != VK_SUCCESS && result != VK_INCOMPLETE)) return result;
+  std::lock_guard lock(dev->mutex);
+  auto [format, extent] = dev->swapchains[u64(swapchain)];
+  for (uint32_t i = 0; i < *count; ++i) {
+    Resource r;
+    r.handle = u64(images[i]);
+    r.image = true;
+    r.kind = Kind::Attachment;
+    r.format = format;
+    r.width = extent.width;
+    r.height = extent.height;
+    r.size = uint64_t(extent.width) * extent.height * formatBytes(format);
+    r.usage = "swapchain";
+    r.name = "swapchain";  // every image of the chain is one line
+    dev->resources[r.handle] = r;
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------- render passes
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass(VkDevice device, const VkRenderPassCreateInfo* info,
+                                                const VkAllocationCallbacks* alloc, VkRenderPass* pass) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateRenderPass(device, info, alloc, pass);
+  if (result != VK_SUCCESS) return result;
+  std::vector<std::vector<uint32_t>> subpasses;
+  for (uint32_t s = 0; s < info->subpassCount; ++s) {
+    std::vector<uint32_t> colors;
+    for (uint32_t c = 0; c < info->pSubpasses[s].colorAttachmentCount; ++c) {
+      colors.push_back(info->pSubpasses[s].pColorAttachments[c].attachment);
+    }
+    subpasses.push_back(std::move(colors));
+  }
+  std::lock_guard lock(dev->mutex);
+  dev->renderPasses[u64(*pass)] = std::move(subpasses);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass2(VkDevice device, const VkRenderPassCreateInfo2* info,
+                                                 const VkAllocationCallbacks* alloc, VkRenderPass* pass) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateRenderPass2(device, info, alloc, pass);
+  if (result != VK_SUCCESS) return result;
+  std::vector<std::vector<uint32_t>> subpasses;
+  for (uint32_t s = 0; s < info->subpassCount; ++s) {
+    std::vector<uint32_t> colors;
+    for (uint32_t c = 0; c < info->pSubpasses[s].colorAttachmentCount; ++c) {
+      colors.push_back(info->pSubpasses[s].pColorAttachments[c].attachment);
+    }
+    subpasses.push_back(std::move(colors));
+  }
+  std::lock_guard lock(dev->mutex);
+  dev->renderPasses[u64(*pass)] = std::move(subpasses);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateFramebuffer(VkDevice device, const VkFramebufferCreateInfo* info,
+                                                 const VkAllocationCallbacks* alloc, VkFramebuffer* framebuffer) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateFramebuffer(device, info, alloc, framebuffer);
+  if (result != VK_SUCCESS) return result;
+  std::vector<uint64_t> views;
+  if (!(info->flags & VK_FRAMEBUFFER_CREATE_IMAGELESS_BIT)) {
+    for (uint32_t i = 0; i < info->attachmentCount; ++i) views.push_back(u64(info->pAttachments[i]));
+  }
+  std::lock_guard lock(dev->mutex);
+  dev->framebuffers[u64(*framebuffer)] = std::move(views);
+  return result;
+}
+
+// ---------------------------------------------------------------- descriptors
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateDescriptorSetLayout(VkDevice device, const VkDescriptorSetLayoutCreateInfo* info,
+                                                         const VkAllocationCallbacks* alloc,
+                                                         VkDescriptorSetLayout* layout) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateDescriptorSetLayout(device, info, alloc, layout);
+  if (result != VK_SUCCESS) return result;
+  auto state = std::make_shared<DescriptorSetLayoutInfo>();
+  for (uint32_t i = 0; i < info->bindingCount; ++i) {
+    const auto& b = info->pBindings[i];
+    state->bindings[b.binding] = {b.descriptorType, b.descriptorCount};
+  }
+  std::lock_guard lock(dev->mutex);
+  dev->setLayouts[u64(*layout)] = std::move(state);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL AllocateDescriptorSets(VkDevice device, const VkDescriptorSetAllocateInfo* info,
+                                                      VkDescriptorSet* sets) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.AllocateDescriptorSets(device, info, sets);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  for (uint32_t i = 0; i < info->descriptorSetCount; ++i) {
+    DescriptorSetState state;
+    if (auto it = dev->setLayouts.find(u64(info->pSetLayouts[i])); it != dev->setLayouts.end()) state.layout = it->second;
+    dev->sets[u64(sets[i])] = std::move(state);
+    dev->poolSets[u64(info->descriptorPool)].insert(u64(sets[i]));
+  }
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL FreeDescriptorSets(VkDevice device, VkDescriptorPool pool, uint32_t count,
+                                                  const VkDescriptorSet* sets) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    for (uint32_t i = 0; i < count; ++i) {
+      dev->sets.erase(u64(sets[i]));
+      dev->poolSets[u64(pool)].erase(u64(sets[i]));
+    }
+  }
+  return dev->d.FreeDescriptorSets(device, pool, count, sets);
+}
+
+void forgetPoolSets(DeviceState& dev, VkDescriptorPool pool) {
+  std::lock_guard lock(dev.mutex);
+  for (uint64_t s : dev.poolSets[u64(pool)]) dev.sets.erase(s);
+  dev.poolSets.erase(u64(pool));
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL ResetDescriptorPool(VkDevice device, VkDescriptorPool pool,
+                                                   VkDescriptorPoolResetFlags flags) {
+  DeviceState* dev = deviceOf(device);
+  forgetPoolSets(*dev, pool);
+  return dev->d.ResetDescriptorPool(device, pool, flags);
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyDescriptorPool(VkDevice device, VkDescriptorPool pool,
+                                                 const VkAllocationCallbacks* alloc) {
+  DeviceState* dev = deviceOf(device);
+  forgetPoolSets(*dev, pool);
+  dev->d.DestroyDescriptorPool(device, pool, alloc);
+}
+
+// What one descriptor of `type` refers to.
+Bound boundImage(DeviceState& dev, VkImageView view) {
+  auto it = dev.views.find(u64(view));
+  if (it == dev.views.end()) return {};
+  return {it->second.image, it->second.format, it->second.aspect};
+}
+Bound boundOf(DeviceState& dev, VkDescriptorType type, const void* element) {
+  switch (type) {
+    case VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER:
+    case VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE:
+    case VK_DESCRIPTOR_TYPE_STORAGE_IMAGE:
+    case VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT:
+      return boundImage(dev, static_cast<const VkDescriptorImageInfo*>(element)->imageView);
+    case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER:
+    case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER:
+    case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC:
+    case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC:
+      return {u64(static_cast<const VkDescriptorBufferInfo*>(element)->buffer)};
+    case VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER:
+    case VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER: {
+      auto it = dev.bufferViews.find(u64(*static_cast<const VkBufferView*>(element)));
+      return {it == dev.bufferViews.end() ? 0 : it->second};
+    }
+    default: return {};  // samplers, inline uniform blocks, acceleration structures
+  }
+}
+
+void writeElement(DescriptorSetState& set, uint32_t binding, uint32_t element, Bound bound) {
+  auto& elements = set.bindings[binding];
+  if (elements.size() <= element) elements.resize(element + 1);
+  elements[element] = bound;
+}
+
+VKAPI_ATTR void VKAPI_CALL UpdateDescriptorSets(VkDevice device, uint32_t writeCount, const VkWriteDescriptorSet* writes,
+                                                uint32_t copyCount, const VkCopyDescriptorSet* copies) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    for (uint32_t w = 0; w < writeCount; ++w) {
+      const auto& write = writes[w];
+      auto it = dev->sets.find(u64(write.dstSet));
+      if (it == dev->sets.end()) continue;
+      for (uint32_t i = 0; i < write.descriptorCount; ++i) {
+        const void* element = nullptr;
+        if (write.pImageInfo != nullptr &&
+            (write.descriptorType == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ||
+             write.descriptorType == VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE ||
+             write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE ||
+             write.descriptorType == VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT)) {
+          element = &write.pImageInfo[i];
+        } else if (write.pBufferInfo != nullptr &&
+                   (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER ||
+                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER ||
+                    write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC ||
+                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC)) {
+          element = &write.pBufferInfo[i];
+        } else if (write.pTexelBufferView != nullptr &&
+                   (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER ||
+                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER)) {
+          element = &write.pTexelBufferView[i];
+        }
+        if (element == nullptr) continue;
+        writeElement(it->second, write.dstBinding, write.dstArrayElement + i,
+                     boundOf(*dev, write.descriptorType, element));
+      }
+    }
+    for (uint32_t c = 0; c < copyCount; ++c) {
+      const auto& copy = copies[c];
+      auto src = dev->sets.find(u64(copy.srcSet));
+      auto dst = dev->sets.find(u64(copy.dstSet));
+      if (src == dev->sets.end() || dst == dev->sets.end()) continue;
+      const auto& from = src->second.bindings[copy.srcBinding];
+      for (uint32_t i = 0; i < copy.descriptorCount; ++i) {
+        uint32_t e = copy.srcArrayElement + i;
+        writeElement(dst->second, copy.dstBinding, copy.dstArrayElement + i, e < from.size() ? from[e] : Bound{});
+      }
+    }
+  }
+  dev->d.UpdateDescriptorSets(device, writeCount, writes, copyCount, copies);
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateDescriptorUpdateTemplate(VkDevice device,
+                                                              const VkDescriptorUpdateTemplateCreateInfo* info,
+                                                              const VkAllocationCallbacks* alloc,
+                                                              VkDescriptorUpdateTemplate* handle) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateDescriptorUpdateTemplate(device, info, alloc, handle);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  if (info->templateType == VK_DESCRIPTOR_UPDATE_TEMPLATE_TYPE_DESCRIPTOR_SET) {
+    dev->templates[u64(*handle)].assign(info->pDescriptorUpdateEntries,
+                                         info->pDescriptorUpdateEntries + info->descriptorUpdateEntryCount);
+  }
+  return result;
+}
+
+VKAPI_ATTR void VKAPI_CALL UpdateDescriptorSetWithTemplate(VkDevice device, VkDescriptorSet set,
+                                                           VkDescriptorUpdateTemplate handle, const void* data) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    auto t = dev->templates.find(u64(handle));
+    auto s = dev->sets.find(u64(set));
+    if (t != dev->templates.end() && s != dev->sets.end()) {
+      for (const auto& entry : t->second) {
+        if (entry.descriptorType == VK_DESCRIPTOR_TYPE_INLINE_UNIFORM_BLOCK) continue;
+        for (uint32_t i = 0; i < entry.descriptorCount; ++i) {
+          const void* element = static_cast<const uint8_t*>(data) + entry.offset + size_t(i) * entry.stride;
+          writeElement(s->second, entry.dstBinding, entry.dstArrayElement + i,
+                       boundOf(*dev, entry.descriptorType, element));
+        }
+      }
+    }
+  }
+  dev->d.UpdateDescriptorSetWithTemplate(device, set, handle, data);
+}
+
+// ---------------------------------------------------------------- shaders and pipelines
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateShaderModule(VkDevice device, const VkShaderModuleCreateInfo* info,
+                                                  const VkAllocationCallbacks* alloc, VkShaderModule* module) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateShaderModule(device, info, alloc, module);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  ShaderInfo shader;
+  shader.words.assign(info->pCode, info->pCode + info->codeSize / 4);
+  dev->shaders[u64(*module)] = std::move(shader);
+  return result;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyShaderModule(VkDevice device, VkShaderModule module,
+                                               const VkAllocationCallbacks* alloc) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    dev->shaders.erase(u64(module));
+  }
+  dev->d.DestroyShaderModule(device, module, alloc);
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPipelineLayoutCreateInfo* info,
+                                                    const VkAllocationCallbacks* alloc, VkPipelineLayout* layout) {
+  DeviceState* dev = deviceOf(device);
+  PipelineLayoutInfo state;
+  state.appSets = info->setLayoutCount;
+  std::vector<VkDescriptorSetLayout> sets;
+  {
+    std::lock_guard lock(dev->mutex);
+    if (dev->counting && info->setLayoutCount <= dev->counterSet) {
+      sets.assign(info->pSetLayouts, info->pSetLayouts + info->setLayoutCount);
+      sets.resize(dev->counterSet, dev->emptySetLayout);
+      sets.push_back(dev->counterSetLayout);
+    } else if (dev->counting) {
+      state.refused = "a pipeline layout uses " + std::to_string(info->setLayoutCount) +
+                      " descriptor sets; the device allows " +
+                      std::to_string(dev->properties.limits.maxBoundDescriptorSets) +
+                      " and the layer needs set " + std::to_string(dev->counterSet) +
+                      ": its pipelines run unchanged, uncounted";
+      dev->notes.insert(state.refused);
+      log(state.refused);
+    }
+  }
+  VkResult result;
+  if (!sets.empty()) {
+    VkPipelineLayoutCreateInfo extended = *info;
+    extended.setLayoutCount = uint32_t(sets.size());
+    extended.pSetLayouts = sets.data();
+    result = dev->d.CreatePipelineLayout(device, &extended, alloc, layout);
+    state.hasCounterSet = result == VK_SUCCESS;
+  } else {
+    result = dev->d.CreatePipelineLayout(device, info, alloc, layout);
+  }
+  if (result != VK_SUCCESS) return result;
+  state.extended = *layout;
+  std::lock_guard lock(dev->mutex);
+  dev->pipelineLayouts[u64(*layout)] = state;
+  return result;
+}
+
+spirv::Stage stageOf(VkShaderStageFlagBits stage) {
+  switch (stage) {
+    case VK_SHADER_STAGE_VERTEX_BIT: return spirv::Stage::Vertex;
+    case VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT: return spirv::Stage::TessControl;
+    case VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT: return spirv::Stage::TessEval;
+    case VK_SHADER_STAGE_GEOMETRY_BIT: return spirv::Stage::Geometry;
+    case VK_SHADER_STAGE_FRAGMENT_BIT: return spirv::Stage::Fragment;
+    case VK_SHADER_STAGE_COMPUTE_BIT: return spirv::Stage::Compute;
+    case VK_SHADER_STAGE_TASK_BIT_EXT: return spirv::Stage::Task;
+    case VK_SHADER_STAGE_MESH_BIT_EXT: return spirv::Stage::Mesh;
+    default: return spirv::Stage::Other;
+  }
+}
+
+// Instruments a pipeline's stages into `modules` (temporary modules to
+// destroy after creation) and fills `info`. Stages that cannot be
+// instrumented keep the application's module; each is reported.
+void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateInfo>& stages, PipelineInfo& info,
+                      std::vector<VkShaderModule>& modules) {
+  uint32_t nextSlot = 0;
+  const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
+  for (auto& stage : stages) {
+    const spirv::Stage s = stageOf(stage.stage);
+    if (s == spirv::Stage::Fragment) info.hasFragment = true;
+    nlohmann::json report = {{"stage", std::string(spirv::toString(s))}, {"instrumented", false}, {"sites", 0}};
+    auto shader = dev.shaders.find(u64(stage.module));
+    std::string why;
+    if (stage.module == VK_NULL_HANDLE || shader == dev.shaders.end()) {
+      why = "the stage's SPIR-V is not in a shader module the layer saw (VkShaderModuleCreateInfo in the stage's pNext, or a module identifier)";
+    } else if (s == spirv::Stage::Fragment && !dev.fragmentStores) {
+      why = "the device has no fragmentStoresAndAtomics";
+    } else if ((s == spirv::Stage::Vertex || s == spirv::Stage::TessControl || s == spirv::Stage::TessEval ||
+                s == spirv::Stage::Geometry) &&
+               !dev.vertexStores) {
+      why = "the device has no vertexPipelineStoresAndAtomics";
+    }
+    report["name"] = shader != dev.shaders.end() && !shader->second.name.empty()
+                         ? shader->second.name
+                         : "shader " + hexHandle(u64(stage.module));
+    if (why.empty()) {
+      spirv::InstrumentOptions options = dev.instrumentOptions;
+      options.firstSlot = nextSlot;
+      // Lavapipe cannot compile the subgroup flush in modules that demote
+      // (as gpu::instrumentOptionsFor): those flush per lane there.
+      if (dev.llvmpipe && spirv::usesDemote(shader->second.words)) {
+        options.subgroupStages &= ~spirv::stageBit(spirv::Stage::Fragment);
+      }
+      auto result = spirv::instrument(shader->second.words, options);
+      if (!result) {
+        why = result.error();
+      } else if (nextSlot + result->layout().reserved() > maxSlots) {
+        why = "needs " + std::to_string(result->layout().reserved()) + " counter slots; the layer's region holds " +
+              std::to_string(maxSlots - nextSlot);
+      } else {
+        VkShaderModuleCreateInfo moduleInfo = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+        moduleInfo.codeSize = result->words.size() * 4;
+        moduleInfo.pCode = result->words.data();
+        VkShaderModule module = VK_NULL_HANDLE;
+        if (dev.d.CreateShaderModule(dev.device, &moduleInfo, nullptr, &module) != VK_SUCCESS) {
+          why = "the driver refused the instrumented module";
+        } else {
+          modules.push_back(module);
+          stage.module = module;
+          nextSlot += result->layout().reserved();
+          if (result->copies > 1) info.foldLayouts.push_back(result->layout());
+          for (auto& site : result->sites) info.sites.push_back(std::move(site));
+          report["instrumented"] = true;
+          report["sites"] = result->sites.size();
+          for (const auto& note : result->notes) dev.notes.insert(note);
+        }
+      }
+    }
+    report["reason"] = why;
+    dev.shaderReports.push_back(report);
+  }
+  info.slots = nextSlot;
+  info.counted = nextSlot > 0;
+}
+
+bool layoutCounted(DeviceState& dev, VkPipelineLayout layout) {
+  auto it = dev.pipelineLayouts.find(u64(layout));
+  return it != dev.pipelineLayouts.end() && it->second.hasCounterSet;
+}
+
+bool isLibraryPipeline(const void* next, VkPipelineCreateFlags flags) {
+  if (flags & VK_PIPELINE_CREATE_LIBRARY_BIT_KHR) return true;
+  for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
+    if (p->sType == VK_STRUCTURE_TYPE_PIPELINE_LIBRARY_CREATE_INFO_KHR ||
+        p->sType == VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_LIBRARY_CREATE_INFO_EXT) {
+      return true;
+    }
+  }
+  return false;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
+                                                       const VkGraphicsPipelineCreateInfo* infos,
+                                                       const VkAllocationCallbacks* alloc, VkPipeline* pipelines) {
+  DeviceState* dev = deviceOf(device);
+  std::vector<VkGraphicsPipelineCreateInfo> patched(infos, infos + count);
+  std::vector<std::vector<VkPipelineShaderStageCreateInfo>> stages(count);
+  std::vector<std::shared_ptr<PipelineInfo>> states(count);
+  std::vector<VkShaderModule> modules;
+  {
+    std::lock_guard lock(dev->mutex);
+    for (uint32_t i = 0; i < count; ++i) {
+      auto state = std::make_shared<PipelineInfo>();
+      state->bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+      state->layout = infos[i].layout;
+      if (infos[i].pVertexInputState != nullptr) {
+        for (uint32_t a = 0; a < infos[i].pVertexInputState->vertexAttributeDescriptionCount; ++a) {
+          const auto& attr = infos[i].pVertexInputState->pVertexAttributeDescriptions[a];
+          state->vertexLocationBinding[attr.location] = attr.binding;
+        }
+      }
+      if (isLibraryPipeline(infos[i].pNext, infos[i].flags)) {
+        dev->notes.insert("graphics pipeline libraries are not instrumented: their pipelines run uncounted");
+      } else if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+        stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
+        instrumentStages(*dev, stages[i], *state, modules);
+        patched[i].pStages = stages[i].data();
+      }
+      states[i] = state;
+    }
+  }
+  VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, patched.data(), alloc, pipelines);
+  for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
+  std::lock_guard lock(dev->mutex);
+  for (uint32_t i = 0; i < count; ++i) {
+    if (pipelines[i] == VK_NULL_HANDLE) continue;
+    states[i]->handle = u64(pipelines[i]);
+    dev->pipelines[u64(pipelines[i])] = states[i];
+  }
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
+                                                      const VkComputePipelineCreateInfo* infos,
+                                                      const VkAllocationCallbacks* alloc, VkPipeline* pipelines) {
+  DeviceState* dev = deviceOf(device);
+  std::vector<VkComputePipelineCreateInfo> patched(infos, infos + count);
+  std::vector<std::shared_ptr<PipelineInfo>> states(count);
+  std::vector<VkShaderModule> modules;
+  {
+    std::lock_guard lock(dev->mutex);
+    for (uint32_t i = 0; i < count; ++i) {
+      auto state = std::make_shared<PipelineInfo>();
+      state->bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
+      state->layout = infos[i].layout;
+      if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+        std::vector<VkPipelineShaderStageCreateInfo> stage = {infos[i].stage};
+        instrumentStages(*dev, stage, *state, modules);
+        patched[i].stage = stage[0];
+      }
+      states[i] = state;
+    }
+  }
+  VkResult result = dev->d.CreateComputePipelines(device, cache, count, patched.data(), alloc, pipelines);
+  for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
+  std::lock_guard lock(dev->mutex);
+  for (uint32_t i = 0; i < count; ++i) {
+    if (pipelines[i] == VK_NULL_HANDLE) continue;
+    states[i]->handle = u64(pipelines[i]);
+    dev->pipelines[u64(pipelines[i])] = states[i];
+  }
+  return result;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyPipeline(VkDevice device, VkPipeline pipeline, const VkAllocationCallbacks* alloc) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    dev->pipelines.erase(u64(pipeline));  // recorded regions keep their own reference
+  }
+  dev->d.DestroyPipeline(device, pipeline, alloc);
+}
+
+// ---------------------------------------------------------------- command buffers
+
+VKAPI_ATTR VkResult VKAPI_CALL CreateCommandPool(VkDevice device, const VkCommandPoolCreateInfo* info,
+                                                 const VkAllocationCallbacks* alloc, VkCommandPool* pool) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.CreateCommandPool(device, info, alloc, pool);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  dev->poolFamilies[u64(*pool)] = info->queueFamilyIndex;
+  return result;
+}
+
+void destroyCommandBufferState(DeviceState& dev, CommandBufferState& cb) {
+  releaseRegions(dev, cb);
+  if (cb.timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.timestampPool, nullptr);
+  if (cb.statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.statisticsPool, nullptr);
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyCommandPool(VkDevice device, VkCommandPool pool, const VkAllocationCallbacks* alloc) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    for (auto it = dev->commandBuffers.begin(); it != dev->commandBuffers.end();) {
+      if (it->second->pool == pool) {
+        destroyCommandBufferState(*dev, *it->second);
+        it = dev->commandBuffers.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  dev->d.DestroyCommandPool(device, pool, alloc);
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL AllocateCommandBuffers(VkDevice device, const VkCommandBufferAllocateInfo* info,
+                                                      VkCommandBuffer* buffers) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.AllocateCommandBuffers(device, info, buffers);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  const uint32_t family = dev->poolFamilies[u64(info->commandPool)];
+  const auto& props = dev->families[family];
+  for (uint32_t i = 0; i < info->commandBufferCount; ++i) {
+    auto cb = std::make_unique<CommandBufferState>();
+    cb->handle = buffers[i];
+    cb->pool = info->commandPool;
+    cb->secondary = info->level == VK_COMMAND_BUFFER_LEVEL_SECONDARY;
+    cb->graphicsOrCompute = (props.queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) != 0;
+    cb->timestamps = props.timestampValidBits > 0 && cb->graphicsOrCompute;
+    dev->commandBuffers[buffers[i]] = std::move(cb);
+  }
+  return result;
+}
+
+VKAPI_ATTR void VKAPI_CALL FreeCommandBuffers(VkDevice device, VkCommandPool pool, uint32_t count,
+                                              const VkCommandBuffer* buffers) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    for (uint32_t i = 0; i < count; ++i) {
+      if (CommandBufferState* cb = cbState(*dev, buffers[i])) {
+        destroyCommandBufferState(*dev, *cb);
+        dev->commandBuffers.erase(buffers[i]);
+      }
+    }
+  }
+  dev->d.FreeCommandBuffers(device, pool, count, buffers);
+}
+
+constexpr uint32_t kQueriesPerCommandBuffer = 512;
+constexpr VkQueryPipelineStatisticFlags kStatistics = VK_QUERY_PIPELINE_STATISTIC_VERTEX_SHADER_INVOCATIONS_BIT |
+                                                      VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT |
+                                                      VK_QUERY_PIPELINE_STATISTIC_COMPUTE_SHADER_INVOCATIONS_BIT;
+
+void resetRecording(DeviceState& dev, CommandBufferState& cb) {
+  releaseRegions(dev, cb);
+  cb.passes.clear();
+  cb.regions.clear();
+  cb.regionIndex.clear();
+  cb.timestampsUsed = cb.statisticsUsed = 0;
+  cb.currentPass = -1;
+  cb.inRenderPass = false;
+  cb.openStatistic = false;
+  cb.appStatisticsActive = false;
+  cb.labels.clear();
+  cb.colorAttachments.clear();
+  cb.bind = {};
+  cb.vertexBuffers.clear();
+  cb.indexBuffer = 0;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkCommandBufferBeginInfo* info) {
+  DeviceState* dev = deviceOf(cmd);
+  VkResult result = dev->d.BeginCommandBuffer(cmd, info);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return result;
+  resetRecording(*dev, *cb);
+  if (cb->secondary || !cb->graphicsOrCompute || !dev->counting) return result;
+  if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
+    VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    q.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    q.queryCount = kQueriesPerCommandBuffer;
+    if (dev->d.CreateQueryPool(dev->device, &q, nullptr, &cb->timestampPool) != VK_SUCCESS) cb->timestamps = false;
+  }
+  if (dev->statistics && cb->statisticsPool == VK_NULL_HANDLE) {
+    VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    q.queryType = VK_QUERY_TYPE_PIPELINE_STATISTICS;
+    q.queryCount = kQueriesPerCommandBuffer;
+    q.pipelineStatistics = kStatistics;
+    dev->d.CreateQueryPool(dev->device, &q, nullptr, &cb->statisticsPool);
+  }
+  if (cb->timestamps) dev->d.CmdResetQueryPool(cmd, cb->timestampPool, 0, kQueriesPerCommandBuffer);
+  if (cb->statisticsPool != VK_NULL_HANDLE) dev->d.CmdResetQueryPool(cmd, cb->statisticsPool, 0, kQueriesPerCommandBuffer);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL ResetCommandBuffer(VkCommandBuffer cmd, VkCommandBufferResetFlags flags) {
+  DeviceState* dev = deviceOf(cmd);
+  {
+    std::lock_guard lock(dev->mutex);
+    if (CommandBufferState* cb = cbState(*dev, cmd)) resetRecording(*dev, *cb);
+  }
+  return dev->d.ResetCommandBuffer(cmd, flags);
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL ResetCommandPool(VkDevice device, VkCommandPool pool, VkCommandPoolResetFlags flags) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    for (auto& [handle, cb] : dev->commandBuffers) {
+      if (cb->pool == pool) resetRecording(*dev, *cb);
+    }
+  }
+  return dev->d.ResetCommandPool(device, pool, flags);
+}
+
+// Statistics queries begin and end inside the render pass (lavapipe crashes
+// on a query around one), once per subpass.
+void beginStatistic(DeviceState& dev, CommandBufferState& cb) {
+  if (cb.statisticsPool == VK_NULL_HANDLE || cb.currentPass < 0 || cb.openStatistic || cb.appStatisticsActive) return;
+  if (cb.statisticsUsed >= kQueriesPerCommandBuffer) return;
+  const uint32_t q = cb.statisticsUsed++;
+  dev.d.CmdBeginQuery(cb.handle, cb.statisticsPool, q, 0);
+  cb.passes[size_t(cb.currentPass)].statisticQueries.push_back(q);
+  cb.openStatistic = true;
+}
+void endStatistic(DeviceState& dev, CommandBufferState& cb) {
+  if (!cb.openStatistic) return;
+  dev.d.CmdEndQuery(cb.handle, cb.statisticsPool, cb.passes[size_t(cb.currentPass)].statisticQueries.back());
+  cb.openStatistic = false;
+}
+
+void openPass(DeviceState& dev, CommandBufferState& cb, const char* kind) {
+  PassScope pass;
+  pass.kind = kind;
+  pass.label = cb.labels.empty() ? "" : cb.labels.back();
+  if (cb.timestamps && cb.timestampsUsed + 2 <= kQueriesPerCommandBuffer) {
+    pass.timestampBegin = cb.timestampsUsed;
+    cb.timestampsUsed += 2;
+    dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, cb.timestampPool, pass.timestampBegin);
+  }
+  cb.passes.push_back(std::move(pass));
+  cb.currentPass = int(cb.passes.size()) - 1;
+  beginStatistic(dev, cb);
+}
+
+void closePass(DeviceState& dev, CommandBufferState& cb) {
+  if (cb.currentPass < 0) return;
+  endStatistic(dev, cb);
+  const PassScope& pass = cb.passes[size_t(cb.currentPass)];
+  if (pass.timestampBegin != UINT32_MAX) {
+    dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, cb.timestampPool,
+                            pass.timestampBegin + 1);
+  }
+  cb.currentPass = -1;
+}
+
+bool tracked(DeviceState& dev, CommandBufferState* cb) { return cb != nullptr && !cb->secondary && dev.counting; }
+
+VKAPI_ATTR VkResult VKAPI_CALL EndCommandBuffer(VkCommandBuffer cmd) {
+  DeviceState* dev = deviceOf(cmd);
+  {
+    std::lock_guard lock(dev->mutex);
+    CommandBufferState* cb = cbState(*dev, cmd);
+    if (tracked(*dev, cb) && !cb->inRenderPass) closePass(*dev, *cb);
+  }
+  return dev->d.EndCommandBuffer(cmd);
+}
+
+void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPass pass, VkFramebuffer framebuffer,
+                           const void* next) {
+  cb.passAttachments.clear();
+  cb.subpassColors.clear();
+  cb.subpass = 0;
+  std::vector<uint64_t> views;
+  if (auto f = dev.framebuffers.find(u64(framebuffer)); f != dev.framebuffers.end()) views = f->second;
+  for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
+    if (p->sType == VK_STRUCTURE_TYPE_RENDER_PASS_ATTACHMENT_BEGIN_INFO) {  // imageless framebuffers
+      const auto* a = reinterpret_cast<const VkRenderPassAttachmentBeginInfo*>(p);
+      views.assign(reinterpret_cast<const uint64_t*>(a->pAttachments),
+                   reinterpret_cast<const uint64_t*>(a->pAttachments) + a->attachmentCount);
+    }
+  }
+  for (uint64_t v : views) cb.passAttachments.push_back(boundImage(dev, reinterpret_cast<VkImageView>(v)));
+  if (auto r = dev.renderPasses.find(u64(pass)); r != dev.renderPasses.end()) cb.subpassColors = r->second;
+  cb.colorAttachments.clear();
+  if (!cb.subpassColors.empty()) {
+    for (uint32_t a : cb.subpassColors[0]) {
+      cb.colorAttachments.push_back(a < cb.passAttachments.size() ? cb.passAttachments[a] : Bound{});
+    }
+  }
+}
+
+void nextSubpassCommon(CommandBufferState& cb) {
+  ++cb.subpass;
+  cb.colorAttachments.clear();
+  if (cb.subpass < cb.subpassColors.size()) {
+    for (uint32_t a : cb.subpassColors[cb.subpass]) {
+      cb.colorAttachments.push_back(a < cb.passAttachments.size() ? cb.passAttachments[a] : Bound{});
+    }
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
+                                              VkSubpassContents contents) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdBeginRenderPass(cmd, info, contents);
+  if (cb == nullptr) return;
+  beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
+  cb->inRenderPass = true;
+  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass2(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
+                                               const VkSubpassBeginInfo* begin) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdBeginRenderPass2(cmd, info, begin);
+  if (cb == nullptr) return;
+  beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
+  cb->inRenderPass = true;
+  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdNextSubpass(VkCommandBuffer cmd, VkSubpassContents contents) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) endStatistic(*dev, *cb);
+  dev->d.CmdNextSubpass(cmd, contents);
+  if (cb == nullptr) return;
+  nextSubpassCommon(*cb);
+  if (tracked(*dev, cb)) beginStatistic(*dev, *cb);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdNextSubpass2(VkCommandBuffer cmd, const VkSubpassBeginInfo* begin,
+                                           const VkSubpassEndInfo* end) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) endStatistic(*dev, *cb);
+  dev->d.CmdNextSubpass2(cmd, begin, end);
+  if (cb == nullptr) return;
+  nextSubpassCommon(*cb);
+  if (tracked(*dev, cb)) beginStatistic(*dev, *cb);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass(VkCommandBuffer cmd) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdEndRenderPass(cmd);
+  if (cb != nullptr) cb->inRenderPass = false;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass2(VkCommandBuffer cmd, const VkSubpassEndInfo* end) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdEndRenderPass2(cmd, end);
+  if (cb != nullptr) cb->inRenderPass = false;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRenderingInfo* info) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdBeginRendering(cmd, info);
+  if (cb == nullptr) return;
+  cb->colorAttachments.clear();
+  for (uint32_t i = 0; i < info->colorAttachmentCount; ++i) {
+    cb->colorAttachments.push_back(boundImage(*dev, info->pColorAttachments[i].imageView));
+  }
+  // A resumed scope continues the suspended one's pass.
+  const bool resuming = (info->flags & VK_RENDERING_RESUMING_BIT) != 0;
+  cb->inRenderPass = true;
+  if (tracked(*dev, cb) && !(resuming && !cb->passes.empty() && cb->passes.back().kind == "rendering")) {
+    openPass(*dev, *cb, "rendering");
+  } else if (tracked(*dev, cb)) {
+    cb->currentPass = int(cb->passes.size()) - 1;
+    beginStatistic(*dev, *cb);
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdEndRendering(VkCommandBuffer cmd) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  dev->d.CmdEndRendering(cmd);
+  if (cb != nullptr) cb->inRenderPass = false;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBeginDebugUtilsLabelEXT(VkCommandBuffer cmd, const VkDebugUtilsLabelEXT* label) {
+  DeviceState* dev = deviceOf(cmd);
+  if (dev->d.CmdBeginDebugUtilsLabelEXT != nullptr) dev->d.CmdBeginDebugUtilsLabelEXT(cmd, label);
+  std::lock_guard lock(dev->mutex);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) cb->labels.push_back(label->pLabelName ? label->pLabelName : "");
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdEndDebugUtilsLabelEXT(VkCommandBuffer cmd) {
+  DeviceState* dev = deviceOf(cmd);
+  if (dev->d.CmdEndDebugUtilsLabelEXT != nullptr) dev->d.CmdEndDebugUtilsLabelEXT(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return;
+  if (!cb->labels.empty()) cb->labels.pop_back();
+  // A compute scope ends with the label that named it.
+  if (tracked(*dev, cb) && !cb->inRenderPass && cb->currentPass >= 0 &&
+      cb->passes[size_t(cb->currentPass)].kind == "compute") {
+    closePass(*dev, *cb);
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBeginQuery(VkCommandBuffer cmd, VkQueryPool pool, uint32_t query,
+                                         VkQueryControlFlags flags) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  // The application's own statistics query: only one may be active, so the layer's yields.
+  if (cb != nullptr && cb->statisticsPool != pool) {
+    if (cb->openStatistic) endStatistic(*dev, *cb);
+    cb->appStatisticsActive = true;
+  }
+  dev->d.CmdBeginQuery(cmd, pool, query, flags);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdEndQuery(VkCommandBuffer cmd, VkQueryPool pool, uint32_t query) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  dev->d.CmdEndQuery(cmd, pool, query);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) cb->appStatisticsActive = false;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipeline pipeline) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdBindPipeline(cmd, point, pipeline);
+  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return;
+  auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
+  auto it = dev->pipelines.find(u64(pipeline));
+  bp.pipeline = it == dev->pipelines.end() ? nullptr : it->second;
+  bp.dirty = true;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorSets(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout,
+                                                 uint32_t first, uint32_t count, const VkDescriptorSet* sets,
+                                                 uint32_t dynamicCount, const uint32_t* dynamicOffsets) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdBindDescriptorSets(cmd, point, layout, first, count, sets, dynamicCount, dynamicOffsets);
+  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return;
+  auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
+  for (uint32_t i = 0; i < count && first + i < bp.sets.size(); ++i) bp.sets[first + i] = u64(sets[i]);
+  bp.dirty = true;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBindVertexBuffers(VkCommandBuffer cmd, uint32_t first, uint32_t count,
+                                                const VkBuffer* buffers, const VkDeviceSize* offsets) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdBindVertexBuffers(cmd, first, count, buffers, offsets);
+  std::lock_guard lock(dev->mutex);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) {
+    for (uint32_t i = 0; i < count; ++i) cb->vertexBuffers[first + i] = u64(buffers[i]);
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBindIndexBuffer(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                              VkIndexType type) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdBindIndexBuffer(cmd, buffer, offset, type);
+  std::lock_guard lock(dev->mutex);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) {
+    cb->indexBuffer = u64(buffer);
+    cb->indexBytes = type == VK_INDEX_TYPE_UINT16 ? 2 : type == VK_INDEX_TYPE_UINT8_EXT ? 1 : 4;
+  }
+}
+
+// Every draw and dispatch: the pass it belongs to, its counter region.
+void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t indices = 0) {
+  std::lock_guard lock(dev.mutex);
+  CommandBufferState* cb = cbState(dev, cmd);
+  if (cb == nullptr || !dev.counting) return;
+  if (!cb->secondary) {
+    if (dispatch) {
+      const std::string label = cb->labels.empty() ? "" : cb->labels.back();
+      if (cb->currentPass < 0 || cb->passes[size_t(cb->currentPass)].label != label) {
+        closePass(dev, *cb);
+        openPass(dev, *cb, "compute");
+      }
+    } else if (cb->currentPass < 0) {
+      return;  // a draw outside any pass cannot happen in valid usage
+    }
+    PassScope& pass = cb->passes[size_t(cb->currentPass)];
+    (dispatch ? pass.dispatches : pass.draws) += 1;
+    if (indices > 0) pass.indexReads[{cb->indexBuffer, cb->indexBytes}] += indices;
+  }
+  beforeDraw(dev, *cb, dispatch ? 1 : 0, dispatch);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDraw(VkCommandBuffer cmd, uint32_t vertices, uint32_t instances, uint32_t firstVertex,
+                                   uint32_t firstInstance) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDraw(cmd, vertices, instances, firstVertex, firstInstance);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawIndexed(VkCommandBuffer cmd, uint32_t indices, uint32_t instances, uint32_t firstIndex,
+                                          int32_t vertexOffset, uint32_t firstInstance) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false, uint64_t(indices) * instances);
+  dev->d.CmdDrawIndexed(cmd, indices, instances, firstIndex, vertexOffset, firstInstance);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawIndirect(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset, uint32_t count,
+                                           uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawIndirect(cmd, buffer, offset, count, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawIndexedIndirect(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                                  uint32_t count, uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  {
+    std::lock_guard lock(dev->mutex);
+    dev->notes.insert("indexed indirect draws: their index reads are not derived (the counts are on the GPU)");
+  }
+  dev->d.CmdDrawIndexedIndirect(cmd, buffer, offset, count, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawIndirectCount(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                                VkBuffer countBuffer, VkDeviceSize countOffset, uint32_t maxCount,
+                                                uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawIndirectCount(cmd, buffer, offset, countBuffer, countOffset, maxCount, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawIndexedIndirectCount(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                                       VkBuffer countBuffer, VkDeviceSize countOffset,
+                                                       uint32_t maxCount, uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawIndexedIndirectCount(cmd, buffer, offset, countBuffer, countOffset, maxCount, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDispatch(VkCommandBuffer cmd, uint32_t x, uint32_t y, uint32_t z) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, true);
+  dev->d.CmdDispatch(cmd, x, y, z);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDispatchBase(VkCommandBuffer cmd, uint32_t bx, uint32_t by, uint32_t bz, uint32_t x,
+                                           uint32_t y, uint32_t z) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, true);
+  dev->d.CmdDispatchBase(cmd, bx, by, bz, x, y, z);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDispatchIndirect(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, true);
+  dev->d.CmdDispatchIndirect(cmd, buffer, offset);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t count, const VkCommandBuffer* secondaries) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdExecuteCommands(cmd, count, secondaries);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (!tracked(*dev, cb)) return;
+  if (cb->currentPass < 0) openPass(*dev, *cb, "secondary");
+  // The secondaries' regions count for the pass that executes them; a region
+  // executed twice in one primary is read back once.
+  std::set<VkDeviceSize> have;
+  for (const auto& r : cb->regions) have.insert(r.offset);
+  for (uint32_t i = 0; i < count; ++i) {
+    CommandBufferState* s = cbState(*dev, secondaries[i]);
+    if (s == nullptr) continue;
+    for (Region r : s->regions) {
+      if (!have.insert(r.offset).second) continue;
+      r.pass = uint32_t(cb->currentPass);
+      r.owned = false;
+      cb->regions.push_back(std::move(r));
+    }
+    cb->passes[size_t(cb->currentPass)].draws += uint32_t(s->regions.size());
+  }
+  if (!cb->inRenderPass) closePass(*dev, *cb);
+}
+
+// ---------------------------------------------------------------- submission and frames
+
+std::vector<VkCommandBuffer> collectBuffers(uint32_t count, const VkSubmitInfo* submits) {
+  std::vector<VkCommandBuffer> out;
+  for (uint32_t i = 0; i < count; ++i) {
+    out.insert(out.end(), submits[i].pCommandBuffers, submits[i].pCommandBuffers + submits[i].commandBufferCount);
+  }
+  return out;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const VkSubmitInfo* submits, VkFence fence) {
+  DeviceState* dev = deviceOf(queue);
+  VkResult result = dev->d.QueueSubmit(queue, count, submits, fence);
+  if (result != VK_SUCCESS) return result;
+  std::lock_guard lock(dev->mutex);
+  afterSubmit(*dev, queue, collectBuffers(count, submits));
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit2(VkQueue queue, uint32_t count, const VkSubmitInfo2* submits, VkFence fence) {
+  DeviceState* dev = deviceOf(queue);
+  VkResult result = dev->d.QueueSubmit2(queue, count, submits, fence);
+  if (result != VK_SUCCESS) return result;
+  std::vector<VkCommandBuffer> buffers;
+  for (uint32_t i = 0; i < count; ++i) {
+    for (uint32_t c = 0; c < submits[i].commandBufferInfoCount; ++c) {
+      buffers.push_back(submits[i].pCommandBufferInfos[c].commandBuffer);
+    }
+  }
+  std::lock_guard lock(dev->mutex);
+  afterSubmit(*dev, queue, buffers);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL QueuePresentKHR(VkQueue queue, const VkPresentInfoKHR* info) {
+  DeviceState* dev = deviceOf(queue);
+  VkResult result = dev->d.QueuePresentKHR(queue, info);
+  std::lock_guard lock(dev->mutex);
+  if (dev->config.frameSubmits == 0) endFrame(*dev);
+  return result;
+}
+
+// ---------------------------------------------------------------- loader interface
+
+constexpr const char* kLayerName = "VK_LAYER_TALLY_counters";
+
+VKAPI_ATTR VkResult VKAPI_CALL EnumerateInstanceLayerProperties(uint32_t* count, VkLayerProperties* properties) {
+  if (properties == nullptr) {
+    *count = 1;
+    return VK_SUCCESS;
+  }
+  if (*count < 1) return VK_INCOMPLETE;
+  std::memset(properties, 0, sizeof *properties);
+  std::snprintf(properties->layerName, sizeof properties->layerName, "%s", kLayerName);
+  std::snprintf(properties->description, sizeof properties->description, "%s",
+                "Tally: per-pass, per-resource memory traffic of any application");
+  properties->implementationVersion = 1;
+  properties->specVersion = VK_HEADER_VERSION_COMPLETE;
+  *count = 1;
+  return VK_SUCCESS;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL EnumerateInstanceExtensionProperties(const char* layer, uint32_t* count,
+                                                                    VkExtensionProperties*) {
+  if (layer == nullptr || std::strcmp(layer, kLayerName) != 0) return VK_ERROR_LAYER_NOT_PRESENT;
+  *count = 0;
+  return VK_SUCCESS;
+}
+
+PFN_vkVoidFunction interceptedDevice(std::string_view name);
+
+VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL GetDeviceProcAddr(VkDevice device, const char* name) {
+  if (PFN_vkVoidFunction f = interceptedDevice(name)) {
+    // Functions the device does not have stay null.
+    DeviceState* dev = deviceOf(device);
+    if (dev != nullptr && dev->d.GetDeviceProcAddr(device, name) == nullptr) return nullptr;
+    return f;
+  }
+  DeviceState* dev = deviceOf(device);
+  return dev == nullptr ? nullptr : dev->d.GetDeviceProcAddr(device, name);
+}
+
+VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL GetInstanceProcAddr(VkInstance instance, const char* name) {
+  const std::string_view n = name;
+#define TALLY_INSTANCE(fn) \
+  if (n == "vk" #fn) return reinterpret_cast<PFN_vkVoidFunction>(fn);
+  TALLY_INSTANCE(CreateInstance)
+  TALLY_INSTANCE(DestroyInstance)
+  TALLY_INSTANCE(CreateDevice)
+  TALLY_INSTANCE(GetInstanceProcAddr)
+  TALLY_INSTANCE(GetDeviceProcAddr)
+  TALLY_INSTANCE(EnumerateInstanceLayerProperties)
+  TALLY_INSTANCE(EnumerateInstanceExtensionProperties)
+#undef TALLY_INSTANCE
+  if (instance == VK_NULL_HANDLE) return nullptr;
+  if (PFN_vkVoidFunction f = interceptedDevice(n)) return f;
+  InstanceState* inst = instanceOf(instance);
+  return inst == nullptr ? nullptr : inst->gipa(instance, name);
+}
+
+PFN_vkVoidFunction interceptedDevice(std::string_view n) {
+#define TALLY_DEVICE(fn) \
+  if (n == "vk" #fn) return reinterpret_cast<PFN_vkVoidFunction>(fn);
+#define TALLY_DEVICE_ALIAS(alias, fn) \
+  if (n == "vk" #alias) return reinterpret_cast<PFN_vkVoidFunction>(fn);
+  TALLY_DEVICE(GetDeviceProcAddr)
+  TALLY_DEVICE(DestroyDevice)
+  TALLY_DEVICE(GetDeviceQueue)
+  TALLY_DEVICE(GetDeviceQueue2)
+  TALLY_DEVICE(CreateImage)
+  TALLY_DEVICE(CreateBuffer)
+  TALLY_DEVICE(CreateImageView)
+  TALLY_DEVICE(CreateBufferView)
+  TALLY_DEVICE(SetDebugUtilsObjectNameEXT)
+  TALLY_DEVICE(CreateSwapchainKHR)
+  TALLY_DEVICE(GetSwapchainImagesKHR)
+  TALLY_DEVICE(CreateRenderPass)
+  TALLY_DEVICE(CreateRenderPass2)
+  TALLY_DEVICE_ALIAS(CreateRenderPass2KHR, CreateRenderPass2)
+  TALLY_DEVICE(CreateFramebuffer)
+  TALLY_DEVICE(CreateDescriptorSetLayout)
+  TALLY_DEVICE(AllocateDescriptorSets)
+  TALLY_DEVICE(FreeDescriptorSets)
+  TALLY_DEVICE(ResetDescriptorPool)
+  TALLY_DEVICE(DestroyDescriptorPool)
+  TALLY_DEVICE(UpdateDescriptorSets)
+  TALLY_DEVICE(CreateDescriptorUpdateTemplate)
+  TALLY_DEVICE_ALIAS(CreateDescriptorUpdateTemplateKHR, CreateDescriptorUpdateTemplate)
+  TALLY_DEVICE(UpdateDescriptorSetWithTemplate)
+  TALLY_DEVICE_ALIAS(UpdateDescriptorSetWithTemplateKHR, UpdateDescriptorSetWithTemplate)
+  TALLY_DEVICE(CreateShaderModule)
+  TALLY_DEVICE(DestroyShaderModule)
+  TALLY_DEVICE(CreatePipelineLayout)
+  TALLY_DEVICE(CreateGraphicsPipelines)
+  TALLY_DEVICE(CreateComputePipelines)
+  TALLY_DEVICE(DestroyPipeline)
+  TALLY_DEVICE(CreateCommandPool)
+  TALLY_DEVICE(DestroyCommandPool)
+  TALLY_DEVICE(ResetCommandPool)
+  TALLY_DEVICE(AllocateCommandBuffers)
+  TALLY_DEVICE(FreeCommandBuffers)
+  TALLY_DEVICE(BeginCommandBuffer)
+  TALLY_DEVICE(EndCommandBuffer)
+  TALLY_DEVICE(ResetCommandBuffer)
+  TALLY_DEVICE(CmdBeginRenderPass)
+  TALLY_DEVICE(CmdBeginRenderPass2)
+  TALLY_DEVICE_ALIAS(CmdBeginRenderPass2KHR, CmdBeginRenderPass2)
+  TALLY_DEVICE(CmdNextSubpass)
+  TALLY_DEVICE(CmdNextSubpass2)
+  TALLY_DEVICE_ALIAS(CmdNextSubpass2KHR, CmdNextSubpass2)
+  TALLY_DEVICE(CmdEndRenderPass)
+  TALLY_DEVICE(CmdEndRenderPass2)
+  TALLY_DEVICE_ALIAS(CmdEndRenderPass2KHR, CmdEndRenderPass2)
+  TALLY_DEVICE(CmdBeginRendering)
+  TALLY_DEVICE_ALIAS(CmdBeginRenderingKHR, CmdBeginRendering)
+  TALLY_DEVICE(CmdEndRendering)
+  TALLY_DEVICE_ALIAS(CmdEndRenderingKHR, CmdEndRendering)
+  TALLY_DEVICE(CmdBeginDebugUtilsLabelEXT)
+  TALLY_DEVICE(CmdEndDebugUtilsLabelEXT)
+  TALLY_DEVICE(CmdBeginQuery)
+  TALLY_DEVICE(CmdEndQuery)
+  TALLY_DEVICE(CmdBindPipeline)
+  TALLY_DEVICE(CmdBindDescriptorSets)
+  TALLY_DEVICE(CmdBindVertexBuffers)
+  TALLY_DEVICE(CmdBindIndexBuffer)
+  TALLY_DEVICE(CmdDraw)
+  TALLY_DEVICE(CmdDrawIndexed)
+  TALLY_DEVICE(CmdDrawIndirect)
+  TALLY_DEVICE(CmdDrawIndexedIndirect)
+  TALLY_DEVICE(CmdDrawIndirectCount)
+  TALLY_DEVICE_ALIAS(CmdDrawIndirectCountKHR, CmdDrawIndirectCount)
+  TALLY_DEVICE(CmdDrawIndexedIndirectCount)
+  TALLY_DEVICE_ALIAS(CmdDrawIndexedIndirectCountKHR, CmdDrawIndexedIndirectCount)
+  TALLY_DEVICE(CmdDispatch)
+  TALLY_DEVICE(CmdDispatchBase)
+  TALLY_DEVICE_ALIAS(CmdDispatchBaseKHR, CmdDispatchBase)
+  TALLY_DEVICE(CmdDispatchIndirect)
+  TALLY_DEVICE(CmdExecuteCommands)
+  TALLY_DEVICE(QueueSubmit)
+  TALLY_DEVICE(QueueSubmit2)
+  TALLY_DEVICE_ALIAS(QueueSubmit2KHR, QueueSubmit2)
+  TALLY_DEVICE(QueuePresentKHR)
+#undef TALLY_DEVICE
+#undef TALLY_DEVICE_ALIAS
+  return nullptr;
+}
+
+}  // namespace
+}  // namespace tally::layer
+
+extern "C" {
+
+__attribute__((visibility("default"))) VKAPI_ATTR VkResult VKAPI_CALL
+vkNegotiateLoaderLayerInterfaceVersion(VkNegotiateLayerInterface* version) {
+  if (version == nullptr || version->sType != LAYER_NEGOTIATE_INTERFACE_STRUCT) return VK_ERROR_INITIALIZATION_FAILED;
+  if (version->loaderLayerInterfaceVersion > 2) version->loaderLayerInterfaceVersion = 2;
+  version->pfnGetInstanceProcAddr = tally::layer::GetInstanceProcAddr;
+  version->pfnGetDeviceProcAddr = tally::layer::GetDeviceProcAddr;
+  version->pfnGetPhysicalDeviceProcAddr = nullptr;
+  return VK_SUCCESS;
+}
+
+__attribute__((visibility("default"))) VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL
+vkGetInstanceProcAddr(VkInstance instance, const char* name) {
+  return tally::layer::GetInstanceProcAddr(instance, name);
+}
+
+__attribute__((visibility("default"))) VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL
+vkGetDeviceProcAddr(VkDevice device, const char* name) {
+  return tally::layer::GetDeviceProcAddr(device, name);
+}
+
+}  // extern "C"

@@ -1,0 +1,325 @@
+// The layer's view of one instance and its devices: the objects the
+// application created (what counting attributes to), the pipelines it
+// instrumented, the command buffers being recorded and the submissions whose
+// counters are still being read back. docs/layer.md describes the model.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+#include <vulkan/vk_layer.h>
+#include <nlohmann/json.hpp>
+
+#include "spirv/instrument.hpp"
+
+namespace tally::layer {
+
+// The loader's dispatch table pointer: the same for an instance and its
+// physical devices, and for a device, its queues and command buffers.
+inline void* dispatchKey(const void* handle) { return *static_cast<void* const*>(handle); }
+template <class T>
+uint64_t u64(T handle) {
+  return reinterpret_cast<uint64_t>(handle);
+}
+
+// What the environment asks of the layer (docs/layer.md, "Configuration").
+struct Config {
+  std::string output;          // TALLY_LAYER_OUTPUT: the result file ("" : none is written)
+  uint32_t frames = 10;        // TALLY_LAYER_FRAMES
+  uint32_t skipFrames = 0;     // TALLY_LAYER_SKIP_FRAMES
+  uint32_t frameSubmits = 0;   // TALLY_LAYER_FRAME_SUBMITS: 0, frames end at present
+  spirv::Mode mode{spirv::CountMode::Accumulate};  // TALLY_LAYER_COUNTING
+  std::string error;           // a variable that did not parse: the layer counts nothing and says so
+  static Config fromEnvironment();
+};
+
+struct InstanceState {
+  VkInstance instance = VK_NULL_HANDLE;
+  PFN_vkGetInstanceProcAddr gipa = nullptr;
+  PFN_vkDestroyInstance destroyInstance = nullptr;
+  PFN_vkGetPhysicalDeviceProperties getProperties = nullptr;
+  PFN_vkGetPhysicalDeviceProperties2 getProperties2 = nullptr;
+  PFN_vkGetPhysicalDeviceFeatures getFeatures = nullptr;
+  PFN_vkGetPhysicalDeviceMemoryProperties getMemoryProperties = nullptr;
+  PFN_vkGetPhysicalDeviceQueueFamilyProperties getQueueFamilies = nullptr;
+  std::string applicationName, engineName;
+  uint32_t apiVersion = VK_API_VERSION_1_0;
+};
+
+// The device functions the layer calls down the chain.
+struct DeviceDispatch {
+#define TALLY_LAYER_DEVICE_FUNCTIONS(X)                                                                       \
+  X(GetDeviceProcAddr) X(DestroyDevice) X(GetDeviceQueue) X(GetDeviceQueue2) X(DeviceWaitIdle)                 \
+  X(CreateShaderModule) X(DestroyShaderModule) X(CreateGraphicsPipelines) X(CreateComputePipelines)         \
+  X(DestroyPipeline) X(CreatePipelineLayout) X(DestroyPipelineLayout) X(CreateDescriptorSetLayout)           \
+  X(DestroyDescriptorSetLayout) X(CreateDescriptorPool) X(DestroyDescriptorPool) X(ResetDescriptorPool)      \
+  X(AllocateDescriptorSets) X(FreeDescriptorSets) X(UpdateDescriptorSets) X(CreateDescriptorUpdateTemplate)  \
+  X(DestroyDescriptorUpdateTemplate) X(UpdateDescriptorSetWithTemplate) X(CreateBuffer) X(DestroyBuffer)    \
+  X(CreateBufferView) X(DestroyBufferView) X(CreateImage) X(DestroyImage) X(CreateImageView)                 \
+  X(DestroyImageView) X(GetImageMemoryRequirements) X(GetBufferMemoryRequirements) X(AllocateMemory)        \
+  X(FreeMemory) X(BindBufferMemory) X(MapMemory) X(UnmapMemory) X(CreateRenderPass) X(CreateRenderPass2)     \
+  X(DestroyRenderPass) X(CreateFramebuffer) X(DestroyFramebuffer) X(CreateCommandPool) X(DestroyCommandPool) \
+  X(ResetCommandPool) X(AllocateCommandBuffers) X(FreeCommandBuffers) X(BeginCommandBuffer)                  \
+  X(EndCommandBuffer) X(ResetCommandBuffer) X(CmdBindPipeline) X(CmdBindDescriptorSets)                      \
+  X(CmdBindVertexBuffers) X(CmdBindIndexBuffer) X(CmdDraw) X(CmdDrawIndexed) X(CmdDrawIndirect)             \
+  X(CmdDrawIndexedIndirect) X(CmdDrawIndirectCount) X(CmdDrawIndexedIndirectCount) X(CmdDispatch)           \
+  X(CmdDispatchIndirect) X(CmdDispatchBase) X(CmdBeginRenderPass) X(CmdNextSubpass) X(CmdEndRenderPass)      \
+  X(CmdBeginRenderPass2) X(CmdNextSubpass2) X(CmdEndRenderPass2) X(CmdBeginRendering) X(CmdEndRendering)     \
+  X(CmdExecuteCommands) X(CmdPipelineBarrier) X(CmdCopyBuffer) X(CmdFillBuffer) X(CmdWriteTimestamp)         \
+  X(CmdResetQueryPool) X(CmdBeginQuery) X(CmdEndQuery) X(CmdCopyQueryPoolResults) X(CreateQueryPool)         \
+  X(DestroyQueryPool) X(QueueSubmit) X(QueueSubmit2) X(QueueWaitIdle) X(CreateFence) X(DestroyFence)         \
+  X(WaitForFences) X(GetFenceStatus) X(ResetFences) X(CreateSwapchainKHR) X(GetSwapchainImagesKHR)           \
+  X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)
+#define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
+  TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
+#undef TALLY_LAYER_MEMBER
+};
+
+enum class Kind { Texture, Attachment, Depth, Buffer };
+const char* toString(Kind kind);
+
+// An image or buffer the application created (or a swapchain's image).
+struct Resource {
+  uint64_t handle = 0;
+  bool image = false;
+  Kind kind = Kind::Buffer;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  uint32_t width = 0, height = 0, samples = 1;
+  uint64_t size = 0;             // buffers: VkBufferCreateInfo::size; images: the memory requirement
+  std::string usage;
+  std::string name;              // debug-utils name, "" for none
+  std::string displayName() const;  // the name, else kind, handle, format and extent
+};
+
+struct ImageView {
+  uint64_t image = 0;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkImageAspectFlags aspect = 0;
+};
+
+// What a descriptor element refers to: the resource and, for image views,
+// the view's format and aspect (bytes per read).
+struct Bound {
+  uint64_t resource = 0;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkImageAspectFlags aspect = 0;
+  bool operator==(const Bound&) const = default;
+};
+
+struct DescriptorSetLayoutInfo {
+  std::map<uint32_t, std::pair<VkDescriptorType, uint32_t>> bindings;  // binding -> type, count
+};
+struct DescriptorSetState {
+  std::shared_ptr<DescriptorSetLayoutInfo> layout;
+  std::map<uint32_t, std::vector<Bound>> bindings;
+};
+
+struct PipelineLayoutInfo {
+  VkPipelineLayout extended = VK_NULL_HANDLE;  // what the application holds (with the counter set) or its own
+  bool hasCounterSet = false;
+  uint32_t appSets = 0;
+  std::string refused;  // why it was not extended
+};
+
+// A pipeline the layer instrumented: its sites, with slots relative to the
+// pipeline's region of the counter buffer.
+struct PipelineInfo {
+  uint64_t handle = 0;
+  VkPipelineBindPoint bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  bool counted = false;
+  uint32_t slots = 0;
+  std::vector<spirv::Site> sites;
+  std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
+  std::map<uint32_t, uint32_t> vertexLocationBinding;  // attribute Location -> vertex buffer binding
+  bool hasFragment = false;
+  std::string name;
+};
+
+// The resource behind each slot of a region, resolved at the draw.
+struct Region {
+  VkDeviceSize offset = 0;
+  VkDeviceSize bytes = 0;
+  std::shared_ptr<PipelineInfo> pipeline;
+  std::vector<Bound> slotResources;  // per slot: what it counts
+  uint32_t pass = 0;                 // index into the command buffer's passes
+  bool owned = true;                 // false: a secondary's region, executed by this primary
+};
+
+// A render pass instance, a dynamic-rendering scope, or the compute
+// dispatches between them.
+struct PassScope {
+  std::string label;   // the innermost debug label open where it began
+  std::string kind;    // "render pass", "rendering", "compute"
+  uint32_t timestampBegin = UINT32_MAX;  // query index; end is begin + 1
+  std::vector<uint32_t> statisticQueries;
+  uint32_t draws = 0, dispatches = 0;
+  std::map<std::pair<uint64_t, uint32_t>, uint64_t> indexReads;  // (index buffer, index bytes) -> indices
+};
+
+struct CommandBufferState {
+  VkCommandBuffer handle = VK_NULL_HANDLE;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  bool secondary = false;
+  bool graphicsOrCompute = true;
+  bool timestamps = false;
+  std::vector<PassScope> passes;
+  std::vector<Region> regions;
+  std::map<std::tuple<uint32_t, uint64_t, std::vector<uint64_t>>, size_t> regionIndex;
+  VkQueryPool timestampPool = VK_NULL_HANDLE, statisticsPool = VK_NULL_HANDLE;
+  uint32_t timestampsUsed = 0, statisticsUsed = 0;
+  // recording state
+  int currentPass = -1;
+  bool inRenderPass = false;
+  bool openStatistic = false;
+  bool appStatisticsActive = false;
+  std::vector<std::string> labels;
+  std::vector<Bound> colorAttachments;  // of the current subpass, by Location
+  // render pass instance: its attachments and each subpass's colour references
+  std::vector<Bound> passAttachments;
+  std::vector<std::vector<uint32_t>> subpassColors;
+  uint32_t subpass = 0;
+  struct BindPoint {
+    std::shared_ptr<PipelineInfo> pipeline;
+    std::array<uint64_t, 32> sets{};
+    VkDeviceSize boundOffset = ~VkDeviceSize(0);
+    bool dirty = true;
+  };
+  std::array<BindPoint, 2> bind;  // graphics, compute
+  std::map<uint32_t, uint64_t> vertexBuffers;
+  uint64_t indexBuffer = 0;
+  uint32_t indexBytes = 4;
+  bool overflowNoted = false;
+};
+
+// One vkQueueSubmit's counters and queries, copied into a host-visible
+// buffer by a command buffer the layer submits right after it.
+struct Harvest {
+  uint64_t frame = 0;
+  VkFence fence = VK_NULL_HANDLE;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  void* mapped = nullptr;
+  struct Part {
+    std::vector<PassScope> passes;
+    std::vector<Region> regions;
+    std::vector<VkDeviceSize> regionAt;  // where each region's counters lie in the buffer
+    VkDeviceSize timestampsAt = 0, statisticsAt = 0;
+    uint32_t timestamps = 0, statistics = 0;
+  };
+  std::vector<Part> parts;  // one per command buffer submitted
+};
+
+// A frame's passes as read back, before they are written out.
+struct PassRecord {
+  std::string name;
+  double gpuMs = 0;
+  bool timed = false;
+  uint32_t draws = 0, dispatches = 0;
+  uint64_t fragmentInvocations = 0, vertexInvocations = 0, computeInvocations = 0;
+  int64_t fragmentStatistic = -1, computeStatistic = -1, vertexStatistic = -1;
+  struct Line {
+    uint64_t count = 0, bytes = 0;
+    std::string kind, format;
+  };
+  std::map<std::tuple<std::string, bool, std::string>, Line> lines;  // (resource name, write, source)
+};
+struct FrameRecord {
+  uint64_t index = 0;
+  uint32_t submissions = 0;
+  std::vector<PassRecord> passes;
+  uint32_t pendingHarvests = 0;
+  bool closed = false;
+};
+
+struct ShaderInfo {
+  std::vector<uint32_t> words;
+  std::string name;
+};
+
+struct DeviceState {
+  VkDevice device = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  InstanceState* instance = nullptr;
+  DeviceDispatch d;
+  PFN_vkSetDeviceLoaderData setLoaderData = nullptr;
+  VkPhysicalDeviceProperties properties{};
+  VkPhysicalDeviceMemoryProperties memory{};
+  std::vector<VkQueueFamilyProperties> families;
+  bool fragmentStores = false, vertexStores = false, statistics = false;
+  std::string driverInfo;
+  bool llvmpipe = false;  // Mesa's lavapipe (see instrumentStages)
+  Config config;
+
+  std::mutex mutex;
+  // Counting: off when the device cannot (the reason says why).
+  bool counting = false;
+  std::string notCounting;
+  uint32_t counterSet = 7;
+  spirv::InstrumentOptions instrumentOptions;
+  VkDescriptorSetLayout counterSetLayout = VK_NULL_HANDLE, emptySetLayout = VK_NULL_HANDLE;
+  VkDescriptorPool descriptorPool = VK_NULL_HANDLE;
+  VkDescriptorSet counterDescriptorSet = VK_NULL_HANDLE;
+  VkBuffer counterBuffer = VK_NULL_HANDLE;
+  VkDeviceMemory counterMemory = VK_NULL_HANDLE;
+  VkDeviceSize arenaBytes = 0, regionRange = 0, alignment = 256, arenaNext = 0;
+  std::map<VkDeviceSize, std::vector<VkDeviceSize>> freeRegions;  // size -> offsets
+
+  // What the application created.
+  std::unordered_map<uint64_t, ShaderInfo> shaders;
+  std::unordered_map<uint64_t, PipelineLayoutInfo> pipelineLayouts;  // keyed by the handle the application holds
+  std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> pipelines;
+  std::unordered_map<uint64_t, std::shared_ptr<DescriptorSetLayoutInfo>> setLayouts;
+  std::unordered_map<uint64_t, DescriptorSetState> sets;
+  std::unordered_map<uint64_t, std::set<uint64_t>> poolSets;
+  std::unordered_map<uint64_t, std::vector<VkDescriptorUpdateTemplateEntry>> templates;
+  std::unordered_map<uint64_t, Resource> resources;  // destroyed ones stay: their counts may still be read back
+  std::unordered_map<uint64_t, ImageView> views;
+  std::unordered_map<uint64_t, uint64_t> bufferViews;  // view -> buffer
+  std::unordered_map<uint64_t, std::vector<std::vector<uint32_t>>> renderPasses;  // subpass -> colour attachment indices
+  std::unordered_map<uint64_t, std::vector<uint64_t>> framebuffers;  // attachment views
+  std::unordered_map<uint64_t, uint32_t> poolFamilies;  // command pool -> queue family
+  std::unordered_map<VkCommandBuffer, std::unique_ptr<CommandBufferState>> commandBuffers;
+  std::unordered_map<VkQueue, uint32_t> queueFamilies;
+  std::unordered_map<uint64_t, std::pair<VkFormat, VkExtent2D>> swapchains;
+  VkExtent2D extent{0, 0};
+
+  // The layer's own command pools (one per queue family) and readback.
+  std::map<uint32_t, VkCommandPool> ownPools;
+  std::deque<std::unique_ptr<Harvest>> pending;
+  std::vector<std::unique_ptr<Harvest>> idle;
+
+  // Frames.
+  uint64_t frame = 0;            // the application's current frame
+  uint32_t frameWorkSubmits = 0;  // submissions with draws or dispatches in this frame
+  std::map<uint64_t, FrameRecord> frames;
+  uint32_t framesDone = 0;
+  bool written = false;
+  std::vector<nlohmann::json> shaderReports;
+  std::set<std::string> notes;
+};
+
+// capture.cpp
+void setupCounting(DeviceState& dev);
+void destroyCounting(DeviceState& dev);
+// Finds (or allocates) the region of this draw and binds the counter set at it.
+void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch);
+void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted);
+void endFrame(DeviceState& dev);
+void finish(DeviceState& dev, bool complete);  // waits for every harvest and writes the output
+void releaseRegions(DeviceState& dev, CommandBufferState& cb);
+nlohmann::json outputJson(DeviceState& dev, bool complete);
+
+}  // namespace tally::layer
