@@ -14,6 +14,10 @@ packages=(
   # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)
   # and the /metrics test's parser (Debian's python3, /usr/bin/python3).
   curl dpkg-dev python3-prometheus-client
+  # The Vulkan layer's tests: applications under a virtual X server
+  # (xvfb-run needs xauth), vkcube (vulkan-tools, above) and GFXReconstruct's
+  # capture layer and replayer.
+  xvfb xauth gfxreconstruct
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
