@@ -613,6 +613,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
                       " and the layer needs set " + std::to_string(dev->counterSet) +
                       ": its pipelines run unchanged, uncounted";
       dev->notes.insert(state.refused);
+      ++dev->layoutsRefused;
       log(state.refused);
     }
   }
@@ -765,6 +766,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     if (pipelines[i] == VK_NULL_HANDLE) continue;
     states[i]->handle = u64(pipelines[i]);
     dev->pipelines[u64(pipelines[i])] = states[i];
+    ++dev->pipelinesCreated;
+    dev->pipelinesCounted += states[i]->counted ? 1 : 0;
   }
   return result;
 }
@@ -797,6 +800,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
     if (pipelines[i] == VK_NULL_HANDLE) continue;
     states[i]->handle = u64(pipelines[i]);
     dev->pipelines[u64(pipelines[i])] = states[i];
+    ++dev->pipelinesCreated;
+    dev->pipelinesCounted += states[i]->counted ? 1 : 0;
   }
   return result;
 }

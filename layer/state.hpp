@@ -308,6 +308,7 @@ struct DeviceState {
   uint32_t framesDone = 0;
   bool written = false;
   std::vector<nlohmann::json> shaderReports;
+  uint32_t pipelinesCreated = 0, pipelinesCounted = 0, layoutsRefused = 0;
   std::set<std::string> notes;
 };
 

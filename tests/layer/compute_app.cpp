@@ -6,7 +6,8 @@
 //           allows (maxBoundDescriptorSets), which the layer cannot extend.
 // It checks its own results, so a layer that changed what the application
 // computes fails the test. --crash-after N: SIGSEGV after N frames;
-// --hang-after N: sleeps forever after N frames.
+// --hang-after N: sleeps forever after N frames; --all-sets-only 1: "fill"
+// uses the full layout too, so the layer can count nothing.
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -52,13 +53,14 @@ void main() { v[gl_GlobalInvocationID.x] += 1000u; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  uint32_t frames = 3, crashAfter = 0, hangAfter = 0;
+  uint32_t frames = 3, crashAfter = 0, hangAfter = 0, allSetsOnly = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     const uint32_t value = uint32_t(std::strtoul(argv[i + 1], nullptr, 10));
     if (flag == "--frames") frames = value;
     else if (flag == "--crash-after") crashAfter = value;
     else if (flag == "--hang-after") hangAfter = value;
+    else if (flag == "--all-sets-only") allSetsOnly = value;
   }
   constexpr uint32_t kCount = 64 * 50;
 
@@ -176,7 +178,9 @@ int main(int argc, char** argv) {
     vkDestroyShaderModule(device, module, nullptr);
     return pipeline;
   };
-  VkPipeline fill = pipelineFor(kFill, oneSet), bump = pipelineFor(kBump, everySet);
+  // --all-sets-only 1: both pipelines use the full layout, so nothing can be counted.
+  VkPipelineLayout fillLayout = allSetsOnly ? everySet : oneSet;
+  VkPipeline fill = pipelineFor(kFill, fillLayout), bump = pipelineFor(kBump, everySet);
 
   VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1};
   VkDescriptorPoolCreateInfo dpci = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -232,7 +236,7 @@ int main(int argc, char** argv) {
     };
     label("fill");
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, fill);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, oneSet, 0, 1, &set, 0, nullptr);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, fillLayout, 0, 1, &set, 0, nullptr);
     vkCmdDispatch(cmd, kCount / 64, 1, 1);
     unlabel();
     VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,

@@ -34,6 +34,10 @@ ALLOWED = {
 TOP = {"commands", "service", "api", "store", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
        "spirv", "gpu"}
 
+# layer/ (the Vulkan layer, a shared library loaded into other processes)
+# beside server/: the SPIR-V library only, no Vulkan loader, no daemon part.
+LAYER_ALLOWED = {"spirv", "common"}
+
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/')
 
 
@@ -62,6 +66,17 @@ def check(server):
                         who = f"server/{part}" if part else "server/"
                         errors.append(f"{os.path.relpath(path, os.path.dirname(server))}:{number}: "
                                       f"{who} may not include {target}/ (allowed: {', '.join(sorted(allowed)) or 'common only'})")
+    layer = os.path.join(os.path.dirname(server), "layer")
+    if os.path.isdir(layer):
+        for name in sorted(os.listdir(layer)):
+            if not name.endswith((".cpp", ".hpp")):
+                continue
+            with open(os.path.join(layer, name), encoding="utf-8") as f:
+                for number, line in enumerate(f, 1):
+                    m = INCLUDE.match(line)
+                    if m and m.group(1) in ALLOWED and m.group(1) not in LAYER_ALLOWED:
+                        errors.append(f"layer/{name}:{number}: layer/ may not include {m.group(1)}/ "
+                                      f"(allowed: {', '.join(sorted(LAYER_ALLOWED))})")
     return errors
 
 
