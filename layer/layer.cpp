@@ -352,6 +352,12 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass(VkDevice device, const VkRenderP
   }
   std::lock_guard lock(dev->mutex);
   dev->renderPasses[u64(*pass)] = std::move(subpasses);
+  for (auto* p = static_cast<const VkBaseInStructure*>(info->pNext); p != nullptr; p = p->pNext) {
+    if (p->sType == VK_STRUCTURE_TYPE_RENDER_PASS_MULTIVIEW_CREATE_INFO &&
+        reinterpret_cast<const VkRenderPassMultiviewCreateInfo*>(p)->subpassCount > 0) {
+      dev->multiviewPasses.insert(u64(*pass));
+    }
+  }
   return result;
 }
 
@@ -361,15 +367,18 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass2(VkDevice device, const VkRender
   VkResult result = dev->d.CreateRenderPass2(device, info, alloc, pass);
   if (result != VK_SUCCESS) return result;
   std::vector<std::vector<uint32_t>> subpasses;
+  bool multiview = false;
   for (uint32_t s = 0; s < info->subpassCount; ++s) {
     std::vector<uint32_t> colors;
     for (uint32_t c = 0; c < info->pSubpasses[s].colorAttachmentCount; ++c) {
       colors.push_back(info->pSubpasses[s].pColorAttachments[c].attachment);
     }
     subpasses.push_back(std::move(colors));
+    multiview = multiview || info->pSubpasses[s].viewMask != 0;
   }
   std::lock_guard lock(dev->mutex);
   dev->renderPasses[u64(*pass)] = std::move(subpasses);
+  if (multiview) dev->multiviewPasses.insert(u64(*pass));
   return result;
 }
 
@@ -957,6 +966,7 @@ VKAPI_ATTR VkResult VKAPI_CALL ResetCommandPool(VkDevice device, VkCommandPool p
 // on a query around one), once per subpass.
 void beginStatistic(DeviceState& dev, CommandBufferState& cb) {
   if (cb.statisticsPool == VK_NULL_HANDLE || cb.currentPass < 0 || cb.openStatistic || cb.appStatisticsActive) return;
+  if (cb.multiview && cb.inRenderPass) return;  // a query there takes one index per view
   if (cb.statisticsUsed >= kQueriesPerCommandBuffer) return;
   const uint32_t q = cb.statisticsUsed++;
   dev.d.CmdBeginQuery(cb.handle, cb.statisticsPool, q, 0);
@@ -973,7 +983,7 @@ void openPass(DeviceState& dev, CommandBufferState& cb, const char* kind) {
   PassScope pass;
   pass.kind = kind;
   pass.label = cb.labels.empty() ? "" : cb.labels.back();
-  if (cb.timestamps && cb.timestampsUsed + 2 <= kQueriesPerCommandBuffer) {
+  if (cb.timestamps && cb.timestampsUsed + 2 <= kQueriesPerCommandBuffer && !(cb.multiview && cb.inRenderPass)) {
     pass.timestampBegin = cb.timestampsUsed;
     cb.timestampsUsed += 2;
     dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, cb.timestampPool, pass.timestampBegin);
@@ -1011,6 +1021,7 @@ void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPas
   cb.passAttachments.clear();
   cb.subpassColors.clear();
   cb.subpass = 0;
+  cb.multiview = dev.multiviewPasses.count(u64(pass)) > 0;
   std::vector<uint64_t> views;
   if (auto f = dev.framebuffers.find(u64(framebuffer)); f != dev.framebuffers.end()) views = f->second;
   for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
@@ -1115,6 +1126,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
   dev->d.CmdBeginRendering(cmd, info);
   if (cb == nullptr) return;
   cb->colorAttachments.clear();
+  cb->multiview = info->viewMask != 0;
   for (uint32_t i = 0; i < info->colorAttachmentCount; ++i) {
     cb->colorAttachments.push_back(boundImage(*dev, info->pColorAttachments[i].imageView));
   }

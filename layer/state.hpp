@@ -183,6 +183,7 @@ struct CommandBufferState {
   bool inRenderPass = false;
   bool openStatistic = false;
   bool appStatisticsActive = false;
+  bool multiview = false;  // the current render pass instance has multiview on: no queries inside
   std::vector<std::string> labels;
   std::vector<Bound> colorAttachments;  // of the current subpass, by Location
   // render pass instance: its attachments and each subpass's colour references
@@ -290,6 +291,7 @@ struct DeviceState {
   std::unordered_map<uint64_t, uint64_t> bufferViews;  // view -> buffer
   std::unordered_map<uint64_t, std::vector<std::vector<uint32_t>>> renderPasses;  // subpass -> colour attachment indices
   std::unordered_map<uint64_t, std::vector<uint64_t>> framebuffers;  // attachment views
+  std::set<uint64_t> multiviewPasses;  // render passes with a view mask: queries inside take N indices
   std::unordered_map<uint64_t, uint32_t> poolFamilies;  // command pool -> queue family
   std::unordered_map<VkCommandBuffer, std::unique_ptr<CommandBufferState>> commandBuffers;
   std::unordered_map<VkQueue, uint32_t> queueFamilies;
