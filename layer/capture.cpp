@@ -472,10 +472,15 @@ void processHarvest(DeviceState& dev, Harvest& h) {
                 key.second, "buffer", "");
       }
       // Unnamed passes take their kind and their place among the frame's passes of that kind.
+      if (pass.name.empty() && scope.continues >= 0 && first + size_t(scope.continues) < frame->second.passes.size()) {
+        pass.name = frame->second.passes[first + size_t(scope.continues)].name;
+      }
       if (pass.name.empty()) {
-        size_t n = 0;
-        for (const auto& p : frame->second.passes) n += p.name.rfind(scope.kind + " ", 0) == 0 ? 1 : 0;
-        pass.name = scope.kind + " " + std::to_string(n);
+        std::set<std::string> named;
+        for (const auto& p : frame->second.passes) {
+          if (p.name.rfind(scope.kind + " ", 0) == 0) named.insert(p.name);
+        }
+        pass.name = scope.kind + " " + std::to_string(named.size());
       }
       frame->second.passes.push_back(std::move(pass));
     }

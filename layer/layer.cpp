@@ -1006,6 +1006,18 @@ void closePass(DeviceState& dev, CommandBufferState& cb) {
 
 bool tracked(DeviceState& dev, CommandBufferState* cb) { return cb != nullptr && !cb->secondary && dev.counting; }
 
+// Each subpass is a scope of its own, so that a label per subpass names it a
+// pass; an unlabelled later subpass takes the first one's name (one pass).
+int subpassScopeStart(const CommandBufferState& cb) {
+  if (cb.currentPass < 0) return -1;
+  const PassScope& pass = cb.passes[size_t(cb.currentPass)];
+  return pass.continues >= 0 ? pass.continues : cb.currentPass;
+}
+void openSubpass(DeviceState& dev, CommandBufferState& cb, int first) {
+  openPass(dev, cb, "render pass");
+  cb.passes.back().continues = first;
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL EndCommandBuffer(VkCommandBuffer cmd) {
   DeviceState* dev = deviceOf(cmd);
   {
@@ -1081,11 +1093,12 @@ VKAPI_ATTR void VKAPI_CALL CmdNextSubpass(VkCommandBuffer cmd, VkSubpassContents
   DeviceState* dev = deviceOf(cmd);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) endStatistic(*dev, *cb);
+  const int first = tracked(*dev, cb) ? subpassScopeStart(*cb) : -1;
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
   dev->d.CmdNextSubpass(cmd, contents);
   if (cb == nullptr) return;
   nextSubpassCommon(*cb);
-  if (tracked(*dev, cb)) beginStatistic(*dev, *cb);
+  if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdNextSubpass2(VkCommandBuffer cmd, const VkSubpassBeginInfo* begin,
@@ -1093,11 +1106,12 @@ VKAPI_ATTR void VKAPI_CALL CmdNextSubpass2(VkCommandBuffer cmd, const VkSubpassB
   DeviceState* dev = deviceOf(cmd);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) endStatistic(*dev, *cb);
+  const int first = tracked(*dev, cb) ? subpassScopeStart(*cb) : -1;
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
   dev->d.CmdNextSubpass2(cmd, begin, end);
   if (cb == nullptr) return;
   nextSubpassCommon(*cb);
-  if (tracked(*dev, cb)) beginStatistic(*dev, *cb);
+  if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass(VkCommandBuffer cmd) {
@@ -1154,7 +1168,15 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginDebugUtilsLabelEXT(VkCommandBuffer cmd, const
   DeviceState* dev = deviceOf(cmd);
   if (dev->d.CmdBeginDebugUtilsLabelEXT != nullptr) dev->d.CmdBeginDebugUtilsLabelEXT(cmd, label);
   std::lock_guard lock(dev->mutex);
-  if (CommandBufferState* cb = cbState(*dev, cmd)) cb->labels.push_back(label->pLabelName ? label->pLabelName : "");
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return;
+  cb->labels.push_back(label->pLabelName ? label->pLabelName : "");
+  // A label begun inside a render pass before its first draw names the pass
+  // where none was open at its start, and names a later subpass.
+  if (tracked(*dev, cb) && cb->inRenderPass && cb->currentPass >= 0) {
+    PassScope& pass = cb->passes[size_t(cb->currentPass)];
+    if (pass.draws == 0 && (pass.label.empty() || pass.continues >= 0)) pass.label = cb->labels.back();
+  }
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdEndDebugUtilsLabelEXT(VkCommandBuffer cmd) {

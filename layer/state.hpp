@@ -161,6 +161,7 @@ struct Region {
 struct PassScope {
   std::string label;   // the innermost debug label open where it began
   std::string kind;    // "render pass", "rendering", "compute"
+  int continues = -1;  // a later subpass: the scope of the render pass's first subpass (its name when unlabelled)
   uint32_t timestampBegin = UINT32_MAX;  // query index; end is begin + 1
   std::vector<uint32_t> statisticQueries;
   uint32_t draws = 0, dispatches = 0;

@@ -1,0 +1,142 @@
+#!/usr/bin/env python3
+"""Tally's own renderers, run as an ordinary uninstrumented application
+(`tallyd play`) under the Vulkan layer, must give the per-pass, per-resource
+counts of their built-in instrumentation (`tallyd capture`, exact): every
+counted line, by pass and resource name, equal.
+
+  compare_builtin.py --tallyd PATH --layer-dir DIR --scene NAME_OR_JSON
+                     [--renderers a,b] [--resolution WxH] [--out REPORT.json]
+
+The renderers name their passes with debug-utils labels and their resources
+with object names (gpu/debug_names), so both sides use the same names. Lines
+only one side can see are listed, not compared: derived lines (depth writes
+from the built-in counting-only fragment shaders) and the index reads the
+layer derives per draw.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+
+def counted_lines(passes):
+    """{(pass, resource, access): count} of the counter lines."""
+    out = {}
+    for p in passes:
+        for r in p["resources"]:
+            if r["source"] != "counter":
+                continue
+            key = (p["name"], r["name"], r["access"])
+            out[key] = out.get(key, 0) + r["count"]
+    return out
+
+
+def run(command, env=None, timeout=900):
+    result = subprocess.run(command, env=env, timeout=timeout, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError("%s exited %d\n%s" % (" ".join(command), result.returncode, result.stderr[-4000:]))
+    return result
+
+
+def compare(args, renderer, tmp, builtin_run):
+    output = os.path.join(tmp, renderer + ".layer.json")
+    env = dict(os.environ)
+    env.update({
+        "VK_ADD_LAYER_PATH": args.layer_dir,
+        "VK_INSTANCE_LAYERS": "VK_LAYER_TALLY_counters",
+        "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
+        "TALLY_LAYER_OUTPUT": output,
+        "TALLY_LAYER_FRAMES": "1",
+        "TALLY_LAYER_SKIP_FRAMES": "1",
+        "TALLY_LAYER_FRAME_SUBMITS": "1",
+        "TALLY_LAYER_COUNTING": args.counting,
+    })
+    camera = builtin_run["samples"][0]["camera"]
+    w, h = args.resolution.split("x")
+    run([args.tallyd, "play", "--renderer", renderer, "--scene", args.scene, "--resolution", args.resolution,
+         "--frames", "2", "--camera", json.dumps({k: camera[k] for k in ("eye", "target", "fov_deg")})]
+        + (["--device", args.device] if args.device else []), env=env)
+    with open(output) as f:
+        layer = json.load(f)
+    frame = layer["frames"][0]
+    a = counted_lines(builtin_run["samples"][0]["passes"])
+    b = counted_lines(frame["passes"])
+    mismatched = sorted((k, a[k], b[k]) for k in a.keys() & b.keys() if a[k] != b[k])
+    only_builtin = sorted(k for k in a.keys() - b.keys() if a[k] != 0)
+    only_layer = sorted(k for k in b.keys() - a.keys() if b[k] != 0)
+    times = {p["name"]: p["gpu_ms"] for p in frame["passes"]}
+    plain = {p["name"]: p["gpu_ms"] for p in builtin_run["samples"][0]["passes"]}
+    return {
+        "renderer": renderer,
+        "lines_equal": len(a.keys() & b.keys()) - len(mismatched),
+        "mismatched": [{"line": list(k), "builtin": x, "layer": y} for k, x, y in mismatched],
+        "only_builtin": [list(k) for k in only_builtin],
+        "only_layer": [list(k) for k in only_layer],
+        "passes_builtin": [p["name"] for p in builtin_run["samples"][0]["passes"]],
+        "passes_layer": [p["name"] for p in frame["passes"]],
+        "frame_ms_layer": frame["frame_ms"],
+        "frame_ms_plain": builtin_run["samples"][0]["frame_ms"],
+        "frame_ms_builtin_counted": builtin_run["samples"][0].get("frame_ms_instrumented"),
+        "gpu_ms_layer": times,
+        "gpu_ms_plain": plain,
+        "uninstrumented_shaders": [s for s in layer["shaders"] if not s["instrumented"]],
+        "notes": layer["notes"],
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--tallyd", required=True)
+    parser.add_argument("--layer-dir", required=True)
+    parser.add_argument("--scene", required=True, help="a scene name or a scene object as JSON")
+    parser.add_argument("--renderers", default="forward,forward-zprepass,deferred,visbuffer,visbuffer-lean")
+    parser.add_argument("--resolution", default="96x54")
+    parser.add_argument("--counting", default="accumulate", help="the layer's mode (the built-in side is exact)")
+    parser.add_argument("--builtin-frames", type=int, default=1)
+    parser.add_argument("--device", default="")
+    parser.add_argument("--out", default="")
+    args = parser.parse_args()
+    args.layer_dir = os.path.abspath(args.layer_dir)
+    renderers = args.renderers.split(",")
+    w, h = (int(x) for x in args.resolution.split("x"))
+    try:
+        scene = json.loads(args.scene)
+    except json.JSONDecodeError:
+        scene = args.scene
+    report = {"scene": scene, "resolution": [w, h], "renderers": []}
+    failed = False
+    with tempfile.TemporaryDirectory(prefix="tally-layer-compare-") as tmp:
+        spec = {"renderers": renderers, "scenes": [scene], "resolutions": [[w, h]], "cameras": "auto",
+                "frames": args.builtin_frames, "counted_frames": 1, "counting": "exact", "ceilings": False}
+        spec_path, result_path = os.path.join(tmp, "spec.json"), os.path.join(tmp, "builtin.json")
+        with open(spec_path, "w") as f:
+            json.dump(spec, f)
+        run([args.tallyd, "capture", "--spec", spec_path, "--out", result_path, "--quiet"]
+            + (["--device", args.device] if args.device else []))
+        with open(result_path) as f:
+            builtin = json.load(f)
+        for r in builtin["runs"]:
+            r["samples"] = r["samples"][:1]  # camera 0 of the auto set
+            entry = compare(args, r["renderer"], tmp, r)
+            report["renderers"].append(entry)
+            ok = not entry["mismatched"] and not entry["only_builtin"] and not entry["only_layer"]
+            failed = failed or not ok
+            print("%-16s %-8s %3d lines equal, %d differ, %d built-in only, %d layer only" %
+                  (r["renderer"], "ok" if ok else "DIFFERS", entry["lines_equal"], len(entry["mismatched"]),
+                   len(entry["only_builtin"]), len(entry["only_layer"])))
+            for m in entry["mismatched"]:
+                print("    %s: built-in %s, layer %s" % ("/".join(m["line"]), m["builtin"], m["layer"]))
+            for k in entry["only_builtin"]:
+                print("    built-in only: " + "/".join(k))
+            for k in entry["only_layer"]:
+                print("    layer only: " + "/".join(k))
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump(report, f, indent=1)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
