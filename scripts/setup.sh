@@ -16,7 +16,7 @@ packages=(
   curl dpkg-dev python3-prometheus-client
   # The Vulkan layer's tests: applications under a virtual X server
   # (xvfb-run needs xauth), vkcube (vulkan-tools, above) and GFXReconstruct's
-  # capture layer and replayer.
+  # capture layer and replayer (also tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.

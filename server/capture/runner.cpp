@@ -55,13 +55,6 @@ json runNotes(const renderers::Renderer& renderer, const scenes::Scene& scene) {
   return notes;
 }
 
-std::string sceneName(const json& spec, const scenes::Scene& scene) {
-  if (spec.is_object() && spec.contains("gltf")) {
-    return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
-  }
-  return scene.name;
-}
-
 // A number from `j[key]`, or nullopt where it is absent or null.
 std::optional<double> numberAt(const json& j, const char* key) {
   auto it = j.find(key);
@@ -250,8 +243,7 @@ std::vector<std::vector<uint8_t>> referenceImages(gpu::Context& ctx, renderers::
   std::vector<std::vector<uint8_t>> images;
   auto made = renderers::makeRenderer(variant.name);
   if (!made) return images;
-  renderers::RendererOptions ro{{res.width, res.height}, false, spec.modes.front(), spec.lights};
-  renderers::applyOptions(variant.options, ro);
+  const renderers::RendererOptions ro = rendererOptions(spec, variant, res, false, spec.modes.front());
   if ((*made)->setup(ctx, gpuScene, ro)) {
     for (const auto& camera : cameras) {
       (*made)->renderFrame(camera);
@@ -318,9 +310,8 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
   auto made = renderers::makeRenderer(rendererName);
   if (!made) return makeError(where + ": " + made.error());
   auto& instrumented = *made;
-  renderers::RendererOptions ro{{res.width, res.height}, true, mode, spec.lights};
-  renderers::applyOptions(variant.options, ro);
-  ro.footprintBlockBytes = spec.footprintBlockBytes;  // counted frames only: the plain twin stays as it is
+  // Footprint on counted frames only: the plain twin stays as it is.
+  const renderers::RendererOptions ro = rendererOptions(spec, variant, res, true, mode);
   auto ok = timedSetup(phases, *instrumented, ctx, gpuScene, ro);
   if (!ok) return makeError(where + ": " + ok.error());
   json run = {{"renderer", rendererName},
@@ -439,30 +430,15 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
   const json ceilings = result["device"].value("ceilings", json(nullptr));
 
   // Load every scene first: a bad file fails the capture before any GPU time is spent.
-  std::vector<scenes::Scene> loaded;
   auto loading = Phases::Clock::now();
-  for (size_t i = 0; i < spec.scenes.size(); ++i) {
-    auto scene = scenes::makeScene(spec.scenes[i]);
-    if (!scene) return makeError("scenes[" + std::to_string(i) + "]: " + scene.error());
-    loaded.push_back(std::move(scene).value());
-  }
-  // Every (renderer, scene) pair the renderer cannot draw is refused here,
-  // before any GPU time is spent (renderers/scene_limits.hpp).
-  for (size_t i = 0; i < loaded.size(); ++i) {
-    for (const auto& variant : spec.renderers) {
-      renderers::RendererOptions ro{{spec.resolutions.front().width, spec.resolutions.front().height}, true,
-                                    spec.modes.front(), spec.lights};
-      renderers::applyOptions(variant.options, ro);
-      ro.footprintBlockBytes = spec.footprintBlockBytes;
-      if (std::string why = renderers::sceneRefusal(variant.name, loaded[i], ro); !why.empty())
-        return makeError("scenes[" + std::to_string(i) + "] (" + sceneName(spec.scenes[i], loaded[i]) + "): " + why);
-    }
-  }
+  auto scenesLoaded = loadScenes(spec, true);
+  if (!scenesLoaded) return makeError(scenesLoaded.error());
+  std::vector<scenes::Scene> loaded = std::move(scenesLoaded).value();
   phases.add("scene_load", std::chrono::duration<double>(Phases::Clock::now() - loading).count());
   std::vector<std::vector<scenes::Camera>> cameras;
   size_t total = 0;
   for (const auto& scene : loaded) {
-    cameras.push_back(spec.autoCameras ? scenes::autoCameras(scene) : spec.cameras);
+    cameras.push_back(cameraSet(spec, scene));
     total += spec.renderers.size() * spec.resolutions.size() * spec.modes.size() * cameras.back().size();
   }
 
@@ -500,8 +476,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         // One uninstrumented renderer per variant, timed again beside every mode's run.
         auto plain = renderers::makeRenderer(rendererName);
         if (!plain) return makeError(where + ": " + plain.error());
-        renderers::RendererOptions plainOptions{{res.width, res.height}, false, spec.modes.front(), spec.lights};
-        renderers::applyOptions(variant.options, plainOptions);
+        const auto plainOptions = rendererOptions(spec, variant, res, false, spec.modes.front());
         auto ok = timedSetup(phases, **plain, ctx, gpuScene, plainOptions);
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
@@ -528,6 +503,44 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 }
 
 }  // namespace
+
+std::string sceneName(const json& spec, const scenes::Scene& scene) {
+  if (spec.is_object() && spec.contains("gltf")) {
+    return std::filesystem::path(spec["gltf"].get<std::string>()).stem().string();
+  }
+  return scene.name;
+}
+
+renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const RendererVariant& variant,
+                                           const Resolution& res, bool instrumented, const spirv::Mode& mode) {
+  renderers::RendererOptions ro{{res.width, res.height}, instrumented, mode, spec.lights};
+  renderers::applyOptions(variant.options, ro);
+  if (instrumented) ro.footprintBlockBytes = spec.footprintBlockBytes;
+  return ro;
+}
+
+Result<std::vector<scenes::Scene>> loadScenes(const CaptureSpec& spec, bool instrumented) {
+  std::vector<scenes::Scene> loaded;
+  for (size_t i = 0; i < spec.scenes.size(); ++i) {
+    auto scene = scenes::makeScene(spec.scenes[i]);
+    if (!scene) return makeError("scenes[" + std::to_string(i) + "]: " + scene.error());
+    loaded.push_back(std::move(scene).value());
+  }
+  // Every (renderer, scene) pair the renderer cannot draw is refused here,
+  // before any GPU time is spent (renderers/scene_limits.hpp).
+  for (size_t i = 0; i < loaded.size(); ++i) {
+    for (const auto& variant : spec.renderers) {
+      const auto ro = rendererOptions(spec, variant, spec.resolutions.front(), instrumented, spec.modes.front());
+      if (std::string why = renderers::sceneRefusal(variant.name, loaded[i], ro); !why.empty())
+        return makeError("scenes[" + std::to_string(i) + "] (" + sceneName(spec.scenes[i], loaded[i]) + "): " + why);
+    }
+  }
+  return loaded;
+}
+
+std::vector<scenes::Camera> cameraSet(const CaptureSpec& spec, const scenes::Scene& scene) {
+  return spec.autoCameras ? scenes::autoCameras(scene) : spec.cameras;
+}
 
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {
   // Before the device: without shaders nothing can be drawn.

@@ -10,6 +10,8 @@
 #include "capture/spec.hpp"
 #include "sweeps/sweep.hpp"
 #include "gpu/context.hpp"
+#include "renderers/renderer.hpp"
+#include "scenes/scene.hpp"
 #include "common/progress.hpp"
 #include "common/result.hpp"
 
@@ -30,5 +32,19 @@ Result<nlohmann::json> runCapture(const CaptureSpec& spec, const CaptureOptions&
 // Runs a stability sweep (a spec with "sweep", sweeps/sweep.hpp) on the
 // device the options name, as runCapture runs a matrix.
 Result<nlohmann::json> runSweep(const sweeps::SweepSpec& spec, const CaptureOptions& options);
+
+// The pieces of a capture that `tallyd play` (capture/play.hpp) shares:
+// - the options `variant` is set up with at `res`: counted in `mode` with
+//   the spec's footprint, or the uninstrumented twin;
+renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const RendererVariant& variant,
+                                           const Resolution& res, bool instrumented, const spirv::Mode& mode);
+// - every scene of the spec built (glTF files loaded), and every (renderer,
+//   scene) pair a renderer cannot draw refused, before any GPU work; errors
+//   name the scene ("scenes[1] (sponza): ...");
+Result<std::vector<scenes::Scene>> loadScenes(const CaptureSpec& spec, bool instrumented);
+// - the cameras a scene is rendered from: the spec's, or the scene's automatic set;
+std::vector<scenes::Camera> cameraSet(const CaptureSpec& spec, const scenes::Scene& scene);
+// - a scene's name in results: a glTF file's stem, else the scene's own.
+std::string sceneName(const nlohmann::json& spec, const scenes::Scene& scene);
 
 }  // namespace tally::capture

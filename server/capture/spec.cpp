@@ -26,6 +26,27 @@ Result<uint32_t> boundedInt(const nlohmann::json& j, const std::string& field, u
 
 }  // namespace
 
+Result<RendererVariant> makeVariant(const std::string& name, const nlohmann::json& options) {
+  if (!options.is_object()) return fieldError("options", "must be an object of option: value, got " + show(options));
+  // canonicalOptions' errors begin with the option's name ("output: ...").
+  auto canonical = renderers::canonicalOptions(name, options);
+  if (!canonical) return makeError("options." + canonical.error());
+  return RendererVariant{name, std::move(canonical).value()};
+}
+
+Result<Resolution> parseResolution(const nlohmann::json& r, const std::string& field) {
+  if (!r.is_array() || r.size() != 2) return fieldError(field, "must be [width, height], got " + show(r));
+  auto w = boundedInt(r[0], field + "[0]", 1, kMaxDimension);
+  if (!w) return makeError(w.error());
+  auto h = boundedInt(r[1], field + "[1]", 1, kMaxDimension);
+  if (!h) return makeError(h.error());
+  if (uint64_t{*w} * *h > kMaxPixels) {
+    return fieldError(field, std::to_string(*w) + "x" + std::to_string(*h) + " is more than the " +
+                                 std::to_string(kMaxPixels) + "-pixel limit (8K)");
+  }
+  return Resolution{*w, *h};
+}
+
 std::string RendererVariant::label() const { return renderers::variantLabel(name, options); }
 
 RendererVariant RendererVariant::reference() const {
@@ -111,11 +132,9 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
         return fieldError(field, "unknown " + noun + " '" + name + "' (expected one of " + known + ")");
       }
       field = std::string(list) + "[" + std::to_string(i) + "]";
-      if (!options.is_object()) return fieldError(field + ".options", "must be an object of option: value, got " + show(options));
-      // canonicalOptions' errors begin with the option's name ("output: ...").
-      auto canonical = renderers::canonicalOptions(name, options);
-      if (!canonical) return makeError(field + ".options." + canonical.error());
-      RendererVariant variant{name, std::move(canonical).value()};
+      auto made = makeVariant(name, options);
+      if (!made) return makeError(field + "." + made.error());
+      RendererVariant variant = std::move(made).value();
       for (const auto& seen : spec.renderers) {
         if (seen.name == variant.name && seen.options == variant.options) {
           return fieldError(field, noun + " '" + variant.label() + "' listed twice");
@@ -155,18 +174,9 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     return fieldError("resolutions", "must be a non-empty array of [width, height]");
   }
   for (size_t i = 0; i < resolutions.size(); ++i) {
-    std::string field = "resolutions[" + std::to_string(i) + "]";
-    const auto& r = resolutions[i];
-    if (!r.is_array() || r.size() != 2) return fieldError(field, "must be [width, height], got " + show(r));
-    auto w = boundedInt(r[0], field + "[0]", 1, kMaxDimension);
-    if (!w) return makeError(w.error());
-    auto h = boundedInt(r[1], field + "[1]", 1, kMaxDimension);
-    if (!h) return makeError(h.error());
-    if (uint64_t{*w} * *h > kMaxPixels) {
-      return fieldError(field, std::to_string(*w) + "x" + std::to_string(*h) + " is more than the " +
-                                   std::to_string(kMaxPixels) + "-pixel limit (8K)");
-    }
-    spec.resolutions.push_back({*w, *h});
+    auto resolution = parseResolution(resolutions[i], "resolutions[" + std::to_string(i) + "]");
+    if (!resolution) return makeError(resolution.error());
+    spec.resolutions.push_back(*resolution);
   }
 
   // cameras

@@ -78,6 +78,16 @@ struct CaptureSpec {
   }
 };
 
+// The variant of a renderer (or workload) `name` with `options` made
+// canonical (renderers::canonicalOptions), as a spec's entry is checked; the
+// name is not. Errors begin "options: ..." or "options.output: ...".
+Result<RendererVariant> makeVariant(const std::string& name, const nlohmann::json& options);
+
+// A [width, height] as a spec's "resolutions" entry: integers from 1 to
+// kMaxDimension, at most kMaxPixels in all; errors name `field`
+// ("resolutions[0][1]: must be an integer between 1 and 16384, got 0").
+Result<Resolution> parseResolution(const nlohmann::json& r, const std::string& field);
+
 // `knownRenderers` is the list to check names against. Errors read
 // "renderers[2]: unknown renderer 'x' (expected one of ...)" or
 // "renderers[1].options.output: ...".

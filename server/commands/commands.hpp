@@ -45,6 +45,26 @@ struct CaptureArgs {
 // naming the field and exit 1.
 int runCapture(const CaptureArgs& args);
 
+struct PlayArgs {
+  std::string renderer;    // a renderer or workload name
+  std::string options;     // its options as a JSON object; "" none
+  std::string scene;       // a scene name, a scene spec as JSON, or a .gltf/.glb file
+  std::string resolution;  // WxH
+  std::string frames;      // how many frames to render
+  std::string camera = "0";  // index into the scene's automatic camera set
+  std::string device;      // index or name substring
+  std::string lights = "400";
+  bool quiet = false;      // no line per frame on standard error
+  bool verbose = false;    // a line after setup too (descriptor sets, names)
+  bool json = false;       // the run's summary as JSON on standard output
+};
+
+// Renders frames of one renderer, uninstrumented, as an ordinary Vulkan
+// application whose images, buffers and passes carry their names through
+// VK_EXT_debug_utils (capture/play.hpp). Bad input: one line naming the
+// flag, exit 2; a failure on the device: exit 1.
+int runPlay(const PlayArgs& args);
+
 struct AccuracyArgs {
   std::string result;  // a capture result file
   bool json = false;   // JSON rows instead of the table

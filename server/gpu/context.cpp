@@ -195,6 +195,17 @@ void createInstance(Context& ctx, const ContextOptions& options) {
 
   std::vector<const char*> layers;
   std::vector<const char*> extensions;
+  // VK_EXT_debug_utils whenever the loader (or an implicit layer) offers it:
+  // the renderers name their images, buffers and passes with it.
+  bool debugUtils = false;
+  {
+    uint32_t count = 0;
+    VK_CHECK(vkEnumerateInstanceExtensionProperties(nullptr, &count, nullptr));
+    std::vector<VkExtensionProperties> available(count);
+    VK_CHECK(vkEnumerateInstanceExtensionProperties(nullptr, &count, available.data()));
+    available.resize(count);
+    debugUtils = hasExtension(available, VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  }
   if (options.validation) {
     uint32_t count = 0;
     VK_CHECK(vkEnumerateInstanceLayerProperties(&count, nullptr));
@@ -204,10 +215,11 @@ void createInstance(Context& ctx, const ContextOptions& options) {
     for (const auto& layer : available) {
       if (std::strcmp(layer.layerName, kValidationLayer) == 0) {
         layers.push_back(kValidationLayer);
-        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+        debugUtils = true;  // the layer provides it
       }
     }
   }
+  if (debugUtils) extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
 
   VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = options.applicationName.c_str();
@@ -225,6 +237,7 @@ void createInstance(Context& ctx, const ContextOptions& options) {
     throw std::runtime_error("vkCreateInstance: no compatible Vulkan driver (ICD) found");
   }
   VK_CHECK(result);
+  ctx.debugUtilsInstance = debugUtils;
 
   if (!layers.empty()) {
     auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
@@ -240,6 +253,23 @@ void createInstance(Context& ctx, const ContextOptions& options) {
       messengerInfo.pfnUserCallback = debugCallback;
       VK_CHECK(create(ctx.instance, &messengerInfo, nullptr, &ctx.messenger));
     }
+  }
+}
+
+// VK_EXT_debug_utils' naming and label commands, through the device (a layer
+// in the chain sees them), else the instance; all null without the extension.
+void loadDebugUtils(Context& ctx) {
+  if (!ctx.debugUtilsInstance) return;
+  auto load = [&ctx](const char* name) {
+    PFN_vkVoidFunction f = vkGetDeviceProcAddr(ctx.device, name);
+    return f != nullptr ? f : vkGetInstanceProcAddr(ctx.instance, name);
+  };
+  ctx.setDebugUtilsObjectName = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(load("vkSetDebugUtilsObjectNameEXT"));
+  ctx.cmdBeginDebugUtilsLabel = reinterpret_cast<PFN_vkCmdBeginDebugUtilsLabelEXT>(load("vkCmdBeginDebugUtilsLabelEXT"));
+  ctx.cmdEndDebugUtilsLabel = reinterpret_cast<PFN_vkCmdEndDebugUtilsLabelEXT>(load("vkCmdEndDebugUtilsLabelEXT"));
+  if (ctx.cmdBeginDebugUtilsLabel == nullptr || ctx.cmdEndDebugUtilsLabel == nullptr) {
+    ctx.cmdBeginDebugUtilsLabel = nullptr;  // labels come in pairs or not at all
+    ctx.cmdEndDebugUtilsLabel = nullptr;
   }
 }
 
@@ -443,6 +473,7 @@ void createDevice(Context& ctx, const Candidate& chosen) {
   info.ppEnabledExtensionNames = extensionNames.data();
   VK_CHECK(vkCreateDevice(ctx.physicalDevice, &info, nullptr, &ctx.device));
   vkGetDeviceQueue(ctx.device, ctx.queueFamily, 0, &ctx.queue);
+  loadDebugUtils(ctx);
 
   VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;

@@ -27,6 +27,17 @@ struct ContextOptions {
   bool validation = false;
 };
 
+// What the debug-utils helpers (gpu/debug_names.hpp) were asked to do: an
+// object name or a command buffer label opened or closed.
+struct DebugUtilsEvent {
+  enum class Kind { ObjectName, BeginLabel, EndLabel };
+  Kind kind = Kind::ObjectName;
+  VkObjectType objectType = VK_OBJECT_TYPE_UNKNOWN;  // ObjectName
+  uint64_t handle = 0;                               // ObjectName
+  VkCommandBuffer commandBuffer = VK_NULL_HANDLE;    // BeginLabel, EndLabel
+  std::string name;                                  // the object's name or the label; "" for EndLabel
+};
+
 struct Context {
   // What was created and written into descriptor sets (the footprint table reads it).
   std::shared_ptr<ResourceLog> log = std::make_shared<ResourceLog>();
@@ -73,6 +84,18 @@ struct Context {
   bool bufferDeviceAddress = false;
   bool descriptorIndexing = false;  // runtime arrays + non-uniform sampled-image indexing + partially bound
   std::vector<std::string> enabledExtensions;
+
+  // VK_EXT_debug_utils, enabled on the instance whenever the loader offers
+  // it: object names and command buffer labels for tools that intercept the
+  // application (a capture layer, a debugger). Null where absent: the
+  // helpers in gpu/debug_names.hpp are then no-ops.
+  bool debugUtilsInstance = false;  // the instance has the extension enabled
+  PFN_vkSetDebugUtilsObjectNameEXT setDebugUtilsObjectName = nullptr;
+  PFN_vkCmdBeginDebugUtilsLabelEXT cmdBeginDebugUtilsLabel = nullptr;
+  PFN_vkCmdEndDebugUtilsLabelEXT cmdEndDebugUtilsLabel = nullptr;
+  // Where set, sees every name and label the helpers are asked for, with or
+  // without the extension (tests record them).
+  std::function<void(const DebugUtilsEvent&)> debugUtilsHook;
 
   // Driver quirks Tally works around (see shaders.hpp).
   // lavapipe (seen on Mesa 22.3.6): a Volatile HelperInvocation load, which

@@ -165,6 +165,7 @@ const gpu::Image* RendererBase::createTarget(const std::string& name, VkFormat f
   info.allocationBytes = r.size;
   info.usage = usageName(usage);
   info.memory = imageMemoryKind(*ctx_, r);
+  info.objects = {gpu::objectOf(image.image)};
   resources_.push_back(info);
   return &image;
 }
@@ -188,6 +189,7 @@ const gpu::Image* RendererBase::createTransientTarget(const std::string& name, V
   info.allocationBytes = r.size;
   info.usage = usageName(usage);
   info.memory = memory;
+  info.objects = {gpu::objectOf(image.image)};
   resources_.push_back(info);
   return &image;
 }
@@ -239,8 +241,25 @@ void RendererBase::endRenderPass(VkCommandBuffer cmd, uint32_t passIndex) {
 
 void RendererBase::nextSubpass(VkCommandBuffer cmd, uint32_t fromPass, uint32_t toPass) {
   if (statistics_.pool != VK_NULL_HANDLE) gpu::endStatistics(cmd, statistics_, fromPass);
+  // The debug labels follow the passes the counters do: `toPass`'s subpass
+  // under its own name, inside the render pass `fromPass` records.
+  endPassLabel(cmd);
   vkCmdNextSubpass(cmd, VK_SUBPASS_CONTENTS_INLINE);
+  beginPassLabel(cmd, toPass);
+  subpassLabelled_.insert(toPass);
   if (statistics_.pool != VK_NULL_HANDLE) gpu::beginStatistics(cmd, statistics_, toPass);
+}
+
+void RendererBase::beginPassLabel(VkCommandBuffer cmd, uint32_t passIndex) {
+  endPassLabel(cmd);
+  gpu::beginLabel(*ctx_, cmd, passes_[passIndex].name);
+  labelOpen_ = true;
+}
+
+void RendererBase::endPassLabel(VkCommandBuffer cmd) {
+  if (!labelOpen_) return;
+  gpu::endLabel(*ctx_, cmd);
+  labelOpen_ = false;
 }
 
 }  // namespace tally::renderers

@@ -2,6 +2,7 @@
 // the graphics and compute pipelines every renderer builds on.
 #include "renderers/renderer_base.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 
@@ -104,12 +105,20 @@ VkPipelineLayout RendererBase::pipelineLayout(VkDescriptorSetLayout material,
 
 VkPipelineLayout RendererBase::makePipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput,
                                                   VkShaderStageFlags pushStages) {
-  std::vector<VkDescriptorSetLayout> sets(counterSet_ + 1, emptyLayout_);
+  const uint32_t count = options_.instrumented ? counterSet_ + 1 : shaders::kSetPassInput + 1;
+  std::vector<VkDescriptorSetLayout> sets(count, emptyLayout_);
   sets[shaders::kSetFrame] = frameLayout_;
   sets[shaders::kSetGeometry] = geometryLayout_;
   if (material != VK_NULL_HANDLE) sets[shaders::kSetMaterial] = material;
   if (passInput != VK_NULL_HANDLE) sets[shaders::kSetPassInput] = passInput;
-  sets[counterSet_] = counterLayout_;
+  if (options_.instrumented) {
+    sets[counterSet_] = counterLayout_;
+  } else {
+    // An ordinary application's layout: no counter set, and no empty sets
+    // after the last one the shaders use (a set they use is never empty).
+    while (sets.size() > 1 && sets.back() == emptyLayout_) sets.pop_back();
+  }
+  maxLayoutSets_ = std::max(maxLayoutSets_, uint32_t(sets.size()));
   pipelineLayouts_.push_back(gpu::createPipelineLayout(*ctx_, sets, sizeof(shaders::DrawPush), pushStages));
   return pipelineLayouts_.back();
 }

@@ -218,6 +218,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   std::array<std::vector<int32_t>, kKinds> layersOf;  // texture index per layer (-1: dummy)
   for (uint32_t k = 0; k < kKinds; ++k) layersOf[k].push_back(-1);
   std::vector<bool> counted(scene.textures.size(), false);
+  textureKinds_.assign(scene.textures.size(), -1);
   VkSamplerCreateInfo defaults = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
   defaults.magFilter = VK_FILTER_LINEAR;
   defaults.minFilter = VK_FILTER_LINEAR;
@@ -261,6 +262,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
       extra.emissiveMap = uint32_t(it - emissiveLayers.begin());
       if (!counted[size_t(e)]) {
         counted[size_t(e)] = true;
+        textureKinds_[size_t(e)] = int32_t(shaders::kMapEmissive);
         emissiveBytes_ += textures_[size_t(e)].allocationBytes;
       }
     }
@@ -280,6 +282,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
       md.maps[k] = uint32_t(it - layers.begin());
       if (t >= 0 && !counted[size_t(t)]) {
         counted[size_t(t)] = true;
+        textureKinds_[size_t(t)] = int32_t(k);
         mapBytesPerKind_[k] += textures_[size_t(t)].allocationBytes;
       }
     }
@@ -439,6 +442,7 @@ void GpuScene::destroy() {
   features_ = {};
   for (auto& t : textures_) destroyMipImage(ctx, t);
   textures_.clear();
+  textureKinds_.clear();
   for (auto& t : dummies_) destroyMipImage(ctx, t);
   for (auto& t : mapArrays_) destroyMipImage(ctx, t);
   destroyMipImage(ctx, sky_);
@@ -471,6 +475,7 @@ std::vector<ResourceInfo> GpuScene::bufferResources() const {
     r.elementBytes = element;
     r.allocationBytes = allocationOf(*ctx_, b);
     r.usage = usage;
+    r.objects = {gpu::objectOf(b.buffer)};
     return r;
   };
   std::vector<ResourceInfo> out = {buffer("vertices", vertices_, sizeof(shaders::Vertex), "vertex|storage"),
@@ -478,16 +483,23 @@ std::vector<ResourceInfo> GpuScene::bufferResources() const {
                                    buffer("draws", drawBuffer_, sizeof(shaders::DrawData), "storage"),
                                    buffer("materials", materialBuffer_, sizeof(shaders::Material), "storage"),
                                    buffer("lights", lightBuffer_, sizeof(shaders::PointLight), "storage")};
+  // The descriptor-indexing path's materials (indexedMaterialBuffer()) count as "materials" too.
+  if (indexedMaterialBuffer_.buffer != VK_NULL_HANDLE) out[3].objects.push_back(gpu::objectOf(indexedMaterialBuffer_.buffer));
   // glTF scenes only: listed where a shader define can read them.
   if (features_.vertexColors || features_.uv1)
     out.push_back(buffer("vertex_attributes", attributes_, sizeof(shaders::VertexAttributes), "vertex|storage"));
-  if (usesMaterialExtras())
+  if (usesMaterialExtras()) {
     out.push_back(buffer("material_extras", materialExtras_, sizeof(shaders::MaterialExtra), "storage"));
+    if (indexedMaterialExtras_.buffer != VK_NULL_HANDLE)
+      out.back().objects.push_back(gpu::objectOf(indexedMaterialExtras_.buffer));
+  }
   return out;
 }
 
-static ResourceInfo imageResource(std::string name, VkFormat format, uint32_t w, uint32_t h, uint64_t bytes) {
+static ResourceInfo imageResource(std::string name, VkFormat format, uint32_t w, uint32_t h, uint64_t bytes,
+                                  std::vector<gpu::DebugObject> objects) {
   ResourceInfo r;
+  r.objects = std::move(objects);
   r.name = std::move(name);
   r.kind = ResourceKind::Texture;
   r.format = format;
@@ -501,18 +513,28 @@ static ResourceInfo imageResource(std::string name, VkFormat format, uint32_t w,
 }
 
 ResourceInfo GpuScene::skyResource() const {
-  return imageResource("sky", sky_.format, sky_.width, sky_.height, sky_.allocationBytes);
+  return imageResource("sky", sky_.format, sky_.width, sky_.height, sky_.allocationBytes, {gpu::objectOf(sky_.image)});
 }
 
 std::vector<ResourceInfo> GpuScene::materialMapResources() const {
+  // A kind's images: its dummy and every texture counted under it (the
+  // first kind that uses it, as its bytes are).
+  auto imagesOf = [&](uint32_t kind, const MipImage& dummy) {
+    std::vector<gpu::DebugObject> objects = {gpu::objectOf(dummy.image)};
+    for (size_t t = 0; t < textures_.size(); ++t) {
+      if (t < textureKinds_.size() && textureKinds_[t] == int32_t(kind)) objects.push_back(gpu::objectOf(textures_[t].image));
+    }
+    return objects;
+  };
   std::vector<ResourceInfo> out;
   for (uint32_t k = 0; k < kKinds; ++k) {
     out.push_back(imageResource(std::string("material_maps.") + mapKindName(k), kindFormat(k), 0, 0,
-                                mapBytesPerKind_[k]));
+                                mapBytesPerKind_[k], imagesOf(k, dummies_[k])));
   }
   if (features_.emissiveMaps) {
     out.push_back(imageResource(std::string("material_maps.") + mapKindName(shaders::kMapEmissive),
-                                VK_FORMAT_R8G8B8A8_SRGB, 0, 0, emissiveBytes_));
+                                VK_FORMAT_R8G8B8A8_SRGB, 0, 0, emissiveBytes_,
+                                imagesOf(shaders::kMapEmissive, emissiveDummy_)));
   }
   return out;
 }
@@ -522,12 +544,12 @@ std::vector<ResourceInfo> GpuScene::mapArrayResources() const {
   for (uint32_t k = 0; k < kKinds; ++k) {
     const auto& a = mapArrays_[k];
     out.push_back(imageResource(std::string("material_maps.") + mapKindName(k), a.format, a.width, a.height,
-                                a.allocationBytes));
+                                a.allocationBytes, {gpu::objectOf(a.image)}));
   }
   if (features_.emissiveMaps) {
     const auto& a = emissiveArray_;
     out.push_back(imageResource(std::string("material_maps.") + mapKindName(shaders::kMapEmissive), a.format,
-                                a.width, a.height, a.allocationBytes));
+                                a.width, a.height, a.allocationBytes, {gpu::objectOf(a.image)}));
   }
   return out;
 }

@@ -147,7 +147,9 @@ class GpuScene {
   std::vector<ResourceInfo> bufferResources() const;
   ResourceInfo skyResource() const;
   // "material_maps.<kind>": the per-texture images (and dummy) of each kind
-  // ("material_maps.emissive" too where a material has an emissive map).
+  // ("material_maps.emissive" too where a material has an emissive map). A
+  // texture that serves several kinds is listed (and counted) under the
+  // first kind a material uses it for.
   std::vector<ResourceInfo> materialMapResources() const;
   // "material_maps.<kind>": the layered image of each kind.
   std::vector<ResourceInfo> mapArrayResources() const;
@@ -173,6 +175,7 @@ class GpuScene {
   std::vector<glm::vec3> cpuPositions_;
   std::vector<uint32_t> cpuIndices_;
   std::vector<MipImage> textures_;                         // per scene texture
+  std::vector<int32_t> textureKinds_;  // per texture: the map kind its bytes count under (-1: no material's)
   std::array<MipImage, scenes::kMapSlotCount> dummies_;    // 1x1 per kind
   std::array<MipImage, scenes::kMapSlotCount> mapArrays_;  // layered per kind
   std::vector<std::array<VkImageView, scenes::kMapSlotCount>> materialMapViews_;

@@ -15,6 +15,7 @@
 
 #include "common/result.hpp"
 #include "gpu/context.hpp"
+#include "gpu/debug_names.hpp"
 #include "scenes/scene.hpp"
 #include "spirv/instrument.hpp"
 
@@ -41,6 +42,14 @@ struct ResourceInfo {
   // "lazily_allocated" (transient attachments where the device offers it) or
   // "host_visible" (a type without DEVICE_LOCAL); "" for buffers.
   std::string memory;
+  // The images or buffers whose accesses count under `name`: one for a
+  // target or a buffer; every texture of a map kind and its dummy for
+  // "material_maps.<kind>" (with the visibility buffers' map arrays, the
+  // kind's layered image first: the per-texture images are bound by their
+  // alpha-tested and transparent draws); both materials buffers where the
+  // descriptor-indexing path binds its own. Setup names each one `name`
+  // through VK_EXT_debug_utils (gpu/debug_names.hpp).
+  std::vector<gpu::DebugObject> objects;
 };
 
 // One line of a pass's traffic: a resource read or written.
@@ -301,6 +310,10 @@ class Renderer {
   virtual nlohmann::json pipelineStatistics() const { return nlohmann::json::array(); }
   // Since the last setup().
   virtual SetupTimes setupTimes() const { return {}; }
+  // After setup: the most descriptor sets any of its pipeline layouts holds
+  // (the counter set's index + 1 when instrumented; uninstrumented ones stop
+  // at the last set their shaders use). 0 where unknown.
+  virtual uint32_t maxPipelineSetCount() const { return 0; }
   virtual void destroy() = 0;
 };
 

@@ -30,8 +30,10 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     return makeError("bloom_taps: must be an odd kernel width up to 63, got " + std::to_string(options.bloom.taps));
   }
   counterSet_ = gpu::instrumentOptionsFor(ctx, options.counting).set;
-  if (counterSet_ <= shaders::kSetPassInput)
+  if (options.instrumented && counterSet_ <= shaders::kSetPassInput)
     return makeError("device: too few descriptor sets for the counters");
+  counterDescriptorSet_ = VK_NULL_HANDLE;  // plain renderers have none (makePipelineLayout)
+  maxLayoutSets_ = 0;
   try {
     const uint32_t materials = scene.materialCount();
     VkDescriptorPoolSize sizes[] = {
@@ -51,9 +53,10 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
     emptyLayout_ = setLayout({});
     // The counters; with footprint, the table (a bank per binding of the set) and the bitmaps.
-    counterLayout_ = options.instrumented && options.footprintBlockBytes != 0
-                         ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
-                         : setLayout({ssbo});
+    // Uninstrumented: no counter set at all.
+    counterLayout_ = !options.instrumented                 ? VK_NULL_HANDLE
+                     : options.footprintBlockBytes != 0 ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
+                                                         : setLayout({ssbo});
     // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
     const bool emissiveMaps = scene.features().emissiveMaps;
     materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
@@ -133,6 +136,9 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
       // indices and every coarser level.
       if (lod_ && r.name == "indices") r.allocationBytes = lod_->indexAllocationBytes();
       if (packedVertices_ && r.name == "vertices") r = packedVertices_->info;  // the buffer bound instead
+      // The buffers bound under these names (LOD's index and draws buffers where it is on).
+      if (r.name == "indices") r.objects = {gpu::objectOf(indexBuffer().buffer)};
+      if (r.name == "draws") r.objects = {gpu::objectOf(drawsBuffer().buffer)};
       resources_.push_back(r);
     }
     ResourceInfo camera;
@@ -141,10 +147,12 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     camera.elementBytes = sizeof(shaders::Camera);
     camera.allocationBytes = cameraBuffer_.size;
     camera.usage = "uniform";
+    camera.objects = {gpu::objectOf(cameraBuffer_.buffer)};
     resources_.push_back(camera);
     camera.name = "lighting";
     camera.elementBytes = sizeof(shaders::Lighting);
     camera.allocationBytes = lightingBuffer_.size;
+    camera.objects = {gpu::objectOf(lightingBuffer_.buffer)};
     resources_.push_back(camera);
     resources_.push_back(scene.skyResource());
     hdr_ = createTarget("hdr", kHdrFormat,
@@ -175,18 +183,25 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     setupBloom();
     setupTonemapAndSkybox();
 
-    counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
-                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                  gpu::MemoryUse::DeviceLocal);
-    counterDescriptorSet_ = allocateSet(counterLayout_);
-    gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
-    gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
+    if (options_.instrumented) {
+      counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
+                                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                        VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                    gpu::MemoryUse::DeviceLocal);
+      counterDescriptorSet_ = allocateSet(counterLayout_);
+      gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
+      gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
+    }
     if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
     if (ctx.pipelineStatistics) {
       statistics_ = gpu::createStatisticsQueries(ctx, uint32_t(passes_.size()),
                                                  VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT |
                                                      VK_QUERY_PIPELINE_STATISTIC_COMPUTE_SHADER_INVOCATIONS_BIT);
+    }
+    // Every image and buffer under the name its lines carry, for tools
+    // that intercept the application (VK_EXT_debug_utils; a no-op without it).
+    for (const auto& r : resources_) {
+      for (const auto& object : r.objects) gpu::nameObject(ctx, object, r.name);
     }
   } catch (const std::exception& e) {
     destroy();
@@ -207,12 +222,16 @@ nlohmann::json RendererBase::frameExtras() {
 }
 
 void RendererBase::recordAll(VkCommandBuffer cmd) {
-  vkCmdFillBuffer(cmd, counters_.buffer, 0, VK_WHOLE_SIZE, 0);  // counters are per frame
-  VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1,
-                       &barrier, 0, nullptr, 0, nullptr);
+  labelOpen_ = false;
+  subpassLabelled_.clear();
+  if (counters_.buffer != VK_NULL_HANDLE) {  // instrumented
+    vkCmdFillBuffer(cmd, counters_.buffer, 0, VK_WHOLE_SIZE, 0);  // counters are per frame
+    VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    barrier.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1,
+                         &barrier, 0, nullptr, 0, nullptr);
+  }
   if (footprint_.created()) footprint_.recordClear(cmd);
   if (timestamps_.pool != VK_NULL_HANDLE) gpu::resetTimestamps(cmd, timestamps_);
   if (statistics_.pool != VK_NULL_HANDLE) gpu::resetStatistics(cmd, statistics_);
@@ -222,9 +241,16 @@ void RendererBase::recordAll(VkCommandBuffer cmd) {
     recordingPass_ = i;
     boundSets_ = {};
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps_, i);
+    // The pass's debug label covers what its timestamps bracket. A pass an
+    // earlier one recorded as its subpass was labelled there (nextSubpass):
+    // its own record is empty and gets no second label.
+    const bool ownLabel = subpassLabelled_.count(i) == 0;
+    if (ownLabel) beginPassLabel(cmd, i);
     passes_[i].record(cmd);
+    if (ownLabel) endPassLabel(cmd);  // or the label of the subpass it moved to
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassEnd(cmd, timestamps_, i);
   }
+  subpassLabelled_.clear();
 }
 
 FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
@@ -400,6 +426,9 @@ void RendererBase::destroy() {
   bloomExtras_ = nullptr;
   tileMemoryExtras_ = nullptr;
   hdr_ = final_ = depth_ = bloom_ = nullptr;
+  counterLayout_ = VK_NULL_HANDLE;
+  counterDescriptorSet_ = VK_NULL_HANDLE;
+  maxLayoutSets_ = 0;
   destroyShadows();
   slotCount_ = 0;
   copyLayouts_.clear();

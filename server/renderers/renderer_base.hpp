@@ -62,6 +62,7 @@ class RendererBase : public Renderer {
   nlohmann::json pipelineStatistics() const override;
   SetupTimes setupTimes() const override { return setupTimes_; }
   std::vector<std::string> passNames() const override;
+  uint32_t maxPipelineSetCount() const override { return maxLayoutSets_; }
   // {"bloom": {...}} with bloom on (setupBloom), else {}. A renderer that adds
   // its own extras merges these in.
   nlohmann::json frameExtras() override;
@@ -125,7 +126,9 @@ class RendererBase : public Renderer {
                                                    VkRenderPass renderPass,
                                                    const std::vector<std::string>& fragmentDefines = {});
   // Sets 0 frame, 1 `material` (or empty), 2 geometry, 3 `passInput` (or
-  // empty), empty up to the counter set; push constants DrawPush.
+  // empty), empty up to the counter set (instrumented; uninstrumented
+  // layouts end at the last set the pass's shaders use, 3 at most, and bind
+  // no counter set); push constants DrawPush.
   VkPipelineLayout pipelineLayout(VkDescriptorSetLayout material, VkDescriptorSetLayout passInput);
   VkPipeline pipeline(const gpu::GraphicsPipelineDesc& desc);
   // One descriptor per binding, or counts[i] where given (arrays).
@@ -303,6 +306,13 @@ class RendererBase : public Renderer {
   void shadowBindings(PassBindings& bindings) const;
   ShadowState shadow_;
   void recordAll(VkCommandBuffer cmd);
+  // Each pass's VK_EXT_debug_utils label (gpu/debug_names.hpp): recordAll
+  // opens and closes one around every pass's record; nextSubpass moves to the
+  // next pass's label inside a render pass of several subpasses.
+  void beginPassLabel(VkCommandBuffer cmd, uint32_t passIndex);
+  void endPassLabel(VkCommandBuffer cmd);
+  bool labelOpen_ = false;
+  std::set<uint32_t> subpassLabelled_;  // passes labelled by nextSubpass in this recording
 
   // Footprint (options_.footprintBlockBytes > 0; base_footprint.cpp). The
   // first frame records once without submitting to learn which descriptor
@@ -331,6 +341,7 @@ class RendererBase : public Renderer {
 
   std::vector<Pass> passes_;
   uint32_t counterSet_ = 7;
+  uint32_t maxLayoutSets_ = 0;  // the most descriptor sets of a pipeline layout made since setup
   uint32_t slotCount_ = 0;                       // counter slots reserved, copies included
   std::vector<spirv::CopyLayout> copyLayouts_;   // striped modules, folded after readback
   gpu::Buffer counters_, cameraBuffer_, lightingBuffer_;

@@ -34,7 +34,19 @@ bool VisbufferBase::indexedMaps() const {
 }
 
 void VisbufferBase::addMapResources() {
-  for (auto& r : indexedMaps() ? scene_->materialMapResources() : scene_->mapArrayResources()) {
+  if (indexedMaps()) {
+    for (auto& r : scene_->materialMapResources()) resources_.push_back(r);
+    return;
+  }
+  // Map arrays: the shading pass reads the layered image of each kind, while
+  // the alpha-tested twins and the transparent pass bind the per-texture
+  // images of the same kind; both count under "material_maps.<kind>", so
+  // both carry that name (the bytes are the layered image's).
+  const std::vector<ResourceInfo> perTexture = scene_->materialMapResources();
+  for (auto& r : scene_->mapArrayResources()) {
+    for (const auto& t : perTexture) {
+      if (t.name == r.name) r.objects.insert(r.objects.end(), t.objects.begin(), t.objects.end());
+    }
     resources_.push_back(r);
   }
 }

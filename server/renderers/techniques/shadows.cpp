@@ -128,6 +128,7 @@ Result<bool> RendererBase::setupShadows() {
   info.width = info.height = size;
   info.allocationBytes = req.size;
   info.usage = "depth_stencil_attachment|sampled";
+  info.objects = {gpu::objectOf(shadow_.map.image)};
   resources_.push_back(info);
 
   VkSamplerCreateInfo sampler = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -150,6 +151,7 @@ Result<bool> RendererBase::setupShadows() {
   ubo.elementBytes = sizeof(shaders::Shadow);
   ubo.allocationBytes = shadow_.uniform.size;
   ubo.usage = "uniform";
+  ubo.objects = {gpu::objectOf(shadow_.uniform.buffer)};
   resources_.push_back(ubo);
 
   gpu::DescriptorWrite writes[2];

@@ -201,6 +201,7 @@ Result<PackedVertexBuffer> buildPackedVertices(gpu::Context& ctx, const GpuScene
   out.info.elementBytes = sizeof(PackedVertex);
   out.info.allocationBytes = r.size;
   out.info.usage = "vertex|storage";
+  out.info.objects = {gpu::objectOf(out.buffer.buffer)};
   out.stats = tangentFrameErrors(normals, tangents);
   out.stats["encoding"] = "quaternion";
   out.stats["vertex_stride_bytes"] = sizeof(PackedVertex);

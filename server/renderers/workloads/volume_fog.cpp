@@ -159,6 +159,7 @@ class VolumeFog final : public WorkloadBase {
     res.allocationBytes = r.size;
     res.usage = "sampled|transfer_dst|3d";
     res.memory = imageMemoryKind(*ctx_, r);
+    res.objects = {gpu::objectOf(volume_)};
     resources_.push_back(res);
   }
 

@@ -52,6 +52,7 @@ class WorkloadBase : public RendererBase {
     info.elementBytes = element;
     info.allocationBytes = b.size;
     info.usage = storage ? "storage" : "uniform";
+    info.objects = {gpu::objectOf(b.buffer)};
     resources_.push_back(info);
     return b;
   }
