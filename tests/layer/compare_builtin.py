@@ -56,7 +56,7 @@ def compare(args, renderer, tmp, builtin_run):
     camera = builtin_run["samples"][0]["camera"]
     w, h = args.resolution.split("x")
     run([args.tallyd, "play", "--renderer", renderer, "--scene", args.scene, "--resolution", args.resolution,
-         "--frames", "2", "--camera", json.dumps({k: camera[k] for k in ("eye", "target", "fov_deg")})]
+         "--frames", "2", "--camera", "0", "--quiet"]
         + (["--device", args.device] if args.device else []), env=env)
     with open(output) as f:
         layer = json.load(f)
