@@ -14,6 +14,9 @@ packages=(
   # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)
   # and the /metrics test's parser (Debian's python3, /usr/bin/python3).
   curl dpkg-dev python3-prometheus-client
+  # Application captures (docs/layer.md): the X server of "display": "xvfb",
+  # and gfxrecon-replay for replays.
+  xvfb gfxreconstruct
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
