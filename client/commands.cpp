@@ -300,11 +300,26 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   }
   // What the scene's loader simplified or ignored, then the renderer's choices.
   const json notes = run->contains("notes") && (*run)["notes"].is_object() ? (*run)["notes"] : json::object();
+  auto text = [](const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
   if (notes.contains("scene") && notes["scene"].is_array()) {
-    for (const auto& note : notes["scene"]) io.out << "scene note: " << (note.is_string() ? note.get<std::string>() : note.dump()) << '\n';
+    for (const auto& note : notes["scene"]) io.out << "scene note: " << text(note) << '\n';
+  }
+  // An application captured under the Vulkan layer: the layer's notes, and
+  // the shaders it left uninstrumented (docs/layer.md).
+  if (notes.contains("layer_notes") && notes["layer_notes"].is_array()) {
+    for (const auto& note : notes["layer_notes"]) io.out << "layer note: " << text(note) << '\n';
+  }
+  if (notes.contains("uninstrumented_shaders") && notes["uninstrumented_shaders"].is_array()) {
+    for (const auto& s : notes["uninstrumented_shaders"]) {
+      if (!s.is_object()) continue;
+      io.out << "uninstrumented shader: " << text(s.value("name", json(""))) << " (" << text(s.value("stage", json("")))
+             << "): " << text(s.value("reason", json(""))) << '\n';
+    }
   }
   for (const auto& [key, value] : notes.items()) {
-    if (key != "scene") io.out << "note: " << key << " = " << (value.is_string() ? value.get<std::string>() : value.dump()) << '\n';
+    if (key != "scene" && key != "layer_notes" && key != "uninstrumented_shaders") {
+      io.out << "note: " << key << " = " << text(value) << '\n';
+    }
   }
   io.out << '\n';
 
@@ -317,7 +332,11 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     variantErrors = variantErrors || s.hasVariantError;
     footprint = footprint || s.footprintBytes.has_value();
   }
-  std::vector<Table::Column> columns = {{"CAMERA"},
+  // An application's samples are its frames (docs/layer.md): no cameras.
+  const bool application = notes.contains("source") && notes["source"].is_object() &&
+                           (notes["source"].value("kind", json("")) == "application" ||
+                            notes["source"].value("kind", json("")) == "replay");
+  std::vector<Table::Column> columns = {{application ? "FRAME" : "CAMERA"},
                                         {"SKY", Align::Right},
                                         {"FRAME MS", Align::Right},
                                         {"OVERHEAD", Align::Right},

@@ -14,9 +14,10 @@ packages=(
   # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)
   # and the /metrics test's parser (Debian's python3, /usr/bin/python3).
   curl dpkg-dev python3-prometheus-client
-  # The Vulkan layer's tests: applications under a virtual X server
-  # (xvfb-run needs xauth), vkcube (vulkan-tools, above) and GFXReconstruct's
-  # capture layer and replayer (also tallyd play's trace: tests/capture/play_trace.py).
+  # The Vulkan layer: application captures (docs/layer.md) under a virtual X
+  # server ("display": "xvfb"; xvfb-run needs xauth), vkcube (vulkan-tools,
+  # above), GFXReconstruct's capture layer and replayer (replays, the layer's
+  # tests and tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.

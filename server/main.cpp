@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
   serve->add_option("--device", serveArgs.device, "Device index or name substring for captures");
   serve->add_option("--web", serveArgs.web, "Dashboard folder (default: the installed dashboard)");
   serve->add_option("--scenes", serveArgs.scenes, "Folder glTF scenes may be loaded from (repeatable)");
+  serve->add_flag("--allow-applications", serveArgs.allowApplications,
+                  "Accept capture specs that run a program on this host ({\"application\": ...} and {\"replay\": ...}, "
+                  "under the Vulkan layer): anyone who may post a capture may then run any command as this user");
   serve->footer(
       "Environment:\n"
       "  XDG_DATA_HOME    the database's folder is $XDG_DATA_HOME/tally without --db (else HOME)\n"
@@ -87,6 +90,8 @@ int main(int argc, char** argv) {
       "  TALLY_SHADER_DIR the renderers' shaders, over the data folder's (for shader work)\n"
       "  VK_DRIVER_FILES, VK_ICD_FILENAMES  the Vulkan loader's choice of driver (captures)\n"
       "  TMPDIR           where each capture job's spec, result and screenshots are written\n"
+      "  TALLY_LAYER_PATH the Vulkan layer's manifest folder for application captures, over build/layer\n"
+      "                   and share/vulkan/explicit_layer.d beside the binary\n"
       "  JOURNAL_STREAM   set by systemd: log lines then carry their syslog priority (<6>) and no time");
   serve->add_option("--job-deadline", serveArgs.jobDeadlineSeconds, "Seconds a capture job may run")
       ->capture_default_str()->check(CLI::Range(1, 7 * 24 * 3600));

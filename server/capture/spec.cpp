@@ -1,6 +1,12 @@
 #include "capture/spec.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <fstream>
+#include <system_error>
+
+#include <unistd.h>
 
 #include "renderers/options.hpp"
 #include "scenes/cameras.hpp"
@@ -255,6 +261,234 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   if (spec.sampleCount(camerasPerScene) > kMaxMatrix) {
     return fieldError("spec", "the matrix has " + std::to_string(spec.sampleCount(camerasPerScene)) +
                                   " samples, more than the limit of " + std::to_string(kMaxMatrix));
+  }
+  return spec;
+}
+
+// ---- Applications ----------------------------------------------------------------
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A string without NUL of 1..maxLength characters (0.. when `empty` is allowed).
+Result<std::string> boundedText(const nlohmann::json& j, const std::string& field, size_t maxLength,
+                                bool empty = false) {
+  if (!j.is_string()) return fieldError(field, "must be a string, got " + show(j));
+  std::string text = j.get<std::string>();
+  if ((!empty && text.empty()) || text.size() > maxLength || text.find('\0') != std::string::npos) {
+    return fieldError(field, "must be " + std::string(empty ? "" : "a non-empty string of ") + "at most " +
+                                 std::to_string(maxLength) + " characters without NUL");
+  }
+  return text;
+}
+
+// Names the layer's configuration is made of: the spec cannot set them.
+bool reservedName(const std::string& name) {
+  return name.starts_with("TALLY_LAYER_") || (name.starts_with("VK_") && name.find("LAYER") != std::string::npos);
+}
+
+bool validEnvName(const std::string& name) {
+  if (name.empty() || name.size() > 256 || std::isdigit(static_cast<unsigned char>(name[0]))) return false;
+  return std::all_of(name.begin(), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+fs::path against(const fs::path& baseDir, const std::string& given) {
+  fs::path p(given);
+  if (p.is_absolute()) return p.lexically_normal();
+  std::error_code ec;
+  fs::path base = baseDir.empty() ? fs::current_path(ec) : fs::absolute(baseDir, ec);
+  return (base / p).lexically_normal();
+}
+
+// The fields an application object or a replay spec share.
+struct CommonFields {
+  ApplicationSpec& spec;
+  std::string prefix;  // "application." or ""
+
+  // Returns an error for a bad value of `key`; true when the key was one of these.
+  Result<bool> take(const std::string& key, const nlohmann::json& value) {
+    const std::string field = prefix + key;
+    if (key == "frames") {
+      auto v = boundedInt(value, field, 1, kMaxFrames);
+      if (!v) return makeError(v.error());
+      spec.frames = *v;
+    } else if (key == "skip_frames") {
+      auto v = boundedInt(value, field, 0, kMaxSkipFrames);
+      if (!v) return makeError(v.error());
+      spec.skipFrames = *v;
+    } else if (key == "frame_submits") {
+      auto v = boundedInt(value, field, 0, kMaxFrameSubmits);
+      if (!v) return makeError(v.error());
+      spec.frameSubmits = *v;
+    } else if (key == "timeout_s") {
+      auto v = boundedInt(value, field, 1, kMaxApplicationTimeoutSeconds);
+      if (!v) return makeError(v.error());
+      spec.timeoutSeconds = *v;
+    } else if (key == "display") {
+      if (value == "none") {
+        spec.display = ApplicationSpec::Display::None;
+      } else if (value == "xvfb") {
+        spec.display = ApplicationSpec::Display::Xvfb;
+      } else {
+        return fieldError(field, "must be \"none\" or \"xvfb\", got " + show(value));
+      }
+    } else if (key == "env") {
+      if (!value.is_object()) return fieldError(field, "must be an object of NAME: \"value\", got " + show(value));
+      if (value.size() > kMaxApplicationEnv) {
+        return fieldError(field, "at most " + std::to_string(kMaxApplicationEnv) + " variables, got " +
+                                     std::to_string(value.size()));
+      }
+      for (const auto& [name, text] : value.items()) {
+        const std::string at = field + "." + name;
+        if (!validEnvName(name)) return fieldError(at, "not a variable name (letters, digits and _)");
+        if (reservedName(name)) {
+          return fieldError(at, "is set by Tally to load and configure the layer; a spec cannot set it");
+        }
+        auto v = boundedText(text, at, kMaxApplicationText, true);
+        if (!v) return makeError(v.error());
+        spec.env.emplace_back(name, *v);
+      }
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  Result<bool> finish() {
+    if (spec.display == ApplicationSpec::Display::Xvfb) {
+      for (const auto& [name, value] : spec.env) {
+        if (name == "DISPLAY") {
+          return fieldError(prefix + "env.DISPLAY", "is set by \"display\": \"xvfb\" (the X server Tally starts)");
+        }
+      }
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
+bool isApplicationSpec(const nlohmann::json& spec) {
+  return spec.is_object() && (spec.contains("application") || spec.contains("replay"));
+}
+
+std::string findOnPath(const std::string& name, const std::string& path) {
+  if (name.empty() || name.find('/') != std::string::npos) return {};
+  size_t start = 0;
+  while (true) {
+    size_t colon = path.find(':', start);
+    std::string dir = path.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
+    std::error_code ec;
+    fs::path candidate = against(dir, name);  // an empty entry: the working directory
+    if (fs::is_regular_file(candidate, ec) && access(candidate.c_str(), X_OK) == 0) return candidate.string();
+    if (colon == std::string::npos) return {};
+    start = colon + 1;
+  }
+}
+
+Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::path& baseDir) {
+  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
+  ApplicationSpec spec;
+  spec.source = j;
+  const bool replay = !j.contains("application");
+  spec.kind = replay ? ApplicationSpec::Kind::Replay : ApplicationSpec::Kind::Application;
+  const std::string what = replay ? "replay" : "application";
+  if (!replay && j.contains("replay")) return fieldError("replay", "cannot be combined with \"application\"");
+  // The matrix's fields have no meaning for an application: it draws what it draws.
+  for (const char* key : {"renderers", "workloads", "scenes", "resolutions", "cameras", "sweep"}) {
+    if (j.contains(key)) {
+      return fieldError(key, "not allowed with \"" + what + "\": the " + what +
+                                 " draws what it draws (drop \"" + key + "\", or capture it in a spec of its own)");
+    }
+  }
+  CommonFields common{spec, spec.fieldPrefix()};
+
+  if (replay) {
+    const std::string expected =
+        "unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting)";
+    for (const auto& [key, value] : j.items()) {
+      if (key == "replay" || key == "counting") continue;
+      auto taken = common.take(key, value);
+      if (!taken) return makeError(taken.error());
+      if (!*taken) return fieldError(key, expected);
+    }
+    auto file = boundedText(j["replay"], "replay", kMaxApplicationText);
+    if (!file) return fieldError("replay", "must be the path of a GFXReconstruct capture file, got " + show(j["replay"]));
+    fs::path path = against(baseDir, *file);
+    std::error_code ec;
+    if (!fs::exists(path, ec)) return fieldError("replay", path.string() + ": no such file");
+    if (!fs::is_regular_file(path, ec)) return fieldError("replay", path.string() + ": not a file");
+    if (std::ifstream in(path, std::ios::binary); !in) return fieldError("replay", path.string() + ": cannot be read");
+    spec.replayFile = path.string();
+  } else {
+    for (const auto& [key, value] : j.items()) {
+      if (key != "application" && key != "counting") {
+        return fieldError(key, "unknown field (expected application, counting)");
+      }
+    }
+    const auto& app = j["application"];
+    if (!app.is_object()) {
+      return fieldError("application", "must be an object with \"command\", got " + show(app));
+    }
+    const std::string expected =
+        "unknown field (expected command, frames, skip_frames, frame_submits, env, display, name, timeout_s)";
+    for (const auto& [key, value] : app.items()) {
+      if (key == "command") continue;
+      if (key == "name") {
+        auto name = boundedText(value, "application.name", kMaxApplicationName);
+        if (!name) return makeError(name.error());
+        spec.name = *name;
+        continue;
+      }
+      auto taken = common.take(key, value);
+      if (!taken) return makeError(taken.error());
+      if (!*taken) return fieldError("application." + key, expected);
+    }
+    if (!app.contains("command")) {
+      return fieldError("application.command", "required: the program and its arguments, e.g. [\"vkcube\", \"--c\", \"100\"]");
+    }
+    const auto& command = app["command"];
+    if (!command.is_array() || command.empty()) {
+      return fieldError("application.command", "must be a non-empty array of strings, got " + show(command));
+    }
+    if (command.size() > kMaxApplicationArguments) {
+      return fieldError("application.command", "at most " + std::to_string(kMaxApplicationArguments) +
+                                                   " arguments, got " + std::to_string(command.size()));
+    }
+    for (size_t i = 0; i < command.size(); ++i) {
+      auto arg = boundedText(command[i], "application.command[" + std::to_string(i) + "]", kMaxApplicationText, i > 0);
+      if (!arg) return makeError(arg.error());
+      spec.command.push_back(*arg);
+    }
+    const std::string& program = spec.command[0];
+    if (program.find('/') == std::string::npos) {
+      const char* path = std::getenv("PATH");
+      spec.program = findOnPath(program, path ? path : "");
+      if (spec.program.empty()) {
+        return fieldError("application.command[0]", "'" + program + "' is not an executable in any folder of $PATH");
+      }
+    } else {
+      fs::path resolved = against(baseDir, program);
+      std::error_code ec;
+      if (!fs::exists(resolved, ec)) return fieldError("application.command[0]", resolved.string() + ": no such file");
+      if (!fs::is_regular_file(resolved, ec) || access(resolved.c_str(), X_OK) != 0) {
+        return fieldError("application.command[0]", resolved.string() + ": not an executable file");
+      }
+      spec.program = resolved.string();
+    }
+  }
+
+  auto finished = common.finish();
+  if (!finished) return makeError(finished.error());
+
+  if (j.contains("counting")) {
+    const auto& counting = j["counting"];
+    if (counting != "accumulate" && counting != "exact") {
+      return fieldError("counting", "must be \"accumulate\" or \"exact\" (the layer's modes), got " + show(counting));
+    }
+    spec.counting = counting.get<std::string>();
   }
   return spec;
 }

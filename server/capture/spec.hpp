@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -92,5 +94,68 @@ Result<Resolution> parseResolution(const nlohmann::json& r, const std::string& f
 // "renderers[2]: unknown renderer 'x' (expected one of ...)" or
 // "renderers[1].options.output: ...".
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers);
+
+// ---- Applications ----------------------------------------------------------------
+//
+// A spec may instead name an application to capture under the Vulkan layer
+// (VK_LAYER_TALLY_counters; docs/layer.md):
+//   {"application": {"command": ["vkcube", "--c", "100"], "frames": 10, "skip_frames": 0,
+//                    "env": {"K": "V"}, "display": "none", "frame_submits": 0, "name": "cube",
+//                    "timeout_s": 300},
+//    "counting": "accumulate"}
+// or a GFXReconstruct capture replayed under it by gfxrecon-replay:
+//   {"replay": "capture.gfxr", "frames": 10, "skip_frames": 0, "display": "none", ...}
+// Neither goes with renderers, workloads, scenes, resolutions, cameras or sweep.
+
+inline constexpr uint32_t kDefaultApplicationFrames = 10;
+inline constexpr uint32_t kMaxSkipFrames = 100000;
+inline constexpr uint32_t kMaxFrameSubmits = 100000;
+inline constexpr uint32_t kDefaultApplicationTimeoutSeconds = 300;
+inline constexpr uint32_t kMaxApplicationTimeoutSeconds = 3600;
+inline constexpr size_t kMaxApplicationArguments = 256;
+inline constexpr size_t kMaxApplicationEnv = 64;
+inline constexpr size_t kMaxApplicationText = 4096;  // one argument, env value or path
+inline constexpr size_t kMaxApplicationName = 128;
+
+struct ApplicationSpec {
+  enum class Kind { Application, Replay };
+  enum class Display { None, Xvfb };
+  Kind kind = Kind::Application;
+  // The command as given (argv); empty for a replay.
+  std::vector<std::string> command;
+  // What runs: command[0] resolved to an absolute path (a bare name looked up
+  // on $PATH when parsed); for a replay, "" (gfxrecon-replay is looked up on
+  // $PATH when the capture runs).
+  std::string program;
+  std::string replayFile;  // a replay's file, absolute
+  std::string name;        // application.name; "" when not given
+  uint32_t frames = kDefaultApplicationFrames;  // frames counted after the skipped ones
+  uint32_t skipFrames = 0;
+  uint32_t frameSubmits = 0;  // 0: a frame ends at vkQueuePresentKHR; M: M submissions with draws or dispatches
+  std::vector<std::pair<std::string, std::string>> env;  // set for the application over tallyd's own
+  Display display = Display::None;
+  uint32_t timeoutSeconds = kDefaultApplicationTimeoutSeconds;
+  std::string counting = "accumulate";  // the layer's modes: accumulate or exact
+  nlohmann::json source;                // the spec as given
+
+  // "application." for an application (its fields live in that object), "" for a replay.
+  std::string fieldPrefix() const { return kind == Kind::Application ? "application." : ""; }
+};
+
+// True for a spec with "application" or "replay" (a JSON object).
+bool isApplicationSpec(const nlohmann::json& spec);
+
+// Errors name the field: "application.frames: must be an integer between 1
+// and 1000, got 0", "application.env.VK_INSTANCE_LAYERS: ...", "renderers:
+// not allowed with "application" ...". A relative replay file, or a
+// command[0] with a '/' in it, is taken relative to `baseDir` (the spec
+// file's folder; "": the working directory); a bare command[0] is looked up
+// on $PATH. The replay file must exist and be readable; the program must be
+// an executable file.
+Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& spec, const std::filesystem::path& baseDir = {});
+
+// The first executable file called `name` in the folders of `path` (a
+// $PATH-style list; an empty entry is the working directory); "" if none.
+std::string findOnPath(const std::string& name, const std::string& path);
 
 }  // namespace tally::capture

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <iterator>
 
+#include "capture/application.hpp"
 #include "capture/runner.hpp"
 #include "capture/spec.hpp"
 #include "capture/summary.hpp"
@@ -12,6 +13,66 @@
 #include "renderers/renderer.hpp"
 
 namespace tally::cli {
+namespace {
+
+// Writes the result JSON to --out (temp file + rename: a reader never sees a
+// half-written result) or standard output.
+int writeResult(const CaptureArgs& args, const nlohmann::json& result) {
+  std::string dump = result.dump(1);
+  if (args.out.empty() || args.out == "-") {
+    std::cout << dump << "\n";
+    return 0;
+  }
+  std::string temp = args.out + ".tmp";
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    out << dump << "\n";
+    if (!out) {
+      std::cerr << "tallyd capture: " << args.out << ": write failed\n";
+      return 1;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, args.out, ec);
+  if (ec) {
+    std::cerr << "tallyd capture: " << args.out << ": " << ec.message() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+// An application (or a replay) under the layer: one run, one sample per frame.
+// Relative paths in the spec are taken beside the spec file.
+int runApplicationCapture(const CaptureArgs& args, const nlohmann::json& json) {
+  auto fail = [](const std::string& message) {
+    std::cerr << "tallyd capture: " << message << "\n";
+    return 1;
+  };
+  std::filesystem::path base;
+  if (args.spec != "-") base = std::filesystem::absolute(args.spec).parent_path();
+  auto spec = capture::parseApplicationSpec(json, base);
+  if (!spec) return fail("spec: " + spec.error());
+  capture::ApplicationOptions options;
+  if (!args.out.empty() && args.out != "-") {
+    options.tempRoot = std::filesystem::absolute(args.out).parent_path();
+  }
+  options.progress = [&args](const Progress& p) {
+    if (args.quiet) return;
+    std::cerr << "[" << p.done << "/" << p.total << "] " << p.current << "\n";
+  };
+  Result<nlohmann::json> result = makeError("not run");
+  try {
+    result = capture::runApplication(*spec, options);
+  } catch (const std::exception& e) {
+    return fail(std::string("capture failed: ") + e.what());
+  }
+  if (!result) return fail(result.error());
+  int written = writeResult(args, *result);
+  if (written == 0 && args.summary && !args.out.empty() && args.out != "-") std::cout << capture::summarize(*result);
+  return written;
+}
+
+}  // namespace
 
 int runCapture(const CaptureArgs& args) {
   auto fail = [](const std::string& message) {
@@ -28,6 +89,8 @@ int runCapture(const CaptureArgs& args) {
   }
   auto json = nlohmann::json::parse(text, nullptr, false);
   if (json.is_discarded()) return fail("spec: not valid JSON");
+  // {"application": ...} or {"replay": ...}: an application under the Vulkan layer.
+  if (capture::isApplicationSpec(json)) return runApplicationCapture(args, json);
   // A spec with "sweep" is a stability sweep (sweeps/sweep.hpp), not a capture matrix.
   const bool sweep = sweeps::isSweepSpec(json);
   Result<sweeps::SweepSpec> sweepSpec = makeError("not a sweep");
@@ -72,23 +135,11 @@ int runCapture(const CaptureArgs& args) {
     return fail(std::string("capture failed: ") + e.what());
   }
   if (!result) return fail(result.error());
-  std::string dump = result->dump(1);
-  if (args.out.empty() || args.out == "-") {
-    std::cout << dump << "\n";
-    return 0;
+  int written = writeResult(args, *result);
+  if (written == 0 && args.summary && !sweep && !args.out.empty() && args.out != "-") {
+    std::cout << capture::summarize(*result);
   }
-  // Temp file + rename: a reader never sees a half-written result.
-  std::string temp = args.out + ".tmp";
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    out << dump << "\n";
-    if (!out) return fail(args.out + ": write failed");
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, args.out, ec);
-  if (ec) return fail(args.out + ": " + ec.message());
-  if (args.summary && !sweep) std::cout << capture::summarize(*result);
-  return 0;
+  return written;
 }
 
 }  // namespace tally::cli

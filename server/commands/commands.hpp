@@ -95,6 +95,9 @@ struct ServeArgs {
   std::string device;               // passed to each capture as --device
   std::string web;                  // dashboard files; "": the data folder's web/ (common/paths.hpp)
   std::vector<std::string> scenes;  // folders glTF scenes may come from
+  // Application and replay specs run a program on this host under the Vulkan
+  // layer: refused (400 naming the field) unless this is set.
+  bool allowApplications = false;
   int jobDeadlineSeconds = 1800;    // per capture job
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address

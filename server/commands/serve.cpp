@@ -132,6 +132,7 @@ int runServe(const ServeArgs& args) {
   context.dbPath = dbPath;
   context.rendererNames = renderers::rendererNames();
   for (const auto& folder : args.scenes) context.options.sceneFolders.emplace_back(folder);
+  context.options.allowApplications = args.allowApplications;
   context.onJobQueued = [&worker] { worker.wake(); };
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});

@@ -34,6 +34,23 @@ Result<fs::path> dataDirectory() {
   return makeError("no Tally data folder (one with shaders/): looked in " + looked);
 }
 
+Result<fs::path> layerDirectory(const fs::path& executableDir) {
+  std::error_code ec;
+  if (const char* env = std::getenv("TALLY_LAYER_PATH"); env != nullptr && *env != '\0') {
+    fs::path dir = fs::absolute(env, ec);
+    if (!ec && fs::is_regular_file(dir / kLayerManifest, ec)) return dir.lexically_normal();
+    return makeError(std::string("$TALLY_LAYER_PATH (") + env + ") holds no " + kLayerManifest);
+  }
+  std::string looked = "$TALLY_LAYER_PATH (not set)";
+  for (fs::path candidate : {executableDir / ".." / "layer", executableDir / ".." / "share" / "vulkan" / "explicit_layer.d"}) {
+    candidate = candidate.lexically_normal();
+    if (fs::is_regular_file(candidate / kLayerManifest, ec)) return candidate;
+    looked += ", " + candidate.string();
+  }
+  return makeError(std::string("no Vulkan layer manifest (") + kLayerManifest + "): looked in " + looked +
+                   "; build the layer or set TALLY_LAYER_PATH to the folder that holds it");
+}
+
 Result<fs::path> userDataDirectory() {
   if (const char* xdg = std::getenv("XDG_DATA_HOME"); xdg != nullptr && *xdg == '/') return fs::path(xdg) / "tally";
   if (const char* home = std::getenv("HOME"); home != nullptr && *home == '/') {

@@ -10,6 +10,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <map>
+
+extern char** environ;
 
 namespace tally::jobs {
 namespace {
@@ -27,7 +30,7 @@ std::string lastLine(const std::string& text) {
 // while the restarted daemon retries the same job. Between fork and exec the
 // child calls only async-signal-safe functions (the daemon is multithreaded).
 // An exec failure comes back as an errno through a close-on-exec pipe.
-Result<pid_t> spawnChild(const std::vector<char*>& argv, const std::string& stdoutPath, int stderrFd) {
+Result<pid_t> spawnChild(const std::vector<char*>& argv, char** envp, const std::string& stdoutPath, int stderrFd) {
   int execPipe[2];
   if (pipe2(execPipe, O_CLOEXEC) != 0) return makeError(std::string("pipe: ") + std::strerror(errno));
   const pid_t parent = getpid();
@@ -50,7 +53,7 @@ Result<pid_t> spawnChild(const std::vector<char*>& argv, const std::string& stdo
         dup2(stderrFd, STDERR_FILENO) < 0) {
       e = errno;
     } else {
-      execv(argv[0], argv.data());
+      execve(argv[0], argv.data(), envp);
       e = errno;
     }
     ssize_t ignored = write(execPipe[1], &e, sizeof e);
@@ -69,6 +72,34 @@ Result<pid_t> spawnChild(const std::vector<char*>& argv, const std::string& stdo
     return makeError(std::strerror(childErrno));
   }
   return pid;
+}
+
+// The parent's environment with `overrides` ("NAME=VALUE") set over it, in
+// the parent's order and then the new names'; a bare "NAME" removes NAME
+// (built before fork: nothing between fork and exec may allocate).
+std::vector<std::string> mergedEnvironment(const std::vector<std::string>& overrides) {
+  std::map<std::string, std::string> set;
+  std::vector<std::string> added;
+  for (const auto& entry : overrides) {
+    std::string name = entry.substr(0, entry.find('='));
+    if (!set.count(name)) added.push_back(name);
+    set[name] = entry;
+  }
+  std::vector<std::string> out;
+  for (char** e = environ; e != nullptr && *e != nullptr; ++e) {
+    std::string entry = *e;
+    auto it = set.find(entry.substr(0, entry.find('=')));
+    if (it == set.end()) {
+      out.push_back(std::move(entry));
+    } else if (!it->second.empty()) {
+      if (it->second.find('=') != std::string::npos) out.push_back(it->second);
+      it->second.clear();  // once, at the parent's place
+    }
+  }
+  for (const auto& name : added) {
+    if (set[name].find('=') != std::string::npos) out.push_back(set[name]);
+  }
+  return out;
 }
 
 }  // namespace
@@ -102,8 +133,15 @@ Result<ChildResult> runChild(const ChildOptions& options) {
   for (const auto& a : options.argv) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   std::string out = options.stdoutPath.empty() ? "/dev/null" : options.stdoutPath;
+  std::vector<std::string> environment;
+  std::vector<char*> envp;
+  if (!options.environment.empty()) {
+    environment = mergedEnvironment(options.environment);
+    for (auto& e : environment) envp.push_back(e.data());
+    envp.push_back(nullptr);
+  }
   auto start = std::chrono::steady_clock::now();
-  auto spawned = spawnChild(argv, out, errPipe[1]);
+  auto spawned = spawnChild(argv, envp.empty() ? environ : envp.data(), out, errPipe[1]);
   close(errPipe[1]);
   if (!spawned) {
     close(errPipe[0]);
@@ -130,9 +168,22 @@ Result<ChildResult> runChild(const ChildOptions& options) {
     }
   };
   bool stopped = false;
+  // Asked to end (shouldTerminate): SIGTERM now, SIGKILL after the grace period.
+  bool terminating = false, terminateKilled = false;
+  std::chrono::steady_clock::time_point terminateKillAt;
   auto checkStop = [&] {
     if (!stopped && options.shouldStop && options.shouldStop()) {
       stopped = true;
+      kill(-pid, SIGKILL);
+    }
+    if (!terminating && options.shouldTerminate && options.shouldTerminate()) {
+      terminating = true;
+      result.terminated = true;
+      terminateKillAt = std::chrono::steady_clock::now() + options.grace;
+      kill(-pid, SIGTERM);
+    }
+    if (terminating && !terminateKilled && std::chrono::steady_clock::now() >= terminateKillAt) {
+      terminateKilled = true;
       kill(-pid, SIGKILL);
     }
   };

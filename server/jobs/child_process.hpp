@@ -22,6 +22,14 @@ struct ChildOptions {
   // Polled about every 200 ms; true kills the child's process group (SIGKILL),
   // e.g. when its job was cancelled. Empty: never.
   std::function<bool()> shouldStop;
+  // Polled like shouldStop; true asks the child to end: SIGTERM to its
+  // process group, then SIGKILL after `grace` (e.g. an application whose
+  // output has been written). Empty: never.
+  std::function<bool()> shouldTerminate;
+  // "NAME=VALUE" entries set in the child's environment over the parent's
+  // (a later entry of the same name wins; a bare "NAME" removes it). Empty:
+  // the parent's environment as it is.
+  std::vector<std::string> environment;
 };
 
 struct ChildResult {
@@ -31,6 +39,7 @@ struct ChildResult {
   int signal = 0;      // when Signaled (or the signal that ended a timed-out child)
   std::string stderrTail;
   std::chrono::milliseconds elapsed{0};
+  bool terminated = false;  // shouldTerminate asked it to end (its end is then how it took that)
 
   bool ok() const { return end == End::Exited && exitCode == 0; }
   // "exited with status 3: <last stderr line>", "killed by signal 11 (SIGSEGV)",

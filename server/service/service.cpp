@@ -394,8 +394,37 @@ std::string resolveGltf(const ServiceOptions& options, const std::string& given,
   invalid(field, "no such file under the scene folders");
 }
 
+// An application or a replay under the Vulkan layer: a program runs on this
+// host, so only where the daemon allows it. Paths are the host's: a program
+// by name (looked up on the daemon's $PATH) or absolute, a replay file absolute.
+json validateApplicationSpec(const ServiceContext& ctx, const json& body) {
+  const std::string key = body.contains("application") ? "application" : "replay";
+  if (!ctx.options.allowApplications) {
+    invalid(key, "this daemon does not run applications (tallyd serve --allow-applications enables them)");
+  }
+  if (key == "application" && body["application"].is_object()) {
+    const json& app = body["application"];
+    if (app.contains("command") && app["command"].is_array() && !app["command"].empty() &&
+        app["command"][0].is_string()) {
+      const std::string program = app["command"][0].get<std::string>();
+      if (program.find('/') != std::string::npos && program[0] != '/') {
+        invalid("application.command[0]", "must be a program name (looked up on the daemon's $PATH) or an absolute path");
+      }
+    }
+  }
+  if (key == "replay" && body["replay"].is_string() && body["replay"].get<std::string>().rfind('/', 0) != 0) {
+    invalid("replay", "must be an absolute path on the daemon's host");
+  }
+  auto parsed = capture::parseApplicationSpec(body, "/");
+  if (!parsed) throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
+  return body;
+}
+
 json validateSpec(const ServiceContext& ctx, const json& body) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
+  // {"application": ...} or {"replay": ...}: its parser names any field of a
+  // capture matrix or a sweep beside it.
+  if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body);
   // A stability sweep ({"sweep": NAME, ...}) is checked by its own parser; its
   // limits on points and resolution are the sweep's (sweeps/sweep.hpp).
   if (sweeps::isSweepSpec(body)) {

@@ -20,6 +20,9 @@ struct ServiceOptions {
   uint32_t maxFrames = 200;                // per sample
   uint64_t maxMatrix = 1000;               // samples per job ("auto" cameras count 10 per scene)
   std::vector<std::filesystem::path> sceneFolders;  // glTF files are allowed only under these
+  // {"application": ...} and {"replay": ...} specs run a program on the
+  // daemon's host (tallyd serve --allow-applications); refused when false.
+  bool allowApplications = false;
 };
 
 struct ServiceContext {

@@ -164,5 +164,46 @@ TEST(ChildProcess, ChildDiesWithAParentKilledByNine) {
   if (state != 0 && state != 'Z') kill(child, SIGKILL);
 }
 
+// environment: set over the parent's, a new name added, a bare name removed.
+TEST(ChildProcess, EnvironmentOverParents) {
+  setenv("TALLY_CHILD_TEST_KEEP", "parent", 1);
+  setenv("TALLY_CHILD_TEST_OVER", "parent", 1);
+  setenv("TALLY_CHILD_TEST_DROP", "parent", 1);
+  ChildOptions options;
+  options.argv = {"/bin/sh", "-c",
+                  "echo \"$TALLY_CHILD_TEST_KEEP/$TALLY_CHILD_TEST_OVER/${TALLY_CHILD_TEST_DROP-unset}/$TALLY_CHILD_TEST_NEW\" >&2"};
+  options.environment = {"TALLY_CHILD_TEST_OVER=child", "TALLY_CHILD_TEST_DROP", "TALLY_CHILD_TEST_NEW=a=b",
+                         "TALLY_CHILD_TEST_OVER=later"};
+  std::vector<std::string> lines;
+  options.onStderrLine = [&](const std::string& l) { lines.push_back(l); };
+  auto r = runChild(options);
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_TRUE(r->ok()) << r->reason();
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "parent/later/unset/a=b");
+  unsetenv("TALLY_CHILD_TEST_KEEP");
+  unsetenv("TALLY_CHILD_TEST_OVER");
+  unsetenv("TALLY_CHILD_TEST_DROP");
+}
+
+// shouldTerminate: SIGTERM to the group; a child that ignores it gets SIGKILL after the grace period.
+TEST(ChildProcess, TerminateThenKill) {
+  for (bool ignoresTerm : {false, true}) {
+    ChildOptions options;
+    options.argv = {"/bin/sh", "-c", std::string(ignoresTerm ? "trap '' TERM; " : "") + "echo ready >&2; while :; do sleep 0.05; done"};
+    options.grace = 300ms;
+    bool ready = false;
+    options.onStderrLine = [&](const std::string& l) { ready = ready || l == "ready"; };
+    options.shouldTerminate = [&] { return ready; };
+    auto t0 = std::chrono::steady_clock::now();
+    auto r = runChild(options);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_TRUE(r->terminated);
+    EXPECT_EQ(r->end, ChildResult::End::Signaled);
+    EXPECT_EQ(r->signal, ignoresTerm ? SIGKILL : SIGTERM) << r->reason();
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);
+  }
+}
+
 }  // namespace
 }  // namespace tally::jobs

@@ -22,7 +22,8 @@ ALLOWED = {
     "renderers": {"gpu", "scenes", "spirv"},
     "analysis": {"renderers", "spirv"},
     "sweeps": {"analysis", "renderers", "gpu", "scenes", "spirv"},
-    "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv"},
+    # jobs: child_process.hpp, to run an application under the Vulkan layer (capture/application.cpp).
+    "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv", "jobs"},
     "store": set(),
     "api": set(),
     "jobs": {"store"},

@@ -12,9 +12,12 @@ const kStartMs = 30_000;  // the daemon prints its address within this
 const kStopMs = 10_000;   // SIGTERM, then SIGKILL
 
 export class Daemon {
-  constructor(tallyd, webRoot) {
+  // options.args: more `tallyd serve` flags; options.env: more environment.
+  constructor(tallyd, webRoot, options = {}) {
     this.tallyd = tallyd;
     this.webRoot = webRoot;
+    this.args = options.args || [];
+    this.env = options.env || {};
     this.dir = mkdtempSync(join(tmpdir(), 'tally-web-'));
     // glTF scenes the tests write (--scenes: the daemon reads glTF files only from here).
     this.scenes = join(this.dir, 'scenes');
@@ -24,8 +27,8 @@ export class Daemon {
 
   async start() {
     // Captures' temp files (specs, results) live in our folder too.
-    this.child = spawn(this.tallyd, ['serve', '--db', join(this.dir, 'tally.db'), '--port', '0', '--web', this.webRoot, '--scenes', this.scenes],
-      { stdio: ['ignore', 'pipe', 'pipe'], env: { ...process.env, TMPDIR: this.dir } });
+    this.child = spawn(this.tallyd, ['serve', '--db', join(this.dir, 'tally.db'), '--port', '0', '--web', this.webRoot, '--scenes', this.scenes, ...this.args],
+      { stdio: ['ignore', 'pipe', 'pipe'], env: { ...process.env, TMPDIR: this.dir, ...this.env } });
     this.child.stderr.on('data', (d) => { this.log += d; });
     const exited = new Promise((resolve) => this.child.once('exit', (code, signal) => resolve({ code, signal })));
     const address = new Promise((resolve) => {
@@ -39,7 +42,7 @@ export class Daemon {
     const found = await Promise.race([
       address,
       exited.then((e) => { throw new Error(`tallyd serve exited (${JSON.stringify(e)}): ${this.log}`); }),
-      sleep(kStartMs).then(() => { throw new Error(`tallyd serve printed no address in ${kStartMs} ms: ${this.log}`); }),
+      sleep(kStartMs, undefined, { ref: false }).then(() => { throw new Error(`tallyd serve printed no address in ${kStartMs} ms: ${this.log}`); }),
     ]);
     this.url = found;
     this.exited = exited;

@@ -2,9 +2,11 @@
 // (docs/result-schema.md) and POSTs it; the server validates it, and its error
 // (message and field) is shown beside the field it names. A started capture's
 // progress is polled until it finishes; below, the list of captures with their
-// status and errors. A second form takes a stability sweep spec as JSON
-// ({"sweep": NAME, ...}, docs/result-schema.md "Sweep results"), posted to
-// the same route; a finished sweep links to its view.
+// status and errors. A second form takes a spec as JSON, posted to the same
+// route: a stability sweep ({"sweep": NAME, ...}, docs/result-schema.md
+// "Sweep results"; a finished sweep links to its view), or an application
+// or a replay under the Vulkan layer ({"application": {...}}, {"replay":
+// FILE}; docs/layer.md), where the daemon allows them.
 import { ApiError, get, request } from '../api.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
@@ -97,8 +99,8 @@ function sweepForm(onSubmit) {
   text.value = JSON.stringify(kExampleSweep, null, 2);
   const form = h('form', { class: 'sweep-form', novalidate: true, 'aria-label': 'New stability sweep' },
     h('label', { class: 'field', dataset: { field: 'sweep_spec' } },
-      h('span', {}, 'Sweep spec (JSON): "sweep" names the sweep; the server names any field it refuses'), text),
-    h('button', { type: 'submit' }, 'Start sweep'),
+      h('span', {}, 'Spec (JSON): a stability sweep ("sweep" names it), or an application under the Vulkan layer ({"application": {"command": ["vkcube"], "frames": 10}}) or a GFXReconstruct replay ({"replay": "/path/capture.gfxr"}) where the daemon allows them; the server names any field it refuses'), text),
+    h('button', { type: 'submit' }, 'Start'),
     h('div', { class: 'form-error', role: 'alert' }));
   form.addEventListener('submit', (e) => {
     e.preventDefault();
@@ -219,6 +221,8 @@ function progressPanel(job) {
 
 function summary(spec) {
   if (spec.sweep) return `sweep ${spec.sweep}`;
+  if (spec.application) return `application ${(spec.application.command || []).join(' ')}`;
+  if (spec.replay) return `replay ${spec.replay}`;
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
   const variant = (r) => (typeof r === 'string' ? r : [r.renderer, ...Object.entries(r.options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`)].join(' '));
@@ -303,7 +307,7 @@ export async function render(page, { signal }) {
     renderers.workloads || []);
   const sweeps = sweepForm((spec) => start(spec, sweeps));
   page.append(h('h1', {}, 'New capture'), form,
-    h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a stability sweep')), sweeps),
+    h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a spec as JSON: a stability sweep, an application, a replay')), sweeps),
     progress, h('h2', {}, 'Captures'), listStatus, list);
   drawList(first.captures);
   if (!first.captures.every((j) => kFinished.includes(j.status))) watchList();

@@ -41,6 +41,14 @@ function trafficBy(passes, access, key = 'bytes') {
 
 const hasFootprint = (run) => run.mean_footprint_bytes !== null && run.mean_footprint_bytes !== undefined;
 
+// An application or a replay captured under the Vulkan layer (docs/layer.md):
+// its notes.source, else null. Its samples are frames (no cameras, sky or
+// screenshots), timed under the layer (no uninstrumented baseline).
+function appSource(run) {
+  const source = run.notes && run.notes.source;
+  return source && (source.kind === 'application' || source.kind === 'replay') ? source : null;
+}
+
 
 function passResourceCharts(parent, run, measure = 'requested') {
   const { key, noun } = kMeasures[measure];
@@ -67,7 +75,11 @@ function passResourceCharts(parent, run, measure = 'requested') {
   }
 }
 
+// "frame 12" for an application's sample (the camera's place holds its frame).
+const frameLabel = (s) => (s.camera && s.camera.frame !== undefined && s.camera.label ? s.camera.label : null);
+
 function cameraLabel(s) {
+  if (frameLabel(s)) return frameLabel(s);
   return s.sky_fraction === null ? `cam ${s.camera_index}` : `cam ${s.camera_index} (${Math.round(100 * s.sky_fraction)}% sky)`;
 }
 
@@ -81,10 +93,10 @@ function perSampleChart(parent, samples, details, measure = 'requested') {
   const footprint = measure === 'footprint';
   barChart(parent, {
     id: 'per-sample',
-    title: `${kMeasures[measure].noun} per frame, per camera`,
+    title: `${kMeasures[measure].noun} per frame${samples.some(frameLabel) ? '' : ', per camera'}`,
     caption: 'read on the left axis, written on the right',
     labels: samples.map(cameraLabel),
-    labelHeader: 'Camera',
+    labelHeader: samples.some(frameLabel) ? 'Frame' : 'Camera',
     format: fmt.bytes,
     datasets: [
       { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y' },
@@ -106,13 +118,13 @@ function passIqr(run, details) {
   });
 }
 
-function frameTimeChart(parent, samples) {
+function frameTimeChart(parent, samples, app) {
   barChart(parent, {
     id: 'sample-time',
-    title: 'Frame time per camera',
-    caption: 'uninstrumented; median over the frames, whiskers the IQR (q1 to q3)',
+    title: app ? 'GPU time per frame' : 'Frame time per camera',
+    caption: app ? 'the sum of the passes\' GPU times, measured under the layer (instrumented)' : 'uninstrumented; median over the frames, whiskers the IQR (q1 to q3)',
     labels: samples.map(cameraLabel),
-    labelHeader: 'Camera',
+    labelHeader: app ? 'Frame' : 'Camera',
     format: fmt.ms,
     datasets: [{
       label: 'frame time',
@@ -123,29 +135,37 @@ function frameTimeChart(parent, samples) {
 }
 
 function passTimeChart(parent, run, iqr) {
+  const app = appSource(run);
   barChart(parent, {
     id: 'pass-time',
     title: 'GPU time per pass',
-    caption: 'uninstrumented and counted frames; median per sample, averaged over the samples; whiskers: the uninstrumented IQR over frames (q1 to q3, averaged over the samples)',
+    caption: app
+      ? 'measured under the layer (instrumented), averaged over the frames'
+      : 'uninstrumented and counted frames; median per sample, averaged over the samples; whiskers: the uninstrumented IQR over frames (q1 to q3, averaged over the samples)',
     labels: run.passes.map((p) => p.name),
     labelHeader: 'Pass',
     format: fmt.ms,
     horizontal: true,
-    datasets: [
-      { label: 'uninstrumented', data: run.passes.map((p) => p.gpu_ms), whiskers: iqr },
-      { label: 'counted', data: run.passes.map((p) => p.gpu_ms_instrumented) },
-    ],
+    datasets: app
+      ? [{ label: 'under the layer', data: run.passes.map((p) => p.gpu_ms) }]
+      : [
+        { label: 'uninstrumented', data: run.passes.map((p) => p.gpu_ms), whiskers: iqr },
+        { label: 'counted', data: run.passes.map((p) => p.gpu_ms_instrumented) },
+      ],
   });
 }
 
 function passTable(run, iqr) {
   const at = (p) => iqr[run.passes.indexOf(p)];
+  // An application's passes are timed under the layer only: no spread, counted time or overhead.
+  const timed = !appSource(run);
   return table([
     { label: 'Pass', value: (p) => p.name },
     { label: 'GPU time', className: 'num', value: (p) => fmt.ms(p.gpu_ms) },
-    { label: 'IQR (q1–q3)', className: 'num', value: (p) => (at(p) ? `${fmt.ms(at(p)[0])}–${fmt.ms(at(p)[1])}` : '–') },
-    { label: 'Counted', className: 'num', value: (p) => fmt.ms(p.gpu_ms_instrumented) },
-    { label: 'Overhead', className: 'num', value: (p) => fmt.ratio(p.overhead_ratio) },
+    ...(timed ? [
+      { label: 'IQR (q1–q3)', className: 'num', value: (p) => (at(p) ? `${fmt.ms(at(p)[0])}–${fmt.ms(at(p)[1])}` : '–') },
+      { label: 'Counted', className: 'num', value: (p) => fmt.ms(p.gpu_ms_instrumented) },
+      { label: 'Overhead', className: 'num', value: (p) => fmt.ratio(p.overhead_ratio) }] : []),
     { label: 'Fragment invocations', className: 'num', value: (p) => fmt.count(p.fragment_invocations) },
     { label: 'Requested bytes', className: 'num', value: (p) => fmt.bytes(p.resources.reduce((sum, r) => sum + r.bytes, 0)) },
     ...(hasFootprint(run)
@@ -244,7 +264,9 @@ function rooflineSection(run, samples) {
   const passes = rooflinePasses(samples);
   const c = run.ceilings;
   if (!passes.length) {
-    return h('p', { class: 'panel muted', dataset: { roofline: 'none' } }, 'Not recorded for this run (captured before the roofline was measured).');
+    return h('p', { class: 'panel muted', dataset: { roofline: 'none' } }, appSource(run)
+      ? 'Not measured for an application captured under the layer.'
+      : 'Not recorded for this run (captured before the roofline was measured).');
   }
   const box = h('div', { class: 'charts', dataset: { roofline: '' } });
   const plotted = (x, y) => x > 0 && y > 0 && Number.isFinite(x) && Number.isFinite(y);
@@ -315,6 +337,10 @@ function extrasSection(samples) {
 }
 
 function gallery(run, samples, signal) {
+  // Applications captured under the layer keep none.
+  if (!samples.some((s) => s.screenshot)) {
+    return h('p', { class: 'panel muted', dataset: { screenshots: 'none' } }, 'No screenshots for this run.');
+  }
   return h('div', { class: 'gallery' }, samples.map((s) => {
     const img = h('img', { alt: `Camera ${s.camera_index}`, loading: 'lazy', width: run.width, height: run.height });
     if (s.screenshot) {
@@ -329,20 +355,23 @@ function gallery(run, samples, signal) {
 }
 
 function sampleTable(samples) {
+  // An application's samples are single frames under the layer: no sky, spread, overhead or image error.
+  const frames = samples.some((s) => frameLabel(s));
   return table([
-    { label: 'Camera', value: (s) => String(s.camera_index) },
-    { label: 'Sky', className: 'num', value: (s) => fmt.percent(s.sky_fraction) },
-    { label: 'Frame time', className: 'num', value: (s) => fmt.ms(s.frame_ms) },
-    { label: 'IQR', className: 'num', value: (s) => fmt.ms(s.frame_ms_spread ? s.frame_ms_spread.iqr : null) },
-    { label: 'q1–q3', className: 'num', value: (s) => (s.frame_ms_spread ? `${fmt.ms(s.frame_ms_spread.q1)}–${fmt.ms(s.frame_ms_spread.q3)}` : '–') },
-    { label: 'Overhead', className: 'num', value: (s) => fmt.ratio(s.overhead_ratio) },
+    frames ? { label: 'Frame', value: (s) => frameLabel(s) || String(s.camera_index) } : { label: 'Camera', value: (s) => String(s.camera_index) },
+    ...(frames ? [] : [{ label: 'Sky', className: 'num', value: (s) => fmt.percent(s.sky_fraction) }]),
+    { label: frames ? 'GPU time' : 'Frame time', className: 'num', value: (s) => fmt.ms(s.frame_ms) },
+    ...(frames ? [] : [
+      { label: 'IQR', className: 'num', value: (s) => fmt.ms(s.frame_ms_spread ? s.frame_ms_spread.iqr : null) },
+      { label: 'q1–q3', className: 'num', value: (s) => (s.frame_ms_spread ? `${fmt.ms(s.frame_ms_spread.q1)}–${fmt.ms(s.frame_ms_spread.q3)}` : '–') },
+      { label: 'Overhead', className: 'num', value: (s) => fmt.ratio(s.overhead_ratio) }]),
     { label: 'Requested read', className: 'num', value: (s) => fmt.bytes(s.bytes_read) },
     { label: 'Requested written', className: 'num', value: (s) => fmt.bytes(s.bytes_written) },
     ...(samples.some((s) => s.footprint_bytes !== null && s.footprint_bytes !== undefined)
       ? [{ label: 'Footprint', className: 'num', value: (s) => valueCell(s.footprint_bytes, fmt.bytes) },
         { label: 'Reuse', className: 'num', value: (s) => valueCell(s.reuse, reuseText) }]
       : []),
-    { label: 'Image vs forward', className: 'num', value: imageErrorText },
+    ...(frames ? [] : [{ label: 'Image vs forward', className: 'num', value: imageErrorText }]),
     ...(samples.some((s) => s.variant_error)
       ? [{ label: 'Image vs reference variant', className: 'num', value: (s) => h('span', { dataset: { variantError: s.variant_error ? String(s.variant_error.psnr) : 'none' } }, errorText(s.variant_error)) }]
       : []),
@@ -373,13 +402,20 @@ function factor(v) {
 // many times resolution x overshading could grow before a counter wraps.
 // What the scene's loader simplified or ignored (notes.scene), then the
 // renderer's own choices (every other key of notes).
+// An application's notes add the layer's notes (notes.layer_notes) and the
+// shaders it could not instrument (notes.uninstrumented_shaders).
 function notesSection(run) {
   const notes = run.notes && typeof run.notes === 'object' ? run.notes : {};
   const scene = Array.isArray(notes.scene) ? notes.scene : [];
-  const others = Object.entries(notes).filter(([k]) => k !== 'scene');
-  if (!scene.length && !others.length) return null;
+  const layer = Array.isArray(notes.layer_notes) ? notes.layer_notes : [];
+  const shaders = Array.isArray(notes.uninstrumented_shaders) ? notes.uninstrumented_shaders : [];
+  const others = Object.entries(notes).filter(([k]) => !['scene', 'layer_notes', 'uninstrumented_shaders'].includes(k));
+  if (!scene.length && !layer.length && !shaders.length && !others.length) return null;
   return h('div', { class: 'panel', dataset: { notes: '' } },
     scene.length ? h('ul', { dataset: { sceneNotes: '' } }, scene.map((n) => h('li', {}, String(n)))) : null,
+    layer.length ? h('ul', { dataset: { layerNotes: '' } }, layer.map((n) => h('li', {}, String(n)))) : null,
+    shaders.length ? h('ul', { dataset: { uninstrumentedShaders: '' } }, shaders.map((s) =>
+      h('li', {}, `uninstrumented: ${s.name} (${s.stage}): ${s.reason}`))) : null,
     others.length ? h('ul', { dataset: { rendererNotes: '' } }, others.map(([k, v]) =>
       h('li', {}, `${k}: ${typeof v === 'string' ? v : JSON.stringify(v)}`))) : null);
 }
@@ -387,8 +423,9 @@ function notesSection(run) {
 function headroomSection(run) {
   const hr = run.counter_headroom;
   if (!hr) {
-    return h('p', { class: 'panel muted', dataset: { headroom: 'none' } },
-      'Not recorded for this run (captured before counter headroom was stored).');
+    return h('p', { class: 'panel muted', dataset: { headroom: 'none' } }, appSource(run)
+      ? 'Not measured for an application captured under the layer.'
+      : 'Not recorded for this run (captured before counter headroom was stored).');
   }
   const hTile = (label, value, key, raw) => h('div', { class: 'tile', dataset: { headroom: key, value: String(raw) } },
     h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
@@ -415,25 +452,30 @@ export async function render(page, { params, signal }) {
   const read = samples.reduce((sum, s) => sum + s.bytes_read, 0) / (samples.length || 1);
   const written = samples.reduce((sum, s) => sum + s.bytes_written, 0) / (samples.length || 1);
   const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
+  const app = appSource(run);
+  const sourceText = app && (app.kind === 'replay' ? `replay of ${app.replay}` : `application: ${(app.command || []).join(' ')}`);
 
   page.append(
     h('h1', {}, `Run #${run.id}: ${fmt.variant(run)} · ${run.scene} · ${fmt.resolution(run)}`),
     h('ul', { class: 'meta' },
       optionsText(run.options) ? h('li', { dataset: { options: '' } }, `options: ${optionsText(run.options)}`) : null,
       h('li', {}, run.device),
+      app ? h('li', { dataset: { source: app.kind } }, sourceText) : null,
+      app ? h('li', {}, `frames ${app.skip_frames} to ${app.skip_frames + app.frames - 1}, timed under the layer`) : null,
       h('li', {}, `counting ${run.counting}`),
       run.footprint_block_bytes ? h('li', { dataset: { footprintBlock: String(run.footprint_block_bytes) } }, `footprint in ${run.footprint_block_bytes}-byte blocks`) : null,
-      h('li', {}, `${run.lights} lights`),
-      h('li', {}, `${run.sample_count} samples`),
+      app ? null : h('li', {}, `${run.lights} lights`),
+      h('li', {}, app ? `${run.sample_count} frames` : `${run.sample_count} samples`),
       h('li', {}, `${fmt.date(run.created_at)} UTC`),
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution'))),
     h('div', { class: 'tiles' },
-      tile('Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
-      tile('Counted frame', fmt.ms(run.mean_frame_ms_instrumented), 'frame-ms-instrumented'),
-      tile('Overhead of counting', fmt.ratio(run.mean_overhead_ratio), 'overhead'),
-      tile('Image error vs forward', fmt.imageError(run), 'image-error'),
+      tile(app ? 'GPU time per frame (under the layer)' : 'Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
+      ...(app ? [] : [
+        tile('Counted frame', fmt.ms(run.mean_frame_ms_instrumented), 'frame-ms-instrumented'),
+        tile('Overhead of counting', fmt.ratio(run.mean_overhead_ratio), 'overhead'),
+        tile('Image error vs forward', fmt.imageError(run), 'image-error')]),
       tile('Read per frame', fmt.bytes(read), 'read'),
       tile('Written per frame', fmt.bytes(written), 'written'),
       ...(hasFootprint(run)
@@ -459,11 +501,11 @@ export async function render(page, { params, signal }) {
   };
   page.append(h('h2', {}, 'Traffic per pass and resource'), measureSwitch('run-measure', hasFootprint(run),
     'This run has no footprint: capture it with "footprint" on (the capture form\'s Footprint select).', draw), traffic);
-  page.append(h('h2', {}, 'Per camera'), cameraBytes);
+  page.append(h('h2', {}, app ? 'Per frame' : 'Per camera'), cameraBytes);
   draw('requested');
-  frameTimeChart(page, samples);
+  frameTimeChart(page, samples, app);
 
-  page.append(h('h2', {}, 'Frame time per pass'));
+  page.append(h('h2', {}, app ? 'GPU time per pass' : 'Frame time per pass'));
   const timing = h('div', { class: 'charts' });
   page.append(timing);
   passTimeChart(timing, run, iqr);

@@ -1,0 +1,348 @@
+// `tallyd capture` on application specs, with tests/capture/fake_app.sh
+// standing in for a Vulkan application under the layer (it reads the layer's
+// environment and writes an output of the layer's shape, or misbehaves on
+// request) and a manifest folder of the test's own ($TALLY_LAYER_PATH). The
+// result is stored in a Store and served by the service's routes in-process.
+// No Vulkan device is needed.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "api/router.hpp"
+#include "capture/spec.hpp"
+#include "common/paths.hpp"
+#include "jobs/child_process.hpp"
+#include "service/service.hpp"
+#include "store/store.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+std::string slurp(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// NAME=VALUE lines (the fake application's record) as a map.
+std::map<std::string, std::string> record(const fs::path& path) {
+  std::map<std::string, std::string> out;
+  std::istringstream in(slurp(path));
+  for (std::string line; std::getline(in, line);) {
+    size_t eq = line.find('=');
+    if (eq != std::string::npos) out[line.substr(0, eq)] = line.substr(eq + 1);
+  }
+  return out;
+}
+
+struct Capture {
+  int rc = -1;
+  std::string err;  // tallyd's stderr: progress lines, then the reason on failure
+  json result;
+  std::chrono::milliseconds elapsed{0};
+  std::string lastLine() const {
+    std::string e = err;
+    while (!e.empty() && e.back() == '\n') e.pop_back();
+    size_t nl = e.rfind('\n');
+    return nl == std::string::npos ? e : e.substr(nl + 1);
+  }
+};
+
+class ApplicationCapture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "tally-apprun-XXXXXX").string();
+    dir_ = mkdtemp(pattern.data());
+    fs::create_directories(layerDir());
+    std::ofstream(layerDir() / tally::kLayerManifest) << R"({"file_format_version": "1.2.0"})";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path layerDir() const { return dir_ / "layer"; }
+
+  // Runs `tallyd capture --spec` on the spec; `env` over the test's own
+  // environment (TALLY_LAYER_PATH: the test's manifest folder unless given).
+  Capture capture(const json& spec, std::vector<std::string> env = {}) {
+    static int count = 0;
+    const std::string n = std::to_string(++count);
+    fs::path specPath = dir_ / ("spec-" + n + ".json"), out = dir_ / ("result-" + n + ".json");
+    std::ofstream(specPath) << spec.dump();
+    tally::jobs::ChildOptions child;
+    child.argv = {TALLYD_PATH, "capture", "--spec", specPath.string(), "--out", out.string()};
+    child.environment = {"TALLY_LAYER_PATH=" + layerDir().string()};
+    child.environment.insert(child.environment.end(), env.begin(), env.end());
+    child.deadline = 60s;
+    child.stderrTailBytes = 1 << 16;
+    auto ran = tally::jobs::runChild(child);
+    Capture c;
+    if (!ran) {
+      ADD_FAILURE() << ran.error();
+      return c;
+    }
+    c.rc = ran->end == tally::jobs::ChildResult::End::Exited ? ran->exitCode : -1;
+    c.err = ran->stderrTail;
+    c.elapsed = ran->elapsed;
+    if (fs::exists(out)) c.result = json::parse(slurp(out), nullptr, false);
+    return c;
+  }
+
+  json appSpec(const std::string& mode, uint32_t frames = 3, json extra = json::object()) {
+    json app = {{"command", {FAKE_APP, "--c", "100"}}, {"frames", frames},
+                {"env", {{"FAKE_APP_MODE", mode}, {"FAKE_APP_RECORD", (dir_ / "record.txt").string()}}}};
+    app.update(extra);
+    return {{"application", app}};
+  }
+
+  fs::path dir_;
+};
+
+// The capture's result: one run, one sample per frame, the passes and
+// resources the layer named; stored, and served by GET /api/runs/{id}.
+TEST_F(ApplicationCapture, ResultStoredAndServed) {
+  json spec = appSpec("ok", 3, {{"skip_frames", 2}});
+  spec["application"]["env"]["MY_SETTING"] = "on and off";
+  spec["counting"] = "exact";
+  Capture c = capture(spec);
+  ASSERT_EQ(c.rc, 0) << c.err;
+  // Progress lines as the worker reads them.
+  EXPECT_NE(c.err.find("[1/3] app:fake_app.sh: waiting for 3 frames after 2 skipped"), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("[3/3] app:fake_app.sh: done, 3 frames"), std::string::npos) << c.err;
+
+  // What the application was given.
+  auto env = record(dir_ / "record.txt");
+  EXPECT_EQ(env["VK_ADD_LAYER_PATH"], layerDir().string());
+  EXPECT_EQ(env["VK_INSTANCE_LAYERS"], "VK_LAYER_TALLY_counters");
+  EXPECT_EQ(env["VK_LOADER_LAYERS_ENABLE"], "VK_LAYER_TALLY_counters");
+  EXPECT_EQ(env["TALLY_LAYER_FRAMES"], "3");
+  EXPECT_EQ(env["TALLY_LAYER_SKIP_FRAMES"], "2");
+  EXPECT_EQ(env["TALLY_LAYER_FRAME_SUBMITS"], "0");
+  EXPECT_EQ(env["TALLY_LAYER_COUNTING"], "exact");
+  EXPECT_NE(env["TALLY_LAYER_OUTPUT"], "");
+  EXPECT_FALSE(fs::exists(env["TALLY_LAYER_OUTPUT"])) << "the capture's temporary folder is removed";
+  EXPECT_EQ(env["MY_SETTING"], "on and off");
+  EXPECT_EQ(env["ARGS"], "--c 100");
+
+  const json& r = c.result;
+  ASSERT_TRUE(r.is_object()) << c.err;
+  EXPECT_EQ(r["device"]["name"], "Fake GPU");
+  ASSERT_EQ(r["runs"].size(), 1u);
+  const json& run = r["runs"][0];
+  EXPECT_EQ(run["renderer"], "app:fakecube");
+  EXPECT_EQ(run["scene"], std::string(FAKE_APP) + " --c 100");
+  EXPECT_EQ(run["width"], 64);
+  EXPECT_EQ(run["height"], 48);
+  EXPECT_EQ(run["counting"], "exact");
+  EXPECT_EQ(run["notes"]["timing"], "instrumented");
+  EXPECT_EQ(run["notes"]["application_exit"], "exited with status 0");
+  EXPECT_EQ(run["notes"]["uninstrumented_shaders"][0]["name"], "shader 0x11");
+  ASSERT_EQ(run["samples"].size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const json& s = run["samples"][i];
+    EXPECT_EQ(s["camera"]["frame"], 2 + i);
+    ASSERT_EQ(s["passes"].size(), 2u);
+    EXPECT_EQ(s["passes"][0]["name"], "render pass 0");
+    EXPECT_EQ(s["passes"][1]["name"], "compute 1");
+    EXPECT_EQ(s["passes"][1]["compute_invocations"], 128);
+    EXPECT_DOUBLE_EQ(s["frame_ms"].get<double>(), 0.75);
+    ASSERT_EQ(s["passes"][0]["resources"].size(), 3u);
+    EXPECT_EQ(s["passes"][0]["resources"][0]["name"], "texture 0x1");
+  }
+
+  // Stored as any capture's result.
+  fs::path db = dir_ / "tally.db";
+  auto opened = tally::store::Store::open(db.string());
+  ASSERT_TRUE(opened.ok()) << opened.error();
+  auto& store = **opened;
+  auto job = store.createJob(spec);
+  ASSERT_TRUE(job.ok()) << job.error();
+  auto ingested = store.ingestCapture(job->job.id, r, {});
+  ASSERT_TRUE(ingested.ok()) << ingested.error();
+  EXPECT_EQ(*ingested, 1);
+
+  // Served by the service's routes.
+  tally::service::ServiceContext ctx;
+  ctx.writer = &store;
+  ctx.dbPath = db.string();
+  ctx.rendererNames = {"forward"};
+  tally::api::Router router;
+  tally::service::addServiceRoutes(router, ctx);
+  auto get = [&](const std::string& path) {
+    tally::api::Request req;
+    req.method = "GET";
+    req.path = path.substr(0, path.find('?'));
+    if (size_t q = path.find('?'); q != std::string::npos) {
+      std::string key = path.substr(q + 1, path.find('=', q) - q - 1);
+      req.query[key] = path.substr(path.find('=', q) + 1);
+    }
+    auto response = router.dispatch(req);
+    EXPECT_EQ(response.status, 200) << path << ": " << response.json.dump();
+    return response.json;
+  };
+  json runs = get("/api/runs?capture=" + std::to_string(job->job.id));
+  ASSERT_EQ(runs["runs"].size(), 1u) << runs.dump();
+  const int64_t runId = runs["runs"][0]["id"];
+  json served = get("/api/runs/" + std::to_string(runId));
+  EXPECT_EQ(served["renderer"], "app:fakecube");
+  EXPECT_EQ(served["variant"], "app:fakecube");
+  EXPECT_EQ(served["device"], "Fake GPU");
+  EXPECT_EQ(served["sample_count"], 3);
+  EXPECT_EQ(served["width"], 64);
+  EXPECT_EQ(served["counting"], "exact");
+  EXPECT_EQ(served["notes"]["source"]["kind"], "application");
+  EXPECT_EQ(served["notes"]["layer"]["name"], "VK_LAYER_TALLY_counters");
+  EXPECT_TRUE(served["image_error"].is_null());
+  EXPECT_TRUE(served["counter_headroom"].is_null());
+  ASSERT_EQ(served["passes"].size(), 2u);
+  EXPECT_EQ(served["passes"][0]["name"], "render pass 0");
+  EXPECT_DOUBLE_EQ(served["passes"][0]["bytes"].get<double>(), 12288 + 2304 + 12288);
+  ASSERT_EQ(served["resources"].size(), 3u);
+  EXPECT_EQ(served["resources"][0]["name"], "swapchain");
+  EXPECT_EQ(served["resources"][0]["format_bytes"], 12288);
+  json samples = get("/api/runs/" + std::to_string(runId) + "/samples");
+  ASSERT_EQ(samples["samples"].size(), 3u);
+  EXPECT_EQ(samples["samples"][0]["camera"]["label"], "frame 2");
+  EXPECT_TRUE(samples["samples"][0]["screenshot"].is_null());
+  EXPECT_TRUE(samples["samples"][0]["image_error"].is_null());
+  EXPECT_TRUE(samples["samples"][0]["sky_fraction"].is_null());
+  json sample = get("/api/samples/" + std::to_string(samples["samples"][0]["id"].get<int64_t>()));
+  EXPECT_EQ(sample["passes"][0]["resources"][2]["name"], "swapchain");
+  EXPECT_EQ(sample["passes"][0]["resources"][2]["access"], "write");
+}
+
+// Each way an application can fail ends the capture with one line naming why.
+TEST_F(ApplicationCapture, FailuresNameTheReason) {
+  struct Case {
+    std::string mode;
+    json extra;
+    std::vector<std::string> expected;  // each in tallyd's last stderr line
+  };
+  const std::vector<Case> cases = {
+      {"segv", json::object(),
+       {"the application was killed by signal 11 (SIGSEGV) before the layer wrote its output",
+        "its stderr ended: fake app: drawing frame 1 | fake app: about to crash on request"}},
+      {"exit1", json::object(),
+       {"the application exited with status 1 before the layer wrote its output",
+        "fake app: cannot open the window on request"}},
+      {"hang", {{"timeout_s", 1}},
+       {"the application did not deliver 3 frames within application.timeout_s (1 s) and was stopped",
+        "fake app: hanging on request"}},
+      {"incomplete", {{"frames", 5}},
+       {"only 2 of the 5 frames asked for arrived", "complete: false", "the application exited with status 0"}},
+      {"badjson", json::object(), {"the layer's output is not a valid JSON object"}},
+      {"silent", json::object(),
+       {"the application exited with status 0 before the layer wrote its output",
+        "or the layer did not load: manifest " + (layerDir() / tally::kLayerManifest).string()}},
+  };
+  for (const auto& c : cases) {
+    Capture r = capture(appSpec(c.mode, 3, c.extra));
+    EXPECT_EQ(r.rc, 1) << c.mode << ": " << r.err;
+    EXPECT_TRUE(r.result.is_null()) << c.mode << ": no result is written";
+    const std::string line = r.lastLine();
+    EXPECT_EQ(line.rfind("tallyd capture: ", 0), 0u) << c.mode << ": " << line;
+    for (const auto& e : c.expected) EXPECT_NE(line.find(e), std::string::npos) << c.mode << ": " << line << "\n  expected: " << e;
+    if (c.mode == "hang") EXPECT_LT(r.elapsed, 10s);
+  }
+}
+
+TEST_F(ApplicationCapture, NoLayerManifestFails) {
+  fs::create_directories(dir_ / "empty");
+  Capture c = capture(appSpec("ok"), {"TALLY_LAYER_PATH=" + (dir_ / "empty").string()});
+  EXPECT_EQ(c.rc, 1);
+  EXPECT_NE(c.lastLine().find("$TALLY_LAYER_PATH (" + (dir_ / "empty").string() + ") holds no VkLayer_tally_counters.json"),
+            std::string::npos)
+      << c.err;
+}
+
+// An application that keeps running once the output is written gets 2 s,
+// then SIGTERM, then (ignoring it) SIGKILL 2 s later; its output stands.
+TEST_F(ApplicationCapture, LingeringApplicationIsStopped) {
+  json spec = appSpec("linger");
+  spec["application"]["env"]["FAKE_APP_IGNORE_TERM"] = "1";
+  Capture c = capture(spec);
+  ASSERT_EQ(c.rc, 0) << c.err;
+  EXPECT_GE(c.elapsed, 3500ms);
+  EXPECT_LT(c.elapsed, 20s);
+  EXPECT_EQ(c.result["runs"][0]["notes"]["application_exit"], "was killed by tallyd (SIGKILL): it did not exit on SIGTERM");
+  EXPECT_EQ(c.result["runs"][0]["samples"].size(), 3u);
+}
+
+// display "xvfb": the application sees DISPLAY on an X server of the
+// capture's own, which is gone afterwards. The program is found on $PATH.
+TEST_F(ApplicationCapture, XvfbDisplayAndProgramOnPath) {
+  const char* path = std::getenv("PATH");
+  if (tally::capture::findOnPath("Xvfb", path ? path : "").empty()) GTEST_SKIP() << "Xvfb is not installed (apt install xvfb)";
+  json spec = appSpec("ok", 2, {{"display", "xvfb"}});
+  spec["application"]["command"] = {"fake_app.sh"};
+  Capture c = capture(spec, {"PATH=" + fs::path(FAKE_APP).parent_path().string() + ":" + (path ? path : "")});
+  ASSERT_EQ(c.rc, 0) << c.err;
+  EXPECT_NE(c.err.find("[0/3] app:fake_app.sh: starting Xvfb"), std::string::npos) << c.err;
+  auto env = record(dir_ / "record.txt");
+  ASSERT_EQ(env["DISPLAY"].rfind(":", 0), 0u) << env["DISPLAY"];
+  EXPECT_EQ(env["XVFB_SOCKET"], "yes");
+  ASSERT_FALSE(env["XVFB_PID"].empty()) << "no Xvfb beside the application";
+  EXPECT_EQ(c.result["runs"][0]["notes"]["source"]["display"], "xvfb");
+  // Gone: the process and its socket.
+  EXPECT_FALSE(fs::exists("/proc/" + env["XVFB_PID"])) << "Xvfb " << env["XVFB_PID"] << " still runs";
+  EXPECT_FALSE(fs::exists("/tmp/.X11-unix/X" + env["DISPLAY"].substr(1)));
+}
+
+// POST /api/captures: refused unless the daemon allows applications; fields
+// named as tallyd capture names them; the host's paths only.
+TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
+  fs::path db = dir_ / "tally.db";
+  auto opened = tally::store::Store::open(db.string());
+  ASSERT_TRUE(opened.ok()) << opened.error();
+  tally::service::ServiceContext ctx;
+  ctx.writer = opened->get();
+  ctx.dbPath = db.string();
+  ctx.rendererNames = {"forward"};
+  tally::api::Router router;
+  tally::service::addServiceRoutes(router, ctx);
+  auto post = [&](const json& body) {
+    tally::api::Request req;
+    req.method = "POST";
+    req.path = "/api/captures";
+    req.body = body;
+    req.principal = tally::api::Principal::kCapture;
+    return router.dispatch(req);
+  };
+  auto refused = post(appSpec("ok"));
+  EXPECT_EQ(refused.status, 400);
+  EXPECT_EQ(refused.json["error"]["field"], "application");
+  EXPECT_NE(refused.json["error"]["message"].get<std::string>().find("--allow-applications"), std::string::npos);
+
+  ctx.options.allowApplications = true;
+  struct Case {
+    json spec;
+    std::string field;
+  };
+  std::vector<Case> cases = {
+      {appSpec("ok", 0), "application.frames"},
+      {{{"application", {{"command", {"./relative/app"}}}}}, "application.command[0]"},
+      {{{"replay", "relative.gfxr"}}, "replay"},
+      {{{"replay", (dir_ / "missing.gfxr").string()}}, "replay"},
+      {{{"application", {{"command", {FAKE_APP}}}}, {"renderers", {"forward"}}}, "renderers"},
+      {{{"application", {{"command", {FAKE_APP}}}}, {"sweep", "depth-reconstruction"}}, "sweep"},
+  };
+  for (const auto& c : cases) {
+    auto r = post(c.spec);
+    EXPECT_EQ(r.status, 400) << c.spec.dump();
+    EXPECT_EQ(r.json["error"]["field"], c.field) << r.json.dump();
+  }
+  auto accepted = post(appSpec("ok"));
+  EXPECT_EQ(accepted.status, 202) << accepted.json.dump();
+}
+
+}  // namespace
