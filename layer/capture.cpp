@@ -432,6 +432,13 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         name = site.set >= 0 ? "set " + std::to_string(site.set) + " binding " + std::to_string(site.binding)
                              : (site.resource.empty() ? "unresolved" : site.resource);
       }
+      // A fragment's colour goes to every covered sample of a multisampled
+      // target: its writes are counted x the sample count, derived (the
+      // built-in renderers' model, renderers/techniques/msaa.cpp).
+      if (site.kind == SiteKind::OutputWrite && r != dev.resources.end() && r->second.samples > 1) {
+        addLine(pass, name, write, "derived", n * r->second.samples, bytes, kind, format);
+        continue;
+      }
       addLine(pass, name, write, "counter", n, bytes, kind, format);
     }
   }

@@ -21,12 +21,12 @@ import sys
 import tempfile
 
 
-def counted_lines(passes):
-    """{(pass, resource, access): count} of the counter lines."""
+def counted_lines(passes, source="counter"):
+    """{(pass, resource, access): count} of the lines of one source."""
     out = {}
     for p in passes:
         for r in p["resources"]:
-            if r["source"] != "counter":
+            if r["source"] != source:
                 continue
             key = (p["name"], r["name"], r["access"])
             out[key] = out.get(key, 0) + r["count"]
@@ -55,8 +55,10 @@ def compare(args, renderer, tmp, builtin_run):
     })
     camera = builtin_run["samples"][0]["camera"]
     w, h = args.resolution.split("x")
+    options = builtin_run.get("options") or {}
     run([args.tallyd, "play", "--renderer", renderer, "--scene", args.scene, "--resolution", args.resolution,
          "--frames", "2", "--camera", "0", "--quiet"]
+        + (["--options", json.dumps(options)] if options else [])
         + (["--device", args.device] if args.device else []), env=env)
     with open(output) as f:
         layer = json.load(f)
@@ -66,11 +68,18 @@ def compare(args, renderer, tmp, builtin_run):
     mismatched = sorted((k, a[k], b[k]) for k in a.keys() & b.keys() if a[k] != b[k])
     only_builtin = sorted(k for k in a.keys() - b.keys() if a[k] != 0)
     only_layer = sorted(k for k in b.keys() - a.keys() if b[k] != 0)
+    # Derived lines both sides derive (multisampled targets' writes) must agree
+    # too; those only one side derives are listed.
+    da = counted_lines(builtin_run["samples"][0]["passes"], "derived")
+    db = counted_lines(frame["passes"], "derived")
+    mismatched += sorted((k, da[k], db[k]) for k in da.keys() & db.keys() if da[k] != db[k])
+    derived_one_side = sorted(list(k) + ["built-in" if k in da else "layer"] for k in da.keys() ^ db.keys())
     times = {p["name"]: p["gpu_ms"] for p in frame["passes"]}
     plain = {p["name"]: p["gpu_ms"] for p in builtin_run["samples"][0]["passes"]}
     return {
-        "renderer": renderer,
-        "lines_equal": len(a.keys() & b.keys()) - len(mismatched),
+        "renderer": builtin_run.get("variant", renderer),
+        "lines_equal": len(a.keys() & b.keys()) + len(da.keys() & db.keys()) - len(mismatched),
+        "derived_one_side": derived_one_side,
         "mismatched": [{"line": list(k), "builtin": x, "layer": y} for k, x, y in mismatched],
         "only_builtin": [list(k) for k in only_builtin],
         "only_layer": [list(k) for k in only_layer],
@@ -91,7 +100,8 @@ def main():
     parser.add_argument("--tallyd", required=True)
     parser.add_argument("--layer-dir", required=True)
     parser.add_argument("--scene", required=True, help="a scene name or a scene object as JSON")
-    parser.add_argument("--renderers", default="forward,forward-zprepass,deferred,visbuffer,visbuffer-lean")
+    parser.add_argument("--renderers", default="forward,forward-zprepass,deferred,visbuffer,visbuffer-lean",
+                        help="names, comma-separated, or a JSON list of a spec's renderer entries (variants)")
     parser.add_argument("--resolution", default="96x54")
     parser.add_argument("--counting", default="accumulate", help="the layer's mode (the built-in side is exact)")
     parser.add_argument("--builtin-frames", type=int, default=1)
@@ -99,7 +109,7 @@ def main():
     parser.add_argument("--out", default="")
     args = parser.parse_args()
     args.layer_dir = os.path.abspath(args.layer_dir)
-    renderers = args.renderers.split(",")
+    renderers = json.loads(args.renderers) if args.renderers.startswith("[") else args.renderers.split(",")
     w, h = (int(x) for x in args.resolution.split("x"))
     try:
         scene = json.loads(args.scene)
@@ -123,8 +133,8 @@ def main():
             report["renderers"].append(entry)
             ok = not entry["mismatched"] and not entry["only_builtin"] and not entry["only_layer"]
             failed = failed or not ok
-            print("%-16s %-8s %3d lines equal, %d differ, %d built-in only, %d layer only" %
-                  (r["renderer"], "ok" if ok else "DIFFERS", entry["lines_equal"], len(entry["mismatched"]),
+            print("%-28s %-8s %3d lines equal, %d differ, %d built-in only, %d layer only" %
+                  (entry["renderer"], "ok" if ok else "DIFFERS", entry["lines_equal"], len(entry["mismatched"]),
                    len(entry["only_builtin"]), len(entry["only_layer"])))
             for m in entry["mismatched"]:
                 print("    %s: built-in %s, layer %s" % ("/".join(m["line"]), m["builtin"], m["layer"]))
