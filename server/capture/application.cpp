@@ -424,6 +424,23 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     text(device, "name", "device");
     const json& layer = object(output, "layer", "");
     const json& application = object(output, "application", "");
+    // Nothing counted: the layer could not count on this device, or every
+    // pipeline layout of the application uses every descriptor set (the
+    // application ran unchanged, but there is nothing to store).
+    if (member(layer, "counting_enabled") && layer["counting_enabled"] == false) {
+      return makeError("the layer counted nothing: " +
+                       (member(layer, "not_counting") && layer["not_counting"].is_string()
+                            ? layer["not_counting"].get<std::string>()
+                            : std::string("counting was off")));
+    }
+    if (member(layer, "pipelines_counted") && layer["pipelines_counted"] == 0 && member(layer, "layouts_refused") &&
+        layer["layouts_refused"].is_number_unsigned() && layer["layouts_refused"].get<uint64_t>() > 0) {
+      return makeError("the layer counted nothing: every pipeline of the application has a layout that uses every "
+                       "descriptor set the device allows (" +
+                       std::to_string(layer["layouts_refused"].get<uint64_t>()) +
+                       " layouts refused; the layer needs the last set for its counters), so its pipelines ran "
+                       "unchanged and uncounted");
+    }
     const json& frames = list(output, "frames", "");
     if (frames.empty()) malformed("frames", "missing or empty: no frame was read back");
     const bool complete = member(output, "complete") ? output["complete"] == true : true;
