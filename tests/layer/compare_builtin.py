@@ -33,6 +33,11 @@ def counted_lines(passes, source="counter"):
     return out
 
 
+def median(values):
+    v = sorted(values)
+    return v[len(v) // 2] if len(v) % 2 else (v[len(v) // 2 - 1] + v[len(v) // 2]) / 2
+
+
 def run(command, env=None, timeout=900):
     result = subprocess.run(command, env=env, timeout=timeout, capture_output=True, text=True)
     if result.returncode != 0:
@@ -48,7 +53,7 @@ def compare(args, renderer, tmp, builtin_run):
         "VK_INSTANCE_LAYERS": "VK_LAYER_TALLY_counters",
         "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
         "TALLY_LAYER_OUTPUT": output,
-        "TALLY_LAYER_FRAMES": "1",
+        "TALLY_LAYER_FRAMES": str(args.layer_frames),
         "TALLY_LAYER_SKIP_FRAMES": "1",
         "TALLY_LAYER_FRAME_SUBMITS": "1",
         "TALLY_LAYER_COUNTING": args.counting,
@@ -57,7 +62,7 @@ def compare(args, renderer, tmp, builtin_run):
     w, h = args.resolution.split("x")
     options = builtin_run.get("options") or {}
     run([args.tallyd, "play", "--renderer", renderer, "--scene", args.scene, "--resolution", args.resolution,
-         "--frames", "2", "--camera", "0", "--quiet"]
+         "--frames", str(args.layer_frames + 1), "--camera", "0", "--quiet"]
         + (["--options", json.dumps(options)] if options else [])
         + (["--device", args.device] if args.device else []), env=env)
     with open(output) as f:
@@ -86,6 +91,8 @@ def compare(args, renderer, tmp, builtin_run):
         "passes_builtin": [p["name"] for p in builtin_run["samples"][0]["passes"]],
         "passes_layer": [p["name"] for p in frame["passes"]],
         "frame_ms_layer": frame["frame_ms"],
+        "frame_ms_layer_median": median([f["frame_ms"] for f in layer["frames"]]),
+        "layer_frames": len(layer["frames"]),
         "frame_ms_plain": builtin_run["samples"][0]["frame_ms"],
         "frame_ms_builtin_counted": builtin_run["samples"][0].get("frame_ms_instrumented"),
         "gpu_ms_layer": times,
@@ -104,7 +111,8 @@ def main():
                         help="names, comma-separated, or a JSON list of a spec's renderer entries (variants)")
     parser.add_argument("--resolution", default="96x54")
     parser.add_argument("--counting", default="accumulate", help="the layer's mode (the built-in side is exact)")
-    parser.add_argument("--builtin-frames", type=int, default=1)
+    parser.add_argument("--builtin-frames", type=int, default=1, help="the capture's uninstrumented frames")
+    parser.add_argument("--layer-frames", type=int, default=1, help="frames read back under the layer (after one skipped)")
     parser.add_argument("--device", default="")
     parser.add_argument("--out", default="")
     args = parser.parse_args()
