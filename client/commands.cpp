@@ -100,10 +100,55 @@ void drawProgress(Io& io, const JobView& j, std::string& last) {
 
 }  // namespace
 
+namespace {
+int submitAndFollow(ApiClient& api, const json& spec, const CaptureArgs& args, Io& io);
+}  // namespace
+
 int runCapture(ApiClient& api, const CaptureArgs& args, Io& io) {
   auto spec = readSpec(args.spec);
   if (!spec) return fail(io, spec.error());
-  auto created = api.submitCapture(*spec, args.idempotencyKey);
+  return submitAndFollow(api, *spec, args, io);
+}
+
+Result<json> profileSpec(const ProfileArgs& args) {
+  if (args.command.empty() == args.replay.empty()) {
+    return makeError("give the application after -- (tally profile -- vkcube --c 100), or --replay FILE, not both");
+  }
+  if (args.frames < 1 || args.frames > 1000) return makeError("--frames: must be between 1 and 1000");
+  if (args.skipFrames < 0) return makeError("--skip-frames: must be 0 or more");
+  if (args.frameSubmits < 0) return makeError("--frame-submits: must be 0 or more");
+  json env = json::object();
+  for (const auto& kv : args.env) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) return makeError("--env: expected KEY=VALUE, got '" + kv + "'");
+    env[kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
+  const std::string display = args.xvfb ? "xvfb" : "none";
+  json spec;
+  if (!args.replay.empty()) {
+    spec = {{"replay", args.replay}, {"frames", args.frames}, {"skip_frames", args.skipFrames}, {"display", display}};
+  } else {
+    json app = {{"command", args.command}, {"frames", args.frames}, {"skip_frames", args.skipFrames},
+                {"display", display}};
+    if (args.frameSubmits > 0) app["frame_submits"] = args.frameSubmits;
+    if (!env.empty()) app["env"] = env;
+    if (!args.name.empty()) app["name"] = args.name;
+    if (args.timeoutS > 0) app["timeout_s"] = args.timeoutS;
+    spec = {{"application", app}};
+  }
+  if (!args.counting.empty()) spec["counting"] = args.counting;
+  return spec;
+}
+
+int runProfile(ApiClient& api, const ProfileArgs& args, Io& io) {
+  auto spec = profileSpec(args);
+  if (!spec) return fail(io, spec.error());
+  return submitAndFollow(api, *spec, args.capture, io);
+}
+
+namespace {
+int submitAndFollow(ApiClient& api, const json& spec, const CaptureArgs& args, Io& io) {
+  auto created = api.submitCapture(spec, args.idempotencyKey);
   if (!created) return fail(io, created.error());
   JobView job = jobView(*created);
   if (job.id.empty()) return fail(io, "tallyd accepted the capture but sent no id");
@@ -157,6 +202,7 @@ int runCapture(ApiClient& api, const CaptureArgs& args, Io& io) {
     return fail(io, "capture " + job.id + " failed: " + orMissing(job.error));
   return fail(io, "capture " + job.id + " " + job.status);
 }
+}  // namespace
 
 int runStatus(ApiClient& api, const std::string& id, Io& io) {
   if (!id.empty()) {

@@ -27,6 +27,25 @@ struct CaptureArgs {
 };
 int runCapture(ApiClient& api, const CaptureArgs& args, Io& io);
 
+// `tally profile -- COMMAND ARGS...`: an application capture spec built from
+// flags (docs/layer.md), submitted and followed as `tally capture` does.
+struct ProfileArgs {
+  std::vector<std::string> command;  // the application and its arguments; empty with replay
+  std::string replay;                // a GFXReconstruct capture file instead
+  int frames = 10;
+  int skipFrames = 0;
+  int frameSubmits = 0;  // 0: frames end at present
+  bool xvfb = false;
+  std::string name;
+  std::vector<std::string> env;  // KEY=VALUE
+  int timeoutS = 0;              // 0: the server's default
+  std::string counting;          // "" : the server's default (accumulate)
+  CaptureArgs capture;           // --no-wait, --idempotency-key, --interval
+};
+// The spec, or the flag that is wrong.
+Result<nlohmann::json> profileSpec(const ProfileArgs& args);
+int runProfile(ApiClient& api, const ProfileArgs& args, Io& io);
+
 // One job when id is set, else the job list.
 int runStatus(ApiClient& api, const std::string& id, Io& io);
 int runCancel(ApiClient& api, const std::string& id, Io& io);

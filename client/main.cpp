@@ -62,6 +62,33 @@ int main(int argc, char** argv) {
       "Example:\n  tally capture --spec atrium.json\n  echo '{\"renderers\":[\"forward\"],"
       "\"resolutions\":[[320,180]]}' | tally capture --spec - --no-wait");
 
+  ProfileArgs profile;
+  auto* prof = app.add_subcommand(
+      "profile", "Capture an application (or a GFXReconstruct replay) under the Tally Vulkan layer (docs/layer.md)");
+  prof->add_option("command", profile.command, "The application and its arguments, after --");
+  prof->add_option("--replay", profile.replay, "A GFXReconstruct capture file (on the daemon's host) to replay instead");
+  prof->add_option("--frames", profile.frames, "Frames to read back (1..1000)")->check(CLI::Range(1, 1000));
+  prof->add_option("--skip-frames", profile.skipFrames, "Frames to let pass first")->check(CLI::NonNegativeNumber);
+  prof->add_option("--frame-submits", profile.frameSubmits,
+                   "For applications that never present: a frame is this many submissions with draws or dispatches")
+      ->check(CLI::NonNegativeNumber);
+  prof->add_flag("--xvfb", profile.xvfb, "Run it under a virtual X server on the daemon's host");
+  prof->add_option("--name", profile.name, "The run's name (app:NAME); default the application's");
+  prof->add_option("--env", profile.env, "KEY=VALUE for the application (repeatable)");
+  prof->add_option("--timeout-s", profile.timeoutS, "Seconds the application may take (1..3600)")
+      ->check(CLI::Range(1, 3600));
+  prof->add_option("--counting", profile.counting, "accumulate (default) or exact");
+  prof->add_flag("--no-wait", profile.capture.noWait, "Print the capture id and exit without waiting");
+  prof->add_option("--idempotency-key", profile.capture.idempotencyKey,
+                   "A key that makes resubmitting the same capture return the first one");
+  prof->add_option("--interval", profile.capture.intervalS, "Seconds between status polls")
+      ->check(CLI::Range(0.01, 3600.0));
+  prof->footer(
+      "The daemon must run with --allow-applications; the application runs on its host.\n"
+      "Exit status: 0 when the capture is done, 1 when it failed or was cancelled.\n"
+      "Example:\n  tally profile --xvfb --skip-frames 20 --frames 10 -- vkcube --c 100\n"
+      "  tally profile --frame-submits 1 --frames 5 -- ./my-compute-app --iterations 50");
+
   std::string statusId;
   auto* status = app.add_subcommand("status", "Show one capture job, or list them");
   status->add_option("ID", statusId, "Capture id (omit for the list)");
@@ -146,6 +173,7 @@ int main(int argc, char** argv) {
   Io io{std::cout, std::cerr, jsonOut, ::isatty(STDERR_FILENO) != 0};
 
   if (cap->parsed()) return runCapture(api, capture, io);
+  if (prof->parsed()) return runProfile(api, profile, io);
   if (status->parsed()) return runStatus(api, statusId, io);
   if (cancel->parsed()) return runCancel(api, cancelId, io);
   if (runsCmd->parsed()) return runRuns(api, runs, io);
