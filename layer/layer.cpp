@@ -337,27 +337,38 @@ VKAPI_ATTR VkResult VKAPI_CALL GetSwapchainImagesKHR(VkDevice device, VkSwapchai
 
 // ---------------------------------------------------------------- render passes
 
+// Each subpass's colour attachment references (their Locations' attachments).
+template <class Info>
+std::vector<std::vector<uint32_t>> subpassColors(const Info& info) {
+  std::vector<std::vector<uint32_t>> subpasses;
+  for (uint32_t s = 0; s < info.subpassCount; ++s) {
+    std::vector<uint32_t> colors;
+    for (uint32_t c = 0; c < info.pSubpasses[s].colorAttachmentCount; ++c) {
+      colors.push_back(info.pSubpasses[s].pColorAttachments[c].attachment);
+    }
+    subpasses.push_back(std::move(colors));
+  }
+  return subpasses;
+}
+
+void recordRenderPass(DeviceState& dev, VkRenderPass pass, std::vector<std::vector<uint32_t>> subpasses,
+                      bool multiview) {
+  std::lock_guard lock(dev.mutex);
+  dev.renderPasses[u64(pass)] = std::move(subpasses);
+  if (multiview) dev.multiviewPasses.insert(u64(pass));
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass(VkDevice device, const VkRenderPassCreateInfo* info,
                                                 const VkAllocationCallbacks* alloc, VkRenderPass* pass) {
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.CreateRenderPass(device, info, alloc, pass);
   if (result != VK_SUCCESS) return result;
-  std::vector<std::vector<uint32_t>> subpasses;
-  for (uint32_t s = 0; s < info->subpassCount; ++s) {
-    std::vector<uint32_t> colors;
-    for (uint32_t c = 0; c < info->pSubpasses[s].colorAttachmentCount; ++c) {
-      colors.push_back(info->pSubpasses[s].pColorAttachments[c].attachment);
-    }
-    subpasses.push_back(std::move(colors));
-  }
-  std::lock_guard lock(dev->mutex);
-  dev->renderPasses[u64(*pass)] = std::move(subpasses);
+  bool multiview = false;
   for (auto* p = static_cast<const VkBaseInStructure*>(info->pNext); p != nullptr; p = p->pNext) {
-    if (p->sType == VK_STRUCTURE_TYPE_RENDER_PASS_MULTIVIEW_CREATE_INFO &&
-        reinterpret_cast<const VkRenderPassMultiviewCreateInfo*>(p)->subpassCount > 0) {
-      dev->multiviewPasses.insert(u64(*pass));
-    }
+    multiview = multiview || (p->sType == VK_STRUCTURE_TYPE_RENDER_PASS_MULTIVIEW_CREATE_INFO &&
+                              reinterpret_cast<const VkRenderPassMultiviewCreateInfo*>(p)->subpassCount > 0);
   }
+  recordRenderPass(*dev, *pass, subpassColors(*info), multiview);
   return result;
 }
 
@@ -366,19 +377,9 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass2(VkDevice device, const VkRender
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.CreateRenderPass2(device, info, alloc, pass);
   if (result != VK_SUCCESS) return result;
-  std::vector<std::vector<uint32_t>> subpasses;
   bool multiview = false;
-  for (uint32_t s = 0; s < info->subpassCount; ++s) {
-    std::vector<uint32_t> colors;
-    for (uint32_t c = 0; c < info->pSubpasses[s].colorAttachmentCount; ++c) {
-      colors.push_back(info->pSubpasses[s].pColorAttachments[c].attachment);
-    }
-    subpasses.push_back(std::move(colors));
-    multiview = multiview || info->pSubpasses[s].viewMask != 0;
-  }
-  std::lock_guard lock(dev->mutex);
-  dev->renderPasses[u64(*pass)] = std::move(subpasses);
-  if (multiview) dev->multiviewPasses.insert(u64(*pass));
+  for (uint32_t s = 0; s < info->subpassCount; ++s) multiview = multiview || info->pSubpasses[s].viewMask != 0;
+  recordRenderPass(*dev, *pass, subpassColors(*info), multiview);
   return result;
 }
 
@@ -738,6 +739,18 @@ bool isLibraryPipeline(const void* next, VkPipelineCreateFlags flags) {
   return false;
 }
 
+void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipelines,
+                       const std::vector<std::shared_ptr<PipelineInfo>>& states) {
+  std::lock_guard lock(dev.mutex);
+  for (uint32_t i = 0; i < count; ++i) {
+    if (pipelines[i] == VK_NULL_HANDLE) continue;  // a failed creation in a batch
+    states[i]->handle = u64(pipelines[i]);
+    dev.pipelines[u64(pipelines[i])] = states[i];
+    ++dev.pipelinesCreated;
+    dev.pipelinesCounted += states[i]->counted ? 1 : 0;
+  }
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
                                                        const VkGraphicsPipelineCreateInfo* infos,
                                                        const VkAllocationCallbacks* alloc, VkPipeline* pipelines) {
@@ -770,14 +783,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
   }
   VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, patched.data(), alloc, pipelines);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
-  std::lock_guard lock(dev->mutex);
-  for (uint32_t i = 0; i < count; ++i) {
-    if (pipelines[i] == VK_NULL_HANDLE) continue;
-    states[i]->handle = u64(pipelines[i]);
-    dev->pipelines[u64(pipelines[i])] = states[i];
-    ++dev->pipelinesCreated;
-    dev->pipelinesCounted += states[i]->counted ? 1 : 0;
-  }
+  registerPipelines(*dev, count, pipelines, states);
   return result;
 }
 
@@ -804,14 +810,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
   }
   VkResult result = dev->d.CreateComputePipelines(device, cache, count, patched.data(), alloc, pipelines);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
-  std::lock_guard lock(dev->mutex);
-  for (uint32_t i = 0; i < count; ++i) {
-    if (pipelines[i] == VK_NULL_HANDLE) continue;
-    states[i]->handle = u64(pipelines[i]);
-    dev->pipelines[u64(pipelines[i])] = states[i];
-    ++dev->pipelinesCreated;
-    dev->pipelinesCounted += states[i]->counted ? 1 : 0;
-  }
+  registerPipelines(*dev, count, pipelines, states);
   return result;
 }
 
@@ -1063,73 +1062,62 @@ void nextSubpassCommon(CommandBufferState& cb) {
   }
 }
 
+// The render pass commands: the layer's work around the call down.
+template <class CallDown>
+void beginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info, CallDown callDown) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  callDown(*dev);
+  if (cb == nullptr) return;
+  beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
+  cb->inRenderPass = true;
+  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+}
+template <class CallDown>
+void nextSubpass(VkCommandBuffer cmd, CallDown callDown) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  const int first = tracked(*dev, cb) ? subpassScopeStart(*cb) : -1;
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  callDown(*dev);
+  if (cb == nullptr) return;
+  nextSubpassCommon(*cb);
+  if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
+}
+// Also the end of a dynamic-rendering scope.
+template <class CallDown>
+void endRenderPass(VkCommandBuffer cmd, CallDown callDown) {
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (tracked(*dev, cb)) closePass(*dev, *cb);
+  callDown(*dev);
+  if (cb != nullptr) cb->inRenderPass = false;
+}
+
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
                                               VkSubpassContents contents) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdBeginRenderPass(cmd, info, contents);
-  if (cb == nullptr) return;
-  beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
-  cb->inRenderPass = true;
-  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+  beginRenderPass(cmd, info, [&](DeviceState& dev) { dev.d.CmdBeginRenderPass(cmd, info, contents); });
 }
-
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass2(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
                                                const VkSubpassBeginInfo* begin) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdBeginRenderPass2(cmd, info, begin);
-  if (cb == nullptr) return;
-  beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
-  cb->inRenderPass = true;
-  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+  beginRenderPass(cmd, info, [&](DeviceState& dev) { dev.d.CmdBeginRenderPass2(cmd, info, begin); });
 }
-
 VKAPI_ATTR void VKAPI_CALL CmdNextSubpass(VkCommandBuffer cmd, VkSubpassContents contents) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  const int first = tracked(*dev, cb) ? subpassScopeStart(*cb) : -1;
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdNextSubpass(cmd, contents);
-  if (cb == nullptr) return;
-  nextSubpassCommon(*cb);
-  if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
+  nextSubpass(cmd, [&](DeviceState& dev) { dev.d.CmdNextSubpass(cmd, contents); });
 }
-
 VKAPI_ATTR void VKAPI_CALL CmdNextSubpass2(VkCommandBuffer cmd, const VkSubpassBeginInfo* begin,
                                            const VkSubpassEndInfo* end) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  const int first = tracked(*dev, cb) ? subpassScopeStart(*cb) : -1;
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdNextSubpass2(cmd, begin, end);
-  if (cb == nullptr) return;
-  nextSubpassCommon(*cb);
-  if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
+  nextSubpass(cmd, [&](DeviceState& dev) { dev.d.CmdNextSubpass2(cmd, begin, end); });
 }
-
 VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass(VkCommandBuffer cmd) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdEndRenderPass(cmd);
-  if (cb != nullptr) cb->inRenderPass = false;
+  endRenderPass(cmd, [&](DeviceState& dev) { dev.d.CmdEndRenderPass(cmd); });
 }
-
 VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass2(VkCommandBuffer cmd, const VkSubpassEndInfo* end) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdEndRenderPass2(cmd, end);
-  if (cb != nullptr) cb->inRenderPass = false;
+  endRenderPass(cmd, [&](DeviceState& dev) { dev.d.CmdEndRenderPass2(cmd, end); });
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRenderingInfo* info) {
@@ -1156,12 +1144,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdEndRendering(VkCommandBuffer cmd) {
-  DeviceState* dev = deviceOf(cmd);
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = cbState(*dev, cmd);
-  if (tracked(*dev, cb)) closePass(*dev, *cb);
-  dev->d.CmdEndRendering(cmd);
-  if (cb != nullptr) cb->inRenderPass = false;
+  endRenderPass(cmd, [&](DeviceState& dev) { dev.d.CmdEndRendering(cmd); });
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginDebugUtilsLabelEXT(VkCommandBuffer cmd, const VkDebugUtilsLabelEXT* label) {
