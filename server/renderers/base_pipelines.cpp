@@ -95,6 +95,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
   }
   modules_.push_back(gpu::createShaderModule(*ctx_, words));
   modulePass_[modules_.back()] = passIndex;
+  gpu::nameObject(*ctx_, VK_OBJECT_TYPE_SHADER_MODULE, gpu::handleValue(modules_.back()), file);
   return modules_.back();
 }
 
@@ -130,6 +131,7 @@ VkPipeline RendererBase::pipeline(const gpu::GraphicsPipelineDesc& desc) {
   for (VkShaderModule m : {desc.fragment, desc.vertex}) {
     if (auto it = modulePass_.find(m); it != modulePass_.end()) {
       passPipelines_.emplace_back(it->second, pipelines_.back());
+      gpu::nameObject(*ctx_, VK_OBJECT_TYPE_PIPELINE, gpu::handleValue(pipelines_.back()), passes_[it->second].name);
       break;
     }
   }
@@ -241,6 +243,7 @@ Result<VkPipeline> RendererBase::computePipeline(uint32_t passIndex, const std::
   pipelines_.push_back(gpu::createComputePipeline(*ctx_, *module, layout));
   setupTimes_.pipelineSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   passPipelines_.emplace_back(passIndex, pipelines_.back());
+  gpu::nameObject(*ctx_, VK_OBJECT_TYPE_PIPELINE, gpu::handleValue(pipelines_.back()), passes_[passIndex].name);
   return pipelines_.back();
 }
 
