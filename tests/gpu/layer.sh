@@ -14,6 +14,7 @@
 #   3. A GFXReconstruct capture of vkcube replayed with and without the layer:
 #      the same counts as live, identical screenshots, the replay's time.
 #
+#   LAYER_SPONZA=0 skips 1, LAYER_X=0 skips 2 and 3.
 #   OUT=dir  (default ./gpu-out): layer-sponza.{json,txt}, vkcube.json.gz,
 #            replay.json.gz, layer-summary.txt, layer-logs.tar.gz
 set -uo pipefail
@@ -36,6 +37,7 @@ if [ "${LAYER_SPONZA:-1}" = 1 ]; then
   cat "$out/layer-sponza.txt"
 fi
 
+if [ "${LAYER_X:-1}" = 1 ]; then
 # Xvfb, vkcube and GFXReconstruct from .xdebs/, with their libraries, only
 # for the programs that need them (python3 and tallyd keep the machine's).
 x=/tmp/tally-x
@@ -107,6 +109,7 @@ for f in "$logs"/shots-plain/*; do
 done | tee -a "$summary"
 [ -f "$logs/replay.json" ] && gzip -c "$logs/replay.json" > "$out/replay.json.gz"
 kill "$xvfb" 2>/dev/null
+fi
 
 python3 tests/gpu/layer_summary.py "$out" | tee -a "$summary"
 rm -rf "$logs"/shots-* "$trace"
