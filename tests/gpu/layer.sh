@@ -14,7 +14,11 @@
 #   3. A GFXReconstruct capture of vkcube replayed with and without the layer:
 #      the same counts as live, identical screenshots, the replay's time.
 #
-#   LAYER_SPONZA=0 skips 1, LAYER_X=0 skips 2 and 3.
+#   4. Without a window system: a GFXReconstruct capture of `tallyd play` on
+#      Sponza replayed with and without the layer (counts against the live
+#      run under the layer, replay time), and LAYER_VKCUBE_TRACE (a vkcube
+#      trace recorded elsewhere) replayed headless.
+#   LAYER_SPONZA=0 skips 1, LAYER_X=0 skips 2 and 3, LAYER_REPLAY=0 skips 4.
 #   OUT=dir  (default ./gpu-out): layer-sponza.{json,txt}, vkcube.json.gz,
 #            replay.json.gz, layer-summary.txt, layer-logs.tar.gz
 set -uo pipefail
@@ -111,7 +115,60 @@ done | tee -a "$summary"
 kill "$xvfb" 2>/dev/null
 fi
 
+# 4. No window system needed: a GFXReconstruct capture of `tallyd play`
+#    (deferred on Sponza, one submission a frame), replayed with and without
+#    the layer: the replay counts what the live run under the layer counted,
+#    and its time with the layer against without. And vkcube's trace (from
+#    LAYER_VKCUBE_TRACE, recorded elsewhere) replayed headless where the
+#    loader offers VK_EXT_headless_surface.
+if [ "${LAYER_REPLAY:-1}" = 1 ]; then
+  x=/tmp/tally-x
+  mkdir -p "$x"
+  [ -x "$x/usr/bin/gfxrecon-replay" ] || for f in .xdebs/*.deb; do dpkg -x "$f" "$x"; done
+  xlibs="$x/usr/lib/x86_64-linux-gnu:$x/lib/x86_64-linux-gnu"
+  gfx() { env LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$@"; }
+  sponza="$(tally_sponza_path)"
+  play=("$tallyd" play --renderer "${LAYER_REPLAY_RENDERER:-deferred}" --scene "{\"gltf\": \"$sponza\"}"
+        --resolution "$LAYER_RESOLUTION" --frames 40 --quiet)
+  env VK_ADD_LAYER_PATH="$layer_dir" VK_INSTANCE_LAYERS=VK_LAYER_TALLY_counters TALLY_LAYER_OUTPUT="$logs/play-live.json" \
+    TALLY_LAYER_SKIP_FRAMES=10 TALLY_LAYER_FRAMES=20 TALLY_LAYER_FRAME_SUBMITS=1 "${play[@]}" > "$logs/play-live.log" 2>&1 \
+    || { echo "play under the layer failed"; tail -3 "$logs/play-live.log"; status=1; }
+  ptrace="$logs/play.gfxr"
+  gfx VK_ADD_LAYER_PATH="$x/usr/share/vulkan/explicit_layer.d" VK_INSTANCE_LAYERS=VK_LAYER_LUNARG_gfxreconstruct \
+    GFXRECON_CAPTURE_FILE="$ptrace" GFXRECON_CAPTURE_FILE_TIMESTAMP=false "${play[@]}" > "$logs/play-capture.log" 2>&1 \
+    || { echo "play under GFXReconstruct failed"; tail -3 "$logs/play-capture.log"; status=1; }
+  echo "play trace: $(du -h "$ptrace" 2>/dev/null | cut -f1)" | tee -a "$summary"
+  for mode in plain layer plain layer plain layer; do
+    start=$(date +%s%N)
+    if [ "$mode" = layer ]; then
+      gfx VK_ADD_LAYER_PATH="$layer_dir" VK_INSTANCE_LAYERS=VK_LAYER_TALLY_counters TALLY_LAYER_OUTPUT="$logs/play-replay.json" \
+        TALLY_LAYER_SKIP_FRAMES=10 TALLY_LAYER_FRAMES=20 TALLY_LAYER_FRAME_SUBMITS=1 \
+        "$x/usr/bin/gfxrecon-replay" "$ptrace" > "$logs/play-replay-$mode.log" 2>&1 || status=1
+    else
+      gfx "$x/usr/bin/gfxrecon-replay" "$ptrace" > "$logs/play-replay-$mode.log" 2>&1 || status=1
+    fi
+    end=$(date +%s%N)
+    echo "play replay $mode: $(( (end - start) / 1000 )) us" | tee -a "$summary"
+  done
+  for f in play-live play-replay; do [ -f "$logs/$f.json" ] && gzip -c "$logs/$f.json" > "$out/$f.json.gz"; done
+  rm -f "$ptrace"
+  if [ -n "${LAYER_VKCUBE_TRACE:-}" ]; then
+    for mode in plain layer; do
+      if [ "$mode" = layer ]; then
+        gfx VK_ADD_LAYER_PATH="$layer_dir" VK_INSTANCE_LAYERS=VK_LAYER_TALLY_counters TALLY_LAYER_OUTPUT="$logs/vkcube-headless.json" \
+          TALLY_LAYER_SKIP_FRAMES=2 TALLY_LAYER_FRAMES=4 "$x/usr/bin/gfxrecon-replay" --wsi headless "$LAYER_VKCUBE_TRACE" \
+          > "$logs/vkcube-headless-$mode.log" 2>&1
+      else
+        gfx "$x/usr/bin/gfxrecon-replay" --wsi headless "$LAYER_VKCUBE_TRACE" > "$logs/vkcube-headless-$mode.log" 2>&1
+      fi
+      echo "vkcube trace replayed headless ($mode): exit $?; $(grep -h 'Replay FPS\|FATAL' "$logs/vkcube-headless-$mode.log" | head -1)" \
+        | tee -a "$summary"
+    done
+    [ -f "$logs/vkcube-headless.json" ] && gzip -c "$logs/vkcube-headless.json" > "$out/vkcube-headless.json.gz"
+  fi
+fi
+
 python3 tests/gpu/layer_summary.py "$out" | tee -a "$summary"
-rm -rf "$logs"/shots-* "$trace"
+rm -rf "$logs"/shots-* "${trace:-}"
 tar -czf "$out/layer-logs.tar.gz" -C "$out" layer-logs && rm -rf "$logs"
 exit "$status"

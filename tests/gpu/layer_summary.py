@@ -35,7 +35,7 @@ def main():
                 r["renderer"], r["lines_equal"], differ, plain, lay,
                 "%.3f" % counted if counted else "-", lay / plain if plain else float("nan"),
                 "%.3f" % (counted / plain) if counted and plain else "-"))
-    for name in ("vkcube.json.gz", "replay.json.gz"):
+    for name in ("vkcube.json.gz", "replay.json.gz", "vkcube-headless.json.gz"):
         result = load(os.path.join(out, name))
         if not result:
             print("%s: none" % name)
@@ -51,6 +51,16 @@ def main():
                                       "=" if ok else "!=",
                                       min(s / fi for _, fi, _, s, _ in rows), max(s / fi for _, fi, _, s, _ in rows),
                                       min(r[4] for r in rows), max(r[4] for r in rows)))
+    a, b = load(os.path.join(out, "play-live.json.gz")), load(os.path.join(out, "play-replay.json.gz"))
+    if a and b:
+        def lines(frame):
+            return {(p["name"], r["name"], r["access"], r["source"]): r["count"] for p in frame["passes"] for r in p["resources"]}
+        same = sum(lines(x) == lines(y) for x, y in zip(a["frames"], b["frames"]))
+        print("tallyd play (live, under the layer) against its GFXReconstruct replay under the layer: %d of %d frames "
+              "with every line equal (%d lines a frame); frame ms live %.3f, replay %.3f (medians)" % (
+                  same, min(len(a["frames"]), len(b["frames"])), len(lines(a["frames"][0])),
+                  sorted(f["frame_ms"] for f in a["frames"])[len(a["frames"]) // 2],
+                  sorted(f["frame_ms"] for f in b["frames"])[len(b["frames"]) // 2]))
     live, replay = load(os.path.join(out, "vkcube.json.gz")), load(os.path.join(out, "replay.json.gz"))
     if live and replay:
         a = {f["index"]: f["passes"][0]["fragment_invocations"] for f in live["frames"]}
