@@ -127,8 +127,8 @@ if [ "${LAYER_REPLAY:-1}" = 1 ]; then
   [ -x "$x/usr/bin/gfxrecon-replay" ] || for f in .xdebs/*.deb; do dpkg -x "$f" "$x"; done
   xlibs="$x/usr/lib/x86_64-linux-gnu:$x/lib/x86_64-linux-gnu"
   gfx() { env LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$@"; }
-  sponza="$(tally_sponza_path)"
-  play=("$tallyd" play --renderer "${LAYER_REPLAY_RENDERER:-deferred}" --scene "{\"gltf\": \"$sponza\"}"
+  if [ -n "${LAYER_REPLAY_SCENE:-}" ]; then scene="$LAYER_REPLAY_SCENE"; else scene="{\"gltf\": \"$(tally_sponza_path)\"}"; fi
+  play=("$tallyd" play --renderer "${LAYER_REPLAY_RENDERER:-deferred}" --scene "$scene"
         --resolution "$LAYER_RESOLUTION" --frames 40 --quiet)
   env VK_ADD_LAYER_PATH="$layer_dir" VK_INSTANCE_LAYERS=VK_LAYER_TALLY_counters TALLY_LAYER_OUTPUT="$logs/play-live.json" \
     TALLY_LAYER_SKIP_FRAMES=10 TALLY_LAYER_FRAMES=20 TALLY_LAYER_FRAME_SUBMITS=1 "${play[@]}" > "$logs/play-live.log" 2>&1 \
