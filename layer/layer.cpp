@@ -155,6 +155,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
     dev->d.CmdBeginRendering = reinterpret_cast<PFN_vkCmdBeginRendering>(gdpa(*device, "vkCmdBeginRenderingKHR"));
     dev->d.CmdEndRendering = reinterpret_cast<PFN_vkCmdEndRendering>(gdpa(*device, "vkCmdEndRenderingKHR"));
   }
+  if (dev->d.CmdBindVertexBuffers2 == nullptr) {
+    dev->d.CmdBindVertexBuffers2 =
+        reinterpret_cast<PFN_vkCmdBindVertexBuffers2>(gdpa(*device, "vkCmdBindVertexBuffers2EXT"));
+  }
   if (dev->d.QueueSubmit2 == nullptr) {
     dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
   }
@@ -1207,6 +1211,15 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
   auto it = dev->pipelines.find(u64(pipeline));
   bp.pipeline = it == dev->pipelines.end() ? nullptr : it->second;
   bp.dirty = true;
+  // A counted pipeline always finds the counter set bound: at the sink (never
+  // read) until a draw the layer sees binds the draw's region, so a draw
+  // command the layer does not intercept runs uncounted, not unbound.
+  if (bp.pipeline && bp.pipeline->counted && dev->counting) {
+    const uint32_t sink = 0;
+    dev->d.CmdBindDescriptorSets(cmd, point, bp.pipeline->layout, dev->counterSet, 1, &dev->counterDescriptorSet, 1,
+                                 &sink);
+    bp.boundOffset = 0;
+  }
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorSets(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout,
@@ -1227,6 +1240,17 @@ VKAPI_ATTR void VKAPI_CALL CmdBindVertexBuffers(VkCommandBuffer cmd, uint32_t fi
                                                 const VkBuffer* buffers, const VkDeviceSize* offsets) {
   DeviceState* dev = deviceOf(cmd);
   dev->d.CmdBindVertexBuffers(cmd, first, count, buffers, offsets);
+  std::lock_guard lock(dev->mutex);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) {
+    for (uint32_t i = 0; i < count; ++i) cb->vertexBuffers[first + i] = u64(buffers[i]);
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdBindVertexBuffers2(VkCommandBuffer cmd, uint32_t first, uint32_t count,
+                                                 const VkBuffer* buffers, const VkDeviceSize* offsets,
+                                                 const VkDeviceSize* sizes, const VkDeviceSize* strides) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdBindVertexBuffers2(cmd, first, count, buffers, offsets, sizes, strides);
   std::lock_guard lock(dev->mutex);
   if (CommandBufferState* cb = cbState(*dev, cmd)) {
     for (uint32_t i = 0; i < count; ++i) cb->vertexBuffers[first + i] = u64(buffers[i]);
@@ -1312,6 +1336,47 @@ VKAPI_ATTR void VKAPI_CALL CmdDrawIndexedIndirectCount(VkCommandBuffer cmd, VkBu
   DeviceState* dev = deviceOf(cmd);
   prepareDraw(*dev, cmd, false);
   dev->d.CmdDrawIndexedIndirectCount(cmd, buffer, offset, countBuffer, countOffset, maxCount, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawMultiEXT(VkCommandBuffer cmd, uint32_t count, const VkMultiDrawInfoEXT* info,
+                                           uint32_t instances, uint32_t firstInstance, uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawMultiEXT(cmd, count, info, instances, firstInstance, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawMultiIndexedEXT(VkCommandBuffer cmd, uint32_t count,
+                                                  const VkMultiDrawIndexedInfoEXT* info, uint32_t instances,
+                                                  uint32_t firstInstance, uint32_t stride, const int32_t* vertexOffset) {
+  DeviceState* dev = deviceOf(cmd);
+  uint64_t indices = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    indices += reinterpret_cast<const VkMultiDrawIndexedInfoEXT*>(reinterpret_cast<const uint8_t*>(info) +
+                                                                  size_t(i) * stride)->indexCount;
+  }
+  prepareDraw(*dev, cmd, false, indices * instances);
+  dev->d.CmdDrawMultiIndexedEXT(cmd, count, info, instances, firstInstance, stride, vertexOffset);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawMeshTasksEXT(VkCommandBuffer cmd, uint32_t x, uint32_t y, uint32_t z) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawMeshTasksEXT(cmd, x, y, z);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawMeshTasksIndirectEXT(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                                       uint32_t count, uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawMeshTasksIndirectEXT(cmd, buffer, offset, count, stride);
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdDrawMeshTasksIndirectCountEXT(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
+                                                            VkBuffer countBuffer, VkDeviceSize countOffset,
+                                                            uint32_t maxCount, uint32_t stride) {
+  DeviceState* dev = deviceOf(cmd);
+  prepareDraw(*dev, cmd, false);
+  dev->d.CmdDrawMeshTasksIndirectCountEXT(cmd, buffer, offset, countBuffer, countOffset, maxCount, stride);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdDispatch(VkCommandBuffer cmd, uint32_t x, uint32_t y, uint32_t z) {
@@ -1523,6 +1588,13 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CmdBindDescriptorSets)
   TALLY_DEVICE(CmdBindVertexBuffers)
   TALLY_DEVICE(CmdBindIndexBuffer)
+  TALLY_DEVICE(CmdBindVertexBuffers2)
+  TALLY_DEVICE_ALIAS(CmdBindVertexBuffers2EXT, CmdBindVertexBuffers2)
+  TALLY_DEVICE(CmdDrawMultiEXT)
+  TALLY_DEVICE(CmdDrawMultiIndexedEXT)
+  TALLY_DEVICE(CmdDrawMeshTasksEXT)
+  TALLY_DEVICE(CmdDrawMeshTasksIndirectEXT)
+  TALLY_DEVICE(CmdDrawMeshTasksIndirectCountEXT)
   TALLY_DEVICE(CmdDraw)
   TALLY_DEVICE(CmdDrawIndexed)
   TALLY_DEVICE(CmdDrawIndirect)

@@ -79,7 +79,9 @@ struct DeviceDispatch {
   X(CmdResetQueryPool) X(CmdBeginQuery) X(CmdEndQuery) X(CmdCopyQueryPoolResults) X(CreateQueryPool)         \
   X(DestroyQueryPool) X(QueueSubmit) X(QueueSubmit2) X(QueueWaitIdle) X(CreateFence) X(DestroyFence)         \
   X(WaitForFences) X(GetFenceStatus) X(ResetFences) X(CreateSwapchainKHR) X(GetSwapchainImagesKHR)           \
-  X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)
+  X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)    \
+  X(CmdBindVertexBuffers2) X(CmdDrawMeshTasksEXT) X(CmdDrawMeshTasksIndirectEXT)                              \
+  X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)
 #define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
 #undef TALLY_LAYER_MEMBER
