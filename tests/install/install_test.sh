@@ -26,7 +26,8 @@ check() {  # check DESCRIPTION COMMAND...
 cmake --install "$build" --prefix "$dir/prefix" > "$dir/install.log" 2>&1 \
   || { cat "$dir/install.log" >&2; exit 1; }
 for f in bin/tallyd bin/tally share/tally/shaders/forward.frag.glsl share/tally/web/index.html \
-         share/tally/migrations/0001_initial.sql lib/systemd/system/tallyd.service share/doc/tally/operating.md; do
+         share/tally/migrations/0001_initial.sql lib/systemd/system/tallyd.service share/doc/tally/operating.md \
+         share/vulkan/explicit_layer.d/VkLayer_tally_counters.json lib/libVkLayer_tally_counters.so; do
   check "installed $f" test -e "$dir/prefix/$f"
 done
 check "the unit runs the installed tallyd serve" \
@@ -56,6 +57,18 @@ echo "$spec" > spec.json
 unset TALLY_DATA_DIR TALLY_SHADER_DIR
 check "the copied tallyd captures from $PWD" "$tallyd" capture --spec spec.json --out result.json --quiet
 check "the result has a run" python3 -c 'import json,sys; r=json.load(open("result.json")); sys.exit(0 if r["runs"] else 1)'
+
+# An application under the copied tree's layer (its manifest names the
+# library relative to itself, so the copy works where the prefix is gone).
+if command -v vkcube > /dev/null && command -v Xvfb > /dev/null; then
+  echo '{"application":{"command":["vkcube","--c","8"],"frames":2,"skip_frames":2,"display":"xvfb"}}' > app.json
+  check "the copied tallyd captures vkcube under the copied layer" \
+    "$tallyd" capture --spec app.json --out app-result.json --quiet
+  check "the application's run counts texture reads" python3 -c 'import json,sys
+r = json.load(open("app-result.json"))["runs"][0]
+sys.exit(0 if r["renderer"] == "app:vkcube" and any(x["kind"] == "texture" and x["count"] > 0
+         for s in r["samples"] for p in s["passes"] for x in p["resources"]) else 1)'
+fi
 
 mv "$dir/copy/share/tally" "$dir/data"
 if "$tallyd" capture --spec spec.json --out gone.json --quiet 2> gone.log; then

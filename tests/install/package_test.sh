@@ -46,14 +46,16 @@ check "binaries are stripped" bash -c "! readelf -S '$dir/root/usr/bin/tallyd' |
 check "the unit runs /usr/bin/tallyd" \
   grep -qx "ExecStart=/usr/bin/tallyd serve --db /var/lib/tally/tally.db" "$dir/root/usr/lib/systemd/system/tallyd.service"
 # The Vulkan layer: its manifest where the loader looks for explicit layers,
-# naming the packaged library by its absolute path.
+# naming the packaged library relative to itself (the loader resolves it from
+# the manifest's folder: /usr/share/vulkan/explicit_layer.d/../../../lib/...).
 manifest="$dir/root/usr/share/vulkan/explicit_layer.d/VkLayer_tally_counters.json"
 check "packaged the layer's manifest" test -f "$manifest"
-layer_lib=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["layer"]["library_path"])' "$manifest" 2>/dev/null)
-check "the manifest names the packaged library by its absolute path ($layer_lib)" \
-  bash -c "[[ '$layer_lib' == /usr/lib/* ]] && test -f '$dir/root$layer_lib'"
+layer_rel=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["layer"]["library_path"])' "$manifest" 2>/dev/null)
+layer_lib=$(realpath -m "$dir/root/usr/share/vulkan/explicit_layer.d/$layer_rel")
+check "the manifest names the packaged library ($layer_rel)" \
+  bash -c "[[ '$layer_rel' != /* ]] && [[ '$layer_lib' == '$dir/root/usr/lib/'* ]] && test -f '$layer_lib'"
 check "the layer exports only the loader's entry points" bash -c \
-  "[ \"\$(nm -D --defined-only '$dir/root$layer_lib' | awk '\$2 == \"T\" { print \$3 }' | sort | tr '\n' ' ')\" = 'vkGetDeviceProcAddr vkGetInstanceProcAddr vkNegotiateLoaderLayerInterfaceVersion ' ]"
+  "[ \"\$(nm -D --defined-only '$layer_lib' | awk '\$2 == \"T\" { print \$3 }' | sort | tr '\n' ' ')\" = 'vkGetDeviceProcAddr vkGetInstanceProcAddr vkNegotiateLoaderLayerInterfaceVersion ' ]"
 for f in usr/share/tally/shaders/forward.frag.glsl usr/share/tally/web/index.html usr/share/doc/tally/operating.md; do
   check "packaged $f" test -f "$dir/root/$f"
 done
