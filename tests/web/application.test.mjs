@@ -95,6 +95,38 @@ describe('an application captured under the layer', () => {
     }
 
     // The captures list names the application.
+    {
+      // The application form: a command with a quoted argument, frames, a
+      // name; the job runs and stores app:NAME. A bad field is named by the server.
+      const { page, errors, close } = await open('#/capture');
+      await page.locator('[data-box="application"] summary').click();
+      const form = page.locator('form.app-form');
+      await form.locator('[name="application.command"]').fill(`${kFakeApp} --c "100"`);
+      await form.locator('[name="application.frames"]').fill('2');
+      await form.locator('[name="application.name"]').fill('formcube');
+      await form.locator('button[type="submit"]').click();
+      await page.waitForFunction(() => /done/.test(document.querySelector('.progress, [data-job]')?.textContent || ''), null, { timeout: kViewMs }).catch(() => {});
+      const formRuns = await (async () => {
+        for (let i = 0; i < 100; i++) {
+          const r = (await daemon.get('/runs?renderer=app:formcube')).runs;
+          if (r.length) return r;
+          await new Promise((f) => setTimeout(f, 200));
+        }
+        return [];
+      })();
+      assert.equal(formRuns.length, 1, 'the form\'s capture stored app:formcube');
+      assert.equal(formRuns[0].sample_count, 2);
+      await form.locator('[name="application.frames"]').fill('0');
+      await form.locator('button[type="submit"]').click();
+      await page.locator('form.app-form .form-error .panel.error').waitFor({ timeout: kViewMs });
+      assert.equal(await form.locator('.form-error [data-field]').getAttribute('data-field'), 'application.frames');
+      assert.equal(await form.locator('[data-field="application.frames"] input').getAttribute('aria-invalid'), 'true');
+      await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, 'capture-application-form.png'), fullPage: true });
+      // The refused POST is logged by the browser itself: the only error allowed.
+      assert.deepEqual(errors.filter((e) => !/status of 400/.test(e)), [], 'console errors');
+      await close();
+    }
+    // The captures list names the application.
     const { page, errors, close } = await open('#/capture');
     assert.match(await page.locator(`tr[data-capture="${job.id}"]`).textContent(), /application .*fake_app\.sh --c 100/);
     assert.deepEqual(errors, [], 'console errors');

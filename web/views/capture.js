@@ -118,6 +118,73 @@ function sweepForm(onSubmit) {
   return form;
 }
 
+// "vkcube --c 100" -> ["vkcube", "--c", "100"]; single or double quotes keep spaces.
+export function splitCommand(text) {
+  const words = [];
+  let word = null, quote = null;
+  for (const c of text) {
+    if (quote) {
+      if (c === quote) quote = null;
+      else word += c;
+    } else if (c === '"' || c === "'") {
+      quote = c;
+      word = word ?? '';
+    } else if (/\s/.test(c)) {
+      if (word !== null) words.push(word);
+      word = null;
+    } else {
+      word = (word ?? '') + c;
+    }
+  }
+  if (quote) throw new Error(`unclosed ${quote}`);
+  if (word !== null) words.push(word);
+  return words;
+}
+
+// An application (or a GFXReconstruct replay) under the Vulkan layer
+// (docs/layer.md): the spec from fields; the server checks every one.
+function appForm(onSubmit) {
+  const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
+  const command = h('input', { name: 'application.command', placeholder: 'vkcube --c 100', size: 40, spellcheck: 'false' });
+  const replay = h('input', { name: 'replay', placeholder: '/srv/traces/scene.gfxr', size: 40, spellcheck: 'false' });
+  const frames = h('input', { name: 'application.frames', type: 'number', min: 1, max: 1000, value: 10 });
+  const skip = h('input', { name: 'application.skip_frames', type: 'number', min: 0, value: 0 });
+  const submits = h('input', { name: 'application.frame_submits', type: 'number', min: 0, value: 0 });
+  const display = h('select', { name: 'application.display' }, h('option', { value: 'none' }, 'none'), h('option', { value: 'xvfb' }, 'xvfb (a virtual X server)'));
+  const name = h('input', { name: 'application.name', placeholder: 'from the application', size: 16 });
+  const form = h('form', { class: 'app-form', novalidate: true, 'aria-label': 'New application capture' },
+    field('Command', command, 'the program and its arguments, run on the daemon\'s host (the daemon needs --allow-applications)'),
+    field('Or replay', replay, 'a GFXReconstruct capture file on the daemon\'s host, replayed by gfxrecon-replay'),
+    h('div', { class: 'form-grid' },
+      field('Frames', frames), field('Skip frames', skip, 'frames to let pass first'),
+      field('Submissions per frame', submits, '0: a frame ends at present; N: for applications that never present'),
+      field('Display', display), field('Name', name)),
+    h('button', { type: 'submit' }, 'Start'),
+    h('div', { class: 'form-error', role: 'alert' }));
+  form.addEventListener('submit', (e) => {
+    e.preventDefault();
+    clearError(form);
+    let argv;
+    try {
+      argv = splitCommand(command.value.trim());
+    } catch (error) {
+      form.querySelector('.form-error').replaceChildren(h('div', { class: 'panel error', dataset: { code: 'bad_command' } },
+        h('strong', {}, 'Command: '), h('span', { class: 'message' }, error.message)));
+      return;
+    }
+    const common = { frames: Number(frames.value), skip_frames: Number(skip.value), display: display.value };
+    if (replay.value.trim() && !argv.length) {
+      onSubmit({ replay: replay.value.trim(), ...common });
+      return;
+    }
+    const application = { command: argv, ...common };
+    if (Number(submits.value) > 0) application.frame_submits = Number(submits.value);
+    if (name.value.trim()) application.name = name.value.trim();
+    onSubmit({ application });
+  });
+  return form;
+}
+
 function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
   const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
   const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
@@ -169,7 +236,10 @@ function showError(form, error) {
     field ? h('div', {}, 'Field: ', h('code', { class: 'field-name' }, field)) : null));
   // The sweep form has one control, the whole spec: any field is in it. (The
   // error panel carries data-field too: it is not a holder.)
-  const holder = form.querySelector(`[data-field="${CSS.escape(top)}"]:not(.panel)`) || (field ? form.querySelector('[data-field="sweep_spec"]') : null);
+  // The application form names its controls by the whole field (application.frames).
+  const exact = field.replace(/\[\d+\]$/, '');
+  const holder = (exact && form.querySelector(`[data-field="${CSS.escape(exact)}"]:not(.panel)`)) ||
+    form.querySelector(`[data-field="${CSS.escape(top)}"]:not(.panel)`) || (field ? form.querySelector('[data-field="sweep_spec"]') : null);
   if (holder) {
     holder.querySelector('input, select, textarea')?.setAttribute('aria-invalid', 'true');
     holder.append(h('span', { class: 'field-error' }, error.message));
@@ -306,7 +376,10 @@ export async function render(page, { signal }) {
   const form = captureForm(renderers.renderers, renderers.options || [], scenes, (spec) => start(spec, form),
     renderers.workloads || []);
   const sweeps = sweepForm((spec) => start(spec, sweeps));
+  const apps = appForm((spec) => start(spec, apps));
   page.append(h('h1', {}, 'New capture'), form,
+    h('details', { class: 'app-box', dataset: { box: 'application' } },
+      h('summary', {}, h('h2', { class: 'inline' }, 'Or profile an application under the Vulkan layer')), apps),
     h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a spec as JSON: a stability sweep, an application, a replay')), sweeps),
     progress, h('h2', {}, 'Captures'), listStatus, list);
   drawList(first.captures);
