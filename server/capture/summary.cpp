@@ -113,10 +113,12 @@ std::string summarize(const nlohmann::json& result, const std::string& baseline)
       std::string renderer = run->at("renderer");
       const Totals& t = totals[renderer];
       auto ratio = [](double value, double reference) { return reference > 0 ? value / reference : 0.0; };
-      out += format("  %-18s %12s %8.2f %12s %8.2f %12s %9.2f %10.3f %8.2fx\n", renderer.c_str(),
+      // An application's frames are timed under the layer only: no overhead to state.
+      const std::string overhead = t.overhead > 0 ? format("%8.2fx", t.overhead) : format("%9s", "-");
+      out += format("  %-18s %12s %8.2f %12s %8.2f %12s %9.2f %10.3f %s\n", renderer.c_str(),
                     human(t.imageRead).c_str(), ratio(t.imageRead, b.imageRead), human(t.bufferRead).c_str(),
                     ratio(t.bufferRead, b.bufferRead), human(t.written).c_str(), ratio(t.written, b.written), t.ms,
-                    t.overhead);
+                    overhead.c_str());
     }
   }
   // Where the capture's time went (result "timing"), largest first.
