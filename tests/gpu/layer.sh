@@ -169,6 +169,9 @@ if [ "${LAYER_REPLAY:-1}" = 1 ]; then
 fi
 
 python3 tests/gpu/layer_summary.py "$out" | tee -a "$summary"
+# Results name files relative to the repository, not the machine's folders.
+for f in "$out"/*.json; do [ -f "$f" ] && sed -i "s|$PWD/||g" "$f"; done
+for f in "$out"/*.json.gz; do [ -f "$f" ] && { zcat "$f" | sed "s|$PWD/||g" | gzip > "$f.tmp" && mv "$f.tmp" "$f"; }; done
 rm -rf "$logs"/shots-* "${trace:-}"
 tar -czf "$out/layer-logs.tar.gz" -C "$out" layer-logs && rm -rf "$logs"
 exit "$status"
