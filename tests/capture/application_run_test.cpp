@@ -24,6 +24,7 @@
 #include "jobs/child_process.hpp"
 #include "service/service.hpp"
 #include "store/store.hpp"
+#include "read_file.hpp"
 
 namespace {
 
@@ -31,15 +32,10 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace std::chrono_literals;
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 // NAME=VALUE lines (the fake application's record) as a map.
 std::map<std::string, std::string> record(const fs::path& path) {
   std::map<std::string, std::string> out;
-  std::istringstream in(slurp(path));
+  std::istringstream in(tally::test::readFile(path));
   for (std::string line; std::getline(in, line);) {
     size_t eq = line.find('=');
     if (eq != std::string::npos) out[line.substr(0, eq)] = line.substr(eq + 1);
@@ -94,7 +90,7 @@ class ApplicationCapture : public ::testing::Test {
     c.rc = ran->end == tally::jobs::ChildResult::End::Exited ? ran->exitCode : -1;
     c.err = ran->stderrTail;
     c.elapsed = ran->elapsed;
-    if (fs::exists(out)) c.result = json::parse(slurp(out), nullptr, false);
+    if (fs::exists(out)) c.result = json::parse(tally::test::readFile(out), nullptr, false);
     return c;
   }
 

@@ -21,19 +21,13 @@
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
 #include "spirv/arith.hpp"
+#include "read_file.hpp"
 
 namespace tally {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class CaptureRun : public ::testing::Test {
  protected:
@@ -62,8 +56,8 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
                {"counted_frames", 2},
                {"lights", 4}};
   fs::path out = dir_ / "result.json";
-  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
-  json result = json::parse(slurp(out));
+  ASSERT_EQ(capture(spec, out.string()), 0) << test::readFile(dir_ / "err");
+  json result = json::parse(test::readFile(out));
   ASSERT_TRUE(result.contains("device"));
   EXPECT_TRUE(result["device"].contains("name"));
   ASSERT_TRUE(result.contains("shaders"));
@@ -163,8 +157,8 @@ TEST_F(CaptureRun, VariantsCarryOptionsAndTheirImageError) {
                {"frames", 1},
                {"lights", 4}};
   fs::path out = dir_ / "result.json";
-  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
-  json result = json::parse(slurp(out));
+  ASSERT_EQ(capture(spec, out.string()), 0) << test::readFile(dir_ / "err");
+  json result = json::parse(test::readFile(out));
   ASSERT_EQ(result["runs"].size(), 3u);
   const json& plain = result["runs"][0];
   const json& own = result["runs"][1];
@@ -255,8 +249,8 @@ TEST_F(CaptureRun, RooflinePerPass) {
                {"counted_frames", 1},
                {"lights", 4}};
   fs::path out = dir_ / "roofline.json";
-  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
-  json result = json::parse(slurp(out));
+  ASSERT_EQ(capture(spec, out.string()), 0) << test::readFile(dir_ / "err");
+  json result = json::parse(test::readFile(out));
   const json& c = result["device"]["ceilings"];
   ASSERT_TRUE(c.is_object()) << result["device"].dump();
   const double peakBandwidth = c["bandwidth_bytes_per_s"].get<double>();
@@ -304,8 +298,8 @@ TEST_F(CaptureRun, RooflinePerPass) {
   // "ceilings": false skips them: no ceilings, arithmetic still estimated,
   // fractions of peak null.
   spec["ceilings"] = false;
-  ASSERT_EQ(capture(spec, out.string()), 0) << slurp(dir_ / "err");
-  result = json::parse(slurp(out));
+  ASSERT_EQ(capture(spec, out.string()), 0) << test::readFile(dir_ / "err");
+  result = json::parse(test::readFile(out));
   EXPECT_FALSE(result["device"].contains("ceilings"));
   EXPECT_FALSE(result["timing"].contains("ceilings"));
   for (const auto& pass : result["runs"][0]["samples"][0]["passes"]) {
@@ -319,7 +313,7 @@ TEST_F(CaptureRun, BadSpecNamesTheFieldAndWritesNothing) {
   json spec = {{"renderers", {"forward", "warp"}}, {"resolutions", {{64, 36}}}};
   fs::path out = dir_ / "bad.json";
   EXPECT_EQ(capture(spec, out.string()), 1);
-  std::string err = slurp(dir_ / "err");
+  std::string err = test::readFile(dir_ / "err");
   EXPECT_NE(err.find("renderers[1]: unknown renderer 'warp'"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
 }

@@ -15,19 +15,13 @@
 
 #include "renderers/renderer.hpp"
 #include "shared.h"
+#include "read_file.hpp"
 
 namespace tally {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 // A shell word.
 std::string quote(const std::string& s) {
@@ -61,8 +55,8 @@ class PlayCommand : public ::testing::Test {
     cmd += " >" + (dir_ / "out").string() + " 2>" + (dir_ / "err").string();
     Run r;
     r.code = WEXITSTATUS(std::system(cmd.c_str()));
-    r.out = slurp(dir_ / "out");
-    r.err = slurp(dir_ / "err");
+    r.out = test::readFile(dir_ / "out");
+    r.err = test::readFile(dir_ / "err");
     return r;
   }
 

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "fake_tallyd.hpp"
+#include "read_file.hpp"
 
 namespace tally::client {
 namespace {
@@ -24,13 +25,6 @@ struct Outcome {
   int rc = -1;
   std::string out, err;
 };
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class TallyCli : public ::testing::Test {
  protected:
@@ -51,8 +45,8 @@ class TallyCli : public ::testing::Test {
     int status = std::system(cmd.c_str());
     Outcome r;
     r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(dir_ / "out");
-    r.err = slurp(dir_ / "err");
+    r.out = tally::test::readFile(dir_ / "out");
+    r.err = tally::test::readFile(dir_ / "err");
     if (std::getenv("TALLY_TEST_PRINT")) std::cout << "$ tally " << args << "\n" << r.out << r.err;
     return r;
   }
@@ -295,7 +289,7 @@ TEST_F(TallyCli, ExportWritesFile) {
   auto out = dir_ / "runs.csv";
   Outcome r = tally("--server " + fake.url() + " export --format csv --capture 7 -o '" + out.string() + "'");
   ASSERT_EQ(r.rc, 0) << r.err;
-  EXPECT_EQ(slurp(out), "run_id,renderer,bytes\n12,deferred,3145728\n");
+  EXPECT_EQ(tally::test::readFile(out), "run_id,renderer,bytes\n12,deferred,3145728\n");
   EXPECT_EQ(r.out, "");
   int files = 0;
   for (const auto& e : fs::directory_iterator(dir_))

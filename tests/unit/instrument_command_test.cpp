@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "spirv_test_util.hpp"
+#include "read_file.hpp"
 
 namespace tally {
 namespace {
@@ -20,13 +21,6 @@ struct CommandResult {
   std::string out;
   std::string err;
 };
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 class InstrumentCommand : public ::testing::Test {
  protected:
@@ -40,7 +34,7 @@ class InstrumentCommand : public ::testing::Test {
     std::string cmd = std::string(TALLYD_PATH) + " instrument " + args + " >" + (dir_ / "out").string() + " 2>" +
                       (dir_ / "err").string();
     int status = std::system(cmd.c_str());
-    return {WEXITSTATUS(status), slurp(dir_ / "out"), slurp(dir_ / "err")};
+    return {WEXITSTATUS(status), test::readFile(dir_ / "out"), test::readFile(dir_ / "err")};
   }
 
   fs::path write(const std::string& name, const std::vector<uint32_t>& words) {
@@ -75,7 +69,7 @@ void main() { color = texture(tex, vec2(0.5)); }
       }
     }
     EXPECT_TRUE(found);
-    auto outBytes = slurp(dir_ / "out.spv");
+    auto outBytes = test::readFile(dir_ / "out.spv");
     EXPECT_GT(outBytes.size(), words.size() * 4);
     EXPECT_FALSE(fs::exists(dir_ / "out.spv.tmp"));
   }
