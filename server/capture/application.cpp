@@ -276,29 +276,14 @@ class XServer {
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
-    const pid_t parent = getpid();
-    pid_t pid = fork();
-    if (pid < 0) {
-      int e = errno;
+    // In tallyd's process group (see above); its stdout and stderr go to the log.
+    auto spawned = jobs::spawnProcess(argv, {logPath, -1, false, fds[1], kDisplayFd, nullptr});
+    if (!spawned) {
       close(fds[0]);
       close(fds[1]);
-      return makeError(std::string("fork: ") + std::strerror(e));
+      return makeError("Xvfb: " + spawned.error());
     }
-    if (pid == 0) {
-      // Only async-signal-safe calls until exec.
-      prctl(PR_SET_PDEATHSIG, SIGKILL);
-      if (getppid() != parent) _exit(127);
-      int in = open("/dev/null", O_RDONLY);
-      int out = open(logPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (in < 0 || out < 0 || dup2(in, STDIN_FILENO) < 0 || dup2(out, STDOUT_FILENO) < 0 || dup2(out, STDERR_FILENO) < 0) _exit(127);
-      if (fds[1] == kDisplayFd) {
-        fcntl(kDisplayFd, F_SETFD, 0);
-      } else if (dup2(fds[1], kDisplayFd) < 0) {
-        _exit(127);
-      }
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
+    const pid_t pid = *spawned;
     close(fds[1]);
     auto server = std::unique_ptr<XServer>(new XServer(pid));
     // The display number, one line, once the server accepts connections.

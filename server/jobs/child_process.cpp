@@ -24,15 +24,18 @@ std::string lastLine(const std::string& text) {
   return text.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
 }
 
+}  // namespace
+
 // fork + exec rather than posix_spawn, for the one thing posix_spawn cannot
 // do: PR_SET_PDEATHSIG. A daemon killed with -9 runs no cleanup, and its
 // capture child would otherwise render on to its deadline, holding the GPU
 // while the restarted daemon retries the same job. Between fork and exec the
 // child calls only async-signal-safe functions (the daemon is multithreaded).
 // An exec failure comes back as an errno through a close-on-exec pipe.
-Result<pid_t> spawnChild(const std::vector<char*>& argv, char** envp, const std::string& stdoutPath, int stderrFd) {
+Result<pid_t> spawnProcess(const std::vector<char*>& argv, const SpawnOptions& options) {
   int execPipe[2];
   if (pipe2(execPipe, O_CLOEXEC) != 0) return makeError(std::string("pipe: ") + std::strerror(errno));
+  char** envp = options.envp != nullptr ? options.envp : environ;
   const pid_t parent = getpid();
   pid_t pid = fork();
   if (pid < 0) {
@@ -43,14 +46,21 @@ Result<pid_t> spawnChild(const std::vector<char*>& argv, char** envp, const std:
   }
   if (pid == 0) {
     // Its own process group, so that a deadline kills the child's children too.
-    setpgid(0, 0);
+    if (options.ownProcessGroup) setpgid(0, 0);
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (getppid() != parent) _exit(127);  // the daemon died before prctl took effect
     int in = open("/dev/null", O_RDONLY);
-    int out = open(stdoutPath.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int out = open(options.stdoutPath.empty() ? "/dev/null" : options.stdoutPath.c_str(),
+                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err = options.stderrFd >= 0 ? options.stderrFd : out;
     int e = 0;
     if (in < 0 || out < 0 || dup2(in, STDIN_FILENO) < 0 || dup2(out, STDOUT_FILENO) < 0 ||
-        dup2(stderrFd, STDERR_FILENO) < 0) {
+        dup2(err, STDERR_FILENO) < 0) {
+      e = errno;
+    } else if (options.passFd >= 0 && options.passFd == options.passAs &&
+               fcntl(options.passAs, F_SETFD, 0) < 0) {  // already there: keep it across exec
+      e = errno;
+    } else if (options.passFd >= 0 && options.passFd != options.passAs && dup2(options.passFd, options.passAs) < 0) {
       e = errno;
     } else {
       execve(argv[0], argv.data(), envp);
@@ -73,6 +83,8 @@ Result<pid_t> spawnChild(const std::vector<char*>& argv, char** envp, const std:
   }
   return pid;
 }
+
+namespace {
 
 // The parent's environment with `overrides` ("NAME=VALUE") set over it, in
 // the parent's order and then the new names'; a bare "NAME" removes NAME
@@ -141,7 +153,7 @@ Result<ChildResult> runChild(const ChildOptions& options) {
     envp.push_back(nullptr);
   }
   auto start = std::chrono::steady_clock::now();
-  auto spawned = spawnChild(argv, envp.empty() ? environ : envp.data(), out, errPipe[1]);
+  auto spawned = spawnProcess(argv, {out, errPipe[1], true, -1, 3, envp.empty() ? environ : envp.data()});
   close(errPipe[1]);
   if (!spawned) {
     close(errPipe[0]);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/types.h>
+
 #include "common/result.hpp"
 
 namespace tally::jobs {
@@ -52,5 +54,19 @@ struct ChildResult {
 // even by kill -9 of the whole process: call it from a thread that lives at
 // least as long as the child should.
 Result<ChildResult> runChild(const ChildOptions& options);
+
+// How spawnProcess starts a program (what runChild uses, for a caller that
+// keeps the child itself, such as an X server for an application's capture).
+struct SpawnOptions {
+  std::string stdoutPath;       // "" : /dev/null
+  int stderrFd = -1;            // -1: the stdout file
+  bool ownProcessGroup = true;  // false: the caller's group (its group's kill reaches the child)
+  int passFd = -1;              // a descriptor the child gets as passAs (e.g. Xvfb's -displayfd)
+  int passAs = 3;
+  char** envp = nullptr;        // nullptr: this process's environment
+};
+// fork + exec with PR_SET_PDEATHSIG (the child dies with its parent, even on
+// kill -9); stdin is /dev/null. An exec failure is the error, with its errno's text.
+Result<pid_t> spawnProcess(const std::vector<char*>& argv, const SpawnOptions& options);
 
 }  // namespace tally::jobs
