@@ -301,7 +301,6 @@ VKAPI_ATTR VkResult VKAPI_CALL SetDebugUtilsObjectNameEXT(VkDevice device, const
   const std::string name = info->pObjectName != nullptr ? info->pObjectName : "";
   if (auto it = dev->resources.find(info->objectHandle); it != dev->resources.end()) it->second.name = name;
   if (auto it = dev->shaders.find(info->objectHandle); it != dev->shaders.end()) it->second.name = name;
-  if (auto it = dev->pipelines.find(info->objectHandle); it != dev->pipelines.end()) it->second->name = name;
   return result;
 }
 
@@ -403,22 +402,6 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateFramebuffer(VkDevice device, const VkFrameb
 
 // ---------------------------------------------------------------- descriptors
 
-VKAPI_ATTR VkResult VKAPI_CALL CreateDescriptorSetLayout(VkDevice device, const VkDescriptorSetLayoutCreateInfo* info,
-                                                         const VkAllocationCallbacks* alloc,
-                                                         VkDescriptorSetLayout* layout) {
-  DeviceState* dev = deviceOf(device);
-  VkResult result = dev->d.CreateDescriptorSetLayout(device, info, alloc, layout);
-  if (result != VK_SUCCESS) return result;
-  auto state = std::make_shared<DescriptorSetLayoutInfo>();
-  for (uint32_t i = 0; i < info->bindingCount; ++i) {
-    const auto& b = info->pBindings[i];
-    state->bindings[b.binding] = {b.descriptorType, b.descriptorCount};
-  }
-  std::lock_guard lock(dev->mutex);
-  dev->setLayouts[u64(*layout)] = std::move(state);
-  return result;
-}
-
 VKAPI_ATTR VkResult VKAPI_CALL AllocateDescriptorSets(VkDevice device, const VkDescriptorSetAllocateInfo* info,
                                                       VkDescriptorSet* sets) {
   DeviceState* dev = deviceOf(device);
@@ -426,9 +409,7 @@ VKAPI_ATTR VkResult VKAPI_CALL AllocateDescriptorSets(VkDevice device, const VkD
   if (result != VK_SUCCESS) return result;
   std::lock_guard lock(dev->mutex);
   for (uint32_t i = 0; i < info->descriptorSetCount; ++i) {
-    DescriptorSetState state;
-    if (auto it = dev->setLayouts.find(u64(info->pSetLayouts[i])); it != dev->setLayouts.end()) state.layout = it->second;
-    dev->sets[u64(sets[i])] = std::move(state);
+    dev->sets[u64(sets[i])] = DescriptorSetState{};
     dev->poolSets[u64(info->descriptorPool)].insert(u64(sets[i]));
   }
   return result;
@@ -611,8 +592,6 @@ VKAPI_ATTR void VKAPI_CALL DestroyShaderModule(VkDevice device, VkShaderModule m
 VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPipelineLayoutCreateInfo* info,
                                                     const VkAllocationCallbacks* alloc, VkPipelineLayout* layout) {
   DeviceState* dev = deviceOf(device);
-  PipelineLayoutInfo state;
-  state.appSets = info->setLayoutCount;
   std::vector<VkDescriptorSetLayout> sets;
   {
     std::lock_guard lock(dev->mutex);
@@ -621,31 +600,35 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
       sets.resize(dev->counterSet, dev->emptySetLayout);
       sets.push_back(dev->counterSetLayout);
     } else if (dev->counting) {
-      state.refused = "a pipeline layout uses " + std::to_string(info->setLayoutCount) +
-                      " descriptor sets; the device allows " +
-                      std::to_string(dev->properties.limits.maxBoundDescriptorSets) +
-                      " and the layer needs set " + std::to_string(dev->counterSet) +
-                      ": its pipelines run unchanged, uncounted";
-      dev->notes.insert(state.refused);
+      const std::string refused = "a pipeline layout uses " + std::to_string(info->setLayoutCount) +
+                                  " descriptor sets; the device allows " +
+                                  std::to_string(dev->properties.limits.maxBoundDescriptorSets) +
+                                  " and the layer needs set " + std::to_string(dev->counterSet) +
+                                  ": its pipelines run unchanged, uncounted";
+      dev->notes.insert(refused);
       ++dev->layoutsRefused;
-      log(state.refused);
+      log(refused);
     }
   }
-  VkResult result;
-  if (!sets.empty()) {
-    VkPipelineLayoutCreateInfo extended = *info;
-    extended.setLayoutCount = uint32_t(sets.size());
-    extended.pSetLayouts = sets.data();
-    result = dev->d.CreatePipelineLayout(device, &extended, alloc, layout);
-    state.hasCounterSet = result == VK_SUCCESS;
-  } else {
-    result = dev->d.CreatePipelineLayout(device, info, alloc, layout);
-  }
+  if (sets.empty()) return dev->d.CreatePipelineLayout(device, info, alloc, layout);
+  VkPipelineLayoutCreateInfo extended = *info;
+  extended.setLayoutCount = uint32_t(sets.size());
+  extended.pSetLayouts = sets.data();
+  VkResult result = dev->d.CreatePipelineLayout(device, &extended, alloc, layout);
   if (result != VK_SUCCESS) return result;
-  state.extended = *layout;
   std::lock_guard lock(dev->mutex);
-  dev->pipelineLayouts[u64(*layout)] = state;
+  dev->countedLayouts.insert(u64(*layout));
   return result;
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyPipelineLayout(VkDevice device, VkPipelineLayout layout,
+                                                const VkAllocationCallbacks* alloc) {
+  DeviceState* dev = deviceOf(device);
+  {
+    std::lock_guard lock(dev->mutex);
+    dev->countedLayouts.erase(u64(layout));  // a later layout may reuse the handle
+  }
+  dev->d.DestroyPipelineLayout(device, layout, alloc);
 }
 
 spirv::Stage stageOf(VkShaderStageFlagBits stage) {
@@ -728,8 +711,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
 }
 
 bool layoutCounted(DeviceState& dev, VkPipelineLayout layout) {
-  auto it = dev.pipelineLayouts.find(u64(layout));
-  return it != dev.pipelineLayouts.end() && it->second.hasCounterSet;
+  return dev.countedLayouts.count(u64(layout)) > 0;
 }
 
 bool isLibraryPipeline(const void* next, VkPipelineCreateFlags flags) {
@@ -767,7 +749,6 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
-      state->bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
       state->layout = infos[i].layout;
       if (infos[i].pVertexInputState != nullptr) {
         for (uint32_t a = 0; a < infos[i].pVertexInputState->vertexAttributeDescriptionCount; ++a) {
@@ -802,7 +783,6 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
-      state->bindPoint = VK_PIPELINE_BIND_POINT_COMPUTE;
       state->layout = infos[i].layout;
       if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
         std::vector<VkPipelineShaderStageCreateInfo> stage = {infos[i].stage};
@@ -1543,7 +1523,6 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CreateRenderPass2)
   TALLY_DEVICE_ALIAS(CreateRenderPass2KHR, CreateRenderPass2)
   TALLY_DEVICE(CreateFramebuffer)
-  TALLY_DEVICE(CreateDescriptorSetLayout)
   TALLY_DEVICE(AllocateDescriptorSets)
   TALLY_DEVICE(FreeDescriptorSets)
   TALLY_DEVICE(ResetDescriptorPool)
@@ -1556,6 +1535,7 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CreateShaderModule)
   TALLY_DEVICE(DestroyShaderModule)
   TALLY_DEVICE(CreatePipelineLayout)
+  TALLY_DEVICE(DestroyPipelineLayout)
   TALLY_DEVICE(CreateGraphicsPipelines)
   TALLY_DEVICE(CreateComputePipelines)
   TALLY_DEVICE(DestroyPipeline)

@@ -118,26 +118,14 @@ struct Bound {
   bool operator==(const Bound&) const = default;
 };
 
-struct DescriptorSetLayoutInfo {
-  std::map<uint32_t, std::pair<VkDescriptorType, uint32_t>> bindings;  // binding -> type, count
-};
 struct DescriptorSetState {
-  std::shared_ptr<DescriptorSetLayoutInfo> layout;
   std::map<uint32_t, std::vector<Bound>> bindings;
-};
-
-struct PipelineLayoutInfo {
-  VkPipelineLayout extended = VK_NULL_HANDLE;  // what the application holds (with the counter set) or its own
-  bool hasCounterSet = false;
-  uint32_t appSets = 0;
-  std::string refused;  // why it was not extended
 };
 
 // A pipeline the layer instrumented: its sites, with slots relative to the
 // pipeline's region of the counter buffer.
 struct PipelineInfo {
   uint64_t handle = 0;
-  VkPipelineBindPoint bindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   bool counted = false;
   uint32_t slots = 0;
@@ -145,7 +133,6 @@ struct PipelineInfo {
   std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
   std::map<uint32_t, uint32_t> vertexLocationBinding;  // attribute Location -> vertex buffer binding
   bool hasFragment = false;
-  std::string name;
 };
 
 // The resource behind each slot of a region, resolved at the draw.
@@ -283,9 +270,8 @@ struct DeviceState {
 
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
-  std::unordered_map<uint64_t, PipelineLayoutInfo> pipelineLayouts;  // keyed by the handle the application holds
+  std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
   std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> pipelines;
-  std::unordered_map<uint64_t, std::shared_ptr<DescriptorSetLayoutInfo>> setLayouts;
   std::unordered_map<uint64_t, DescriptorSetState> sets;
   std::unordered_map<uint64_t, std::set<uint64_t>> poolSets;
   std::unordered_map<uint64_t, std::vector<VkDescriptorUpdateTemplateEntry>> templates;
