@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 
 // The benchmark's own queries: fixed SQL, one value per row.
 template <class T>
-std::vector<T> column(sqlite3* db, const char* sql, T (*read)(const store::Statement&)) {
+std::vector<T> column(store::Connection& db, const char* sql, T (*read)(const store::Statement&)) {
   store::Statement query(db, sql);
   std::vector<T> out;
   while (query.step()) out.push_back(read(query));
@@ -32,9 +32,9 @@ std::pair<std::string, uint64_t> nameAndBytes(const store::Statement& s) {
   return {s.getText(0), static_cast<uint64_t>(s.getInt(1))};
 }
 
-int64_t sampleCount(sqlite3* db) { return column(db, "SELECT COUNT(*) FROM samples", intAt0).at(0); }
+int64_t sampleCount(store::Connection& db) { return column(db, "SELECT COUNT(*) FROM samples", intAt0).at(0); }
 
-std::vector<std::pair<std::string, int64_t>> rowCounts(sqlite3* db) {
+std::vector<std::pair<std::string, int64_t>> rowCounts(store::Connection& db) {
   std::vector<std::pair<std::string, int64_t>> out;
   for (const char* table :
        {"jobs", "devices", "runs", "run_resources", "samples", "passes", "counters", "screenshots"}) {
@@ -46,17 +46,27 @@ std::vector<std::pair<std::string, int64_t>> rowCounts(sqlite3* db) {
 
 // The largest tables and indexes by the pages they take; empty when this
 // SQLite lacks the dbstat table.
-std::vector<std::pair<std::string, uint64_t>> largestObjects(sqlite3* db) {
+std::vector<std::pair<std::string, uint64_t>> largestObjects(store::Connection& db) {
   try {
+    if (db.engine() == store::Engine::Postgres) {
+      return column(db,
+                    "SELECT c.relname, pg_relation_size(c.oid) FROM pg_class c JOIN pg_namespace n ON "
+                    "n.oid = c.relnamespace WHERE n.nspname = current_schema() AND c.relkind IN ('r', 'i') "
+                    "ORDER BY 2 DESC LIMIT 6",
+                    nameAndBytes);
+    }
     return column(db, "SELECT name, SUM(pgsize) FROM dbstat GROUP BY name ORDER BY 2 DESC LIMIT 6",
                   nameAndBytes);
-  } catch (const store::SqliteError&) {
+  } catch (const store::DbError&) {
     return {};
   }
 }
 
-uint64_t databaseBytes(sqlite3* db, const std::string& path) {
-  store::exec(db, "PRAGMA wal_checkpoint(TRUNCATE)");
+uint64_t databaseBytes(store::Connection& db, const std::string& path) {
+  if (db.engine() == store::Engine::Postgres) {
+    return static_cast<uint64_t>(column(db, "SELECT pg_database_size(current_database())", intAt0).at(0));
+  }
+  db.exec("PRAGMA wal_checkpoint(TRUNCATE)");
   uint64_t bytes = 0;
   for (const char* suffix : {"", "-wal"}) {
     std::error_code ec;
@@ -72,7 +82,7 @@ Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::st
                                        store::Store& writer) {
   DatabaseReport out;
   out.path = path;
-  bool empty = sampleCount(writer.handle()) == 0;
+  bool empty = sampleCount(writer.connection()) == 0;
   if (!empty && !options.reuse) return makeError(path + " already holds samples; pass --reuse, or remove it");
   if (empty) {
     auto renderers = renderers::rendererNames();
@@ -90,14 +100,14 @@ Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::st
     out.filled = true;
     out.fill = *filled;
   }
-  out.bytes = databaseBytes(writer.handle(), path);
-  out.rows = rowCounts(writer.handle());
-  out.largest = largestObjects(writer.handle());
+  out.bytes = databaseBytes(writer.connection(), path);
+  out.rows = rowCounts(writer.connection());
+  out.largest = largestObjects(writer.connection());
   return out;
 }
 
 Pools readPools(store::Store& writer) {
-  sqlite3* db = writer.handle();
+  store::Connection& db = writer.connection();
   Pools p;
   p.runs = column(db, "SELECT id FROM runs", intAt0);
   p.samples = column(db, "SELECT id FROM samples", intAt0);
@@ -111,10 +121,12 @@ Pools readPools(store::Store& writer) {
 }
 
 void removeDatabase(const std::string& path) {
+  if (store::isPostgresUrl(path)) return;  // a server's database is the user's to drop
   for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(path + suffix);
 }
 
 void evictFromPageCache(const std::string& path) {
+  if (store::isPostgresUrl(path)) return;  // the server's cache is its own
   int fd = ::open(path.c_str(), O_RDONLY);
   if (fd < 0) return;
   ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
@@ -122,6 +134,7 @@ void evictFromPageCache(const std::string& path) {
 }
 
 void loadIntoPageCache(const std::string& path) {
+  if (store::isPostgresUrl(path)) return;
   std::ifstream in(path, std::ios::binary);
   std::vector<char> buffer(1 << 20);
   while (in.read(buffer.data(), static_cast<std::streamsize>(buffer.size())) || in.gcount() > 0) {

@@ -41,7 +41,7 @@ struct RunTotals {
   std::map<std::pair<std::string, std::string>, ResourceSums> resources;  // (name, access)
 };
 
-RunTotals totalsOf(sqlite3* db, int64_t runId) {
+RunTotals totalsOf(Connection* db, int64_t runId) {
   RunTotals t;
   Statement frame(db, "SELECT COUNT(*), AVG(frame_ms) FROM samples WHERE run_id = ?1");
   frame.bind(1, runId);
@@ -50,7 +50,7 @@ RunTotals totalsOf(sqlite3* db, int64_t runId) {
   t.frameMs = frame.getOptDouble(1);
   Statement passes(db,
                    "SELECT p.name, SUM(p.gpu_ms), SUM(p.fragment_invocations), "
-                   "SUM((SELECT TOTAL(c.bytes) FROM counters c WHERE c.pass_id = p.id)), "
+                   "SUM((SELECT COALESCE(SUM(c.bytes), 0) FROM counters c WHERE c.pass_id = p.id)), "
                    "SUM((SELECT SUM(c.footprint_bytes) FROM counters c WHERE c.pass_id = p.id)), "
                    "SUM((SELECT SUM(c.bytes) FROM counters c WHERE c.pass_id = p.id AND c.footprint_bytes IS NOT NULL)) "
                    "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
@@ -219,7 +219,7 @@ Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
                          mean(passes.getOptDouble(5)), {}});
     }
     Statement counters(db_,
-                       "SELECT p.name, c.resource, c.kind, c.format, c.access, SUM(c.count), SUM(c.bytes), "
+                       "SELECT p.name, c.resource, MIN(c.kind), MIN(c.format), c.access, SUM(c.count), SUM(c.bytes), "
                        "c.source, SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = c.pass_id "
                        "JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
                        "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
@@ -249,9 +249,9 @@ Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
         "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
         "JOIN samples s ON s.run_id = r.id JOIN passes p ON p.sample_id = s.id JOIN counters c ON c.pass_id "
         "= p.id "
-        "WHERE 1" +
+        "WHERE TRUE" +
         detail::runFilterSql(filter) +
-        " GROUP BY r.id, p.name, c.resource, c.access ORDER BY r.id, MIN(p.position), c.resource, c.access";
+        " GROUP BY r.id, sc.name, d.name, p.name, c.resource, c.access ORDER BY r.id, MIN(p.position), c.resource, c.access";
     Statement query(db_, sql);
     detail::bindRunFilter(query, filter, 1);
     std::vector<ExportRow> rows;

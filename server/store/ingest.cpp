@@ -98,7 +98,7 @@ std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::
 
 // The prepared statements of one ingest, reused across rows.
 struct Inserter {
-  explicit Inserter(sqlite3* connection)
+  explicit Inserter(Connection* connection)
       : db(connection),
         device(db,
                "INSERT INTO devices (fingerprint, name, vendor, driver, api_version, features, info) "
@@ -112,12 +112,12 @@ struct Inserter {
             "INSERT INTO runs (job_id, device_id, renderer, scene_id, width, height, counting, lights, "
             "render_target_bytes, notes, shaders, counter_headroom, options, variant, tally_version, tally_commit, "
             "footprint_block_bytes) "
-            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17)"),
+            "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17) RETURNING id"),
         resource(
             db,
             "INSERT INTO run_resources (run_id, position, name, kind, format, element_bytes, width, height, "
             "allocation_bytes, format_bytes, usage) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
-        screenshot(db, "INSERT INTO screenshots (name, png, width, height) VALUES (?1, ?2, ?3, ?4)"),
+        screenshot(db, "INSERT INTO screenshots (name, png, width, height) VALUES (?1, ?2, ?3, ?4) RETURNING id"),
         sample(
             db,
             "INSERT INTO samples (run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, "
@@ -126,28 +126,27 @@ struct Inserter {
             "psnr, max_abs, mean_abs, screenshot_id, extras, variant_against, variant_identical, variant_psnr, "
             "variant_max_abs, variant_mean_abs) "
             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, "
-            "?21, ?22)"),
+            "?21, ?22) RETURNING id"),
         pass(db,
              "INSERT INTO passes (sample_id, position, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, "
              "overhead_ratio, fragment_invocations, fragment_invocations_statistic, compute_invocations, "
              "compute_invocations_statistic) "
-             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
+             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11) RETURNING id"),
         counter(db,
                 "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
                 "count_spread, source, footprint_bytes) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
         sampleBytes(
             db,
-            "UPDATE samples SET bytes = (SELECT TOTAL(c.bytes) FROM counters c JOIN passes p ON p.id = "
+            "UPDATE samples SET bytes = (SELECT COALESCE(SUM(c.bytes), 0) FROM counters c JOIN passes p ON p.id = "
             "c.pass_id WHERE p.sample_id = ?1), "
             // SUM: NULL when no line has a footprint.
             "footprint_bytes = (SELECT SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = "
             "c.pass_id WHERE p.sample_id = ?1), "
             "footprint_requested_bytes = (SELECT SUM(c.bytes) FROM counters c JOIN passes p ON p.id = "
             "c.pass_id WHERE p.sample_id = ?1 AND c.footprint_bytes IS NOT NULL) WHERE id = ?1") {}
-  sqlite3* db;
+  Connection* db;
   Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes;
   nlohmann::json ceilings;  // the capture's device.ceilings (null when not measured)
-  int64_t lastId() const { return sqlite3_last_insert_rowid(db); }
 };
 
 int64_t returnedId(Statement& statement) {
@@ -229,8 +228,7 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
         .bind(9, optNumber(pass, "fragment_invocations_statistic", at))
         .bind(10, optNumber(pass, "compute_invocations", at))
         .bind(11, optNumber(pass, "compute_invocations_statistic", at));
-    in.pass.run();
-    insertCounters(in, in.lastId(), pass, at);
+    insertCounters(in, returnedId(in.pass), pass, at);
   }
 }
 
@@ -244,8 +242,7 @@ std::optional<int64_t> insertScreenshot(Inserter& in, const json& sample, const 
   auto [width, height] = pngSize(it->second, path + ".screenshot");
   in.screenshot.reset();
   in.screenshot.bind(1, *name).bind(2, std::span<const uint8_t>(it->second)).bind(3, width).bind(4, height);
-  in.screenshot.run();
-  return in.lastId();
+  return returnedId(in.screenshot);
 }
 
 // The columns of an {"against", "psnr", "identical", "max_abs", "mean_abs"}
@@ -337,12 +334,12 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
         .bind(20, variant.psnr)
         .bind(21, variant.maxAbs)
         .bind(22, variant.meanAbs);
+    int64_t sampleId = 0;
     try {
-      in.sample.run();
-    } catch (const SqliteError& e) {
+      sampleId = returnedId(in.sample);
+    } catch (const DbError& e) {
       bad(at, e.what());  // e.g. a camera index repeated within the run
     }
-    int64_t sampleId = in.lastId();
     insertPasses(in, sampleId, sample, at);
     in.sampleBytes.reset();
     in.sampleBytes.bind(1, sampleId).run();
@@ -422,8 +419,7 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(15, build.version)
       .bind(16, build.commit)
       .bind(17, footprintBlock);
-  in.run.run();
-  int64_t runId = in.lastId();
+  int64_t runId = returnedId(in.run);
   insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");
   insertSamples(in, runId, run, path, screenshots);
   return runId;
@@ -531,7 +527,7 @@ void checkSweep(const json& result) {
 Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
     checkSweep(result);
     Transaction tx(db_, Transaction::Kind::Write);
@@ -565,7 +561,7 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
                                      const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return detail::guarded<int64_t>("ingesting the capture result", [&]() -> Result<int64_t> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement job(db_, "SELECT 1 FROM jobs WHERE id = ?1");

@@ -6,15 +6,26 @@
 #include <string>
 
 #include "common/result.hpp"
-#include "store/sqlite.hpp"
+#include "store/db.hpp"
 #include "store/store.hpp"
 
 namespace tally::store::detail {
 
-// One writer per process: every write transaction holds this.
+// One writer per process on SQLite: every write transaction holds this
+// mutex. PostgreSQL takes concurrent writers (row locks and MVCC), so there
+// it is not taken.
 std::mutex& writeMutex();
+class WriteLock {
+ public:
+  explicit WriteLock(const Connection& db) {
+    if (db.engine() == Engine::Sqlite) lock_ = std::unique_lock(writeMutex());
+  }
 
-// Runs body, turning exceptions (SqliteError, JSON errors, bad input) into an Error.
+ private:
+  std::unique_lock<std::mutex> lock_;
+};
+
+// Runs body, turning exceptions (DbError, JSON errors, bad input) into an Error.
 template <class T, class F>
 Result<T> guarded(const char* what, F&& body) {
   try {
@@ -41,8 +52,5 @@ RunRow readRunRow(const Statement& row);
 // and binding its values from parameter index `first`; returns the next index.
 std::string runFilterSql(const RunFilter& filter);
 int bindRunFilter(Statement& statement, const RunFilter& filter, int first);
-
-// Current UTC time as SQLite writes it in DEFAULTs.
-inline constexpr const char* kNowSql = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
 
 }  // namespace tally::store::detail

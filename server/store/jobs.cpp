@@ -1,14 +1,11 @@
 // The persistent job queue: transitions queued -> running -> done | failed,
 // and queued | running -> cancelled. Each transition is one write transaction.
-#include <sqlite3.h>
-
 #include "store/internal.hpp"
 
 namespace tally::store {
 
 using detail::guarded;
 using detail::kJobColumns;
-using detail::kNowSql;
 using nlohmann::json;
 
 namespace detail {
@@ -35,7 +32,7 @@ Job readJob(const Statement& row) {
 
 namespace {
 
-std::optional<Job> findJob(sqlite3* db, int64_t id) {
+std::optional<Job> findJob(Connection* db, int64_t id) {
   Statement query(db, std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id = ?1");
   query.bind(1, id);
   if (!query.step()) return std::nullopt;
@@ -57,7 +54,7 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
     return makeError("idempotency_key: must be 1 to 255 characters");
   }
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<CreatedJob>("createJob", [&]() -> Result<CreatedJob> {
     Transaction tx(db_, Transaction::Kind::Write);
     CreatedJob out;
@@ -82,12 +79,12 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
 
 Result<std::optional<Job>> Store::claimNextJob(int64_t workerPid) {
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("claimNextJob", [&]() -> Result<std::optional<Job>> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement claim(
         db_, std::string("UPDATE jobs SET status = 'running', attempts = attempts + 1, started_at = ") +
-                 kNowSql +
+                 nowSql(*db_) +
                  ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
                  "worker_pid = ?1 "
                  "WHERE id = (SELECT id FROM jobs WHERE status = 'queued' ORDER BY id LIMIT 1) "
@@ -104,7 +101,7 @@ Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
                                    std::optional<std::string> current) {
   if (done < 0 || total < 0) return makeError("progress: done and total must not be negative");
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<bool>("updateProgress", [&]() -> Result<bool> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement update(db_,
@@ -112,7 +109,7 @@ Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
                      "WHERE id = ?4 AND status = 'running'");
     update.bind(1, done).bind(2, total).bind(3, current).bind(4, jobId);
     update.run();
-    bool running = sqlite3_changes(db_) > 0;
+    bool running = db_->changes() > 0;
     tx.commit();
     return running;
   });
@@ -124,14 +121,14 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
   }
   if (status == JobStatus::Done) error.reset();
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<bool>("finishJob", [&]() -> Result<bool> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") + kNowSql +
+    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") + nowSql(*db_) +
                               " WHERE id = ?3 AND status = 'running'");
     update.bind(1, toString(status)).bind(2, error).bind(3, jobId);
     update.run();
-    bool changed = sqlite3_changes(db_) > 0;
+    bool changed = db_->changes() > 0;
     tx.commit();
     return changed;
   });
@@ -139,10 +136,10 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
 
 Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("cancelJob", [&]() -> Result<std::optional<Job>> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = 'cancelled', finished_at = ") + kNowSql +
+    Statement update(db_, std::string("UPDATE jobs SET status = 'cancelled', finished_at = ") + nowSql(*db_) +
                               " WHERE id = ?1 AND status IN ('queued', 'running')");
     update.bind(1, jobId);
     update.run();
@@ -196,7 +193,7 @@ Result<std::map<std::string, int64_t>> Store::jobCounts() {
 Result<Recovery> Store::requeueInterrupted(int maxAttempts) {
   if (maxAttempts < 1) return makeError("maxAttempts: must be at least 1");
   std::lock_guard lock(mutex_);
-  std::lock_guard writer(detail::writeMutex());
+  detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueInterrupted", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' ORDER BY id");
@@ -205,7 +202,7 @@ Result<Recovery> Store::requeueInterrupted(int maxAttempts) {
                       "progress_current = NULL WHERE id = ?1");
     Statement fail(
         db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, error = ?2, finished_at = ") +
-                 kNowSql + " WHERE id = ?1");
+                 nowSql(*db_) + " WHERE id = ?1");
     std::vector<std::pair<int64_t, int64_t>> interrupted;
     while (running.step()) interrupted.emplace_back(running.getInt(0), running.getInt(1));
     Recovery recovery;

@@ -2,15 +2,36 @@
 
 #include <string>
 
-#include "store/sqlite.hpp"
-
 namespace tally::store {
 namespace {
 
-int readVersion(sqlite3* db) {
-  Statement query(db, "PRAGMA user_version");
+// Any constant: the advisory lock that serialises PostgreSQL migrations.
+constexpr const char* kMigrationLock = "SELECT pg_advisory_xact_lock(7371696)";
+
+int readVersion(Connection& db) {
+  if (db.engine() == Engine::Sqlite) {
+    Statement query(db, "PRAGMA user_version");
+    query.step();
+    return static_cast<int>(query.getInt(0));
+  }
+  Statement exists(db, "SELECT to_regclass('tally_schema_version') IS NOT NULL");
+  exists.step();
+  if (!exists.getInt(0)) return 0;
+  Statement query(db, "SELECT COALESCE(MAX(version), 0) FROM tally_schema_version");
   query.step();
   return static_cast<int>(query.getInt(0));
+}
+
+void writeVersion(Connection& db, int version) {
+  if (db.engine() == Engine::Sqlite) {
+    // PRAGMA takes no bound parameters; the value is the binary's own constant.
+    db.exec("PRAGMA user_version = " + std::to_string(version));
+    return;
+  }
+  db.exec("CREATE TABLE IF NOT EXISTS tally_schema_version (version INTEGER NOT NULL)");
+  db.exec("DELETE FROM tally_schema_version");
+  Statement insert(db, "INSERT INTO tally_schema_version (version) VALUES (?1)");
+  insert.bind(1, version).run();
 }
 
 std::string tooNew(int found, int known) {
@@ -21,11 +42,11 @@ std::string tooNew(int found, int known) {
 }  // namespace
 
 int latestSchemaVersion() {
-  auto all = embeddedMigrations();
+  auto all = embeddedMigrations(Engine::Sqlite);
   return all.empty() ? 0 : all.back().version;
 }
 
-Result<int> schemaVersion(sqlite3* db) {
+Result<int> schemaVersion(Connection& db) {
   try {
     return readVersion(db);
   } catch (const std::exception& e) {
@@ -33,7 +54,9 @@ Result<int> schemaVersion(sqlite3* db) {
   }
 }
 
-Result<int> migrate(sqlite3* db, std::span<const Migration> migrations) {
+Result<int> migrate(Connection& db) { return migrate(db, embeddedMigrations(db.engine())); }
+
+Result<int> migrate(Connection& db, std::span<const Migration> migrations) {
   int known = migrations.empty() ? 0 : migrations.back().version;
   try {
     int found = readVersion(db);
@@ -41,6 +64,7 @@ Result<int> migrate(sqlite3* db, std::span<const Migration> migrations) {
     for (const Migration& m : migrations) {
       if (m.version <= found) continue;
       Transaction tx(db, Transaction::Kind::Write);
+      if (db.engine() == Engine::Postgres) db.exec(kMigrationLock);
       found = readVersion(db);  // another process may have migrated meanwhile
       if (found > known) return makeError(tooNew(found, known));
       if (m.version <= found) continue;
@@ -49,9 +73,8 @@ Result<int> migrate(sqlite3* db, std::span<const Migration> migrations) {
                          std::to_string(found));
       }
       try {
-        exec(db, m.sql);
-        // PRAGMA takes no bound parameters; the value is the binary's own constant.
-        exec(db, "PRAGMA user_version = " + std::to_string(m.version));
+        db.exec(m.sql);
+        writeVersion(db, m.version);
       } catch (const std::exception& e) {
         return makeError("migration " + std::to_string(m.version) + "_" + std::string(m.name) +
                          " failed: " + e.what());
@@ -65,7 +88,7 @@ Result<int> migrate(sqlite3* db, std::span<const Migration> migrations) {
   }
 }
 
-Result<int> requireCurrentSchema(sqlite3* db) {
+Result<int> requireCurrentSchema(Connection& db) {
   auto version = schemaVersion(db);
   if (!version) return version;
   int known = latestSchemaVersion();

@@ -112,9 +112,9 @@ const char* const kSampleColumns =
     "frame_ms_spread, "
     "frame_ms_instrumented, overhead_ratio, bytes, image_against, image_identical, psnr, max_abs, mean_abs, "
     "screenshot_id IS NOT NULL, "
-    "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
+    "(SELECT COALESCE(SUM(c.bytes), 0) FROM passes p JOIN counters c ON c.pass_id = p.id "
     "WHERE p.sample_id = samples.id AND c.access = 'read'), "
-    "(SELECT TOTAL(c.bytes) FROM passes p JOIN counters c ON c.pass_id = p.id "
+    "(SELECT COALESCE(SUM(c.bytes), 0) FROM passes p JOIN counters c ON c.pass_id = p.id "
     "WHERE p.sample_id = samples.id AND c.access = 'write'), "
     "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs, "
     "footprint_bytes, footprint_requested_bytes";
@@ -160,7 +160,7 @@ SampleRow readSampleRow(const Statement& row) {
   return s;
 }
 
-std::optional<RunRow> findRunRow(sqlite3* db, int64_t runId) {
+std::optional<RunRow> findRunRow(Connection* db, int64_t runId) {
   Statement query(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
   query.bind(1, runId);
   if (!query.step()) return std::nullopt;
@@ -180,7 +180,7 @@ Result<RunPage> Store::listRuns(const RunFilter& filter, const Page& page) {
     // filter that the index cannot return in id order (a device or scene
     // name matching several ids) makes SQLite sort, and it computes every
     // result column, the per-run sample aggregates included, before it sorts.
-    std::string sql = std::string(detail::kRunSelect) + " WHERE r.id IN (SELECT r.id FROM runs r WHERE 1" +
+    std::string sql = std::string(detail::kRunSelect) + " WHERE r.id IN (SELECT r.id FROM runs r WHERE TRUE" +
                       detail::runFilterSql(filter);
     if (after) sql += " AND r.id < ?";
     sql += " ORDER BY r.id DESC LIMIT ?) ORDER BY r.id DESC";
@@ -232,9 +232,13 @@ Result<std::optional<Run>> Store::getRun(int64_t runId) {
       run.shaders = device.getJson(7);
       run.counterHeadroom = device.getJson(8);
     }
-    Statement ceilings(db_,
-                       "SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = ?1 AND "
-                       "json_type(extras, '$.roofline.ceilings') = 'object' ORDER BY camera_index LIMIT 1");
+    Statement ceilings(
+        db_, db_->engine() == Engine::Sqlite
+                 ? "SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = ?1 AND "
+                   "json_type(extras, '$.roofline.ceilings') = 'object' ORDER BY camera_index LIMIT 1"
+                 : "SELECT CAST(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings' AS text) FROM samples "
+                   "WHERE run_id = ?1 AND jsonb_typeof(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings') = "
+                   "'object' ORDER BY camera_index LIMIT 1");
     ceilings.bind(1, runId);
     run.ceilings = ceilings.step() ? ceilings.getJson(0) : nlohmann::json(nullptr);
     Statement resources(

@@ -1,7 +1,5 @@
 #include "store/store.hpp"
 
-#include <sqlite3.h>
-
 #include <charconv>
 #include <cstdio>
 
@@ -63,28 +61,18 @@ std::optional<int64_t> decodeCursor(std::string_view cursor) {
 
 namespace {
 
-void pragma(sqlite3* db, const char* sql) { exec(db, sql); }
-
-}  // namespace
-
-Result<std::unique_ptr<Store>> Store::open(const std::string& path, Options options) {
-  sqlite3* db = nullptr;
-  int flags = SQLITE_OPEN_READWRITE | (options.readOnly ? 0 : SQLITE_OPEN_CREATE);
-  int rc = sqlite3_open_v2(path.c_str(), &db, flags, nullptr);
-  if (rc != SQLITE_OK) {
-    std::string message =
-        "opening database '" + path + "': " + (db ? sqlite3_errmsg(db) : sqlite3_errstr(rc));
-    sqlite3_close(db);
-    return makeError(message);
+Result<std::unique_ptr<Connection>> openSqliteStore(const std::string& path, const Store::Options& options) {
+  std::unique_ptr<Connection> db;
+  try {
+    db = openSqlite(path, !options.readOnly, options.busyTimeoutMs);
+  } catch (const std::exception& e) {
+    return makeError(e.what());
   }
-  auto fail = [&](const std::string& message) -> Result<std::unique_ptr<Store>> {
-    sqlite3_close(db);
+  auto fail = [&](const std::string& message) -> Result<std::unique_ptr<Connection>> {
     return makeError("database '" + path + "': " + message);
   };
-  sqlite3_extended_result_codes(db, 1);
-  sqlite3_busy_timeout(db, options.busyTimeoutMs);
   // Refuse a newer schema before touching anything (not even the journal mode).
-  auto version = store::schemaVersion(db);
+  auto version = schemaVersion(*db);
   if (!version) return fail(version.error());
   if (*version > latestSchemaVersion()) {
     return fail("schema version " + std::to_string(*version) + " is newer than this tallyd knows (" +
@@ -94,32 +82,64 @@ Result<std::unique_ptr<Store>> Store::open(const std::string& path, Options opti
     if (!options.readOnly) {
       // WAL: readers and the writer do not block each other. The mode persists
       // in the file, so readers need not set it.
-      Statement mode(db, "PRAGMA journal_mode = WAL");
+      Statement mode(*db, "PRAGMA journal_mode = WAL");
       mode.step();
       std::string got = mode.getText(0);
       if (got != "wal" && got != "memory") return fail("cannot use WAL journal mode (got " + got + ")");
     }
-    pragma(db, "PRAGMA synchronous = FULL");  // durable commits: 202 means stored
-    pragma(db, "PRAGMA foreign_keys = ON");
-    if (options.readOnly) pragma(db, "PRAGMA query_only = ON");
+    db->exec("PRAGMA synchronous = FULL");  // durable commits: 202 means stored
+    db->exec("PRAGMA foreign_keys = ON");
+    if (options.readOnly) db->exec("PRAGMA query_only = ON");
   } catch (const std::exception& e) {
     return fail(e.what());
   }
-  auto migrated = options.readOnly ? requireCurrentSchema(db) : [&] {
-    std::lock_guard lock(detail::writeMutex());
-    return migrate(db);
-  }();
-  if (!migrated) return fail(migrated.error());
-  return std::unique_ptr<Store>(new Store(db, *migrated));
+  return db;
 }
 
-Store::~Store() { sqlite3_close_v2(db_); }
+Result<std::unique_ptr<Connection>> openPostgresStore(const std::string& url, const Store::Options& options) {
+  std::unique_ptr<Connection> db;
+  try {
+    db = openPostgres(url);
+    // Lock waits end like SQLite's busy timeout; readers cannot write.
+    db->exec("SET lock_timeout = " + std::to_string(options.busyTimeoutMs));
+    if (options.readOnly) db->exec("SET default_transaction_read_only = on");
+  } catch (const std::exception& e) {
+    return makeError(e.what());
+  }
+  return db;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Store>> Store::open(const std::string& location, Options options) {
+  const bool postgres = isPostgresUrl(location);
+  auto db = postgres ? openPostgresStore(location, options) : openSqliteStore(location, options);
+  if (!db) return makeError(db.error());
+  const std::string name = postgres ? redactUrl(location) : location;
+  auto migrated = options.readOnly ? requireCurrentSchema(**db) : [&] {
+    detail::WriteLock lock(**db);
+    return migrate(**db);
+  }();
+  if (!migrated) return makeError("database '" + name + "': " + migrated.error());
+  return std::unique_ptr<Store>(new Store(std::move(*db), *migrated));
+}
+
+Store::~Store() = default;
 
 Result<std::string> Store::integrityCheck() {
   std::lock_guard lock(mutex_);
   return detail::guarded<std::string>("integrity_check", [&]() -> Result<std::string> {
+    if (db_->engine() == Engine::Postgres) {
+      Statement ping(db_, "SELECT 1");
+      return ping.step() ? std::string("ok") : std::string("no answer");
+    }
     Statement check(db_, "PRAGMA integrity_check");
-    return check.step() ? check.getText(0) : std::string("no answer");
+    std::string first = check.step() ? check.getText(0) : std::string("no answer");
+    if (first != "ok") return first;
+    Statement keys(db_, "SELECT COUNT(*) FROM pragma_foreign_key_check");
+    keys.step();
+    if (int64_t n = keys.getInt(0)) return std::to_string(n) + " foreign key violations";
+    return first;
   });
 }
 

@@ -1,7 +1,9 @@
-// Tally's SQLite store: capture jobs (a persistent queue), ingested capture
-// results, and the queries the service layer turns into JSON.
+// Tally's store: capture jobs (a persistent queue), ingested capture
+// results, and the queries the service layer turns into JSON. One interface
+// over two engines (db.hpp): a SQLite file, the default for one host, or a
+// PostgreSQL database that a fleet of daemons shares (docs/fleet.md).
 //
-// Connections and threads. A Store is one SQLite connection; its calls are
+// Connections and threads. A Store is one connection; its calls are
 // serialised by a mutex, so sharing one between threads is safe but slow.
 // The daemon opens:
 //   - one writer:  Store::open(path)            migrates, then takes writes;
@@ -11,7 +13,9 @@
 //     (WAL recovery, checkpoints) when SQLite briefly makes them wait.
 // All write transactions in the process are additionally serialised by one
 // process-wide mutex (one writer), and use BEGIN IMMEDIATE, so two processes
-// on one file wait on busy_timeout instead of failing.
+// on one file wait on busy_timeout instead of failing. On PostgreSQL the same
+// shape holds (a writer that migrates, readers per thread) without the
+// process-wide mutex: the server orders concurrent writers.
 //
 // Errors come back as tally::Result with a one-line reason; "not found" is an
 // empty optional, not an error.
@@ -29,8 +33,8 @@
 #include <nlohmann/json.hpp>
 
 #include "common/result.hpp"
+#include "store/db.hpp"
 
-struct sqlite3;
 
 namespace tally::store {
 
@@ -324,10 +328,11 @@ class Store {
     int busyTimeoutMs = 5000;  // how long to wait on another connection's lock
   };
 
-  // Opens (creating when writable) and migrates. Refuses a database whose
+  // Opens (creating when writable) and migrates. location is a SQLite file
+  // path or a postgresql:// URL (isPostgresUrl). Refuses a database whose
   // schema is newer than this binary's, naming both versions.
-  static Result<std::unique_ptr<Store>> open(const std::string& path, Options options);
-  static Result<std::unique_ptr<Store>> open(const std::string& path) { return open(path, Options{}); }
+  static Result<std::unique_ptr<Store>> open(const std::string& location, Options options);
+  static Result<std::unique_ptr<Store>> open(const std::string& location) { return open(location, Options{}); }
   ~Store();
   Store(const Store&) = delete;
   Store& operator=(const Store&) = delete;
@@ -400,15 +405,20 @@ class Store {
   // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
   Result<std::vector<ExportRow>> exportRuns(const RunFilter& filter);
 
-  // PRAGMA integrity_check's first line ("ok" when healthy).
+  // SQLite: PRAGMA integrity_check's first line ("ok" when healthy) and no
+  // foreign key violations. PostgreSQL enforces both as it writes: "ok" when
+  // the server answers.
   Result<std::string> integrityCheck();
 
-  // The raw connection, for tests and tools; not for concurrent use.
-  sqlite3* handle() { return db_; }
+  // The connection, for tests and tools; not for concurrent use.
+  Connection& connection() { return *db_; }
+  Engine engine() const { return db_->engine(); }
 
  private:
-  Store(sqlite3* db, int version) : db_(db), schemaVersion_(version) {}
-  sqlite3* db_;
+  Store(std::unique_ptr<Connection> db, int version)
+      : owner_(std::move(db)), db_(owner_.get()), schemaVersion_(version) {}
+  std::unique_ptr<Connection> owner_;
+  Connection* db_;
   int schemaVersion_;
   std::mutex mutex_;  // one call at a time on this connection
 };

@@ -64,7 +64,7 @@ Result<SweepPage> Store::listSweeps(const SweepFilter& filter, const Page& page)
   std::optional<int64_t> after = *checked;
   std::lock_guard lock(mutex_);
   return guarded<SweepPage>("listSweeps", [&]() -> Result<SweepPage> {
-    std::string sql = std::string(kSweepColumns) + kSweepFrom + " WHERE 1" + sweepFilterSql(filter);
+    std::string sql = std::string(kSweepColumns) + kSweepFrom + " WHERE TRUE" + sweepFilterSql(filter);
     if (after) sql += " AND s.id < ?";
     sql += " ORDER BY s.id DESC LIMIT ?";
     Statement query(db_, sql);

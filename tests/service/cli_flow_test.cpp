@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include "daemon.hpp"
+#include "store/sqlite.hpp"
 #include "store/store.hpp"
 
 namespace {
@@ -167,7 +168,7 @@ class Db {
   bool ok() const { return store_ != nullptr; }
 
   json rows(const std::string& sql, const std::vector<json>& params = {}) {
-    sqlite3* db = store_->handle();
+    sqlite3* db = static_cast<tally::store::SqliteConnection&>(store_->connection()).raw();
     sqlite3_stmt* stmt = nullptr;
     json out = json::array();
     if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) {

@@ -89,7 +89,7 @@ TEST(Migrations, ReopenIsANoOp) {
   auto schemaText = [](Store& store) {
     std::string text;
     sqlite3_stmt* st = nullptr;
-    sqlite3_prepare_v2(store.handle(), "SELECT sql FROM sqlite_schema WHERE sql IS NOT NULL ORDER BY name",
+    sqlite3_prepare_v2(handle(store), "SELECT sql FROM sqlite_schema WHERE sql IS NOT NULL ORDER BY name",
                        -1, &st, nullptr);
     while (sqlite3_step(st) == SQLITE_ROW) text += reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
     sqlite3_finalize(st);
@@ -188,7 +188,7 @@ TEST(Migrations, VersionOneWithDataUpgradesKeepingEverything) {
   EXPECT_EQ((*passes)[0].counters.size(), 1u);
   EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM sweeps"), 0);
   // The new column's check holds for new rows.
-  EXPECT_NE(sqlite3_exec(store->handle(), "UPDATE runs SET counter_headroom = 'not json' WHERE id = 1", nullptr,
+  EXPECT_NE(sqlite3_exec(handle(*store), "UPDATE runs SET counter_headroom = 'not json' WHERE id = 1", nullptr,
                          nullptr, nullptr),
             SQLITE_OK);
   EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pragma_foreign_key_check"), 0);
@@ -260,7 +260,7 @@ TEST(Migrations, VersionTwoWithDataUpgradesToVariantsKeepingEverything) {
   EXPECT_EQ(page->runs.size(), 1u);
   for (const char* bad : {"UPDATE runs SET options = 'not json' WHERE id = 1",
                           "UPDATE samples SET extras = 'not json' WHERE id = 1"}) {
-    EXPECT_NE(sqlite3_exec(store->handle(), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
+    EXPECT_NE(sqlite3_exec(handle(*store), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
   }
   EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pragma_foreign_key_check"), 0);
   auto integrity = store->integrityCheck();
@@ -331,12 +331,12 @@ TEST(Migrations, VersionFiveWithDataUpgradesToFootprintKeepingEverything) {
   EXPECT_EQ((*sample)->passes[0].counters[0].bytes, 96);
   EXPECT_FALSE((*sample)->passes[0].counters[0].footprintBytes);
   // The new columns' checks: a block size of 32, 64 or 128 only, no negative footprint.
-  EXPECT_EQ(sqlite3_exec(store->handle(), "UPDATE runs SET footprint_block_bytes = 64 WHERE id = 1", nullptr,
+  EXPECT_EQ(sqlite3_exec(handle(*store), "UPDATE runs SET footprint_block_bytes = 64 WHERE id = 1", nullptr,
                          nullptr, nullptr),
             SQLITE_OK);
   for (const char* bad : {"UPDATE runs SET footprint_block_bytes = 48 WHERE id = 1",
                           "UPDATE counters SET footprint_bytes = -1"}) {
-    EXPECT_NE(sqlite3_exec(store->handle(), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
+    EXPECT_NE(sqlite3_exec(handle(*store), bad, nullptr, nullptr, nullptr), SQLITE_OK) << bad;
   }
   EXPECT_EQ(scalar(*store, "SELECT footprint_block_bytes FROM runs WHERE id = 1"), 64);
   auto integrity = store->integrityCheck();

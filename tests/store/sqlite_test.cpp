@@ -8,14 +8,13 @@ namespace tally::store {
 namespace {
 
 struct Db {
-  Db() { EXPECT_EQ(sqlite3_open(":memory:", &db), SQLITE_OK); }
-  ~Db() { sqlite3_close(db); }
-  sqlite3* db = nullptr;
+  std::unique_ptr<Connection> owner = openSqlite(":memory:", true, 5000);
+  Connection& db = *owner;
 };
 
 TEST(Statement, BindsAndReadsEveryType) {
   Db d;
-  exec(d.db, "CREATE TABLE t (i INTEGER, r REAL, s TEXT, b BLOB, j TEXT, n TEXT)");
+  d.db.exec("CREATE TABLE t (i INTEGER, r REAL, s TEXT, b BLOB, j TEXT, n TEXT)");
   Statement insert(d.db, "INSERT INTO t VALUES (:i, :r, :s, :b, :j, :n)");
   const std::vector<uint8_t> blob = {0, 1, 2, 255};
   insert.bind(":i", int64_t{1} << 40)
@@ -46,15 +45,15 @@ TEST(Statement, BindsAndReadsEveryType) {
 
 TEST(Statement, ErrorsThrowWithTheReason) {
   Db d;
-  EXPECT_THROW(Statement(d.db, "SELEKT 1"), SqliteError);
-  exec(d.db, "CREATE TABLE t (x INTEGER NOT NULL)");
+  EXPECT_THROW(Statement(d.db, "SELEKT 1"), DbError);
+  d.db.exec("CREATE TABLE t (x INTEGER NOT NULL)");
   Statement insert(d.db, "INSERT INTO t VALUES (?1)");
-  EXPECT_THROW(insert.bind(":missing", 1), SqliteError);
+  EXPECT_THROW(insert.bind(":missing", 1), DbError);
   insert.bind(1, nullptr);
   try {
     insert.run();
     FAIL() << "NOT NULL not enforced";
-  } catch (const SqliteError& e) {
+  } catch (const DbError& e) {
     EXPECT_EQ(e.code() & 0xff, SQLITE_CONSTRAINT);
     EXPECT_NE(std::string(e.what()).find("NOT NULL"), std::string::npos) << e.what();
   }
@@ -62,14 +61,14 @@ TEST(Statement, ErrorsThrowWithTheReason) {
 
 TEST(Transaction, RollsBackUnlessCommitted) {
   Db d;
-  exec(d.db, "CREATE TABLE t (x)");
+  d.db.exec("CREATE TABLE t (x)");
   {
     Transaction tx(d.db, Transaction::Kind::Write);
-    exec(d.db, "INSERT INTO t VALUES (1)");
+    d.db.exec("INSERT INTO t VALUES (1)");
   }
   {
     Transaction tx(d.db, Transaction::Kind::Write);
-    exec(d.db, "INSERT INTO t VALUES (2)");
+    d.db.exec("INSERT INTO t VALUES (2)");
     tx.commit();
   }
   Statement count(d.db, "SELECT group_concat(x) FROM t");

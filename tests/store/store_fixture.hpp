@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "store/migrations.hpp"
+#include "store/sqlite.hpp"
 #include "store/store.hpp"
 
 namespace tally::store::testing {
@@ -47,14 +49,28 @@ inline std::unique_ptr<Store> openStore(const std::string& path, Store::Options 
   return store ? std::move(store).value() : nullptr;
 }
 
-// Runs a one-value query on the raw connection (test-only SQL, no values).
+// Runs a one-value query on the store's connection (test-only SQL, no values).
 inline int64_t scalar(Store& store, const std::string& sql) {
-  sqlite3_stmt* statement = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(store.handle(), sql.c_str(), -1, &statement, nullptr), SQLITE_OK) << sql;
-  int64_t value = -1;
-  if (sqlite3_step(statement) == SQLITE_ROW) value = sqlite3_column_int64(statement, 0);
-  sqlite3_finalize(statement);
-  return value;
+  try {
+    Statement statement(store.connection(), sql);
+    return statement.step() ? statement.getInt(0) : -1;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what();
+    return -1;
+  }
+}
+
+// The SQLite handle of a store on a file (SQLite-only tests).
+inline sqlite3* handle(Store& store) { return static_cast<SqliteConnection&>(store.connection()).raw(); }
+
+// The migration functions on a raw SQLite handle (not closed afterwards).
+inline Result<int> migrate(sqlite3* raw, std::span<const Migration> migrations) {
+  SqliteConnection connection(raw, "test", /*owns=*/false);
+  return store::migrate(connection, migrations);
+}
+inline Result<int> schemaVersion(sqlite3* raw) {
+  SqliteConnection connection(raw, "test", /*owns=*/false);
+  return store::schemaVersion(connection);
 }
 
 // A minimal PNG: signature, IHDR (width, height), IEND. Enough for the store.

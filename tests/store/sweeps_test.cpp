@@ -93,9 +93,7 @@ TEST_F(Sweeps, DeletingTheJobDeletesItsSweep) {
   int64_t jobId = newSweepJob();
   ASSERT_TRUE(store_->ingestSweep(jobId, sweepResult()));
   ASSERT_EQ(count("sweeps"), 1);
-  ASSERT_EQ(sqlite3_exec(store_->handle(), ("DELETE FROM jobs WHERE id = " + std::to_string(jobId)).c_str(),
-                         nullptr, nullptr, nullptr),
-            SQLITE_OK);
+  ASSERT_NO_THROW(store_->connection().exec("DELETE FROM jobs WHERE id = " + std::to_string(jobId)));
   EXPECT_EQ(count("sweeps"), 0);
 }
 

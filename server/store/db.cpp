@@ -1,0 +1,175 @@
+// The engine-neutral half of db.hpp: Statement's JSON and optional getters,
+// Transaction, the dialect fragments and the parameter rewriting for PostgreSQL.
+#include "store/db.hpp"
+
+#include <sqlite3.h>
+
+#include <cctype>
+
+namespace tally::store {
+
+bool DbError::isConstraint() const {
+  if (!sqlState_.empty()) return sqlState_.compare(0, 2, "23") == 0;  // integrity_constraint_violation
+  return (code_ & 0xff) == SQLITE_CONSTRAINT;
+}
+
+bool DbError::isConnectionLost() const {
+  // 08: connection_exception; 57P01..03: admin shutdown, crash shutdown, cannot connect now.
+  return sqlState_.compare(0, 2, "08") == 0 || sqlState_ == "57P01" || sqlState_ == "57P02" ||
+         sqlState_ == "57P03";
+}
+
+bool isPostgresUrl(std::string_view location) {
+  return location.starts_with("postgresql://") || location.starts_with("postgres://");
+}
+
+std::string redactUrl(std::string_view url) {
+  // scheme://user:password@host...: the password is between the first ':' after
+  // the scheme and the '@' that ends the user information.
+  size_t scheme = url.find("://");
+  if (scheme == std::string_view::npos) return std::string(url);
+  size_t start = scheme + 3;
+  size_t at = url.find('@', start);
+  size_t slash = url.find('/', start);
+  if (at == std::string_view::npos || (slash != std::string_view::npos && slash < at)) {
+    // No user information; a password may still be a query parameter.
+    std::string out(url);
+    size_t p = out.find("password=");
+    if (p != std::string::npos) {
+      size_t end = out.find('&', p);
+      out.replace(p + 9, (end == std::string::npos ? out.size() : end) - (p + 9), "***");
+    }
+    return out;
+  }
+  size_t colon = url.find(':', start);
+  if (colon == std::string_view::npos || colon > at) return std::string(url);
+  return std::string(url.substr(0, colon + 1)) + "***" + std::string(url.substr(at));
+}
+
+std::string toPostgresParameters(std::string_view sql, std::vector<std::string>* names) {
+  std::string out;
+  out.reserve(sql.size() + 8);
+  std::vector<std::string> assigned;  // assigned[k]: the name of $k+1 ("" when numbered)
+  int largest = 0;
+  auto number = [&](int n, const std::string& name) {
+    if (n > largest) largest = n;
+    if (static_cast<int>(assigned.size()) < n) assigned.resize(static_cast<size_t>(n));
+    if (!name.empty()) assigned[static_cast<size_t>(n - 1)] = name;
+    out += '$';
+    out += std::to_string(n);
+  };
+  for (size_t i = 0; i < sql.size();) {
+    char c = sql[i];
+    if (c == '\'' || c == '"') {  // a literal or quoted identifier, copied whole ('' and "" escape)
+      size_t end = i + 1;
+      while (end < sql.size()) {
+        if (sql[end] == c) {
+          if (end + 1 < sql.size() && sql[end + 1] == c) {
+            end += 2;
+            continue;
+          }
+          break;
+        }
+        ++end;
+      }
+      end = std::min(end + 1, sql.size());
+      out.append(sql.substr(i, end - i));
+      i = end;
+    } else if (c == '-' && i + 1 < sql.size() && sql[i + 1] == '-') {
+      size_t end = sql.find('\n', i);
+      end = end == std::string_view::npos ? sql.size() : end;
+      out.append(sql.substr(i, end - i));
+      i = end;
+    } else if (c == '?') {
+      size_t end = i + 1;
+      while (end < sql.size() && std::isdigit(static_cast<unsigned char>(sql[end]))) ++end;
+      number(end > i + 1 ? std::stoi(std::string(sql.substr(i + 1, end - i - 1))) : largest + 1, "");
+      i = end;
+    } else if (c == ':' && i + 1 < sql.size() && i > 0 && sql[i - 1] == ':') {
+      out += c;  // the second ':' of a "::type" cast
+      ++i;
+    } else if (c == ':' && i + 1 < sql.size() &&
+               (std::isalpha(static_cast<unsigned char>(sql[i + 1])) || sql[i + 1] == '_') &&
+               !(i + 1 < sql.size() && sql[i + 1] == ':')) {
+      size_t end = i + 1;
+      while (end < sql.size() && (std::isalnum(static_cast<unsigned char>(sql[end])) || sql[end] == '_')) ++end;
+      std::string name(sql.substr(i, end - i));
+      int n = 0;
+      for (size_t k = 0; k < assigned.size(); ++k) {
+        if (assigned[k] == name) n = static_cast<int>(k) + 1;
+      }
+      number(n ? n : largest + 1, name);
+      i = end;
+    } else {
+      out += c;
+      ++i;
+    }
+  }
+  if (names) *names = std::move(assigned);
+  return out;
+}
+
+Statement& Statement::bind(int index, const nlohmann::json& value) {
+  // Replace invalid UTF-8 rather than throw: notes and labels come from captures.
+  return bind(index, std::string_view(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)));
+}
+
+int Statement::parameterIndex(const char* name) const {
+  int index = impl_->parameterIndex(name);
+  if (index == 0) throw DbError(SQLITE_RANGE, "", std::string("no parameter ") + name + " in " + impl_->sql());
+  return index;
+}
+
+nlohmann::json Statement::getJson(int column) const {
+  if (isNull(column)) return nullptr;
+  return nlohmann::json::parse(getText(column));
+}
+
+std::optional<int64_t> Statement::getOptInt(int column) const {
+  return isNull(column) ? std::nullopt : std::optional<int64_t>(getInt(column));
+}
+std::optional<double> Statement::getOptDouble(int column) const {
+  return isNull(column) ? std::nullopt : std::optional<double>(getDouble(column));
+}
+std::optional<std::string> Statement::getOptText(int column) const {
+  return isNull(column) ? std::nullopt : std::optional<std::string>(getText(column));
+}
+
+Transaction::Transaction(Connection& db, Kind kind) : db_(db) {
+  if (db_.engine() == Engine::Sqlite) {
+    db_.exec(kind == Kind::Write ? "BEGIN IMMEDIATE" : "BEGIN");
+  } else {
+    db_.exec(kind == Kind::Write ? "BEGIN" : "BEGIN ISOLATION LEVEL REPEATABLE READ, READ ONLY");
+  }
+}
+
+Transaction::~Transaction() {
+  if (!open_) return;
+  try {
+    db_.exec("ROLLBACK");
+  } catch (const std::exception&) {
+    // The connection is gone; so is the transaction.
+  }
+}
+
+void Transaction::commit() {
+  db_.exec("COMMIT");
+  open_ = false;
+}
+
+const char* nowSql(const Connection& db) {
+  return db.engine() == Engine::Sqlite
+             ? "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')"
+             : "to_char(clock_timestamp() AT TIME ZONE 'UTC', 'YYYY-MM-DD\"T\"HH24:MI:SS.MS\"Z\"')";
+}
+
+const char* nowMsSql(const Connection& db) {
+  return db.engine() == Engine::Sqlite ? "CAST((julianday('now') - 2440587.5) * 86400000 AS INTEGER)"
+                                       : "CAST(extract(epoch FROM clock_timestamp()) * 1000 AS BIGINT)";
+}
+
+const char* skipLockedSql(const Connection& db) {
+  return db.engine() == Engine::Sqlite ? "" : " FOR UPDATE SKIP LOCKED";
+}
+
+}  // namespace tally::store
