@@ -524,6 +524,73 @@ void checkSweep(const json& result) {
 
 }  // namespace
 
+namespace {
+
+// The sweep's row for a job, replacing an earlier one; inside the caller's transaction.
+int64_t storeSweep(Connection* db, int64_t jobId, const json& result) {
+  // Idempotency, as for captures: the job's result replaces its earlier one.
+  Statement drop(db, "DELETE FROM sweeps WHERE job_id = ?1");
+  drop.bind(1, jobId).run();
+  Inserter in(db);
+  int64_t deviceId = insertDevice(in, result);
+  const json& failsAt = result["fails_at"];
+  Statement insert(db,
+                   "INSERT INTO sweeps (job_id, device_id, name, parameters, threshold, fails_at, point_count, "
+                   "result) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) RETURNING id");
+  insert.bind(1, jobId)
+      .bind(2, deviceId)
+      .bind(3, result["sweep"].get<std::string>())
+      .bind(4, result["parameters"])
+      .bind(5, result["threshold"])
+      .bind(6, failsAt.is_null() ? std::optional<json>() : std::optional<json>(failsAt))
+      .bind(7, static_cast<int64_t>(result["points"].size()))
+      .bind(8, result);
+  return returnedId(insert);
+}
+
+// A capture's runs for a job, replacing earlier ones; inside the caller's transaction.
+int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
+                     const std::map<std::string, std::vector<uint8_t>>& screenshots,
+                     const std::optional<std::string>& host) {
+  // Idempotency: a job's result replaces whatever was ingested for it before
+  // (its screenshots first, then its runs, which cascade to samples,
+  // passes, counters and resources).
+  Statement dropShots(db,
+                      "DELETE FROM screenshots WHERE id IN (SELECT s.screenshot_id FROM samples s "
+                      "JOIN runs r ON r.id = s.run_id WHERE r.job_id = ?1)");
+  dropShots.bind(1, jobId).run();
+  Statement dropRuns(db, "DELETE FROM runs WHERE job_id = ?1");
+  dropRuns.bind(1, jobId).run();
+
+  Inserter in(db);
+  int64_t deviceId = insertDevice(in, result);
+  if (const json* device = find(result, "device"); device && device->is_object()) {
+    if (const json* c = find(*device, "ceilings"); c && c->is_object()) in.ceilings = *c;
+  }
+  json shaders = optObject(result, "shaders", "result");
+  Build build = buildOf(result);
+  const json* runs = find(result, "runs");
+  if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
+  for (size_t r = 0; r < runs->size(); ++r) {
+    insertRun(in, jobId, deviceId, shaders, build, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
+  }
+  if (host) {
+    Statement stamp(db, "UPDATE runs SET host = ?1 WHERE job_id = ?2");
+    stamp.bind(1, *host).bind(2, jobId).run();
+  }
+  return static_cast<int64_t>(runs->size());
+}
+
+bool jobExists(Connection* db, int64_t jobId) {
+  Statement job(db, "SELECT 1 FROM jobs WHERE id = ?1");
+  job.bind(1, jobId);
+  bool found = job.step();
+  job.run();
+  return found;
+}
+
+}  // namespace
+
 Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
@@ -531,27 +598,23 @@ Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
   return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
     checkSweep(result);
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement job(db_, "SELECT 1 FROM jobs WHERE id = ?1");
-    job.bind(1, jobId);
-    if (!job.step()) return makeError("job " + std::to_string(jobId) + " not found");
-    // Idempotency, as for captures: the job's result replaces its earlier one.
-    Statement drop(db_, "DELETE FROM sweeps WHERE job_id = ?1");
-    drop.bind(1, jobId).run();
-    Inserter in(db_);
-    int64_t deviceId = insertDevice(in, result);
-    const json& failsAt = result["fails_at"];
-    Statement insert(db_,
-                     "INSERT INTO sweeps (job_id, device_id, name, parameters, threshold, fails_at, point_count, "
-                     "result) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) RETURNING id");
-    insert.bind(1, jobId)
-        .bind(2, deviceId)
-        .bind(3, result["sweep"].get<std::string>())
-        .bind(4, result["parameters"])
-        .bind(5, result["threshold"])
-        .bind(6, failsAt.is_null() ? std::optional<json>() : std::optional<json>(failsAt))
-        .bind(7, static_cast<int64_t>(result["points"].size()))
-        .bind(8, result);
-    int64_t id = returnedId(insert);
+    if (!jobExists(db_, jobId)) return makeError("job " + std::to_string(jobId) + " not found");
+    int64_t id = storeSweep(db_, jobId, result);
+    tx.commit();
+    return id;
+  });
+}
+
+Result<int64_t> Store::ingestSweep(const Lease& lease, const json& result) {
+  if (!result.is_object()) return makeError("result: must be a JSON object");
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
+    checkSweep(result);
+    Transaction tx(db_, Transaction::Kind::Write);
+    if (!detail::holdsLease(db_, lease)) return makeError(detail::lostLease(db_, lease));
+    int64_t id = storeSweep(db_, lease.jobId, result);
+    detail::finishHeld(db_, lease, JobStatus::Done, std::nullopt);
     tx.commit();
     return id;
   });
@@ -564,33 +627,25 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
   detail::WriteLock writer(*db_);
   return detail::guarded<int64_t>("ingesting the capture result", [&]() -> Result<int64_t> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement job(db_, "SELECT 1 FROM jobs WHERE id = ?1");
-    job.bind(1, jobId);
-    if (!job.step()) return makeError("job " + std::to_string(jobId) + " not found");
-    // Idempotency: a job's result replaces whatever was ingested for it before
-    // (its screenshots first, then its runs, which cascade to samples,
-    // passes, counters and resources).
-    Statement dropShots(db_,
-                        "DELETE FROM screenshots WHERE id IN (SELECT s.screenshot_id FROM samples s "
-                        "JOIN runs r ON r.id = s.run_id WHERE r.job_id = ?1)");
-    dropShots.bind(1, jobId).run();
-    Statement dropRuns(db_, "DELETE FROM runs WHERE job_id = ?1");
-    dropRuns.bind(1, jobId).run();
-
-    Inserter in(db_);
-    int64_t deviceId = insertDevice(in, result);
-    if (const json* device = find(result, "device"); device && device->is_object()) {
-      if (const json* c = find(*device, "ceilings"); c && c->is_object()) in.ceilings = *c;
-    }
-    json shaders = optObject(result, "shaders", "result");
-    Build build = buildOf(result);
-    const json* runs = find(result, "runs");
-    if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
-    for (size_t r = 0; r < runs->size(); ++r) {
-      insertRun(in, jobId, deviceId, shaders, build, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
-    }
+    if (!jobExists(db_, jobId)) return makeError("job " + std::to_string(jobId) + " not found");
+    int64_t runs = storeCapture(db_, jobId, result, screenshots, std::nullopt);
     tx.commit();
-    return static_cast<int64_t>(runs->size());
+    return runs;
+  });
+}
+
+Result<int64_t> Store::ingestCapture(const Lease& lease, const json& result,
+                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  if (!result.is_object()) return makeError("result: must be a JSON object");
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return detail::guarded<int64_t>("ingesting the capture result", [&]() -> Result<int64_t> {
+    Transaction tx(db_, Transaction::Kind::Write);
+    if (!detail::holdsLease(db_, lease)) return makeError(detail::lostLease(db_, lease));
+    int64_t runs = storeCapture(db_, lease.jobId, result, screenshots, lease.host);
+    detail::finishHeld(db_, lease, JobStatus::Done, std::nullopt);
+    tx.commit();
+    return runs;
   });
 }
 

@@ -41,8 +41,17 @@ Result<std::optional<int64_t>> checkPage(const Page& page);
 // Job rows: kJobColumns in this order, read by readJob.
 inline constexpr const char* kJobColumns =
     "id, status, spec, progress_done, progress_total, progress_current, error, attempts, idempotency_key, "
-    "created_at, started_at, finished_at, worker_pid";
+    "created_at, started_at, finished_at, worker_pid, host, lease_expires_ms, max_attempts, attempt_errors, "
+    "device_requirement";
 Job readJob(const Statement& row);
+
+// Leases (jobs.cpp). holdsLease: the job is running under `lease` (on
+// PostgreSQL its row is then locked until the transaction ends).
+// finishHeld: done | failed, counted on the host; inside the caller's
+// transaction, after holdsLease. lostLease: why a lease no longer holds.
+bool holdsLease(Connection* db, const Lease& lease);
+void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std::optional<std::string>& error);
+std::string lostLease(Connection* db, const Lease& lease);
 
 // Run rows: kRunSelect (+ WHERE ...) read by readRunRow.
 extern const char* const kRunSelect;

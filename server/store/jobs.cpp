@@ -25,6 +25,11 @@ Job readJob(const Statement& row) {
   job.startedAt = row.getOptText(10);
   job.finishedAt = row.getOptText(11);
   job.workerPid = row.getOptInt(12);
+  job.host = row.getOptText(13);
+  job.leaseExpiresMs = row.getOptInt(14);
+  job.maxAttempts = static_cast<int>(row.getInt(15));
+  job.attemptErrors = row.getJson(16);
+  job.deviceRequirement = row.getJson(17);
   return job;
 }
 
@@ -49,10 +54,14 @@ std::optional<Job> returnedJob(Statement& statement) {
 
 }  // namespace
 
-Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey) {
+Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+                                    int maxAttempts) {
   if (idempotencyKey && (idempotencyKey->empty() || idempotencyKey->size() > 255)) {
     return makeError("idempotency_key: must be 1 to 255 characters");
   }
+  if (maxAttempts < 1) return makeError("max_attempts: must be at least 1");
+  auto requirement = parseDeviceRequirement(spec);
+  if (!requirement) return makeError(requirement.error());
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<CreatedJob>("createJob", [&]() -> Result<CreatedJob> {
@@ -67,9 +76,16 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
         return out;  // nothing written; the transaction rolls back
       }
     }
-    Statement insert(db_, std::string("INSERT INTO jobs (spec, idempotency_key) VALUES (?1, ?2) RETURNING ") +
-                              kJobColumns);
-    insert.bind(1, spec).bind(2, idempotencyKey);
+    Statement insert(db_,
+                     std::string("INSERT INTO jobs (spec, idempotency_key, max_attempts, device_requirement) "
+                                 "VALUES (?1, ?2, ?3, ?4) RETURNING ") +
+                         kJobColumns);
+    insert.bind(1, spec).bind(2, idempotencyKey).bind(3, maxAttempts);
+    if (*requirement) {
+      insert.bind(4, (*requirement)->toJson());
+    } else {
+      insert.bind(4, nullptr);
+    }
     out.job = returnedJob(insert).value();
     out.created = true;
     tx.commit();
@@ -78,22 +94,162 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
 }
 
 Result<std::optional<Job>> Store::claimNextJob(int64_t workerPid) {
+  Claimer claimer;
+  claimer.workerPid = workerPid;
+  return claimNextJob(claimer);
+}
+
+Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
+  if (claimer.leaseMs < 1) return makeError("lease: must be at least 1 ms");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("claimNextJob", [&]() -> Result<std::optional<Job>> {
     Transaction tx(db_, Transaction::Kind::Write);
+    // Candidates in queue order, a page at a time, filtered here by device;
+    // only the one taken is locked, so other claimers pass over it and take
+    // the next (SKIP LOCKED) instead of waiting.
+    Statement page(db_,
+                   "SELECT id, device_requirement FROM jobs WHERE status = 'queued' AND id > ?1 "
+                   "ORDER BY id LIMIT 64");
+    Statement lockOne(db_, std::string("SELECT id FROM jobs WHERE id = ?1 AND status = 'queued'") +
+                               skipLockedSql(*db_));
+    std::optional<int64_t> chosen;
+    int64_t after = 0;
+    while (!chosen) {
+      page.reset();
+      page.bind(1, after);
+      std::vector<std::pair<int64_t, json>> candidates;
+      while (page.step()) candidates.emplace_back(page.getInt(0), page.getJson(1));
+      if (candidates.empty()) break;
+      after = candidates.back().first;
+      for (const auto& [id, requirement] : candidates) {
+        if (!requirement.is_null()) {
+          if (claimer.device.is_null()) continue;
+          auto parsed = deviceRequirementFromJson(requirement);
+          if (!parsed || !deviceMismatch(*parsed, claimer.device).empty()) continue;
+        }
+        lockOne.reset();
+        lockOne.bind(1, id);
+        if (lockOne.step()) {
+          lockOne.run();
+          chosen = id;
+          break;
+        }
+      }
+    }
+    if (!chosen) return std::optional<Job>();
     Statement claim(
         db_, std::string("UPDATE jobs SET status = 'running', attempts = attempts + 1, started_at = ") +
                  nowSql(*db_) +
                  ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
-                 "worker_pid = ?1 "
-                 "WHERE id = (SELECT id FROM jobs WHERE status = 'queued' ORDER BY id LIMIT 1) "
-                 "RETURNING " +
-                 kJobColumns);
-    claim.bind(1, workerPid > 0 ? std::optional<int64_t>(workerPid) : std::nullopt);
+                 "worker_pid = ?1, host = ?2, lease_expires_ms = " +
+                 nowMsSql(*db_) + " + ?3 WHERE id = ?4 RETURNING " + kJobColumns);
+    claim.bind(1, claimer.workerPid > 0 ? std::optional<int64_t>(claimer.workerPid) : std::nullopt)
+        .bind(2, claimer.host.empty() ? std::optional<std::string>() : std::optional(claimer.host))
+        .bind(3, claimer.leaseMs)
+        .bind(4, *chosen);
     auto job = returnedJob(claim);
+    if (!claimer.host.empty()) {
+      Statement host(db_, "UPDATE hosts SET current_job = ?1 WHERE name = ?2");
+      host.bind(1, *chosen).bind(2, claimer.host).run();
+    }
     tx.commit();
     return job;
+  });
+}
+
+namespace {
+
+// The job row, locked until the transaction ends, if `lease` still holds it.
+bool holds(Connection* db, const Lease& lease) {
+  Statement query(db, std::string("SELECT 1 FROM jobs WHERE id = ?1 AND status = 'running' AND attempts = ?2 "
+                                   "AND host = ?3") +
+                          (db->engine() == Engine::Postgres ? " FOR UPDATE" : ""));
+  query.bind(1, lease.jobId).bind(2, lease.attempt).bind(3, lease.host);
+  bool held = query.step();
+  query.run();
+  return held;
+}
+
+}  // namespace
+
+namespace detail {
+
+std::string lostLease(Connection* db, const Lease& lease) {
+  auto job = findJob(db, lease.jobId);
+  std::string now = !job ? "gone"
+                         : std::string(toString(job->status)) + ", attempt " + std::to_string(job->attempts) +
+                               (job->host ? " on " + *job->host : "");
+  return "job " + std::to_string(lease.jobId) + " attempt " + std::to_string(lease.attempt) +
+         " is no longer held by " + lease.host + " (now " + now + ")";
+}
+
+bool holdsLease(Connection* db, const Lease& lease) { return holds(db, lease); }
+
+}  // namespace detail
+
+Result<bool> Store::renewLease(const Lease& lease, int64_t leaseMs) {
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return guarded<bool>("renewLease", [&]() -> Result<bool> {
+    Statement renew(db_, std::string("UPDATE jobs SET lease_expires_ms = ") + nowMsSql(*db_) +
+                             " + ?1 WHERE id = ?2 AND status = 'running' AND attempts = ?3 AND host = ?4");
+    renew.bind(1, leaseMs).bind(2, lease.jobId).bind(3, lease.attempt).bind(4, lease.host).run();
+    return db_->changes() > 0;
+  });
+}
+
+Result<Recovery> Store::requeueExpired() {
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return guarded<Recovery>("requeueExpired", [&]() -> Result<Recovery> {
+    Transaction tx(db_, Transaction::Kind::Write);
+    Statement expired(db_, std::string("SELECT id, attempts, max_attempts, host, attempt_errors, ") +
+                               nowMsSql(*db_) + " - lease_expires_ms FROM jobs WHERE status = 'running' AND "
+                               "lease_expires_ms < " + nowMsSql(*db_) + " ORDER BY id" + skipLockedSql(*db_));
+    struct Expired {
+      int64_t id, attempts, maxAttempts;
+      std::string host;
+      json errors;
+      int64_t agoMs;
+    };
+    std::vector<Expired> found;
+    while (expired.step()) {
+      found.push_back({expired.getInt(0), expired.getInt(1), expired.getInt(2),
+                       expired.getOptText(3).value_or("an unnamed host"), expired.getJson(4), expired.getInt(5)});
+    }
+    Statement requeue(db_,
+                      "UPDATE jobs SET status = 'queued', worker_pid = NULL, lease_expires_ms = NULL, "
+                      "progress_done = 0, progress_current = NULL, attempt_errors = ?2 WHERE id = ?1");
+    Statement fail(db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, lease_expires_ms = "
+                                    "NULL, attempt_errors = ?2, error = ?3, finished_at = ") +
+                            nowSql(*db_) + " WHERE id = ?1");
+    Statement freeHost(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
+    Recovery recovery;
+    for (auto& job : found) {
+      if (!job.errors.is_array()) job.errors = json::array();
+      job.errors.push_back("attempt " + std::to_string(job.attempts) + " on " + job.host +
+                           ": lease expired (not renewed for " + std::to_string(job.agoMs / 1000) +
+                           " s past its end; the host died or lost the database)");
+      if (job.attempts < job.maxAttempts) {
+        requeue.reset();
+        requeue.bind(1, job.id).bind(2, job.errors).run();
+        recovery.requeued.push_back(job.id);
+      } else {
+        std::string reasons;
+        for (const auto& e : job.errors) reasons += (reasons.empty() ? "" : "; ") + e.get<std::string>();
+        fail.reset();
+        fail.bind(1, job.id)
+            .bind(2, job.errors)
+            .bind(3, "failed after " + std::to_string(job.attempts) + " attempts: " + reasons)
+            .run();
+        recovery.failed.push_back(job.id);
+      }
+      freeHost.reset();
+      freeHost.bind(1, job.host).bind(2, job.id).run();
+    }
+    tx.commit();
+    return recovery;
   });
 }
 
@@ -134,6 +290,37 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
   });
 }
 
+Result<bool> Store::finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error) {
+  if (status != JobStatus::Done && status != JobStatus::Failed) {
+    return makeError(std::string("finishJob: status must be done or failed, got ") + toString(status));
+  }
+  if (status == JobStatus::Done) error.reset();
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return guarded<bool>("finishJob", [&]() -> Result<bool> {
+    Transaction tx(db_, Transaction::Kind::Write);
+    if (!holds(db_, lease)) return false;
+    detail::finishHeld(db_, lease, status, error);
+    tx.commit();
+    return true;
+  });
+}
+
+namespace detail {
+
+void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std::optional<std::string>& error) {
+  Statement update(db, std::string("UPDATE jobs SET status = ?1, error = ?2, lease_expires_ms = NULL, "
+                                   "finished_at = ") +
+                           nowSql(*db) + " WHERE id = ?3");
+  update.bind(1, toString(status)).bind(2, error).bind(3, lease.jobId).run();
+  Statement host(db, status == JobStatus::Done
+                         ? "UPDATE hosts SET jobs_done = jobs_done + 1, current_job = NULL WHERE name = ?1"
+                         : "UPDATE hosts SET jobs_failed = jobs_failed + 1, current_job = NULL WHERE name = ?1");
+  host.bind(1, lease.host).run();
+}
+
+}  // namespace detail
+
 Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -161,7 +348,7 @@ Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& pag
   std::lock_guard lock(mutex_);
   return guarded<JobPage>("listJobs", [&]() -> Result<JobPage> {
     Statement query(db_, std::string("SELECT ") + kJobColumns +
-                             " FROM jobs WHERE (?1 IS NULL OR status = ?1) AND (?2 IS NULL OR id < ?2) "
+                             " FROM jobs WHERE (CAST(?1 AS TEXT) IS NULL OR status = ?1) AND (CAST(?2 AS BIGINT) IS NULL OR id < ?2) "
                              "ORDER BY id DESC LIMIT ?3");
     query.bind(1, status ? std::optional<std::string>(toString(*status)) : std::nullopt)
         .bind(2, *after)
@@ -190,16 +377,18 @@ Result<std::map<std::string, int64_t>> Store::jobCounts() {
   });
 }
 
-Result<Recovery> Store::requeueInterrupted(int maxAttempts) {
+Result<Recovery> Store::requeueInterrupted(int maxAttempts, std::optional<std::string> host) {
   if (maxAttempts < 1) return makeError("maxAttempts: must be at least 1");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueInterrupted", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' ORDER BY id");
+    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' AND "
+                           "(CAST(?1 AS TEXT) IS NULL OR host = ?1 OR host IS NULL) ORDER BY id");
+    running.bind(1, host);
     Statement requeue(db_,
                       "UPDATE jobs SET status = 'queued', worker_pid = NULL, progress_done = 0, "
-                      "progress_current = NULL WHERE id = ?1");
+                      "progress_current = NULL, lease_expires_ms = NULL WHERE id = ?1");
     Statement fail(
         db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, error = ?2, finished_at = ") +
                  nowSql(*db_) + " WHERE id = ?1");

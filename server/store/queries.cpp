@@ -25,7 +25,7 @@ const char* const kRunSelect =
     "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
     "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
     "(SELECT AVG(s.footprint_bytes) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id) "
+    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id), r.host "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -60,6 +60,7 @@ RunRow readRunRow(const Statement& row) {
   run.footprintBlockBytes = row.getOptInt(27);
   run.meanFootprintBytes = row.getOptDouble(28);
   run.meanFootprintRequestedBytes = row.getOptDouble(29);
+  run.host = row.getOptText(30);
   return run;
 }
 
@@ -74,6 +75,7 @@ std::string runFilterSql(const RunFilter& f) {
   if (f.deviceId) sql += " AND r.device_id = ?";
   if (f.deviceName) sql += " AND r.device_id IN (SELECT id FROM devices WHERE name = ?)";
   if (f.jobId) sql += " AND r.job_id = ?";
+  if (f.host) sql += " AND r.host = ?";
   if (!f.runIds.empty()) {
     sql += " AND r.id IN (?";
     for (size_t i = 1; i < f.runIds.size(); ++i) sql += ", ?";  // placeholders only
@@ -94,6 +96,7 @@ int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
   if (f.deviceId) statement.bind(i++, *f.deviceId);
   if (f.deviceName) statement.bind(i++, *f.deviceName);
   if (f.jobId) statement.bind(i++, *f.jobId);
+  if (f.host) statement.bind(i++, *f.host);
   for (int64_t id : f.runIds) statement.bind(i++, id);
   if (f.createdSince) statement.bind(i++, *f.createdSince);
   if (f.createdUntil) {

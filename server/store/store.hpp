@@ -58,6 +58,71 @@ struct Job {
   std::optional<std::string> startedAt;  // last claim
   std::optional<std::string> finishedAt;
   std::optional<int64_t> workerPid;
+  // The fleet (0007): the host that holds the job (running) or last held it;
+  // when the holder's lease ends unless renewed (ms since 1970, the
+  // database's clock); claims allowed; why each earlier attempt ended (JSON
+  // array of strings); the spec's device requirement, normalised (null: any).
+  std::optional<std::string> host;
+  std::optional<int64_t> leaseExpiresMs;
+  int maxAttempts = 3;
+  nlohmann::json attemptErrors = nlohmann::json::array();
+  nlohmann::json deviceRequirement;
+};
+
+// ---- the fleet: device requirements, hosts, leases ---------------------------
+
+// A spec's "device": a string (a substring of the device name) or
+// {"name": substring, "vendor": "NVIDIA" | "0x10DE", "features": [names]}.
+// Matching ignores case; features must be true in the device's "features".
+struct DeviceRequirement {
+  std::optional<std::string> name;
+  std::optional<std::string> vendor;
+  std::vector<std::string> features;
+  nlohmann::json toJson() const;  // {"name"?, "vendor"?, "features"?}
+};
+// From spec["device"]; empty when the spec has none. Errors name the field.
+Result<std::optional<DeviceRequirement>> parseDeviceRequirement(const nlohmann::json& spec);
+Result<DeviceRequirement> deviceRequirementFromJson(const nlohmann::json& value);
+// Why `device` (a result-style device object: name, vendorID, features) does
+// not meet the requirement; empty when it does.
+std::string deviceMismatch(const DeviceRequirement& requirement, const nlohmann::json& device);
+// "NVIDIA" for "0x10DE", ... ; the id itself when unknown.
+std::string vendorName(std::string_view vendorId);
+
+struct HostInfo {
+  std::string name;      // unique in the store
+  std::string instance;  // random per process
+  std::string role;      // "worker" | "all"
+  nlohmann::json device;  // result-style device object; null until probed
+  std::optional<std::string> deviceOverride;
+  std::string tallyVersion, tallyCommit;
+};
+
+struct Host {
+  HostInfo info;
+  std::string startedAt;
+  std::string lastHeartbeat;  // UTC ISO-8601
+  double secondsSinceHeartbeat = 0;
+  bool alive = false;  // heartbeat within the stale limit
+  int64_t jobsDone = 0, jobsFailed = 0;
+  std::optional<int64_t> currentJob;
+};
+
+// What a worker offers when it claims.
+struct Claimer {
+  int64_t workerPid = 0;
+  std::string host;       // empty: a single daemon without a host row
+  nlohmann::json device;  // null: only jobs without a device requirement
+  int64_t leaseMs = 30000;
+};
+
+// The claim a worker holds. Every write it makes for the job (renewals,
+// progress, ingest, finish) is checked against it, so a worker whose lease
+// expired and whose job was claimed again cannot store or finish it.
+struct Lease {
+  int64_t jobId = 0;
+  int attempt = 0;
+  std::string host;
 };
 
 struct CreatedJob {
@@ -94,6 +159,7 @@ struct RunFilter {
   std::optional<int64_t> deviceId;
   std::optional<std::string> deviceName;  // exact device name
   std::optional<int64_t> jobId;
+  std::optional<std::string> host;  // exact host name
   std::vector<int64_t> runIds;  // any of these runs (at most 1000); empty: any run
   // Creation time bounds, as prefixes of the stored UTC ISO-8601 text
   // ("2026-11-21", "2026-11-21T06:30"): since is compared with created_at,
@@ -146,6 +212,7 @@ struct RunRow {
   // (reuse = footprintRequested / footprint). Absent when no sample has one.
   std::optional<int64_t> footprintBlockBytes;
   std::optional<double> meanFootprintBytes, meanFootprintRequestedBytes;
+  std::optional<std::string> host;  // the host it was captured on (0007); absent before
 };
 
 struct RunPage {
@@ -341,15 +408,31 @@ class Store {
 
   // Jobs (the persistent queue; the worker drives the transitions).
   // A repeated idempotency key returns the existing job (created = false).
-  Result<CreatedJob> createJob(const nlohmann::json& spec, std::optional<std::string> idempotencyKey = {});
+  // The spec's "device" is stored as its requirement (an error names a bad one).
+  Result<CreatedJob> createJob(const nlohmann::json& spec, std::optional<std::string> idempotencyKey = {},
+                               int maxAttempts = 3);
   // Oldest queued job -> running, attempts + 1, started_at, worker_pid; empty when none.
   Result<std::optional<Job>> claimNextJob(int64_t workerPid = 0);
+  // The oldest queued job whose device requirement the claimer's device
+  // meets -> running, held by claimer.host under a lease of leaseMs. On
+  // PostgreSQL the candidates are locked FOR UPDATE SKIP LOCKED, so claimers
+  // on many hosts never take one job twice and never wait on each other.
+  Result<std::optional<Job>> claimNextJob(const Claimer& claimer);
+  // Extends the lease; false when the job is no longer held under `lease`
+  // (cancelled, or expired and claimed again): stop working on it.
+  Result<bool> renewLease(const Lease& lease, int64_t leaseMs);
+  // Running jobs whose lease ended (their host died or lost the database):
+  // queued again with the reason in attempt_errors, or failed with every
+  // reason once max_attempts claims were used.
+  Result<Recovery> requeueExpired();
   // False when the job is no longer running (cancelled meanwhile): stop working on it.
   Result<bool> updateProgress(int64_t jobId, int64_t done, int64_t total,
                               std::optional<std::string> current = {});
   // running -> done | failed (with error). False when the job was not running
   // (e.g. cancelled meanwhile: it stays cancelled).
   Result<bool> finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error = {});
+  // As above, only while `lease` holds the job; counts the job on the host.
+  Result<bool> finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error = {});
   // queued | running -> cancelled; a finished job is returned unchanged. Empty: no such job.
   Result<std::optional<Job>> cancelJob(int64_t jobId);
   // Jobs by status ("queued", "running", "done", "failed", "cancelled"), each present.
@@ -357,9 +440,18 @@ class Store {
   Result<std::optional<Job>> getJob(int64_t jobId);
   // Newest first, cursor-paginated like listRuns; status empty: every status.
   Result<JobPage> listJobs(std::optional<JobStatus> status, const Page& page);
-  // Start-up recovery: every running job goes back to queued when attempts <
-  // maxAttempts, else to failed with "interrupted N times".
-  Result<Recovery> requeueInterrupted(int maxAttempts);
+  // Start-up recovery: every running job (of `host`, when given: other
+  // hosts' jobs are theirs) goes back to queued when attempts < maxAttempts,
+  // else to failed with "interrupted N times".
+  Result<Recovery> requeueInterrupted(int maxAttempts, std::optional<std::string> host = {});
+
+  // Hosts. Registers (or re-registers) a worker under its name; refused
+  // while another live instance (heartbeat within staleAfterMs) holds the name.
+  Result<bool> registerHost(const HostInfo& info, int64_t staleAfterMs);
+  // The host's heartbeat and current job; false when another instance took the name.
+  Result<bool> heartbeat(const std::string& name, const std::string& instance, std::optional<int64_t> currentJob);
+  // Every host by name, alive when its heartbeat is within staleAfterMs.
+  Result<std::vector<Host>> listHosts(int64_t staleAfterMs);
 
   // Stores a whole capture result (docs/result-schema.md) for a job, in one
   // transaction: all of it or none of it. Idempotent: the job's previously
@@ -370,6 +462,12 @@ class Store {
   // runs stored.
   Result<int64_t> ingestCapture(int64_t jobId, const nlohmann::json& result,
                                 const std::map<std::string, std::vector<uint8_t>>& screenshots);
+  // A worker's ingest: the same, only while `lease` holds the job, with the
+  // runs stamped with lease.host, and the job finished as done (and counted
+  // on its host) in the same transaction: a job is done exactly when its
+  // result is stored, and an attempt that lost its lease stores nothing.
+  Result<int64_t> ingestCapture(const Lease& lease, const nlohmann::json& result,
+                                const std::map<std::string, std::vector<uint8_t>>& screenshots);
 
   // Stores a whole sweep result (docs/result-schema.md, "Sweep results") for
   // a job, in one transaction, after checking its frame: sweep, device,
@@ -379,6 +477,7 @@ class Store {
   // previous sweep is replaced. Does not change the job's status. Returns the
   // sweep's id.
   Result<int64_t> ingestSweep(int64_t jobId, const nlohmann::json& result);
+  Result<int64_t> ingestSweep(const Lease& lease, const nlohmann::json& result);  // as ingestCapture(lease)
 
   // Queries.
   // Every device a capture was ingested from, by id.
