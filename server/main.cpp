@@ -70,8 +70,29 @@ int main(int argc, char** argv) {
   repeats->add_flag("--json", repeatsArgs.json, "JSON groups instead of the table");
 
   tally::cli::ServeArgs serveArgs;
+  tally::cli::DeviceArgs deviceArgs;
+  auto* deviceCmd = app.add_subcommand("device", "Show the Vulkan device captures run on (what a fleet worker registers)");
+  deviceCmd->add_option("--device", deviceArgs.device, "Device index or name substring");
+  deviceCmd->add_flag("--json", deviceArgs.json, "The device object a result records, as JSON");
+
   auto* serve = app.add_subcommand("serve", "Serve the REST API and dashboard; run queued captures");
-  serve->add_option("--db", serveArgs.db, "SQLite database file (default: $XDG_DATA_HOME/tally/tally.db)");
+  serve->add_option("--db,--store", serveArgs.db,
+                    "SQLite database file (default: $XDG_DATA_HOME/tally/tally.db), or a postgresql:// URL that a "
+                    "fleet of daemons shares (docs/fleet.md)");
+  serve->add_option("--role", serveArgs.role,
+                    "api: serve REST and the dashboard; worker: claim and run captures; all: both")
+      ->capture_default_str()->check(CLI::IsMember({"api", "worker", "all"}));
+  serve->add_option("--host-name", serveArgs.hostName,
+                    "This daemon's name among the fleet's hosts (default: the machine's host name)");
+  serve->add_option("--device-name-override", serveArgs.deviceNameOverride,
+                    "Register and record this device name instead of the real one (tests; sites naming their GPUs)");
+  serve->add_option("--lease", serveArgs.leaseSeconds,
+                    "Seconds a worker's claim on a job lasts unless renewed (every third of it)")
+      ->capture_default_str()->check(CLI::Range(1.0, 3600.0));
+  serve->add_option("--stale-after", serveArgs.staleSeconds, "Seconds without a heartbeat before a host is not alive")
+      ->capture_default_str()->check(CLI::Range(1.0, 86400.0));
+  serve->add_option("--max-attempts", serveArgs.maxAttempts, "Claims of a job before it fails with their reasons")
+      ->capture_default_str()->check(CLI::Range(1, 100));
   serve->add_option("--bind", serveArgs.bind, "Address to listen on")->capture_default_str();
   serve->add_option("--port", serveArgs.port, "Port (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
   serve->add_option("--token-file", serveArgs.tokenFile, "Token file (required off loopback)");
@@ -120,6 +141,7 @@ int main(int argc, char** argv) {
   if (*play) return tally::cli::runPlay(playArgs);
   if (*accuracy) return tally::cli::runAccuracy(accuracyArgs);
   if (*repeats) return tally::cli::runRepeats(repeatsArgs);
+  if (*deviceCmd) return tally::cli::runDevice(deviceArgs);
   if (*serve) return tally::cli::runServe(serveArgs);
   return 2;
 }

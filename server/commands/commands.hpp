@@ -87,8 +87,22 @@ struct RepeatsArgs {
 // identical.
 int runRepeats(const RepeatsArgs& args);
 
+struct DeviceArgs {
+  std::string device;  // index or name substring; "": the first discrete GPU
+  bool json = false;
+};
+
+// Prints the device captures would run on (its result "device" object with --json).
+int runDevice(const DeviceArgs& args);
+
 struct ServeArgs {
-  std::string db;                   // SQLite file (created and migrated); "": $XDG_DATA_HOME/tally/tally.db
+  std::string db;                   // SQLite file or postgresql:// URL; "": $XDG_DATA_HOME/tally/tally.db
+  std::string role = "all";         // api | worker | all (docs/fleet.md)
+  std::string hostName;             // this daemon's name among the hosts; "": gethostname()
+  std::string deviceNameOverride;   // report this device name instead of the real one
+  double leaseSeconds = 30;         // a claimed job's lease; renewed every third of it
+  double staleSeconds = 30;         // a host without a heartbeat this long is not alive
+  int maxAttempts = 3;              // claims of a job before it fails
   std::string bind = "127.0.0.1";
   int port = 8377;                  // protocol::kDefaultPort; 0: an ephemeral port (printed)
   std::string tokenFile;            // required for a non-loopback bind

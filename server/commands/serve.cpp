@@ -1,11 +1,15 @@
 // tallyd serve: the writer Store, the Worker, the HTTP server; stops cleanly
 // on SIGINT/SIGTERM (a thread waits for them; the handler does nothing else).
+// --role picks the parts: api (HTTP only), worker (the Worker only, as one
+// host of a fleet sharing a PostgreSQL store), all (both; docs/fleet.md).
 #include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
 #include <filesystem>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 #include <utility>
@@ -17,6 +21,7 @@
 #include "common/metrics.hpp"
 #include "common/paths.hpp"
 #include "common/version.hpp"
+#include "jobs/child_process.hpp"
 #include "jobs/worker.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
@@ -25,6 +30,36 @@
 
 namespace tally::cli {
 namespace {
+
+// The device this worker captures on, probed in a child process (a broken
+// driver ends the probe, not the daemon): `tallyd device --json`. Null, with
+// a warning, when there is none: the worker then takes only jobs that name
+// no device.
+nlohmann::json probeDevice(const std::string& self, const std::string& selector) {
+  char path[] = "/tmp/tally-device-XXXXXX";
+  int fd = mkstemp(path);
+  if (fd < 0) return nullptr;
+  close(fd);
+  jobs::ChildOptions child;
+  child.argv = {self, "device", "--json"};
+  if (!selector.empty()) child.argv.insert(child.argv.end(), {"--device", selector});
+  child.deadline = std::chrono::seconds(60);
+  child.stdoutPath = path;
+  auto ran = jobs::runChild(child);
+  nlohmann::json device;
+  if (ran && ran->ok()) {
+    std::ifstream in(path);
+    device = nlohmann::json::parse(in, nullptr, false);
+    if (device.is_discarded() || !device.is_object()) device = nullptr;
+  }
+  if (device.is_null()) {
+    log::warning(std::string("no capture device found (") + (ran ? ran->reason() : ran.error()) +
+                 "); this worker takes only jobs that name no device");
+  }
+  std::filesystem::remove(path);
+  return device;
+}
+
 
 // The daemon's own families (the HTTP server declares its own).
 void declareMetrics(metrics::Registry& m) {
@@ -66,6 +101,10 @@ int runServe(const ServeArgs& args) {
   pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
   signal(SIGPIPE, SIG_IGN);
 
+  const bool serveHttp = args.role != "worker";
+  const bool runWorker = args.role != "api";
+  const bool postgres = store::isPostgresUrl(args.db);
+
   // The defaults: the user's data folder for the database, the installed
   // dashboard (the unit passes --db /var/lib/tally/tally.db).
   std::string dbPath = args.db;
@@ -82,8 +121,9 @@ int runServe(const ServeArgs& args) {
     }
     dbPath = (*state / "tally.db").string();
   }
+  const std::string dbName = postgres ? store::redactUrl(dbPath) : dbPath;
   std::string webRoot = args.web;
-  if (webRoot.empty()) {
+  if (webRoot.empty() && serveHttp) {
     auto data = dataDirectory();
     if (!data || !fs::is_directory(*data / "web", ec)) {
       std::fprintf(stderr, "tallyd serve: no dashboard to serve (%s); give --web\n",
@@ -92,10 +132,16 @@ int runServe(const ServeArgs& args) {
     }
     webRoot = (*data / "web").string();
   }
+  std::string hostName = args.hostName;
+  if (hostName.empty()) {
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    hostName = name;
+  }
 
   auto writer = store::Store::open(dbPath);
   if (!writer) {
-    std::fprintf(stderr, "tallyd serve: %s: %s\n", dbPath.c_str(), writer.error().c_str());
+    std::fprintf(stderr, "tallyd serve: %s: %s\n", dbName.c_str(), writer.error().c_str());
     return 1;
   }
 
@@ -107,10 +153,16 @@ int runServe(const ServeArgs& args) {
   for (const char* status : {"done", "failed", "cancelled"}) metrics.add("tally_jobs_finished_total", {{"status", status}}, 0);
   std::mutex deviceMutex;
 
+  const auto lease = std::chrono::milliseconds(int64_t(args.leaseSeconds * 1000));
+  const auto staleAfter = std::chrono::milliseconds(int64_t(args.staleSeconds * 1000));
   jobs::WorkerOptions workerOptions;
   workerOptions.tallydPath = self.string();
   workerOptions.device = args.device;
   workerOptions.deadline = std::chrono::seconds(args.jobDeadlineSeconds);
+  workerOptions.maxAttempts = args.maxAttempts;
+  workerOptions.lease = lease;
+  workerOptions.staleAfter = staleAfter;
+  workerOptions.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
   workerOptions.onFinished = [&](const jobs::JobOutcome& outcome) {
     metrics.add("tally_jobs_finished_total", {{"status", outcome.status}});
     metrics.observe("tally_capture_duration_seconds", {{"kind", outcome.kind}, {"status", outcome.status}},
@@ -121,10 +173,75 @@ int runServe(const ServeArgs& args) {
       metrics.set("tally_device_info", {{"selector", selector}, {"device", outcome.device}}, 1);
     }
   };
+  if (runWorker) {
+    workerOptions.host.name = hostName;
+    workerOptions.host.instance = jobs::Worker::newInstance();
+    workerOptions.host.role = args.role;
+    workerOptions.host.tallyVersion = std::string(version());
+    workerOptions.host.tallyCommit = std::string(gitCommit());
+    workerOptions.host.device = probeDevice(self.string(), args.device);
+    if (!args.deviceNameOverride.empty()) {
+      workerOptions.deviceNameOverride = args.deviceNameOverride;
+      workerOptions.host.deviceOverride = args.deviceNameOverride;
+      if (workerOptions.host.device.is_object()) {
+        workerOptions.host.device["name_reported"] = workerOptions.host.device.value("name", "");
+        workerOptions.host.device["name"] = args.deviceNameOverride;
+      }
+    }
+  }
   jobs::Worker worker(**writer, workerOptions);
-  if (auto recovered = worker.recover(); !recovered) {
-    std::fprintf(stderr, "tallyd serve: recovery: %s\n", recovered.error().c_str());
-    return 1;
+  if (runWorker) {
+    if (auto recovered = worker.recover(); !recovered) {
+      std::fprintf(stderr, "tallyd serve: %s\n", recovered.error().c_str());
+      return 1;
+    }
+  }
+
+  // Without a worker here, something must still notice workers that died:
+  // the API daemon reaps expired leases on the worker's schedule.
+  std::mutex reaperMutex;
+  std::condition_variable reaperWake;
+  bool reaperStop = false;
+  std::thread reaper;
+  if (!runWorker) {
+    reaper = std::thread([&] {
+      auto store = store::Store::open(dbPath);
+      std::unique_lock lock(reaperMutex);
+      while (!reaperStop) {
+        if (store) {
+          lock.unlock();
+          auto reaped = (*store)->requeueExpired();
+          if (reaped) {
+            for (int64_t id : reaped->requeued) log::warning("lease expired; queued again", id);
+            for (int64_t id : reaped->failed) log::error("lease expired on its last attempt; failed", id);
+          }
+          lock.lock();
+        }
+        reaperWake.wait_for(lock, std::max(lease / 3, std::chrono::milliseconds(100)), [&] { return reaperStop; });
+      }
+    });
+  }
+  auto stopReaper = [&] {
+    {
+      std::lock_guard lock(reaperMutex);
+      reaperStop = true;
+    }
+    reaperWake.notify_all();
+    if (reaper.joinable()) reaper.join();
+  };
+
+  if (!serveHttp) {
+    worker.start();
+    std::printf("tallyd: worker %s on %s, database %s\n", hostName.c_str(),
+                workerOptions.host.device.is_object() ? workerOptions.host.device.value("name", "").c_str() : "no device",
+                dbName.c_str());
+    std::fflush(stdout);
+    log::info(versionLine("tallyd") + " worker " + hostName + " database " + dbName + " device " + selector);
+    int received = 0;
+    sigwait(&stopSignals, &received);
+    worker.stop();
+    log::info("stopped");
+    return 0;
   }
 
   service::ServiceContext context;
@@ -133,6 +250,8 @@ int runServe(const ServeArgs& args) {
   context.rendererNames = renderers::rendererNames();
   for (const auto& folder : args.scenes) context.options.sceneFolders.emplace_back(folder);
   context.options.allowApplications = args.allowApplications;
+  context.options.staleAfterMs = staleAfter.count();
+  context.options.maxAttempts = args.maxAttempts;
   context.onJobQueued = [&worker] { worker.wake(); };
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
@@ -144,6 +263,7 @@ int runServe(const ServeArgs& args) {
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
     }
+    if (postgres) return;  // the server's files are not this host's
     for (const auto& [file, suffix] : {std::pair{"db", ""}, std::pair{"wal", "-wal"}, std::pair{"shm", "-shm"}}) {
       std::error_code sizeError;
       auto bytes = fs::file_size(dbPath + suffix, sizeError);
@@ -170,25 +290,28 @@ int runServe(const ServeArgs& args) {
   auto server = api::HttpServer::create(options, std::move(router));
   if (!server) {
     std::fprintf(stderr, "tallyd serve: %s\n", server.error().c_str());
+    stopReaper();
     return 1;
   }
 
-  worker.start();
+  if (runWorker) worker.start();
   std::thread signals([&] {
     int received = 0;
     sigwait(&stopSignals, &received);
     (*server)->stop();
   });
   std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), (*server)->port());
-  std::printf("tallyd: database %s, dashboard %s\n", dbPath.c_str(), webRoot.c_str());
+  std::printf("tallyd: database %s, dashboard %s\n", dbName.c_str(), webRoot.c_str());
   std::fflush(stdout);
   log::info(versionLine("tallyd") + " serving http://" + args.bind + ":" + std::to_string((*server)->port()) +
-            "/ database " + dbPath + " dashboard " + webRoot + " device " + selector);
+            "/ database " + dbName + " dashboard " + webRoot + " role " + args.role +
+            (runWorker ? " host " + hostName + " device " + selector : std::string()));
   (*server)->run();
   // Stopped by a signal, or the server ended on its own: wake the signal thread either way.
   pthread_kill(signals.native_handle(), SIGTERM);
   signals.join();
   worker.stop();
+  stopReaper();
   log::info("stopped");
   return 0;
 }

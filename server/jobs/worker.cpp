@@ -1,6 +1,11 @@
 #include "jobs/worker.hpp"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <random>
 
 #include <cstdio>
 #include <fstream>
@@ -12,6 +17,11 @@
 
 namespace tally::jobs {
 namespace fs = std::filesystem;
+
+namespace {
+// ingest(): the job is no longer this worker's to store (lost lease, or stopping).
+const std::string kLost = "\x01lost";
+}  // namespace
 
 std::optional<ProgressLine> parseProgressLine(const std::string& line) {
   if (line.empty() || line[0] != '[') return std::nullopt;
@@ -34,7 +44,47 @@ std::optional<ProgressLine> parseProgressLine(const std::string& line) {
   }
 }
 
-Worker::Worker(store::Store& writer, WorkerOptions options) : store_(writer), options_(std::move(options)) {}
+namespace {
+
+// This machine, for telling our own dead instances from another machine's live ones.
+std::string machineId() {
+  std::ifstream in("/etc/machine-id");
+  std::string id;
+  if (in >> id && !id.empty()) return id;
+  char name[256] = {};
+  gethostname(name, sizeof name - 1);
+  return name;
+}
+
+}  // namespace
+
+std::string Worker::newInstance() {
+  std::random_device random;
+  char text[32];
+  std::snprintf(text, sizeof text, "%08x", random());
+  return machineId() + ":" + std::to_string(getpid()) + ":" + text;
+}
+
+bool Worker::instanceIsGone(const std::string& instance) {
+  // MACHINE:PID:RANDOM; gone when on this machine and the pid is not running.
+  size_t first = instance.find(':');
+  size_t second = instance.find(':', first == std::string::npos ? 0 : first + 1);
+  if (first == std::string::npos || second == std::string::npos) return false;
+  if (instance.substr(0, first) != machineId()) return false;
+  long pid = std::strtol(instance.c_str() + first + 1, nullptr, 10);
+  if (pid <= 0) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
+Worker::Worker(store::Store& writer, WorkerOptions options) : store_(writer), options_(std::move(options)) {
+  if (options_.host.name.empty()) {
+    char name[256] = {};
+    gethostname(name, sizeof name - 1);
+    options_.host.name = name;
+  }
+  if (options_.host.instance.empty()) options_.host.instance = newInstance();
+  if (options_.host.role.empty()) options_.host.role = "all";
+}
 
 Worker::~Worker() { stop(); }
 
@@ -48,7 +98,10 @@ void Worker::log(log::Level level, std::optional<int64_t> job, const std::string
 }
 
 Result<store::Recovery> Worker::recover() {
-  auto recovery = store_.requeueInterrupted(options_.maxAttempts);
+  if (options_.host.name.empty()) return makeError("worker: no host name");
+  auto registered = store_.registerHost(options_.host, options_.staleAfter.count(), instanceIsGone);
+  if (!registered) return makeError(registered.error());
+  auto recovery = store_.requeueInterrupted(options_.maxAttempts, options_.host.name);
   if (!recovery) return recovery;
   for (int64_t id : recovery->requeued) log(log::Level::kWarning, id, "interrupted, queued again");
   for (int64_t id : recovery->failed) log(log::Level::kError, id, "interrupted too often, failed");
@@ -58,12 +111,64 @@ Result<store::Recovery> Worker::recover() {
 void Worker::start() {
   stopping_ = false;
   thread_ = std::thread([this] { loop(); });
+  if (options_.openHeartbeatStore) heartbeat_ = std::thread([this] { heartbeatLoop(); });
 }
 
 void Worker::stop() {
   stopping_ = true;
   wake();
   if (thread_.joinable()) thread_.join();
+  if (heartbeat_.joinable()) heartbeat_.join();
+}
+
+// Every third of the lease: the host's heartbeat, the current job's lease,
+// and the expired leases of hosts that stopped renewing theirs. A failure
+// (the database unreachable) is logged and tried again at the next beat;
+// the capture in progress goes on.
+void Worker::heartbeatLoop() {
+  std::unique_ptr<store::Store> store;
+  const auto period = std::max(options_.lease / 3, std::chrono::milliseconds(100));
+  std::string lastError;
+  auto report = [&](const std::string& error) {
+    if (error == lastError) return;
+    lastError = error;
+    if (!error.empty()) log(log::Level::kWarning, std::nullopt, "heartbeat: " + error);
+  };
+  while (!stopping_) {
+    if (!store) {
+      auto opened = options_.openHeartbeatStore();
+      if (opened) {
+        store = std::move(*opened);
+      } else {
+        report(opened.error());
+      }
+    }
+    if (store) {
+      int64_t job = currentJob_.load();
+      auto beat = store->heartbeat(options_.host.name, options_.host.instance,
+                                   job ? std::optional<int64_t>(job) : std::nullopt);
+      if (!beat) {
+        report(beat.error());
+      } else {
+        if (!*beat) report("host name '" + options_.host.name + "' was taken over by another daemon");
+        if (job) {
+          store::Lease lease{job, currentAttempt_.load(), options_.host.name};
+          auto renewed = store->renewLease(lease, options_.lease.count());
+          if (renewed && !*renewed && currentJob_.load() == job) leaseLost_ = true;
+        }
+        auto reaped = store->requeueExpired();
+        if (reaped) {
+          for (int64_t id : reaped->requeued) log(log::Level::kWarning, id, "lease expired; queued again");
+          for (int64_t id : reaped->failed) log(log::Level::kError, id, "lease expired on its last attempt; failed");
+          if (*beat) report("");
+        } else {
+          report(reaped.error());
+        }
+      }
+    }
+    std::unique_lock lock(mutex_);
+    cv_.wait_for(lock, period, [this] { return stopping_.load(); });
+  }
 }
 
 void Worker::wake() {
@@ -75,8 +180,13 @@ void Worker::wake() {
 }
 
 void Worker::loop() {
+  store::Claimer claimer;
+  claimer.workerPid = static_cast<int64_t>(getpid());
+  claimer.host = options_.host.name;
+  claimer.device = options_.host.device;
+  claimer.leaseMs = options_.lease.count();
   while (!stopping_) {
-    auto claimed = store_.claimNextJob(static_cast<int64_t>(getpid()));
+    auto claimed = store_.claimNextJob(claimer);
     if (!claimed) {
       log(log::Level::kError, std::nullopt, "worker: cannot claim a job: " + claimed.error());
     } else if (claimed->has_value()) {
@@ -113,10 +223,19 @@ void Worker::runJob(const store::Job& job) {
     outcome.device = device;
     options_.onFinished(outcome);
   };
+  const store::Lease lease{job.id, job.attempts, options_.host.name};
+  currentAttempt_ = job.attempts;
+  leaseLost_ = false;
+  currentJob_ = job.id;
+  struct Release {
+    std::atomic<int64_t>& job;
+    ~Release() { job = 0; }
+  } release{currentJob_};
   auto fail = [&](const std::string& reason) {
     log(log::Level::kError, job.id, "failed: " + reason);
-    auto r = store_.finishJob(job.id, store::JobStatus::Failed, reason);
+    auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
     if (!r) log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
+    if (r && !*r) log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
     finished("failed");
   };
 
@@ -137,8 +256,11 @@ void Worker::runJob(const store::Job& job) {
 
   fs::path specPath = dir / "spec.json", outPath = dir / "result.json";
   {
+    // "device" chose the host; the capture itself does not take it.
+    nlohmann::json content = job.spec;
+    if (content.is_object()) content.erase("device");
     std::ofstream spec(specPath);
-    spec << job.spec.dump();
+    spec << content.dump();
     if (!spec) return fail("cannot write " + specPath.string());
   }
 
@@ -159,6 +281,7 @@ void Worker::runJob(const store::Job& job) {
     if (still && !*still) cancelled = true;
   };
   child.shouldStop = [&] {
+    if (leaseLost_) cancelled = true;
     if (stopping_ || cancelled) return true;
     // A cancel between progress lines: look at the job once a second.
     auto now = std::chrono::steady_clock::now();
@@ -174,7 +297,10 @@ void Worker::runJob(const store::Job& job) {
   auto ran = runChild(child);
   if (stopping_) return;  // left running: recovery at the next start retries it
   if (cancelled) {
-    log(log::Level::kInfo, job.id, "cancelled");
+    auto now = store_.getJob(job.id);
+    bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
+    log(log::Level::kInfo, job.id,
+        wasCancelled ? "cancelled" : "stopped: its lease expired and it was queued again");
     finished("cancelled");
     return;
   }
@@ -187,6 +313,11 @@ void Worker::runJob(const store::Job& job) {
   if (result.is_discarded() || !result.is_object()) return fail("the capture's result is not valid JSON");
   if (result.contains("device") && result["device"].is_object() && result["device"].contains("name") &&
       result["device"]["name"].is_string()) {
+    if (options_.deviceNameOverride) {
+      // The host reports another name (tests pretending to be other GPUs, sites naming theirs).
+      result["device"]["name_reported"] = result["device"]["name"];
+      result["device"]["name"] = *options_.deviceNameOverride;
+    }
     device = result["device"]["name"].get<std::string>();
   }
 
@@ -197,15 +328,12 @@ void Worker::runJob(const store::Job& job) {
       return fail("the sweep's result names sweep " + result.value("sweep", nlohmann::json()).dump() +
                   ", the spec " + job.spec["sweep"].dump());
     }
-    auto sweep = store_.ingestSweep(job.id, result);
-    if (!sweep) return fail("cannot store the sweep: " + sweep.error());
-    auto done = store_.finishJob(job.id, store::JobStatus::Done);
-    if (!done) {
-      log(log::Level::kError, job.id, "cannot finish: " + done.error());
-    } else {
-      log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(*sweep));
-      finished("done");
-    }
+    int64_t sweep = 0;
+    std::string error = ingest(lease, result, {}, /*sweep=*/true, &sweep);
+    if (error == kLost) return;
+    if (!error.empty()) return fail("cannot store the sweep: " + error);
+    log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(sweep));
+    finished("done");
     return;
   }
 
@@ -228,14 +356,40 @@ void Worker::runJob(const store::Job& job) {
     return fail(std::string("the capture's result is malformed: ") + e.what());
   }
 
-  auto ingested = store_.ingestCapture(job.id, result, screenshots);
-  if (!ingested) return fail("cannot store the result: " + ingested.error());
-  auto done = store_.finishJob(job.id, store::JobStatus::Done);
-  if (!done) {
-    log(log::Level::kError, job.id, "cannot finish: " + done.error());
-  } else {
-    log(log::Level::kInfo, job.id, "done, " + std::to_string(*ingested) + " runs");
-    finished("done");
+  int64_t runs = 0;
+  std::string error = ingest(lease, result, screenshots, /*sweep=*/false, &runs);
+  if (error == kLost) return;
+  if (!error.empty()) return fail("cannot store the result: " + error);
+  log(log::Level::kInfo, job.id, "done, " + std::to_string(runs) + " runs");
+  finished("done");
+}
+
+std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& result,
+                           const std::map<std::string, std::vector<uint8_t>>& screenshots, bool sweep,
+                           int64_t* stored) {
+  for (int attempt = 1;; ++attempt) {
+    auto ingested = sweep ? store_.ingestSweep(lease, result) : store_.ingestCapture(lease, result, screenshots);
+    if (ingested) {
+      *stored = *ingested;
+      return "";
+    }
+    // Unreachable database: keep the result and try again until it answers
+    // (or this daemon stops: the lease then expires and another host reruns it).
+    auto alive = store_.integrityCheck();
+    if (alive) {
+      if (ingested.error().find("is no longer held by") != std::string::npos) {
+        log(log::Level::kWarning, lease.jobId, "result dropped: " + ingested.error());
+        return kLost;
+      }
+      return ingested.error();
+    }
+    if (attempt == 1 || attempt % 30 == 0) {
+      log(log::Level::kWarning, lease.jobId,
+          "cannot reach the database to store the result (" + alive.error() + "); retrying every " +
+              std::to_string(options_.ingestRetry.count()) + " ms");
+    }
+    std::unique_lock lock(mutex_);
+    if (cv_.wait_for(lock, options_.ingestRetry, [this] { return stopping_.load(); })) return kLost;
   }
 }
 

@@ -1,5 +1,6 @@
 // Worker: the one thread that runs capture jobs. It owns the writer Store's
-// job transitions: claims the oldest queued job, runs `tallyd capture` on it
+// job transitions: claims the oldest queued job its device can run (as a host
+// of the fleet: docs/fleet.md), runs `tallyd capture` on it
 // in a child process (so a crash, hang, lost device or OOM ends only that
 // job), reports progress, ingests the result (its runs, or for a sweep spec
 // the sweep) and finishes the job.
@@ -14,7 +15,10 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <map>
+#include <memory>
 #include <thread>
+#include <vector>
 
 #include "common/log.hpp"
 #include "common/result.hpp"
@@ -32,6 +36,18 @@ struct WorkerOptions {
   std::function<void(const log::Event&)> log;  // default: log::write (stderr, one line per event)
   // Called as each job leaves the worker (not when stop() leaves it running).
   std::function<void(const struct JobOutcome&)> onFinished;
+
+  // The fleet. Every claim is held under a lease, renewed by a heartbeat
+  // thread on its own connection (openHeartbeatStore), which also reaps
+  // other hosts' expired leases. host.device is what claims are matched
+  // against (null: only jobs without a device requirement).
+  store::HostInfo host;
+  std::optional<std::string> deviceNameOverride;  // results record this device name
+  std::chrono::milliseconds lease{std::chrono::seconds(30)};
+  std::chrono::milliseconds staleAfter{std::chrono::seconds(30)};
+  std::function<Result<std::unique_ptr<store::Store>>()> openHeartbeatStore;
+  // How long to wait between ingest attempts while the database is unreachable.
+  std::chrono::milliseconds ingestRetry{std::chrono::seconds(2)};
 };
 
 // How a job ended, for the daemon's metrics.
@@ -57,7 +73,8 @@ class Worker {
   Worker(const Worker&) = delete;
   Worker& operator=(const Worker&) = delete;
 
-  // Start-up recovery (requeueInterrupted(maxAttempts)); call before start().
+  // Start-up: registers the host (refused while another live daemon holds its
+  // name) and requeues this host's interrupted jobs; call before start().
   Result<store::Recovery> recover();
   void start();
   // Stops after the current step; a running child is killed and its job left
@@ -66,14 +83,28 @@ class Worker {
   // A job was queued: look now instead of at the next poll.
   void wake();
 
+  // A host instance id: MACHINE:PID:RANDOM; and whether one is a dead
+  // process of this machine (its name may then be taken over at once).
+  static std::string newInstance();
+  static bool instanceIsGone(const std::string& instance);
+
  private:
   void loop();
+  void heartbeatLoop();
   void runJob(const store::Job& job);
+  // Stores a result under the job's lease, retrying while the database is
+  // unreachable; the error when it cannot (empty: stored and finished).
+  std::string ingest(const store::Lease& lease, const nlohmann::json& result,
+                     const std::map<std::string, std::vector<uint8_t>>& screenshots, bool sweep, int64_t* stored);
   void log(log::Level level, std::optional<int64_t> job, const std::string& message) const;
 
   store::Store& store_;
   WorkerOptions options_;
   std::thread thread_;
+  std::thread heartbeat_;
+  std::atomic<int64_t> currentJob_{0};   // 0: none
+  std::atomic<int> currentAttempt_{0};
+  std::atomic<bool> leaseLost_{false};   // the heartbeat found the job no longer ours
   std::atomic<bool> stopping_{false};
   std::mutex mutex_;
   std::condition_variable cv_;

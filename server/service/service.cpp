@@ -142,6 +142,7 @@ store::RunFilter queryFilter(const Request& req) {
     }
   }
   f.jobId = queryInt(req, "capture", 1, INT64_MAX);
+  f.host = queryString(req, "host");
   f.createdSince = queryTime(req, "since");
   f.createdUntil = queryTime(req, "until");
   return f;
@@ -161,6 +162,17 @@ json reuseJson(std::optional<double> requested, std::optional<double> footprint)
   return requested.value_or(0) / *footprint;
 }
 
+// Milliseconds since 1970 as UTC ISO-8601 text, as the store writes times.
+std::string isoTime(int64_t ms) {
+  std::time_t seconds = static_cast<std::time_t>(ms / 1000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[40];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1,
+                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(ms % 1000));
+  return text;
+}
+
 json jobJson(const store::Job& j) {
   return {{"id", j.id},
           {"status", store::toString(j.status)},
@@ -168,9 +180,81 @@ json jobJson(const store::Job& j) {
           {"progress", {{"done", j.progressDone}, {"total", j.progressTotal}, {"current", opt(j.progressCurrent)}}},
           {"error", opt(j.error)},
           {"attempts", j.attempts},
+          {"max_attempts", j.maxAttempts},
+          {"attempt_errors", j.attemptErrors.is_array() ? j.attemptErrors : json::array()},
+          {"host", opt(j.host)},
+          {"lease_expires_at", j.leaseExpiresMs ? json(isoTime(*j.leaseExpiresMs)) : json(nullptr)},
+          {"device", j.deviceRequirement},
+          {"waiting", nullptr},
           {"created_at", j.createdAt},
           {"started_at", opt(j.startedAt)},
           {"finished_at", opt(j.finishedAt)}};
+}
+
+json hostJson(const store::Host& h) {
+  json device = nullptr;
+  if (h.info.device.is_object()) {
+    const json& d = h.info.device;
+    device = {{"name", d.value("name", "")},
+              {"vendor", store::vendorName(d.value("vendorID", ""))},
+              {"vendor_id", d.value("vendorID", "")},
+              {"driver", d.value("driverInfo", "")},
+              {"api_version", d.value("apiVersion", "")},
+              {"type", d.value("type", "")},
+              {"features", d.contains("features") ? d["features"] : json::object()}};
+  }
+  return {{"name", h.info.name},
+          {"role", h.info.role},
+          {"device", device},
+          {"device_override", opt(h.info.deviceOverride)},
+          {"tally_version", h.info.tallyVersion},
+          {"tally_commit", h.info.tallyCommit},
+          {"started_at", h.startedAt},
+          {"last_heartbeat", h.lastHeartbeat},
+          {"seconds_since_heartbeat", h.secondsSinceHeartbeat},
+          {"alive", h.alive},
+          {"jobs_done", h.jobsDone},
+          {"jobs_failed", h.jobsFailed},
+          {"current_job", opt(h.currentJob)}};
+}
+
+// Why nobody runs a queued job, from the hosts: none alive; none alive whose
+// device meets its requirement (each one's reason); or every one that could
+// is busy. Null when a free worker can take it (it will, at its next poll).
+json waitingReason(const store::Job& job, const std::vector<store::Host>& hosts, int64_t staleAfterMs) {
+  if (job.status != store::JobStatus::Queued) return nullptr;
+  std::vector<const store::Host*> alive;
+  for (const auto& h : hosts) {
+    if (h.alive) alive.push_back(&h);
+  }
+  if (alive.empty()) {
+    return "no live worker: " + std::to_string(hosts.size()) + " host(s) registered, none with a heartbeat in the last " +
+           std::to_string(staleAfterMs / 1000) + " s";
+  }
+  std::optional<store::DeviceRequirement> requirement;
+  if (!job.deviceRequirement.is_null()) {
+    auto parsed = store::deviceRequirementFromJson(job.deviceRequirement);
+    if (parsed) requirement = *parsed;
+  }
+  std::vector<const store::Host*> able;
+  std::string mismatches;
+  for (const auto* h : alive) {
+    std::string why = requirement ? store::deviceMismatch(*requirement, h->info.device) : "";
+    if (why.empty()) {
+      able.push_back(h);
+    } else {
+      mismatches += (mismatches.empty() ? "" : "; ") + h->info.name + ": " + why;
+    }
+  }
+  if (able.empty()) {
+    return "no live worker has a device matching " + job.deviceRequirement.dump() + " (" + mismatches + ")";
+  }
+  std::string busy;
+  for (const auto* h : able) {
+    if (!h->currentJob) return nullptr;
+    busy += (busy.empty() ? "" : ", ") + h->info.name + " (capture " + std::to_string(*h->currentJob) + ")";
+  }
+  return "waiting for a " + std::string(requirement ? "matching " : "") + "worker to finish: " + busy;
 }
 
 json runRowJson(const store::RunRow& r) {
@@ -193,6 +277,7 @@ json runRowJson(const store::RunRow& r) {
           {"created_at", r.createdAt},
           {"tally_version", opt(r.tallyVersion)},
           {"tally_commit", opt(r.tallyCommit)},
+          {"host", opt(r.host)},
           {"sample_count", r.sampleCount},
           {"mean_frame_ms", opt(r.meanFrameMs)},
           {"mean_bytes", opt(r.meanBytes)},
@@ -420,8 +505,23 @@ json validateApplicationSpec(const ServiceContext& ctx, const json& body) {
   return body;
 }
 
+json validateContent(const ServiceContext& ctx, const json& body);
+
+// The spec's "device" picks the hosts that may run it (docs/fleet.md); the
+// rest is the capture, sweep or application spec, checked by its parser.
 json validateSpec(const ServiceContext& ctx, const json& body) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
+  if (!body.contains("device")) return validateContent(ctx, body);
+  auto requirement = store::parseDeviceRequirement(body);
+  if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), fieldOf(requirement.error()));
+  json content = body;
+  content.erase("device");
+  json stored = validateContent(ctx, content);
+  stored["device"] = body["device"];
+  return stored;
+}
+
+json validateContent(const ServiceContext& ctx, const json& body) {
   // {"application": ...} or {"replay": ...}: its parser names any field of a
   // capture matrix or a sweep beside it.
   if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body);
@@ -490,7 +590,7 @@ Response postCapture(ServiceContext& ctx, const Request& req) {
   json spec = validateSpec(ctx, req.body);
   std::optional<std::string> key;
   if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
-  auto created = check(ctx.writer->createJob(spec, key));
+  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts));
   if (created.conflict) {
     throw RequestError(409, api::code::kConflict,
                        "Idempotency-Key was used before with a different spec (capture " +
@@ -510,9 +610,18 @@ Response listCaptures(ServiceContext& ctx, const Request& req) {
     status = store::parseJobStatus(*s);
     if (!status) invalid("status", "must be queued, running, done, failed or cancelled");
   }
-  auto page = check(reader(ctx).listJobs(status, queryPage(req)));
+  auto& store = reader(ctx);
+  auto page = check(store.listJobs(status, queryPage(req)));
+  std::optional<std::vector<store::Host>> hosts;
   json jobs = json::array();
-  for (const auto& j : page.jobs) jobs.push_back(jobJson(j));
+  for (const auto& j : page.jobs) {
+    json out = jobJson(j);
+    if (j.status == store::JobStatus::Queued) {
+      if (!hosts) hosts = check(store.listHosts(ctx.options.staleAfterMs));
+      out["waiting"] = waitingReason(j, *hosts, ctx.options.staleAfterMs);
+    }
+    jobs.push_back(std::move(out));
+  }
   return Response::ok({{"captures", jobs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
 }
 
@@ -524,6 +633,9 @@ Response getCapture(ServiceContext& ctx, const Request& req) {
   if (!job) return api::notFound("no capture " + std::to_string(id));
   json j = jobJson(*job);
   j["sweeps"] = check(store.jobSweepIds(id));  // a finished sweep job's sweep
+  if (job->status == store::JobStatus::Queued) {
+    j["waiting"] = waitingReason(*job, check(store.listHosts(ctx.options.staleAfterMs)), ctx.options.staleAfterMs);
+  }
   return Response::ok(j);
 }
 
@@ -546,7 +658,8 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
 }
 
 Response listRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until", "limit", "cursor"});
+  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "host", "since", "until", "limit",
+                  "cursor"});
   auto filter = queryFilter(req);
   auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
   json runs = json::array();
@@ -752,6 +865,13 @@ Response listDevices(ServiceContext& ctx, const Request& req) {
   return Response::ok({{"devices", devices}});
 }
 
+Response listHosts(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  json hosts = json::array();
+  for (const auto& h : check(reader(ctx).listHosts(ctx.options.staleAfterMs))) hosts.push_back(hostJson(h));
+  return Response::ok({{"hosts", hosts}, {"stale_after_s", static_cast<double>(ctx.options.staleAfterMs) / 1000.0}});
+}
+
 Response listScenes(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   json procedural = json::array({
@@ -822,6 +942,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/repeats", route(repeats));
   router.get("/api/export", route(exportRuns));
   router.get("/api/devices", route(listDevices));
+  router.get("/api/hosts", route(listHosts));
   router.get("/api/scenes", route(listScenes));
 }
 

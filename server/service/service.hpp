@@ -23,6 +23,10 @@ struct ServiceOptions {
   // {"application": ...} and {"replay": ...} specs run a program on the
   // daemon's host (tallyd serve --allow-applications); refused when false.
   bool allowApplications = false;
+  // The fleet (docs/fleet.md): a host without a heartbeat this long is not
+  // alive (GET /api/hosts, a queued job's "waiting"); claims of a new job.
+  int64_t staleAfterMs = 30000;
+  int maxAttempts = 3;
 };
 
 struct ServiceContext {

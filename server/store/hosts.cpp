@@ -105,7 +105,8 @@ std::string deviceMismatch(const DeviceRequirement& requirement, const json& dev
   return "";
 }
 
-Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs) {
+Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs,
+                                 const std::function<bool(const std::string&)>& instanceIsGone) {
   if (info.name.empty() || info.name.size() > 255) return makeError("host name: must be 1 to 255 characters");
   if (info.role != "worker" && info.role != "all") return makeError("host role: must be worker or all");
   std::lock_guard lock(mutex_);
@@ -120,7 +121,7 @@ Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs) {
       std::string instance = existing.getText(0);
       int64_t ago = existing.getInt(1);
       existing.run();
-      if (instance != info.instance && ago < staleAfterMs) {
+      if (instance != info.instance && ago < staleAfterMs && !(instanceIsGone && instanceIsGone(instance))) {
         return makeError("host name '" + info.name + "' is in use by a live daemon (heartbeat " +
                          std::to_string(ago / 1000) + " s ago); give each daemon its own --host-name");
       }

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -447,7 +448,10 @@ class Store {
 
   // Hosts. Registers (or re-registers) a worker under its name; refused
   // while another live instance (heartbeat within staleAfterMs) holds the name.
-  Result<bool> registerHost(const HostInfo& info, int64_t staleAfterMs);
+  // instanceIsGone: says whether a live-looking holder is in fact gone (the
+  // same machine, its process dead: a restart after a crash need not wait).
+  Result<bool> registerHost(const HostInfo& info, int64_t staleAfterMs,
+                            const std::function<bool(const std::string&)>& instanceIsGone = {});
   // The host's heartbeat and current job; false when another instance took the name.
   Result<bool> heartbeat(const std::string& name, const std::string& instance, std::optional<int64_t> currentJob);
   // Every host by name, alive when its heartbeat is within staleAfterMs.
