@@ -19,6 +19,8 @@ packages=(
   # above), GFXReconstruct's capture layer and replayer (replays, the layer's
   # tests and tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
+  # The fleet store and its tests (PostgreSQL server and client, libpq).
+  postgresql libpq-dev
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
