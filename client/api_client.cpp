@@ -47,6 +47,7 @@ std::vector<std::pair<std::string, std::string>> filterParams(const RunFilters& 
   if (f.device) p.emplace_back("device", *f.device);
   if (f.capture) p.emplace_back("capture", *f.capture);
   if (f.runs) p.emplace_back("runs", *f.runs);
+  if (f.host) p.emplace_back("host", *f.host);
   return p;
 }
 
@@ -193,6 +194,7 @@ Result<json> ApiClient::listCaptures() { return sendJson("GET", "/api/captures")
 Result<json> ApiClient::cancelCapture(const std::string& id) {
   return sendJson("DELETE", "/api/captures/" + pathId(id));
 }
+Result<json> ApiClient::listHosts() { return sendJson("GET", "/api/hosts"); }
 
 namespace {
 
@@ -301,6 +303,10 @@ JobView jobView(const json& job) {
   v.error = str(job, "error");
   v.createdAt = str(job, "created_at");
   if (auto a = integer(job, "attempts")) v.attempts = static_cast<int>(*a);
+  if (auto a = integer(job, "max_attempts")) v.maxAttempts = static_cast<int>(*a);
+  v.host = str(job, "host");
+  v.waiting = str(job, "waiting");
+  for (const auto& e : array(job, "attempt_errors")) v.attemptErrors.push_back(idString(e));
   if (const json* p = field(job, "progress")) {
     if (p->is_number()) {
       v.fraction = p->get<double>();
@@ -336,6 +342,7 @@ RunView runView(const json& run) {
   }
   v.counting = str(run, "counting");
   v.createdAt = str(run, "created_at");
+  v.host = str(run, "host");
   v.tallyVersion = str(run, "tally_version");
   v.tallyCommit = str(run, "tally_commit");
   v.width = integer(run, "width");
@@ -353,6 +360,33 @@ RunView runView(const json& run) {
 
 std::vector<json> runList(const json& page) { return array(page, "runs"); }
 std::string nextCursor(const json& page) { return str(page, "next_cursor"); }
+
+HostView hostView(const json& host) {
+  HostView v;
+  v.name = str(host, "name");
+  v.role = str(host, "role");
+  if (const json* d = field(host, "device"); d && d->is_object()) {
+    v.probed = true;
+    v.deviceName = str(*d, "name");
+    v.deviceVendor = str(*d, "vendor");
+    v.driver = str(*d, "driver");
+    v.apiVersion = str(*d, "api_version");
+  }
+  v.deviceOverride = str(host, "device_override");
+  v.tallyVersion = str(host, "tally_version");
+  v.tallyCommit = str(host, "tally_commit");
+  v.startedAt = str(host, "started_at");
+  v.lastHeartbeat = str(host, "last_heartbeat");
+  v.secondsSinceHeartbeat = num(host, "seconds_since_heartbeat");
+  if (const json* a = field(host, "alive"); a && a->is_boolean()) v.alive = a->get<bool>();
+  v.jobsDone = integer(host, "jobs_done");
+  v.jobsFailed = integer(host, "jobs_failed");
+  v.currentJob = str(host, "current_job");
+  return v;
+}
+
+std::vector<json> hostList(const json& page) { return array(page, "hosts"); }
+std::optional<double> staleAfterSeconds(const json& page) { return num(page, "stale_after_s"); }
 
 SampleView sampleView(const json& sample) {
   SampleView v;

@@ -44,6 +44,7 @@ std::string tokenFromEnv();
 struct RunFilters {
   std::optional<std::string> renderer, scene, device, capture, runs;
   std::optional<std::string> variant;  // exact variant label
+  std::optional<std::string> host;     // exact host name; /api/runs only (the export takes no host)
   std::optional<int> width, height;
 };
 
@@ -66,6 +67,8 @@ class ApiClient {
   Result<json> getCapture(const std::string& id);
   Result<json> listCaptures();
   Result<json> cancelCapture(const std::string& id);  // {} on 204
+  // {"hosts": [...], "stale_after_s": N}: the daemons that share the store.
+  Result<json> listHosts();
   // One page; cursor empty for the first.
   Result<json> listRuns(const RunFilters& filters, std::optional<int> limit, const std::string& cursor = "");
   // Follows next_cursor to the end; {"runs":[...every page's runs...]}.
@@ -110,7 +113,10 @@ struct JobView {
   std::string id, status, error, current, createdAt;
   std::optional<int64_t> done, total;  // progress counts when the server gives them
   std::optional<double> fraction;      // 0..1, from counts or a bare number
-  std::optional<int> attempts;
+  std::optional<int> attempts, maxAttempts;
+  std::string host;                        // the host that holds or last ran it; "" for none
+  std::string waiting;                     // a queued job: why no host runs it; "" when none is given
+  std::vector<std::string> attemptErrors;  // why each earlier attempt ended, oldest first
   std::vector<std::string> runs;
   std::vector<std::string> sweeps;  // the sweep a finished sweep job stored
   bool finished() const {
@@ -123,6 +129,7 @@ std::vector<json> jobList(const json& page);  // the "captures" array
 
 struct RunView {
   std::string id, capture, renderer, scene, device, counting, createdAt;
+  std::string host;  // the host that captured it; "" for runs stored before hosts existed
   std::string tallyVersion, tallyCommit;  // the build that made it; "" for runs stored before builds recorded it
   // The variant label ("visbuffer barycentrics=float32"; the renderer for a
   // run without options or from a server before variants) and its options.
@@ -139,6 +146,22 @@ struct RunView {
 RunView runView(const json& run);
 std::vector<json> runList(const json& page);  // the "runs" array
 std::string nextCursor(const json& page);     // empty at the end
+
+// One daemon of the fleet (GET /api/hosts).
+struct HostView {
+  std::string name, role;
+  bool probed = false;  // false: "device" is null (not probed yet)
+  std::string deviceName, deviceVendor, driver, apiVersion;
+  std::string deviceOverride;  // "" for none; else the name it reports in place of the device's
+  std::string tallyVersion, tallyCommit, startedAt, lastHeartbeat;
+  std::optional<double> secondsSinceHeartbeat;
+  std::optional<bool> alive;  // heartbeat within stale_after_s
+  std::optional<int64_t> jobsDone, jobsFailed;
+  std::string currentJob;  // "" for none
+};
+HostView hostView(const json& host);
+std::vector<json> hostList(const json& page);               // the "hosts" array
+std::optional<double> staleAfterSeconds(const json& page);  // "stale_after_s"
 
 struct SampleView {
   std::string id, camera;  // camera: label or index

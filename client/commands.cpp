@@ -63,6 +63,12 @@ std::string progressCell(const JobView& j) {
   return j.fraction ? percent(j.fraction) : kMissing;
 }
 
+// "1/3": attempts so far of the most it gets; "1" from a server that gives no maximum.
+std::string attemptsCell(const JobView& j) {
+  if (!j.attempts) return kMissing;
+  return std::to_string(*j.attempts) + (j.maxAttempts ? "/" + std::to_string(*j.maxAttempts) : "");
+}
+
 Result<json> readSpec(const std::string& source) {
   std::string text;
   if (source == "-") {
@@ -88,7 +94,8 @@ Result<json> readSpec(const std::string& source) {
 
 void drawProgress(Io& io, const JobView& j, std::string& last) {
   std::string line = progressLine(j.fraction, j.done, j.total, j.current);
-  if (j.status == protocol::kJobQueued) line += " (queued)";
+  if (j.status == protocol::kJobQueued)
+    line += j.waiting.empty() ? " (queued)" : " (queued: " + j.waiting + ")";
   if (line == last) return;
   last = line;
   if (io.progressTty) {
@@ -216,9 +223,12 @@ int runStatus(ApiClient& api, const std::string& id, Io& io) {
     Table t({{"FIELD"}, {"VALUE"}});
     t.addRow({"id", j.id});
     t.addRow({"status", j.status});
+    if (!j.host.empty()) t.addRow({"host", j.host});
+    if (!j.waiting.empty()) t.addRow({"waiting", j.waiting});
     t.addRow({"progress", progressCell(j)});
     if (!j.current.empty()) t.addRow({"current", j.current});
-    if (j.attempts) t.addRow({"attempts", std::to_string(*j.attempts)});
+    if (j.attempts) t.addRow({"attempts", attemptsCell(j)});
+    for (const auto& e : j.attemptErrors) t.addRow({"attempt error", e});
     if (!j.createdAt.empty()) t.addRow({"created", j.createdAt});
     if (!j.error.empty()) t.addRow({"error", j.error});
     if (!j.runs.empty()) {
@@ -240,18 +250,68 @@ int runStatus(ApiClient& api, const std::string& id, Io& io) {
     printJson(io, *res);
     return 0;
   }
-  Table t({{"ID", Align::Right},
-           {"STATUS"},
-           {"PROGRESS", Align::Right},
-           {"ATTEMPTS", Align::Right},
-           {"CREATED"},
-           {"ERROR"}});
+  // A HOST column where any job names one (a fleet; none from a single daemon before hosts).
+  std::vector<JobView> jobs;
+  bool hosts = false;
   for (const auto& job : jobList(*res)) {
-    JobView j = jobView(job);
-    t.addRow({j.id, j.status, progressCell(j), j.attempts ? std::to_string(*j.attempts) : kMissing,
-              orMissing(j.createdAt), j.error});
+    jobs.push_back(jobView(job));
+    hosts = hosts || !jobs.back().host.empty();
+  }
+  std::vector<Table::Column> columns = {{"ID", Align::Right}, {"STATUS"}};
+  if (hosts) columns.push_back({"HOST"});
+  columns.insert(columns.end(),
+                 {{"PROGRESS", Align::Right}, {"ATTEMPTS", Align::Right}, {"CREATED"}, {"ERROR"}});
+  Table t(columns);
+  for (const auto& j : jobs) {
+    std::vector<std::string> row = {j.id, j.status};
+    if (hosts) row.push_back(orMissing(j.host));
+    // A queued job that no host can take says why in place of an error.
+    std::string error = !j.error.empty() || j.waiting.empty() ? j.error : "waiting: " + j.waiting;
+    row.insert(row.end(), {progressCell(j), attemptsCell(j), orMissing(j.createdAt), error});
+    t.addRow(row);
   }
   t.print(io.out);
+  return 0;
+}
+
+int runHosts(ApiClient& api, Io& io) {
+  auto res = api.listHosts();
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t({{"NAME"},
+           {"ROLE"},
+           {"DEVICE"},
+           {"DRIVER"},
+           {"VERSION"},
+           {"HEARTBEAT", Align::Right},
+           {"STATE"},
+           {"DONE", Align::Right},
+           {"FAILED", Align::Right},
+           {"JOB", Align::Right}});
+  int stale = 0;
+  for (const auto& host : hostList(*res)) {
+    HostView h = hostView(host);
+    std::string device = !h.deviceOverride.empty() ? h.deviceOverride + " (override)"
+                         : h.probed                ? orMissing(h.deviceName)
+                                                   : "(not probed)";
+    std::string version = orMissing(h.tallyVersion);
+    if (!h.tallyCommit.empty()) version += " (" + h.tallyCommit + ")";
+    std::string state = !h.alive ? kMissing : *h.alive ? "alive" : "stale";
+    stale += h.alive && !*h.alive;
+    auto count = [](std::optional<int64_t> n) { return n ? std::to_string(*n) : std::string(kMissing); };
+    t.addRow({h.name, orMissing(h.role), device, h.probed ? orMissing(h.driver) : kMissing, version,
+              ago(h.secondsSinceHeartbeat), state, count(h.jobsDone), count(h.jobsFailed),
+              orMissing(h.currentJob)});
+  }
+  t.print(io.out);
+  if (stale) {
+    auto after = staleAfterSeconds(*res);
+    io.err << stale << (stale == 1 ? " host is" : " hosts are") << " stale: no heartbeat"
+           << (after ? " in the last " + fixedOrSci(*after) + " s" : std::string(" lately")) << '\n';
+  }
   return 0;
 }
 
@@ -269,9 +329,14 @@ int runCancel(ApiClient& api, const std::string& id, Io& io) {
 int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
   auto res = args.all ? api.listAllRuns(args.filters, args.limit) : api.listRuns(args.filters, args.limit);
   // A page with footprint runs says which bytes are which: requested beside footprint.
-  bool footprint = false;
+  // A page of runs from named hosts (a fleet) says which host made each.
+  bool footprint = false, hosts = false;
   if (res) {
-    for (const auto& run : runList(*res)) footprint = footprint || runView(run).hasFootprint();
+    for (const auto& run : runList(*res)) {
+      RunView r = runView(run);
+      footprint = footprint || r.hasFootprint();
+      hosts = hosts || !r.host.empty();
+    }
   }
   std::vector<Table::Column> columns = {{"ID", Align::Right},
                                         {"CAPTURE", Align::Right},
@@ -282,16 +347,19 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
                                         {"SAMPLES", Align::Right},
                                         {"FRAME MS", Align::Right},
                                         {footprint ? "REQUESTED/FRAME" : "BYTES/FRAME", Align::Right}};
+  constexpr size_t kHostColumn = 6;  // after DEVICE
+  if (hosts) columns.insert(columns.begin() + kHostColumn, {"HOST"});
   if (footprint) {
     columns.push_back({"FOOTPRINT/FRAME", Align::Right});
     columns.push_back({"REUSE", Align::Right});
   }
-  return printListing(io, res, args.all, "runs", columns, [footprint](const json& page, Table& t) {
+  return printListing(io, res, args.all, "runs", columns, [footprint, hosts](const json& page, Table& t) {
     for (const auto& run : runList(page)) {
       RunView r = runView(run);
       std::vector<std::string> row = {r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
                                       r.samples ? std::to_string(*r.samples) : kMissing, fixed(r.frameMs, 3),
                                       humanBytes(r.bytes)};
+      if (hosts) row.insert(row.begin() + kHostColumn, orMissing(r.host));
       if (footprint) {
         row.push_back(humanBytes(r.footprintBytes));
         row.push_back(ratio(r.reuse));
@@ -319,7 +387,9 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
     }
     io.out << '\n';
   }
-  io.out << "device: " << orMissing(r.device) << "   capture: " << orMissing(r.capture);
+  io.out << "device: " << orMissing(r.device);
+  if (!r.host.empty()) io.out << "   host: " << r.host;
+  io.out << "   capture: " << orMissing(r.capture);
   if (!r.counting.empty()) io.out << "   counting: " << r.counting;
   if (r.footprintBlockBytes) io.out << "   footprint: " << *r.footprintBlockBytes << "-byte blocks";
   if (r.lights) io.out << "   lights: " << *r.lights;

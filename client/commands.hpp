@@ -49,6 +49,8 @@ int runProfile(ApiClient& api, const ProfileArgs& args, Io& io);
 // One job when id is set, else the job list.
 int runStatus(ApiClient& api, const std::string& id, Io& io);
 int runCancel(ApiClient& api, const std::string& id, Io& io);
+// The daemons that share the store: device, build, heartbeat, jobs.
+int runHosts(ApiClient& api, Io& io);
 
 // The arguments of a listing: its filters, a page size, or every page.
 template <class Filters>

@@ -90,9 +90,17 @@ int main(int argc, char** argv) {
       "  tally profile --frame-submits 1 --frames 5 -- ./my-compute-app --iterations 50");
 
   std::string statusId;
-  auto* status = app.add_subcommand("status", "Show one capture job, or list them");
+  auto* status = app.add_subcommand(
+      "status",
+      "Show one capture job (its host, attempts and why an earlier one ended, why it waits), or list them");
   status->add_option("ID", statusId, "Capture id (omit for the list)");
   status->footer("Example:\n  tally status\n  tally status 7");
+
+  auto* hosts = app.add_subcommand(
+      "hosts", "List the daemons that share the store: their device, build, last heartbeat and jobs");
+  hosts->footer(
+      "STATE: alive, or stale when no heartbeat came within the server's stale_after_s.\n"
+      "Example:\n  tally hosts\n  tally hosts --json");
 
   std::string cancelId;
   auto* cancel = app.add_subcommand(
@@ -104,10 +112,13 @@ int main(int argc, char** argv) {
   auto* runsCmd =
       app.add_subcommand("runs", "List runs (renderer x scene x resolution on a device), newest first");
   addFilters(runsCmd, runs.filters);
+  runsCmd->add_option("--host", runs.filters.host,
+                      "Only runs captured on this host (its exact name; see `tally hosts`)");
   runsCmd->add_option("--limit", runs.limit, "Page size (1..1000)")->check(CLI::Range(1, 1000));
   runsCmd->add_flag("--all", runs.all, "Fetch every page");
   runsCmd->footer(
-      "Example:\n  tally runs --renderer visbuffer --scene atrium --width 1920 --height 1080 --all");
+      "Example:\n  tally runs --renderer visbuffer --scene atrium --width 1920 --height 1080 --all\n"
+      "  tally runs --host gpu-a");
 
   std::string showId;
   auto* show = app.add_subcommand("show", "Show a run and its samples (one per camera)");
@@ -176,6 +187,7 @@ int main(int argc, char** argv) {
   if (prof->parsed()) return runProfile(api, profile, io);
   if (status->parsed()) return runStatus(api, statusId, io);
   if (cancel->parsed()) return runCancel(api, cancelId, io);
+  if (hosts->parsed()) return runHosts(api, io);
   if (runsCmd->parsed()) return runRuns(api, runs, io);
   if (show->parsed()) return runShow(api, showId, io);
   if (compare->parsed()) return runCompare(api, compareIds, io);

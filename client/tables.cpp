@@ -87,6 +87,15 @@ std::string signedFixed(std::optional<double> delta, int decimals) {
   return (*delta >= 0 ? "+" : "") + fixed(*delta, decimals);
 }
 
+std::string ago(std::optional<double> seconds) {
+  if (!seconds) return kMissing;
+  double s = std::max(0.0, *seconds);
+  if (s < 90) return format("%.0f s ago", std::floor(s));
+  if (s < 90 * 60) return format("%.0f min ago", std::floor(s / 60));
+  if (s < 48 * 3600) return format("%.0f h ago", std::floor(s / 3600));
+  return format("%.0f d ago", std::floor(s / 86400));
+}
+
 std::string progressLine(std::optional<double> fraction, std::optional<long long> done,
                          std::optional<long long> total, const std::string& current, int width) {
   double f = std::clamp(fraction.value_or(0.0), 0.0, 1.0);

@@ -44,6 +44,9 @@ std::string ratio(std::optional<double> value);
 // Signed: +1.50 KiB / -0.20 ms style, with the given formatter.
 std::string signedBytes(std::optional<double> delta);
 std::string signedFixed(std::optional<double> delta, int decimals);
+// Time since an event: "3 s ago" below 90 s, "12 min ago" below 90 min,
+// "5 h ago" below 48 h, else "3 d ago"; negative (clocks apart) counts as 0.
+std::string ago(std::optional<double> seconds);
 // "[#####.....] 12/40 deferred atrium 320x180 camera 3" (width cells in the bar).
 std::string progressLine(std::optional<double> fraction, std::optional<long long> done,
                          std::optional<long long> total, const std::string& current, int width = 20);

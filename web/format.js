@@ -39,6 +39,17 @@ export const resolution = (run) => `${run.width}×${run.height}`;
 // "2026-11-21 06:30" from the API's UTC timestamps (shown in UTC, as stored).
 export const date = (iso) => (iso ? iso.slice(0, 16).replace('T', ' ') : '–');
 
+// Time since an event, as the CLI says it: "3 s ago" below 90 s, "12 min ago"
+// below 90 min, "5 h ago" below 48 h, else "3 d ago" (negative: clocks apart, 0).
+export function ago(seconds) {
+  if (seconds === null || seconds === undefined) return '–';
+  const s = Math.max(0, seconds);
+  if (s < 90) return `${Math.floor(s)} s ago`;
+  if (s < 90 * 60) return `${Math.floor(s / 60)} min ago`;
+  if (s < 48 * 3600) return `${Math.floor(s / 3600)} h ago`;
+  return `${Math.floor(s / 86400)} d ago`;
+}
+
 // A run's variant label: "visbuffer barycentrics=float32", or the renderer
 // for a run without options (and for servers from before variants).
 export const variant = (run) => run.variant || run.renderer;

@@ -160,6 +160,62 @@ TEST(ApiClient, ToleratesStringIdsAndNumericProgress) {
   EXPECT_DOUBLE_EQ(*r.frameMs, 2.5);
 }
 
+// A fleet's fields: hosts, and a job's host, attempts and why it waits; all
+// absent (or null) from a server before hosts.
+TEST(ApiClient, HostsAndJobsOfAFleet) {
+  FakeTallyd fake;
+  ApiClient api({.server = fake.url()});
+  auto page = api.listHosts();
+  ASSERT_TRUE(page) << page.error();
+  auto hosts = hostList(*page);
+  ASSERT_EQ(hosts.size(), 3u);
+  EXPECT_EQ(staleAfterSeconds(*page), 30.0);
+  HostView a = hostView(hosts[0]), b = hostView(hosts[1]), c = hostView(hosts[2]);
+  EXPECT_EQ(a.name, "gpu-a");
+  EXPECT_EQ(a.role, "worker");
+  EXPECT_TRUE(a.probed);
+  EXPECT_EQ(a.deviceName, "NVIDIA H100 80GB HBM3");
+  EXPECT_EQ(a.deviceVendor, "NVIDIA");
+  EXPECT_EQ(a.driver, "550.54.15");
+  EXPECT_EQ(a.apiVersion, "1.3.280");
+  EXPECT_EQ(a.deviceOverride, "");
+  EXPECT_EQ(a.tallyCommit, "abc1234");
+  EXPECT_DOUBLE_EQ(*a.secondsSinceHeartbeat, 3.2);
+  EXPECT_EQ(a.alive, true);
+  EXPECT_EQ(a.jobsDone, 4);
+  EXPECT_EQ(a.jobsFailed, 1);
+  EXPECT_EQ(a.currentJob, "12");
+  EXPECT_EQ(b.deviceOverride, "FakeGPU-A");
+  EXPECT_EQ(b.currentJob, "");
+  EXPECT_FALSE(c.probed);
+  EXPECT_EQ(c.alive, false);
+
+  JobView queued = jobView(*api.getCapture("9"));
+  EXPECT_EQ(queued.host, "");
+  EXPECT_EQ(queued.attempts, 1);
+  EXPECT_EQ(queued.maxAttempts, 3);
+  EXPECT_EQ(queued.attemptErrors, std::vector<std::string>{test::kLostAttempt});
+  EXPECT_EQ(queued.waiting, test::kWaitingReason);
+  JobView running = jobView(*api.getCapture("10"));
+  EXPECT_EQ(running.host, "gpu-a");
+  EXPECT_EQ(running.waiting, "");
+
+  RunFilters f;
+  f.host = "gpu-a";
+  auto runs = api.listRuns(f, std::nullopt);
+  ASSERT_TRUE(runs) << runs.error();
+  EXPECT_EQ(fake.lastRunsQuery().find("host")->second, "gpu-a");
+  EXPECT_EQ(runView(runList(*runs).at(0)).host, "gpu-a");
+
+  // Before hosts: none of the fields.
+  JobView old = jobView(json::parse(R"({"id":7,"status":"queued","attempts":0})"));
+  EXPECT_EQ(old.host, "");
+  EXPECT_FALSE(old.maxAttempts);
+  EXPECT_TRUE(old.attemptErrors.empty());
+  EXPECT_EQ(old.waiting, "");
+  EXPECT_EQ(runView(json::parse(R"({"id":3,"host":null})")).host, "");
+}
+
 // fails_at comes keyed by the swept parameter, or as one list of groups
 // (a sweep of one axis); either way one row per group, with the value where
 // it fails or none where it holds.
@@ -209,6 +265,13 @@ TEST(Tables, NumberFormats) {
   EXPECT_EQ(ratio(1.1), "1.10x");
   EXPECT_EQ(signedBytes(-2048.0), "-2.00 KiB");
   EXPECT_EQ(signedFixed(0.5, 2), "+0.50");
+  EXPECT_EQ(ago(3.2), "3 s ago");
+  EXPECT_EQ(ago(-0.5), "0 s ago");  // clocks apart
+  EXPECT_EQ(ago(89.9), "89 s ago");
+  EXPECT_EQ(ago(125.0), "2 min ago");
+  EXPECT_EQ(ago(3 * 3600.0 + 5), "3 h ago");
+  EXPECT_EQ(ago(3 * 86400.0), "3 d ago");
+  EXPECT_EQ(ago(std::nullopt), "-");
   EXPECT_EQ(progressLine(0.3, 12, 40, "deferred atrium 320x180 camera 3", 10),
             "[###.......] 12/40 deferred atrium 320x180 camera 3");
 }

@@ -62,7 +62,7 @@ TEST_F(TallyCli, VersionAndHelp) {
   Outcome v = tally("--version");
   EXPECT_EQ(v.rc, 0);
   EXPECT_NE(v.out.find("API v1"), std::string::npos);
-  for (const char* sub : {"capture", "status", "runs", "show", "compare", "export", "cancel"}) {
+  for (const char* sub : {"capture", "status", "runs", "show", "compare", "export", "cancel", "hosts"}) {
     Outcome h = tally(std::string(sub) + " --help");
     EXPECT_EQ(h.rc, 0) << sub;
     EXPECT_NE(h.out.find("Example:"), std::string::npos) << sub;
@@ -111,6 +111,105 @@ TEST_F(TallyCli, StatusOneAndList) {
   ASSERT_EQ(one.rc, 0) << one.err;
   EXPECT_NE(one.out.find("queued"), std::string::npos);
   EXPECT_NE(one.out.find("0/40"), std::string::npos);
+}
+
+// A fleet: `tally hosts` prints one row per host of GET /api/hosts (the fake's
+// three: gpu-b's device name overridden, gpu-c stale and not probed), and
+// says on stderr how many are stale.
+TEST_F(TallyCli, HostsTable) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " hosts");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out,
+            "NAME   ROLE    DEVICE                 DRIVER     VERSION          HEARTBEAT  STATE  DONE  "
+            "FAILED  JOB\n"
+            "gpu-a  worker  NVIDIA H100 80GB HBM3  550.54.15  0.1.0 (abc1234)    3 s ago  alive     4       "
+            "1   12\n"
+            "gpu-b  all     FakeGPU-A (override)   560.35.03  0.1.0 (abc1234)    0 s ago  alive     0       "
+            "0    -\n"
+            "gpu-c  worker  (not probed)           -          0.1.0 (def5678)  2 min ago  stale     7       "
+            "2    -\n");
+  EXPECT_EQ(r.err, "1 host is stale: no heartbeat in the last 30 s\n");
+
+  Outcome j = tally("--server " + fake.url() + " hosts --json");
+  ASSERT_EQ(j.rc, 0) << j.err;
+  EXPECT_EQ(json::parse(j.out), test::hostsJson());
+}
+
+// A job of the fleet: the host that holds it, attempts of the most it gets,
+// why each earlier attempt ended, and why a queued one waits.
+TEST_F(TallyCli, StatusShowsHostAttemptsAndWhyItWaits) {
+  FakeTallyd fake;
+  Outcome queued = tally("--server " + fake.url() + " status 9");
+  ASSERT_EQ(queued.rc, 0) << queued.err;
+  EXPECT_NE(queued.out.find(std::string("waiting        ") + test::kWaitingReason + "\n"), std::string::npos)
+      << queued.out;
+  EXPECT_NE(queued.out.find("attempts       1/3\n"), std::string::npos) << queued.out;
+  EXPECT_NE(queued.out.find(std::string("attempt error  ") + test::kLostAttempt + "\n"), std::string::npos)
+      << queued.out;
+  EXPECT_EQ(queued.out.find("host"), std::string::npos) << queued.out;  // nobody holds it
+
+  Outcome running = tally("--server " + fake.url() + " status 10");
+  ASSERT_EQ(running.rc, 0) << running.err;
+  EXPECT_NE(running.out.find("host           gpu-a\n"), std::string::npos) << running.out;
+  EXPECT_NE(running.out.find("attempts       2/3\n"), std::string::npos) << running.out;
+  EXPECT_EQ(running.out.find("waiting"), std::string::npos) << running.out;
+
+  // The list: a HOST column, attempts of the most, the waiting reason in place of an error.
+  Outcome list = tally("--server " + fake.url() + " status");
+  ASSERT_EQ(list.rc, 0) << list.err;
+  EXPECT_EQ(list.out.rfind("ID  STATUS   HOST   PROGRESS  ATTEMPTS  CREATED               ERROR\n", 0), 0u)
+      << list.out;
+  EXPECT_NE(
+      list.out.find(std::string(" 9  queued   -           0/4       1/3  2026-11-21T06:32:00Z  waiting: ") +
+                    test::kWaitingReason + "\n"),
+      std::string::npos)
+      << list.out;
+  EXPECT_NE(list.out.find(" 8  failed   gpu-b       1/4         2  "), std::string::npos) << list.out;
+  EXPECT_NE(list.out.find(" 7  running  gpu-a     12/40       1/3  "), std::string::npos) << list.out;
+
+  // `tally capture` says why its job waits while it is queued.
+  Outcome waits = tally("--server " + fake.url() + " capture --interval 0.02 --spec '" +
+                        writeSpec(R"({"renderers":["deferred"],"waits":true})") + "'");
+  ASSERT_EQ(waits.rc, 0) << waits.err;
+  EXPECT_NE(waits.err.find(std::string("(queued: ") + test::kWaitingReason + ")"), std::string::npos)
+      << waits.err;
+  EXPECT_NE(waits.out.find("capture 11 done: runs 21"), std::string::npos) << waits.out;
+}
+
+// --host goes to /api/runs as ?host=; a page with hosts gets a HOST column
+// ("-" for a run stored before hosts), a page without keeps its table.
+TEST_F(TallyCli, RunsByHost) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " runs --host gpu-a");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(fake.lastRunsQuery().find("host")->second, "gpu-a");
+  EXPECT_NE(r.out.find("DEVICE                            HOST   SAMPLES"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("llvmpipe (LLVM 15.0.6, 256 bits)  gpu-a        2"), std::string::npos) << r.out;
+
+  Outcome mixed = tally("--server " + fake.url() + " runs --capture 21");
+  ASSERT_EQ(mixed.rc, 0) << mixed.err;
+  EXPECT_EQ(fake.lastRunsQuery().count("host"), 0u);
+  EXPECT_NE(mixed.out.find(
+                "21        7  deferred  atrium  320x180  llvmpipe (LLVM 15.0.6, 256 bits)  gpu-a        2"),
+            std::string::npos)
+      << mixed.out;
+  EXPECT_NE(mixed.out.find(
+                "12        7  deferred  atrium  320x180  llvmpipe (LLVM 15.0.6, 256 bits)  -            2"),
+            std::string::npos)
+      << mixed.out;
+
+  Outcome plain = tally("--server " + fake.url() + " runs");
+  ASSERT_EQ(plain.rc, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("HOST"), std::string::npos) << plain.out;
+
+  Outcome show = tally("--server " + fake.url() + " show 21");
+  ASSERT_EQ(show.rc, 0) << show.err;
+  EXPECT_NE(show.out.find("device: llvmpipe (LLVM 15.0.6, 256 bits)   host: gpu-a   capture: 7"),
+            std::string::npos)
+      << show.out;
+  Outcome old = tally("--server " + fake.url() + " show 12");
+  EXPECT_EQ(old.out.find("host:"), std::string::npos) << old.out;
 }
 
 TEST_F(TallyCli, ShowRunAndSamples) {

@@ -2,6 +2,10 @@
 // 127.0.0.1 (ephemeral port) serving canned JSON for every route the client
 // calls. Capture 7 goes queued -> running -> running -> done over successive
 // polls; capture 8 fails; run 404 and compare of run 99 give API errors.
+// A fleet: /api/hosts lists three hosts (kHostsJson); capture 9 is queued
+// with a waiting reason after a lost attempt, capture 10 runs on gpu-a on
+// its second attempt, capture 11 (a spec with "waits") waits, then runs to
+// the end; runs filtered by host (and run 21) carry their host.
 #pragma once
 
 #include <arpa/inet.h>
@@ -74,6 +78,30 @@ inline json footprintRunJson(int id) {
   return run;
 }
 
+// GET /api/hosts: gpu-a and gpu-b alive (gpu-b reports an overridden
+// device name), gpu-c stale and never probed.
+inline json hostsJson() {
+  return json::parse(R"({"hosts": [
+    {"name": "gpu-a", "role": "worker",
+     "device": {"name": "NVIDIA H100 80GB HBM3", "vendor": "NVIDIA", "driver": "550.54.15", "api_version": "1.3.280"},
+     "device_override": null, "tally_version": "0.1.0", "tally_commit": "abc1234",
+     "started_at": "2026-11-21T06:00:00Z", "last_heartbeat": "2026-11-21T06:30:00Z",
+     "seconds_since_heartbeat": 3.2, "alive": true, "jobs_done": 4, "jobs_failed": 1, "current_job": 12},
+    {"name": "gpu-b", "role": "all",
+     "device": {"name": "NVIDIA H200", "vendor": "NVIDIA", "driver": "560.35.03", "api_version": "1.3.289"},
+     "device_override": "FakeGPU-A", "tally_version": "0.1.0", "tally_commit": "abc1234",
+     "started_at": "2026-11-21T06:00:05Z", "last_heartbeat": "2026-11-21T06:30:03Z",
+     "seconds_since_heartbeat": 0.4, "alive": true, "jobs_done": 0, "jobs_failed": 0, "current_job": null},
+    {"name": "gpu-c", "role": "worker", "device": null, "device_override": null,
+     "tally_version": "0.1.0", "tally_commit": "def5678",
+     "started_at": "2026-11-21T05:00:00Z", "last_heartbeat": "2026-11-21T06:28:00Z",
+     "seconds_since_heartbeat": 125.0, "alive": false, "jobs_done": 7, "jobs_failed": 2, "current_job": null}
+  ], "stale_after_s": 30})");
+}
+
+inline const char* const kWaitingReason = R"(no live worker has a device matching {"name":"AMD"})";
+inline const char* const kLostAttempt = "attempt 1 on gpu-b: lease expired (no heartbeat for 31 s)";
+
 class FakeTallyd {
  public:
   // port 0: an ephemeral port; else that port (to stand in for a restarted daemon).
@@ -97,7 +125,7 @@ class FakeTallyd {
             apiError("invalid_field", "must be an integer between 1 and 16384, got 0", "resolutions[0][0]"),
             400);
       }
-      int id = spec.value("fail", false) ? 8 : 7;
+      int id = spec.value("fail", false) ? 8 : spec.value("waits", false) ? 11 : 7;
       reply(res, {{"id", id}, {"status", "queued"}}, 202);
     });
     server_.Get(R"(/api/captures/(\d+))", [this, reply](const httplib::Request& req, httplib::Response& res) {
@@ -127,11 +155,53 @@ class FakeTallyd {
         if (poll > 0) job["error"] = "device lost during deferred atrium 320x180 camera 1";
         return reply(res, job);
       }
+      if (id == 9) {
+        return reply(res, {{"id", 9},
+                           {"status", "queued"},
+                           {"host", nullptr},
+                           {"attempts", 1},
+                           {"max_attempts", 3},
+                           {"attempt_errors", {kLostAttempt}},
+                           {"waiting", kWaitingReason},
+                           {"progress", {{"done", 0}, {"total", 4}}}});
+      }
+      if (id == 10) {
+        return reply(res, {{"id", 10},
+                           {"status", "running"},
+                           {"host", "gpu-a"},
+                           {"attempts", 2},
+                           {"max_attempts", 3},
+                           {"attempt_errors", {kLostAttempt}},
+                           {"waiting", nullptr},
+                           {"progress", {{"done", 2}, {"total", 4}}}});
+      }
+      if (id == 11) {  // waits for a device, then runs on gpu-a
+        json job = {{"id", 11},
+                    {"attempts", poll == 0 ? 0 : 1},
+                    {"max_attempts", 3},
+                    {"attempt_errors", json::array()}};
+        job["status"] = poll == 0 ? "queued" : poll == 1 ? "running" : "done";
+        job["host"] = poll == 0 ? json(nullptr) : json("gpu-a");
+        job["waiting"] = poll == 0 ? json(kWaitingReason) : json(nullptr);
+        job["progress"] = {{"done", poll == 0 ? 0 : 4}, {"total", 4}};
+        if (poll >= 2) job["runs"] = {21};
+        return reply(res, job);
+      }
       reply(res, apiError("not_found", "capture " + std::to_string(id) + " not found"), 404);
     });
     server_.Get("/api/captures", [reply](const httplib::Request&, httplib::Response& res) {
       reply(res, {{"captures",
-                   {{{"id", 8},
+                   {{{"id", 9},
+                     {"status", "queued"},
+                     {"host", nullptr},
+                     {"attempts", 1},
+                     {"max_attempts", 3},
+                     {"attempt_errors", {kLostAttempt}},
+                     {"waiting", kWaitingReason},
+                     {"progress", {{"done", 0}, {"total", 4}}},
+                     {"created_at", "2026-11-21T06:32:00Z"}},
+                    {{"id", 8},
+                     {"host", "gpu-b"},
                      {"status", "failed"},
                      {"attempts", 2},
                      {"error", "out of memory"},
@@ -139,7 +209,9 @@ class FakeTallyd {
                      {"created_at", "2026-11-21T06:31:00Z"}},
                     {{"id", 7},
                      {"status", "running"},
+                     {"host", "gpu-a"},
                      {"attempts", 1},
+                     {"max_attempts", 3},
                      {"progress", {{"done", 12}, {"total", 40}}},
                      {"created_at", "2026-11-21T06:30:00Z"}}}},
                   {"next_cursor", nullptr}});
@@ -152,6 +224,18 @@ class FakeTallyd {
         lastRunsQuery_ = req.params;
       }
       std::string cursor = req.get_param_value("cursor");
+      if (req.has_param("host")) {
+        json run = runJson(21, "deferred", 320);
+        run["host"] = req.get_param_value("host");
+        return reply(res, {{"runs", {run}}, {"next_cursor", nullptr}});
+      }
+      if (req.get_param_value("capture") == "21") {  // a fleet's run beside one stored before hosts
+        json run = runJson(21, "deferred", 320);
+        run["host"] = "gpu-a";
+        json old = runJson(12, "deferred", 320);
+        old["host"] = nullptr;
+        return reply(res, {{"runs", {run, old}}, {"next_cursor", nullptr}});
+      }
       if (req.has_param("variant"))
         return reply(res, {{"runs", {variantRunJson(16)}}, {"next_cursor", nullptr}});
       if (req.get_param_value("capture") == "18")
@@ -167,6 +251,11 @@ class FakeTallyd {
       int id = std::stoi(req.matches[1]);
       if (id == 404) return reply(res, apiError("not_found", "run 404 not found"), 404);
       if (id == 16) return reply(res, variantRunJson(id));
+      if (id == 21) {
+        json run = runJson(id, "deferred", 320);
+        run["host"] = "gpu-a";
+        return reply(res, run);
+      }
       if (id == 18) return reply(res, footprintRunJson(id));
       if (id == 17) {  // a user's glTF scene: the loader's notes and the renderer's
         json run = runJson(id, "forward", 320);
@@ -288,6 +377,8 @@ class FakeTallyd {
         res.set_content(R"({"rows":[{"run_id":12,"renderer":"deferred"}]})", "application/json");
       }
     });
+    server_.Get("/api/hosts",
+                [reply](const httplib::Request&, httplib::Response& res) { reply(res, hostsJson()); });
     server_.Get("/api/health", [reply](const httplib::Request&, httplib::Response& res) {
       reply(res, {{"status", "ok"}, {"version", "0.1.0"}, {"api_version", 1}});
     });

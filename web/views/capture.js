@@ -2,14 +2,17 @@
 // (docs/result-schema.md) and POSTs it; the server validates it, and its error
 // (message and field) is shown beside the field it names. A started capture's
 // progress is polled until it finishes; below, the list of captures with their
-// status and errors. A second form takes a spec as JSON, posted to the same
-// route: a stability sweep ({"sweep": NAME, ...}, docs/result-schema.md
-// "Sweep results"; a finished sweep links to its view), or an application
-// or a replay under the Vulkan layer ({"application": {...}}, {"replay":
-// FILE}; docs/layer.md), where the daemon allows them.
+// status, the host that holds or last ran each, its attempts (and why the
+// earlier ones ended), why a queued one waits, and errors. A second form
+// takes a spec as JSON, posted to the same route: a stability sweep
+// ({"sweep": NAME, ...}, docs/result-schema.md "Sweep results"; a finished
+// sweep links to its view), or an application or a replay under the Vulkan
+// layer ({"application": {...}}, {"replay": FILE}; docs/layer.md), where the
+// daemon allows them.
 import { ApiError, get, request } from '../api.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
+import { poll } from '../poll.js';
 
 const kPollMs = 500;      // progress of the capture just started
 const kListPollMs = 2000;  // the job list, while any job is queued or running
@@ -252,39 +255,28 @@ function clearError(form) {
   for (const el of form.querySelectorAll('[aria-invalid]')) el.removeAttribute('aria-invalid');
 }
 
-// Waits ms, or less when the view is left.
-function sleep(ms, signal) {
-  return new Promise((resolve) => {
-    const done = () => {
-      clearTimeout(timer);
-      signal.removeEventListener('abort', done);
-      resolve();
-    };
-    const timer = setTimeout(done, ms);
-    signal.addEventListener('abort', done);
-  });
-}
-
-const kWatchMs = 2 * 3600 * 1000;  // stop polling after two hours: reload to watch again
-
-// Calls fn every `ms` until it returns true, the view is left, or kWatchMs pass.
-async function poll(fn, ms, signal) {
-  const until = Date.now() + kWatchMs;
-  while (!signal.aborted && Date.now() < until) {
-    if (await fn()) return;
-    await sleep(ms, signal);
-  }
-}
-
 const progressText = (job) => `${job.progress.done} / ${job.progress.total}${job.progress.current ? `: ${job.progress.current}` : ''}`;
+
+// "2 / 3": attempts so far of the most a job gets (a server before hosts gives no maximum).
+const attemptsText = (job) => `${job.attempts ?? '–'}${job.max_attempts ? ` / ${job.max_attempts}` : ''}`;
+
+// Why a queued job waits (no live host can take it), and why its earlier attempts ended.
+const waitingNote = (job) => (job.status === 'queued' && job.waiting ? h('div', { class: 'waiting', dataset: { waiting: '' } }, `Waiting: ${job.waiting}`) : null);
+const attemptErrors = (job) => (job.attempt_errors && job.attempt_errors.length
+  ? h('ul', { class: 'attempt-errors', 'aria-label': 'Earlier attempts' }, job.attempt_errors.map((e) => h('li', {}, e)))
+  : null);
 
 function progressPanel(job) {
   const done = job.status === 'done';
   return h('div', { class: 'panel', dataset: { capture: job.id, status: job.status }, role: 'status' },
-    h('div', {}, h('strong', {}, `Capture #${job.id}: `), h('span', { class: `job-status status-${job.status}` }, job.status)),
+    h('div', {}, h('strong', {}, `Capture #${job.id}: `), h('span', { class: `job-status status-${job.status}` }, job.status),
+      job.host ? h('span', { dataset: { host: job.host } }, ` on ${job.host}`) : null,
+      job.max_attempts && job.attempts > 1 ? h('span', { class: 'muted' }, ` (attempt ${job.attempts} of ${job.max_attempts})`) : null),
+    waitingNote(job),
     h('progress', { max: Math.max(job.progress.total, 1), value: job.progress.done }),
     h('div', { class: 'muted' }, progressText(job)),
     job.error ? h('div', { class: 'error' }, job.error) : null,
+    attemptErrors(job),
     done && job.sweeps && job.sweeps.length ? h('a', { href: `#/sweeps/${job.sweeps[0]}` }, 'See its sweep') : null,
     done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
 }
@@ -301,11 +293,13 @@ function summary(spec) {
 
 function jobTable(jobs, onCancel) {
   return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Captures', class: 'jobs' },
-    h('thead', {}, h('tr', {}, ['Capture', 'Status', 'Progress', 'Spec', 'Created (UTC)', 'Finished', 'Error', ''].map((t) => h('th', { scope: 'col' }, t)))),
+    h('thead', {}, h('tr', {}, ['Capture', 'Status', 'Host', 'Progress', 'Attempts', 'Spec', 'Created (UTC)', 'Finished', 'Error', ''].map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, jobs.map((j) => h('tr', { dataset: { capture: j.id, status: j.status } },
       h('td', {}, `#${j.id}`),
-      h('td', { class: `status-${j.status}` }, j.status),
+      h('td', { class: `status-${j.status}` }, j.status, waitingNote(j)),
+      h('td', { dataset: { cell: 'host' } }, j.host || '–'),
       h('td', {}, progressText(j)),
+      h('td', { dataset: { cell: 'attempts' } }, attemptsText(j), attemptErrors(j)),
       h('td', {}, summary(j.spec)),
       h('td', {}, fmt.date(j.created_at)),
       h('td', {}, fmt.date(j.finished_at)),

@@ -460,6 +460,7 @@ export async function render(page, { params, signal }) {
     h('ul', { class: 'meta' },
       optionsText(run.options) ? h('li', { dataset: { options: '' } }, `options: ${optionsText(run.options)}`) : null,
       h('li', {}, run.device),
+      run.host ? h('li', { dataset: { host: run.host } }, 'on host ', h('a', { href: `#/runs?host=${encodeURIComponent(run.host)}` }, run.host)) : null,
       app ? h('li', { dataset: { source: app.kind } }, sourceText) : null,
       app ? h('li', {}, `frames ${app.skip_frames} to ${app.skip_frames + app.frames - 1}, timed under the layer`) : null,
       h('li', {}, `counting ${run.counting}`),

@@ -1,7 +1,8 @@
-// Runs browser. The filters (renderer, scene, resolution, device, dates,
-// capture) live in the URL and go to the server as /api/runs query
-// parameters; rows arrive a page at a time (the store may hold thousands), and
-// a header click sorts the rows loaded so far. Ticking 2 to 4 rows opens them
+// Runs browser. The filters (renderer, scene, resolution, device, host,
+// dates, capture) live in the URL and go to the server as /api/runs query
+// parameters (the host select offers the hosts of /api/hosts and those the
+// loaded runs name); rows arrive a page at a time (the store may hold
+// thousands), and a header click sorts the rows loaded so far. Ticking 2 to 4 rows opens them
 // in the compare view.
 import { get, queryString } from '../api.js';
 import { h } from '../dom.js';
@@ -17,6 +18,8 @@ const kColumns = [
   { key: 'scene', label: 'Scene', sort: (r) => r.scene, cell: (r) => r.scene },
   { key: 'resolution', label: 'Resolution', sort: (r) => r.width * r.height, cell: fmt.resolution, num: true },
   { key: 'device', label: 'Device', sort: (r) => r.device, cell: (r) => h('span', { class: 'clip', title: r.device }, r.device) },
+  // null for runs stored before hosts existed
+  { key: 'host', label: 'Host', sort: (r) => r.host, cell: (r) => (r.host ? h('span', { class: 'clip', title: r.host }, r.host) : '–') },
   { key: 'counting', label: 'Counting', sort: (r) => r.counting, cell: (r) => r.counting },
   { key: 'sample_count', label: 'Samples', sort: (r) => r.sample_count, cell: (r) => String(r.sample_count), num: true },
   { key: 'mean_frame_ms', label: 'Frame time', sort: (r) => r.mean_frame_ms, cell: (r) => fmt.ms(r.mean_frame_ms), num: true },
@@ -46,13 +49,13 @@ function compareRows(column, direction) {
 // The API query for the filters in the URL: "resolution=320x180" becomes width and height.
 function apiFilters(query) {
   const f = {};
-  for (const key of ['renderer', 'scene', 'device', 'since', 'until', 'capture']) f[key] = query.get(key);
+  for (const key of ['renderer', 'scene', 'device', 'host', 'since', 'until', 'capture']) f[key] = query.get(key);
   const res = /^(\d+)\s*[x×]\s*(\d+)$/.exec(query.get('resolution') || '');
   if (res) [f.width, f.height] = [res[1], res[2]];
   return f;
 }
 
-function filterForm(query, { renderers, scenes, devices }, onApply) {
+function filterForm(query, { renderers, scenes, devices, hosts }, onApply) {
   const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
   const select = (name, options) => h('select', { name },
     h('option', { value: '' }, 'any'),
@@ -63,6 +66,7 @@ function filterForm(query, { renderers, scenes, devices }, onApply) {
     h('datalist', { id: 'scene-names' }, scenes.map((s) => h('option', { value: s }))),
     field('Resolution', h('input', { name: 'resolution', value: query.get('resolution') || '', placeholder: 'e.g. 320x180', pattern: '\\s*\\d+\\s*[x×]\\s*\\d+\\s*', size: 10 })),
     field('Device', select('device', devices.map((d) => [d.id, d.name]))),
+    hosts.length ? field('Host', select('host', hosts)) : null,
     field('From', h('input', { type: 'date', name: 'since', value: query.get('since') || '' })),
     field('To', h('input', { type: 'date', name: 'until', value: query.get('until') || '' })),
     query.get('capture') ? h('input', { type: 'hidden', name: 'capture', value: query.get('capture') }) : null,
@@ -78,12 +82,27 @@ function filterForm(query, { renderers, scenes, devices }, onApply) {
   return form;
 }
 
+// The host select's [value, text] pairs: the registered hosts (a stale one
+// says so), the hosts the loaded runs name (one since removed, say) and the
+// one in the URL, by name.
+function hostOptions(registered, runs, current) {
+  const stale = new Set(registered.filter((x) => !x.alive).map((x) => x.name));
+  const names = new Set([...registered.map((x) => x.name), ...runs.map((r) => r.host).filter(Boolean)]);
+  if (current) names.add(current);
+  return [...names].sort().map((name) => [name, stale.has(name) ? `${name} (stale)` : name]);
+}
+
 export async function render(page, { query, signal }) {
   const filters = apiFilters(query);
-  const [renderers, scenes, devices, first] = await Promise.all([
+  const [renderers, scenes, devices, hosts, first] = await Promise.all([
     get('/renderers', signal),
     get('/scenes', signal),
     get('/devices', signal),
+    // A daemon from before hosts has no /api/hosts: the runs' hosts fill the select then.
+    get('/hosts', signal).catch((error) => {
+      if (signal.aborted) throw error;
+      return { hosts: [] };
+    }),
     get('/runs' + queryString({ ...filters, limit: kPageSize }), signal),
   ]);
   const sceneNames = [...scenes.procedural.map((s) => s.name), ...scenes.gltf.flatMap((f) => f.files)];
@@ -155,7 +174,8 @@ export async function render(page, { query, signal }) {
   };
   page.append(
     h('h1', {}, 'Runs'),
-    filterForm(query, { renderers: [...renderers.renderers, ...(renderers.workloads || [])], scenes: sceneNames, devices: devices.devices }, apply),
+    filterForm(query, { renderers: [...renderers.renderers, ...(renderers.workloads || [])], scenes: sceneNames, devices: devices.devices,
+      hosts: hostOptions(hosts.hosts, rows, query.get('host')) }, apply),
     h('div', { class: 'toolbar' }, compareButton, status),
     rows.length
       ? h('div', { class: 'table-wrap' }, h('table', { class: 'runs', 'aria-label': 'Runs' }, thead, tbody))
