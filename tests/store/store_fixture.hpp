@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "postgres_server.hpp"
 #include "store/migrations.hpp"
 #include "store/sqlite.hpp"
 #include "store/store.hpp"
@@ -25,13 +26,23 @@ namespace tally::store::testing {
 using nlohmann::json;
 
 // The engine the store tests run on: SQLite files, or with
-// TALLY_TEST_POSTGRES set to a server's maintenance database URL
-// (postgresql://tally@127.0.0.1:PORT/postgres), a fresh PostgreSQL database
-// per test. ctest runs the engine-neutral suites both ways (store.* and
-// store.pg.*), against a server tests/support starts.
+// TALLY_TEST_STORE=postgres a fresh PostgreSQL database per test, on the
+// server in TALLY_TEST_POSTGRES (its maintenance database's URL,
+// postgresql://tally@127.0.0.1:PORT/postgres) or else one this process
+// starts (tests/support/postgres_server.hpp). ctest runs the engine-neutral
+// suites both ways: store.* on SQLite, store.postgresql on PostgreSQL.
 inline const char* postgresServer() {
+  const char* engine = std::getenv("TALLY_TEST_STORE");
+  if (!engine || std::string(engine) != "postgres") return nullptr;
   const char* url = std::getenv("TALLY_TEST_POSTGRES");
-  return url && *url ? url : nullptr;
+  if (url && *url) return url;
+  static std::string own;
+  if (own.empty()) {
+    auto* server = tally::testing::requirePostgres();
+    if (!server) throw std::runtime_error("TALLY_TEST_STORE=postgres, and no PostgreSQL server could be started");
+    own = server->url("postgres");
+  }
+  return own.c_str();
 }
 
 // A database for one test: a file in the temporary directory, removed (with
