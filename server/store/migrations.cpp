@@ -14,7 +14,11 @@ int readVersion(Connection& db) {
     query.step();
     return static_cast<int>(query.getInt(0));
   }
-  Statement exists(db, "SELECT to_regclass('tally_schema_version') IS NOT NULL");
+  // A catalog read, not to_regclass(): a prepared to_regclass() is planned
+  // once, and its answer kept, while another daemon creates the table.
+  Statement exists(db,
+                   "SELECT COUNT(*) FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace "
+                   "WHERE c.relname = 'tally_schema_version' AND n.nspname = current_schema()");
   exists.step();
   if (!exists.getInt(0)) return 0;
   Statement query(db, "SELECT COALESCE(MAX(version), 0) FROM tally_schema_version");

@@ -383,6 +383,25 @@ TEST(Engines, PostgresStatementsBindAndReadEveryType) {
   EXPECT_EQ(all.getText(0), "2");
 }
 
+// Daemons of a fleet start together: each opens the store and migrates; one
+// applies each migration, the others find it applied (the advisory lock).
+TEST(Engines, ConcurrentOpensMigrateOnce) {
+  TempDb db;  // either engine
+  std::vector<std::thread> daemons;
+  std::vector<std::string> errors(6);
+  for (size_t i = 0; i < errors.size(); ++i) {
+    daemons.emplace_back([&, i] {
+      auto store = Store::open(db.path());
+      if (!store) errors[i] = store.error();
+    });
+  }
+  for (auto& t : daemons) t.join();
+  for (const auto& e : errors) EXPECT_EQ(e, "");
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
+}
+
 TEST(Engines, ParametersAreRewrittenOutsideLiterals) {
   std::vector<std::string> names;
   EXPECT_EQ(toPostgresParameters("SELECT ?2, ?, :a, ':b', \"?\", :a, x::jsonb -- ?9\n, ?", &names),
