@@ -262,7 +262,8 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   for (const char* path :
        {"/api/captures", "/api/captures/{id}", "/api/runs", "/api/runs/{id}", "/api/runs/{id}/samples",
         "/api/samples/{id}", "/api/samples/{id}/screenshot.png", "/api/compare", "/api/export", "/api/health",
-        "/api/devices", "/api/renderers", "/api/scenes", "/api/openapi.json", "/api/sweeps", "/api/sweeps/{id}"}) {
+        "/api/devices", "/api/renderers", "/api/scenes", "/api/openapi.json", "/api/sweeps", "/api/sweeps/{id}",
+        "/api/hosts"}) {
     EXPECT_TRUE(embedded["paths"].contains(path)) << path;
   }
   EXPECT_TRUE(embedded["paths"]["/api/captures"].contains("post"));
@@ -271,7 +272,7 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   std::set<std::string> runFilters;
   for (auto& p : embedded["paths"]["/api/runs"]["get"]["parameters"]) runFilters.insert(p["name"]);
   EXPECT_EQ(runFilters, (std::set<std::string>{"renderer", "variant", "scene", "width", "height", "device", "capture",
-                                               "since", "until", "limit", "cursor"}));
+                                               "host", "since", "until", "limit", "cursor"}));
 }
 
 }  // namespace

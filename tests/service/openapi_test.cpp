@@ -84,7 +84,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
-      "/api/sweeps",       "/api/sweeps/{id}",  "/metrics"};
+      "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
   EXPECT_EQ(documented, served);
