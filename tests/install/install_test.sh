@@ -26,12 +26,18 @@ check() {  # check DESCRIPTION COMMAND...
 cmake --install "$build" --prefix "$dir/prefix" > "$dir/install.log" 2>&1 \
   || { cat "$dir/install.log" >&2; exit 1; }
 for f in bin/tallyd bin/tally share/tally/shaders/forward.frag.glsl share/tally/web/index.html \
-         share/tally/migrations/0001_initial.sql lib/systemd/system/tallyd.service share/doc/tally/operating.md \
+         share/tally/migrations/0001_initial.sql share/tally/migrations/postgresql/0007_fleet.sql \
+         lib/systemd/system/tallyd.service share/doc/tally/operating.md \
          share/vulkan/explicit_layer.d/VkLayer_tally_counters.json lib/libVkLayer_tally_counters.so; do
   check "installed $f" test -e "$dir/prefix/$f"
 done
 check "the unit runs the installed tallyd serve" \
   grep -q "^ExecStart=$dir/prefix/bin/tallyd serve --db /var/lib/tally/tally.db$" "$dir/prefix/lib/systemd/system/tallyd.service"
+check "the fleet's API unit runs the api role on the shared store" \
+  grep -q "^ExecStart=$dir/prefix/bin/tallyd serve --role api --store \${TALLY_STORE} " "$dir/prefix/lib/systemd/system/tallyd-api.service"
+check "the fleet's worker unit runs the worker role named by the host" \
+  grep -q "^ExecStart=$dir/prefix/bin/tallyd serve --role worker --store \${TALLY_STORE} --host-name %H$" \
+  "$dir/prefix/lib/systemd/system/tallyd-worker.service"
 
 # A copy of the install tree, away from the build and the source.
 cp -a "$dir/prefix" "$dir/copy"
