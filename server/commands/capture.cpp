@@ -1,3 +1,4 @@
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -89,6 +90,11 @@ int runCapture(const CaptureArgs& args) {
   }
   auto json = nlohmann::json::parse(text, nullptr, false);
   if (json.is_discarded()) return fail("spec: not valid JSON");
+  // "device" picks a fleet's host (docs/fleet.md); here --device picks the GPU.
+  if (json.is_object() && json.contains("device")) {
+    if (!args.quiet) std::fprintf(stderr, "tallyd capture: the spec's \"device\" is for a fleet's queue; --device picks the GPU here\n");
+    json.erase("device");
+  }
   // {"application": ...} or {"replay": ...}: an application under the Vulkan layer.
   if (capture::isApplicationSpec(json)) return runApplicationCapture(args, json);
   // A spec with "sweep" is a stability sweep (sweeps/sweep.hpp), not a capture matrix.
