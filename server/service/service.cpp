@@ -162,17 +162,6 @@ json reuseJson(std::optional<double> requested, std::optional<double> footprint)
   return requested.value_or(0) / *footprint;
 }
 
-// Milliseconds since 1970 as UTC ISO-8601 text, as the store writes times.
-std::string isoTime(int64_t ms) {
-  std::time_t seconds = static_cast<std::time_t>(ms / 1000);
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[40];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1,
-                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(ms % 1000));
-  return text;
-}
-
 json jobJson(const store::Job& j) {
   return {{"id", j.id},
           {"status", store::toString(j.status)},
@@ -183,7 +172,7 @@ json jobJson(const store::Job& j) {
           {"max_attempts", j.maxAttempts},
           {"attempt_errors", j.attemptErrors.is_array() ? j.attemptErrors : json::array()},
           {"host", opt(j.host)},
-          {"lease_expires_at", j.leaseExpiresMs ? json(isoTime(*j.leaseExpiresMs)) : json(nullptr)},
+          {"lease_expires_at", j.leaseExpiresMs ? json(store::isoTimeFromMs(*j.leaseExpiresMs)) : json(nullptr)},
           {"device", j.deviceRequirement},
           {"waiting", nullptr},
           {"created_at", j.createdAt},

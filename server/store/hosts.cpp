@@ -2,6 +2,8 @@
 // meets them, and the hosts table (registration, heartbeats, listing).
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
+#include <ctime>
 
 #include "store/internal.hpp"
 
@@ -19,6 +21,16 @@ std::string lower(std::string_view text) {
 }
 
 }  // namespace
+
+std::string isoTimeFromMs(int64_t ms) {
+  std::time_t seconds = static_cast<std::time_t>(ms / 1000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char text[40];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1,
+                utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(ms % 1000));
+  return text;
+}
 
 std::string vendorName(std::string_view vendorId) {
   // PCI vendor ids (and Khronos vendor ids for drivers without one).
@@ -184,14 +196,7 @@ Result<std::vector<Host>> Store::listHosts(int64_t staleAfterMs) {
       h.jobsDone = query.getInt(10);
       h.jobsFailed = query.getInt(11);
       h.currentJob = query.getOptInt(12);
-      // The heartbeat as UTC ISO-8601 text, as every other time the API gives.
-      std::time_t seconds = static_cast<std::time_t>(beatMs / 1000);
-      std::tm utc{};
-      gmtime_r(&seconds, &utc);
-      char text[40];
-      std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", utc.tm_year + 1900, utc.tm_mon + 1,
-                    utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, static_cast<int>(beatMs % 1000));
-      h.lastHeartbeat = text;
+      h.lastHeartbeat = isoTimeFromMs(beatMs);  // UTC ISO-8601, as every other time the API gives
       out.push_back(std::move(h));
     }
     return out;

@@ -89,6 +89,9 @@ Result<DeviceRequirement> deviceRequirementFromJson(const nlohmann::json& value)
 std::string deviceMismatch(const DeviceRequirement& requirement, const nlohmann::json& device);
 // "NVIDIA" for "0x10DE", ... ; the id itself when unknown.
 std::string vendorName(std::string_view vendorId);
+// Milliseconds since 1970 (lease and heartbeat times) as UTC ISO-8601 text
+// with milliseconds, as the store writes every other time.
+std::string isoTimeFromMs(int64_t ms);
 
 struct HostInfo {
   std::string name;      // unique in the store
