@@ -211,7 +211,7 @@ class Db {
 // A run as the database has it: its columns and per-frame means over its samples.
 struct DbRun {
   int64_t id = 0, capture = 0, samples = 0;
-  std::string renderer, scene, device;
+  std::string renderer, scene, device, host;
   int64_t width = 0, height = 0;
   double frameMs = 0, bytes = 0;  // means of samples.frame_ms and samples.bytes
 };
@@ -220,7 +220,7 @@ std::map<int64_t, DbRun> dbRuns(Db& db) {
   std::map<int64_t, DbRun> out;
   json rows = db.rows(
       "SELECT r.id, r.job_id, r.renderer, sc.name, d.name, r.width, r.height, COUNT(s.id), AVG(s.frame_ms), "
-      "AVG(s.bytes) FROM runs r JOIN scenes sc ON sc.id = r.scene_id JOIN devices d ON d.id = r.device_id "
+      "AVG(s.bytes), r.host FROM runs r JOIN scenes sc ON sc.id = r.scene_id JOIN devices d ON d.id = r.device_id "
       "LEFT JOIN samples s ON s.run_id = r.id GROUP BY r.id");
   for (const auto& r : rows) {
     DbRun run;
@@ -234,6 +234,7 @@ std::map<int64_t, DbRun> dbRuns(Db& db) {
     run.samples = r[7].get<int64_t>();
     run.frameMs = r[8].get<double>();
     run.bytes = r[9].get<double>();
+    run.host = r[10].get<std::string>();
     out[run.id] = run;
   }
   return out;
@@ -367,9 +368,9 @@ void CliFlow::captureWithProgress(int64_t& capture) {
 
 // `tally status` (the list) and `tally status ID` show the job's row.
 void CliFlow::checkStatus(Db& db, int64_t capture) {
-  json job =
-      db.row("SELECT status, progress_done, progress_total, attempts, created_at FROM jobs WHERE id = ?1",
-             {capture});
+  json job = db.row(
+      "SELECT status, progress_done, progress_total, attempts, created_at, host, max_attempts FROM jobs WHERE id = ?1",
+      {capture});
   ASSERT_TRUE(job.is_array()) << "capture " << capture << " is not in the database";
   EXPECT_EQ(job[0], "done");
   EXPECT_EQ(job[1], kFlowSamples);
@@ -380,11 +381,13 @@ void CliFlow::checkStatus(Db& db, int64_t capture) {
   ASSERT_EQ(list.rc, 0) << list.err;
   auto listed = rowsStartingWith(list.out, std::to_string(capture));
   ASSERT_EQ(listed.size(), 1u) << list.out;
-  ASSERT_EQ(listed[0].size(), 5u) << list.out;  // ID STATUS PROGRESS ATTEMPTS CREATED (ERROR empty)
+  // ID STATUS HOST PROGRESS ATTEMPTS CREATED (ERROR empty): the daemon's worker is a host.
+  ASSERT_EQ(listed[0].size(), 6u) << list.out;
   EXPECT_EQ(listed[0][1], job[0]);
-  EXPECT_EQ(listed[0][2], progress);
-  EXPECT_EQ(listed[0][3], job[3].dump());
-  EXPECT_EQ(listed[0][4], job[4]);
+  EXPECT_EQ(listed[0][2], job[5]);
+  EXPECT_EQ(listed[0][3], progress);
+  EXPECT_EQ(listed[0][4], job[3].dump() + "/" + job[6].dump());
+  EXPECT_EQ(listed[0][5], job[4]);
 
   Outcome one = tally({"status", std::to_string(capture)});
   ASSERT_EQ(one.rc, 0) << one.err;
@@ -395,7 +398,8 @@ void CliFlow::checkStatus(Db& db, int64_t capture) {
   }
   EXPECT_EQ(fields["status"], job[0]);
   EXPECT_EQ(fields["progress"], progress);
-  EXPECT_EQ(fields["attempts"], job[3].dump());
+  EXPECT_EQ(fields["attempts"], job[3].dump() + "/" + job[6].dump());
+  EXPECT_EQ(fields["host"], job[5]);
   EXPECT_EQ(fields["created"], job[4]);
 }
 
@@ -440,16 +444,17 @@ void CliFlow::checkRunsTable(const Runs& runs) {
     SCOPED_TRACE("runs table, run " + std::to_string(id));
     auto rows = rowsStartingWith(table.out, std::to_string(id));
     ASSERT_EQ(rows.size(), 1u) << table.out;
-    const auto& c = rows[0];  // ID CAPTURE RENDERER SCENE SIZE DEVICE SAMPLES FRAME-MS BYTES/FRAME
-    ASSERT_EQ(c.size(), 9u) << table.out;
+    const auto& c = rows[0];  // ID CAPTURE RENDERER SCENE SIZE DEVICE HOST SAMPLES FRAME-MS BYTES/FRAME
+    ASSERT_EQ(c.size(), 10u) << table.out;
     EXPECT_EQ(c[1], std::to_string(want.capture));
     EXPECT_EQ(c[2], want.renderer);
     EXPECT_EQ(c[3], want.scene);
     EXPECT_EQ(c[4], std::to_string(want.width) + "x" + std::to_string(want.height));
     EXPECT_EQ(c[5], want.device);
-    EXPECT_EQ(c[6], std::to_string(want.samples));
-    EXPECT_TRUE(shows(parseFixed(c[7]), want.frameMs, c[7]));
-    EXPECT_TRUE(shows(parseBytes(c[8]), want.bytes, c[8]));
+    EXPECT_EQ(c[6], want.host);
+    EXPECT_EQ(c[7], std::to_string(want.samples));
+    EXPECT_TRUE(shows(parseFixed(c[8]), want.frameMs, c[8]));
+    EXPECT_TRUE(shows(parseBytes(c[9]), want.bytes, c[9]));
   }
 }
 
@@ -486,7 +491,7 @@ void CliFlow::checkShow(Db& db, const DbRun& run) {
   ASSERT_GE(out.size(), 4u + samples.size()) << table.out;
   EXPECT_EQ(out[0], "run " + id + ": " + run.renderer + " on " + run.scene + " at " +
                         std::to_string(run.width) + "x" + std::to_string(run.height));
-  EXPECT_EQ(out[1].rfind("device: " + run.device + "   capture: " + std::to_string(run.capture), 0), 0u)
+  EXPECT_EQ(out[1].rfind("device: " + run.device + "   host: " + run.host + "   capture: " + std::to_string(run.capture), 0), 0u)
       << out[1];
   // The build that made the run, as stored.
   json build = db.rows("SELECT tally_version, tally_commit FROM runs WHERE id = ?1", {run.id});
