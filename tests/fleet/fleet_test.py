@@ -18,6 +18,9 @@ Checked afterwards:
   - GET /api/hosts lists the three workers, the killed one no longer alive,
     and jobs done per host add up;
   - a queued job nobody can run says why, and cancelling it works;
+  - with the database stopped mid-capture, the worker keeps its capture and
+    retries the ingest until it is back; the API answers 500 meanwhile; the
+    result is stored once;
   - with node and Chromium present, the dashboard's hosts view and runs
     browser show the hosts (tests/web/fleet_check.mjs).
 
@@ -304,6 +307,47 @@ def main():
             print(result.stdout.strip(), flush=True)
         elif os.environ.get("CI") == "true":
             fail("node, playwright-core or the dashboard check is missing")
+
+        # The database goes away mid-capture: the worker keeps its capture,
+        # retries the ingest until the database is back, and the result is
+        # stored once (by it, or, had its lease been taken meanwhile, by the
+        # worker that ran the job again). The API answers 500 meanwhile and
+        # reconnects afterwards.
+        status, reply = api.call("POST", "/api/captures", dict(spec(1), frames=4))
+        check(status == 202, "POST the outage capture: %d %s" % (status, reply))
+        outage = reply["id"]
+        end = time.time() + 180
+        holder = None
+        while holder is None:
+            check(time.time() < end, "the outage capture never ran")
+            j = api.get("/api/captures/%d" % outage)
+            if j["status"] == "running" and j["progress"]["done"] > 0:
+                holder = j["host"]
+            else:
+                check(j["status"] in ("queued", "running"), "the outage capture ended first: %s" % j)
+                time.sleep(0.05)
+        server.pause()
+        status, reply = api.call("GET", "/api/captures/%d" % outage)
+        check(status == 500 and reply["error"]["code"] == "internal", "GET with the database down: %d %s" % (status, reply))
+        end = time.time() + 240
+        while "cannot reach the database to store the result" not in open(logs[holder], errors="replace").read():
+            check(time.time() < end, "%s never retried its ingest: %s" % (holder, open(logs[holder]).read()[-1500:]))
+            check(processes[holder].poll() is None, "%s exited while the database was down" % holder)
+            time.sleep(0.2)
+        server.resume()
+        end = time.time() + 120
+        while True:
+            status, j = api.call("GET", "/api/captures/%d" % outage)
+            if status == 200 and j["status"] in ("done", "failed"):
+                break
+            check(time.time() < end, "the outage capture did not end after the database came back: %d %s" % (status, j))
+            time.sleep(0.3)
+        check(j["status"] == "done", "the outage capture ended %s: %s" % (j["status"], j))
+        stored = api.get("/api/runs?capture=%d" % outage)["runs"]
+        check(len(stored) == 1 and stored[0]["host"] == j["host"],
+              "the outage capture stored %d runs: %s" % (len(stored), stored))
+        print("database outage: %s kept capture %d and retried its ingest; stored once, by %s (attempt %d)" %
+              (holder, outage, j["host"], j["attempts"]), flush=True)
 
         for name in ("worker-b", "worker-c", "api"):
             processes[name].send_signal(signal.SIGTERM)

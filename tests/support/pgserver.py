@@ -220,6 +220,26 @@ class PostgresServer:
                                     f"server log {self.log_path}:\n{_tail(log)}")
         self.create_database("tally")
 
+    def pause(self):
+        """Stops the server (pg_ctl stop -m fast) and keeps its data, port and
+        folder, so that resume() brings the same databases back: an outage,
+        for tests of what clients do meanwhile."""
+        if not self.running:
+            raise PostgresError("pause: the PostgreSQL server is not running")
+        stopped = self._run([os.path.join(self.bindir, "pg_ctl"), "-D", self.data_dir, "-m", "fast", "-w",
+                             "-t", "60", "stop"], as_server_user=True)
+        if stopped.returncode != 0:
+            raise PostgresError(f"pg_ctl stop failed:\n{_tail(stopped.stdout)}")
+
+    def resume(self):
+        """Starts a paused server again on its port."""
+        options = (f"-p {self.port} -k {shlex.quote(self.socket_dir)} -c listen_addresses=127.0.0.1"
+                   " -c fsync=off -c max_connections=200")
+        started = self._run([os.path.join(self.bindir, "pg_ctl"), "-D", self.data_dir, "-o", options, "-w",
+                             "-t", "60", "-l", self.log_path, "start"], as_server_user=True)
+        if started.returncode != 0:
+            raise PostgresError(f"pg_ctl start failed:\n{_tail(started.stdout)}")
+
     def stop(self):
         """pg_ctl stop -m fast, waits until the postmaster has exited, and
         removes the folder (log included). Does nothing when not running, and
