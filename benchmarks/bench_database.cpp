@@ -81,9 +81,12 @@ uint64_t databaseBytes(store::Connection& db, const std::string& path) {
 Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::string& path,
                                        store::Store& writer) {
   DatabaseReport out;
-  out.path = path;
+  out.path = store::isPostgresUrl(path) ? store::redactUrl(path) : path;
   bool empty = sampleCount(writer.connection()) == 0;
-  if (!empty && !options.reuse) return makeError(path + " already holds samples; pass --reuse, or remove it");
+  if (!empty && !options.reuse) {
+    return makeError(out.path + " already holds samples; pass --reuse, or remove it" +
+                     (store::isPostgresUrl(path) ? " (drop and create the database)" : ""));
+  }
   if (empty) {
     auto renderers = renderers::rendererNames();
     auto source = loadTemplate(options.templatePath, renderers);

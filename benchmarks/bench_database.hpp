@@ -21,7 +21,7 @@ struct FillOptions {
 };
 
 // Fills the writer's database when it holds no samples, then checkpoints
-// the WAL and describes it.
+// the WAL (SQLite) and describes it. path: a SQLite file or a PostgreSQL URL.
 Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::string& path,
                                        store::Store& writer);
 
@@ -33,13 +33,14 @@ struct Pools {
 };
 Pools readPools(store::Store& writer);
 
-void removeDatabase(const std::string& path);  // with its -wal and -shm
+void removeDatabase(const std::string& path);  // with its -wal and -shm; nothing for a PostgreSQL URL
 
 // Drops the file's pages from the OS page cache (this file's only), so that
-// the next reads come from the disk.
+// the next reads come from the disk. Nothing for a PostgreSQL URL: the
+// server's shared buffers and files are out of this process's reach.
 void evictFromPageCache(const std::string& path);
 // Reads the file once, so that later reads find it in the page cache, as on
-// a daemon that has served for a while.
+// a daemon that has served for a while. Nothing for a PostgreSQL URL.
 void loadIntoPageCache(const std::string& path);
 
 }  // namespace tally::bench

@@ -166,4 +166,73 @@ Result<std::vector<PlannedStatement>> explain(const std::string& dbPath,
   return out;
 }
 
+std::unique_ptr<ServerStatements> ServerStatements::connect(const std::string& url, std::string* why) {
+  try {
+    auto db = store::openPostgres(url);
+    {
+      store::Statement installed(*db,
+                                 "SELECT COUNT(*) FROM pg_extension WHERE extname = 'pg_stat_statements'");
+      installed.step();
+      if (installed.getInt(0) == 0) {
+        if (why) *why = "the database has no pg_stat_statements extension";
+        return nullptr;
+      }
+      installed.run();
+    }
+    std::unique_ptr<ServerStatements> out(new ServerStatements(std::move(db)));
+    out->snapshot();  // fails when the server does not load the module
+    return out;
+  } catch (const std::exception& e) {
+    if (why) *why = e.what();
+    return nullptr;
+  }
+}
+
+ServerStatements::Snapshot ServerStatements::snapshot() {
+  store::Statement query(*db_,
+                         "SELECT queryid::text, query, calls, total_exec_time, rows, shared_blks_hit, "
+                         "shared_blks_read FROM pg_stat_statements WHERE dbid = (SELECT oid FROM pg_database "
+                         "WHERE datname = current_database()) AND queryid IS NOT NULL AND query NOT LIKE "
+                         "'%pg_stat_statements%'");
+  Snapshot out;
+  while (query.step()) {
+    Entry& e = out[query.getText(0)];
+    e.query = query.getText(1);
+    e.calls += query.getInt(2);
+    e.ms += query.getDouble(3);
+    e.rows += query.getInt(4);
+    e.blocksHit += query.getInt(5);
+    e.blocksRead += query.getInt(6);
+  }
+  return out;
+}
+
+ServerStatements::Snapshot ServerStatements::difference(const Snapshot& before, const Snapshot& after) {
+  Snapshot out;
+  for (const auto& [id, a] : after) {
+    Entry d = a;
+    if (auto it = before.find(id); it != before.end()) {
+      d.calls -= it->second.calls;
+      d.ms -= it->second.ms;
+      d.rows -= it->second.rows;
+      d.blocksHit -= it->second.blocksHit;
+      d.blocksRead -= it->second.blocksRead;
+    }
+    if (d.calls > 0) out[id] = d;
+  }
+  return out;
+}
+
+ServerStatements::Entry ServerStatements::total(const Snapshot& statements) {
+  Entry t;
+  for (const auto& [id, e] : statements) {
+    t.calls += e.calls;
+    t.ms += e.ms;
+    t.rows += e.rows;
+    t.blocksHit += e.blocksHit;
+    t.blocksRead += e.blocksRead;
+  }
+  return t;
+}
+
 }  // namespace tally::bench

@@ -1,14 +1,18 @@
 // Which SQL the server runs for a request, how long its statements take, and
 // what SQLite plans for them. An SQLite auto extension adds a profile trace to
 // every connection the process opens afterwards, so the store's own
-// statements are seen without touching the store.
+// statements are seen without touching the store. On PostgreSQL the same
+// questions go to the server's pg_stat_statements view (ServerStatements).
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/result.hpp"
+#include "store/db.hpp"
 
 namespace tally::bench {
 
@@ -43,5 +47,33 @@ struct PlannedStatement {
 // run for every selected row, not only for those LIMIT keeps.
 Result<std::vector<PlannedStatement>> explain(const std::string& dbPath,
                                               const std::vector<std::string>& sqls);
+
+// PostgreSQL: what the server's pg_stat_statements view counts for one
+// database, every connection to it included, read over a connection of its
+// own. Available when the server loads the module (shared_preload_libraries)
+// and the database has the extension (CREATE EXTENSION pg_stat_statements);
+// the benchmark creates nothing.
+class ServerStatements {
+ public:
+  // Null, with the reason in `why`, when the view cannot be read.
+  static std::unique_ptr<ServerStatements> connect(const std::string& url, std::string* why);
+
+  struct Entry {
+    std::string query;  // normalised: constants and parameters as $N
+    int64_t calls = 0;
+    double ms = 0;  // total_exec_time: on the server, planning, round trips and the client's reading excluded
+    int64_t rows = 0;
+    int64_t blocksHit = 0, blocksRead = 0;  // shared buffers found in PostgreSQL's cache, and read into it
+  };
+  using Snapshot = std::map<std::string, Entry>;  // by queryid
+  Snapshot snapshot();  // the view's statements, without the benchmark's own reads of it
+  // after - before, per statement; statements not called in between left out.
+  static Snapshot difference(const Snapshot& before, const Snapshot& after);
+  static Entry total(const Snapshot& statements);
+
+ private:
+  explicit ServerStatements(std::unique_ptr<store::Connection> db) : db_(std::move(db)) {}
+  std::unique_ptr<store::Connection> db_;
+};
 
 }  // namespace tally::bench

@@ -2,12 +2,14 @@
 // (docs/benchmarks.md). Fills a fresh database through Store::ingestCapture
 // (the daemon's path after a capture), serves it with the daemon's HTTP
 // server and service routes in this process, and times the read routes with
-// one client and with several at once. It prints figures and asserts none;
-// it exits 1 when a request fails.
+// one client and with several at once. The database is a SQLite file or a
+// PostgreSQL database (--db postgresql://...). It prints figures and asserts
+// none; it exits 1 when a request fails.
 #include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -35,7 +37,7 @@ struct Options {
   size_t requests = 1000;  // per route and client count (pages for the walk)
   int clients = 8;
   int seconds = 30;  // per route and client count: no request starts later
-  std::string db;    // empty: a temporary file, removed at the end
+  std::string db;    // a file or a postgresql:// URL; empty: a temporary file, removed at the end
   bool reuse = false;
   bool json = false;
   std::string templatePath = TALLY_BENCH_TEMPLATE;
@@ -155,18 +157,64 @@ std::vector<RouteBench> routeBenches(const Pools& pools) {
 
 // ---- measuring -------------------------------------------------------------------
 
-RouteFigures timeRoute(int port, const Options& options, const RouteBench& bench, int clients) {
+// Where the store's statement figures come from: SQLite's trace of this
+// process's connections, or the PostgreSQL server's pg_stat_statements (null
+// when it cannot be read: no store ms then).
+struct StatementSource {
+  bool postgres = false;
+  std::unique_ptr<ServerStatements> server;
+  // Milliseconds spent in the store's statements so far, over every connection.
+  double storeMs() {
+    if (!postgres) return static_cast<double>(statementTotals().nanoseconds) / 1e6;
+    return server ? ServerStatements::total(server->snapshot()).ms : 0;
+  }
+};
+
+RouteFigures timeRoute(int port, const Options& options, const RouteBench& bench, int clients,
+                       StatementSource& source) {
   // Units of work: requests, or whole walks for the paginated listing (at
   // least one per client).
   size_t units = (options.requests + bench.requestsPerUnit - 1) / bench.requestsPerUnit;
   if (bench.requestsPerUnit > 1) units = std::max<size_t>(units, static_cast<size_t>(clients));
-  StatementTotals before = statementTotals();
+  double before = source.storeMs();
   Summary summary = measure(port, clients, units, std::chrono::seconds(options.seconds), bench.workload);
-  StatementTotals after = statementTotals();
-  double storeMs = summary.count ? static_cast<double>(after.nanoseconds - before.nanoseconds) / 1e6 /
-                                       static_cast<double>(summary.count)
-                                 : 0;
+  double after = source.storeMs();
+  double storeMs = summary.count ? (after - before) / static_cast<double>(summary.count) : 0;
   return RouteFigures{bench.route, clients, summary, storeMs};
+}
+
+// PostgreSQL: the SELECTs one request (or one walk) of the route ran, with
+// what the server counted for them, most time first.
+Result<RoutePlan> serverStatementsOf(int port, ServerStatements& server, const RouteBench& bench) {
+  HttpClient client(port);
+  std::mt19937 random(7);
+  auto before = server.snapshot();
+  UnitResult unit = bench.workload(client, random);
+  auto ran = ServerStatements::difference(before, server.snapshot());
+  if (!unit.error.empty()) return makeError(unit.error);
+  double requests = static_cast<double>(std::max<size_t>(1, unit.ms.size()));
+  auto total = ServerStatements::total(ran);
+  RoutePlan plan{bench.route, 0, static_cast<double>(total.blocksHit + total.blocksRead) / requests, {}};
+  std::vector<ServerStatements::Entry> selects;
+  for (const auto& [id, e] : ran) {
+    size_t start = e.query.find_first_not_of(" \t\r\n");
+    if (start != std::string::npos &&
+        (e.query.compare(start, 6, "SELECT") == 0 || e.query.compare(start, 4, "WITH") == 0)) {
+      selects.push_back(e);
+    }
+  }
+  std::sort(selects.begin(), selects.end(), [](const auto& a, const auto& b) { return a.ms > b.ms; });
+  for (const auto& e : selects) {
+    char line[200];
+    std::snprintf(
+        line, sizeof line,
+        "per request: %.1f calls, %.3f ms, %.0f rows, %.0f shared buffers (%.0f read into the cache)",
+        static_cast<double>(e.calls) / requests, e.ms / requests, static_cast<double>(e.rows) / requests,
+        static_cast<double>(e.blocksHit + e.blocksRead) / requests,
+        static_cast<double>(e.blocksRead) / requests);
+    plan.statements.push_back(PlannedStatement{e.query, {line}, {}});
+  }
+  return plan;
 }
 
 Result<RoutePlan> planRoute(int port, const std::string& dbPath, const RouteBench& bench) {
@@ -231,7 +279,7 @@ Result<std::vector<std::pair<std::string, double>>> timeColdRequests(int port, c
 }
 
 std::vector<RouteFigures> timeRoutes(int port, const Options& options, const std::vector<RouteBench>& benches,
-                                     size_t httpThreads) {
+                                     size_t httpThreads, StatementSource& source) {
   // Every server thread opens its read connection before timing starts.
   measure(port, options.clients, 4 * httpThreads, std::chrono::seconds(options.seconds),
           oneRequest([](std::mt19937&) { return "/api/runs?limit=1"; }));
@@ -239,7 +287,7 @@ std::vector<RouteFigures> timeRoutes(int port, const Options& options, const std
   for (int clients : {1, options.clients}) {
     for (const auto& bench : benches) {
       if (!options.json) std::fprintf(stderr, "timing %s with %d client(s)\n", bench.route.c_str(), clients);
-      out.push_back(timeRoute(port, options, bench, clients));
+      out.push_back(timeRoute(port, options, bench, clients, source));
     }
   }
   return out;
@@ -248,6 +296,22 @@ std::vector<RouteFigures> timeRoutes(int port, const Options& options, const std
 int fail(const std::string& message) {
   std::fprintf(stderr, "tally_bench_read_latency: %s\n", message.c_str());
   return 1;
+}
+
+std::string engineVersion(store::Store& writer) {
+  bool postgres = writer.engine() == store::Engine::Postgres;
+  store::Statement version(writer.connection(), postgres ? "SHOW server_version" : "SELECT sqlite_version()");
+  std::string out =
+      std::string(postgres ? "PostgreSQL " : "SQLite ") + (version.step() ? version.getText(0) : "?");
+  version.run();
+  if (postgres) {
+    for (const char* setting : {"shared_buffers", "fsync", "synchronous_commit"}) {
+      store::Statement show(writer.connection(), std::string("SHOW ") + setting);  // fixed names only
+      out += std::string(", ") + setting + " " + (show.step() ? show.getText(0) : "?");
+      show.run();
+    }
+  }
+  return out;
 }
 
 int run(const Options& options) {
@@ -267,11 +331,17 @@ int run(const Options& options) {
 
   auto writer = store::Store::open(path);
   if (!writer) return fail(writer.error());
+  const bool postgres = (*writer)->engine() == store::Engine::Postgres;
+  StatementSource source;
+  source.postgres = postgres;
+  std::string serverStatementsMissing;
+  if (postgres) source.server = ServerStatements::connect(path, &serverStatementsMissing);
+  const std::string engine = engineVersion(**writer);  // before the server shares the writer
   FillOptions fill{options.samples, options.reuse, options.templatePath, options.json};
   auto database = prepareDatabase(fill, path, **writer);
   if (!database) return fail(database.error());
   Pools pools = readPools(**writer);
-  if (pools.runs.empty()) return fail(path + " holds no runs");
+  if (pools.runs.empty()) return fail(database->path + " holds no runs");
 
   installStatementTrace();  // every connection opened from here on: the server's readers
   auto daemon = startDaemon(**writer, path);
@@ -279,6 +349,9 @@ int run(const Options& options) {
   const int port = (*daemon)->server->port();
 
   Report report;
+  report.postgres = postgres;
+  report.engineVersion = engine;
+  report.serverStatementsMissing = serverStatementsMissing;
   report.machine = describeMachine();
   report.database = std::move(*database);
   report.server = "http://127.0.0.1:" + std::to_string(port) + "/";
@@ -289,10 +362,11 @@ int run(const Options& options) {
   loadIntoPageCache(path);
 
   auto benches = routeBenches(pools);
-  report.figures = timeRoutes(port, options, benches, report.httpThreads);
+  report.figures = timeRoutes(port, options, benches, report.httpThreads, source);
   bool failed = false;
   for (const auto& bench : benches) {
-    auto plan = planRoute(port, path, bench);
+    if (postgres && !source.server) break;  // nothing to show
+    auto plan = postgres ? serverStatementsOf(port, *source.server, bench) : planRoute(port, path, bench);
     if (!plan) {
       fail("plans of " + bench.route + ": " + plan.error());
       failed = true;
@@ -330,7 +404,9 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", options.seconds, "Time limit per route and client count")
       ->capture_default_str()
       ->check(CLI::Range(1, 3600));
-  auto* db = app.add_option("--db", options.db, "Keep the database in this file (default: a temporary file)");
+  auto* db = app.add_option("--db", options.db,
+                            "Keep the database in this file, or use this postgresql:// database (default: a "
+                            "temporary file)");
   app.add_flag("--reuse", options.reuse, "Use the samples already in --db instead of refusing it")->needs(db);
   app.add_flag("--json", options.json, "Print the figures as JSON");
   app.add_option("--template", options.templatePath,
@@ -343,7 +419,7 @@ int main(int argc, char** argv) {
   }
   try {
     return tally::bench::run(options);
-  } catch (const std::exception& e) {  // SQLite errors of the benchmark's own queries
+  } catch (const std::exception& e) {  // database errors of the benchmark's own queries
     std::fprintf(stderr, "tally_bench_read_latency: %s\n", e.what());
     return 1;
   }

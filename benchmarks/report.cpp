@@ -19,7 +19,7 @@ std::string shortened(const std::string& sql) {
   return sql.size() <= kSqlShown ? sql : sql.substr(0, kSqlShown) + " ...";
 }
 
-void printDatabase(const DatabaseReport& db) {
+void printDatabase(const DatabaseReport& db, bool postgres) {
   std::printf("database: %s\n", db.path.c_str());
   if (db.filled) {
     std::printf(
@@ -29,8 +29,9 @@ void printDatabase(const DatabaseReport& db) {
   } else {
     std::printf("  reused as found (--reuse)\n");
   }
-  std::printf("  size: %.1f MiB (database and WAL after a checkpoint)\n",
-              static_cast<double>(db.bytes) / (1 << 20));
+  std::printf(
+      "  size: %.1f MiB (%s)\n", static_cast<double>(db.bytes) / (1 << 20),
+      postgres ? "pg_database_size: tables, indexes and TOAST" : "database and WAL after a checkpoint");
   std::printf("  rows:");
   for (const auto& [table, count] : db.rows)
     std::printf(" %s %lld", table.c_str(), static_cast<long long>(count));
@@ -42,22 +43,62 @@ void printDatabase(const DatabaseReport& db) {
   std::printf("\n");
 }
 
-void printFigures(const std::vector<RouteFigures>& figures) {
+void printFigures(const Report& report) {
+  const std::vector<RouteFigures>& figures = report.figures;
+  const bool storeTimed = !report.postgres || report.serverStatementsMissing.empty();
   std::printf("\n%-50s %7s %6s %8s %8s %8s %8s %8s %9s %9s\n", "route", "clients", "count", "p50 ms",
               "p90 ms", "p99 ms", "max ms", "req/s", "store ms", "KiB/resp");
   for (const auto& f : figures) {
     const Summary& s = f.summary;
-    std::printf("%-50s %7d %6zu %8.2f %8.2f %8.2f %8.2f %8.1f %9.2f %9.1f\n", f.route.c_str(), f.clients,
-                s.count, s.p50, s.p90, s.p99, s.max, s.perSecond, f.storeMsPerRequest, s.meanBytes / 1024);
+    char storeMs[32] = "        -";
+    if (storeTimed) std::snprintf(storeMs, sizeof storeMs, "%9.2f", f.storeMsPerRequest);
+    std::printf("%-50s %7d %6zu %8.2f %8.2f %8.2f %8.2f %8.1f %s %9.1f\n", f.route.c_str(), f.clients,
+                s.count, s.p50, s.p90, s.p99, s.max, s.perSecond, storeMs, s.meanBytes / 1024);
     if (s.errors) std::printf("  FAILED %zu times, first: %s\n", s.errors, s.firstError.c_str());
   }
+  if (!report.postgres) {
+    std::printf(
+        "(store ms: per request, the store's SQLite statements from first step to finalize, rows read\n"
+        " into structs included, summed over the server's threads; SQLite's profile clock ticks in whole "
+        "ms,\n"
+        " so this is a mean over many requests)\n");
+  } else if (storeTimed) {
+    std::printf(
+        "(store ms: per request, the server's execution time of the store's statements (pg_stat_statements\n"
+        " total_exec_time, BEGIN and COMMIT included), summed over the connections; round trips, planning "
+        "and\n"
+        " reading rows into structs are not in it, unlike SQLite's figure)\n");
+  } else {
+    std::printf("(store ms: not measured: pg_stat_statements cannot be read: %s)\n",
+                report.serverStatementsMissing.c_str());
+  }
+}
+
+// PostgreSQL: each route's SELECTs with what pg_stat_statements counted for one request.
+void printServerStatements(const Report& report) {
+  if (!report.serverStatementsMissing.empty()) {
+    std::printf("\nstatements per route: not shown: pg_stat_statements cannot be read: %s\n",
+                report.serverStatementsMissing.c_str());
+    return;
+  }
   std::printf(
-      "(store ms: per request, the store's SQLite statements from first step to finalize, rows read\n"
-      " into structs included, summed over the server's threads; SQLite's profile clock ticks in whole ms,\n"
-      " so this is a mean over many requests)\n");
+      "\nstatements per route (pg_stat_statements over one request, or one walk; no plans: PostgreSQL 15\n"
+      " cannot EXPLAIN a statement with parameters without their values):\n");
+  for (const auto& plan : report.plans) {
+    std::printf("%s  [per request: %.0f shared buffers touched]\n", plan.route.c_str(),
+                plan.vmStepsPerRequest);
+    for (const auto& statement : plan.statements) {
+      std::printf("  %s\n", shortened(statement.sql).c_str());
+      for (const auto& line : statement.plan) std::printf("      %s\n", line.c_str());
+    }
+  }
 }
 
 void printPlans(const Report& report) {
+  if (report.postgres) {
+    printServerStatements(report);
+    return;
+  }
   std::printf("\nquery plans (EXPLAIN QUERY PLAN of every SELECT a route runs):\n");
   for (const auto& plan : report.plans) {
     std::printf("%s  [per request: %.0f rows stepped in full scans, %.0f SQLite VM steps]\n",
@@ -135,16 +176,21 @@ void printText(const Report& report) {
   std::printf("Tally read latency (REST API)\n");
   std::printf("machine: %u cores, %s; load average (1, 5, 15 min) %s as timing began, %s as it ended\n",
               m.cores, m.cpu.c_str(), m.loadBefore.c_str(), m.loadAfter.c_str());
-  printDatabase(report.database);
+  std::printf("engine: %s\n", report.engineVersion.c_str());
+  printDatabase(report.database, report.postgres);
   std::printf(
-      "server: %s (%zu HTTP threads, a read-only SQLite connection per thread, one request per connection)\n",
-      report.server.c_str(), report.httpThreads);
+      "server: %s (%zu HTTP threads, a read-only %s connection per thread, one request per connection)\n",
+      report.server.c_str(), report.httpThreads, report.postgres ? "PostgreSQL" : "SQLite");
   for (const auto& [route, ms] : report.cold) {
-    std::printf("cold first request: %s: %.2f ms (fresh server, database file out of the OS page cache)\n",
-                route.c_str(), ms);
+    std::printf("cold first request: %s: %.2f ms (%s)\n", route.c_str(), ms,
+                report.postgres
+                    ? "fresh server, its connections opened then; PostgreSQL's caches are not dropped"
+                    : "fresh server, database file out of the OS page cache");
   }
-  std::printf("then the database file is read once into the page cache; the timings below are warm\n");
-  printFigures(report.figures);
+  if (!report.postgres) {
+    std::printf("then the database file is read once into the page cache; the timings below are warm\n");
+  }
+  printFigures(report);
   printPlans(report);
 }
 
@@ -180,13 +226,18 @@ void printJson(const Report& report) {
   const Machine& m = report.machine;
   json machine = {
       {"cores", m.cores}, {"cpu", m.cpu}, {"load_before", m.loadBefore}, {"load_after", m.loadAfter}};
-  json out = {{"machine", machine},
+  json out = {{"engine", report.postgres ? "postgresql" : "sqlite"},
+              {"engine_version", report.engineVersion},
+              {"machine", machine},
               {"database", database},
               {"server", {{"url", report.server}, {"http_threads", report.httpThreads}}},
               {"cold_first_requests", cold},
               {"routes", figures},
               {"plans", plans},
-              {"plan_problems", report.planProblems()}};
+              {"plan_problems", report.planProblems()},
+              // PostgreSQL: store ms and the statements per route need pg_stat_statements.
+              {"store_ms_measured", !report.postgres || report.serverStatementsMissing.empty()},
+              {"plans_checked", !report.postgres}};
   std::printf("%s\n", out.dump(2).c_str());
 }
 

@@ -21,10 +21,10 @@ Machine describeMachine();  // load before: now
 std::string loadAverage();
 
 struct DatabaseReport {
-  std::string path;
+  std::string path;     // a file, or a PostgreSQL URL without its password
   bool filled = false;  // false: reused as found
   FillStats fill;
-  uint64_t bytes = 0;                                     // database file and WAL, after a checkpoint
+  uint64_t bytes = 0;  // SQLite: database file and WAL, after a checkpoint; PostgreSQL: pg_database_size
   std::vector<std::pair<std::string, int64_t>> rows;      // table -> row count
   std::vector<std::pair<std::string, uint64_t>> largest;  // table or index -> bytes, largest first
 };
@@ -39,11 +39,16 @@ struct RouteFigures {
 struct RoutePlan {
   std::string route;
   double fullScanRowsPerRequest = 0;
-  double vmStepsPerRequest = 0;
+  double vmStepsPerRequest = 0;  // PostgreSQL: shared buffers touched (found or read)
   std::vector<PlannedStatement> statements;
 };
 
 struct Report {
+  bool postgres = false;  // the engine: PostgreSQL, else SQLite
+  std::string engineVersion;
+  // PostgreSQL: store ms and the statements per route come from
+  // pg_stat_statements; when it cannot be read, why (and neither is shown).
+  std::string serverStatementsMissing;
   Machine machine;
   DatabaseReport database;
   std::string server;  // "http://127.0.0.1:PORT/"
