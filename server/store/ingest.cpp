@@ -135,18 +135,23 @@ struct Inserter {
         counter(db,
                 "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
                 "count_spread, source, footprint_bytes) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
-        sampleBytes(
-            db,
-            "UPDATE samples SET bytes = (SELECT COALESCE(SUM(c.bytes), 0) FROM counters c JOIN passes p ON p.id = "
-            "c.pass_id WHERE p.sample_id = ?1), "
-            // SUM: NULL when no line has a footprint.
-            "footprint_bytes = (SELECT SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = "
-            "c.pass_id WHERE p.sample_id = ?1), "
-            "footprint_requested_bytes = (SELECT SUM(c.bytes) FROM counters c JOIN passes p ON p.id = "
-            "c.pass_id WHERE p.sample_id = ?1 AND c.footprint_bytes IS NOT NULL) WHERE id = ?1") {}
+        sampleBytes(db,
+                    "UPDATE samples SET bytes = ?2, footprint_bytes = ?3, footprint_requested_bytes = ?4 "
+                    "WHERE id = ?1"),
+        // Most ingests find their device and scene stored: a plain read then,
+        // so that concurrent ingests (a fleet of one GPU model capturing one
+        // scene) do not queue on the upsert's row lock.
+        findDevice(db, "SELECT id FROM devices WHERE fingerprint = ?1 AND info = ?2"),
+        findScene(db, "SELECT id FROM scenes WHERE name = ?1 AND params = ?2") {}
   Connection* db;
-  Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes;
+  Statement device, scene, run, resource, screenshot, sample, pass, counter, sampleBytes, findDevice, findScene;
   nlohmann::json ceilings;  // the capture's device.ceilings (null when not measured)
+  // The sample being inserted: all its lines' bytes; the footprint of the
+  // lines that have one and those lines' requested bytes (null when none has).
+  struct Sums {
+    double bytes = 0;
+    std::optional<double> footprint, footprintRequested;
+  } sums;
 };
 
 int64_t returnedId(Statement& statement) {
@@ -166,6 +171,13 @@ int64_t insertDevice(Inserter& in, const json& result) {
   std::string api = optText(*device, "apiVersion", "device").value_or("");
   // Unit separators keep the fields apart whatever they contain.
   std::string fingerprint = name + '\x1f' + vendor + '\x1f' + deviceId + '\x1f' + driver + '\x1f' + api;
+  in.findDevice.reset();
+  in.findDevice.bind(1, fingerprint).bind(2, *device);
+  if (in.findDevice.step()) {
+    int64_t id = in.findDevice.getInt(0);
+    in.findDevice.run();
+    return id;
+  }
   in.device.reset();
   in.device.bind(1, fingerprint)
       .bind(2, name)
@@ -207,6 +219,12 @@ void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::s
         .bind(10, text(counter, "source", at))
         .bind(11, footprint);
     in.counter.run();
+    double bytes = number(counter, "bytes", at);
+    in.sums.bytes += bytes;
+    if (footprint) {
+      in.sums.footprint = in.sums.footprint.value_or(0) + *footprint;
+      in.sums.footprintRequested = in.sums.footprintRequested.value_or(0) + bytes;
+    }
   }
 }
 
@@ -340,9 +358,14 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
     } catch (const DbError& e) {
       bad(at, e.what());  // e.g. a camera index repeated within the run
     }
+    in.sums = {};
     insertPasses(in, sampleId, sample, at);
     in.sampleBytes.reset();
-    in.sampleBytes.bind(1, sampleId).run();
+    in.sampleBytes.bind(1, sampleId)
+        .bind(2, in.sums.bytes)
+        .bind(3, in.sums.footprint)
+        .bind(4, in.sums.footprintRequested)
+        .run();
   }
 }
 
@@ -382,9 +405,17 @@ Build buildOf(const json& result) {
 int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& shaders, const Build& build,
                   const json& run, const std::string& path, const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!run.is_object()) bad(path, "must be an object");
-  in.scene.reset();
-  in.scene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
-  int64_t sceneId = returnedId(in.scene);
+  in.findScene.reset();
+  in.findScene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
+  int64_t sceneId = 0;
+  if (in.findScene.step()) {
+    sceneId = in.findScene.getInt(0);
+    in.findScene.run();
+  } else {
+    in.scene.reset();
+    in.scene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
+    sceneId = returnedId(in.scene);
+  }
   int64_t width = integer(run, "width", path);
   int64_t height = integer(run, "height", path);
   if (width < 1 || width > 16384) bad(path + ".width", "must be between 1 and 16384");
