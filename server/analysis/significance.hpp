@@ -87,7 +87,8 @@ struct TimeComparison {
 // Compares two samples of positive, finite times (ms), e.g. per-frame times
 // of run A and run B pooled over cameras. Each sample needs at least 2 times.
 // Verdict rule: Faster/Slower when p < alpha, the interval (widened, where
-// across-capture noise is given) excludes 1, and |ratio - 1| >
+// across-capture noise is given) lies on one side of 1 (an end may be exactly
+// 1 where tied times make a pairwise difference 0), and |ratio - 1| >
 // practicalThreshold; the direction is the interval's side of 1.
 Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vector<double>& b,
                                     const CompareOptions& options = {});
@@ -131,8 +132,11 @@ const char* toString(Verdict v);           // "faster" | "slower" | "same"
 const char* toString(EffectMagnitude m);   // "negligible" | "small" | "medium" | "large"
 const char* toString(CountVerdict v);      // "same" | "changed"
 
-// For the API: the fields above by these names; an unbounded interval's upper
-// end is null (JSON has no infinity).
+// For the API: the fields above in snake_case (n_a, median_a, ratio,
+// interval, mann_whitney {u, z, p, method "exact" | "normal", ties},
+// cliffs_delta {delta, magnitude}, alpha, practical_threshold, verdict,
+// reason); an infinite interval end or widening is null (JSON has no
+// infinity).
 nlohmann::json toJson(const TimeComparison& c);
 nlohmann::json toJson(const CountComparison& c);
 
