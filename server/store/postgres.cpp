@@ -198,14 +198,17 @@ class PgConnection final : public Connection {
   }
 
  public:
-  // The session's settings: UTC text, UTF-8, and the same float text whatever the server's defaults.
+  // The session's settings: UTC text, UTF-8, and the same float text whatever
+  // the server's defaults; no JIT compilation, which the store's short
+  // index-driven queries never repay (on a 1M-sample database it turned the
+  // run's samples listing from 0.2 ms into 100 ms: docs/benchmarks.md).
   void configure() {
     finish(PQexec(conn_, kSessionSql), kSessionSql);
   }
 
  private:
   static constexpr const char* kSessionSql =
-      "SET TIME ZONE 'UTC'; SET client_encoding = 'UTF8'; SET extra_float_digits = 1";
+      "SET TIME ZONE 'UTC'; SET client_encoding = 'UTF8'; SET extra_float_digits = 1; SET jit = off";
 
   PGconn* conn_;
   std::string url_;
