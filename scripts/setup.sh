@@ -10,6 +10,9 @@ packages=(
   glslang-dev glslang-tools spirv-tools spirv-headers
   libglm-dev libcpp-httplib-dev nlohmann-json3-dev libsqlite3-dev libstb-dev
   libtinygltf-dev libcli11-dev libgtest-dev libmeshoptimizer-dev
+  # Boost.Math (header-only): Student's t quantiles for the intervals of the
+  # crossover fits (server/analysis/crossover.cpp).
+  libboost-math-dev
   chromium
   # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)
   # and the /metrics test's parser (Debian's python3, /usr/bin/python3).
