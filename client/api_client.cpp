@@ -249,6 +249,10 @@ Result<json> ApiClient::compare(const std::vector<std::string>& runIds) {
   return sendJson("GET", "/api/compare" + query({{"runs", ids}}));
 }
 
+Result<json> ApiClient::crossover(const std::string& captureId, const std::string& metric) {
+  return sendJson("GET", "/api/crossover" + query({{"capture", captureId}, {"metric", metric}}));
+}
+
 Result<json> ApiClient::listSweeps(const SweepFilters& filters, std::optional<int> limit,
                                    const std::string& cursor) {
   return sendJson("GET", "/api/sweeps" + pageQuery(sweepParams(filters), limit, cursor));

@@ -77,6 +77,8 @@ class ApiClient {
   Result<json> getRunSamples(const std::string& id);
   Result<json> getSample(const std::string& id);
   Result<json> compare(const std::vector<std::string>& runIds);
+  // GET /api/crossover: fits against pixel count and crossings over a capture's runs.
+  Result<json> crossover(const std::string& captureId, const std::string& metric);
   // One page of sweeps; cursor empty for the first.
   Result<json> listSweeps(const SweepFilters& filters, std::optional<int> limit, const std::string& cursor = "");
   // Follows next_cursor to the end; {"sweeps":[...every page's sweeps...]}.

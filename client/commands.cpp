@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -562,6 +563,134 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
       cells.push_back(ratio(has ? row.values[i].ratio : std::nullopt));
     }
     t.addRow(cells);
+  }
+  t.print(io.out);
+  return 0;
+}
+
+namespace {
+
+// Numbers of a crossover answer, which may be null.
+std::optional<double> num(const json& j, const std::string& key) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return std::nullopt;
+  return it->get<double>();
+}
+
+std::string str(const json& j, const std::string& key) {
+  auto it = j.find(key);
+  return it != j.end() && it->is_string() ? it->get<std::string>() : std::string();
+}
+
+// "1193x671"; kMissing for null.
+std::string resolutionText(const json& r) {
+  if (!r.is_object()) return kMissing;
+  return std::to_string(r.value("width", 0)) + "x" + std::to_string(r.value("height", 0));
+}
+
+// A value of the metric: bytes (binary units) or milliseconds.
+std::string metricText(const std::string& metric, std::optional<double> v) {
+  if (!v) return kMissing;
+  if (metric == "bytes") return humanBytes(*v);
+  return fixed(v, 3) + " ms";
+}
+
+// A cost per pixel, shown per megapixel.
+std::string perPixelText(const std::string& metric, std::optional<double> b) {
+  if (!b) return kMissing;
+  return metricText(metric, *b * 1e6) + "/Mpx";
+}
+
+std::string intervalText(const json& ci, const std::function<std::string(std::optional<double>)>& format) {
+  if (!ci.is_array() || ci.size() != 2) return kMissing;
+  return format(ci[0].get<double>()) + " .. " + format(ci[1].get<double>());
+}
+
+std::string pixelsText(std::optional<double> p) {
+  if (!p) return kMissing;
+  return fixed(*p, 0);
+}
+
+}  // namespace
+
+int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
+  auto res = api.crossover(args.capture, args.metric);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  const json& body = *res;
+  const std::string metric = str(body, "metric").empty() ? args.metric : str(body, "metric");
+  const int level = static_cast<int>(std::lround(num(body, "confidence").value_or(0.95) * 100));
+  const std::string ci = std::to_string(level) + "% CI";
+  io.out << "capture " << args.capture << ", " << (metric == "bytes" ? "bytes per frame" : "frame time (ms)")
+         << " against pixels: y = a + b * pixels, least squares, " << level << "% t intervals; poor fit: R2 < "
+         << fixedOrSci(num(body, "poor_fit_r2").value_or(0.9)) << "\n\n";
+  const json series = body.value("series", json::array());
+  if (series.empty()) {
+    io.out << "no runs in this capture\n";
+    return 0;
+  }
+  auto metricFormat = [&](std::optional<double> v) { return metricText(metric, v); };
+  auto perPixelFormat = [&](std::optional<double> v) { return perPixelText(metric, v); };
+  Table fits({{"VARIANT"}, {"SCENE"}, {"N", Align::Right}, {"A (FIXED)", Align::Right}, {"A " + ci, Align::Right},
+              {"B (PER PIXEL)", Align::Right}, {"B " + ci, Align::Right}, {"R2", Align::Right}, {"FIT"}});
+  Table residuals({{"VARIANT"}, {"SCENE"}, {"RESOLUTION"}, {"PIXELS", Align::Right}, {"VALUE", Align::Right},
+                   {"RESIDUAL", Align::Right}, {"RUN", Align::Right}});
+  for (const auto& s : series) {
+    const json& fit = s.contains("fit") ? s["fit"] : json(nullptr);
+    if (!fit.is_object()) {
+      fits.addRow({str(s, "variant"), str(s, "scene"), kMissing, kMissing, kMissing, kMissing, kMissing, kMissing,
+                   "none: " + orMissing(str(s, "error"))});
+      continue;
+    }
+    fits.addRow({str(s, "variant"), str(s, "scene"), std::to_string(fit.value("n", 0)), metricFormat(num(fit, "a")),
+                 intervalText(fit["a_ci"], metricFormat), perPixelFormat(num(fit, "b")),
+                 intervalText(fit["b_ci"], perPixelFormat), fixed(num(fit, "r2"), 4),
+                 fit.value("poor_fit", false) ? "POOR (not linear)" : "ok"});
+    for (const auto& p : fit.value("points", json::array())) {
+      std::string resolution = p.contains("width") ? std::to_string(p.value("width", 0)) + "x" +
+                                                         std::to_string(p.value("height", 0))
+                                                   : kMissing;
+      residuals.addRow({str(s, "variant"), str(s, "scene"), resolution, pixelsText(num(p, "pixels")),
+                        metricFormat(num(p, "value")), metricFormat(num(p, "residual")),
+                        p.contains("run") ? "#" + std::to_string(p.value("run", 0)) : kMissing});
+    }
+  }
+  io.out << "FITS\n";
+  fits.print(io.out);
+  if (residuals.rows() > 0) {
+    io.out << "\nRESIDUALS (value - fitted)\n";
+    residuals.print(io.out);
+  }
+  const json crossings = body.value("crossings", json::array());
+  io.out << "\nCROSSINGS (pixels* = (a2 - a1) / (b1 - b2), delta-method " << ci << ")\n";
+  if (crossings.empty()) {
+    io.out << "none: no two variants with a fit on the same scene and device\n";
+    return 0;
+  }
+  Table t({{"FIRST"}, {"SECOND"}, {"SCENE"}, {"RESULT"}, {"PIXELS", Align::Right}, {"PIXELS " + ci, Align::Right},
+           {"16:9"}, {"16:9 " + ci}, {"LOWER"}});
+  for (const auto& c : crossings) {
+    std::string kind = str(c, "kind");
+    std::string lower;
+    if (kind == "crosses") {
+      lower = str(c, "lower_below") + " below, " + str(c, "lower_above") + " above";
+    } else {
+      lower = str(c, "lower_throughout") + " throughout";
+    }
+    std::string result = kind == "crosses"         ? "crosses"
+                         : kind == "outside_range" ? "no crossing in range"
+                         : kind == "parallel"      ? "parallel within error"
+                                                   : kind;
+    std::string resCi = kMissing;
+    if (c.contains("resolution_ci") && c["resolution_ci"].is_array() && c["resolution_ci"].size() == 2) {
+      resCi = resolutionText(c["resolution_ci"][0]) + " .. " + resolutionText(c["resolution_ci"][1]);
+    }
+    t.addRow({str(c, "first"), str(c, "second"), str(c, "scene"), result, pixelsText(num(c, "pixels")),
+              intervalText(c.contains("pixels_ci") ? c["pixels_ci"] : json(nullptr), pixelsText),
+              resolutionText(c.contains("resolution") ? c["resolution"] : json(nullptr)), resCi, lower});
   }
   t.print(io.out);
   return 0;

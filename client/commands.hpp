@@ -64,6 +64,14 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io);
 int runShow(ApiClient& api, const std::string& runId, Io& io);
 int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io);
 
+// `tally crossover CAPTURE`: each variant's fit y = a + b * pixels with its
+// intervals, R² and residuals, and where pairs of variants cross.
+struct CrossoverArgs {
+  std::string capture;
+  std::string metric = "bytes";  // or frame_ms
+};
+int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io);
+
 using SweepsArgs = ListArgs<SweepFilters>;
 int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io);
 // Its threshold, where it fails (fails_at) and its points.

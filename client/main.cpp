@@ -133,6 +133,19 @@ int main(int argc, char** argv) {
       ->expected(2, 4);
   compare->footer("Example:\n  tally compare 12 15");
 
+  CrossoverArgs crossoverArgs;
+  auto* crossoverCmd = app.add_subcommand(
+      "crossover", "Fit each renderer's bytes or frame time against pixel count over a capture, and where they cross");
+  crossoverCmd->add_option("CAPTURE", crossoverArgs.capture, "Capture id (a capture over several resolutions)")
+      ->required();
+  crossoverCmd->add_option("--metric", crossoverArgs.metric, "bytes (per frame) or frame_ms")
+      ->check(CLI::IsMember({"bytes", "frame_ms"}))
+      ->capture_default_str();
+  crossoverCmd->footer(
+      "Model: y = a + b * pixels by least squares, 95% t intervals; the crossing (a2 - a1) / (b1 - b2) with a\n"
+      "delta-method interval, also as the 16:9 resolution of that pixel count (docs/measurement.md, \"Crossover\").\n"
+      "Example:\n  tally crossover 7\n  tally crossover 7 --metric frame_ms --json");
+
   SweepsArgs sweeps;
   auto* sweepsCmd = app.add_subcommand("sweeps", "List stability sweeps, newest first, with where they fail");
   sweepsCmd->add_option("--name", sweeps.filters.name, "Only this sweep (e.g. depth-reconstruction)");
@@ -191,6 +204,7 @@ int main(int argc, char** argv) {
   if (runsCmd->parsed()) return runRuns(api, runs, io);
   if (show->parsed()) return runShow(api, showId, io);
   if (compare->parsed()) return runCompare(api, compareIds, io);
+  if (crossoverCmd->parsed()) return runCrossover(api, crossoverArgs, io);
   if (sweepsCmd->parsed()) return runSweeps(api, sweeps, io);
   if (sweepCmd->parsed()) return runSweep(api, sweepId, io);
   if (exportCmd->parsed()) return runExport(api, exportArgs, io);

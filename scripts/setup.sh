@@ -11,7 +11,8 @@ packages=(
   libglm-dev libcpp-httplib-dev nlohmann-json3-dev libsqlite3-dev libstb-dev
   libtinygltf-dev libcli11-dev libgtest-dev libmeshoptimizer-dev
   # Boost.Math (headers only): the normal distribution's quantiles and tails
-  # for the significance of time differences (server/analysis/significance.cpp).
+  # for the significance of time differences (server/analysis/significance.cpp)
+  # and Student's t quantiles for the crossover fits (crossover.cpp).
   libboost-math-dev
   chromium
   # The install and package tests (curl, dpkg-shlibdeps for CPack's Depends)

@@ -78,6 +78,47 @@ const thresholdPlugin = {
 };
 Chart.register(thresholdPlugin);
 
+// Crossings: an xy chart's `options.plugins.tallyCrossings.marks`, each
+// {x, low, high, label}, is drawn as a shaded band from low to high (the
+// interval, clipped to the plot) and a solid vertical line at x with its
+// label at the top: where two fitted lines cross (web/views/compare.js).
+const crossingPlugin = {
+  id: 'tallyCrossings',
+  afterDatasetsDraw(chart, _args, options) {
+    const marks = options?.marks || [];
+    const { ctx, chartArea } = chart;
+    const scale = chart.scales.x;
+    if (!scale || !marks.length) return;
+    const clip = (px) => Math.min(chartArea.right, Math.max(chartArea.left, px));
+    ctx.save();
+    for (const m of marks) {
+      const x = scale.getPixelForValue(m.x);
+      if (m.low !== null && m.low !== undefined && m.high !== null && m.high !== undefined) {
+        const a = clip(scale.getPixelForValue(m.low)), b = clip(scale.getPixelForValue(m.high));
+        ctx.fillStyle = 'rgba(120, 120, 120, 0.15)';
+        ctx.fillRect(Math.min(a, b), chartArea.top, Math.abs(b - a), chartArea.bottom - chartArea.top);
+      }
+      if (!(x >= chartArea.left && x <= chartArea.right)) continue;
+      ctx.strokeStyle = '#222';
+      ctx.lineWidth = 1.5;
+      ctx.setLineDash([]);
+      ctx.beginPath();
+      ctx.moveTo(x, chartArea.top);
+      ctx.lineTo(x, chartArea.bottom);
+      ctx.stroke();
+      if (m.label) {
+        ctx.fillStyle = '#222';
+        ctx.font = `12px ${Chart.defaults.font.family}`;
+        const width = ctx.measureText(m.label).width;
+        const left = x + 4 + width > chartArea.right ? x - 4 - width : x + 4;
+        ctx.fillText(m.label, left, chartArea.top + 12);
+      }
+    }
+    ctx.restore();
+  },
+};
+Chart.register(crossingPlugin);
+
 // n well-separated colours; the same index gets the same colour in every chart.
 export function color(i, alpha = 1) {
   const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most
@@ -167,7 +208,7 @@ export function barChart(parent, spec) {
 // Scatter/line chart over numeric x. spec: {id, title, caption, datasets:
 // [{label, data: [{x, y, ...}], showLine, ...}], x: {title, format, type,
 // reverse}, y: {title, format, type}, table (a node: the data table to show),
-// tooltip (context -> text)}.
+// tooltip (context -> text), marks (vertical crossing marks: [{x, low, high, label}])}.
 export function xyChart(parent, spec) {
   const fig = figure(spec.id, spec.title, spec.caption, spec.table);
   parent.append(fig);
@@ -187,6 +228,7 @@ export function xyChart(parent, spec) {
       plugins: {
         legend: { position: 'bottom', labels: { boxWidth: 12 } },
         tooltip: { callbacks: { label: spec.tooltip || ((c) => `${c.dataset.label}: ${spec.x.format(c.raw.x)}, ${spec.y.format(c.raw.y)}`) } },
+        tallyCrossings: { marks: spec.marks || [] },
       },
     },
   });

@@ -12,6 +12,7 @@
 #include "capture/spec.hpp"
 #include "sweeps/sweep.hpp"
 #include "service/accuracy.hpp"
+#include "service/crossover.hpp"
 #include "service/repeats.hpp"
 
 namespace tally::service {
@@ -795,6 +796,19 @@ Response compare(ServiceContext& ctx, const Request& req) {
   return Response::ok(comparisonJson(check(store.compareRuns(ids))));
 }
 
+// Each variant's metric fitted against the pixel count over one capture's
+// runs, and where pairs of variants cross (service/crossover.hpp).
+Response crossover(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"capture", "metric", "scene", "device"});
+  if (!req.queryValue("capture")) invalid("capture", "required: the capture whose runs are fitted");
+  std::string metric = queryString(req, "metric", 16).value_or("bytes");
+  if (!isCrossoverMetric(metric)) invalid("metric", "must be bytes or frame_ms");
+  store::RunFilter filter = queryFilter(req);
+  auto& store = reader(ctx);
+  if (!check(store.getJob(*filter.jobId))) return api::notFound("no capture " + std::to_string(*filter.jobId));
+  return Response::ok(check(crossoverModels(store, filter, metric)));
+}
+
 Response exportRuns(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"format", "renderer", "variant", "scene", "width", "height", "device", "capture", "since", "until", "runs"});
   std::string format = queryString(req, "format", 8).value_or("json");
@@ -927,6 +941,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/samples/{id}", route(getSample));
   router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
   router.get("/api/compare", route(compare));
+  router.get("/api/crossover", route(crossover));
   router.get("/api/accuracy", route(accuracy));
   router.get("/api/repeats", route(repeats));
   router.get("/api/export", route(exportRuns));

@@ -62,7 +62,7 @@ TEST_F(TallyCli, VersionAndHelp) {
   Outcome v = tally("--version");
   EXPECT_EQ(v.rc, 0);
   EXPECT_NE(v.out.find("API v1"), std::string::npos);
-  for (const char* sub : {"capture", "status", "runs", "show", "compare", "export", "cancel", "hosts"}) {
+  for (const char* sub : {"capture", "status", "runs", "show", "compare", "crossover", "export", "cancel", "hosts"}) {
     Outcome h = tally(std::string(sub) + " --help");
     EXPECT_EQ(h.rc, 0) << sub;
     EXPECT_NE(h.out.find("Example:"), std::string::npos) << sub;
@@ -275,6 +275,35 @@ TEST_F(TallyCli, VariantsAreLabelled) {
   ASSERT_EQ(plain.rc, 0) << plain.err;
   EXPECT_EQ(plain.out.find("options:"), std::string::npos) << plain.out;
   EXPECT_EQ(plain.out.find("VARIANT ERROR"), std::string::npos) << plain.out;
+}
+
+TEST_F(TallyCli, CrossoverTables) {
+  FakeTallyd fake;
+  Outcome r = tally("--server " + fake.url() + " crossover 7");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  for (const char* text : {"bytes per frame", "FITS", "RESIDUALS", "CROSSINGS", "A 95% CI", "deferred",
+                           "1.00 MiB",      // a of deferred
+                           "38.15 MiB/Mpx",  // b of deferred: 40 B per pixel
+                           "0.9991", "POOR (not linear)", "none: a fit needs at least 3 resolutions, got 2",
+                           "1280x720", "#31", "crosses", "800000", "760000 .. 840000", "1193x671",
+                           "1162x654 .. 1222x687", "deferred below, visbuffer above", "parallel within error",
+                           "deferred throughout"}) {
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << " in\n" << r.out;
+  }
+  Outcome ms = tally("--server " + fake.url() + " crossover 7 --metric frame_ms");
+  ASSERT_EQ(ms.rc, 0) << ms.err;
+  EXPECT_NE(ms.out.find("frame time (ms)"), std::string::npos) << ms.out;
+  Outcome j = tally("--server " + fake.url() + " --json crossover 7");
+  ASSERT_EQ(j.rc, 0) << j.err;
+  json body = json::parse(j.out);
+  EXPECT_EQ(body["crossings"][0]["kind"], "crosses");
+  Outcome missing = tally("--server " + fake.url() + " crossover 8");
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_NE(missing.err.find("no capture 8"), std::string::npos) << missing.err;
+  Outcome badMetric = tally("--server " + fake.url() + " crossover 7 --metric watts");
+  EXPECT_EQ(badMetric.rc, 2);
+  Outcome noId = tally("--server " + fake.url() + " crossover");
+  EXPECT_EQ(noId.rc, 2);
 }
 
 TEST_F(TallyCli, CompareTable) {

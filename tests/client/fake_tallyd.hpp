@@ -1,7 +1,8 @@
 // A fake tallyd for the client tests: an in-process httplib::Server on
 // 127.0.0.1 (ephemeral port) serving canned JSON for every route the client
 // calls. Capture 7 goes queued -> running -> running -> done over successive
-// polls; capture 8 fails; run 404 and compare of run 99 give API errors.
+// polls; capture 8 fails; run 404 and compare of run 99 give API errors;
+// /api/crossover answers for capture 7 only (crossoverJson).
 // A fleet: /api/hosts lists three hosts (kHostsJson); capture 9 is queued
 // with a waiting reason after a lost attempt, capture 10 runs on gpu-a on
 // its second attempt, capture 11 (a spec with "waits") waits, then runs to
@@ -48,6 +49,54 @@ inline json runJson(int id, const std::string& renderer, int width) {
           {"mean_bytes", 3145728.0},
           {"render_target_bytes", 1048576},
           {"extra_field", {1, 2}}};
+}
+
+// GET /api/crossover?capture=7: deferred and visbuffer fitted over three
+// resolutions (visbuffer's fit poor), forward with two runs (no fit); they
+// cross at 800,000 pixels (1193x671), and deferred and forward-zprepass are parallel.
+inline json crossoverJson(const std::string& metric) {
+  auto fit = [](double a, double b, double r2, bool poor) {
+    json points = json::array();
+    int run = 30;
+    for (auto [w, h] : {std::pair{640, 360}, {1280, 720}, {1920, 1080}}) {
+      double p = double(w) * h;
+      points.push_back({{"pixels", p}, {"value", a + b * p + 1000}, {"residual", 1000.0}, {"run", run++},
+                        {"width", w}, {"height", h}});
+    }
+    return json{{"n", 3}, {"a", a}, {"b", b}, {"a_se", a / 100}, {"b_se", b / 100}, {"a_ci", {a * 0.9, a * 1.1}},
+                {"b_ci", {b * 0.9, b * 1.1}}, {"residual_se", 1000.0}, {"r2", r2}, {"poor_fit", poor},
+                {"confidence", 0.95}, {"min_pixels", 230400.0}, {"max_pixels", 2073600.0}, {"points", points}};
+  };
+  auto series = [](const std::string& variant, json f, json error) {
+    return json{{"variant", variant}, {"renderer", variant}, {"scene", "atrium"}, {"scene_params", json::object()},
+                {"device_id", 1}, {"device", "llvmpipe"}, {"counting", "exact"}, {"lights", 4},
+                {"footprint_block_bytes", nullptr}, {"runs", {30, 31, 32}}, {"fit", f}, {"error", error}};
+  };
+  return {{"capture", 7},
+          {"metric", metric},
+          {"model", "y = a + b * pixels (ordinary least squares)"},
+          {"confidence", 0.95},
+          {"poor_fit_r2", 0.9},
+          {"interval_method", "delta"},
+          {"series",
+           {series("deferred", fit(1048576, 40, 0.9991, false), nullptr),
+            series("visbuffer", fit(9437184, 30, 0.61, true), nullptr),
+            series("forward", nullptr, "a fit needs at least 3 resolutions, got 2")}},
+          {"crossings",
+           {{{"first", "deferred"}, {"second", "visbuffer"}, {"scene", "atrium"}, {"device_id", 1}, {"kind", "crosses"},
+             {"pixels", 800000.0}, {"pixels_se", 20000.0}, {"pixels_ci", {760000.0, 840000.0}},
+             {"resolution", {{"width", 1193}, {"height", 671}}},
+             {"resolution_ci", {{{"width", 1162}, {"height", 654}}, {{"width", 1222}, {"height", 687}}}},
+             {"range", {230400.0, 2073600.0}}, {"slope_difference", 10.0}, {"slope_difference_se", 0.5},
+             {"lower_below", "deferred"}, {"lower_above", "visbuffer"}, {"lower_throughout", nullptr},
+             {"confidence", 0.95}, {"degrees_of_freedom", 2}, {"interval_method", "delta"}},
+            {{"first", "deferred"}, {"second", "forward-zprepass"}, {"scene", "atrium"}, {"device_id", 1},
+             {"kind", "parallel"}, {"pixels", nullptr}, {"pixels_se", nullptr}, {"pixels_ci", nullptr},
+             {"resolution", nullptr}, {"resolution_ci", nullptr}, {"range", {230400.0, 2073600.0}},
+             {"slope_difference", 0.1}, {"slope_difference_se", 0.5}, {"lower_below", nullptr},
+             {"lower_above", nullptr}, {"lower_throughout", "deferred"}, {"confidence", 0.95},
+             {"degrees_of_freedom", 2}, {"interval_method", "delta"}}}},
+          {"truncated", false}};
 }
 
 // Run 16: a variant of visbuffer (its options set, "variant" its label).
@@ -365,6 +414,12 @@ class FakeTallyd {
                      {"access", "write"},
                      {"count", c(57600, 0)},
                      {"bytes", json::array({{{"value", 460800.0}}, {{"value", nullptr}}})}}}}});
+    });
+    server_.Get("/api/crossover", [reply](const httplib::Request& req, httplib::Response& res) {
+      std::string capture = req.get_param_value("capture");
+      if (capture != "7") return reply(res, apiError("not_found", "no capture " + capture), 404);
+      std::string metric = req.has_param("metric") ? req.get_param_value("metric") : "bytes";
+      reply(res, crossoverJson(metric));
     });
     server_.Get("/api/export", [this](const httplib::Request& req, httplib::Response& res) {
       {

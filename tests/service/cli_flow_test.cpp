@@ -709,6 +709,7 @@ TEST(CliWithoutServer, EverySubcommandSaysTheServerIsDown) {
                                                           {"runs"},
                                                           {"show", "1"},
                                                           {"compare", "1", "2"},
+                                                          {"crossover", "1"},
                                                           {"export", "--format", "json"}};
   for (auto args : commands) {
     SCOPED_TRACE(args[0]);
@@ -735,6 +736,7 @@ TEST(CliHelp, EverySubcommandListsItsOptions) {
       {"runs", {"--limit", "--all"}},
       {"show", {"RUN"}},
       {"compare", {"RUN"}},
+      {"crossover", {"CAPTURE", "--metric"}},
       {"export", {"--format", "--runs", "--output"}},
   };
   for (const auto& f : filters) {

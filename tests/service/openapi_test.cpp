@@ -84,6 +84,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
+      "/api/crossover",
       "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
@@ -155,6 +156,27 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   EXPECT_GE(repeats["groups"].size(), 2u) << repeats.dump();
   expect("GET", "/api/repeats?limit=3", "/api/repeats", 400);
 
+  // /api/crossover: the first capture (one resolution: no fit, an error, no
+  // crossing) and one at three resolutions (fits and a crossing).
+  json single = expect("GET", "/api/crossover?capture=" + std::to_string(captureId_), "/api/crossover", 200);
+  ASSERT_EQ(single["series"].size(), 2u) << single.dump();
+  EXPECT_TRUE(single["series"][0]["fit"].is_null());
+  EXPECT_TRUE(single["crossings"].empty());
+  json sweep3 = tinySpec();
+  sweep3["resolutions"] = {{32, 18}, {48, 27}, {64, 36}};
+  posted = daemon_->request("POST", "/api/captures", sweep3.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t sweep3Id = posted.j()["id"];
+  ASSERT_EQ(daemon_->waitFinished(sweep3Id).value("status", ""), "done");
+  for (std::string metric : {"bytes", "frame_ms"}) {
+    json crossover = expect("GET", "/api/crossover?capture=" + std::to_string(sweep3Id) + "&metric=" + metric,
+                            "/api/crossover", 200);
+    ASSERT_EQ(crossover["series"].size(), 2u) << crossover.dump();
+    EXPECT_TRUE(crossover["series"][0]["fit"].is_object()) << crossover.dump();
+    ASSERT_EQ(crossover["crossings"].size(), 1u) << crossover.dump();
+  }
+  expect("GET", "/api/crossover", "/api/crossover", 400);
+
   // A variant run: options, variant label, extras and variant_error (the
   // clamped uv derivatives against their float32 reference), found by the
   // variant filter; GET /api/renderers lists the option table.
@@ -216,6 +238,8 @@ TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {
   expect("GET", "/api/runs/987654", "/api/runs/{id}", 404);
   expect("GET", "/api/runs?limit=0", "/api/runs", 400);
   expect("GET", "/api/compare?runs=1", "/api/compare", 400);
+  expect("GET", "/api/crossover?capture=987654", "/api/crossover", 404);
+  expect("GET", "/api/crossover?capture=1&metric=watts", "/api/crossover", 400);
   expect("GET", "/api/sweeps/987654", "/api/sweeps/{id}", 404);
   expect("GET", "/api/sweeps?limit=0", "/api/sweeps", 400);
   Reply badSweep = daemon_->request("POST", "/api/captures", R"({"sweep": "nope"})");

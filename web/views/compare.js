@@ -1,11 +1,12 @@
 // Compare 2 to 4 runs (#/compare?runs=a,b,c): totals and per-resource and
 // per-pass traffic side by side with deltas and ratios against the first run
 // (all from /api/compare), how bytes and frame time scale with the pixel
-// count for each run's renderer (the founding study's total figure), the
+// count for each run's renderer (the founding study's total figure) with the
+// fitted lines and crossings of the first run's capture (/api/crossover), the
 // spread across repeated captures of each run's configuration (/api/repeats),
 // and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
-import { barChart, destroyCharts, xyChart } from '../charts.js';
+import { barChart, color, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch } from '../dom.js';
 import * as fmt from '../format.js';
 
@@ -185,13 +186,99 @@ async function scalingSeries(runs, signal) {
     }
     const points = [...newest.values()].sort((a, b) => a.width * a.height - b.width * b.height);
     const footprint = run.footprint_block_bytes ? ` + footprint ${run.footprint_block_bytes}` : '';
-    return { label: `${fmt.variant(run)}${run.counting !== 'exact' || footprint ? ` (${run.counting}${footprint})` : ''}`, points };
+    return { label: `${fmt.variant(run)}${run.counting !== 'exact' || footprint ? ` (${run.counting}${footprint})` : ''}`, variant: fmt.variant(run), points };
   }));
+}
+
+// Fits against pixel count and crossings (GET /api/crossover) over the
+// capture of the first compared run, on its scene and device, for both
+// metrics; a metric's answer is null when the server gives none.
+async function crossovers(run, signal) {
+  const fetchOne = (metric) => get('/crossover' + queryString({ capture: run.capture, metric, scene: run.scene, device: run.device_id }), signal)
+    .catch((error) => {
+      if (signal.aborted) throw error;
+      return null;
+    });
+  const [bytes, frameMs] = await Promise.all([fetchOne('bytes'), fetchOne('frame_ms')]);
+  return { bytes, frame_ms: frameMs };
+}
+
+// The crossover series that belong to the compared runs' configuration
+// (counting mode, lights, footprint block of the first run): those with a fit.
+function fittedSeries(answer, run) {
+  if (!answer) return [];
+  return answer.series.filter((s) => s.fit && s.counting === run.counting && s.lights === run.lights
+    && (s.footprint_block_bytes ?? null) === (run.footprint_block_bytes ?? null));
+}
+
+// One dashed line per fit across the pixel range of all fits, coloured as its
+// renderer's points; crossings inside the range as marks with their interval.
+function fitOverlay(answer, run, series) {
+  const fits = fittedSeries(answer, run);
+  if (!fits.length) return { datasets: [], marks: [] };
+  const low = Math.min(...fits.map((s) => s.fit.min_pixels)), high = Math.max(...fits.map((s) => s.fit.max_pixels));
+  let extra = series.length;
+  const datasets = fits.map((s) => {
+    const at = series.findIndex((x) => x.variant === s.variant);
+    const i = at >= 0 ? at : extra++;
+    const { a, b } = s.fit;
+    return { label: `${s.variant} fit`, showLine: true, pointRadius: 0, borderWidth: 2, borderDash: [6, 4],
+      backgroundColor: color(i), borderColor: color(i), fit: { variant: s.variant, a, b, r2: s.fit.r2, poor: s.fit.poor_fit },
+      data: [{ x: low, y: a + b * low }, { x: high, y: a + b * high }] };
+  });
+  const names = new Set(fits.map((s) => s.variant));
+  const marks = answer.crossings.filter((c) => c.kind === 'crosses' && names.has(c.first) && names.has(c.second))
+    .map((c) => ({ x: c.pixels, low: c.pixels_ci?.[0] ?? null, high: c.pixels_ci?.[1] ?? null,
+      label: c.resolution ? `${c.resolution.width}×${c.resolution.height}` : fmt.count(c.pixels), first: c.first, second: c.second }));
+  return { datasets, marks };
+}
+
+const kCrossingText = { crosses: 'crosses', outside_range: 'no crossing in range', parallel: 'parallel within error' };
+const kMetricText = { bytes: 'Bytes', frame_ms: 'Frame time' };
+const resolutionText = (r) => (r ? `${r.width}×${r.height}` : '–');
+
+// The fits (with R² and the poor-fit flag) and the crossings of both metrics.
+function crossoverTables(answers, run) {
+  const fitRows = [], crossingRows = [];
+  for (const [metric, answer] of Object.entries(answers)) {
+    if (!answer) continue;
+    const format = metric === 'bytes' ? fmt.bytes : fmt.ms;
+    const fits = fittedSeries(answer, run);
+    const names = new Set(fits.map((s) => s.variant));
+    for (const s of fits) {
+      fitRows.push(h('tr', { dataset: { metric, variant: s.variant, r2: s.fit.r2, poor: String(s.fit.poor_fit) } },
+        h('td', {}, kMetricText[metric]), h('td', {}, s.variant),
+        h('td', { class: 'num', dataset: { value: s.fit.a } }, `${format(s.fit.a)} (${format(s.fit.a_ci[0])} to ${format(s.fit.a_ci[1])})`),
+        h('td', { class: 'num', dataset: { value: s.fit.b } }, `${format(s.fit.b * 1e6)}/Mpx (${format(s.fit.b_ci[0] * 1e6)} to ${format(s.fit.b_ci[1] * 1e6)})`),
+        h('td', { class: `num ${s.fit.poor_fit ? 'worse' : ''}` }, `${s.fit.r2.toFixed(4)}${s.fit.poor_fit ? ' poor fit' : ''}`)));
+    }
+    for (const c of answer.crossings.filter((x) => names.has(x.first) && names.has(x.second))) {
+      const interval = c.pixels_ci ? `${fmt.count(c.pixels_ci[0])} to ${fmt.count(c.pixels_ci[1])}` : '–';
+      const resolutions = c.resolution_ci ? `${resolutionText(c.resolution_ci[0])} to ${resolutionText(c.resolution_ci[1])}` : '';
+      const lower = c.kind === 'crosses' ? `${c.lower_below} below, ${c.lower_above} above` : `${c.lower_throughout} throughout`;
+      crossingRows.push(h('tr', { dataset: { metric, kind: c.kind, first: c.first, second: c.second, pixels: c.pixels ?? '' } },
+        h('td', {}, kMetricText[metric]), h('td', {}, `${c.first} / ${c.second}`), h('td', {}, kCrossingText[c.kind] || c.kind),
+        h('td', { class: 'num' }, c.kind === 'crosses' ? `${resolutionText(c.resolution)} (${fmt.count(c.pixels)} px)` : '–'),
+        h('td', { class: 'num' }, c.kind === 'crosses' ? `${interval} px${resolutions ? ` (${resolutions})` : ''}` : '–'),
+        h('td', {}, lower)));
+    }
+  }
+  if (!fitRows.length) {
+    return h('p', { class: 'muted', dataset: { crossover: 'none' } },
+      `No fitted lines: capture #${run.capture} needs 3 or more resolutions per renderer (docs/measurement.md, "Crossover").`);
+  }
+  const head = (titles) => h('thead', {}, h('tr', {}, titles.map((t) => h('th', { scope: 'col' }, t))));
+  return h('div', { class: 'crossover' },
+    h('p', { class: 'muted' }, `Lines: y = a + b × pixels, least squares over capture #${run.capture}; 95 % intervals (t for a and b, delta method for the crossing). R² below 0.9: the line does not describe the points.`),
+    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Fits', dataset: { table: 'fits' } },
+      head(['Metric', 'Renderer', 'a (fixed)', 'b (per pixel)', 'R²']), h('tbody', {}, fitRows))),
+    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Crossings', dataset: { table: 'crossings' } },
+      head(['Metric', 'Renderers', 'Result', 'Where (16:9)', '95 % interval', 'Lower']), h('tbody', {}, crossingRows))));
 }
 
 async function scaling(page, c, signal) {
   page.append(h('h2', {}, 'Scaling with resolution'));
-  const series = await scalingSeries(c.runs, signal);
+  const [series, answers] = await Promise.all([scalingSeries(c.runs, signal), crossovers(c.runs[0], signal)]);
   const rows = series.flatMap((s) => s.points.map((r) => ({ s, r })));
   const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Scaling', dataset: { chartTable: 'scaling' } },
     h('thead', {}, h('tr', {}, ['Renderer', 'Resolution', 'Pixels', 'Bytes per frame', 'Frame time', 'Run'].map((t) => h('th', { scope: 'col' }, t)))),
@@ -204,8 +291,11 @@ async function scaling(page, c, signal) {
   page.append(box);
   const pixels = { title: 'pixels', format: (v) => fmt.count(v) };
   const datasets = (value) => series.map((s) => ({ label: s.label, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
-  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: datasets('mean_bytes'), table });
-  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption: 'per renderer, same scene and device', x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: datasets('mean_frame_ms'), table: table.cloneNode(true) });
+  const bytesFit = fitOverlay(answers.bytes, c.runs[0], series), msFit = fitOverlay(answers.frame_ms, c.runs[0], series);
+  const caption = `per renderer, same scene and device${bytesFit.datasets.length ? '; dashed: fitted lines, vertical: crossings with their interval' : ''}`;
+  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption, x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: [...datasets('mean_bytes'), ...bytesFit.datasets], marks: bytesFit.marks, table });
+  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption, x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: [...datasets('mean_frame_ms'), ...msFit.datasets], marks: msFit.marks, table: table.cloneNode(true) });
+  page.append(crossoverTables(answers, c.runs[0]));
 }
 
 // ---- Repeated captures ---------------------------------------------------------

@@ -1,0 +1,201 @@
+#include "analysis/crossover.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <boost/math/distributions/students_t.hpp>
+
+namespace tally::analysis {
+
+using nlohmann::json;
+
+double tQuantile(double confidence, int df) {
+  if (df < 1) return std::numeric_limits<double>::infinity();
+  boost::math::students_t dist(static_cast<double>(df));
+  return boost::math::quantile(dist, 0.5 + confidence / 2.0);
+}
+
+Result<LinearFit> fitLinear(const std::vector<double>& pixels, const std::vector<double>& values, double confidence) {
+  if (pixels.size() != values.size()) {
+    return makeError("pixel counts and values differ in number (" + std::to_string(pixels.size()) + " and " +
+                     std::to_string(values.size()) + ")");
+  }
+  const size_t n = pixels.size();
+  if (n < 3) {
+    return makeError("a fit needs at least 3 resolutions, got " + std::to_string(n) +
+                     " (with 2 the line passes through both points and has no error to state)");
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(pixels[i]) || !std::isfinite(values[i])) {
+      return makeError("point " + std::to_string(i) + " is not a finite number");
+    }
+  }
+  double mx = 0, my = 0;
+  for (size_t i = 0; i < n; ++i) {
+    mx += pixels[i];
+    my += values[i];
+  }
+  mx /= double(n);
+  my /= double(n);
+  double sxx = 0, sxy = 0, syy = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double dx = pixels[i] - mx, dy = values[i] - my;
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+  }
+  auto [lo, hi] = std::minmax_element(pixels.begin(), pixels.end());
+  if (*lo == *hi || sxx <= 0) {
+    return makeError("every point has the same pixel count (" + std::to_string(static_cast<long long>(*lo)) +
+                     "): the cost per pixel is undetermined; capture at least 2 different resolutions");
+  }
+  LinearFit f;
+  f.n = static_cast<int>(n);
+  f.confidence = confidence;
+  f.minPixels = *lo;
+  f.maxPixels = *hi;
+  f.b = sxy / sxx;
+  f.a = my - f.b * mx;
+  double sse = 0;
+  for (size_t i = 0; i < n; ++i) {
+    double r = values[i] - (f.a + f.b * pixels[i]);
+    sse += r * r;
+    f.points.push_back({pixels[i], values[i], r});
+  }
+  const int df = f.n - 2;
+  double s2 = sse / double(df);
+  f.residualSe = std::sqrt(s2);
+  f.bSe = std::sqrt(s2 / sxx);
+  f.aSe = std::sqrt(s2 * (1.0 / double(n) + mx * mx / sxx));
+  f.covAb = -mx * s2 / sxx;
+  double t = tQuantile(confidence, df);
+  f.aLow = f.a - t * f.aSe;
+  f.aHigh = f.a + t * f.aSe;
+  f.bLow = f.b - t * f.bSe;
+  f.bHigh = f.b + t * f.bSe;
+  f.r2 = syy > 0 ? 1.0 - sse / syy : 1.0;
+  f.poor = f.r2 < kPoorFitR2;
+  return f;
+}
+
+const char* crossingKindName(CrossingKind kind) {
+  switch (kind) {
+    case CrossingKind::Crosses: return "crosses";
+    case CrossingKind::OutsideRange: return "outside_range";
+    case CrossingKind::Parallel: return "parallel";
+  }
+  return "parallel";
+}
+
+std::optional<Resolution169> resolution169(double pixels) {
+  if (!std::isfinite(pixels) || pixels <= 0) return std::nullopt;
+  double height = std::round(std::sqrt(pixels * 9.0 / 16.0));
+  if (height < 1) height = 1;
+  if (height > 1e6) return std::nullopt;
+  return Resolution169{static_cast<int>(std::round(height * 16.0 / 9.0)), static_cast<int>(height)};
+}
+
+Crossing crossing(const LinearFit& first, const LinearFit& second) {
+  Crossing c;
+  c.confidence = first.confidence;
+  c.rangeLow = std::max(first.minPixels, second.minPixels);
+  c.rangeHigh = std::min(first.maxPixels, second.maxPixels);
+  if (c.rangeLow > c.rangeHigh) {  // no overlap: the span of both
+    c.rangeLow = std::min(first.minPixels, second.minPixels);
+    c.rangeHigh = std::max(first.maxPixels, second.maxPixels);
+  }
+  c.degreesOfFreedom = first.n + second.n - 4;
+  const double t = tQuantile(c.confidence, c.degreesOfFreedom);
+  // Independent fits: the variances of the differences add.
+  const double da = second.a - first.a;  // numerator
+  const double db = first.b - second.b;  // denominator
+  const double varDa = first.aSe * first.aSe + second.aSe * second.aSe;
+  const double varDb = first.bSe * first.bSe + second.bSe * second.bSe;
+  const double covDaDb = -first.covAb - second.covAb;  // cov(a2 - a1, b1 - b2)
+  c.slopeDifference = db;
+  c.slopeDifferenceSe = std::sqrt(varDb);
+  auto valueAt = [](const LinearFit& f, double x) { return f.a + f.b * x; };
+  const double middle = (c.rangeLow + c.rangeHigh) / 2.0;
+  const int lowerAtMiddle = valueAt(first, middle) <= valueAt(second, middle) ? 0 : 1;
+
+  // Exact fits (no residuals) have no error: slopes equal to rounding are parallel too.
+  const double rounding = 1e-9 * std::max(std::abs(first.b), std::abs(second.b));
+  if (std::abs(db) <= rounding || std::abs(db) <= t * c.slopeDifferenceSe) {
+    c.kind = CrossingKind::Parallel;
+    c.lowerBelow = c.lowerAbove = lowerAtMiddle;
+    return c;
+  }
+  const double p = da / db;
+  const double var = (varDa + p * p * varDb - 2.0 * p * covDaDb) / (db * db);
+  c.pixels = p;
+  c.pixelsSe = std::sqrt(std::max(0.0, var));
+  c.low = p - t * *c.pixelsSe;
+  c.high = p + t * *c.pixelsSe;
+  // Above the crossing the smaller slope is lower.
+  c.lowerAbove = first.b < second.b ? 0 : 1;
+  c.lowerBelow = 1 - c.lowerAbove;
+  if (p >= c.rangeLow && p <= c.rangeHigh) {
+    c.kind = CrossingKind::Crosses;
+  } else {
+    c.kind = CrossingKind::OutsideRange;
+    c.lowerBelow = c.lowerAbove = lowerAtMiddle;
+  }
+  return c;
+}
+
+namespace {
+
+json resolutionJson(const std::optional<double>& pixels) {
+  if (!pixels) return nullptr;
+  auto r = resolution169(*pixels);
+  if (!r) return nullptr;
+  return {{"width", r->width}, {"height", r->height}};
+}
+
+}  // namespace
+
+json toJson(const LinearFit& f) {
+  json points = json::array();
+  for (const auto& p : f.points) points.push_back({{"pixels", p.pixels}, {"value", p.value}, {"residual", p.residual}});
+  return {{"n", f.n},
+          {"a", f.a},
+          {"b", f.b},
+          {"a_se", f.aSe},
+          {"b_se", f.bSe},
+          {"a_ci", {f.aLow, f.aHigh}},
+          {"b_ci", {f.bLow, f.bHigh}},
+          {"residual_se", f.residualSe},
+          {"r2", f.r2},
+          {"poor_fit", f.poor},
+          {"confidence", f.confidence},
+          {"min_pixels", f.minPixels},
+          {"max_pixels", f.maxPixels},
+          {"points", points}};
+}
+
+json toJson(const Crossing& c, const std::string& firstName, const std::string& secondName) {
+  const std::string names[2] = {firstName, secondName};
+  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  bool crosses = c.kind == CrossingKind::Crosses;
+  json ci = c.low ? json{*c.low, *c.high} : json(nullptr);
+  json resolutionCi = nullptr;
+  if (c.low) resolutionCi = json{resolutionJson(c.low), resolutionJson(c.high)};
+  return {{"kind", crossingKindName(c.kind)},
+          {"pixels", opt(c.pixels)},
+          {"pixels_se", opt(c.pixelsSe)},
+          {"pixels_ci", ci},
+          {"resolution", resolutionJson(c.pixels)},
+          {"resolution_ci", resolutionCi},
+          {"range", {c.rangeLow, c.rangeHigh}},
+          {"slope_difference", c.slopeDifference},
+          {"slope_difference_se", c.slopeDifferenceSe},
+          {"lower_below", crosses ? json(names[c.lowerBelow]) : json(nullptr)},
+          {"lower_above", crosses ? json(names[c.lowerAbove]) : json(nullptr)},
+          {"lower_throughout", crosses ? json(nullptr) : json(names[c.lowerBelow])},
+          {"confidence", c.confidence},
+          {"degrees_of_freedom", c.degreesOfFreedom},
+          {"interval_method", "delta"}};
+}
+
+}  // namespace tally::analysis
