@@ -273,6 +273,12 @@ Result<std::string> ApiClient::exportRuns(const std::string& format, const RunFi
   return raw->body;
 }
 
+Result<std::string> ApiClient::sampleTrace(const std::string& sampleId) {
+  auto raw = send("GET", "/api/samples/" + pathId(sampleId) + "/trace");
+  if (!raw) return makeError(raw.error());
+  return raw->body;
+}
+
 std::string formatHttpError(int status, const std::string& body) {
   json parsed = json::parse(body, nullptr, false);
   const json* error = parsed.is_discarded() ? nullptr : field(parsed, "error");

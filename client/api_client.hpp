@@ -86,6 +86,8 @@ class ApiClient {
   Result<json> getSweep(const std::string& id);
   // The export body, verbatim.
   Result<std::string> exportRuns(const std::string& format, const RunFilters& filters);
+  // GET /api/samples/{id}/trace: the sample as Chrome trace-event JSON, verbatim.
+  Result<std::string> sampleTrace(const std::string& sampleId);
 
  private:
   struct Raw {

@@ -838,7 +838,7 @@ Result<bool> writeFileAtomically(const std::string& path, const std::string& dat
 }
 
 int runExport(ApiClient& api, const ExportArgs& args, Io& io) {
-  auto body = api.exportRuns(args.format, args.filters);
+  auto body = args.trace ? api.sampleTrace(*args.trace) : api.exportRuns(args.format, args.filters);
   if (!body) return fail(io, body.error());
   if (args.output.empty() || args.output == "-") {
     io.out << *body << std::flush;

@@ -81,6 +81,9 @@ struct ExportArgs {
   std::string format = "csv";
   RunFilters filters;
   std::string output;  // empty: stdout; else written atomically (temp file + rename)
+  // A sample id: export that sample as a Chrome trace-event JSON trace
+  // (GET /api/samples/{id}/trace) instead of runs; no filters, no format.
+  std::optional<std::string> trace;
 };
 int runExport(ApiClient& api, const ExportArgs& args, Io& io);
 

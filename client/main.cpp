@@ -168,12 +168,27 @@ int main(int argc, char** argv) {
   ExportArgs exportArgs;
   auto* exportCmd =
       app.add_subcommand("export", "Export runs as CSV or JSON, exactly as the server writes it");
-  exportCmd->add_option("--format", exportArgs.format, "csv or json")->check(CLI::IsMember({"csv", "json"}));
+  auto* formatOpt =
+      exportCmd->add_option("--format", exportArgs.format, "csv or json")->check(CLI::IsMember({"csv", "json"}));
   addFilters(exportCmd, exportArgs.filters);
   exportCmd->add_option("--runs", exportArgs.filters.runs, "Comma-separated run ids");
   exportCmd->add_option("-o,--output", exportArgs.output,
                         "Write to this file (atomically) instead of stdout");
-  exportCmd->footer("Example:\n  tally export --format csv --scene atrium -o atrium.csv");
+  auto* traceOpt = exportCmd->add_option(
+      "--trace", exportArgs.trace,
+      "Export this sample as a Chrome trace-event JSON trace (open it in ui.perfetto.dev) instead of runs");
+  // A trace is one sample: no run filters, no format.
+  for (auto* option : exportCmd->get_options()) {
+    const std::string& name = option->get_name();
+    if (option != traceOpt && option != formatOpt && name.rfind("--", 0) == 0 && name != "--output" &&
+        name != "--help") {
+      traceOpt->excludes(option);
+    }
+  }
+  traceOpt->excludes(formatOpt);
+  exportCmd->footer(
+      "Example:\n  tally export --format csv --scene atrium -o atrium.csv\n"
+      "  tally export --trace 42 -o sample42.trace.json");
 
   try {
     app.parse(argc, argv);

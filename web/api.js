@@ -88,3 +88,10 @@ export async function imageSource(apiPath, signal) {
   if (!response.ok) throw await errorOf(response);
   return URL.createObjectURL(await response.blob());
 }
+
+// The same for a download link (a sample's trace): a link cannot send a
+// token either.
+export const downloadSource = imageSource;
+
+// Whether requests carry a token (links to /api paths then need downloadSource).
+export const hasToken = () => Boolean(token());

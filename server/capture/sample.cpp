@@ -53,8 +53,12 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
 
 void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
   double total = 0;
+  size_t index = m.frameMs.size();  // this frame's
   for (const auto& pass : frame.passes) {
     m.plainMs[pass.name].push_back(pass.gpuMs);
+    auto& byFrame = m.plainMsByFrame[pass.name];
+    byFrame.resize(index + 1, 0.0);  // 0 in earlier frames without the pass
+    byFrame[index] += pass.gpuMs;
     total += pass.gpuMs;
   }
   m.frameMs.push_back(total);
@@ -64,6 +68,13 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
                 uint32_t countedFrames) {
   std::map<std::string, const renderers::ResourceInfo*> byName;
   for (const auto& r : resources) byName[r.name] = &r;
+  // A pass's time in each uninstrumented frame, one entry per frame.
+  auto passFrames = [&m](const std::string& name) {
+    std::vector<double> ms;
+    if (auto it = m.plainMsByFrame.find(name); it != m.plainMsByFrame.end()) ms = it->second;
+    ms.resize(m.frameMs.size(), 0.0);
+    return ms;
+  };
   json passes = json::array();
   double sampleBytes = 0, sampleDram = 0;
   double sampleFootprint = 0;
@@ -75,6 +86,7 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
         {"name", name},
         {"gpu_ms", plain.median},
         {"gpu_ms_spread", toJson(plain)},
+        {"gpu_ms_frames", passFrames(name)},
         {"gpu_ms_instrumented", instrumented.median},
         {"overhead_ratio", plain.median > 0 ? instrumented.median / plain.median : 0.0},
         {"fragment_invocations", spreadOf(m.fragmentInvocations.at(name)).mean},
@@ -147,6 +159,7 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
       {"counts_vary", countsVary},
       {"frame_ms", frame.median},
       {"frame_ms_spread", toJson(frame)},
+      {"frame_ms_frames", m.frameMs},
       {"frame_ms_instrumented", instrumentedFrame.median},
       {"overhead_ratio", frame.median > 0 ? instrumentedFrame.median / frame.median : 0.0},
       {"bytes", sampleBytes},

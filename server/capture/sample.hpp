@@ -36,6 +36,9 @@ struct SampleMeasure {
   // Passes that dispatch compute work only.
   std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
   std::vector<double> frameMs, instrumentedFrameMs;
+  // Each pass's time in every uninstrumented frame, in frame order and
+  // aligned with frameMs (0 in a frame the pass did not run in).
+  std::map<std::string, std::vector<double>> plainMsByFrame;
   std::map<std::string, std::vector<double>> arithmeticOps;  // per pass, where known (PassResult::arithmeticOps)
   std::set<std::string> arithmeticCounted;                    // passes whose arithmetic was counted, not estimated
 };
@@ -51,7 +54,9 @@ void addTimes(SampleMeasure& m, const renderers::FrameResult& frame);
 // measured it, "footprint_bytes" (the distinct bytes touched, mean over the
 // frames that measured it) and "reuse" (bytes / footprint_bytes; null for a
 // footprint of 0). Passes and the sample sum "footprint_bytes" over their
-// lines that have one (absent where none has).
+// lines that have one (absent where none has). "frame_ms_frames" (the sample)
+// and "gpu_ms_frames" (each pass) hold every uninstrumented frame's time in
+// order: their medians are frame_ms and gpu_ms.
 nlohmann::json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources,
                           uint32_t frames, uint32_t countedFrames);
 

@@ -14,6 +14,7 @@
 #include "service/accuracy.hpp"
 #include "service/crossover.hpp"
 #include "service/repeats.hpp"
+#include "service/trace.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -742,10 +743,29 @@ Response getSample(ServiceContext& ctx, const Request& req) {
   auto sample = check(reader(ctx).getSample(id));
   if (!sample) return api::notFound("no sample " + std::to_string(id));
   json j = sampleRowJson(sample->row);
+  // Per-frame times (0008): null where not stored.
+  auto frameTimes = [](const std::vector<double>& ms) { return ms.empty() ? json(nullptr) : json(ms); };
+  j["frame_ms_frames"] = frameTimes(sample->row.frameMsFrames);
   json passes = json::array();
-  for (const auto& p : sample->passes) passes.push_back(passJson(p));
+  for (const auto& p : sample->passes) {
+    json pass = passJson(p);
+    pass["gpu_ms_frames"] = frameTimes(p.gpuMsFrames);
+    passes.push_back(std::move(pass));
+  }
   j["passes"] = passes;
   return Response::ok(j);
+}
+
+// The sample as a Chrome trace-event JSON trace (service/trace.hpp).
+Response getSampleTrace(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto& store = reader(ctx);
+  auto sample = check(store.getSample(id));
+  if (!sample) return api::notFound("no sample " + std::to_string(id));
+  auto run = check(store.getRun(sample->row.runId));
+  if (!run) return api::notFound("no run for sample " + std::to_string(id));
+  return Response::ok(sampleTrace(run->row, *sample));
 }
 
 Response getScreenshot(ServiceContext& ctx, const Request& req) {
@@ -940,6 +960,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/sweeps/{id}", route(getSweep));
   router.get("/api/samples/{id}", route(getSample));
   router.get("/api/samples/{id}/screenshot.png", route(getScreenshot));
+  router.get("/api/samples/{id}/trace", route(getSampleTrace));
   router.get("/api/compare", route(compare));
   router.get("/api/crossover", route(crossover));
   router.get("/api/accuracy", route(accuracy));

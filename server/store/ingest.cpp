@@ -124,14 +124,14 @@ struct Inserter {
             "frame_ms, frame_ms_spread, frame_ms_instrumented, overhead_ratio, image_against, "
             "image_identical, "
             "psnr, max_abs, mean_abs, screenshot_id, extras, variant_against, variant_identical, variant_psnr, "
-            "variant_max_abs, variant_mean_abs) "
+            "variant_max_abs, variant_mean_abs, frame_ms_frames) "
             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, "
-            "?21, ?22) RETURNING id"),
+            "?21, ?22, ?23) RETURNING id"),
         pass(db,
              "INSERT INTO passes (sample_id, position, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, "
              "overhead_ratio, fragment_invocations, fragment_invocations_statistic, compute_invocations, "
-             "compute_invocations_statistic) "
-             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11) RETURNING id"),
+             "compute_invocations_statistic, gpu_ms_frames) "
+             "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12) RETURNING id"),
         counter(db,
                 "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, "
                 "count_spread, source, footprint_bytes) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)"),
@@ -194,6 +194,24 @@ std::optional<json> optJson(const json& object, const char* key) {
   return value ? std::optional<json>(*value) : std::nullopt;
 }
 
+// Per-frame times (frame_ms_frames, gpu_ms_frames): absent (or null), or an
+// array of finite, non-negative milliseconds; errors name the entry.
+std::optional<json> optFrameTimes(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) return std::nullopt;
+  std::string at = path + "." + key;
+  if (!value->is_array()) bad(at, "must be an array of milliseconds, got " + value->dump());
+  for (size_t i = 0; i < value->size(); ++i) {
+    const json& ms = (*value)[i];
+    std::string entry = at + "[" + std::to_string(i) + "]";
+    if (!ms.is_number()) bad(entry, "must be a number, got " + ms.dump());
+    double x = ms.get<double>();
+    if (!std::isfinite(x)) bad(entry, "must be finite");
+    if (x < 0) bad(entry, "must not be negative, got " + ms.dump());
+  }
+  return *value;
+}
+
 void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::string& path) {
   const json& counters = array(pass, "resources", path);
   for (size_t c = 0; c < counters.size(); ++c) {
@@ -245,7 +263,8 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
         .bind(8, optNumber(pass, "fragment_invocations", at))
         .bind(9, optNumber(pass, "fragment_invocations_statistic", at))
         .bind(10, optNumber(pass, "compute_invocations", at))
-        .bind(11, optNumber(pass, "compute_invocations_statistic", at));
+        .bind(11, optNumber(pass, "compute_invocations_statistic", at))
+        .bind(12, optFrameTimes(pass, "gpu_ms_frames", at));
     insertCounters(in, returnedId(in.pass), pass, at);
   }
 }
@@ -351,7 +370,8 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
         .bind(19, variant.identical)
         .bind(20, variant.psnr)
         .bind(21, variant.maxAbs)
-        .bind(22, variant.meanAbs);
+        .bind(22, variant.meanAbs)
+        .bind(23, optFrameTimes(sample, "frame_ms_frames", at));
     int64_t sampleId = 0;
     try {
       sampleId = returnedId(in.sample);

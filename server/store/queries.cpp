@@ -163,6 +163,17 @@ SampleRow readSampleRow(const Statement& row) {
   return s;
 }
 
+// A stored per-frame array (0008; JSON, NULL before): empty when absent.
+std::vector<double> frameTimes(const Statement& row, int column) {
+  std::vector<double> out;
+  nlohmann::json value = row.getJson(column);
+  if (!value.is_array()) return out;
+  out.reserve(value.size());
+  for (const auto& ms : value)
+    if (ms.is_number()) out.push_back(ms.get<double>());
+  return out;
+}
+
 std::optional<RunRow> findRunRow(Connection* db, int64_t runId) {
   Statement query(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
   query.bind(1, runId);
@@ -276,15 +287,17 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Sample>>("getSample", [&]() -> Result<std::optional<Sample>> {
     Transaction tx(db_, Transaction::Kind::Read);
-    Statement query(db_, std::string("SELECT ") + kSampleColumns + " FROM samples WHERE id = ?1");
+    // frame_ms_frames comes after kSampleColumns' 28 columns: only this query reads it.
+    Statement query(db_, std::string("SELECT ") + kSampleColumns + ", frame_ms_frames FROM samples WHERE id = ?1");
     query.bind(1, sampleId);
     if (!query.step()) return std::optional<Sample>();
     Sample sample;
     sample.row = readSampleRow(query);
+    sample.row.frameMsFrames = frameTimes(query, 28);
     Statement passes(db_,
                      "SELECT id, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, overhead_ratio, "
                      "fragment_invocations, fragment_invocations_statistic, compute_invocations, "
-                     "compute_invocations_statistic FROM passes WHERE sample_id = ?1 "
+                     "compute_invocations_statistic, gpu_ms_frames FROM passes WHERE sample_id = ?1 "
                      "ORDER BY position");
     passes.bind(1, sampleId);
     std::map<int64_t, size_t> byId;
@@ -299,7 +312,8 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
                                    passes.getOptDouble(7),
                                    {},
                                    passes.getOptDouble(8),
-                                   passes.getOptDouble(9)});
+                                   passes.getOptDouble(9),
+                                   frameTimes(passes, 10)});
     }
     Statement counters(
         db_,

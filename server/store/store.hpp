@@ -270,6 +270,9 @@ struct SampleRow {
   // The footprint of the sample's lines that have one, and those lines'
   // requested bytes, per frame; absent when no line has a footprint.
   std::optional<double> footprintBytes, footprintRequestedBytes;
+  // Every uninstrumented frame's time (ms), in frame order (0008): filled by
+  // getSample only; empty when not stored (older rows, results without it).
+  std::vector<double> frameMsFrames;
 };
 
 struct Counter {
@@ -295,6 +298,9 @@ struct Pass {
   // Passes that dispatch compute work; empty for the others.
   std::optional<double> computeInvocations;
   std::optional<double> computeInvocationsStatistic;
+  // The pass's time (ms) in each of the sample's uninstrumented frames, in
+  // frame order (0008): filled by getSample only; empty when not stored.
+  std::vector<double> gpuMsFrames;
 };
 
 struct Sample {

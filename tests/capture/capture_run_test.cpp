@@ -1,6 +1,7 @@
 // `tallyd capture` end to end on lavapipe: the result follows
 // docs/result-schema.md, bytes follow the formats, screenshots are written,
 // and bad specs fail with the field named.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -135,6 +136,53 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
     }
     auto expected = (*renderers::makeRenderer(run["renderer"].get<std::string>()))->passNames();
     EXPECT_EQ(passNames, expected);
+  }
+}
+
+// Per-frame times: the sample's frame_ms_frames and every pass's
+// gpu_ms_frames hold one entry per uninstrumented frame, in order, and their
+// medians are the frame_ms and gpu_ms the result reports.
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  size_t n = values.size();
+  return n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
+}
+
+TEST_F(CaptureRun, PerFrameTimesHaveFramesEntriesWhoseMediansAreTheTimes) {
+  json spec = {{"renderers", {"forward", "deferred"}},
+               {"scenes", {{{"name", "planes"}, {"layers", 2}}}},
+               {"resolutions", {{32, 18}}},
+               {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}, {"fov_deg", 60}}}},
+               {"frames", 5},
+               {"counted_frames", 1},
+               {"lights", 2},
+               {"ceilings", false}};
+  fs::path out = dir_ / "result.json";
+  ASSERT_EQ(capture(spec, out.string()), 0) << test::readFile(dir_ / "err");
+  json result = json::parse(test::readFile(out));
+  ASSERT_EQ(result["runs"].size(), 2u);
+  for (const auto& run : result["runs"]) {
+    SCOPED_TRACE(run["renderer"].get<std::string>());
+    for (const auto& sample : run["samples"]) {
+      ASSERT_TRUE(sample["frame_ms_frames"].is_array());
+      auto frames = sample["frame_ms_frames"].get<std::vector<double>>();
+      ASSERT_EQ(frames.size(), 5u);
+      ASSERT_EQ(sample["frames"], 5);
+      for (double ms : frames) EXPECT_GE(ms, 0.0);
+      EXPECT_DOUBLE_EQ(median(frames), sample["frame_ms"].get<double>());
+      ASSERT_FALSE(sample["passes"].empty());
+      std::vector<double> sums(5, 0.0);
+      for (const auto& pass : sample["passes"]) {
+        SCOPED_TRACE(pass["name"].get<std::string>());
+        ASSERT_TRUE(pass["gpu_ms_frames"].is_array());
+        auto passFrames = pass["gpu_ms_frames"].get<std::vector<double>>();
+        ASSERT_EQ(passFrames.size(), 5u);
+        EXPECT_DOUBLE_EQ(median(passFrames), pass["gpu_ms"].get<double>());
+        for (size_t f = 0; f < 5; ++f) sums[f] += passFrames[f];
+      }
+      // A frame's time is its passes' times (the same frames, in the same order).
+      for (size_t f = 0; f < 5; ++f) EXPECT_NEAR(sums[f], frames[f], 1e-9 * (1 + frames[f])) << "frame " << f;
+    }
   }
 }
 

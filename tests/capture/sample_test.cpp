@@ -117,5 +117,26 @@ TEST(SampleJson, NoFootprintFieldsWhenNotMeasured) {
   EXPECT_EQ(sample["frame_ms"], 0.75);
 }
 
+// Per-frame times: one entry per uninstrumented frame, in order, aligned
+// across passes (0 in a frame a pass did not run in); the medians are the
+// reported times.
+TEST(SampleJson, PerFrameTimesAlignedWithTheFrames) {
+  SampleMeasure m;
+  addCounts(m, frame({}, {}));
+  for (double scale : {1.0, 3.0, 2.0}) {
+    renderers::FrameResult f = frame({}, {});
+    for (auto& p : f.passes) p.gpuMs *= scale;
+    addTimes(m, f);
+  }
+  renderers::FrameResult gbufferOnly = frame({}, {});
+  gbufferOnly.passes.pop_back();
+  addTimes(m, gbufferOnly);
+  json sample = sampleJson(m, {}, 4, 1);
+  EXPECT_EQ(sample["frame_ms_frames"], json({0.75, 2.25, 1.5, 0.5}));
+  EXPECT_EQ(passOf(sample, "gbuffer")["gpu_ms_frames"], json({0.5, 1.5, 1.0, 0.5}));
+  EXPECT_EQ(passOf(sample, "lighting")["gpu_ms_frames"], json({0.25, 0.75, 0.5, 0.0}));
+  EXPECT_DOUBLE_EQ(sample["frame_ms"].get<double>(), 1.125);  // median of 0.5, 0.75, 1.5, 2.25
+}
+
 }  // namespace
 }  // namespace tally::capture

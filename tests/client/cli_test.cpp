@@ -429,6 +429,30 @@ TEST_F(TallyCli, ExportWritesFile) {
   EXPECT_EQ(stdoutJson.out, R"({"rows":[{"run_id":12,"renderer":"deferred"}]})");
 }
 
+// export --trace: one sample's trace, verbatim, to a file or stdout; a run
+// filter or --format beside it is a usage error; an unknown sample fails.
+TEST_F(TallyCli, ExportTraceWritesTheSamplesTrace) {
+  FakeTallyd fake;
+  auto out = dir_ / "sample.trace.json";
+  Outcome r = tally("--server " + fake.url() + " export --trace 42 -o '" + out.string() + "'");
+  ASSERT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(r.out, "");
+  json trace = json::parse(tally::test::readFile(out));
+  EXPECT_EQ(trace["metadata"]["sample"], 42);
+  ASSERT_TRUE(trace["traceEvents"].is_array());
+  EXPECT_EQ(trace["traceEvents"][0]["ph"], "X");
+
+  Outcome toStdout = tally("--server " + fake.url() + " export --trace 42");
+  ASSERT_EQ(toStdout.rc, 0) << toStdout.err;
+  EXPECT_EQ(json::parse(toStdout.out)["displayTimeUnit"], "ms");
+
+  EXPECT_EQ(tally("--server " + fake.url() + " export --trace 42 --scene atrium").rc, 2);
+  EXPECT_EQ(tally("--server " + fake.url() + " export --trace 42 --format json").rc, 2);
+  Outcome missing = tally("--server " + fake.url() + " export --trace 404");
+  EXPECT_EQ(missing.rc, 1);
+  EXPECT_NE(missing.err.find("no sample 404"), std::string::npos) << missing.err;
+}
+
 TEST_F(TallyCli, CaptureWaitsUntilDone) {
   FakeTallyd fake;
   std::string spec = writeSpec(R"({"renderers":["deferred"],"resolutions":[[320,180]]})");

@@ -353,6 +353,18 @@ class FakeTallyd {
       }
       reply(res, samples);
     });
+    // A sample's trace: sample 404 does not exist.
+    server_.Get(R"(/api/samples/(\d+)/trace)", [reply](const httplib::Request& req, httplib::Response& res) {
+      int id = std::stoi(req.matches[1]);
+      if (id == 404) {
+        reply(res, {{"error", {{"code", "not_found"}, {"message", "no sample 404"}, {"field", nullptr}}}}, 404);
+        return;
+      }
+      reply(res, {{"traceEvents", json::array({{{"name", "frame 0"}, {"ph", "X"}, {"pid", 1}, {"tid", 1},
+                                                {"ts", 0}, {"dur", 1500}, {"args", json::object()}}})},
+                  {"displayTimeUnit", "ms"},
+                  {"metadata", {{"sample", id}}}});
+    });
     server_.Get(R"(/api/samples/(\d+))", [reply](const httplib::Request& req, httplib::Response& res) {
       int id = std::stoi(req.matches[1]);
       double scale = id == 101 ? 1.0 : 0.5;

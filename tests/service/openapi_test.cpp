@@ -83,6 +83,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
+      "/api/samples/{id}/trace",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
       "/api/crossover",
       "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics"};
@@ -118,6 +119,14 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
   json sample = expect("GET", "/api/samples/" + std::to_string(samples["samples"][0]["id"].get<int64_t>()),
                        "/api/samples/{id}", 200);
   EXPECT_FALSE(sample["passes"].empty());
+  // A capture stores every frame's time: one entry per frame, per pass too.
+  ASSERT_TRUE(sample["frame_ms_frames"].is_array());
+  EXPECT_EQ(sample["frame_ms_frames"].size(), sample["frames"].get<size_t>());
+  EXPECT_TRUE(sample["passes"][0]["gpu_ms_frames"].is_array());
+  json trace = expect("GET", "/api/samples/" + std::to_string(sample["id"].get<int64_t>()) + "/trace",
+                      "/api/samples/{id}/trace", 200);
+  EXPECT_EQ(trace["metadata"]["frame_times"], "measured");
+  EXPECT_FALSE(trace["traceEvents"].empty());
   expect("GET", "/api/compare?runs=" + a + "," + b, "/api/compare", 200);
   json exported = expect("GET", "/api/export?format=json&capture=" + std::to_string(captureId_), "/api/export", 200);
   EXPECT_FALSE(exported["rows"].empty());
@@ -241,6 +250,7 @@ TEST_F(OpenApiTest, ErrorsMatchTheErrorSchema) {
   expect("GET", "/api/crossover?capture=987654", "/api/crossover", 404);
   expect("GET", "/api/crossover?capture=1&metric=watts", "/api/crossover", 400);
   expect("GET", "/api/sweeps/987654", "/api/sweeps/{id}", 404);
+  expect("GET", "/api/samples/987654/trace", "/api/samples/{id}/trace", 404);
   expect("GET", "/api/sweeps?limit=0", "/api/sweeps", 400);
   Reply badSweep = daemon_->request("POST", "/api/captures", R"({"sweep": "nope"})");
   EXPECT_EQ(badSweep.status, 400);

@@ -1,4 +1,6 @@
 // ingestCapture: read back what went in, idempotency, atomicity.
+#include <limits>
+
 #include "store_fixture.hpp"
 
 namespace tally::store::testing {
@@ -376,6 +378,79 @@ TEST_F(Ingest, BadInputNamesTheField) {
   auto unknownJob = store_->ingestCapture(9999, realisticCapture().result, realisticCapture().screenshots);
   ASSERT_FALSE(unknownJob);
   EXPECT_NE(unknownJob.error().find("job 9999 not found"), std::string::npos);
+}
+
+// Per-frame times (0008): the sample's frame_ms_frames and each pass's
+// gpu_ms_frames come back as they went in; a sample or pass without them
+// reads back empty (NULL in the store), as rows stored before 0008 do.
+TEST_F(Ingest, PerFrameTimesRoundTrip) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  json& timed = c.result["runs"][0]["samples"][0];
+  timed["frame_ms_frames"] = {1.5, 1.25, 2.0, 0.0};
+  for (size_t p = 0; p < timed["passes"].size(); ++p) {
+    double base = 0.125 * double(p + 1);
+    timed["passes"][p]["gpu_ms_frames"] = {base, base * 2, base * 3, 0.0};
+  }
+  c.result["runs"][0]["samples"][1]["frame_ms_frames"] = nullptr;  // null: as absent
+  ASSERT_EQ(ingest(jobId, c), 2);
+  auto page = store_->listRuns({.jobId = jobId}, {});
+  ASSERT_TRUE(page) << page.error();
+  ASSERT_EQ(page->runs.size(), 2u);
+  auto samples = store_->listSamples(page->runs[1].id);  // forward: stored first
+  ASSERT_TRUE(samples) << samples.error();
+  ASSERT_EQ(samples->size(), 2u);
+
+  auto first = store_->getSample((*samples)[0].id);
+  ASSERT_TRUE(first && first->has_value()) << (first ? "" : first.error());
+  EXPECT_EQ((*first)->row.frameMsFrames, (std::vector<double>{1.5, 1.25, 2.0, 0.0}));
+  ASSERT_EQ((*first)->passes.size(), timed["passes"].size());
+  for (size_t p = 0; p < (*first)->passes.size(); ++p) {
+    EXPECT_EQ((*first)->passes[p].gpuMsFrames, timed["passes"][p]["gpu_ms_frames"].get<std::vector<double>>()) << p;
+  }
+  auto second = store_->getSample((*samples)[1].id);
+  ASSERT_TRUE(second && second->has_value());
+  EXPECT_TRUE((*second)->row.frameMsFrames.empty());
+  for (const auto& pass : (*second)->passes) EXPECT_TRUE(pass.gpuMsFrames.empty()) << pass.name;
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM samples WHERE frame_ms_frames IS NULL"), 3);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM samples WHERE frame_ms_frames IS NOT NULL"), 1);
+}
+
+TEST_F(Ingest, BadPerFrameTimesNameTheEntry) {
+  const std::vector<BadInput> cases = {
+      {"frame times not an array",
+       [](Capture& c) { c.result["runs"][0]["samples"][0]["frame_ms_frames"] = 1.5; },
+       "runs[0].samples[0].frame_ms_frames: must be an array"},
+      {"frame time text",
+       [](Capture& c) { c.result["runs"][0]["samples"][1]["frame_ms_frames"] = {1.0, "slow"}; },
+       "runs[0].samples[1].frame_ms_frames[1]: must be a number"},
+      {"frame time negative",
+       [](Capture& c) { c.result["runs"][1]["samples"][0]["frame_ms_frames"] = {1.0, 2.0, -0.5}; },
+       "runs[1].samples[0].frame_ms_frames[2]: must not be negative"},
+      {"frame time null entry",
+       [](Capture& c) { c.result["runs"][0]["samples"][0]["frame_ms_frames"] = {nullptr}; },
+       "runs[0].samples[0].frame_ms_frames[0]: must be a number"},
+      {"pass time object",
+       [](Capture& c) { c.result["runs"][0]["samples"][1]["passes"][2]["gpu_ms_frames"] = {{"ms", 1}}; },
+       "runs[0].samples[1].passes[2].gpu_ms_frames: must be an array"},
+      {"pass time negative",
+       [](Capture& c) { c.result["runs"][1]["samples"][1]["passes"][0]["gpu_ms_frames"] = {0.5, -1e-3}; },
+       "runs[1].samples[1].passes[0].gpu_ms_frames[1]: must not be negative"},
+      {"pass time not finite",
+       [](Capture& c) {
+         c.result["runs"][0]["samples"][0]["passes"][1]["gpu_ms_frames"] = {0.5, std::numeric_limits<double>::infinity()};
+       },
+       "runs[0].samples[0].passes[1].gpu_ms_frames"},
+  };
+  int64_t jobId = newJob();
+  for (const auto& test : cases) {
+    Capture c = realisticCapture();
+    test.spoil(c);
+    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    ASSERT_FALSE(stored) << test.name;
+    EXPECT_NE(stored.error().find(test.error), std::string::npos) << test.name << ": " << stored.error();
+    EXPECT_EQ(rowsOfJob(jobId), 0) << test.name;
+  }
 }
 
 }  // namespace

@@ -694,6 +694,38 @@ describe('dashboard', () => {
     await close();
   });
 
+  test('run view: each sample\'s "Download trace" link fetches its trace, Chrome trace-event JSON', async () => {
+    const id = runOf('deferred', 64).id;
+    const { samples } = await daemon.get(`/runs/${id}/samples`);
+    const { page, errors, close } = await open(`#/runs/${id}`);
+    const links = page.locator('[data-table="samples"] a[data-trace]');
+    assert.equal(await links.count(), samples.length);
+    const first = links.first();
+    assert.equal(await first.textContent(), 'Download trace');
+    assert.equal(Number(await first.getAttribute('data-trace')), samples[0].id);
+    assert.ok(await first.getAttribute('download'), 'the link downloads a file');
+    // What the link fetches: the sample's trace, JSON with traceEvents.
+    const href = await first.getAttribute('href');
+    const trace = await page.evaluate(async (url) => (await fetch(url)).json(), href);
+    assert.ok(Array.isArray(trace.traceEvents) && trace.traceEvents.length > 0, 'traceEvents');
+    assert.equal(trace.displayTimeUnit, 'ms');
+    assert.equal(trace.metadata.sample, samples[0].id);
+    assert.equal(trace.metadata.frame_times, 'measured');
+    const frames = trace.traceEvents.filter((e) => e.ph === 'X' && e.cat === 'frame');
+    assert.equal(frames.length, samples[0].frames);
+    for (const e of trace.traceEvents) {
+      assert.equal(typeof e.name, 'string');
+      assert.ok(['X', 'C', 'M'].includes(e.ph), e.ph);
+      assert.ok(Number.isInteger(e.pid) && Number.isInteger(e.tid));
+      if (e.ph === 'X') assert.ok(e.dur >= 0);
+    }
+    // The download itself: a click saves the file the link names.
+    const [download] = await Promise.all([page.waitForEvent('download'), first.click()]);
+    assert.equal(download.suggestedFilename(), `tally-sample-${samples[0].id}.trace.json`);
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
   test('roofline: one point per pass against the run\'s ceilings; compare shows each pass\'s share of the bandwidth ceiling', async () => {
     const run = await daemon.get(`/runs/${runOf('deferred', 128).id}`);
     const ceilings = run.ceilings;

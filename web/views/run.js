@@ -5,7 +5,7 @@
 // (counter headroom). Time figures carry their IQR over frames
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
-import { get, imageSource } from '../api.js';
+import { downloadSource, get, hasToken, imageSource } from '../api.js';
 import { barChart, color, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch, table } from '../dom.js';
 import * as fmt from '../format.js';
@@ -354,6 +354,28 @@ function gallery(run, samples, signal) {
   }));
 }
 
+// A sample's trace (GET /api/samples/{id}/trace): Chrome trace-event JSON of
+// its frames and passes, for ui.perfetto.dev. With a token the file is
+// fetched with it and handed to the link as an object URL.
+function traceLink(s) {
+  const path = `/api/samples/${s.id}/trace`;
+  const name = `tally-sample-${s.id}.trace.json`;
+  const onclick = async (event) => {
+    if (!hasToken() || event.currentTarget.dataset.fetched) return;
+    event.preventDefault();
+    const link = event.currentTarget;
+    try {
+      link.href = await downloadSource(path);
+    } catch (e) {
+      link.title = `trace not available: ${e.message}`;
+      return;
+    }
+    link.dataset.fetched = 'true';
+    link.click();
+  };
+  return h('a', { href: path, download: name, title: 'Chrome trace-event JSON: open it in ui.perfetto.dev', dataset: { trace: String(s.id) }, onclick }, 'Download trace');
+}
+
 function sampleTable(samples) {
   // An application's samples are single frames under the layer: no sky, spread, overhead or image error.
   const frames = samples.some((s) => frameLabel(s));
@@ -375,6 +397,7 @@ function sampleTable(samples) {
     ...(samples.some((s) => s.variant_error)
       ? [{ label: 'Image vs reference variant', className: 'num', value: (s) => h('span', { dataset: { variantError: s.variant_error ? String(s.variant_error.psnr) : 'none' } }, errorText(s.variant_error)) }]
       : []),
+    { label: 'Trace', value: traceLink },
   ], samples, { 'aria-label': 'Samples', dataset: { table: 'samples' } });
 }
 
