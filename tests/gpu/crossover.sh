@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# The crossover capture on the GPU machine, through the daemon: tallyd serve
+# on a fresh SQLite store, tests/gpu/crossover-atrium.json posted (cameras
+# cut to CAMERAS of the spec's automatic set, frames to FRAMES, to fit the
+# machine's time), then GET /api/crossover for bytes and frame time.
+#
+#   tests/gpu/crossover.sh        OUT=dir (default ./gpu-out): crossover/{spec,capture,bytes,frame_ms}.json,
+#                                 crossover/serve.log
+#   CAMERAS=2 FRAMES=10           the defaults
+set -uo pipefail
+cd "$(dirname "$0")/../.."
+. tests/gpu/env.sh
+tally_gpu_script crossover RESOLUTION || exit 2
+dir="$out/crossover"
+mkdir -p "$dir"
+tallyd="$(cd "$(dirname "$tallyd")" && pwd)/$(basename "$tallyd")"
+
+python3 - "$dir/spec.json" "${CAMERAS:-2}" "${FRAMES:-10}" <<'EOF'
+import json, sys
+spec = json.load(open("tests/gpu/crossover-atrium.json"))
+# The repeats spec's atrium cameras: fixed poses, the first CAMERAS of them.
+cameras = json.load(open("tests/gpu/repeats-atrium.json"))["cameras"]
+spec["cameras"] = cameras[: int(sys.argv[2])]
+spec["frames"] = int(sys.argv[3])
+json.dump(spec, open(sys.argv[1], "w"), indent=1)
+EOF
+
+port=18377
+"$tallyd" serve --db "$dir/tally.db" --port "$port" --web "$PWD/web" --job-deadline 1500 \
+  > "$dir/serve.out" 2> "$dir/serve.log" &
+daemon=$!
+trap 'kill $daemon 2>/dev/null; wait $daemon 2>/dev/null' EXIT
+
+python3 - "$port" "$dir" <<'EOF'
+import json, sys, time, urllib.request
+port, out = sys.argv[1], sys.argv[2]
+base = "http://127.0.0.1:%s" % port
+def call(method, path, body=None):
+    data = json.dumps(body).encode() if body is not None else None
+    req = urllib.request.Request(base + path, data=data, method=method,
+                                 headers={"Content-Type": "application/json"} if data else {})
+    with urllib.request.urlopen(req, timeout=60) as r:
+        return json.loads(r.read())
+for _ in range(120):
+    try:
+        call("GET", "/api/health")
+        break
+    except Exception:
+        time.sleep(0.5)
+start = time.time()
+job = call("POST", "/api/captures", json.load(open(out + "/spec.json")))["id"]
+while True:
+    j = call("GET", "/api/captures/%d" % job)
+    if j["status"] in ("done", "failed", "cancelled"):
+        break
+    time.sleep(2)
+j["wall_s"] = time.time() - start
+json.dump(j, open(out + "/capture.json", "w"), indent=1)
+print("capture %d %s in %.0f s %s" % (job, j["status"], j["wall_s"], j.get("error") or ""))
+if j["status"] != "done":
+    sys.exit(1)
+hosts = call("GET", "/api/hosts")
+json.dump(hosts, open(out + "/hosts.json", "w"), indent=1)
+for metric in ("bytes", "frame_ms"):
+    c = call("GET", "/api/crossover?capture=%d&metric=%s" % (job, metric))
+    json.dump(c, open("%s/%s.json" % (out, metric), "w"), indent=1)
+    for s in c["series"]:
+        f = s.get("fit")
+        if f:
+            print("%s %s: a %.4g [%.4g, %.4g], b %.4g per pixel [%.4g, %.4g], R2 %.4f%s" % (
+                metric, s["variant"], f["a"], f["a_ci"][0], f["a_ci"][1], f["b"], f["b_ci"][0], f["b_ci"][1],
+                f["r2"], " (poor fit)" if f["poor_fit"] else ""))
+        else:
+            print("%s %s: no fit: %s" % (metric, s["variant"], s.get("error")))
+    for x in c["crossings"]:
+        print("%s %s vs %s: %s %s" % (metric, x["first"], x["second"], x["kind"],
+                                      json.dumps({k: x.get(k) for k in ("pixels", "pixels_ci", "resolution",
+                                                                         "resolution_ci", "lower_below",
+                                                                         "lower_above", "lower_throughout")})))
+EOF
