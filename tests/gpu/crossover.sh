@@ -7,6 +7,9 @@
 #   tests/gpu/crossover.sh        OUT=dir (default ./gpu-out): crossover/{spec,capture,bytes,frame_ms}.json,
 #                                 crossover/serve.log
 #   CAMERAS=2 FRAMES=10           the defaults
+#   SCENE=sponza                  Sponza (.scenes/sponza, else ../shared's) with its 10 automatic
+#                                 cameras instead of the atrium's fixed ones; EVERY=2 keeps every
+#                                 second resolution of the spec
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 . tests/gpu/env.sh
@@ -15,18 +18,26 @@ dir="$out/crossover"
 mkdir -p "$dir"
 tallyd="$(cd "$(dirname "$tallyd")" && pwd)/$(basename "$tallyd")"
 
-python3 - "$dir/spec.json" "${CAMERAS:-2}" "${FRAMES:-10}" <<'EOF'
+python3 - "$dir/spec.json" "${CAMERAS:-2}" "${FRAMES:-10}" "${SCENE:-atrium}" "$(tally_sponza_path)" \
+  "${EVERY:-1}" <<'EOF'
 import json, sys
+out, cameras, frames, scene, sponza, every = sys.argv[1:7]
 spec = json.load(open("tests/gpu/crossover-atrium.json"))
-# The repeats spec's atrium cameras: fixed poses, the first CAMERAS of them.
-cameras = json.load(open("tests/gpu/repeats-atrium.json"))["cameras"]
-spec["cameras"] = cameras[: int(sys.argv[2])]
-spec["frames"] = int(sys.argv[3])
-json.dump(spec, open(sys.argv[1], "w"), indent=1)
+if scene == "sponza":
+    spec["scenes"] = [{"gltf": sponza}]
+    spec["cameras"] = "auto"
+else:
+    # The repeats spec's atrium cameras: fixed poses, the first CAMERAS of them.
+    spec["cameras"] = json.load(open("tests/gpu/repeats-atrium.json"))["cameras"][: int(cameras)]
+spec["resolutions"] = spec["resolutions"][:: int(every)]
+spec["frames"] = int(frames)
+json.dump(spec, open(out, "w"), indent=1)
 EOF
 
 port=18377
-"$tallyd" serve --db "$dir/tally.db" --port "$port" --web "$PWD/web" --job-deadline 1500 \
+scenes=()
+[ "${SCENE:-atrium}" = sponza ] && scenes=(--scenes "$(dirname "$(tally_sponza_path)")")
+"$tallyd" serve --db "$dir/tally.db" --port "$port" --web "$PWD/web" --job-deadline 1500 "${scenes[@]}" \
   > "$dir/serve.out" 2> "$dir/serve.log" &
 daemon=$!
 trap 'kill $daemon 2>/dev/null; wait $daemon 2>/dev/null' EXIT
