@@ -271,11 +271,21 @@ Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
   });
 }
 
-Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error) {
+namespace {
+
+// finishJob's status must end a job: done (its error dropped) or failed.
+std::optional<std::string> finishableStatus(JobStatus status, std::optional<std::string>& error) {
   if (status != JobStatus::Done && status != JobStatus::Failed) {
-    return makeError(std::string("finishJob: status must be done or failed, got ") + toString(status));
+    return std::string("finishJob: status must be done or failed, got ") + toString(status);
   }
   if (status == JobStatus::Done) error.reset();
+  return std::nullopt;
+}
+
+}  // namespace
+
+Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error) {
+  if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("finishJob", [&]() -> Result<bool> {
@@ -291,10 +301,7 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
 }
 
 Result<bool> Store::finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error) {
-  if (status != JobStatus::Done && status != JobStatus::Failed) {
-    return makeError(std::string("finishJob: status must be done or failed, got ") + toString(status));
-  }
-  if (status == JobStatus::Done) error.reset();
+  if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("finishJob", [&]() -> Result<bool> {
