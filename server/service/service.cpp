@@ -14,6 +14,7 @@
 #include "service/accuracy.hpp"
 #include "service/crossover.hpp"
 #include "service/repeats.hpp"
+#include "service/run_significance.hpp"
 #include "service/trace.hpp"
 
 namespace tally::service {
@@ -73,6 +74,35 @@ std::optional<std::string> queryString(const Request& req, const std::string& ke
     invalid(key, "must be 1 to " + std::to_string(maxLength) + " characters");
   }
   return *v;
+}
+
+// A number in [low, high] (exclusive ends where asked): "confidence=0.99".
+std::optional<double> queryDouble(const Request& req, const std::string& key, double low, double high,
+                                  bool openLow, bool openHigh) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return std::nullopt;
+  double n = 0;
+  size_t used = 0;
+  try {
+    n = std::stod(*v, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  bool inRange = std::isfinite(n) && (openLow ? n > low : n >= low) && (openHigh ? n < high : n <= high);
+  if (v->empty() || used != v->size() || !inRange) {
+    std::ostringstream range;
+    range << (openLow ? "(" : "[") << low << ", " << high << (openHigh ? ")" : "]");
+    invalid(key, "must be a number in " + range.str() + ", got '" + v->substr(0, 32) + "'");
+  }
+  return n;
+}
+
+std::optional<bool> queryBool(const Request& req, const std::string& key) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return std::nullopt;
+  if (*v == "true" || *v == "1") return true;
+  if (*v == "false" || *v == "0") return false;
+  invalid(key, "must be true or false");
 }
 
 int64_t pathId(const Request& req) {
@@ -807,13 +837,26 @@ std::vector<int64_t> runIdList(const Request& req, size_t least, size_t most) {
 }
 
 Response compare(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"runs"});
+  allowOnly(req, {"runs", "confidence", "threshold", "across_capture"});
   std::vector<int64_t> ids = runIdList(req, 2, 4);
+  SignificanceOptions options;
+  options.compare.confidence = queryDouble(req, "confidence", 0.5, 1, false, true).value_or(0.95);
+  options.compare.practicalThreshold = queryDouble(req, "threshold", 0, 10, false, false).value_or(0);
+  options.acrossCapture = queryBool(req, "across_capture").value_or(true);
   auto& store = reader(ctx);
   for (int64_t id : ids) {
     if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
   }
-  return Response::ok(comparisonJson(check(store.compareRuns(ids))));
+  json out = comparisonJson(check(store.compareRuns(ids)));
+  // Each later run against the first: times tested, counts exact.
+  json significance = json::array();
+  for (size_t i = 1; i < ids.size(); ++i) {
+    significance.push_back(toJson(check(runSignificance(store, ids[0], ids[i], options))));
+  }
+  out["significance"] = std::move(significance);
+  out["confidence"] = options.compare.confidence;
+  out["threshold"] = options.compare.practicalThreshold;
+  return Response::ok(std::move(out));
 }
 
 // Each variant's metric fitted against the pixel count over one capture's

@@ -1,0 +1,266 @@
+#include "service/run_significance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "analysis/run_config.hpp"
+#include "analysis/stats.hpp"
+#include "service/run_rows.hpp"
+
+namespace tally::service {
+namespace {
+
+using nlohmann::json;
+
+constexpr const char* kFrame = "frame";
+
+// A run's samples by camera key; a second sample of an equal camera gets "#2".
+using Samples = std::map<std::string, store::Sample>;
+
+Result<Samples> loadSamples(store::Store& store, int64_t runId) {
+  auto rows = store.listSamples(runId);
+  if (!rows) return makeError(rows.error());
+  Samples out;
+  for (const auto& row : *rows) {
+    auto sample = store.getSample(row.id);
+    if (!sample) return makeError(sample.error());
+    if (!*sample) continue;
+    std::string key = analysis::cameraKey(row.camera);
+    for (int n = 2; out.count(key); ++n) key = analysis::cameraKey(row.camera) + "#" + std::to_string(n);
+    out.emplace(std::move(key), std::move(**sample));
+  }
+  return out;
+}
+
+const store::Pass* findPass(const store::Sample& s, const std::string& name) {
+  for (const auto& p : s.passes) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+// The figure's per-frame times pooled over `cameras`, or empty when a camera
+// lacks them.
+std::vector<double> pooled(const Samples& samples, const std::vector<std::string>& cameras, const std::string& figure) {
+  std::vector<double> out;
+  for (const auto& key : cameras) {
+    auto it = samples.find(key);
+    if (it == samples.end()) return {};
+    const std::vector<double>* times = nullptr;
+    if (figure == kFrame) {
+      times = &it->second.row.frameMsFrames;
+    } else if (const store::Pass* p = findPass(it->second, figure)) {
+      times = &p->gpuMsFrames;
+    }
+    if (!times || times->empty()) return {};
+    out.insert(out.end(), times->begin(), times->end());
+  }
+  return out;
+}
+
+bool sameConfig(const analysis::RunConfig& a, const analysis::RunConfig& b) {
+  return a.renderer == b.renderer && a.options == b.options && a.scene == b.scene && a.sceneParams == b.sceneParams &&
+         a.device == b.device && a.counting == b.counting && a.width == b.width && a.height == b.height &&
+         a.lights == b.lights;
+}
+
+// Earlier or later captures of `row`'s configuration (itself included, `skip`
+// not), newest first, at most kMaxAcrossCaptureRepeats, with their samples.
+Result<std::vector<std::pair<int64_t, Samples>>> repeatsOf(store::Store& store, const store::RunRow& row,
+                                                           int64_t skip) {
+  store::RunFilter filter;
+  filter.variant = row.variant;
+  filter.scene = row.scene;
+  filter.width = row.width;
+  filter.height = row.height;
+  filter.deviceId = row.deviceId;
+  bool complete = false;
+  auto rows = selectRuns(store, filter, 1000, complete);
+  if (!rows) return makeError(rows.error());
+  const analysis::RunConfig config = runConfigOf(row);
+  std::vector<std::pair<int64_t, Samples>> out;
+  for (auto it = rows->rbegin(); it != rows->rend() && out.size() < kMaxAcrossCaptureRepeats; ++it) {
+    if (it->id == skip || !sameConfig(runConfigOf(*it), config)) continue;
+    auto samples = loadSamples(store, it->id);
+    if (!samples) return makeError(samples.error());
+    out.emplace_back(it->id, std::move(samples).value());
+  }
+  return out;
+}
+
+// The pooled within-configuration standard deviation of log(median of the
+// figure's pooled frames) over the groups' runs that have every camera.
+std::optional<AcrossCapture> acrossCapture(const std::vector<const std::vector<std::pair<int64_t, Samples>>*>& groups,
+                                           const std::vector<std::string>& cameras, const std::string& figure) {
+  AcrossCapture out;
+  double sumSquares = 0;
+  for (const auto* group : groups) {
+    std::vector<double> logs;
+    std::vector<int64_t> ids;
+    for (const auto& [id, samples] : *group) {
+      std::vector<double> times = pooled(samples, cameras, figure);
+      if (times.empty()) continue;
+      double m = analysis::spreadOf(std::move(times)).median;
+      if (!(m > 0) || !std::isfinite(m)) continue;
+      logs.push_back(std::log(m));
+      ids.push_back(id);
+    }
+    if (logs.size() < 2) continue;
+    double mean = 0;
+    for (double l : logs) mean += l;
+    mean /= static_cast<double>(logs.size());
+    for (double l : logs) sumSquares += (l - mean) * (l - mean);
+    out.degreesOfFreedom += logs.size() - 1;
+    out.runs.insert(out.runs.end(), ids.begin(), ids.end());
+  }
+  if (out.degreesOfFreedom == 0) return std::nullopt;
+  out.logSd = std::sqrt(sumSquares / static_cast<double>(out.degreesOfFreedom));
+  return out;
+}
+
+json acrossJson(const std::optional<AcrossCapture>& a) {
+  if (!a) return nullptr;
+  return {{"runs", a->runs}, {"log_sd", a->logSd}, {"degrees_of_freedom", a->degreesOfFreedom}};
+}
+
+json figureJson(const FigureSignificance& f) {
+  json out = analysis::toJson(f.time);
+  out["across_capture"] = acrossJson(f.acrossCapture);
+  return out;
+}
+
+}  // namespace
+
+Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64_t runB,
+                                        const SignificanceOptions& options) {
+  auto rowA = store.getRun(runA);
+  if (!rowA) return makeError(rowA.error());
+  if (!*rowA) return makeError("no run " + std::to_string(runA));
+  auto rowB = store.getRun(runB);
+  if (!rowB) return makeError(rowB.error());
+  if (!*rowB) return makeError("no run " + std::to_string(runB));
+  auto samplesA = loadSamples(store, runA);
+  if (!samplesA) return makeError(samplesA.error());
+  auto samplesB = loadSamples(store, runB);
+  if (!samplesB) return makeError(samplesB.error());
+
+  RunSignificance out;
+  out.runA = runA;
+  out.runB = runB;
+  for (const auto& [key, sample] : *samplesA) {
+    if (samplesB->count(key)) out.cameras.push_back(key);
+  }
+  if (out.cameras.empty()) {
+    out.incomparable = "runs " + std::to_string(runA) + " and " + std::to_string(runB) +
+                       " measured no camera in common; neither times nor counts can be compared";
+    return out;
+  }
+
+  // Counts: every line summed over the shared cameras, compared exactly.
+  std::map<std::string, std::pair<double, double>> lines;
+  std::vector<std::string> order{"total"};
+  auto addCounts = [&](const Samples& samples, bool isA) {
+    for (const auto& key : out.cameras) {
+      const store::Sample& s = samples.at(key);
+      (isA ? lines["total"].first : lines["total"].second) += s.row.bytes;
+      for (const auto& p : s.passes) {
+        for (const auto& c : p.counters) {
+          std::string line = lineKey(p.name, c);
+          if (!lines.count(line)) order.push_back(line);
+          (isA ? lines[line].first : lines[line].second) += c.count;
+        }
+      }
+    }
+  };
+  addCounts(*samplesA, true);
+  addCounts(*samplesB, false);
+  out.countLines = order.size();
+  for (const auto& line : order) {
+    auto [a, b] = lines[line];
+    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed) out.countChanges.push_back({line, a, b});
+  }
+
+  // Repeats of each configuration (one group when both runs share it: B is
+  // the capture under test, so it is left out).
+  std::vector<std::pair<int64_t, Samples>> repeatsA, repeatsB;
+  std::vector<const std::vector<std::pair<int64_t, Samples>>*> groups;
+  if (options.acrossCapture) {
+    bool same = sameConfig(runConfigOf((*rowA)->row), runConfigOf((*rowB)->row));
+    auto a = repeatsOf(store, (*rowA)->row, runB);
+    if (!a) return makeError(a.error());
+    repeatsA = std::move(a).value();
+    groups.push_back(&repeatsA);
+    if (!same) {
+      auto b = repeatsOf(store, (*rowB)->row, runA);
+      if (!b) return makeError(b.error());
+      repeatsB = std::move(b).value();
+      groups.push_back(&repeatsB);
+    }
+  }
+
+  // A figure's comparison, or why there is none.
+  auto figure = [&](const std::string& name, std::string& missing) -> std::optional<FigureSignificance> {
+    std::vector<double> a = pooled(*samplesA, out.cameras, name), b = pooled(*samplesB, out.cameras, name);
+    if (a.size() < 2 || b.size() < 2) {
+      missing = "a shared camera has fewer than 2 per-frame times stored in one of the runs (runs stored before "
+                "per-frame times were kept have none)";
+      return std::nullopt;
+    }
+    FigureSignificance f;
+    f.figure = name;
+    analysis::CompareOptions compare = options.compare;
+    f.acrossCapture = acrossCapture(groups, out.cameras, name);
+    if (f.acrossCapture) {
+      compare.acrossCaptureLogSd = f.acrossCapture->logSd;
+      compare.acrossCaptureRuns = f.acrossCapture->degreesOfFreedom + 1;
+    }
+    auto time = analysis::compareTimes(a, b, compare);
+    if (!time) {
+      // Stored times the test cannot take: a pass below the timer's resolution reads 0 ms.
+      missing = time.error();
+      return std::nullopt;
+    }
+    f.time = std::move(time).value();
+    return f;
+  };
+
+  out.frame = figure(kFrame, out.frameMissing);
+  for (const auto& p : samplesA->at(out.cameras.front()).passes) {
+    std::string missing;
+    if (auto pass = figure(p.name, missing)) {
+      out.passes.push_back(std::move(*pass));
+    } else if (findPass(samplesB->at(out.cameras.front()), p.name)) {
+      out.passesMissing.emplace_back(p.name, missing);
+    }
+  }
+  return out;
+}
+
+json toJson(const RunSignificance& s) {
+  if (!s.incomparable.empty()) return {{"run_a", s.runA}, {"run_b", s.runB}, {"cameras", 0}, {"error", s.incomparable}};
+  json passes = json::array(), changes = json::array();
+  for (const auto& p : s.passes) {
+    json j = figureJson(p);
+    j["pass"] = p.figure;
+    passes.push_back(std::move(j));
+  }
+  json missing = json::array();
+  for (const auto& [pass, why] : s.passesMissing) missing.push_back({{"pass", pass}, {"reason", why}});
+  for (const auto& c : s.countChanges) {
+    changes.push_back({{"line", c.line}, {"a", c.a}, {"b", c.b}, {"delta", c.b - c.a}});
+  }
+  return {{"run_a", s.runA},
+          {"run_b", s.runB},
+          {"cameras", s.cameras.size()},
+          {"frame", s.frame ? figureJson(*s.frame) : json(nullptr)},
+          {"frame_missing", s.frame ? json(nullptr) : json(s.frameMissing)},
+          {"passes", std::move(passes)},
+          {"passes_missing", std::move(missing)},
+          {"counts",
+           {{"verdict", s.countsChanged() ? "changed" : "same"},
+            {"lines", s.countLines},
+            {"changes", std::move(changes)}}}};
+}
+
+}  // namespace tally::service

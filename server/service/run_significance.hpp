@@ -1,0 +1,75 @@
+// Whether two stored runs differ: their frame and pass times with the tests of
+// analysis/significance.hpp over per-frame times pooled across the cameras both
+// runs measured, widened by the across-capture noise of repeated captures
+// where the store has them, and their counts compared exactly. The compare
+// route and the alert evaluator call it; docs/statistics.md, "Comparing two
+// stored runs", states the rules.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "analysis/significance.hpp"
+#include "common/result.hpp"
+#include "store/store.hpp"
+
+namespace tally::service {
+
+// Repeated captures of one configuration taken into account at most (the
+// newest first).
+inline constexpr size_t kMaxAcrossCaptureRepeats = 20;
+
+// The across-capture noise one figure was widened by.
+struct AcrossCapture {
+  std::vector<int64_t> runs;  // the repeats whose medians gave it (both runs' configurations)
+  double logSd = 0;           // pooled standard deviation of log(run median) within each configuration
+  size_t degreesOfFreedom = 0;
+};
+
+struct FigureSignificance {
+  std::string figure;  // "frame" or the pass's name
+  analysis::TimeComparison time;
+  std::optional<AcrossCapture> acrossCapture;  // absent: no configuration had 2 comparable captures
+};
+
+struct CountChange {
+  std::string line;  // "total" (the sample bytes) or "pass/resource access" (its count)
+  double a = 0, b = 0;  // summed over the shared cameras, per frame
+};
+
+struct RunSignificance {
+  int64_t runA = 0, runB = 0;
+  // Set (and nothing else) when the runs share no camera: then there is
+  // nothing to compare.
+  std::string incomparable;
+  std::vector<std::string> cameras;  // camera keys both runs measured; frames are pooled over these
+  // Absent when a shared camera of either run has no per-frame times stored
+  // (runs ingested before they were kept) or a stored time is not positive,
+  // with the reason in frameMissing.
+  std::optional<FigureSignificance> frame;
+  std::string frameMissing;
+  std::vector<FigureSignificance> passes;  // passes of both runs with per-frame times, in run A's order
+  std::vector<std::pair<std::string, std::string>> passesMissing;  // passes of both runs not compared, and why
+  size_t countLines = 0;                   // lines compared, "total" included
+  std::vector<CountChange> countChanges;   // every line whose count differs (==, no tolerance)
+  bool countsChanged() const { return !countChanges.empty(); }
+};
+
+struct SignificanceOptions {
+  analysis::CompareOptions compare;  // confidence and practical threshold; its across-capture fields are set here
+  bool acrossCapture = true;         // look for repeated captures of both configurations
+};
+
+// Errors: a run that does not exist, a store error. Runs without a camera in
+// common are answered with `incomparable` set.
+Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64_t runB,
+                                        const SignificanceOptions& options = {});
+
+nlohmann::json toJson(const RunSignificance& s);
+
+}  // namespace tally::service

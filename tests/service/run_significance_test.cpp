@@ -1,0 +1,242 @@
+// service::runSignificance over stored runs of known frame-time
+// distributions: a run built 15% slower is called slower with an interval
+// that covers 1.15, a run drawn from the same distribution is the same, one
+// changed counter is the one change reported, repeated captures with their
+// own offsets widen the interval by the spread of their medians (computed
+// here independently), and runs without per-frame times or with zero pass
+// times say why instead of failing.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "../store/store_fixture.hpp"
+#include "service/run_significance.hpp"
+
+namespace {
+namespace st = tally::store::testing;
+using nlohmann::json;
+using tally::analysis::Verdict;
+using tally::service::runSignificance;
+using tally::service::SignificanceOptions;
+
+constexpr int kCameras = 3;
+constexpr int kFrames = 20;
+
+struct RunShape {
+  double scale = 1.0;        // every time multiplied by this
+  bool passZero = false;     // the "lights" pass reads 0 ms in every frame
+  bool perFrame = true;      // store frame_ms_frames and gpu_ms_frames
+  double lightsCount = 1000; // the lights pass's counter
+  int firstCamera = 0;       // cameras firstCamera .. firstCamera + kCameras - 1
+};
+
+// Lognormal frame times around 4 ms + 1 ms per camera index (sigma of log
+// 0.05), split 30/70 into the passes "gbuffer" and "lights".
+json runOf(std::mt19937_64& rng, const RunShape& shape) {
+  std::lognormal_distribution<double> noise(0.0, 0.05);
+  std::vector<json> samples;
+  for (int c = shape.firstCamera; c < shape.firstCamera + kCameras; ++c) {
+    std::vector<double> frames, gbuffer, lights;
+    for (int f = 0; f < kFrames; ++f) {
+      double t = (4.0 + c) * noise(rng) * shape.scale;
+      frames.push_back(t);
+      gbuffer.push_back(0.3 * t);
+      lights.push_back(shape.passZero ? 0.0 : 0.7 * t);
+    }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    };
+    json g = st::makePass("gbuffer", median(gbuffer), 1000, {st::makeCounter("gbuffer.normal", "write", 500, 4000)});
+    json l = st::makePass("lights", median(lights), 1000,
+                          {st::makeCounter("gbuffer.normal", "read", shape.lightsCount, shape.lightsCount * 8)});
+    if (shape.perFrame) {
+      g["gpu_ms_frames"] = gbuffer;
+      l["gpu_ms_frames"] = lights;
+    }
+    json s = st::makeSample(c, median(frames), {g, l});
+    s["camera"]["eye"] = {double(c), 2.0, 3.0};
+    s["frames"] = kFrames;
+    if (shape.perFrame) s["frame_ms_frames"] = frames;
+    samples.push_back(std::move(s));
+  }
+  return st::makeRun("deferred", "atrium", 320, 180, std::move(samples));
+}
+
+class RunSignificance : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    store_ = st::openStore(db_.path());
+    ASSERT_NE(store_, nullptr);
+  }
+  // Stores one capture of one run; returns the run's id.
+  int64_t store(const json& run) {
+    auto job = store_->createJob({{"renderers", {"deferred"}}});
+    EXPECT_TRUE(job) << job.error();
+    auto stored = store_->ingestCapture(job->job.id, st::makeCapture({run}), {});
+    EXPECT_TRUE(stored) << stored.error();
+    EXPECT_TRUE(store_->finishJob(job->job.id, tally::store::JobStatus::Done));
+    tally::store::RunFilter filter;
+    filter.jobId = job->job.id;
+    auto runs = store_->listRuns(filter, {});
+    EXPECT_TRUE(runs && runs->runs.size() == 1);
+    return runs->runs.front().id;
+  }
+  st::TempDb db_;
+  std::unique_ptr<tally::store::Store> store_;
+  std::mt19937_64 rng_{20261125};
+};
+
+SignificanceOptions framesOnly() {
+  SignificanceOptions o;
+  o.acrossCapture = false;
+  return o;
+}
+
+TEST_F(RunSignificance, SlowerRunIsSlowerWithAnIntervalCoveringItsFactor) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {.scale = 1.15}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s) << s.error();
+  EXPECT_EQ(s->cameras.size(), size_t(kCameras));
+  ASSERT_TRUE(s->frame);
+  EXPECT_EQ(s->frame->time.nA, size_t(kCameras * kFrames));
+  EXPECT_EQ(s->frame->time.verdict, Verdict::Slower) << s->frame->time.reason;
+  EXPECT_LT(s->frame->time.interval.lower, 1.15);
+  EXPECT_GT(s->frame->time.interval.upper, 1.15);
+  EXPECT_LT(s->frame->time.test.pValue, 0.05);
+  ASSERT_EQ(s->passes.size(), 2u);
+  EXPECT_EQ(s->passes[0].figure, "gbuffer");
+  EXPECT_EQ(s->passes[1].figure, "lights");
+  for (const auto& p : s->passes) EXPECT_EQ(p.time.verdict, Verdict::Slower) << p.figure;
+  // Same counters: three lines and the total, none changed.
+  EXPECT_EQ(s->countLines, 3u);
+  EXPECT_FALSE(s->countsChanged());
+  // And the other way round.
+  auto back = runSignificance(*store_, b, a, framesOnly());
+  ASSERT_TRUE(back && back->frame);
+  EXPECT_EQ(back->frame->time.verdict, Verdict::Faster);
+}
+
+TEST_F(RunSignificance, RunFromTheSameDistributionIsTheSame) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s && s->frame);
+  EXPECT_EQ(s->frame->time.verdict, Verdict::Same) << s->frame->time.reason;
+  EXPECT_LT(s->frame->time.interval.lower, 1.0);
+  EXPECT_GT(s->frame->time.interval.upper, 1.0);
+}
+
+TEST_F(RunSignificance, ChangedCounterIsTheOneChangeReported) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {.lightsCount = 1200}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s);
+  ASSERT_TRUE(s->countsChanged());
+  // The sample bytes (every counter's bytes) and the lights line change; the gbuffer write does not.
+  ASSERT_EQ(s->countChanges.size(), 2u);
+  EXPECT_EQ(s->countChanges[0].line, "total");
+  EXPECT_DOUBLE_EQ(s->countChanges[0].b - s->countChanges[0].a, kCameras * 200.0 * 8);
+  EXPECT_EQ(s->countChanges[1].line, "lights/gbuffer.normal read");
+  EXPECT_DOUBLE_EQ(s->countChanges[1].a, kCameras * 1000.0);
+  EXPECT_DOUBLE_EQ(s->countChanges[1].b, kCameras * 1200.0);
+  json j = tally::service::toJson(*s);
+  EXPECT_EQ(j["counts"]["verdict"], "changed");
+  EXPECT_EQ(j["counts"]["changes"][1]["delta"], kCameras * 200.0);
+}
+
+// Five captures of one configuration, each with its own offset (sigma of log
+// 0.08) and tight frames: between captures the frames alone call differences
+// real; the repeats' spread widens the interval.
+TEST_F(RunSignificance, RepeatedCapturesWidenByTheSpreadOfTheirMedians) {
+  std::normal_distribution<double> offset(0.0, 0.08);
+  std::vector<int64_t> ids;
+  std::vector<double> scales;
+  for (int i = 0; i < 5; ++i) {
+    double scale = std::exp(offset(rng_));
+    // Keep two of them clearly apart so frames alone call a difference.
+    if (i == 4) scale = scales[0] * 1.12;
+    scales.push_back(scale);
+    ids.push_back(store(runOf(rng_, {.scale = scale})));
+  }
+  auto frames = runSignificance(*store_, ids[0], ids[4], framesOnly());
+  ASSERT_TRUE(frames && frames->frame);
+  EXPECT_EQ(frames->frame->time.verdict, Verdict::Slower);
+  EXPECT_FALSE(frames->frame->acrossCapture);
+
+  auto widened = runSignificance(*store_, ids[0], ids[4]);
+  ASSERT_TRUE(widened && widened->frame);
+  const auto& across = widened->frame->acrossCapture;
+  ASSERT_TRUE(across);
+  // The repeats are runs 0..3: B (run 4) is the capture under test.
+  std::vector<int64_t> expectedRuns(ids.begin(), ids.begin() + 4);
+  std::vector<int64_t> got = across->runs;
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, expectedRuns);
+  EXPECT_EQ(across->degreesOfFreedom, 3u);
+  // The same standard deviation from the stored samples' own frames.
+  std::vector<double> logs;
+  for (int i = 0; i < 4; ++i) {
+    std::vector<double> pooledFrames;
+    auto rows = store_->listSamples(ids[i]);
+    ASSERT_TRUE(rows);
+    for (const auto& row : *rows) {
+      auto sample = store_->getSample(row.id);
+      ASSERT_TRUE(sample && *sample);
+      pooledFrames.insert(pooledFrames.end(), (**sample).row.frameMsFrames.begin(), (**sample).row.frameMsFrames.end());
+    }
+    std::sort(pooledFrames.begin(), pooledFrames.end());
+    size_t n = pooledFrames.size();
+    logs.push_back(std::log(0.5 * (pooledFrames[n / 2 - 1] + pooledFrames[n / 2])));
+  }
+  double mean = (logs[0] + logs[1] + logs[2] + logs[3]) / 4, ss = 0;
+  for (double l : logs) ss += (l - mean) * (l - mean);
+  EXPECT_NEAR(across->logSd, std::sqrt(ss / 3), 1e-12);
+  EXPECT_GT(widened->frame->time.interval.widening, 1.0);
+  EXPECT_LT(widened->frame->time.interval.lower, frames->frame->time.interval.lower);
+  EXPECT_GT(widened->frame->time.interval.upper, frames->frame->time.interval.upper);
+  // The p-value stays the frames' own.
+  EXPECT_DOUBLE_EQ(widened->frame->time.test.pValue, frames->frame->time.test.pValue);
+}
+
+TEST_F(RunSignificance, RunsWithoutPerFrameTimesSayWhy) {
+  int64_t a = store(runOf(rng_, {.perFrame = false}));
+  int64_t b = store(runOf(rng_, {}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s) << s.error();
+  EXPECT_FALSE(s->frame);
+  EXPECT_NE(s->frameMissing.find("per-frame times"), std::string::npos) << s->frameMissing;
+  EXPECT_TRUE(s->passes.empty());
+  EXPECT_EQ(s->passesMissing.size(), 2u);
+  EXPECT_FALSE(s->countsChanged());  // counts still compare
+}
+
+TEST_F(RunSignificance, ZeroPassTimesAreReportedNotFatal) {
+  int64_t a = store(runOf(rng_, {.passZero = true}));
+  int64_t b = store(runOf(rng_, {.passZero = true}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s) << s.error();
+  ASSERT_TRUE(s->frame);
+  ASSERT_EQ(s->passes.size(), 1u);
+  EXPECT_EQ(s->passes[0].figure, "gbuffer");
+  ASSERT_EQ(s->passesMissing.size(), 1u);
+  EXPECT_EQ(s->passesMissing[0].first, "lights");
+  EXPECT_NE(s->passesMissing[0].second.find("not positive"), std::string::npos) << s->passesMissing[0].second;
+}
+
+TEST_F(RunSignificance, RunsWithoutACommonCameraAreIncomparable) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {.firstCamera = 10}));
+  auto s = runSignificance(*store_, a, b);
+  ASSERT_TRUE(s) << s.error();
+  EXPECT_TRUE(s->cameras.empty());
+  EXPECT_NE(s->incomparable.find("no camera in common"), std::string::npos);
+  EXPECT_TRUE(tally::service::toJson(*s).contains("error"));
+  auto missing = runSignificance(*store_, a, 9999);
+  ASSERT_FALSE(missing);
+  EXPECT_EQ(missing.error(), "no run 9999");
+}
+
+}  // namespace
