@@ -245,7 +245,7 @@ Result<json> ApiClient::getSample(const std::string& id) {
 }
 
 Result<json> ApiClient::compare(const std::vector<std::string>& runIds, std::optional<double> confidence,
-                                std::optional<double> threshold, bool acrossCapture) {
+                                std::optional<double> threshold, bool acrossCapture, bool camerasAsStrata) {
   std::string ids;
   for (const auto& id : runIds) ids += (ids.empty() ? "" : ",") + id;
   std::vector<std::pair<std::string, std::string>> params = {{"runs", ids}};
@@ -258,6 +258,7 @@ Result<json> ApiClient::compare(const std::vector<std::string>& runIds, std::opt
   if (confidence) params.emplace_back("confidence", number(*confidence));
   if (threshold) params.emplace_back("threshold", number(*threshold));
   if (!acrossCapture) params.emplace_back("across_capture", "false");
+  if (!camerasAsStrata) params.emplace_back("strata", "none");
   return sendJson("GET", "/api/compare" + query(params));
 }
 

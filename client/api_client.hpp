@@ -78,7 +78,8 @@ class ApiClient {
   Result<json> getSample(const std::string& id);
   // confidence, threshold: as GET /api/compare takes them; acrossCapture false: frames only.
   Result<json> compare(const std::vector<std::string>& runIds, std::optional<double> confidence = std::nullopt,
-                       std::optional<double> threshold = std::nullopt, bool acrossCapture = true);
+                       std::optional<double> threshold = std::nullopt, bool acrossCapture = true,
+                       bool camerasAsStrata = true);
   // GET /api/crossover: fits against pixel count and crossings over a capture's runs.
   Result<json> crossover(const std::string& captureId, const std::string& metric);
   // One page of sweeps; cursor empty for the first.

@@ -532,8 +532,10 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
   const json& list = comparison.value("significance", json::array());
   if (!list.is_array() || list.empty()) return;
   double confidence = comparison.value("confidence", 0.95);
-  io.out << "\nSignificance against " << names[0] << " (" << fixed(confidence * 100, 0)
-         << "% intervals over frames and cameras; docs/statistics.md):\n";
+  const json& first = list.front().value("frame", json());
+  bool aligned = !first.is_object() || first.value("strata", "cameras") == "cameras";
+  io.out << "\nSignificance against " << names[0] << " (" << fixed(confidence * 100, 0) << "% intervals over frames"
+         << (aligned ? ", each camera's aligned on its median" : " pooled over cameras") << "; docs/statistics.md):\n";
   Table t({{"RUN"},
            {"FIGURE"},
            {"RATIO", Align::Right},
@@ -596,7 +598,7 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
 
 int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
   const std::vector<std::string>& runIds = args.runs;
-  auto res = api.compare(runIds, args.confidence, args.threshold, !args.framesOnly);
+  auto res = api.compare(runIds, args.confidence, args.threshold, !args.framesOnly, !args.pooled);
   if (!res) return fail(io, res.error());
   if (io.json) {
     printJson(io, *res);

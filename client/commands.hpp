@@ -67,6 +67,7 @@ struct CompareArgs {
   std::optional<double> confidence;  // of the intervals; the server's default 0.95
   std::optional<double> threshold;   // practical threshold on |ratio - 1|; default 0
   bool framesOnly = false;           // no widening by repeated captures' spread
+  bool pooled = false;               // raw frames pooled, not aligned per camera
 };
 // The comparison table, then each later run's significance against the first
 // (times tested over per-frame times, counts exact).

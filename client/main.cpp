@@ -138,6 +138,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 10.0));
   compare->add_flag("--frames-only", compareArgs.framesOnly,
                     "Do not widen intervals by the spread of repeated captures of the runs' configurations");
+  compare->add_flag("--pooled", compareArgs.pooled,
+                    "Pool the raw frames of all cameras instead of aligning each camera's on its median");
   compare->footer("Example:\n  tally compare 12 15\n  tally compare 12 15 --confidence 0.99 --threshold 0.02");
 
   CrossoverArgs crossoverArgs;

@@ -837,12 +837,15 @@ std::vector<int64_t> runIdList(const Request& req, size_t least, size_t most) {
 }
 
 Response compare(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"runs", "confidence", "threshold", "across_capture"});
+  allowOnly(req, {"runs", "confidence", "threshold", "across_capture", "strata"});
   std::vector<int64_t> ids = runIdList(req, 2, 4);
   SignificanceOptions options;
   options.compare.confidence = queryDouble(req, "confidence", 0.5, 1, false, true).value_or(0.95);
   options.compare.practicalThreshold = queryDouble(req, "threshold", 0, 10, false, false).value_or(0);
   options.acrossCapture = queryBool(req, "across_capture").value_or(true);
+  std::string strata = queryString(req, "strata", 16).value_or("cameras");
+  if (strata != "cameras" && strata != "none") invalid("strata", "must be cameras or none");
+  options.camerasAsStrata = strata == "cameras";
   auto& store = reader(ctx);
   for (int64_t id : ids) {
     if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
