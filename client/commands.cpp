@@ -519,8 +519,10 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
 namespace {
 
 // "1.12x [1.08x, 1.17x]"; an unbounded end is "-".
+std::string ratio3(double v) { return fixed(v, 3) + "x"; }
+
 std::string intervalText(const json& interval) {
-  auto end = [](const json& v) { return v.is_number() ? ratio(v.get<double>()) : kMissing; };
+  auto end = [](const json& v) { return v.is_number() ? ratio3(v.get<double>()) : kMissing; };
   return "[" + end(interval.value("lower", json())) + ", " + end(interval.value("upper", json())) + "]";
 }
 
@@ -560,7 +562,7 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
         std::string across = "widened " + fixed(widening, 1) + "x by repeated captures";
         note = note.empty() ? across : note + "; " + across;
       }
-      t.addRow({run, figure, ratio(c.value("ratio", 1.0)), intervalText(interval),
+      t.addRow({run, figure, ratio3(c.value("ratio", 1.0)), intervalText(interval),
                 pText(c.value("mann_whitney", json::object()).value("p", 1.0)),
                 signedFixed(c.value("cliffs_delta", json::object()).value("delta", 0.0), 2), c.value("verdict", ""), note});
     };
@@ -576,7 +578,9 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
     const json& counts = s.value("counts", json::object());
     const json& changes = counts.value("changes", json::array());
     std::string line = run + ": counts " + counts.value("verdict", "") + " (" + std::to_string(changes.size()) +
-                       " of " + std::to_string(counts.value("lines", 0)) + " lines differ, compared exactly)";
+                       " of " + std::to_string(counts.value("lines", 0)) +
+                       " lines differ, compared exactly; per frame, summed over the " +
+                       std::to_string(s.value("cameras", 0)) + " shared cameras)";
     countLines.push_back(line);
     size_t shown = 0;
     for (const auto& c : changes) {
