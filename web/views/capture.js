@@ -278,7 +278,8 @@ function progressPanel(job) {
     job.error ? h('div', { class: 'error' }, job.error) : null,
     attemptErrors(job),
     done && job.sweeps && job.sweeps.length ? h('a', { href: `#/sweeps/${job.sweeps[0]}` }, 'See its sweep') : null,
-    done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
+    done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null,
+    done && job.spec.heatmap ? [' · ', h('a', { href: `#/heatmap?capture=${job.id}`, dataset: { heatmapLink: job.id } }, 'See its heatmap')] : null);
 }
 
 function summary(spec) {
@@ -288,7 +289,8 @@ function summary(spec) {
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
   const variant = (r) => (typeof r === 'string' ? r : [r.renderer, ...Object.entries(r.options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`)].join(' '));
-  return `${[...(spec.renderers || []), ...(spec.workloads || [])].map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
+  const heatmap = spec.heatmap ? ` · heatmap ${spec.heatmap.layout}${spec.heatmap.cells ? ` ${spec.heatmap.cells.join('×')}` : ''}` : '';
+  return `${[...(spec.renderers || []), ...(spec.workloads || [])].map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}${heatmap}`;
 }
 
 function jobTable(jobs, onCancel) {
@@ -305,7 +307,8 @@ function jobTable(jobs, onCancel) {
       h('td', {}, fmt.date(j.finished_at)),
       h('td', { class: 'error', style: 'white-space: normal; min-width: 12rem' }, j.error || ''),
       h('td', {}, kFinished.includes(j.status)
-        ? (j.status === 'done' ? (j.spec.sweep ? h('a', { href: `#/sweeps?capture=${j.id}` }, 'sweep') : h('a', { href: `#/runs?capture=${j.id}` }, 'runs')) : '')
+        ? (j.status === 'done' ? (j.spec.sweep ? h('a', { href: `#/sweeps?capture=${j.id}` }, 'sweep') : [h('a', { href: `#/runs?capture=${j.id}` }, 'runs'),
+          j.spec.heatmap ? [' · ', h('a', { href: `#/heatmap?capture=${j.id}`, dataset: { heatmapLink: j.id } }, 'heatmap')] : null]) : '')
         : h('button', { type: 'button', class: 'secondary', onclick: () => onCancel(j.id) }, 'Cancel')))))));
 }
 
