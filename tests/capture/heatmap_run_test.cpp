@@ -98,6 +98,26 @@ TEST_F(HeatmapRun, PosesCarryTheirCellsAndCountLikeExplicitCameras) {
   }
 }
 
+// A scene without a walkable floor (stacked vertical planes) fails the
+// capture before any frame, saying why, and writes no result.
+TEST_F(HeatmapRun, NoWalkableFloorFailsTheCapture) {
+  std::ofstream(dir_ / "spec.json") << json{{"renderers", {"forward"}},
+                                            {"scenes", {{{"name", "planes"}, {"layers", 2}}}},
+                                            {"resolutions", {{16, 9}}},
+                                            {"heatmap", {{"layout", "floor"}, {"cells", {2, 2}}}},
+                                            {"frames", 1},
+                                            {"ceilings", false}}
+                                           .dump();
+  const fs::path out = dir_ / "none.json";
+  std::string cmd = std::string(TALLYD_PATH) + " capture --quiet --spec " + (dir_ / "spec.json").string() +
+                    " --out " + out.string() + " 2>" + (dir_ / "err").string();
+  EXPECT_NE(WEXITSTATUS(std::system(cmd.c_str())), 0);
+  std::string err = test::readFile(dir_ / "err");
+  EXPECT_NE(err.find("scenes[0] (planes): heatmap: no cell has a walkable floor"), std::string::npos) << err;
+  EXPECT_NE(err.find("\"no_surface\":4"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(HeatmapRun, SponzaSmallGridOnTheGround) {
   const fs::path sponza = fs::path(TALLY_SHARED_SCENES) / "sponza" / "Sponza.gltf";
   if (!fs::exists(sponza)) {
