@@ -74,7 +74,7 @@ before(async () => {
   data.floor = floor.id;
   data.map = await daemon.get(`/heatmap?capture=${floor.id}&renderer=deferred&versus=visbuffer&metric=frame_ms`);
   const sphere = await daemon.capture({
-    renderers: ['forward'], resolutions: [[32, 18]], heatmap: { layout: 'sphere', rings: 2, segments: 3 },
+    renderers: ['forward'], resolutions: [[32, 18], [48, 27]], heatmap: { layout: 'sphere', rings: 2, segments: 3 },
     frames: 2, counted_frames: 1, ceilings: false,
   }, kCaptureMs);
   data.sphere = sphere.id;
@@ -192,6 +192,14 @@ describe('heatmap', () => {
     assert.equal(cells.length, 6);
     assert.ok(cells.every((c) => c.value !== null && c.fill.startsWith('rgb(')));
     assert.ok(cells[0].title.startsWith('ring 0, segment 0 (lat 45°, lon -120°)'), cells[0].title);
+    // Two resolutions: two maps, the first shown, the other one select away.
+    assert.match(await page.locator('#view .meta').textContent(), /32×18/);
+    const rendered = await page.evaluate(() => document.getElementById('view').dataset.rendered);
+    await page.selectOption('select[name="config"]', { label: 'atrium · 48×27 · accumulate' });
+    await page.waitForFunction((n) => document.getElementById('view').dataset.rendered !== n, rendered, { timeout: kViewMs });
+    assert.match(await page.locator('#view .meta').textContent(), /48×27/);
+    const at48 = await daemon.get(`/heatmap?capture=${data.sphere}&renderer=forward&width=48&height=27`);
+    assert.deepEqual((await drawnCells(page)).map((c) => c.value), at48.cells.map((c) => c.value_a));
     assert.deepEqual(errors, []);
     await close();
   });

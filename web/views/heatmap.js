@@ -1,4 +1,4 @@
-// A camera heatmap (#/heatmap?capture=&renderer=&versus=&metric=&yaw=&scene=):
+// A camera heatmap (#/heatmap?capture=&renderer=&versus=&metric=&yaw=&scene=&width=&height=&counting=):
 // GET /api/heatmap drawn over the top-down plan of the scene (a floor layout;
 // GET /api/heatmap/{capture}/topdown.png) or as a longitude/latitude grid (a
 // sphere layout). One renderer: a sequential scale of its value. Two: their
@@ -116,18 +116,43 @@ function legend(body, scale) {
     body.versus ? h('p', { class: 'caption' }, 'Hatched: the difference is not significant (', body.metric === 'bytes' ? 'counts equal' : 'Mann-Whitney and the 95 % interval of the ratio', '). Empty cells have no walkable floor.') : null);
 }
 
-function controls(query, variants, layout, onApply) {
+// A capture's run sets: one per scene, resolution and counting mode, each a map of its own.
+const configKey = (c) => `${c.scene}|${c.width}|${c.height}|${c.counting}`;
+export function configsOf(runs) {
+  const seen = new Map();
+  for (const r of runs) {
+    const c = { scene: r.scene, width: r.width, height: r.height, counting: r.counting };
+    if (!seen.has(configKey(c))) seen.set(configKey(c), c);
+  }
+  // By scene, then smallest first.
+  return [...seen.values()].sort((a, b) => a.scene.localeCompare(b.scene) || a.width * a.height - b.width * b.height || a.counting.localeCompare(b.counting));
+}
+
+function controls(query, variants, configs, layout, onApply) {
   const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
   const option = (value, text, current) => h('option', { value, selected: value === current }, text);
   const yaws = layout && layout.yaws_deg && layout.yaws_deg.length > 1 ? layout.yaws_deg : [];
+  const current = configKey(query);
   const form = h('form', { class: 'filters', 'aria-label': 'Heatmap' },
+    configs.length > 1
+      ? field('Scene and resolution', h('select', { name: 'config' },
+        configs.map((c) => option(configKey(c), `${c.scene} · ${c.width}×${c.height} · ${c.counting}`, current))))
+      : null,
     field('Renderer', h('select', { name: 'renderer' }, variants.map((v) => option(v, v, query.renderer)))),
     field('Versus', h('select', { name: 'versus' }, option('none', 'none', query.versus || 'none'), variants.map((v) => option(v, v, query.versus)))),
     field('Metric', h('select', { name: 'metric' }, option('frame_ms', 'frame time', query.metric), option('bytes', 'bytes', query.metric))),
     field('Yaw', h('select', { name: 'yaw', disabled: yaws.length === 0 },
       option('mean', 'mean over yaws', query.yaw), option('worst', 'worst yaw', query.yaw),
       yaws.map((deg, i) => option(String(i), `${deg}°`, query.yaw)))));
-  form.addEventListener('change', () => onApply(Object.fromEntries(new FormData(form))));
+  form.addEventListener('change', () => {
+    const values = Object.fromEntries(new FormData(form));
+    if (values.config) {
+      const [scene, width, height, counting] = values.config.split('|');
+      Object.assign(values, { scene, width, height, counting });
+      delete values.config;
+    }
+    onApply(values);
+  });
   return form;
 }
 
@@ -212,13 +237,19 @@ export async function render(page, { query, signal }) {
   }
   const runs = (await get(`/runs${queryString({ capture, limit: 1000 })}`, signal)).runs;
   const variants = [...new Set(runs.map(fmt.variant))];
+  const configs = configsOf(runs);
+  const first = configs[0] || {};
   const q = {
     renderer: query.get('renderer') || variants[0],
     // "none": one renderer (an absent versus takes the capture's second variant).
     versus: query.get('versus') ?? (variants.length > 1 ? variants[1] : 'none'),
     metric: query.get('metric') || 'frame_ms',
     yaw: query.get('yaw') || 'mean',
-    scene: query.get('scene') || '',
+    // The run set: the URL's, else the capture's first (a capture of several needs one).
+    scene: query.get('scene') || first.scene || '',
+    width: query.get('width') || (first.width ? String(first.width) : ''),
+    height: query.get('height') || (first.height ? String(first.height) : ''),
+    counting: query.get('counting') || first.counting || '',
   };
   const body = await get(`/heatmap${queryString({ capture, ...q, versus: q.versus === 'none' ? '' : q.versus })}`, signal);
   const go = (changed) => { location.hash = `#/heatmap${queryString({ capture, ...q, ...changed })}`; };
@@ -227,7 +258,7 @@ export async function render(page, { query, signal }) {
     h('li', {}, body.device),
     h('li', {}, `${body.layout.layout} layout, ${body.layout.columns} × ${body.layout.rows} cells`),
     h('li', {}, h('a', { href: `#/runs?capture=${capture}` }, 'its runs'))));
-  page.append(controls(q, variants, body.layout, go));
+  page.append(controls(q, variants, configs, body.layout, go));
   page.append(h('p', { class: 'caption' }, body.versus
     ? `Each cell: ${body.versus} / ${body.renderer}, ${body.metric === 'bytes' ? 'bytes per frame' : 'median frame time'}${body.yaw === 'mean' ? ', mean over the cell\'s yaws' : body.yaw === 'worst' ? ', the yaw least favourable to ' + body.versus : ''}. Below 1 (blue): ${body.versus} is lower.`
     : `Each cell: ${body.renderer}, ${body.metric === 'bytes' ? 'bytes per frame' : 'median frame time'}.`));
