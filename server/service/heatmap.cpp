@@ -29,9 +29,16 @@ HeatmapAnswer fail(int status, std::string field, std::string message) {
 
 std::string variantOf(const store::RunRow& r) { return r.variant.empty() ? r.renderer : r.variant; }
 
+// A run with a layout in its notes; a grid beyond the spec's limits (a
+// result from elsewhere) is not one.
 bool isHeatmapRun(const store::RunRow& r) {
-  return r.notes.is_object() && r.notes.contains("heatmap") && r.notes["heatmap"].is_object() &&
-         r.notes["heatmap"].contains("columns") && r.notes["heatmap"].contains("rows");
+  if (!r.notes.is_object() || !r.notes.contains("heatmap") || !r.notes["heatmap"].is_object()) return false;
+  const json& layout = r.notes["heatmap"];
+  auto within = [&](const char* key) {
+    return layout.contains(key) && layout[key].is_number_unsigned() && layout[key].get<uint64_t>() >= 1 &&
+           layout[key].get<uint64_t>() <= std::max(scenes::kMaxHeatmapCells, scenes::kMaxHeatmapSegments);
+  };
+  return within("columns") && within("rows");
 }
 
 // Runs of one configuration but the variant: scene, its parameters,
