@@ -124,34 +124,39 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
   const float minUp = std::cos(glm::radians(spec.maxSlopeDeg));
   const std::vector<glm::vec3> normals = faceNormals(scene);
 
-  // The lowest valid floor of each cell, or why there is none.
+  // The lowest valid floor of each cell, or why there is none; and every
+  // level surface with headroom (the candidates), lowest first.
   const size_t cells = size_t(spec.columns) * spec.rows;
   std::vector<std::optional<float>> floor(cells);
+  std::vector<std::vector<float>> candidates(cells);
   std::vector<std::string> reason(cells, kNoSurface);
-  for (uint32_t r = 0; r < spec.rows; ++r) {
-    for (uint32_t c = 0; c < spec.columns; ++c) {
-      const size_t k = size_t(r) * spec.columns + c;
-      const float x = x0 + (float(c) + 0.5f) * dx, z = z0 + (float(r) + 0.5f) * dz;
-      if (b.empty()) continue;
-      std::vector<ColumnHit> hits = columnHits(bvh, normals, x, z, top, bottom, step);
-      bool seenLevel = false, seenHeadroom = false;
-      for (size_t i = hits.size(); i-- > 0;) {  // lowest first
-        const ColumnHit& h = hits[i];
-        if (h.up < minUp) continue;
-        seenLevel = true;
-        const float above = i == 0 ? std::numeric_limits<float>::infinity() : hits[i - 1].y - h.y;
-        if (above < spec.headroom) continue;
-        seenHeadroom = true;
-        if (!eyeClear(bvh, {x, h.y + spec.eyeHeight, z}, spec.clearance)) continue;
-        floor[k] = h.y;
+  auto centre = [&](size_t k) {
+    return glm::vec2(x0 + (float(k % spec.columns) + 0.5f) * dx, z0 + (float(k / spec.columns) + 0.5f) * dz);
+  };
+  for (size_t k = 0; k < cells && !b.empty(); ++k) {
+    const glm::vec2 at = centre(k);
+    std::vector<ColumnHit> hits = columnHits(bvh, normals, at.x, at.y, top, bottom, step);
+    bool seenLevel = false;
+    for (size_t i = hits.size(); i-- > 0;) {  // lowest first
+      const ColumnHit& h = hits[i];
+      if (h.up < minUp) continue;
+      seenLevel = true;
+      const float above = i == 0 ? std::numeric_limits<float>::infinity() : hits[i - 1].y - h.y;
+      if (above >= spec.headroom) candidates[k].push_back(h.y);
+    }
+    for (float y : candidates[k]) {
+      if (eyeClear(bvh, {at.x, y + spec.eyeHeight, at.y}, spec.clearance)) {
+        floor[k] = y;
         break;
       }
-      if (!floor[k]) reason[k] = !seenLevel ? kNoSurface : !seenHeadroom ? kNoHeadroom : kEyeBlocked;
     }
+    if (!floor[k]) reason[k] = !seenLevel ? kNoSurface : candidates[k].empty() ? kNoHeadroom : kEyeBlocked;
   }
-  // The ground level: the median of the cells' floors (the lower middle one
-  // for an even count). A floor off it by more than max_rise is another
-  // level (an upper storey seen through a wall cell, the top of a pillar).
+  // The ground level: the median of the cells' lowest floors (the lower
+  // middle one for an even count). A cell keeps the lowest valid floor within
+  // max_rise of it; one without is on another level only (an upper storey
+  // seen through a wall cell, the top of a pillar) and is empty. A basement
+  // under a ground-level floor does not hide it.
   std::vector<float> heights;
   for (const auto& f : floor)
     if (f) heights.push_back(*f);
@@ -160,9 +165,15 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
     std::sort(heights.begin(), heights.end());
     ground = heights[(heights.size() - 1) / 2];
     for (size_t k = 0; k < cells; ++k) {
-      if (floor[k] && std::abs(*floor[k] - *ground) > spec.maxRise) {
-        floor[k].reset();
-        reason[k] = kOffLevel;
+      if (!floor[k] || std::abs(*floor[k] - *ground) <= spec.maxRise) continue;
+      floor[k].reset();
+      reason[k] = kOffLevel;
+      const glm::vec2 at = centre(k);
+      for (float y : candidates[k]) {
+        if (std::abs(y - *ground) <= spec.maxRise && eyeClear(bvh, {at.x, y + spec.eyeHeight, at.y}, spec.clearance)) {
+          floor[k] = y;
+          break;
+        }
       }
     }
   }

@@ -22,12 +22,14 @@ using nlohmann::json;
 
 // The room, 1 m cells over x [0, 20], z [0, 10]:
 // - floor (y 0) over x [0, 16]: x above 16 has no surface at all;
-// - a closed box pillar x, z [4, 6], y [0, 3]: eyes at 1.7 would be inside it,
+// - a closed box pillar x, z [4, 6], y [0.01, 3]: eyes at 1.7 would be inside it,
 //   its top (3 m) is off the ground level;
 // - a shelf (one quad, y 1.5) over x [8, 10], z [2, 4]: 1.5 m of headroom
 //   under it, and its top is off the level;
 // - a low ceiling (y 1.9) over x [0, 4], z [0, 2]: too little headroom;
-// - a roof (y 4) over x [10, 16]: floor under it, nothing on it.
+// - a roof (y 4) over x [10, 16]: floor under it, nothing on it;
+// - a basement floor (y -3) under x [12, 14], z [6, 8]: the lowest walkable
+//   surface there, but off the ground level, so the floor above it is taken.
 Scene room() {
   Scene scene;
   scene.name = "room";
@@ -38,10 +40,11 @@ Scene room() {
     b.quad({x0, y, z0}, {x1, y, z0}, {x1, y, z1}, {x0, y, z1}, n, X, Z, 1.0f);
   };
   level(0, 0, 16, 10, 0.0f, up);
-  b.box({4, 0, 4}, {6, 3, 6}, 1.0f);
+  b.box({4, 0.01f, 4}, {6, 3, 6}, 1.0f);  // 1 cm up: its bottom is not coplanar with the floor
   level(8, 2, 10, 4, 1.5f, up);
   level(0, 0, 4, 2, 1.9f, down);
   level(10, 0, 16, 10, 4.0f, down);
+  level(12, 6, 14, 8, -3.0f, up);
   scene.meshes.push_back(b.finish("room", 0));
   updateBounds(scene);
   return scene;
