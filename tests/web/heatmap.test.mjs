@@ -204,6 +204,34 @@ describe('heatmap', () => {
     await close();
   });
 
+  test('the capture form makes a heatmap spec; a bad grid shows the server\'s field beside it', async () => {
+    const { page, errors, close } = await open('#/capture', kViewports.wide);
+    const before = (await daemon.get('/captures?limit=1000')).captures.length;
+    const posted = [];
+    page.on('request', (r) => { if (r.method() === 'POST' && new URL(r.url()).pathname === '/api/captures') posted.push(r.postDataJSON()); });
+    await page.selectOption('select[name="cameras_mode"]', 'floor');
+    await page.fill('input[name="heatmap_grid"]', '4x0');
+    await page.fill('input[name="heatmap_yaws"]', '2');
+    await page.click('form.capture-form button[type="submit"]');
+    const panel = page.locator('.form-error .panel.error');
+    await panel.waitFor({ timeout: kViewMs });
+    assert.equal(await panel.locator('.field-name').textContent(), 'heatmap.cells[1]');
+    assert.equal(await page.locator('input[name="heatmap_grid"]').getAttribute('aria-invalid'), 'true');
+    assert.equal(posted.length, 1);
+    assert.deepEqual(posted[0].heatmap, { layout: 'floor', cells: [4, 0], yaws: 2 });
+    assert.equal(posted[0].cameras, undefined);
+    // A sphere: rings x segments.
+    await page.selectOption('select[name="cameras_mode"]', 'sphere');
+    await page.fill('input[name="heatmap_grid"]', '0x3');
+    await page.click('form.capture-form button[type="submit"]');
+    await page.waitForFunction(() => document.querySelector('.form-error .field-name')?.textContent === 'heatmap.rings', null, { timeout: kViewMs });
+    assert.deepEqual(posted[1].heatmap, { layout: 'sphere', rings: 0, segments: 3 });
+    assert.equal((await daemon.get('/captures?limit=1000')).captures.length, before, 'a refused spec stores no job');
+    // The only console lines: Chromium's notes of the two 400 answers.
+    assert.equal(errors.length, 2, errors.join('\n'));
+    await close();
+  });
+
   test('the capture view links a heatmap capture to its heatmap', async () => {
     const { page, errors, close } = await open('#/capture', kViewports.wide);
     const link = page.locator(`a[data-heatmap-link="${data.floor}"]`);
