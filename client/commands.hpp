@@ -74,7 +74,8 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io);
 
 // `tally heatmap CAPTURE --renderer A [--versus B]`: a heatmap capture's
 // map as a text grid (client/heatmap.cpp) and a summary: where B gains and
-// loses most, by how much, and how many cells differ significantly.
+// loses most (lowest and highest ratio), by how much, and how many cells differ
+// significantly.
 struct HeatmapArgs {
   std::string capture;
   std::string renderer;

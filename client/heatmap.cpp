@@ -150,9 +150,9 @@ int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io) {
     };
     io.out << b << " / " << a << ": median " << fixed(numberAt(ratio, "median"), 3) << ", geometric mean "
            << fixed(numberAt(ratio, "geometric_mean"), 3) << "\n";
-    io.out << "  " << b << " gains most at " << where(ratio["min"], layout) << ": ratio "
+    io.out << "  best for " << b << " (lowest ratio) at " << where(ratio["min"], layout) << ": "
            << fixed(numberAt(ratio["min"], "value"), 3) << " (" << pct(ratio["min"]["value"].get<double>()) << ")\n";
-    io.out << "  " << b << " loses most at " << where(ratio["max"], layout) << ": ratio "
+    io.out << "  worst for " << b << " (highest ratio) at " << where(ratio["max"], layout) << ": "
            << fixed(numberAt(ratio["max"], "value"), 3) << " (" << pct(ratio["max"]["value"].get<double>()) << ")\n";
     io.out << "significant cells: " << s.value("significant", 0) << " of " << s.value("cells_measured", 0) << " ("
            << b << " lower in " << s.value("b_lower", 0) << ", higher in " << s.value("b_higher", 0) << ")\n";

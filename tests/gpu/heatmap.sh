@@ -131,8 +131,8 @@ for metric, mm in maps.items():
             z = lay["origin"][1] + (ref["row"] + 0.5) * lay["cell_size"][1]
             return "cell %d,%d (x %.1f, z %.1f)" % (ref["column"], ref["row"], x, z)
         r = s["ratio"]
-        lines.append("median ratio %.4f, geometric mean %.4f; visbuffer gains most at %s: %.4f (%+.1f %%), "
-                     "loses most at %s: %.4f (%+.1f %%)" % (r["median"], r["geometric_mean"], where(r["min"]),
+        lines.append("median ratio %.4f, geometric mean %.4f; best for visbuffer (lowest ratio) at %s: %.4f (%+.1f %%), "
+                     "worst (highest) at %s: %.4f (%+.1f %%)" % (r["median"], r["geometric_mean"], where(r["min"]),
                      r["min"]["value"], (r["min"]["value"] - 1) * 100, where(r["max"]), r["max"]["value"],
                      (r["max"]["value"] - 1) * 100))
         lines.append("significant in %d of %d cells: visbuffer lower in %d, higher in %d" % (

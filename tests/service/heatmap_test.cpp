@@ -260,7 +260,7 @@ TEST_F(HeatmapRoute, CliPrintsTheGridAndSummary) {
     EXPECT_NE(text.find(ratio), std::string::npos) << ratio << " in\n" << text;
   }
   EXPECT_NE(text.find("SUMMARY"), std::string::npos) << text;
-  EXPECT_NE(text.find("visbuffer gains most at cell"), std::string::npos) << text;
+  EXPECT_NE(text.find("best for visbuffer (lowest ratio) at cell"), std::string::npos) << text;
   EXPECT_NE(text.find("significant cells: " + std::to_string(body["summary"]["significant"].get<int>()) + " of"),
             std::string::npos)
       << text;

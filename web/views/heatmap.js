@@ -222,7 +222,7 @@ function summaryList(body) {
   if (body.versus && sm.ratio) {
     const pct = (r) => `${r < 1 ? '−' : '+'}${Math.abs((r - 1) * 100).toFixed(1)} %`;
     items.push(h('li', { dataset: { summary: 'ratio' } }, `${body.versus} / ${body.renderer}: median ×${sm.ratio.median.toFixed(3)}, geometric mean ×${sm.ratio.geometric_mean.toFixed(3)}`));
-    items.push(h('li', { dataset: { summary: 'gains' } }, `${body.versus} gains most at ${where(sm.ratio.min)}: ×${sm.ratio.min.value.toFixed(3)} (${pct(sm.ratio.min.value)}); loses most at ${where(sm.ratio.max)}: ×${sm.ratio.max.value.toFixed(3)} (${pct(sm.ratio.max.value)})`));
+    items.push(h('li', { dataset: { summary: 'gains' } }, `best for ${body.versus} (lowest ratio): ${where(sm.ratio.min)}, ×${sm.ratio.min.value.toFixed(3)} (${pct(sm.ratio.min.value)}); worst (highest): ${where(sm.ratio.max)}, ×${sm.ratio.max.value.toFixed(3)} (${pct(sm.ratio.max.value)})`));
     items.push(h('li', { dataset: { summary: 'significant' } }, `significant in ${sm.significant} of ${sm.cells_measured} cells: ${body.versus} lower in ${sm.b_lower}, higher in ${sm.b_higher}`));
   }
   return h('ul', { class: 'heatmap-summary' }, items);
