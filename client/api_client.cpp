@@ -266,6 +266,13 @@ Result<json> ApiClient::crossover(const std::string& captureId, const std::strin
   return sendJson("GET", "/api/crossover" + query({{"capture", captureId}, {"metric", metric}}));
 }
 
+Result<json> ApiClient::heatmap(const std::vector<std::pair<std::string, std::string>>& params) {
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const auto& p : params)
+    if (!p.second.empty()) given.push_back(p);
+  return sendJson("GET", "/api/heatmap" + query(given));
+}
+
 Result<json> ApiClient::listSweeps(const SweepFilters& filters, std::optional<int> limit,
                                    const std::string& cursor) {
   return sendJson("GET", "/api/sweeps" + pageQuery(sweepParams(filters), limit, cursor));

@@ -82,6 +82,8 @@ class ApiClient {
                        bool camerasAsStrata = true);
   // GET /api/crossover: fits against pixel count and crossings over a capture's runs.
   Result<json> crossover(const std::string& captureId, const std::string& metric);
+  // GET /api/heatmap with these query parameters (empty values left out).
+  Result<json> heatmap(const std::vector<std::pair<std::string, std::string>>& params);
   // One page of sweeps; cursor empty for the first.
   Result<json> listSweeps(const SweepFilters& filters, std::optional<int> limit, const std::string& cursor = "");
   // Follows next_cursor to the end; {"sweeps":[...every page's sweeps...]}.

@@ -81,6 +81,22 @@ struct CrossoverArgs {
 };
 int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io);
 
+// `tally heatmap CAPTURE --renderer A [--versus B]`: a heatmap capture's
+// map as a text grid (client/heatmap.cpp) and a summary: where B gains and
+// loses most (lowest and highest ratio), by how much, and how many cells differ
+// significantly.
+struct HeatmapArgs {
+  std::string capture;
+  std::string renderer;
+  std::string versus;             // "": one renderer's values
+  std::string metric = "frame_ms";  // or bytes
+  std::string yaw = "mean";       // mean | worst | a yaw index
+  std::string scene;              // "": the capture's one heatmap scene
+  std::optional<int> width, height;
+  std::string counting;
+};
+int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io);
+
 using SweepsArgs = ListArgs<SweepFilters>;
 int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io);
 // Its threshold, where it fails (fails_at) and its points.

@@ -716,7 +716,7 @@ Result<Scene> loadGltf(const std::string& path, const GltfOptions& options) {
 
   Result<bool> r = loader.loadMaterials();
   if (r) r = loader.loadNodes();
-  if (r) r = loader.decodeTextures();
+  if (r && !options.geometryOnly) r = loader.decodeTextures();
   if (!r) return makeError(quote(path) + ": " + r.error());
   if (loader.scene.meshes.empty()) return makeError(quote(path) + ": no triangles in the default scene");
 

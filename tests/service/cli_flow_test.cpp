@@ -779,6 +779,7 @@ TEST(CliHelp, EverySubcommandListsItsOptions) {
       {"show", {"RUN"}},
       {"compare", {"RUN"}},
       {"crossover", {"CAPTURE", "--metric"}},
+      {"heatmap", {"CAPTURE", "--renderer", "--versus", "--metric", "--yaw"}},
       {"export", {"--format", "--runs", "--output"}},
   };
   for (const auto& f : filters) {
