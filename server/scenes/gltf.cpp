@@ -377,8 +377,8 @@ struct Loader {
       auto ext = g.extensions.find("KHR_materials_specular");
       if (ext != g.extensions.end() && ext->second.IsObject()) {
         const tinygltf::Value& color = ext->second.Get("specularColorTexture");
-        const tinygltf::Value& strength = ext->second.Get("specularTexture");
-        const tinygltf::Value& used = color.IsObject() && color.Get("index").IsInt() ? color : strength;
+        const tinygltf::Value& texture = ext->second.Get("specularTexture");
+        const tinygltf::Value& used = color.IsObject() && color.Get("index").IsInt() ? color : texture;
         if (used.IsObject() && used.Get("index").IsInt()) {
           specular = used.Get("index").GetNumberAsInt();
           specularSrgb = &used == &color;
