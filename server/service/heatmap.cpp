@@ -241,7 +241,7 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
       }
       double sumA = 0, sumB = 0;
       json idsA = json::array(), idsB = json::array();
-      std::vector<double> framesA, framesB;
+      std::vector<analysis::Stratum> strata;  // one per yaw: a yaw's frames against the same yaw's
       for (uint32_t y : used) {
         sumA += valueOf(cell.a.at(y));
         idsA.push_back(cell.a.at(y)->id);
@@ -249,10 +249,7 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
           sumB += valueOf(cell.b.at(y));
           idsB.push_back(cell.b.at(y)->id);
           if (!bytes) {
-            const auto& fa = framesOf(cell.a.at(y));
-            const auto& fb = framesOf(cell.b.at(y));
-            framesA.insert(framesA.end(), fa.begin(), fa.end());
-            framesB.insert(framesB.end(), fb.begin(), fb.end());
+            strata.push_back({framesOf(cell.a.at(y)), framesOf(cell.b.at(y))});
           }
         }
       }
@@ -276,12 +273,21 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
           m.verdict = analysis::toString(cc.verdict);
           m.significant = cc.verdict == analysis::CountVerdict::Changed;
           out["significance"] = analysis::toJson(cc);
-        } else if (framesA.size() >= 2 && framesB.size() >= 2) {
-          auto tc = analysis::compareTimes(framesA, framesB);
+        } else if (std::all_of(strata.begin(), strata.end(),
+                               [](const analysis::Stratum& st) { return !st.a.empty() && !st.b.empty(); }) &&
+                   !strata.empty()) {
+          // The yaws' frames aligned on each yaw's median before they are
+          // pooled: looking one way costs more than another, and that
+          // spread would hide a difference between renderers
+          // (docs/statistics.md, "Cameras as strata").
+          auto aligned = analysis::alignStrata(strata);
+          auto tc = aligned ? analysis::compareTimes(aligned->a, aligned->b)
+                            : Result<analysis::TimeComparison>(makeError(aligned.error()));
           if (tc) {
             m.verdict = analysis::toString(tc->verdict);
             m.significant = tc->verdict != analysis::Verdict::Same;
             out["significance"] = analysis::toJson(*tc);
+            out["significance"]["strata"] = strata.size() > 1 ? "yaws" : "none";
           } else {
             out["significance"] = {{"error", tc.error()}};
           }
