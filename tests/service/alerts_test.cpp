@@ -231,9 +231,9 @@ TEST_F(AlertRoutes, BadInputNamesTheFieldAndUnknownIdsAre404) {
       {"GET", "/api/trend", "", "baseline"},
       {"GET", "/api/trend?baseline=1&limit=501", "", "limit"},
       {"GET", "/api/runs?label=commit", "", "label"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"labels":{"commit":3}})", "labels.commit"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"labels":["a"]})", "labels"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"labels":{"bad key":"x"}})", "labels"},
+      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"commit":3}})", "labels.commit"},
+      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":["a"]})", "labels"},
+      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"bad key":"x"}})", "labels"},
   };
   for (const auto& c : cases) {
     json e = call(c.method, c.path, c.body, 400);
