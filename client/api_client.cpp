@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <sstream>
 
 #include <httplib.h>
 
@@ -282,10 +283,21 @@ Result<json> ApiClient::getSample(const std::string& id) {
   return sendJson("GET", "/api/samples/" + pathId(id));
 }
 
-Result<json> ApiClient::compare(const std::vector<std::string>& runIds) {
+Result<json> ApiClient::compare(const std::vector<std::string>& runIds, std::optional<double> confidence,
+                                std::optional<double> threshold, bool acrossCapture) {
   std::string ids;
   for (const auto& id : runIds) ids += (ids.empty() ? "" : ",") + id;
-  return sendJson("GET", "/api/compare" + query({{"runs", ids}}));
+  std::vector<std::pair<std::string, std::string>> params = {{"runs", ids}};
+  auto number = [](double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+  };
+  if (confidence) params.emplace_back("confidence", number(*confidence));
+  if (threshold) params.emplace_back("threshold", number(*threshold));
+  if (!acrossCapture) params.emplace_back("across_capture", "false");
+  return sendJson("GET", "/api/compare" + query(params));
 }
 
 Result<json> ApiClient::crossover(const std::string& captureId, const std::string& metric) {

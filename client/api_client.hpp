@@ -77,7 +77,9 @@ class ApiClient {
   Result<json> getRun(const std::string& id);
   Result<json> getRunSamples(const std::string& id);
   Result<json> getSample(const std::string& id);
-  Result<json> compare(const std::vector<std::string>& runIds);
+  // confidence, threshold: as GET /api/compare takes them; acrossCapture false: frames only.
+  Result<json> compare(const std::vector<std::string>& runIds, std::optional<double> confidence = std::nullopt,
+                       std::optional<double> threshold = std::nullopt, bool acrossCapture = true);
   // GET /api/crossover: fits against pixel count and crossings over a capture's runs.
   Result<json> crossover(const std::string& captureId, const std::string& metric);
   // One page of sweeps; cursor empty for the first.

@@ -536,8 +536,87 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
   return 0;
 }
 
-int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
-  auto res = api.compare(runIds);
+namespace {
+
+// "1.12x [1.08x, 1.17x]"; an unbounded end is "-".
+std::string intervalText(const json& interval) {
+  auto end = [](const json& v) { return v.is_number() ? ratio(v.get<double>()) : kMissing; };
+  return "[" + end(interval.value("lower", json())) + ", " + end(interval.value("upper", json())) + "]";
+}
+
+std::string pText(double p) { return p < 1e-4 ? "<0.0001" : fixed(p, 4); }
+
+// Each later run against the first: one row per figure (frame, then passes),
+// then the counts.
+void printSignificance(const json& comparison, const std::vector<std::string>& names, Io& io) {
+  const json& list = comparison.value("significance", json::array());
+  if (!list.is_array() || list.empty()) return;
+  double confidence = comparison.value("confidence", 0.95);
+  io.out << "\nSignificance against " << names[0] << " (" << fixed(confidence * 100, 0)
+         << "% intervals over frames and cameras; docs/statistics.md):\n";
+  Table t({{"RUN"},
+           {"FIGURE"},
+           {"RATIO", Align::Right},
+           {"INTERVAL", Align::Right},
+           {"P", Align::Right},
+           {"CLIFF", Align::Right},
+           {"VERDICT"},
+           {"NOTE"}});
+  std::vector<std::string> countLines;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const json& s = list[i];
+    std::string run = i + 1 < names.size() ? names[i + 1] : "#" + std::to_string(s.value("run_b", 0));
+    if (s.contains("error")) {
+      countLines.push_back(run + ": " + s.value("error", ""));
+      continue;
+    }
+    auto row = [&](const std::string& figure, const json& c) {
+      const json& interval = c.value("interval", json::object());
+      double widening = interval.value("widening", json(1.0)).is_number() ? interval.value("widening", 1.0) : 1.0;
+      std::string note = c.value("verdict", "") == "same" ? c.value("reason", "") : "";
+      if (widening > 1.0) {
+        std::string across = "widened " + fixed(widening, 1) + "x by repeated captures";
+        note = note.empty() ? across : note + "; " + across;
+      }
+      t.addRow({run, figure, ratio(c.value("ratio", 1.0)), intervalText(interval),
+                pText(c.value("mann_whitney", json::object()).value("p", 1.0)),
+                signedFixed(c.value("cliffs_delta", json::object()).value("delta", 0.0), 2), c.value("verdict", ""), note});
+    };
+    if (s.value("frame", json()).is_object()) {
+      row("(frame)", s["frame"]);
+    } else {
+      t.addRow({run, "(frame)", kMissing, kMissing, kMissing, kMissing, kMissing, s.value("frame_missing", "")});
+    }
+    for (const auto& p : s.value("passes", json::array())) row(p.value("pass", ""), p);
+    for (const auto& p : s.value("passes_missing", json::array())) {
+      t.addRow({run, p.value("pass", ""), kMissing, kMissing, kMissing, kMissing, kMissing, p.value("reason", "")});
+    }
+    const json& counts = s.value("counts", json::object());
+    const json& changes = counts.value("changes", json::array());
+    std::string line = run + ": counts " + counts.value("verdict", "") + " (" + std::to_string(changes.size()) +
+                       " of " + std::to_string(counts.value("lines", 0)) + " lines differ, compared exactly)";
+    countLines.push_back(line);
+    size_t shown = 0;
+    for (const auto& c : changes) {
+      if (++shown > 10) {
+        countLines.push_back("  ... and " + std::to_string(changes.size() - 10) + " more (--json lists them)");
+        break;
+      }
+      bool bytes = c.value("line", "") == "total";
+      double a = c.value("a", 0.0), b = c.value("b", 0.0);
+      countLines.push_back("  " + c.value("line", "") + ": " + (bytes ? humanBytes(a) : fixed(a, 0)) + " -> " +
+                           (bytes ? humanBytes(b) : fixed(b, 0)));
+    }
+  }
+  t.print(io.out);
+  for (const auto& l : countLines) io.out << l << '\n';
+}
+
+}  // namespace
+
+int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
+  const std::vector<std::string>& runIds = args.runs;
+  auto res = api.compare(runIds, args.confidence, args.threshold, !args.framesOnly);
   if (!res) return fail(io, res.error());
   if (io.json) {
     printJson(io, *res);
@@ -585,6 +664,7 @@ int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io) {
     t.addRow(cells);
   }
   t.print(io.out);
+  printSignificance(*res, names, io);
   return 0;
 }
 

@@ -65,7 +65,15 @@ struct ListArgs {
 using RunsArgs = ListArgs<RunFilters>;
 int runRuns(ApiClient& api, const RunsArgs& args, Io& io);
 int runShow(ApiClient& api, const std::string& runId, Io& io);
-int runCompare(ApiClient& api, const std::vector<std::string>& runIds, Io& io);
+struct CompareArgs {
+  std::vector<std::string> runs;
+  std::optional<double> confidence;  // of the intervals; the server's default 0.95
+  std::optional<double> threshold;   // practical threshold on |ratio - 1|; default 0
+  bool framesOnly = false;           // no widening by repeated captures' spread
+};
+// The comparison table, then each later run's significance against the first
+// (times tested over per-frame times, counts exact).
+int runCompare(ApiClient& api, const CompareArgs& args, Io& io);
 
 // `tally crossover CAPTURE`: each variant's fit y = a + b * pixels with its
 // intervals, R² and residuals, and where pairs of variants cross.

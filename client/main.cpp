@@ -129,13 +129,20 @@ int main(int argc, char** argv) {
   show->add_option("RUN", showId, "Run id")->required();
   show->footer("Example:\n  tally show 12");
 
-  std::vector<std::string> compareIds;
-  auto* compare =
-      app.add_subcommand("compare", "Compare 2 to 4 runs per pass and per resource, against the first");
-  compare->add_option("RUN", compareIds, "Run ids (2 to 4); deltas and ratios are against the first")
+  CompareArgs compareArgs;
+  auto* compare = app.add_subcommand(
+      "compare", "Compare 2 to 4 runs per pass and per resource, against the first, with each difference's significance");
+  compare->add_option("RUN", compareArgs.runs, "Run ids (2 to 4); deltas and ratios are against the first")
       ->required()
       ->expected(2, 4);
-  compare->footer("Example:\n  tally compare 12 15");
+  compare->add_option("--confidence", compareArgs.confidence, "Level of the intervals (default 0.95); alpha = 1 - it")
+      ->check(CLI::Range(0.5, 0.999999));
+  compare->add_option("--threshold", compareArgs.threshold,
+                      "Practical threshold: faster or slower also needs |ratio - 1| above it (default 0)")
+      ->check(CLI::Range(0.0, 10.0));
+  compare->add_flag("--frames-only", compareArgs.framesOnly,
+                    "Do not widen intervals by the spread of repeated captures of the runs' configurations");
+  compare->footer("Example:\n  tally compare 12 15\n  tally compare 12 15 --confidence 0.99 --threshold 0.02");
 
   CrossoverArgs crossoverArgs;
   auto* crossoverCmd = app.add_subcommand(
@@ -263,7 +270,7 @@ int main(int argc, char** argv) {
   if (hosts->parsed()) return runHosts(api, io);
   if (runsCmd->parsed()) return runRuns(api, runs, io);
   if (show->parsed()) return runShow(api, showId, io);
-  if (compare->parsed()) return runCompare(api, compareIds, io);
+  if (compare->parsed()) return runCompare(api, compareArgs, io);
   if (crossoverCmd->parsed()) return runCrossover(api, crossoverArgs, io);
   if (sweepsCmd->parsed()) return runSweeps(api, sweeps, io);
   if (sweepCmd->parsed()) return runSweep(api, sweepId, io);

@@ -565,6 +565,30 @@ void CliFlow::checkCompare(Db& db, const DbRun& a, const DbRun& b) {
     if (va == 0) continue;  // no ratio to show
     EXPECT_TRUE(comparesAs(comparedCells(cmp.out, pass, "(all)", "bytes"), va, vb, true)) << pass;
   }
+  // The significance rows: the frame's ratio is the ratio of the medians of
+  // the per-frame times stored for each run, pooled over its cameras.
+  auto pooledMedian = [&](int64_t run) {
+    std::vector<double> all;
+    for (const auto& r : db.rows("SELECT frame_ms_frames FROM samples WHERE run_id = ?1", {run})) {
+      for (double t : json::parse(r[0].get<std::string>())) all.push_back(t);
+    }
+    std::sort(all.begin(), all.end());
+    size_t n = all.size();
+    return n == 0 ? 0.0 : n % 2 ? all[n / 2] : 0.5 * (all[n / 2 - 1] + all[n / 2]);
+  };
+  double ma = pooledMedian(a.id), mb = pooledMedian(b.id);
+  ASSERT_GT(ma, 0);
+  std::vector<std::vector<std::string>> frameRows;
+  for (const auto& c : rowsStartingWith(cmp.out, "#" + std::to_string(b.id))) {
+    if (c.size() > 2 && c[1] == "(frame)") frameRows.push_back(c);
+  }
+  ASSERT_EQ(frameRows.size(), 1u) << cmp.out;
+  EXPECT_TRUE(shows(parseFixed(frameRows[0][2], "x"), mb / ma, frameRows[0][2])) << cmp.out;
+  EXPECT_NE(cmp.out.find("#" + std::to_string(b.id) + ": counts "), std::string::npos) << cmp.out;
+  // A bad level is refused by the client before any request.
+  Outcome bad = tally({"compare", std::to_string(a.id), std::to_string(b.id), "--confidence", "1.5"});
+  EXPECT_NE(bad.rc, 0);
+  EXPECT_NE(bad.err.find("confidence"), std::string::npos) << bad.err;
 }
 
 // `tally export`: CSV to a file and JSON to stdout, row for row the database's

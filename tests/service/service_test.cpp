@@ -146,6 +146,18 @@ TEST_F(ServiceTest, CaptureQueryCompareExport) {
   EXPECT_TRUE(cmp.j()["frame_ms"][1]["ratio"].is_number()) << cmp.j()["frame_ms"].dump();
   EXPECT_TRUE(cmp.j()["total_bytes"][1]["ratio"].is_number());
   EXPECT_FALSE(cmp.j()["passes"].empty());
+  // Forward against deferred on lavapipe: the same cameras, every frame's time
+  // tested, and counts that differ (different passes write different bytes).
+  const json comparison = cmp.j();
+  const json& sig = comparison["significance"];
+  ASSERT_EQ(sig.size(), 1u) << cmp.body;
+  EXPECT_EQ(sig[0]["run_b"], runIds["deferred"]);
+  EXPECT_GT(sig[0]["cameras"].get<int>(), 0);
+  ASSERT_TRUE(sig[0]["frame"].is_object()) << sig[0].dump();
+  EXPECT_EQ(sig[0]["frame"]["n_a"].get<int>(), sig[0]["frame"]["n_b"].get<int>());
+  double ratio = sig[0]["frame"]["ratio"], medianA = sig[0]["frame"]["median_a"], medianB = sig[0]["frame"]["median_b"];
+  EXPECT_NEAR(ratio, medianB / medianA, 1e-12);
+  EXPECT_EQ(sig[0]["counts"]["verdict"], "changed");
 
   Reply csv = d.request("GET", "/api/export?format=csv&capture=" + std::to_string(id));
   ASSERT_EQ(csv.status, 200);
@@ -442,6 +454,10 @@ TEST_F(ServiceTest, BadRequestsNameTheField) {
       {"compare a run twice", "GET", "/api/compare?runs=1,1", nullptr, 400, "invalid_field", "runs"},
       {"compare without runs", "GET", "/api/compare", nullptr, 400, "invalid_field", "runs"},
       {"compare unknown runs", "GET", "/api/compare?runs=987654,987655", nullptr, 404, "not_found", ""},
+      {"compare at confidence 1", "GET", "/api/compare?runs=1,2&confidence=1", nullptr, 400, "invalid_field", "confidence"},
+      {"compare at confidence x", "GET", "/api/compare?runs=1,2&confidence=x", nullptr, 400, "invalid_field", "confidence"},
+      {"compare with a negative threshold", "GET", "/api/compare?runs=1,2&threshold=-0.1", nullptr, 400, "invalid_field", "threshold"},
+      {"compare across_capture maybe", "GET", "/api/compare?runs=1,2&across_capture=maybe", nullptr, 400, "invalid_field", "across_capture"},
       {"export as xml", "GET", "/api/export?format=xml", nullptr, 400, "invalid_field", "format"},
       {"export runs not ids", "GET", "/api/export?runs=1,x", nullptr, 400, "invalid_field", "runs"},
   };

@@ -375,6 +375,58 @@ describe('dashboard', () => {
     await close();
   });
 
+  test('compare view: each run\'s significance is the API\'s, its ratio the pooled frames\' medians, and the level can be changed', async () => {
+    const runs = [runOf('forward', 128), runOf('deferred', 128), runOf('visbuffer', 128)];
+    const ids = runs.map((r) => r.id);
+    const c = await daemon.get(`/compare?runs=${ids.join(',')}`);
+    assert.equal(c.significance.length, 2);
+    // Every run's per-frame times pooled over its cameras, from the samples route.
+    const pooled = async (id) => {
+      const { samples } = await daemon.get(`/runs/${id}/samples`);
+      const all = [];
+      for (const s of samples) all.push(...(await daemon.get(`/samples/${s.id}`)).frame_ms_frames);
+      return all.sort((a, b) => a - b);
+    };
+    const median = (v) => (v.length % 2 ? v[(v.length - 1) / 2] : 0.5 * (v[v.length / 2 - 1] + v[v.length / 2]));
+    const framesA = await pooled(ids[0]);
+    const { page, errors, close } = await open(`#/compare?runs=${ids.join(',')}`);
+    const table = page.locator('[data-table="significance"]');
+    await table.waitFor({ timeout: kViewMs });
+    for (const s of c.significance) {
+      const framesB = await pooled(s.run_b);
+      assert.equal(s.frame.n_a, framesA.length);
+      assert.equal(s.frame.n_b, framesB.length);
+      assertClose(s.frame.ratio, median(framesB) / median(framesA), `frame ratio of run ${s.run_b}`);
+      const row = page.locator(`[data-table="significance"] tr[data-run="${s.run_b}"][data-figure="frame"]`);
+      assert.equal(await row.getAttribute('data-verdict'), s.frame.verdict);
+      assert.equal(Number(await row.getAttribute('data-ratio')), s.frame.ratio);
+      assert.equal(Number(await row.getAttribute('data-p')), s.frame.mann_whitney.p);
+      assert.ok((await row.textContent()).includes(`×${s.frame.ratio.toFixed(3)}`));
+      const figures = await page.locator(`[data-table="significance"] tr[data-run="${s.run_b}"]`).evaluateAll((trs) => trs.map((tr) => tr.dataset.figure));
+      assert.deepEqual(figures, ['frame', ...s.passes.map((p) => p.pass), ...s.passes_missing.map((p) => p.pass)]);
+      const counts = page.locator(`ul.counts-verdicts li[data-run="${s.run_b}"]`);
+      assert.equal(await counts.getAttribute('data-counts'), s.counts.verdict);
+      assert.equal(Number(await counts.getAttribute('data-changes')), s.counts.changes.length);
+    }
+    // Different renderers write different attachments: their counts changed.
+    assert.equal(c.significance[0].counts.verdict, 'changed');
+    // At 99% the interval is the API's at 99%, and no narrower than at 95%.
+    const c99 = await daemon.get(`/compare?runs=${ids.join(',')}&confidence=0.99`);
+    await page.selectOption('select[name="confidence"]', '0.99');
+    await page.locator('[data-table="significance"][data-confidence="0.99"]').waitFor({ timeout: kViewMs });
+    for (const [i, s] of c99.significance.entries()) {
+      const row = page.locator(`[data-table="significance"] tr[data-run="${s.run_b}"][data-figure="frame"]`);
+      const lower = await row.getAttribute('data-lower');
+      assert.equal(lower === '' ? null : Number(lower), s.frame.interval.lower);
+      if (s.frame.interval.lower !== null && c.significance[i].frame.interval.lower !== null) {
+        assert.ok(s.frame.interval.lower <= c.significance[i].frame.interval.lower, '99% is no narrower than 95%');
+      }
+    }
+    await screenshot(page, 'compare-significance');
+    assert.deepEqual(errors, []);
+    await close();
+  });
+
   test('speed vs accuracy: one point per run, error against exact, the Pareto front', async () => {
     const { page, errors, close } = await open('#/accuracy?error=counting&cost=overhead');
     const c = await chart(page, 'accuracy');

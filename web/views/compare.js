@@ -4,7 +4,8 @@
 // count for each run's renderer (the founding study's total figure) with the
 // fitted lines and crossings of the first run's capture (/api/crossover), the
 // spread across repeated captures of each run's configuration (/api/repeats),
-// and an A/B/difference viewer of one camera's screenshots.
+// whether each run's times differ from the first's (significance, from
+// /api/compare) and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
 import { barChart, color, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch } from '../dom.js';
@@ -446,6 +447,94 @@ function imageViewer(page, runs, signal) {
   return redraw();
 }
 
+// ---- significance ---------------------------------------------------------------
+
+const verdictText = { faster: 'faster', slower: 'slower', same: 'no significant difference' };
+const endText = (v) => (v === null || v === undefined ? '∞' : `×${v.toFixed(3)}`);
+
+// One figure's test as a table row: ratio of medians, interval, p, Cliff's
+// delta and the verdict with its reason (and the across-capture widening).
+function significanceRow(run, figure, t) {
+  if (!t) return null;
+  const widened = t.interval.widening !== null && t.interval.widening > 1;
+  const note = [t.verdict === 'same' ? t.reason : '',
+    widened ? `interval widened ×${t.interval.widening.toFixed(1)} by ${t.across_capture.runs.length} repeated captures` : '']
+    .filter(Boolean).join('; ');
+  return h('tr', { dataset: { run: run.id, figure, verdict: t.verdict, ratio: t.ratio, p: t.mann_whitney.p, lower: t.interval.lower ?? '', upper: t.interval.upper ?? '' } },
+    h('th', { scope: 'row' }, `${fmt.variant(run)} #${run.id}`),
+    h('td', {}, figure),
+    h('td', { class: 'num' }, fmt.ratio(t.ratio)),
+    h('td', { class: 'num' }, `[${endText(t.interval.lower)}, ${endText(t.interval.upper)}]`),
+    h('td', { class: 'num' }, t.mann_whitney.p < 1e-4 ? '< 0.0001' : t.mann_whitney.p.toFixed(4)),
+    h('td', { class: 'num' }, `${t.cliffs_delta.delta >= 0 ? '+' : ''}${t.cliffs_delta.delta.toFixed(2)} (${t.cliffs_delta.magnitude})`),
+    h('td', {}, h('span', { class: `badge verdict ${t.verdict}` }, verdictText[t.verdict])),
+    h('td', { class: 'muted' }, note));
+}
+
+function missingRow(run, figure, reason) {
+  return h('tr', { dataset: { run: run.id, figure, verdict: 'missing' } },
+    h('th', { scope: 'row' }, `${fmt.variant(run)} #${run.id}`), h('td', {}, figure),
+    h('td', { colspan: 5, class: 'muted' }, '–'), h('td', { class: 'muted' }, reason));
+}
+
+function significanceTable(c) {
+  const runOf = (id) => c.runs.find((r) => r.id === id);
+  const rows = [];
+  const counts = [];
+  for (const s of c.significance) {
+    const run = runOf(s.run_b);
+    if (s.error) {
+      counts.push(h('li', { dataset: { run: run.id, counts: 'incomparable' } }, `${fmt.variant(run)} #${run.id}: ${s.error}`));
+      continue;
+    }
+    rows.push(s.frame ? significanceRow(run, 'frame', s.frame) : missingRow(run, 'frame', s.frame_missing));
+    for (const p of s.passes) rows.push(significanceRow(run, p.pass, p));
+    for (const p of s.passes_missing) rows.push(missingRow(run, p.pass, p.reason));
+    const changes = s.counts.changes;
+    counts.push(h('li', { dataset: { run: run.id, counts: s.counts.verdict, changes: changes.length } },
+      h('span', { class: `badge verdict ${s.counts.verdict === 'same' ? 'same' : 'slower'}` }, `counts ${s.counts.verdict}`),
+      ` ${fmt.variant(run)} #${run.id}: ${changes.length} of ${s.counts.lines} lines differ (exact, no test)`,
+      changes.length === 0 ? null : h('details', {}, h('summary', {}, 'Changed lines'),
+        h('ul', {}, changes.map((x) => h('li', { dataset: { line: x.line } },
+          `${x.line}: ${x.line === 'total' ? fmt.bytes(x.a) : fmt.count(x.a)} → ${x.line === 'total' ? fmt.bytes(x.b) : fmt.count(x.b)}`))))));
+  }
+  const pct = Math.round(c.confidence * 1000) / 10;
+  return h('div', {},
+    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'significance', dataset: { table: 'significance', confidence: c.confidence } },
+      h('thead', {}, h('tr', {}, ['Run', 'Figure', 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
+      h('tbody', {}, rows))),
+    h('ul', { class: 'counts-verdicts' }, counts));
+}
+
+// Times against the first run, with their significance; the level, the
+// practical threshold and the across-capture widening can be changed (each a
+// new request).
+function significance(page, c, ids, signal) {
+  page.append(h('h2', {}, 'Is it real? Times tested, counts exact'),
+    h('p', { class: 'muted' }, 'Each run against the reference: per-frame times pooled over the cameras both measured. The interval is Hodges-Lehmann on log times, the test Mann-Whitney U, widened by the spread of repeated captures of the same configuration where there are any (docs/statistics.md).'));
+  const confidence = h('select', { name: 'confidence' }, [0.9, 0.95, 0.99].map((v) => h('option', { value: v, selected: v === 0.95 }, `${v * 100}%`)));
+  const threshold = h('select', { name: 'threshold' }, [0, 0.01, 0.02, 0.05, 0.1].map((v) => h('option', { value: v, selected: v === 0 }, v === 0 ? 'none' : `${v * 100}%`)));
+  const across = h('input', { type: 'checkbox', name: 'across_capture', checked: true });
+  const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
+  const out = h('div', { dataset: { significance: 'table' } }, significanceTable(c));
+  page.append(h('form', { class: 'filters', 'aria-label': 'Significance' },
+    field('Level', confidence), field('Practical threshold', threshold), field('Widen by repeated captures', across)), out);
+  let asked = 0;
+  const redraw = async () => {
+    const ticket = ++asked;
+    out.dataset.significance = 'loading';
+    try {
+      const again = await get('/compare' + queryString({ runs: ids.join(','), confidence: confidence.value, threshold: threshold.value, across_capture: across.checked }), signal);
+      if (ticket !== asked) return;
+      out.replaceChildren(significanceTable(again));
+      out.dataset.significance = 'table';
+    } catch (error) {
+      if (!signal.aborted) out.replaceChildren(h('p', { class: 'panel error', role: 'alert' }, error.message));
+    }
+  };
+  for (const control of [confidence, threshold, across]) control.addEventListener('change', redraw);
+}
+
 function chooser() {
   return h('div', { class: 'panel' },
     h('p', {}, 'Pick 2 to 4 runs in the ', h('a', { href: '#/runs' }, 'runs browser'), ' (tick them, then "Compare selected"), for example deferred, visbuffer and visbuffer-lean on one scene and resolution.'));
@@ -467,6 +556,7 @@ export async function render(page, { query, signal }) {
   page.append(measureSwitch('compare-measure', anyFootprint(c),
     'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).', (measure) => byteCharts(c, measure, boxes)));
   totals(page, c, boxes.totals);
+  significance(page, c, ids, signal);
   perResource(page, c, boxes.resources);
   perPass(page, c, boxes.passes);
   byteCharts(c, 'requested', boxes);
