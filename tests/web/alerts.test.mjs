@@ -117,6 +117,7 @@ describe('alerts', () => {
     {
       const { page, errors, close } = await open('#/alerts');
       assert.equal(await (await badge(page, open0)).textContent(), String(open0));
+      assert.doesNotMatch(await page.locator('#view').textContent(), /\b(null|undefined|NaN)\b/);
       const rows = page.locator('table.alerts tbody tr');
       assert.equal(await rows.count(), alerts.length);
       for (const a of alerts) {

@@ -6,7 +6,7 @@
 // few seconds while shown.
 import { refreshBadge } from '../alert_badge.js';
 import { get, queryString, request } from '../api.js';
-import { h, table } from '../dom.js';
+import { append, h, table } from '../dom.js';
 import * as fmt from '../format.js';
 import { sleep } from '../poll.js';
 
@@ -143,14 +143,14 @@ export async function render(page, { params, query, signal }) {
     }
   }
 
-  page.append(
+  append(page, [
     h('h1', {}, 'Alerts'),
     h('p', { class: 'muted' }, 'Each new run of a configuration with a baseline is tested against the baseline run: a significant change of frame or pass time beyond the baseline\'s threshold, or any change of counts, raises an alert.'),
     detail,
     h('h2', {}, 'Baselines'),
     baselines.length ? baselineTable(baselines) : h('p', { class: 'panel' }, 'No baseline yet: mark a run as its configuration\'s baseline in its run view.'),
     h('h2', {}, 'Alerts'),
-    h('label', {}, 'Status ', filter), summary, list);
+    h('label', {}, 'Status ', filter), summary, list]);
   draw(first);
   refresh();
 }
