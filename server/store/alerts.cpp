@@ -216,75 +216,144 @@ Result<std::vector<RunRow>> Store::configurationRuns(int64_t baselineId, int lim
 
 // ---- evaluation ---------------------------------------------------------------------------
 
+namespace {
+
+// A run to evaluate: its row and, when its configuration has an active
+// baseline older than it, that baseline.
+struct Candidate {
+  int64_t runId = 0;
+  std::optional<RunRow> run;
+  std::optional<Baseline> baseline;
+};
+
+// The runs picked by `pick` (their ids in its first column) with their baselines.
+std::vector<Candidate> candidates(Connection* db, Statement& pick) {
+  std::vector<Candidate> out;
+  while (pick.step()) out.push_back({pick.getInt(0), std::nullopt, std::nullopt});
+  Statement findBase(db, std::string("SELECT b.id FROM baselines b JOIN runs r ON ") + kSameConfiguration +
+                             " WHERE r.id = ?1 AND b.status = 'active' AND b.run_id < r.id");
+  Statement runRow(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+  for (auto& c : out) {
+    findBase.reset();
+    findBase.bind(1, c.runId);
+    std::optional<int64_t> baselineId;
+    if (findBase.step()) baselineId = findBase.getInt(0);
+    findBase.run();
+    if (!baselineId) continue;
+    runRow.reset();
+    runRow.bind(1, c.runId);
+    if (runRow.step()) c.run = detail::readRunRow(runRow);
+    runRow.run();
+    c.baseline = findBaseline(db, *baselineId);
+  }
+  return out;
+}
+
+// Inserts a run's alerts; their ids are appended to `ids`.
+void insertAlerts(Connection* db, const Candidate& c, const std::vector<NewAlert>& alerts, bool deliver,
+                  std::vector<int64_t>& ids) {
+  Statement insert(db,
+                   "INSERT INTO alerts (baseline_id, run_id, baseline_run_id, kind, metric, verdict, ratio, "
+                   "ratio_lower, ratio_upper, p_value, cliffs_delta, value_a, value_b, details, delivery, "
+                   "next_attempt_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16) "
+                   "RETURNING id");
+  for (const auto& a : alerts) {
+    insert.reset();
+    insert.bind(1, c.baseline->id)
+        .bind(2, c.runId)
+        .bind(3, c.baseline->runId)
+        .bind(4, a.kind)
+        .bind(5, a.metric)
+        .bind(6, a.verdict)
+        .bind(7, finite(a.ratio))
+        .bind(8, finite(a.ratioLower))
+        .bind(9, finite(a.ratioUpper))
+        .bind(10, finite(a.pValue))
+        .bind(11, finite(a.cliffsDelta))
+        .bind(12, finite(a.valueA))
+        .bind(13, finite(a.valueB))
+        .bind(14, a.details)
+        .bind(15, deliver ? "pending" : "none");
+    if (deliver) {
+      insert.bind(16, int64_t{0});  // due at once
+    } else {
+      insert.bind(16, nullptr);
+    }
+    if (!insert.step()) throw DbError(0, "", "an alert was not inserted");
+    ids.push_back(insert.getInt(0));
+    insert.run();
+  }
+}
+
+}  // namespace
+
 Result<Evaluated> Store::evaluatePendingRuns(const RunEvaluator& evaluate, int limit, bool deliver) {
   if (limit < 1) return makeError("limit: must be at least 1");
-  std::lock_guard lock(mutex_);
+  std::unique_lock lock(mutex_);
+  if (db_->engine() == Engine::Postgres) {
+    // The oldest runs not yet evaluated, locked until this transaction ends;
+    // those another daemon is evaluating are skipped, never waited on. Only
+    // those rows are locked: workers storing new runs go on meanwhile.
+    return guarded<Evaluated>("evaluatePendingRuns", [&]() -> Result<Evaluated> {
+      Transaction tx(db_, Transaction::Kind::Write);
+      Statement pick(db_, std::string("SELECT id FROM runs WHERE evaluated = 0 ORDER BY id LIMIT ?1") +
+                              skipLockedSql(*db_));
+      pick.bind(1, limit);
+      Evaluated out;
+      Statement mark(db_, "UPDATE runs SET evaluated = 1 WHERE id = ?1");
+      for (const auto& c : candidates(db_, pick)) {
+        if (c.run && c.baseline) {
+          auto alerts = evaluate(*c.run, *c.baseline);
+          if (!alerts) return makeError("run " + std::to_string(c.runId) + ": " + alerts.error());
+          ++out.tested;
+          insertAlerts(db_, c, *alerts, deliver, out.alertIds);
+        }
+        mark.reset();
+        mark.bind(1, c.runId).run();
+        ++out.runs;
+      }
+      tx.commit();
+      return out;
+    });
+  }
+  // SQLite has one write lock for the whole file: holding it while runs are
+  // tested would stall the worker's ingest. So the runs are read and tested
+  // first, and the marks and alerts written after, each run's only if it is
+  // still unevaluated then: a run tested by two daemons at once gets the
+  // alerts of the first to write, once.
+  std::vector<Candidate> found;
+  {
+    auto read = guarded<bool>("evaluatePendingRuns", [&]() -> Result<bool> {
+      Transaction tx(db_, Transaction::Kind::Read);
+      Statement pick(db_, "SELECT id FROM runs WHERE evaluated = 0 ORDER BY id LIMIT ?1");
+      pick.bind(1, limit);
+      found = candidates(db_, pick);
+      return true;
+    });
+    if (!read) return makeError(read.error());
+  }
+  lock.unlock();
+  std::vector<std::vector<NewAlert>> results(found.size());
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (!found[i].run || !found[i].baseline) continue;
+    auto alerts = evaluate(*found[i].run, *found[i].baseline);
+    if (!alerts) return makeError("run " + std::to_string(found[i].runId) + ": " + alerts.error());
+    results[i] = std::move(alerts).value();
+  }
+  lock.lock();
   detail::WriteLock writer(*db_);
   return guarded<Evaluated>("evaluatePendingRuns", [&]() -> Result<Evaluated> {
     Transaction tx(db_, Transaction::Kind::Write);
-    // The oldest runs not yet evaluated; on PostgreSQL those another daemon
-    // is evaluating are locked, and skipped rather than waited on.
-    Statement pick(db_, std::string("SELECT id FROM runs WHERE evaluated = 0 ORDER BY id LIMIT ?1") +
-                            skipLockedSql(*db_));
-    pick.bind(1, limit);
-    std::vector<int64_t> ids;
-    while (pick.step()) ids.push_back(pick.getInt(0));
     Evaluated out;
-    Statement findBase(db_, std::string("SELECT b.id FROM baselines b JOIN runs r ON ") + kSameConfiguration +
-                                " WHERE r.id = ?1 AND b.status = 'active' AND b.run_id < r.id");
-    Statement runRow(db_, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
-    Statement insert(db_,
-                     "INSERT INTO alerts (baseline_id, run_id, baseline_run_id, kind, metric, verdict, ratio, "
-                     "ratio_lower, ratio_upper, p_value, cliffs_delta, value_a, value_b, details, delivery, "
-                     "next_attempt_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16) "
-                     "RETURNING id");
-    Statement mark(db_, "UPDATE runs SET evaluated = 1 WHERE id = ?1");
-    for (int64_t id : ids) {
-      findBase.reset();
-      findBase.bind(1, id);
-      std::optional<int64_t> baselineId;
-      if (findBase.step()) baselineId = findBase.getInt(0);
-      findBase.run();
-      if (baselineId) {
-        runRow.reset();
-        runRow.bind(1, id);
-        if (!runRow.step()) return makeError("run " + std::to_string(id) + " vanished");
-        RunRow run = detail::readRunRow(runRow);
-        runRow.run();
-        Baseline baseline = findBaseline(db_, *baselineId).value();
-        auto alerts = evaluate(run, baseline);
-        if (!alerts) return makeError("run " + std::to_string(id) + ": " + alerts.error());
-        ++out.tested;
-        for (const auto& a : *alerts) {
-          insert.reset();
-          insert.bind(1, baseline.id)
-              .bind(2, id)
-              .bind(3, baseline.runId)
-              .bind(4, a.kind)
-              .bind(5, a.metric)
-              .bind(6, a.verdict)
-              .bind(7, finite(a.ratio))
-              .bind(8, finite(a.ratioLower))
-              .bind(9, finite(a.ratioUpper))
-              .bind(10, finite(a.pValue))
-              .bind(11, finite(a.cliffsDelta))
-              .bind(12, finite(a.valueA))
-              .bind(13, finite(a.valueB))
-              .bind(14, a.details)
-              .bind(15, deliver ? "pending" : "none");
-          if (deliver) {
-            insert.bind(16, int64_t{0});  // due at once
-          } else {
-            insert.bind(16, nullptr);
-          }
-          if (!insert.step()) return makeError("an alert was not inserted");
-          out.alertIds.push_back(insert.getInt(0));
-          insert.run();
-        }
-      }
+    Statement mark(db_, "UPDATE runs SET evaluated = 1 WHERE id = ?1 AND evaluated = 0");
+    for (size_t i = 0; i < found.size(); ++i) {
       mark.reset();
-      mark.bind(1, id).run();
+      mark.bind(1, found[i].runId).run();
+      if (db_->changes() == 0) continue;  // evaluated meanwhile by another daemon, or gone
       ++out.runs;
+      if (!found[i].run || !found[i].baseline) continue;
+      ++out.tested;
+      insertAlerts(db_, found[i], results[i], deliver, out.alertIds);
     }
     tx.commit();
     return out;

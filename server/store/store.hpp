@@ -476,8 +476,8 @@ struct AlertPage {
 };
 
 // Tests a run against its baseline's run: the alerts to raise (none: no
-// change). Called by evaluatePendingRuns inside its write transaction, so it
-// must read through another connection, never this Store.
+// change). Called by evaluatePendingRuns (on PostgreSQL inside its write
+// transaction), so it must read through another connection, never this Store.
 using RunEvaluator = std::function<Result<std::vector<NewAlert>>(const RunRow& run, const Baseline& baseline)>;
 
 struct Evaluated {
@@ -620,11 +620,15 @@ class Store {
   // (the newest ones when there are more).
   Result<std::vector<RunRow>> configurationRuns(int64_t baselineId, int limit);
 
-  // Alerts. Claims up to `limit` runs not yet evaluated (FOR UPDATE SKIP
-  // LOCKED on PostgreSQL: two daemons never take one run), tests each run
-  // that has an active baseline older than it with `evaluate`, inserts the
-  // alerts (delivery pending when `deliver`, else none) and marks the runs
-  // evaluated, all in one transaction. An evaluator error rolls it all back.
+  // Alerts. Takes up to `limit` runs not yet evaluated, tests each run that
+  // has an active baseline older than it with `evaluate`, inserts the alerts
+  // (delivery pending when `deliver`, else none) and marks the runs
+  // evaluated. On PostgreSQL the runs are claimed FOR UPDATE SKIP LOCKED and
+  // all of it is one transaction: two daemons never test one run. On SQLite
+  // the runs are tested before the write transaction (the file's one write
+  // lock is not held while they are), which then marks each run still
+  // unevaluated and stores its alerts: a run raises its alerts once. An
+  // evaluator error stores nothing of the pass.
   Result<Evaluated> evaluatePendingRuns(const RunEvaluator& evaluate, int limit, bool deliver);
   Result<AlertPage> listAlerts(const AlertFilter& filter, const Page& page);
   Result<std::optional<Alert>> getAlert(int64_t alertId);
