@@ -72,6 +72,7 @@ function showError(root, error) {
 async function route() {
   const root = document.getElementById('view');
   const hash = location.hash.replace(/^#/, '') || '/runs';
+  startBadge();  // polls the open alerts' count; again after a token is given
   const [path, search = ''] = hash.split('?');
   leave(root);
   const found = match(path);
@@ -101,4 +102,3 @@ async function route() {
 
 window.addEventListener('hashchange', route);
 route();
-startBadge();
