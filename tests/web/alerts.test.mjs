@@ -136,6 +136,19 @@ describe('alerts', () => {
       await close();
     }
 
+    // The runs browser filtered by a label: only the regressed run, its labels shown.
+    {
+      const { page, errors, close } = await open('#/runs?label=commit%3Dmore-lights');
+      assert.equal(await page.inputValue('input[name="label"]'), 'commit=more-lights');
+      const rows = await page.locator('table.runs tbody tr').evaluateAll((trs) => trs.map((r) => Number(r.dataset.runId)));
+      assert.deepEqual(rows, [run.id]);
+      const column = (await page.locator('table.runs thead th').allTextContents()).indexOf('Labels');
+      assert.ok(column > 0, 'a Labels column');
+      assert.equal(await page.locator('table.runs tbody tr td').nth(column).textContent(), 'commit=more-lights');
+      assert.deepEqual(errors, []);
+      await close();
+    }
+
     // The trend: both runs, by their commit label; the baseline across, the alerts marked.
     {
       const trend = await daemon.get(`/trend?baseline=${baseline.id}`);

@@ -511,7 +511,8 @@ export async function render(page, { params, signal }) {
       app ? null : h('li', {}, `${run.lights} lights`),
       h('li', {}, app ? `${run.sample_count} frames` : `${run.sample_count} samples`),
       h('li', {}, `${fmt.date(run.created_at)} UTC`),
-      fmt.labels(run.labels) ? h('li', { dataset: { labels: '' } }, `labels: ${fmt.labels(run.labels)}`) : null,
+      fmt.labels(run.labels) ? h('li', { dataset: { labels: '' } }, 'labels: ', Object.entries(run.labels).map(([k, v], i) =>
+        [i ? ', ' : '', h('a', { href: `#/runs?label=${encodeURIComponent(`${k}=${v}`)}`, title: `runs labelled ${k}=${v}` }, `${k}=${v}`)])) : null,
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),

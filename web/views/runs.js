@@ -69,6 +69,7 @@ function filterForm(query, { renderers, scenes, devices, hosts }, onApply) {
     field('Resolution', h('input', { name: 'resolution', value: query.get('resolution') || '', placeholder: 'e.g. 320x180', pattern: '\\s*\\d+\\s*[x×]\\s*\\d+\\s*', size: 10 })),
     field('Device', select('device', devices.map((d) => [d.id, d.name]))),
     hosts.length ? field('Host', select('host', hosts)) : null,
+    field('Label', h('input', { name: 'label', value: query.get('label') || '', placeholder: 'commit=4f2a9c1', pattern: '\\s*[^=\\s]+=.+', size: 14, title: 'NAME=VALUE: runs of captures with this label' })),
     field('From', h('input', { type: 'date', name: 'since', value: query.get('since') || '' })),
     field('To', h('input', { type: 'date', name: 'until', value: query.get('until') || '' })),
     query.get('capture') ? h('input', { type: 'hidden', name: 'capture', value: query.get('capture') }) : null,
