@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
 #include <gtest/gtest.h>
 
@@ -42,6 +43,7 @@ class TallyAlertsCli : public ::testing::Test {
     r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     r.out = tally::test::readFile(dir_ / "out");
     r.err = tally::test::readFile(dir_ / "err");
+    if (std::getenv("TALLY_TEST_PRINT")) std::cout << "$ tally " << args << "\n" << r.out << r.err;
     return r;
   }
   std::string param(const httplib::Params& params, const std::string& key) {
