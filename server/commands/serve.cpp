@@ -74,6 +74,9 @@ void declareMetrics(metrics::Registry& m) {
   m.declare("tally_capture_duration_seconds", Type::kHistogram,
             "Time from claiming a job to its end, by kind (capture, sweep) and status", metrics::kCaptureSeconds);
   m.declare("tally_store_bytes", Type::kGauge, "Size of the SQLite store on disk, by file (db, wal, shm)");
+  m.declare("tally_alerts", Type::kGauge, "Regression alerts in the store, by status (open, acknowledged, invalid, fixed)");
+  m.declare("tally_alerts_raised_total", Type::kCounter,
+            "Regression alerts this daemon's evaluator raised since it started");
   m.declare("tally_device_info", Type::kGauge,
             "The capture device: the --device selector (\"auto\": the first discrete GPU) and the name of "
             "the device the last capture ran on (\"\" until one has); always 1");
@@ -184,6 +187,10 @@ int runServe(const ServeArgs& args) {
   evaluatorOptions.location = dbPath;
   evaluatorOptions.deliver = !args.alertWebhook.empty();
   evaluatorOptions.log = [](std::string_view line) { log::info(std::string(line)); };
+  metrics.add("tally_alerts_raised_total", {}, 0);
+  evaluatorOptions.onEvaluated = [&metrics](const store::Evaluated& done) {
+    metrics.add("tally_alerts_raised_total", {}, double(done.alertIds.size()));
+  };
   service::AlertEvaluator evaluator(evaluatorOptions);
   service::WebhookOptions webhookOptions;
   webhookOptions.url = args.alertWebhook;
@@ -290,6 +297,10 @@ int runServe(const ServeArgs& args) {
     auto counts = writer->get()->jobCounts();
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
+    }
+    auto alerts = writer->get()->alertCounts();
+    if (alerts) {
+      for (const auto& [status, n] : *alerts) m.set("tally_alerts", {{"status", status}}, double(n));
     }
     if (postgres) return;  // the server's files are not this host's
     for (const auto& [file, suffix] : {std::pair{"db", ""}, std::pair{"wal", "-wal"}, std::pair{"shm", "-shm"}}) {

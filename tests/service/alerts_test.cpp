@@ -153,6 +153,16 @@ TEST_F(AlertRoutes, ARegressionAlertsAndARepeatDoesNot) {
 
   json open = call("GET", "/api/alerts?status=open", "", 200);
   EXPECT_EQ(open["counts"]["open"], 4);
+  // /metrics: the store's alerts by status, and those this daemon raised.
+  Reply scraped = daemon_->request("GET", "/metrics");
+  ASSERT_EQ(scraped.status, 200);
+  auto metric = [&](const std::string& series) {
+    size_t at = scraped.body.find("\n" + series + " ");
+    return at == std::string::npos ? -1.0 : std::stod(scraped.body.substr(at + series.size() + 2));
+  };
+  EXPECT_EQ(metric("tally_alerts{status=\"open\"}"), 4.0) << scraped.body;
+  EXPECT_EQ(metric("tally_alerts{status=\"fixed\"}"), 0.0) << scraped.body;
+  EXPECT_EQ(metric("tally_alerts_raised_total"), 4.0) << scraped.body;
   EXPECT_EQ(open["alerts"].size(), 4u);
 
   // One alert with its run and baseline; acknowledged by PATCH, fixed by POST.
