@@ -22,19 +22,23 @@ Result<HttpTarget> parseHttpUrl(const std::string& url) {
   size_t colon = authority.rfind(':');
   if (colon != std::string::npos && authority.find(']') == std::string::npos) {
     std::string port = authority.substr(colon + 1);
-    bool digits = !port.empty() && port.size() <= 5 &&
-                  std::all_of(port.begin(), port.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
-    if (!digits || std::stoi(port) < 1 || std::stoi(port) > 65535) return makeError("has a bad port '" + port + "'");
+    bool digits = !port.empty() && port.size() <= 5 && std::all_of(port.begin(), port.end(), [](char c) {
+      return std::isdigit(static_cast<unsigned char>(c));
+    });
+    if (!digits || std::stoi(port) < 1 || std::stoi(port) > 65535)
+      return makeError("has a bad port '" + port + "'");
     if (colon == 0) return makeError("has no host");
   }
   for (char c : url) {
-    if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f) return makeError("must not contain spaces or control characters");
+    if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f)
+      return makeError("must not contain spaces or control characters");
   }
   return HttpTarget{scheme + authority, path};
 }
 
 Result<PostReply> postJson(const HttpTarget& target, const std::string& body,
-                           const std::vector<std::pair<std::string, std::string>>& headers, int timeoutSeconds) {
+                           const std::vector<std::pair<std::string, std::string>>& headers,
+                           int timeoutSeconds) {
   httplib::Client client(target.origin);
   client.set_connection_timeout(timeoutSeconds, 0);
   client.set_read_timeout(timeoutSeconds, 0);

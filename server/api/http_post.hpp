@@ -27,6 +27,7 @@ struct PostReply {
 // POSTs `body` as application/json with `headers`; an error when no reply
 // came back (refused, unreachable, timed out), naming the reason.
 Result<PostReply> postJson(const HttpTarget& target, const std::string& body,
-                           const std::vector<std::pair<std::string, std::string>>& headers, int timeoutSeconds);
+                           const std::vector<std::pair<std::string, std::string>>& headers,
+                           int timeoutSeconds);
 
 }  // namespace tally::api

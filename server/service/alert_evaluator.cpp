@@ -49,7 +49,8 @@ Result<std::vector<store::NewAlert>> evaluateRun(store::Store& reader, const sto
   if (!s) return makeError(s.error());
   std::vector<store::NewAlert> out;
   if (!s->incomparable.empty()) return out;  // no camera in common: nothing to test
-  if (s->frame && s->frame->time.verdict != analysis::Verdict::Same) out.push_back(timeAlert("frame", *s->frame));
+  if (s->frame && s->frame->time.verdict != analysis::Verdict::Same)
+    out.push_back(timeAlert("frame", *s->frame));
   for (const auto& p : s->passes) {
     if (p.time.verdict != analysis::Verdict::Same) out.push_back(timeAlert("pass " + p.figure, p));
   }
@@ -67,15 +68,19 @@ Result<std::vector<store::NewAlert>> evaluateRun(store::Store& reader, const sto
         if (c.a != 0) a.ratio = c.b / c.a;
       }
     }
-    a.details = {{"lines", s->countLines}, {"changed", s->countChanges.size()}, {"changes", std::move(changes)}};
+    a.details = {
+        {"lines", s->countLines}, {"changed", s->countChanges.size()}, {"changes", std::move(changes)}};
     out.push_back(std::move(a));
   }
   return out;
 }
 
-Result<store::Evaluated> evaluatePending(store::Store& writer, store::Store& reader, bool deliver, int batch) {
+Result<store::Evaluated> evaluatePending(store::Store& writer, store::Store& reader, bool deliver,
+                                         int batch) {
   return writer.evaluatePendingRuns(
-      [&reader](const store::RunRow& run, const store::Baseline& baseline) { return evaluateRun(reader, run, baseline); },
+      [&reader](const store::RunRow& run, const store::Baseline& baseline) {
+        return evaluateRun(reader, run, baseline);
+      },
       batch, deliver);
 }
 
@@ -83,7 +88,9 @@ AlertEvaluator::AlertEvaluator(Options options) : options_(std::move(options)) {
 
 AlertEvaluator::~AlertEvaluator() { stop(); }
 
-void AlertEvaluator::start() { thread_ = std::thread([this] { loop(); }); }
+void AlertEvaluator::start() {
+  thread_ = std::thread([this] { loop(); });
+}
 
 void AlertEvaluator::stop() {
   {
@@ -116,7 +123,8 @@ void AlertEvaluator::loop() {
     bool busy = false;
     if (!writer || !reader) {
       auto w = store::Store::open(options_.location);
-      auto r = w ? store::Store::open(options_.location, {.readOnly = true}) : Result<std::unique_ptr<store::Store>>(makeError(w.error()));
+      auto r = w ? store::Store::open(options_.location, {.readOnly = true})
+                 : Result<std::unique_ptr<store::Store>>(makeError(w.error()));
       if (w && r) {
         writer = std::move(w).value();
         reader = std::move(r).value();

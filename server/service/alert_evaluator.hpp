@@ -47,11 +47,12 @@ Result<store::Evaluated> evaluatePending(store::Store& writer, store::Store& rea
 class AlertEvaluator {
  public:
   struct Options {
-    std::string location;                   // the store (a SQLite file or postgresql:// URL)
-    bool deliver = false;                   // a webhook is set: new alerts are pending delivery
-    std::chrono::milliseconds idle{1000};   // between passes that found nothing
+    std::string location;                  // the store (a SQLite file or postgresql:// URL)
+    bool deliver = false;                  // a webhook is set: new alerts are pending delivery
+    std::chrono::milliseconds idle{1000};  // between passes that found nothing
     std::function<void(std::string_view)> log;
-    std::function<void(const store::Evaluated&)> onEvaluated;  // after a pass that evaluated runs; may be empty
+    std::function<void(const store::Evaluated&)>
+        onEvaluated;  // after a pass that evaluated runs; may be empty
   };
   explicit AlertEvaluator(Options options);
   ~AlertEvaluator();

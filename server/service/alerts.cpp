@@ -43,23 +43,27 @@ Response postBaseline(ServiceContext& ctx, const Request& req) {
   const json& body = req.body;
   allowFields(body, {"run", "threshold", "name"});
   if (!body.contains("run")) invalid("run", "required: the id of the run to make the baseline");
-  if (!body["run"].is_number_integer() || body["run"].get<int64_t>() < 1) invalid("run", "must be a positive integer");
+  if (!body["run"].is_number_integer() || body["run"].get<int64_t>() < 1)
+    invalid("run", "must be a positive integer");
   store::NewBaseline nb;
   nb.runId = body["run"].get<int64_t>();
   if (body.contains("threshold")) {
     const json& t = body["threshold"];
     if (!t.is_number() || !std::isfinite(t.get<double>()) || t.get<double>() < 0 || t.get<double>() > 10) {
-      invalid("threshold", "must be a number from 0 to 10 (|ratio - 1| beyond which a time change alerts; 0.05: 5%)");
+      invalid("threshold",
+              "must be a number from 0 to 10 (|ratio - 1| beyond which a time change alerts; 0.05: 5%)");
     }
     nb.threshold = t.get<double>();
   }
   if (body.contains("name") && !body["name"].is_null()) {
     const json& n = body["name"];
-    bool control = n.is_string() && std::any_of(n.get_ref<const std::string&>().begin(),
-                                                 n.get_ref<const std::string&>().end(),
-                                                 [](char c) { return static_cast<unsigned char>(c) < 0x20; });
-    if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > kMaxBaselineName || control) {
-      invalid("name", "must be 1 to " + std::to_string(kMaxBaselineName) + " characters without control characters");
+    bool control = n.is_string() &&
+                   std::any_of(n.get_ref<const std::string&>().begin(), n.get_ref<const std::string&>().end(),
+                               [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+    if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > kMaxBaselineName ||
+        control) {
+      invalid("name",
+              "must be 1 to " + std::to_string(kMaxBaselineName) + " characters without control characters");
     }
     nb.name = n.get<std::string>();
   }
@@ -83,7 +87,8 @@ bool queryBool(const Request& req, const std::string& key) {
 Response listBaselines(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"all"});
   json out = json::array();
-  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all")))) out.push_back(baselineJson(b));
+  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all"))))
+    out.push_back(baselineJson(b));
   return Response::ok({{"baselines", out}});
 }
 

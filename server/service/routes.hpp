@@ -48,7 +48,8 @@ nlohmann::json opt(const std::optional<T>& v) {
 
 // Query parameters; each throws a RequestError naming the parameter.
 std::optional<int64_t> queryInt(const api::Request& req, const std::string& key, int64_t low, int64_t high);
-std::optional<std::string> queryString(const api::Request& req, const std::string& key, size_t maxLength = 256);
+std::optional<std::string> queryString(const api::Request& req, const std::string& key,
+                                       size_t maxLength = 256);
 int64_t pathId(const api::Request& req);
 store::Page queryPage(const api::Request& req);
 void allowOnly(const api::Request& req, const std::set<std::string>& keys);

@@ -28,7 +28,8 @@ json alertJson(const store::Alert& a) {
           {"metric", f.metric},
           {"verdict", f.verdict},
           {"ratio", opt(f.ratio)},
-          {"interval", f.ratioLower && f.ratioUpper ? json::array({*f.ratioLower, *f.ratioUpper}) : json(nullptr)},
+          {"interval",
+           f.ratioLower && f.ratioUpper ? json::array({*f.ratioLower, *f.ratioUpper}) : json(nullptr)},
           {"p_value", opt(f.pValue)},
           {"cliffs_delta", opt(f.cliffsDelta)},
           {"value_a", opt(f.valueA)},
@@ -40,8 +41,9 @@ json alertJson(const store::Alert& a) {
           {"delivery",
            {{"state", a.delivery},
             {"attempts", a.deliveryAttempts},
-            {"next_attempt_at", a.nextAttemptMs && a.delivery == "pending" ? json(store::isoTimeFromMs(*a.nextAttemptMs))
-                                                                             : json(nullptr)},
+            {"next_attempt_at", a.nextAttemptMs && a.delivery == "pending"
+                                    ? json(store::isoTimeFromMs(*a.nextAttemptMs))
+                                    : json(nullptr)},
             {"last_error", opt(a.deliveryError)},
             {"delivered_at", opt(a.deliveredAt)}}}};
 }
@@ -80,10 +82,18 @@ json webhookBody(const store::Alert& alert, const std::optional<store::Baseline>
   json runJson = nullptr, labels = json::object();
   if (run) {
     labels = run->labels;
-    runJson = {{"id", run->id},          {"capture", run->jobId},   {"variant", run->variant},
-               {"scene", run->scene},    {"width", run->width},     {"height", run->height},
-               {"device", run->deviceName}, {"counting", run->counting}, {"lights", run->lights},
-               {"host", opt(run->host)}, {"created_at", run->createdAt}, {"labels", run->labels}};
+    runJson = {{"id", run->id},
+               {"capture", run->jobId},
+               {"variant", run->variant},
+               {"scene", run->scene},
+               {"width", run->width},
+               {"height", run->height},
+               {"device", run->deviceName},
+               {"counting", run->counting},
+               {"lights", run->lights},
+               {"host", opt(run->host)},
+               {"created_at", run->createdAt},
+               {"labels", run->labels}};
   }
   json link = nullptr;
   if (!dashboardUrl.empty()) {
@@ -127,15 +137,17 @@ Result<int> deliverDue(store::Store& store, const api::HttpTarget& target, const
     std::optional<store::RunRow> row;
     if (*run) row = (*run)->row;
     json body = webhookBody(alert, *baseline, row, options.dashboardUrl);
-    auto reply = api::postJson(target, body.dump(),
-                               {{"X-Tally-Event", "alert"},
-                                {"X-Tally-Delivery", std::to_string(alert.id) + "." + std::to_string(alert.deliveryAttempts)}},
-                               options.timeoutSeconds);
+    auto reply = api::postJson(
+        target, body.dump(),
+        {{"X-Tally-Event", "alert"},
+         {"X-Tally-Delivery", std::to_string(alert.id) + "." + std::to_string(alert.deliveryAttempts)}},
+        options.timeoutSeconds);
     std::string error;
     if (!reply) {
       error = reply.error();
     } else if (reply->status < 200 || reply->status >= 300) {
-      error = "HTTP " + std::to_string(reply->status) + (reply->body.empty() ? "" : ": " + reply->body.substr(0, 200));
+      error = "HTTP " + std::to_string(reply->status) +
+              (reply->body.empty() ? "" : ": " + reply->body.substr(0, 200));
     }
     std::optional<int64_t> retry;
     if (!error.empty() && alert.deliveryAttempts < options.maxAttempts) {
@@ -152,7 +164,8 @@ Result<int> deliverDue(store::Store& store, const api::HttpTarget& target, const
   return static_cast<int>(claimed->size());
 }
 
-WebhookSender::WebhookSender(std::string location, WebhookOptions options, std::function<void(std::string_view)> log)
+WebhookSender::WebhookSender(std::string location, WebhookOptions options,
+                             std::function<void(std::string_view)> log)
     : location_(std::move(location)), options_(std::move(options)), log_(std::move(log)) {
   auto target = api::parseHttpUrl(options_.url);
   if (target) target_ = *target;
@@ -160,7 +173,9 @@ WebhookSender::WebhookSender(std::string location, WebhookOptions options, std::
 
 WebhookSender::~WebhookSender() { stop(); }
 
-void WebhookSender::start() { thread_ = std::thread([this] { loop(); }); }
+void WebhookSender::start() {
+  thread_ = std::thread([this] { loop(); });
+}
 
 void WebhookSender::stop() {
   {

@@ -25,12 +25,12 @@
 namespace tally::service {
 
 struct WebhookOptions {
-  std::string url;                // http://host[:port]/path
-  std::string dashboardUrl;       // the dashboard's base for links ("http://tally.example.org/"); may be empty
-  int maxAttempts = 8;            // posts before an alert's delivery fails for good
-  int64_t firstRetryMs = 1000;    // the wait after the first failure; doubled after each further one
-  int64_t maxRetryMs = 300000;    // the longest wait between attempts (5 min)
-  int timeoutSeconds = 10;        // connect, send and read, each
+  std::string url;              // http://host[:port]/path
+  std::string dashboardUrl;     // the dashboard's base for links ("http://tally.example.org/"); may be empty
+  int maxAttempts = 8;          // posts before an alert's delivery fails for good
+  int64_t firstRetryMs = 1000;  // the wait after the first failure; doubled after each further one
+  int64_t maxRetryMs = 300000;  // the longest wait between attempts (5 min)
+  int timeoutSeconds = 10;      // connect, send and read, each
   std::chrono::milliseconds idle{1000};  // between looks at the outbox when nothing is due
 };
 

@@ -15,7 +15,8 @@ using nlohmann::json;
 namespace {
 
 const char* const kBaselineSelect =
-    "SELECT b.id, b.name, b.run_id, b.renderer, COALESCE(r.variant, b.renderer), b.options, sc.name, sc.params, "
+    "SELECT b.id, b.name, b.run_id, b.renderer, COALESCE(r.variant, b.renderer), b.options, sc.name, "
+    "sc.params, "
     "b.width, b.height, b.device_id, d.name, b.counting, b.threshold, b.status, b.created_at, b.ended_at, "
     "b.replaced_by, (SELECT j.labels FROM jobs j WHERE j.id = r.job_id), "
     "(SELECT COUNT(*) FROM alerts a WHERE a.baseline_id = b.id AND a.status = 'open') "
@@ -119,7 +120,8 @@ const char* toString(AlertStatus status) {
 }
 
 std::optional<AlertStatus> parseAlertStatus(std::string_view name) {
-  for (AlertStatus s : {AlertStatus::Open, AlertStatus::Acknowledged, AlertStatus::Invalid, AlertStatus::Fixed}) {
+  for (AlertStatus s :
+       {AlertStatus::Open, AlertStatus::Acknowledged, AlertStatus::Invalid, AlertStatus::Fixed}) {
     if (name == toString(s)) return s;
   }
   return std::nullopt;
@@ -128,7 +130,8 @@ std::optional<AlertStatus> parseAlertStatus(std::string_view name) {
 // ---- baselines -----------------------------------------------------------------------
 
 Result<std::optional<SetBaseline>> Store::setBaseline(const NewBaseline& nb) {
-  if (!(nb.threshold >= 0) || !std::isfinite(nb.threshold)) return makeError("threshold: must be a number >= 0");
+  if (!(nb.threshold >= 0) || !std::isfinite(nb.threshold))
+    return makeError("threshold: must be a number >= 0");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<SetBaseline>>("setBaseline", [&]() -> Result<std::optional<SetBaseline>> {
@@ -151,10 +154,11 @@ Result<std::optional<SetBaseline>> Store::setBaseline(const NewBaseline& nb) {
                              " WHERE id = ?1");
       end.bind(1, *out.replaced).run();
     }
-    Statement insert(db_,
-                     "INSERT INTO baselines (name, run_id, renderer, options, scene_id, width, height, device_id, "
-                     "counting, threshold) SELECT ?1, r.id, r.renderer, r.options, r.scene_id, r.width, r.height, "
-                     "r.device_id, r.counting, ?2 FROM runs r WHERE r.id = ?3 RETURNING id");
+    Statement insert(
+        db_,
+        "INSERT INTO baselines (name, run_id, renderer, options, scene_id, width, height, device_id, "
+        "counting, threshold) SELECT ?1, r.id, r.renderer, r.options, r.scene_id, r.width, r.height, "
+        "r.device_id, r.counting, ?2 FROM runs r WHERE r.id = ?3 RETURNING id");
     insert.bind(1, nb.name).bind(2, nb.threshold).bind(3, nb.runId);
     if (!insert.step()) return makeError("the baseline was not inserted");
     int64_t id = insert.getInt(0);
@@ -205,7 +209,8 @@ Result<std::vector<RunRow>> Store::configurationRuns(int64_t baselineId, int lim
   return guarded<std::vector<RunRow>>("configurationRuns", [&]() -> Result<std::vector<RunRow>> {
     Transaction tx(db_, Transaction::Kind::Read);
     Statement query(db_, std::string(detail::kRunSelect) +
-                             " WHERE r.id IN (SELECT r.id FROM runs r JOIN baselines b ON " + kSameConfiguration +
+                             " WHERE r.id IN (SELECT r.id FROM runs r JOIN baselines b ON " +
+                             kSameConfiguration +
                              " WHERE b.id = ?1 ORDER BY r.id DESC LIMIT ?2) ORDER BY r.id");
     query.bind(1, baselineId).bind(2, limit);
     std::vector<RunRow> out;
@@ -252,11 +257,12 @@ std::vector<Candidate> candidates(Connection* db, Statement& pick) {
 // Inserts a run's alerts; their ids are appended to `ids`.
 void insertAlerts(Connection* db, const Candidate& c, const std::vector<NewAlert>& alerts, bool deliver,
                   std::vector<int64_t>& ids) {
-  Statement insert(db,
-                   "INSERT INTO alerts (baseline_id, run_id, baseline_run_id, kind, metric, verdict, ratio, "
-                   "ratio_lower, ratio_upper, p_value, cliffs_delta, value_a, value_b, details, delivery, "
-                   "next_attempt_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16) "
-                   "RETURNING id");
+  Statement insert(
+      db,
+      "INSERT INTO alerts (baseline_id, run_id, baseline_run_id, kind, metric, verdict, ratio, "
+      "ratio_lower, ratio_upper, p_value, cliffs_delta, value_a, value_b, details, delivery, "
+      "next_attempt_ms) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16) "
+      "RETURNING id");
   for (const auto& a : alerts) {
     insert.reset();
     insert.bind(1, c.baseline->id)
@@ -394,12 +400,15 @@ Result<std::optional<Alert>> Store::getAlert(int64_t id) {
 
 Result<std::map<std::string, int64_t>> Store::alertCounts(std::optional<int64_t> baselineId) {
   std::lock_guard lock(mutex_);
-  return guarded<std::map<std::string, int64_t>>("alertCounts", [&]() -> Result<std::map<std::string, int64_t>> {
+  return guarded<
+      std::map<std::string, int64_t>>("alertCounts", [&]() -> Result<std::map<std::string, int64_t>> {
     std::map<std::string, int64_t> out;
     for (auto s : {AlertStatus::Open, AlertStatus::Acknowledged, AlertStatus::Invalid, AlertStatus::Fixed})
       out[toString(s)] = 0;
-    Statement query(db_, "SELECT status, COUNT(*) FROM alerts WHERE (CAST(?1 AS BIGINT) IS NULL OR baseline_id = ?1) "
-                         "GROUP BY status");
+    Statement query(
+        db_,
+        "SELECT status, COUNT(*) FROM alerts WHERE (CAST(?1 AS BIGINT) IS NULL OR baseline_id = ?1) "
+        "GROUP BY status");
     query.bind(1, baselineId);
     while (query.step()) out[query.getText(0)] = query.getInt(1);
     return out;
@@ -411,8 +420,8 @@ Result<std::optional<Alert>> Store::setAlertStatus(int64_t id, AlertStatus statu
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Alert>>("setAlertStatus", [&]() -> Result<std::optional<Alert>> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE alerts SET status = ?1, updated_at = ") + nowSql(*db_) +
-                              " WHERE id = ?2");
+    Statement update(
+        db_, std::string("UPDATE alerts SET status = ?1, updated_at = ") + nowSql(*db_) + " WHERE id = ?2");
     update.bind(1, toString(status)).bind(2, id).run();
     auto out = findAlert(db_, id);
     tx.commit();
@@ -426,11 +435,12 @@ Result<std::vector<Alert>> Store::configurationAlerts(int64_t baselineId, int li
   return guarded<std::vector<Alert>>("configurationAlerts", [&]() -> Result<std::vector<Alert>> {
     // The alerts of every baseline of this baseline's configuration (one
     // configuration may have had several baselines over time).
-    Statement query(db_, std::string("SELECT ") + kAlertColumns +
-                             " FROM alerts a WHERE a.baseline_id IN (SELECT o.id FROM baselines o JOIN baselines b "
-                             "ON o.renderer = b.renderer AND o.options = b.options AND o.scene_id = b.scene_id AND "
-                             "o.width = b.width AND o.height = b.height AND o.device_id = b.device_id AND "
-                             "o.counting = b.counting WHERE b.id = ?1) ORDER BY a.id DESC LIMIT ?2");
+    Statement query(
+        db_, std::string("SELECT ") + kAlertColumns +
+                 " FROM alerts a WHERE a.baseline_id IN (SELECT o.id FROM baselines o JOIN baselines b "
+                 "ON o.renderer = b.renderer AND o.options = b.options AND o.scene_id = b.scene_id AND "
+                 "o.width = b.width AND o.height = b.height AND o.device_id = b.device_id AND "
+                 "o.counting = b.counting WHERE b.id = ?1) ORDER BY a.id DESC LIMIT ?2");
     query.bind(1, baselineId).bind(2, limit);
     std::vector<Alert> out;
     while (query.step()) out.push_back(readAlert(query));
@@ -447,13 +457,15 @@ Result<std::vector<Alert>> Store::claimDeliveries(int limit, int64_t claimMs) {
   detail::WriteLock writer(*db_);
   return guarded<std::vector<Alert>>("claimDeliveries", [&]() -> Result<std::vector<Alert>> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement pick(db_, std::string("SELECT id FROM alerts WHERE delivery = 'pending' AND next_attempt_ms <= ") +
-                            nowMsSql(*db_) + " ORDER BY id LIMIT ?1" + skipLockedSql(*db_));
+    Statement pick(db_,
+                   std::string("SELECT id FROM alerts WHERE delivery = 'pending' AND next_attempt_ms <= ") +
+                       nowMsSql(*db_) + " ORDER BY id LIMIT ?1" + skipLockedSql(*db_));
     pick.bind(1, limit);
     std::vector<int64_t> ids;
     while (pick.step()) ids.push_back(pick.getInt(0));
-    Statement claim(db_, std::string("UPDATE alerts SET delivery_attempts = delivery_attempts + 1, next_attempt_ms = ") +
-                             nowMsSql(*db_) + " + ?1 WHERE id = ?2");
+    Statement claim(
+        db_, std::string("UPDATE alerts SET delivery_attempts = delivery_attempts + 1, next_attempt_ms = ") +
+                 nowMsSql(*db_) + " + ?1 WHERE id = ?2");
     std::vector<Alert> out;
     for (int64_t id : ids) {
       claim.reset();
@@ -479,8 +491,9 @@ Result<bool> Store::finishDelivery(int64_t id, bool delivered, const std::string
       sql = std::string("UPDATE alerts SET delivery_error = ?2, next_attempt_ms = ") + nowMsSql(*db_) +
             " + ?3 WHERE id = ?1 AND delivery = 'pending'";
     } else {
-      sql = "UPDATE alerts SET delivery = 'failed', delivery_error = ?2, next_attempt_ms = NULL "
-            "WHERE id = ?1 AND delivery = 'pending'";
+      sql =
+          "UPDATE alerts SET delivery = 'failed', delivery_error = ?2, next_attempt_ms = NULL "
+          "WHERE id = ?1 AND delivery = 'pending'";
     }
     Statement update(db_, sql);
     update.bind(1, id);

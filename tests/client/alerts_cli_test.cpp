@@ -36,8 +36,9 @@ class TallyAlertsCli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   Outcome tally(const std::string& args) {
-    std::string cmd = "env -u TALLY_SERVER -u TALLY_TOKEN '" + std::string(TALLY_BIN) + "' --server " + fake_.url() +
-                      " " + args + " >'" + (dir_ / "out").string() + "' 2>'" + (dir_ / "err").string() + "'";
+    std::string cmd = "env -u TALLY_SERVER -u TALLY_TOKEN '" + std::string(TALLY_BIN) + "' --server " +
+                      fake_.url() + " " + args + " >'" + (dir_ / "out").string() + "' 2>'" +
+                      (dir_ / "err").string() + "'";
     int status = std::system(cmd.c_str());
     Outcome r;
     r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -132,7 +133,8 @@ TEST_F(TallyAlertsCli, AlertsListAcknowledgeAndSet) {
 TEST_F(TallyAlertsCli, LabelsOnCapturesAndRuns) {
   auto spec = dir_ / "spec.json";
   std::ofstream(spec) << R"({"renderers":["forward"],"labels":{"branch":"dev"}})";
-  Outcome r = tally("capture --no-wait --spec '" + spec.string() + "' --label commit=4f2a9c1 --label branch=main");
+  Outcome r =
+      tally("capture --no-wait --spec '" + spec.string() + "' --label commit=4f2a9c1 --label branch=main");
   ASSERT_EQ(r.rc, 0) << r.err;
   json sent = json::parse(fake_.lastSpec());
   EXPECT_EQ(sent["labels"], json({{"commit", "4f2a9c1"}, {"branch", "main"}}));  // the flag wins

@@ -31,7 +31,8 @@ constexpr int kFrames = 20;
 // kFrames times around `base` ms: a deterministic +-5% wobble.
 json frameTimes(double base, int seed) {
   json out = json::array();
-  for (int k = 0; k < kFrames; ++k) out.push_back(base * (1.0 + 0.05 * (((k * 7 + seed * 3) % 11) - 5) / 5.0));
+  for (int k = 0; k < kFrames; ++k)
+    out.push_back(base * (1.0 + 0.05 * (((k * 7 + seed * 3) % 11) - 5) / 5.0));
   return out;
 }
 
@@ -42,7 +43,8 @@ json captureOf(double slowdown, double lightBytes, int lights, int seed) {
   std::vector<json> samples;
   for (int cam = 0; cam < 2; ++cam) {
     json depth = st::makePass("depth", 0.4 * slowdown, 2304, {st::makeCounter("depth", "write", 2304, 9216)});
-    json shade = st::makePass("shade", 0.8 * slowdown, 2304, {st::makeCounter("lights", "read", lightBytes / 16, lightBytes)});
+    json shade = st::makePass("shade", 0.8 * slowdown, 2304,
+                              {st::makeCounter("lights", "read", lightBytes / 16, lightBytes)});
     depth["gpu_ms_frames"] = frameTimes(0.4 * slowdown, seed + cam);
     shade["gpu_ms_frames"] = frameTimes(0.8 * slowdown, seed + cam + 1);
     json sample = st::makeSample(cam, 1.2 * slowdown, {depth, shade});
@@ -107,8 +109,9 @@ class AlertRoutes : public ::testing::Test {
 };
 
 TEST_F(AlertRoutes, ARegressionAlertsAndARepeatDoesNot) {
-  json baseline = call("POST", "/api/baselines",
-                       json{{"run", baselineRun_}, {"threshold", 0.05}, {"name", "forward atrium"}}.dump(), 201);
+  json baseline =
+      call("POST", "/api/baselines",
+           json{{"run", baselineRun_}, {"threshold", 0.05}, {"name", "forward atrium"}}.dump(), 201);
   EXPECT_EQ(baseline["run"], baselineRun_);
   EXPECT_EQ(baseline["status"], "active");
   EXPECT_EQ(baseline["configuration"]["renderer"], "forward");
@@ -195,7 +198,8 @@ TEST_F(AlertRoutes, ARegressionAlertsAndARepeatDoesNot) {
     EXPECT_LE(f["lower"].get<double>(), f["median"].get<double>());
     EXPECT_GE(f["upper"].get<double>(), f["median"].get<double>());
   }
-  EXPECT_NEAR(trend["runs"][2]["frame_ms"]["median"].get<double>() / trend["runs"][0]["frame_ms"]["median"].get<double>(),
+  EXPECT_NEAR(trend["runs"][2]["frame_ms"]["median"].get<double>() /
+                  trend["runs"][0]["frame_ms"]["median"].get<double>(),
               1.5, 0.05);
 
   // Runs carry their labels and filter by them.
@@ -241,9 +245,12 @@ TEST_F(AlertRoutes, BadInputNamesTheFieldAndUnknownIdsAre404) {
       {"GET", "/api/trend", "", "baseline"},
       {"GET", "/api/trend?baseline=1&limit=501", "", "limit"},
       {"GET", "/api/runs?label=commit", "", "label"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"commit":3}})", "labels.commit"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":["a"]})", "labels"},
-      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"bad key":"x"}})", "labels"},
+      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"commit":3}})",
+       "labels.commit"},
+      {"POST", "/api/captures", R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":["a"]})",
+       "labels"},
+      {"POST", "/api/captures",
+       R"({"renderers":["forward"],"resolutions":[[64,36]],"labels":{"bad key":"x"}})", "labels"},
   };
   for (const auto& c : cases) {
     json e = call(c.method, c.path, c.body, 400);
@@ -375,7 +382,8 @@ TEST_F(Webhook, RetriesWithBackoffThenDeliversEachAlertOnce) {
     EXPECT_EQ(b["run"]["lights"], 8);
     EXPECT_EQ(b["baseline"]["threshold"], 0.05);
     EXPECT_TRUE(b["figures"].contains("ratio"));
-    EXPECT_EQ(b["link"], "http://tally.example.org/#/alerts/" + std::to_string(b["alert"]["id"].get<int64_t>()));
+    EXPECT_EQ(b["link"],
+              "http://tally.example.org/#/alerts/" + std::to_string(b["alert"]["id"].get<int64_t>()));
   }
   EXPECT_EQ(delivered, std::set<int64_t>(ids.begin(), ids.end()));
   EXPECT_EQ(st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE delivery = 'delivered'"), 4);
@@ -383,7 +391,8 @@ TEST_F(Webhook, RetriesWithBackoffThenDeliversEachAlertOnce) {
   // again once its backoff (200 ms after one failure) had passed.
   auto times = receiver.times();
   ASSERT_EQ(times.size(), ids.size() + 3);
-  EXPECT_EQ(st::scalar(*store_, "SELECT SUM(delivery_attempts) FROM alerts"), static_cast<int64_t>(ids.size() + 3));
+  EXPECT_EQ(st::scalar(*store_, "SELECT SUM(delivery_attempts) FROM alerts"),
+            static_cast<int64_t>(ids.size() + 3));
   EXPECT_EQ(st::scalar(*store_, "SELECT MAX(delivery_attempts) FROM alerts"), 2);
   EXPECT_EQ(logged.size(), 3u);
   for (const auto& line : logged) EXPECT_NE(line.find("HTTP 503"), std::string::npos) << line;
@@ -414,8 +423,9 @@ TEST_F(Webhook, AnUnreachableWebhookFailsAfterItsAttemptsAndChangesNothingElse) 
     if (st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE delivery = 'pending'") == 0) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  EXPECT_EQ(st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE delivery = 'failed' AND delivery_attempts = 3"),
-            static_cast<int64_t>(ids.size()));
+  EXPECT_EQ(
+      st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE delivery = 'failed' AND delivery_attempts = 3"),
+      static_cast<int64_t>(ids.size()));
   EXPECT_EQ(st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE delivery_error IS NULL"), 0);
   // The alerts themselves are untouched: open, with their figures.
   EXPECT_EQ(st::scalar(*store_, "SELECT COUNT(*) FROM alerts WHERE status = 'open' AND ratio IS NOT NULL"),
@@ -439,8 +449,8 @@ TEST_F(Webhook, AnUnreachableWebhookFailsAfterItsAttemptsAndChangesNothingElse) 
 TEST(WebhookUrl, OnlyPlainHttpUrls) {
   EXPECT_TRUE(tally::api::parseHttpUrl("http://hooks.example.org/tally"));
   EXPECT_EQ(tally::api::parseHttpUrl("http://127.0.0.1:8080")->path, "/");
-  for (const char* bad : {"https://x/y", "ftp://x", "http://", "http://:80/x", "http://h:99999/", "http://u:p@h/",
-                          "http://h/a b"}) {
+  for (const char* bad : {"https://x/y", "ftp://x", "http://", "http://:80/x", "http://h:99999/",
+                          "http://u:p@h/", "http://h/a b"}) {
     EXPECT_FALSE(tally::api::parseHttpUrl(bad)) << bad;
   }
 }

@@ -36,8 +36,8 @@ class Alerts : public StoreTest {
 
   // Marks every run stored so far evaluated, testing nothing.
   void evaluateAll() {
-    auto done = store_->evaluatePendingRuns([](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{}); },
-                                            1000, false);
+    auto done = store_->evaluatePendingRuns(
+        [](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{}); }, 1000, false);
     ASSERT_TRUE(done) << done.error();
   }
 };
@@ -181,8 +181,8 @@ TEST_F(Alerts, AnEvaluatorErrorStoresNothing) {
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs WHERE evaluated = 0"), 2);
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM alerts"), 0);
   // The next pass, with a working evaluator, takes them.
-  auto ok = store_->evaluatePendingRuns([](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.2)}); },
-                                        100, false);
+  auto ok = store_->evaluatePendingRuns(
+      [](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.2)}); }, 100, false);
   ASSERT_TRUE(ok) << ok.error();
   EXPECT_EQ(ok->tested, 1);
   EXPECT_EQ((*store_->getAlert(ok->alertIds.at(0)))->delivery, "none");
@@ -228,7 +228,8 @@ TEST_F(Alerts, ConcurrentEvaluatorsTestEachRunOnce) {
   if (db_.postgres()) EXPECT_EQ(tested.size(), expected.size());
   EXPECT_EQ(std::set<int64_t>(tested.begin(), tested.end()), expected);
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM alerts"), static_cast<int64_t>(expected.size()));
-  EXPECT_EQ(scalar(*store_, "SELECT COUNT(DISTINCT run_id) FROM alerts"), static_cast<int64_t>(expected.size()));
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(DISTINCT run_id) FROM alerts"),
+            static_cast<int64_t>(expected.size()));
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs WHERE evaluated = 0"), 0);
 }
 
@@ -238,7 +239,10 @@ TEST_F(Alerts, StatusListsAndCounts) {
   evaluateAll();
   for (int i = 0; i < 3; ++i) capture(nullptr, 400, i + 1);
   auto done = store_->evaluatePendingRuns(
-      [](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.5), slower(1.6)}); }, 100, false);
+      [](const RunRow&, const Baseline&) {
+        return Result(std::vector<NewAlert>{slower(1.5), slower(1.6)});
+      },
+      100, false);
   ASSERT_TRUE(done);
   ASSERT_EQ(done->alertIds.size(), 6u);
   auto acked = store_->setAlertStatus(done->alertIds[0], AlertStatus::Acknowledged);
@@ -282,8 +286,8 @@ TEST_F(Alerts, OutboxClaimsRetriesAndFinishes) {
   evaluateAll();
   capture(nullptr, 400, 1);
   capture(nullptr, 400, 2);
-  auto done = store_->evaluatePendingRuns([](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.5)}); },
-                                          100, true);
+  auto done = store_->evaluatePendingRuns(
+      [](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.5)}); }, 100, true);
   ASSERT_TRUE(done);
   ASSERT_EQ(done->alertIds.size(), 2u);
   auto claimed = store_->claimDeliveries(10, 60000);
@@ -323,7 +327,10 @@ TEST_F(Alerts, ConcurrentSendersClaimEachAlertOnce) {
   evaluateAll();
   for (int i = 0; i < 10; ++i) capture(nullptr, 400, i + 1);
   auto done = store_->evaluatePendingRuns(
-      [](const RunRow&, const Baseline&) { return Result(std::vector<NewAlert>{slower(1.5), slower(1.7)}); }, 100, true);
+      [](const RunRow&, const Baseline&) {
+        return Result(std::vector<NewAlert>{slower(1.5), slower(1.7)});
+      },
+      100, true);
   ASSERT_TRUE(done);
   ASSERT_EQ(done->alertIds.size(), 20u);
   std::mutex mutex;
