@@ -11,7 +11,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -19,6 +21,7 @@
 
 #include "../store/store_fixture.hpp"
 #include "daemon.hpp"
+#include "postgres_server.hpp"
 #include "service/alert_evaluator.hpp"
 #include "service/webhook.hpp"
 
@@ -444,6 +447,65 @@ TEST_F(Webhook, AnUnreachableWebhookFailsAfterItsAttemptsAndChangesNothingElse) 
   EXPECT_EQ(alerts[0]["delivery"]["state"], "pending");
   EXPECT_EQ(daemon.request("GET", "/api/health").status, 200);
   EXPECT_EQ(daemon.stop(SIGTERM), 0);
+}
+
+// A fleet's API side: two daemons serving the API on one PostgreSQL, both
+// evaluating and both posting to one webhook that fails its first requests,
+// while captures are stored as workers store them. Every run gets its alerts
+// once, and every alert reaches the receiver once.
+TEST(AlertFleet, TwoApiDaemonsOnOnePostgresRaiseAndPostEachAlertOnce) {
+  auto* server = tally::testing::requirePostgres();
+  if (!server) return;
+  std::string url = server->createDatabase();
+  fs::path dir = makeTempDir("tally-alert-fleet-test");
+  auto store = st::openStore(url);
+  ASSERT_NE(store, nullptr);
+  auto storeCapture = [&](const json& labels, const json& result) {
+    auto job = store->createJob({{"renderers", {"forward"}}, {"labels", labels}});
+    EXPECT_TRUE(job) << job.error();
+    EXPECT_TRUE(store->ingestCapture(job->job.id, result, {}));
+    tally::store::RunFilter f;
+    f.jobId = job->job.id;
+    return store->listRuns(f, {})->runs.at(0).id;
+  };
+  int64_t base = storeCapture({{"commit", "a"}}, captureOf(1.0, 4096, 4, 0));
+  ASSERT_TRUE(*store->setBaseline({base, 0.05, std::nullopt}));
+  Receiver receiver(2);
+  std::vector<std::unique_ptr<Daemon>> daemons;
+  for (const char* name : {"api-1", "api-2"}) {
+    fs::create_directories(dir / name);
+    daemons.push_back(std::make_unique<Daemon>(
+        dir / name, fs::path(url),
+        std::vector<std::string>{"--role", "api", "--alert-webhook", receiver.url()}));
+    ASSERT_TRUE(daemons.back()->start()) << name;
+  }
+  constexpr int kRegressions = 12;
+  for (int i = 0; i < kRegressions; ++i)
+    storeCapture({{"commit", "c" + std::to_string(i)}}, captureOf(1.5, 8192, 8, i));
+  const int64_t expected = 4 * kRegressions;  // frame, two passes, counts
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(40);
+  while (std::chrono::steady_clock::now() < deadline &&
+         st::scalar(*store, "SELECT COUNT(*) FROM alerts WHERE delivery = 'delivered'") < expected) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  EXPECT_EQ(st::scalar(*store, "SELECT COUNT(*) FROM runs WHERE evaluated = 0"), 0);
+  EXPECT_EQ(st::scalar(*store, "SELECT COUNT(*) FROM alerts"), expected);
+  EXPECT_EQ(st::scalar(*store,
+                       "SELECT COUNT(*) FROM (SELECT run_id, metric FROM alerts GROUP BY run_id, metric "
+                       "HAVING COUNT(*) > 1) AS twice"),
+            0);
+  EXPECT_EQ(st::scalar(*store, "SELECT COUNT(DISTINCT run_id) FROM alerts"), kRegressions);
+  EXPECT_EQ(st::scalar(*store, "SELECT COUNT(*) FROM alerts WHERE delivery = 'delivered'"), expected);
+  std::multiset<int64_t> posted;
+  for (const auto& b : receiver.bodies()) posted.insert(b["alert"]["id"].get<int64_t>());
+  EXPECT_EQ(posted.size(), static_cast<size_t>(expected));
+  EXPECT_EQ(std::set<int64_t>(posted.begin(), posted.end()).size(), static_cast<size_t>(expected));
+  // The two failures were retried: two alerts needed a second attempt.
+  EXPECT_EQ(st::scalar(*store, "SELECT SUM(delivery_attempts) FROM alerts"), expected + 2);
+  for (auto& d : daemons) EXPECT_EQ(d->stop(SIGTERM), 0);
+  daemons.clear();
+  store.reset();
+  fs::remove_all(dir);
 }
 
 TEST(WebhookUrl, OnlyPlainHttpUrls) {
