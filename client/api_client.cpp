@@ -284,7 +284,7 @@ Result<json> ApiClient::getSample(const std::string& id) {
 }
 
 Result<json> ApiClient::compare(const std::vector<std::string>& runIds, std::optional<double> confidence,
-                                std::optional<double> threshold, bool acrossCapture) {
+                                std::optional<double> threshold, bool acrossCapture, bool camerasAsStrata) {
   std::string ids;
   for (const auto& id : runIds) ids += (ids.empty() ? "" : ",") + id;
   std::vector<std::pair<std::string, std::string>> params = {{"runs", ids}};
@@ -297,11 +297,19 @@ Result<json> ApiClient::compare(const std::vector<std::string>& runIds, std::opt
   if (confidence) params.emplace_back("confidence", number(*confidence));
   if (threshold) params.emplace_back("threshold", number(*threshold));
   if (!acrossCapture) params.emplace_back("across_capture", "false");
+  if (!camerasAsStrata) params.emplace_back("strata", "none");
   return sendJson("GET", "/api/compare" + query(params));
 }
 
 Result<json> ApiClient::crossover(const std::string& captureId, const std::string& metric) {
   return sendJson("GET", "/api/crossover" + query({{"capture", captureId}, {"metric", metric}}));
+}
+
+Result<json> ApiClient::heatmap(const std::vector<std::pair<std::string, std::string>>& params) {
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const auto& p : params)
+    if (!p.second.empty()) given.push_back(p);
+  return sendJson("GET", "/api/heatmap" + query(given));
 }
 
 Result<json> ApiClient::listSweeps(const SweepFilters& filters, std::optional<int> limit,

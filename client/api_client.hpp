@@ -79,9 +79,12 @@ class ApiClient {
   Result<json> getSample(const std::string& id);
   // confidence, threshold: as GET /api/compare takes them; acrossCapture false: frames only.
   Result<json> compare(const std::vector<std::string>& runIds, std::optional<double> confidence = std::nullopt,
-                       std::optional<double> threshold = std::nullopt, bool acrossCapture = true);
+                       std::optional<double> threshold = std::nullopt, bool acrossCapture = true,
+                       bool camerasAsStrata = true);
   // GET /api/crossover: fits against pixel count and crossings over a capture's runs.
   Result<json> crossover(const std::string& captureId, const std::string& metric);
+  // GET /api/heatmap with these query parameters (empty values left out).
+  Result<json> heatmap(const std::vector<std::pair<std::string, std::string>>& params);
   // One page of sweeps; cursor empty for the first.
   Result<json> listSweeps(const SweepFilters& filters, std::optional<int> limit, const std::string& cursor = "");
   // Follows next_cursor to the end; {"sweeps":[...every page's sweeps...]}.

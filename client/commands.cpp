@@ -539,8 +539,10 @@ int runShow(ApiClient& api, const std::string& runId, Io& io) {
 namespace {
 
 // "1.12x [1.08x, 1.17x]"; an unbounded end is "-".
+std::string ratio3(double v) { return fixed(v, 3) + "x"; }
+
 std::string intervalText(const json& interval) {
-  auto end = [](const json& v) { return v.is_number() ? ratio(v.get<double>()) : kMissing; };
+  auto end = [](const json& v) { return v.is_number() ? ratio3(v.get<double>()) : kMissing; };
   return "[" + end(interval.value("lower", json())) + ", " + end(interval.value("upper", json())) + "]";
 }
 
@@ -552,8 +554,10 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
   const json& list = comparison.value("significance", json::array());
   if (!list.is_array() || list.empty()) return;
   double confidence = comparison.value("confidence", 0.95);
-  io.out << "\nSignificance against " << names[0] << " (" << fixed(confidence * 100, 0)
-         << "% intervals over frames and cameras; docs/statistics.md):\n";
+  const json& first = list.front().value("frame", json());
+  bool aligned = !first.is_object() || first.value("strata", "cameras") == "cameras";
+  io.out << "\nSignificance against " << names[0] << " (" << fixed(confidence * 100, 0) << "% intervals over frames"
+         << (aligned ? ", each camera's aligned on its median" : " pooled over cameras") << "; docs/statistics.md):\n";
   Table t({{"RUN"},
            {"FIGURE"},
            {"RATIO", Align::Right},
@@ -578,7 +582,7 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
         std::string across = "widened " + fixed(widening, 1) + "x by repeated captures";
         note = note.empty() ? across : note + "; " + across;
       }
-      t.addRow({run, figure, ratio(c.value("ratio", 1.0)), intervalText(interval),
+      t.addRow({run, figure, ratio3(c.value("ratio", 1.0)), intervalText(interval),
                 pText(c.value("mann_whitney", json::object()).value("p", 1.0)),
                 signedFixed(c.value("cliffs_delta", json::object()).value("delta", 0.0), 2), c.value("verdict", ""), note});
     };
@@ -594,7 +598,9 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
     const json& counts = s.value("counts", json::object());
     const json& changes = counts.value("changes", json::array());
     std::string line = run + ": counts " + counts.value("verdict", "") + " (" + std::to_string(changes.size()) +
-                       " of " + std::to_string(counts.value("lines", 0)) + " lines differ, compared exactly)";
+                       " of " + std::to_string(counts.value("lines", 0)) +
+                       " lines differ, compared exactly; per frame, summed over the " +
+                       std::to_string(s.value("cameras", 0)) + " shared cameras)";
     countLines.push_back(line);
     size_t shown = 0;
     for (const auto& c : changes) {
@@ -616,7 +622,7 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
 
 int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
   const std::vector<std::string>& runIds = args.runs;
-  auto res = api.compare(runIds, args.confidence, args.threshold, !args.framesOnly);
+  auto res = api.compare(runIds, args.confidence, args.threshold, !args.framesOnly, !args.pooled);
   if (!res) return fail(io, res.error());
   if (io.json) {
     printJson(io, *res);

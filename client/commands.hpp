@@ -70,6 +70,7 @@ struct CompareArgs {
   std::optional<double> confidence;  // of the intervals; the server's default 0.95
   std::optional<double> threshold;   // practical threshold on |ratio - 1|; default 0
   bool framesOnly = false;           // no widening by repeated captures' spread
+  bool pooled = false;               // raw frames pooled, not aligned per camera
 };
 // The comparison table, then each later run's significance against the first
 // (times tested over per-frame times, counts exact).
@@ -82,6 +83,22 @@ struct CrossoverArgs {
   std::string metric = "bytes";  // or frame_ms
 };
 int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io);
+
+// `tally heatmap CAPTURE --renderer A [--versus B]`: a heatmap capture's
+// map as a text grid (client/heatmap.cpp) and a summary: where B gains and
+// loses most (lowest and highest ratio), by how much, and how many cells differ
+// significantly.
+struct HeatmapArgs {
+  std::string capture;
+  std::string renderer;
+  std::string versus;             // "": one renderer's values
+  std::string metric = "frame_ms";  // or bytes
+  std::string yaw = "mean";       // mean | worst | a yaw index
+  std::string scene;              // "": the capture's one heatmap scene
+  std::optional<int> width, height;
+  std::string counting;
+};
+int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io);
 
 using SweepsArgs = ListArgs<SweepFilters>;
 int runSweeps(ApiClient& api, const SweepsArgs& args, Io& io);

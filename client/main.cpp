@@ -142,6 +142,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 10.0));
   compare->add_flag("--frames-only", compareArgs.framesOnly,
                     "Do not widen intervals by the spread of repeated captures of the runs' configurations");
+  compare->add_flag("--pooled", compareArgs.pooled,
+                    "Pool the raw frames of all cameras instead of aligning each camera's on its median");
   compare->footer("Example:\n  tally compare 12 15\n  tally compare 12 15 --confidence 0.99 --threshold 0.02");
 
   CrossoverArgs crossoverArgs;
@@ -156,6 +158,29 @@ int main(int argc, char** argv) {
       "Model: y = a + b * pixels by least squares, 95% t intervals; the crossing (a2 - a1) / (b1 - b2) with a\n"
       "delta-method interval, also as the 16:9 resolution of that pixel count (docs/measurement.md, \"Crossover\").\n"
       "Example:\n  tally crossover 7\n  tally crossover 7 --metric frame_ms --json");
+
+  HeatmapArgs heatmapArgs;
+  auto* heatmapCmd = app.add_subcommand(
+      "heatmap", "Show a camera heatmap capture: one renderer per cell, or the ratio of two and where it is significant");
+  heatmapCmd->add_option("CAPTURE", heatmapArgs.capture, "Capture id (a spec with \"heatmap\")")->required();
+  heatmapCmd->add_option("--renderer", heatmapArgs.renderer, "The variant measured (its label, e.g. deferred)")
+      ->required();
+  heatmapCmd->add_option("--versus", heatmapArgs.versus, "A second variant: cells show versus / renderer");
+  heatmapCmd->add_option("--metric", heatmapArgs.metric, "frame_ms or bytes (per frame)")
+      ->check(CLI::IsMember({"bytes", "frame_ms"}))
+      ->capture_default_str();
+  heatmapCmd->add_option("--yaw", heatmapArgs.yaw, "mean (over a cell's yaws), worst, or a yaw index")
+      ->capture_default_str();
+  heatmapCmd->add_option("--scene", heatmapArgs.scene, "The scene, where the capture has several");
+  heatmapCmd->add_option("--width", heatmapArgs.width, "The resolution's width, where the capture has several");
+  heatmapCmd->add_option("--height", heatmapArgs.height, "The resolution's height, where the capture has several");
+  heatmapCmd->add_option("--counting", heatmapArgs.counting, "The counting mode, where the capture has several");
+  heatmapCmd->footer(
+      "A cell's time is the median frame time of its samples (the mean over its yaws with --yaw mean); with\n"
+      "--versus a cell is marked * when the Mann-Whitney test and the 95% interval of the ratio of per-frame times\n"
+      "both say the difference is real (docs/measurement.md, \"Camera heatmaps\").\n"
+      "Example:\n  tally heatmap 9 --renderer deferred --versus visbuffer\n"
+      "  tally heatmap 9 --renderer deferred --metric bytes --yaw worst --json");
 
   SweepsArgs sweeps;
   auto* sweepsCmd = app.add_subcommand("sweeps", "List stability sweeps, newest first, with where they fail");
@@ -272,6 +297,7 @@ int main(int argc, char** argv) {
   if (show->parsed()) return runShow(api, showId, io);
   if (compare->parsed()) return runCompare(api, compareArgs, io);
   if (crossoverCmd->parsed()) return runCrossover(api, crossoverArgs, io);
+  if (heatmapCmd->parsed()) return runHeatmap(api, heatmapArgs, io);
   if (sweepsCmd->parsed()) return runSweeps(api, sweeps, io);
   if (sweepCmd->parsed()) return runSweep(api, sweepId, io);
   if (exportCmd->parsed()) return runExport(api, exportArgs, io);

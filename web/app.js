@@ -11,6 +11,7 @@ import * as accuracy from './views/accuracy.js';
 import * as alerts from './views/alerts.js';
 import * as capture from './views/capture.js';
 import * as compare from './views/compare.js';
+import * as heatmap from './views/heatmap.js';
 import * as hosts from './views/hosts.js';
 import * as run from './views/run.js';
 import * as runs from './views/runs.js';
@@ -27,6 +28,7 @@ const kRoutes = [
   ['/sweeps', sweeps, 'sweeps'],
   ['/sweeps/:id', sweep, 'sweeps'],
   ['/capture', capture, 'capture'],
+  ['/heatmap', heatmap, 'capture'],
   ['/hosts', hosts, 'hosts'],
   ['/alerts', alerts, 'alerts'],
   ['/alerts/:id', alerts, 'alerts'],

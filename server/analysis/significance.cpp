@@ -420,6 +420,39 @@ const char* toString(EffectMagnitude m) {
 
 const char* toString(CountVerdict v) { return v == CountVerdict::Changed ? "changed" : "same"; }
 
+Result<AlignedSamples> alignStrata(const std::vector<Stratum>& strata) {
+  if (strata.empty()) return makeError("no strata to align");
+  std::vector<double> all;
+  for (size_t s = 0; s < strata.size(); ++s) {
+    if (strata[s].a.empty() || strata[s].b.empty()) {
+      return makeError("stratum " + std::to_string(s) + " has no time in sample " + (strata[s].a.empty() ? "A" : "B"));
+    }
+    for (const auto* times : {&strata[s].a, &strata[s].b}) {
+      for (size_t i = 0; i < times->size(); ++i) {
+        double v = (*times)[i];
+        if (!std::isfinite(v) || v <= 0) {
+          return makeError("stratum " + std::to_string(s) + ", sample " + (times == &strata[s].a ? "A" : "B") +
+                           ": time " + std::to_string(i) + (std::isfinite(v) ? " is not positive (" : " is not finite (") +
+                           number(v) + " ms)");
+        }
+      }
+      all.insert(all.end(), times->begin(), times->end());
+    }
+  }
+  std::sort(all.begin(), all.end());
+  const double grand = medianOfSorted(all);
+  AlignedSamples out;
+  for (const auto& stratum : strata) {
+    std::vector<double> both(stratum.a);
+    both.insert(both.end(), stratum.b.begin(), stratum.b.end());
+    std::sort(both.begin(), both.end());
+    const double factor = grand / medianOfSorted(both);
+    for (double v : stratum.a) out.a.push_back(v * factor);
+    for (double v : stratum.b) out.b.push_back(v * factor);
+  }
+  return out;
+}
+
 nlohmann::json toJson(const TimeComparison& c) {
   auto end = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   return {{"n_a", c.nA},

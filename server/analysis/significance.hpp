@@ -93,6 +93,25 @@ struct TimeComparison {
 Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vector<double>& b,
                                     const CompareOptions& options = {});
 
+// Times in strata (a run's cameras): camera-to-camera differences in time
+// dwarf a few percent between two renderers, and pooled over cameras they
+// make the test blind to a consistent difference. Aligning removes them: each
+// stratum's times, of both samples, are multiplied by M / m_s, where m_s is
+// the median of that stratum's A and B times together and M the median of all
+// times together. A ratio common to every stratum survives the alignment;
+// under no difference a stratum's times stay exchangeable between A and B,
+// since m_s is a function of the stratum's times as a set
+// (docs/statistics.md, "Cameras as strata"). Returns the aligned A and B,
+// pooled in stratum order. Errors as compareTimes's for a non-positive or
+// non-finite time, or a stratum with no time in A or in B.
+struct Stratum {
+  std::vector<double> a, b;
+};
+struct AlignedSamples {
+  std::vector<double> a, b;
+};
+Result<AlignedSamples> alignStrata(const std::vector<Stratum>& strata);
+
 // The pieces on their own (same checks on the times as compareTimes).
 Result<MannWhitney> mannWhitney(const std::vector<double>& a, const std::vector<double>& b,
                                 PValueMethod method = PValueMethod::Automatic);

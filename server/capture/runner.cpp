@@ -28,6 +28,7 @@
 #include "renderers/renderer.hpp"
 #include "renderers/scene_limits.hpp"
 #include "scenes/cameras.hpp"
+#include "scenes/heatmap.hpp"
 #include "scenes/spec.hpp"
 
 namespace tally::capture {
@@ -44,9 +45,11 @@ using nlohmann::json;
 
 // A run's notes: the renderer's (an object of its choices), and under
 // "scene" what the scene's loader simplified or ignored (Scene::notes).
-json runNotes(const renderers::Renderer& renderer, const scenes::Scene& scene) {
+json runNotes(const renderers::Renderer& renderer, const scenes::Scene& scene, const json& heatmapLayout) {
   json notes = renderer.notes();
   if (!notes.is_object()) notes = json::object();
+  // A heatmap's layout: what GET /api/heatmap rebuilds the map from.
+  if (!heatmapLayout.is_null()) notes["heatmap"] = heatmapLayout;
   if (!scene.notes.empty()) notes["scene"] = scene.notes;
   // Alpha-tested draws run without early fragment tests, so their depth and
   // stencil writes are derived from the fragments their shaders ran: an upper
@@ -302,9 +305,10 @@ class ScreenshotWriter {
 Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers::Renderer& plain,
                     const RendererVariant& variant, const spirv::Mode& mode, const std::string& where0,
                     const std::string& name, const scenes::Scene& scene, const Resolution& res,
-                    const std::vector<scenes::Camera>& cameras, const References& references,
+                    const SceneCameras& sceneCams, const References& references,
                     const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress,
                     Phases& phases, ScreenshotWriter& screenshots, const json& ceilings) {
+  const std::vector<scenes::Camera>& cameras = sceneCams.cameras;
   const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
   auto made = renderers::makeRenderer(rendererName);
@@ -325,7 +329,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
               // The footprint's block size in bytes (docs/result-schema.md); null: footprint off.
               {"footprint_block_bytes", spec.footprintBlockBytes ? json(spec.footprintBlockBytes) : json(nullptr)},
               {"lights", spec.lights},
-              {"notes", runNotes(*instrumented, scene)},
+              {"notes", runNotes(*instrumented, scene, sceneCams.heatmapLayout)},
               {"resources", resourcesJson(instrumented->resources())},
               {"samples", json::array()}};
   // The cost of the instrumentation in the compiled code, where the driver
@@ -361,6 +365,7 @@ Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers:
     addRoofline(sample, m, ceilings);
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
+    if (c < sceneCams.tags.size()) sample["camera"]["heatmap"] = sceneCams.tags[c];
     // Sky pixels are exactly the skybox pass's fragment invocations (stencil 0, early tests).
     double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
     sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
@@ -435,11 +440,18 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
   if (!scenesLoaded) return makeError(scenesLoaded.error());
   std::vector<scenes::Scene> loaded = std::move(scenesLoaded).value();
   phases.add("scene_load", std::chrono::duration<double>(Phases::Clock::now() - loading).count());
-  std::vector<std::vector<scenes::Camera>> cameras;
+  std::vector<SceneCameras> cameras;
   size_t total = 0;
-  for (const auto& scene : loaded) {
-    cameras.push_back(cameraSet(spec, scene));
-    total += spec.renderers.size() * spec.resolutions.size() * spec.modes.size() * cameras.back().size();
+  for (size_t s = 0; s < loaded.size(); ++s) {
+    auto placing = Phases::Clock::now();
+    cameras.push_back(sceneCameras(spec, loaded[s], spec.scenes[s]));
+    phases.add("cameras", std::chrono::duration<double>(Phases::Clock::now() - placing).count());
+    if (cameras.back().cameras.empty() && spec.heatmap) {
+      return makeError("scenes[" + std::to_string(s) + "] (" + sceneName(spec.scenes[s], loaded[s]) +
+                       "): heatmap: no cell has a walkable floor (" + cameras.back().heatmapLayout["empty_counts"].dump() +
+                       "); see docs/measurement.md, \"Camera heatmaps\"");
+    }
+    total += spec.renderers.size() * spec.resolutions.size() * spec.modes.size() * cameras.back().cameras.size();
   }
 
   ScreenshotWriter screenshots;
@@ -459,7 +471,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
       if (std::any_of(spec.renderers.begin(), spec.renderers.end(),
                       [](const RendererVariant& v) { return !renderers::isWorkload(v.name); })) {
         references.forward =
-            referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s], spec, phases);
+            referenceImages(ctx, gpuScene, RendererVariant{"forward", json::object()}, res, cameras[s].cameras, spec, phases);
       }
 
       for (const auto& variant : spec.renderers) {
@@ -471,7 +483,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         references.variant.clear();
         if (!variant.options.empty() && referenceVariant != variant) {
           references.variantAgainst = referenceVariant.label();
-          references.variant = referenceImages(ctx, gpuScene, referenceVariant, res, cameras[s], spec, phases);
+          references.variant = referenceImages(ctx, gpuScene, referenceVariant, res, cameras[s].cameras, spec, phases);
         }
         // One uninstrumented renderer per variant, timed again beside every mode's run.
         auto plain = renderers::makeRenderer(rendererName);
@@ -539,7 +551,24 @@ Result<std::vector<scenes::Scene>> loadScenes(const CaptureSpec& spec, bool inst
 }
 
 std::vector<scenes::Camera> cameraSet(const CaptureSpec& spec, const scenes::Scene& scene) {
+  if (spec.heatmap) return sceneCameras(spec, scene, json(nullptr)).cameras;
   return spec.autoCameras ? scenes::autoCameras(scene) : spec.cameras;
+}
+
+SceneCameras sceneCameras(const CaptureSpec& spec, const scenes::Scene& scene, const json& sceneSpec) {
+  SceneCameras out;
+  if (!spec.heatmap) {
+    out.cameras = cameraSet(spec, scene);
+    return out;
+  }
+  scenes::HeatmapPlacement placed = scenes::placeHeatmap(scene, *spec.heatmap);
+  for (const auto& pose : placed.poses) {
+    out.cameras.push_back(pose.camera);
+    out.tags.push_back(scenes::poseJson(pose, *spec.heatmap));
+  }
+  out.heatmapLayout = std::move(placed.layout);
+  out.heatmapLayout["scene"] = sceneSpec;  // what the top-down plan is rendered from
+  return out;
 }
 
 Result<json> runCapture(const CaptureSpec& spec, const CaptureOptions& options) {

@@ -42,8 +42,18 @@ renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const Render
 //   scene) pair a renderer cannot draw refused, before any GPU work; errors
 //   name the scene ("scenes[1] (sponza): ...");
 Result<std::vector<scenes::Scene>> loadScenes(const CaptureSpec& spec, bool instrumented);
-// - the cameras a scene is rendered from: the spec's, or the scene's automatic set;
+// - the cameras a scene is rendered from: the spec's, the scene's automatic
+//   set, or a heatmap's poses (placed on the scene's BVH);
 std::vector<scenes::Camera> cameraSet(const CaptureSpec& spec, const scenes::Scene& scene);
+// - with a heatmap, also each camera's "heatmap" object (its cell) and the
+//   layout the runs' notes carry (with the scene's spec as "scene"); empty
+//   tags and a null layout otherwise.
+struct SceneCameras {
+  std::vector<scenes::Camera> cameras;
+  std::vector<nlohmann::json> tags;
+  nlohmann::json heatmapLayout;
+};
+SceneCameras sceneCameras(const CaptureSpec& spec, const scenes::Scene& scene, const nlohmann::json& sceneSpec);
 // - a scene's name in results: a glTF file's stem, else the scene's own.
 std::string sceneName(const nlohmann::json& spec, const scenes::Scene& scene);
 

@@ -109,12 +109,12 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
                                                  "frames",    "counted_frames", "counting", "lights",
-                                                 "footprint", "ceilings", "labels"};
+                                                 "footprint", "ceilings",       "heatmap", "labels"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
                         "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights, footprint, ceilings, labels)");
+                        "counted_frames, counting, lights, footprint, ceilings, heatmap, labels)");
     }
   }
   CaptureSpec spec;
@@ -229,6 +229,17 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     }
   }
 
+  // heatmap: poses placed per scene, instead of cameras.
+  if (j.contains("heatmap")) {
+    if (j.contains("cameras")) {
+      return fieldError("heatmap", "cannot be combined with \"cameras\" (a heatmap places its own cameras)");
+    }
+    auto heatmap = scenes::parseHeatmapSpec(j["heatmap"]);
+    if (!heatmap) return makeError(heatmap.error());
+    spec.heatmap = std::move(heatmap).value();
+    spec.autoCameras = false;
+  }
+
   if (j.contains("frames")) {
     auto frames = boundedInt(j["frames"], "frames", 1, kMaxFrames);
     if (!frames) return makeError(frames.error());
@@ -290,7 +301,7 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     }
   }
 
-  size_t camerasPerScene = spec.autoCameras ? 10 : spec.cameras.size();
+  size_t camerasPerScene = spec.camerasPerScene();
   if (spec.sampleCount(camerasPerScene) > kMaxMatrix) {
     return fieldError("spec", "the matrix has " + std::to_string(spec.sampleCount(camerasPerScene)) +
                                   " samples, more than the limit of " + std::to_string(kMaxMatrix));

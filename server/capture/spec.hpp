@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,7 @@
 
 #include "common/resolution.hpp"
 #include "common/result.hpp"
+#include "scenes/heatmap.hpp"
 #include "scenes/scene.hpp"
 #include "spirv/instrument.hpp"
 
@@ -49,6 +51,10 @@ struct CaptureSpec {
   std::vector<Resolution> resolutions;
   bool autoCameras = true;
   std::vector<scenes::Camera> cameras;  // when !autoCameras
+  // A camera heatmap ("heatmap", replacing "cameras"): the poses are placed
+  // per scene when it is loaded (scenes/heatmap.hpp); its samples' cameras
+  // carry their cell and its runs' notes the layout.
+  std::optional<scenes::HeatmapSpec> heatmap;
   uint32_t frames = kDefaultFrames;
   // Instrumented frames per sample, whose counts are averaged and whose
   // times give the overhead ratio; 0: kDefaultCountedFrames (or `frames`
@@ -80,6 +86,11 @@ struct CaptureSpec {
   std::map<std::string, std::string> labels;
   nlohmann::json source;  // the spec as given, stored with the result
 
+  // Cameras per scene as the matrix limit counts them: automatic 10, a
+  // heatmap every pose it may place (empty floor cells are dropped later).
+  size_t camerasPerScene() const {
+    return heatmap ? heatmap->maxPoses() : autoCameras ? 10 : cameras.size();
+  }
   size_t sampleCount(size_t camerasPerScene) const {
     return renderers.size() * scenes.size() * resolutions.size() * modes.size() * camerasPerScene;
   }

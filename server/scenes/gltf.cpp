@@ -377,8 +377,8 @@ struct Loader {
       auto ext = g.extensions.find("KHR_materials_specular");
       if (ext != g.extensions.end() && ext->second.IsObject()) {
         const tinygltf::Value& color = ext->second.Get("specularColorTexture");
-        const tinygltf::Value& strength = ext->second.Get("specularTexture");
-        const tinygltf::Value& used = color.IsObject() && color.Get("index").IsInt() ? color : strength;
+        const tinygltf::Value& texture = ext->second.Get("specularTexture");
+        const tinygltf::Value& used = color.IsObject() && color.Get("index").IsInt() ? color : texture;
         if (used.IsObject() && used.Get("index").IsInt()) {
           specular = used.Get("index").GetNumberAsInt();
           specularSrgb = &used == &color;
@@ -716,7 +716,7 @@ Result<Scene> loadGltf(const std::string& path, const GltfOptions& options) {
 
   Result<bool> r = loader.loadMaterials();
   if (r) r = loader.loadNodes();
-  if (r) r = loader.decodeTextures();
+  if (r && !options.geometryOnly) r = loader.decodeTextures();
   if (!r) return makeError(quote(path) + ": " + r.error());
   if (loader.scene.meshes.empty()) return makeError(quote(path) + ": no triangles in the default scene");
 

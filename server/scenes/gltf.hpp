@@ -16,6 +16,9 @@ struct GltfOptions {
   uint32_t maxTextureSize = 0;
   // Threads decoding images (the bulk of loading Sponza); 0 = one per core.
   unsigned threads = 0;
+  // Geometry only: images are not decoded (textures keep their names and
+  // samplers, with no texels). For CPU work on the triangles (the BVH).
+  bool geometryOnly = false;
 };
 
 // Loads a .gltf (with its .bin and images) or .glb file:

@@ -103,7 +103,7 @@ Result<Scene> sky(const nlohmann::json& spec) {
   return makeSky(p);
 }
 
-Result<Scene> gltf(const nlohmann::json& spec) {
+Result<Scene> gltf(const nlohmann::json& spec, bool geometryOnly) {
   if (auto e = checkKeys(spec, {"gltf", "max_texture_size"}, "a glTF scene")) return *e;
   const nlohmann::json& path = spec["gltf"];
   if (!path.is_string() || path.get<std::string>().empty())
@@ -112,14 +112,13 @@ Result<Scene> gltf(const nlohmann::json& spec) {
   Result<int64_t> maxSize = integerField(spec, "max_texture_size", 1, kMaxTextureSizeLimit, 0);
   if (!maxSize) return makeError(maxSize.error());
   options.maxTextureSize = uint32_t(*maxSize);
+  options.geometryOnly = geometryOnly;
   Result<Scene> scene = loadGltf(path.get<std::string>(), options);
   if (!scene) return makeError("gltf: " + scene.error());
   return scene;
 }
 
-}  // namespace
-
-Result<Scene> makeScene(const nlohmann::json& spec) {
+Result<Scene> makeScene(const nlohmann::json& spec, bool geometryOnly) {
   if (spec.is_string()) {
     const std::string name = spec.get<std::string>();
     if (name == "atrium") return makeAtrium();
@@ -131,7 +130,7 @@ Result<Scene> makeScene(const nlohmann::json& spec) {
   if (spec.contains("gltf")) {
     if (spec.contains("name"))
       return makeError("name: cannot be combined with gltf (a glTF scene is named after its file)");
-    return gltf(spec);
+    return gltf(spec, geometryOnly);
   }
   if (!spec.contains("name")) return makeError("name: missing, expected " + std::string(kNames));
   const nlohmann::json& name = spec["name"];
@@ -143,5 +142,10 @@ Result<Scene> makeScene(const nlohmann::json& spec) {
   if (name == "sky") return sky(spec);
   return makeError("name: unknown scene " + name.dump() + ", expected " + kNames);
 }
+
+}  // namespace
+
+Result<Scene> makeScene(const nlohmann::json& spec) { return makeScene(spec, false); }
+Result<Scene> makeSceneGeometry(const nlohmann::json& spec) { return makeScene(spec, true); }
 
 }  // namespace tally::scenes

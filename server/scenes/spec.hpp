@@ -21,4 +21,9 @@ namespace tally::scenes {
 // ("scenes[2]."). A bare-string spec's error names no field.
 Result<Scene> makeScene(const nlohmann::json& spec);
 
+// The same scene's triangles only: a glTF file's images are not decoded
+// (GltfOptions::geometryOnly), so its textures have no texels. For CPU work
+// on the geometry (heatmap placement, the top-down plan).
+Result<Scene> makeSceneGeometry(const nlohmann::json& spec);
+
 }  // namespace tally::scenes

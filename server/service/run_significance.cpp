@@ -40,10 +40,11 @@ const store::Pass* findPass(const store::Sample& s, const std::string& name) {
   return nullptr;
 }
 
-// The figure's per-frame times pooled over `cameras`, or empty when a camera
+// The figure's per-frame times of each of `cameras`, or empty when a camera
 // lacks them.
-std::vector<double> pooled(const Samples& samples, const std::vector<std::string>& cameras, const std::string& figure) {
-  std::vector<double> out;
+std::vector<std::vector<double>> perCamera(const Samples& samples, const std::vector<std::string>& cameras,
+                                           const std::string& figure) {
+  std::vector<std::vector<double>> out;
   for (const auto& key : cameras) {
     auto it = samples.find(key);
     if (it == samples.end()) return {};
@@ -54,8 +55,15 @@ std::vector<double> pooled(const Samples& samples, const std::vector<std::string
       times = &p->gpuMsFrames;
     }
     if (!times || times->empty()) return {};
-    out.insert(out.end(), times->begin(), times->end());
+    out.push_back(*times);
   }
+  return out;
+}
+
+// The same pooled over the cameras.
+std::vector<double> pooled(const Samples& samples, const std::vector<std::string>& cameras, const std::string& figure) {
+  std::vector<double> out;
+  for (const auto& times : perCamera(samples, cameras, figure)) out.insert(out.end(), times.begin(), times.end());
   return out;
 }
 
@@ -127,6 +135,7 @@ json acrossJson(const std::optional<AcrossCapture>& a) {
 json figureJson(const FigureSignificance& f) {
   json out = analysis::toJson(f.time);
   out["across_capture"] = acrossJson(f.acrossCapture);
+  out["strata"] = f.camerasAsStrata ? "cameras" : "none";
   return out;
 }
 
@@ -202,6 +211,18 @@ Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64
   // A figure's comparison, or why there is none.
   auto figure = [&](const std::string& name, std::string& missing) -> std::optional<FigureSignificance> {
     std::vector<double> a = pooled(*samplesA, out.cameras, name), b = pooled(*samplesB, out.cameras, name);
+    if (options.camerasAsStrata && !a.empty() && !b.empty()) {
+      std::vector<analysis::Stratum> strata;
+      auto ca = perCamera(*samplesA, out.cameras, name), cb = perCamera(*samplesB, out.cameras, name);
+      for (size_t c = 0; c < ca.size(); ++c) strata.push_back({std::move(ca[c]), std::move(cb[c])});
+      auto aligned = analysis::alignStrata(strata);
+      if (!aligned) {
+        missing = aligned.error();
+        return std::nullopt;
+      }
+      a = std::move(aligned->a);
+      b = std::move(aligned->b);
+    }
     if (a.size() < 2 || b.size() < 2) {
       missing = "a shared camera has fewer than 2 per-frame times stored in one of the runs (runs stored before "
                 "per-frame times were kept have none)";
@@ -209,6 +230,7 @@ Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64
     }
     FigureSignificance f;
     f.figure = name;
+    f.camerasAsStrata = options.camerasAsStrata;
     analysis::CompareOptions compare = options.compare;
     f.acrossCapture = acrossCapture(groups, out.cameras, name);
     if (f.acrossCapture) {

@@ -33,7 +33,10 @@ struct AcrossCapture {
 
 struct FigureSignificance {
   std::string figure;  // "frame" or the pass's name
+  // Over the cameras' frames aligned (analysis::alignStrata) when the
+  // cameras were strata: then the medians and ratio are of aligned times.
   analysis::TimeComparison time;
+  bool camerasAsStrata = true;
   std::optional<AcrossCapture> acrossCapture;  // absent: no configuration had 2 comparable captures
 };
 
@@ -63,6 +66,10 @@ struct RunSignificance {
 struct SignificanceOptions {
   analysis::CompareOptions compare;  // confidence and practical threshold; its across-capture fields are set here
   bool acrossCapture = true;         // look for repeated captures of both configurations
+  // Each camera a stratum: its frames aligned on their median before pooling
+  // (the default); false pools the raw frames, and camera-to-camera spread
+  // then hides differences of a few percent (docs/statistics.md).
+  bool camerasAsStrata = true;
 };
 
 // Errors: a run that does not exist, a store error. Runs without a camera in

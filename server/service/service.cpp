@@ -14,6 +14,7 @@
 #include "service/accuracy.hpp"
 #include "service/alerts.hpp"
 #include "service/crossover.hpp"
+#include "service/heatmap.hpp"
 #include "service/repeats.hpp"
 #include "service/run_significance.hpp"
 #include "service/trace.hpp"
@@ -552,7 +553,8 @@ json validateContent(const ServiceContext& ctx, const json& body) {
   if (spec.frames > options.maxFrames) {
     invalid("frames", "at most " + std::to_string(options.maxFrames) + " on this server");
   }
-  size_t cameras = spec.autoCameras ? 10 : spec.cameras.size();
+  // A heatmap counts every pose it may place (cells x yaws).
+  size_t cameras = spec.camerasPerScene();
   if (spec.sampleCount(cameras) > options.maxMatrix) {
     invalid("spec", "the matrix (renderers x scenes x resolutions x cameras) has " +
                         std::to_string(spec.sampleCount(cameras)) + " samples; at most " +
@@ -820,12 +822,15 @@ std::vector<int64_t> runIdList(const Request& req, size_t least, size_t most) {
 }
 
 Response compare(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"runs", "confidence", "threshold", "across_capture"});
+  allowOnly(req, {"runs", "confidence", "threshold", "across_capture", "strata"});
   std::vector<int64_t> ids = runIdList(req, 2, 4);
   SignificanceOptions options;
   options.compare.confidence = queryDouble(req, "confidence", 0.5, 1, false, true).value_or(0.95);
   options.compare.practicalThreshold = queryDouble(req, "threshold", 0, 10, false, false).value_or(0);
   options.acrossCapture = queryBool(req, "across_capture").value_or(true);
+  std::string strata = queryString(req, "strata", 16).value_or("cameras");
+  if (strata != "cameras" && strata != "none") invalid("strata", "must be cameras or none");
+  options.camerasAsStrata = strata == "cameras";
   auto& store = reader(ctx);
   for (int64_t id : ids) {
     if (!check(store.getRun(id))) return api::notFound("no run " + std::to_string(id));
@@ -853,6 +858,52 @@ Response crossover(ServiceContext& ctx, const Request& req) {
   auto& store = reader(ctx);
   if (!check(store.getJob(*filter.jobId))) return api::notFound("no capture " + std::to_string(*filter.jobId));
   return Response::ok(check(crossoverModels(store, filter, metric)));
+}
+
+// A heatmap capture's map: one variant's metric per cell, or two variants'
+// and their ratio with its significance (service/heatmap.hpp).
+Response heatmap(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"capture", "renderer", "versus", "metric", "yaw", "scene", "width", "height", "counting"});
+  if (!req.queryValue("capture")) invalid("capture", "required: the heatmap capture");
+  HeatmapQuery q;
+  q.capture = *queryInt(req, "capture", 1, INT64_MAX);
+  auto renderer = queryString(req, "renderer");
+  if (!renderer) invalid("renderer", "required: the variant measured (its label, e.g. deferred)");
+  q.renderer = *renderer;
+  q.versus = queryString(req, "versus");
+  q.metric = queryString(req, "metric", 16).value_or("frame_ms");
+  if (q.metric != "frame_ms" && q.metric != "bytes") invalid("metric", "must be frame_ms or bytes");
+  q.yaw = queryString(req, "yaw", 16).value_or("mean");
+  q.scene = queryString(req, "scene");
+  q.counting = queryString(req, "counting", 64);
+  if (auto w = queryInt(req, "width", 1, kMaxDimension)) q.width = static_cast<int>(*w);
+  if (auto h = queryInt(req, "height", 1, kMaxDimension)) q.height = static_cast<int>(*h);
+  auto& store = reader(ctx);
+  if (!check(store.getJob(q.capture))) return api::notFound("no capture " + std::to_string(q.capture));
+  HeatmapAnswer answer = heatmapMap(store, q);
+  if (answer.failure) {
+    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    throw RequestError(answer.failure->status, answer.failure->status == 404 ? api::code::kNotFound : api::code::kInvalidField,
+                       answer.failure->field + ": " + answer.failure->message, answer.failure->field);
+  }
+  return Response::ok(std::move(answer.body));
+}
+
+// The top-down plan of a floor heatmap (PNG).
+Response heatmapTopDownPng(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"scene"});
+  int64_t id = pathId(req);
+  auto scene = queryString(req, "scene");
+  auto& store = reader(ctx);
+  if (!check(store.getJob(id))) return api::notFound("no capture " + std::to_string(id));
+  HeatmapAnswer answer = heatmapTopDown(store, id, scene, ctx.options.sceneFolders);
+  if (answer.failure) {
+    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    if (answer.failure->status == 404) return api::notFound(answer.failure->message);
+    throw RequestError(answer.failure->status, api::code::kInvalidField,
+                       answer.failure->field + ": " + answer.failure->message, answer.failure->field);
+  }
+  return Response::raw(std::string(answer.png.begin(), answer.png.end()), "image/png");
 }
 
 Response exportRuns(ServiceContext& ctx, const Request& req) {
@@ -991,6 +1042,8 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/samples/{id}/trace", route(getSampleTrace));
   router.get("/api/compare", route(compare));
   router.get("/api/crossover", route(crossover));
+  router.get("/api/heatmap", route(heatmap));
+  router.get("/api/heatmap/{id}/topdown.png", route(heatmapTopDownPng));
   router.get("/api/accuracy", route(accuracy));
   router.get("/api/repeats", route(repeats));
   router.get("/api/export", route(exportRuns));

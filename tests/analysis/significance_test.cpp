@@ -541,3 +541,75 @@ TEST(SignificanceRates, AcrossCaptureNoise) {
 }
 
 }  // namespace
+
+// Ten cameras whose frame times differ by up to 3x (4 to 13 ms, lognormal,
+// sigma of log 0.05), 8 frames each, B slower by a factor common to every
+// camera. Pooled over cameras, the camera-to-camera spread hides a 2%
+// difference; aligned per camera (alignStrata), the test keeps its level,
+// the interval its coverage, and the difference shows.
+TEST(SignificanceRates, CamerasAsStrata) {
+  constexpr size_t kCamerasPerRun = 10, kFramesPerCamera = 8;
+  constexpr double kShift = 1.02;
+  std::mt19937_64 rng(5150);
+  auto run = [&](double scale) {
+    std::vector<std::vector<double>> cams;
+    for (size_t c = 0; c < kCamerasPerRun; ++c) cams.push_back(lognormal(rng, kFramesPerCamera, 4.0 + c, 0.05, scale));
+    return cams;
+  };
+  auto pooled = [](const std::vector<std::vector<double>>& cams) {
+    std::vector<double> all;
+    for (const auto& c : cams) all.insert(all.end(), c.begin(), c.end());
+    return all;
+  };
+  auto aligned = [](const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b) {
+    std::vector<Stratum> strata;
+    for (size_t c = 0; c < a.size(); ++c) strata.push_back({a[c], b[c]});
+    auto out = alignStrata(strata);
+    EXPECT_TRUE(out.ok());
+    return *out;
+  };
+  int pooledFalse = 0, alignedFalse = 0, pooledDetected = 0, alignedDetected = 0, alignedCovered = 0, wrongWay = 0;
+  for (int i = 0; i < kReplications; ++i) {
+    auto a = run(1), b = run(1);
+    auto same = aligned(a, b);
+    auto p0 = compareTimes(pooled(a), pooled(b)), a0 = compareTimes(same.a, same.b);
+    ASSERT_TRUE(p0.ok() && a0.ok());
+    pooledFalse += p0->verdict != Verdict::Same;
+    alignedFalse += a0->verdict != Verdict::Same;
+    alignedCovered += a0->interval.lower <= 1 && 1 <= a0->interval.upper;
+
+    double truth = i % 2 ? 1 / kShift : kShift;
+    b = run(truth);
+    auto shifted = aligned(a, b);
+    auto p1 = compareTimes(pooled(a), pooled(b)), a1 = compareTimes(shifted.a, shifted.b);
+    ASSERT_TRUE(p1.ok() && a1.ok());
+    Verdict expected = truth > 1 ? Verdict::Slower : Verdict::Faster;
+    pooledDetected += p1->verdict == expected;
+    alignedDetected += a1->verdict == expected;
+    wrongWay += a1->verdict != expected && a1->verdict != Verdict::Same;
+    alignedCovered += a1->interval.lower <= truth && truth <= a1->interval.upper;
+  }
+  double n = kReplications;
+  std::printf("10 cameras (4-13 ms) x 8 frames, 2%% shift: pooled false positives %.4f power %.4f; aligned false "
+              "positives %.4f power %.4f coverage %.4f\n",
+              pooledFalse / n, pooledDetected / n, alignedFalse / n, alignedDetected / n, alignedCovered / (2 * n));
+  EXPECT_LT(pooledDetected / n, 0.3);  // why cameras are strata
+  EXPECT_LE(alignedFalse / n, kAlpha + tolerance(kAlpha, n));
+  EXPECT_GE(alignedCovered / (2 * n), 0.95 - tolerance(0.95, 2 * n));
+  EXPECT_GE(alignedDetected / n, 0.6);  // a t-test on log times with known sigma would have about 0.70
+  EXPECT_EQ(wrongWay, 0);
+}
+
+TEST(Significance, AlignStrataScalesEachStratumToTheGrandMedian) {
+  // Stratum 0: A {1, 3}, B {2}: median 2. Stratum 1: A {10}, B {20, 30}: median 20.
+  // All together {1, 2, 3, 10, 20, 30}: median 6.5.
+  auto out = alignStrata({{{1, 3}, {2}}, {{10}, {20, 30}}});
+  ASSERT_TRUE(out.ok()) << out.error();
+  std::vector<double> a = {1 * 6.5 / 2, 3 * 6.5 / 2, 10 * 6.5 / 20}, b = {2 * 6.5 / 2, 20 * 6.5 / 20, 30 * 6.5 / 20};
+  EXPECT_EQ(out->a, a);
+  EXPECT_EQ(out->b, b);
+  EXPECT_EQ(alignStrata({}).error(), "no strata to align");
+  EXPECT_EQ(alignStrata({{{1}, {}}}).error(), "stratum 0 has no time in sample B");
+  EXPECT_NE(alignStrata({{{1}, {0}}}).error().find("stratum 0, sample B: time 0 is not positive (0 ms)"),
+            std::string::npos);
+}

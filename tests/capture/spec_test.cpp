@@ -208,3 +208,38 @@ TEST(CaptureSpec, MatrixLimitCountsModes) {
 
 }  // namespace
 }  // namespace tally::capture
+
+namespace tally::capture {
+namespace {
+
+// "heatmap" replaces "cameras": parsed by scenes::parseHeatmapSpec, its
+// errors named from "heatmap", and every pose it may place counted in the
+// matrix limit.
+TEST(CaptureSpec, Heatmap) {
+  auto spec = parse(R"({"renderers":["deferred","visbuffer"],"resolutions":[[64,36]],
+    "heatmap":{"layout":"floor","cells":[4,3],"yaws":2}})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  ASSERT_TRUE(spec->heatmap.has_value());
+  EXPECT_FALSE(spec->autoCameras);
+  EXPECT_EQ(spec->heatmap->columns, 4u);
+  EXPECT_EQ(spec->heatmap->rows, 3u);
+  EXPECT_EQ(spec->camerasPerScene(), 24u);
+  EXPECT_EQ(spec->sampleCount(spec->camerasPerScene()), 48u);
+
+  auto both = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":"auto","heatmap":{"layout":"sphere"}})");
+  ASSERT_FALSE(both.ok());
+  EXPECT_EQ(both.error().rfind("heatmap: cannot be combined with \"cameras\"", 0), 0u) << both.error();
+
+  auto bad = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"heatmap":{"layout":"floor","cells":[4,0]}})");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().rfind("heatmap.cells[1]: must be an integer between 1 and 256, got 0", 0), 0u) << bad.error();
+
+  // 100 x 100 cells x 1 yaw x 2 renderers = 20000 samples: over kMaxMatrix.
+  auto big = parse(R"({"renderers":["deferred","visbuffer"],"resolutions":[[8,8]],
+    "heatmap":{"layout":"floor","cells":[100,100],"yaws":1}})");
+  ASSERT_FALSE(big.ok());
+  EXPECT_EQ(big.error().rfind("spec: the matrix has 20000 samples", 0), 0u) << big.error();
+}
+
+}  // namespace
+}  // namespace tally::capture

@@ -2,9 +2,10 @@
 # The crossover capture on the GPU machine, through the daemon: tallyd serve
 # on a fresh SQLite store, tests/gpu/crossover-atrium.json posted (cameras
 # cut to CAMERAS of the spec's automatic set, frames to FRAMES, to fit the
-# machine's time), then GET /api/crossover for bytes and frame time.
+# machine's time), then GET /api/crossover for bytes and frame time, and at
+# each resolution GET /api/compare's significance of the variants' frame times.
 #
-#   tests/gpu/crossover.sh        OUT=dir (default ./gpu-out): crossover/{spec,capture,bytes,frame_ms}.json,
+#   tests/gpu/crossover.sh        OUT=dir (default ./gpu-out): crossover/{spec,capture,bytes,frame_ms,significance,frames}.json,
 #                                 crossover/serve.log
 #   CAMERAS=2 FRAMES=10           the defaults
 #   SCENE=sponza                  Sponza (.scenes/sponza, else ../shared's) with its 10 automatic
@@ -88,4 +89,44 @@ for metric in ("bytes", "frame_ms"):
                                       json.dumps({k: x.get(k) for k in ("pixels", "pixels_ci", "resolution",
                                                                          "resolution_ci", "lower_below",
                                                                          "lower_above", "lower_throughout")})))
+# At each resolution, every later variant against the first: frame times
+# tested over the per-frame times of all cameras (GET /api/compare's
+# significance), so the crossing can be read against what each resolution
+# shows on its own.
+runs = call("GET", "/api/runs?capture=%d&limit=1000" % job)["runs"]
+by_res = {}
+for r in runs:
+    by_res.setdefault((r["width"], r["height"]), []).append(r)
+rows = []
+for (w, h), rs in sorted(by_res.items(), key=lambda kv: kv[0][0] * kv[0][1]):
+    rs.sort(key=lambda r: r["variant"])
+    ids = ",".join(str(r["id"]) for r in rs[:4])
+    for strata in ("cameras", "none"):
+        c = call("GET", "/api/compare?runs=%s&strata=%s" % (ids, strata))
+        for s in c["significance"]:
+            f = s.get("frame")
+            b = next(r for r in rs if r["id"] == s["run_b"])
+            row = {"width": w, "height": h, "a": rs[0]["variant"], "b": b["variant"], "strata": strata,
+                   "cameras": s.get("cameras")}
+            if f:
+                row.update({"ratio": f["ratio"], "lower": f["interval"]["lower"], "upper": f["interval"]["upper"],
+                            "p": f["mann_whitney"]["p"], "cliffs_delta": f["cliffs_delta"]["delta"],
+                            "verdict": f["verdict"], "n": f["n_a"]})
+                print("frame %dx%d %s vs %s (%s): ratio %.4f [%s, %s] p %.3g delta %+.2f %s" % (
+                    w, h, b["variant"], rs[0]["variant"], strata, f["ratio"], f["interval"]["lower"],
+                    f["interval"]["upper"], f["mann_whitney"]["p"], f["cliffs_delta"]["delta"], f["verdict"]))
+            else:
+                row["missing"] = s.get("frame_missing") or s.get("error")
+            rows.append(row)
+# Every sample's per-frame times, for analyses after the fact (the database
+# itself, with its screenshots, is too large to bring back).
+frames = []
+for r in runs:
+    for smp in call("GET", "/api/runs/%d/samples" % r["id"])["samples"]:
+        full = call("GET", "/api/samples/%d" % smp["id"])
+        frames.append({"run": r["id"], "variant": r["variant"], "width": r["width"], "height": r["height"],
+                       "camera": smp["camera_index"], "frame_ms_frames": full.get("frame_ms_frames"),
+                       "passes": {p["name"]: p.get("gpu_ms_frames") for p in full.get("passes", [])}})
+json.dump(frames, open(out + "/frames.json", "w"))
+json.dump(rows, open(out + "/significance.json", "w"), indent=1)
 EOF

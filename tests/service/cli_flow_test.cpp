@@ -566,17 +566,35 @@ void CliFlow::checkCompare(Db& db, const DbRun& a, const DbRun& b) {
     EXPECT_TRUE(comparesAs(comparedCells(cmp.out, pass, "(all)", "bytes"), va, vb, true)) << pass;
   }
   // The significance rows: the frame's ratio is the ratio of the medians of
-  // the per-frame times stored for each run, pooled over its cameras.
-  auto pooledMedian = [&](int64_t run) {
-    std::vector<double> all;
-    for (const auto& r : db.rows("SELECT frame_ms_frames FROM samples WHERE run_id = ?1", {run})) {
-      for (double t : json::parse(r[0].get<std::string>())) all.push_back(t);
-    }
-    std::sort(all.begin(), all.end());
-    size_t n = all.size();
-    return n == 0 ? 0.0 : n % 2 ? all[n / 2] : 0.5 * (all[n / 2 - 1] + all[n / 2]);
+  // the per-frame times stored for each run, each camera's aligned on the
+  // median of both runs' frames of that camera (docs/statistics.md).
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
   };
-  double ma = pooledMedian(a.id), mb = pooledMedian(b.id);
+  auto framesOf = [&](int64_t run) {
+    std::map<int64_t, std::vector<double>> byCamera;
+    for (const auto& r : db.rows("SELECT camera_index, frame_ms_frames FROM samples WHERE run_id = ?1", {run})) {
+      for (double t : json::parse(r[1].get<std::string>())) byCamera[r[0].get<int64_t>()].push_back(t);
+    }
+    return byCamera;
+  };
+  auto fa = framesOf(a.id), fb = framesOf(b.id);
+  std::vector<double> all, alignedA, alignedB;
+  for (const auto& [camera, times] : fa) {
+    all.insert(all.end(), times.begin(), times.end());
+    all.insert(all.end(), fb[camera].begin(), fb[camera].end());
+  }
+  double grand = median(all);
+  for (const auto& [camera, times] : fa) {
+    std::vector<double> both = times;
+    both.insert(both.end(), fb[camera].begin(), fb[camera].end());
+    double m = median(both);
+    for (double t : times) alignedA.push_back(t * grand / m);
+    for (double t : fb[camera]) alignedB.push_back(t * grand / m);
+  }
+  double ma = median(alignedA), mb = median(alignedB);
   ASSERT_GT(ma, 0);
   std::vector<std::vector<std::string>> frameRows;
   for (const auto& c : rowsStartingWith(cmp.out, "#" + std::to_string(b.id))) {
@@ -761,6 +779,7 @@ TEST(CliHelp, EverySubcommandListsItsOptions) {
       {"show", {"RUN"}},
       {"compare", {"RUN"}},
       {"crossover", {"CAPTURE", "--metric"}},
+      {"heatmap", {"CAPTURE", "--renderer", "--versus", "--metric", "--yaw"}},
       {"export", {"--format", "--runs", "--output"}},
   };
   for (const auto& f : filters) {

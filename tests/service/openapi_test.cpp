@@ -87,7 +87,7 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
       "/api/samples/{id}/trace",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
-      "/api/crossover",
+      "/api/crossover",    "/api/heatmap",      "/api/heatmap/{id}/topdown.png",
       "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics",
       "/api/baselines",    "/api/baselines/{id}", "/api/alerts",          "/api/alerts/{id}",
       "/api/trend"};
@@ -189,6 +189,27 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
     ASSERT_EQ(crossover["crossings"].size(), 1u) << crossover.dump();
   }
   expect("GET", "/api/crossover", "/api/crossover", 400);
+
+  // /api/heatmap: a tiny floor heatmap, two renderers, frame time and bytes.
+  json heatmap = tinySpec();
+  heatmap.erase("cameras");
+  heatmap["scenes"] = {"atrium"};
+  heatmap["heatmap"] = {{"layout", "floor"}, {"cells", {2, 1}}, {"yaws", 1}};
+  posted = daemon_->request("POST", "/api/captures", heatmap.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  int64_t heatmapId = posted.j()["id"];
+  ASSERT_EQ(daemon_->waitFinished(heatmapId).value("status", ""), "done");
+  json renderersOf = expect("GET", "/api/runs?capture=" + std::to_string(heatmapId), "/api/runs", 200);
+  ASSERT_EQ(renderersOf["runs"].size(), 2u);
+  const std::string first = renderersOf["runs"][1]["variant"], second = renderersOf["runs"][0]["variant"];
+  for (std::string metric : {"frame_ms", "bytes"}) {
+    json map = expect("GET", "/api/heatmap?capture=" + std::to_string(heatmapId) + "&renderer=" + first + "&versus=" +
+                                 second + "&metric=" + metric,
+                      "/api/heatmap", 200);
+    EXPECT_EQ(map["cells"].size(), 2u) << map.dump();
+  }
+  expect("GET", "/api/heatmap?capture=" + std::to_string(heatmapId) + "&renderer=" + first, "/api/heatmap", 200);
+  expect("GET", "/api/heatmap?capture=" + std::to_string(heatmapId), "/api/heatmap", 400);
 
   // A variant run: options, variant label, extras and variant_error (the
   // clamped uv derivatives against their float32 reference), found by the

@@ -457,6 +457,7 @@ TEST_F(ServiceTest, BadRequestsNameTheField) {
       {"compare at confidence 1", "GET", "/api/compare?runs=1,2&confidence=1", nullptr, 400, "invalid_field", "confidence"},
       {"compare at confidence x", "GET", "/api/compare?runs=1,2&confidence=x", nullptr, 400, "invalid_field", "confidence"},
       {"compare with a negative threshold", "GET", "/api/compare?runs=1,2&threshold=-0.1", nullptr, 400, "invalid_field", "threshold"},
+      {"compare with strata by pass", "GET", "/api/compare?runs=1,2&strata=passes", nullptr, 400, "invalid_field", "strata"},
       {"compare across_capture maybe", "GET", "/api/compare?runs=1,2&across_capture=maybe", nullptr, 400, "invalid_field", "across_capture"},
       {"export as xml", "GET", "/api/export?format=xml", nullptr, 400, "invalid_field", "format"},
       {"export runs not ids", "GET", "/api/export?runs=1,x", nullptr, 400, "invalid_field", "runs"},

@@ -375,28 +375,43 @@ describe('dashboard', () => {
     await close();
   });
 
-  test('compare view: each run\'s significance is the API\'s, its ratio the pooled frames\' medians, and the level can be changed', async () => {
+  test('compare view: each run\'s significance is the API\'s, its ratio the camera-aligned frames\' medians; level and pooling can be changed', async () => {
     const runs = [runOf('forward', 128), runOf('deferred', 128), runOf('visbuffer', 128)];
     const ids = runs.map((r) => r.id);
     const c = await daemon.get(`/compare?runs=${ids.join(',')}`);
     assert.equal(c.significance.length, 2);
-    // Every run's per-frame times pooled over its cameras, from the samples route.
-    const pooled = async (id) => {
+    // Every run's per-frame times by camera, from the samples route.
+    const framesOf = async (id) => {
       const { samples } = await daemon.get(`/runs/${id}/samples`);
-      const all = [];
-      for (const s of samples) all.push(...(await daemon.get(`/samples/${s.id}`)).frame_ms_frames);
-      return all.sort((a, b) => a - b);
+      const byCamera = new Map();
+      for (const s of samples) byCamera.set(s.camera_index, (await daemon.get(`/samples/${s.id}`)).frame_ms_frames);
+      return byCamera;
     };
-    const median = (v) => (v.length % 2 ? v[(v.length - 1) / 2] : 0.5 * (v[v.length / 2 - 1] + v[v.length / 2]));
-    const framesA = await pooled(ids[0]);
+    const median = (values) => {
+      const v = [...values].sort((x, y) => x - y);
+      return v.length % 2 ? v[(v.length - 1) / 2] : 0.5 * (v[v.length / 2 - 1] + v[v.length / 2]);
+    };
+    // Each camera's frames of both runs scaled by (median of all) / (median of the camera's).
+    const alignedRatio = (fa, fb) => {
+      const grand = median([...fa.values(), ...fb.values()].flat());
+      const a = [], b = [];
+      for (const [camera, times] of fa) {
+        const m = median([...times, ...fb.get(camera)]);
+        a.push(...times.map((t) => (t * grand) / m));
+        b.push(...fb.get(camera).map((t) => (t * grand) / m));
+      }
+      return median(b) / median(a);
+    };
+    const framesA = await framesOf(ids[0]);
     const { page, errors, close } = await open(`#/compare?runs=${ids.join(',')}`);
     const table = page.locator('[data-table="significance"]');
     await table.waitFor({ timeout: kViewMs });
     for (const s of c.significance) {
-      const framesB = await pooled(s.run_b);
-      assert.equal(s.frame.n_a, framesA.length);
-      assert.equal(s.frame.n_b, framesB.length);
-      assertClose(s.frame.ratio, median(framesB) / median(framesA), `frame ratio of run ${s.run_b}`);
+      const framesB = await framesOf(s.run_b);
+      assert.equal(s.frame.strata, 'cameras');
+      assert.equal(s.frame.n_a, [...framesA.values()].flat().length);
+      assert.equal(s.frame.n_b, [...framesB.values()].flat().length);
+      assertClose(s.frame.ratio, alignedRatio(framesA, framesB), `frame ratio of run ${s.run_b}`);
       const row = page.locator(`[data-table="significance"] tr[data-run="${s.run_b}"][data-figure="frame"]`);
       assert.equal(await row.getAttribute('data-verdict'), s.frame.verdict);
       assert.equal(Number(await row.getAttribute('data-ratio')), s.frame.ratio);
@@ -422,6 +437,12 @@ describe('dashboard', () => {
         assert.ok(s.frame.interval.lower <= c.significance[i].frame.interval.lower, '99% is no narrower than 95%');
       }
     }
+    // Unticking "Align each camera" asks for the raw frames pooled: the ratio of pooled medians.
+    await page.uncheck('input[name="strata"]');
+    await page.locator('[data-table="significance"][data-strata="none"]').waitFor({ timeout: kViewMs });
+    const pooledRow = page.locator(`[data-table="significance"] tr[data-run="${ids[1]}"][data-figure="frame"]`);
+    const framesB = await framesOf(ids[1]);
+    assertClose(Number(await pooledRow.getAttribute('data-ratio')), median([...framesB.values()].flat()) / median([...framesA.values()].flat()), 'pooled frame ratio');
     await screenshot(page, 'compare-significance');
     assert.deepEqual(errors, []);
     await close();

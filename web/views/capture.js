@@ -67,6 +67,17 @@ function variantRow(renderer, optionDefs, checked, list = 'renderers') {
   return row;
 }
 
+// "auto", or a camera heatmap (docs/measurement.md, "Camera heatmaps"): a
+// floor grid "CxR" with yaws per cell, or a sphere "RINGSxSEGMENTS".
+function camerasOf(data) {
+  const mode = data.get('cameras_mode');
+  if (mode !== 'floor' && mode !== 'sphere') return { cameras: 'auto' };
+  const [a, b] = String(data.get('heatmap_grid')).split(/[x×,]/).map((v) => numberOr(v.trim()));
+  return mode === 'floor'
+    ? { heatmap: { layout: 'floor', cells: [a, b], yaws: numberOr(data.get('heatmap_yaws')) } }
+    : { heatmap: { layout: 'sphere', rings: a, segments: b } };
+}
+
 function specOf(form) {
   const data = new FormData(form);
   const counting = data.get('counting') === 'sampled' ? `sampled:${data.get('sample_n').trim()}` : data.get('counting');
@@ -77,7 +88,7 @@ function specOf(form) {
     ...(workloads.length ? { workloads } : {}),
     scenes: [...data.getAll('scenes'), ...data.getAll('gltf').map((path) => ({ gltf: path }))],
     resolutions: parseResolutions(data.get('resolutions')),
-    cameras: 'auto',
+    ...camerasOf(data),
     frames: numberOr(data.get('frames')),
     ...(data.get('counted_frames').trim() !== '' ? { counted_frames: numberOr(data.get('counted_frames')) } : {}),
     counting,
@@ -190,7 +201,7 @@ function appForm(onSubmit) {
 
 function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
   const choice = (name, value, checked) => h('label', {}, h('input', { type: 'checkbox', name, value, checked }), ' ', value);
-  const field = (label, control, hint) => h('label', { class: 'field', dataset: { field: control.name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
+  const field = (label, control, hint, name = control.name) => h('label', { class: 'field', dataset: { field: name } }, h('span', {}, label), control, hint ? h('small', { class: 'muted' }, hint) : null);
   const samplingN = h('input', { name: 'sample_n', value: '4', size: 4, 'aria-label': 'Sampling tile size N' });
   // The server's modes, the default (accumulate) first.
   const counting = h('select', { name: 'counting' },
@@ -217,7 +228,11 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
       field('Footprint', h('select', { name: 'footprint' }, [['off', 'off'], ['32', '32 B blocks'], ['64', '64 B blocks'], ['128', '128 B blocks']]
         .map(([value, text]) => h('option', { value, selected: value === 'off' }, text))),
       'distinct bytes touched per line, beside the requested bytes; counted frames cost more'),
-      h('div', { class: 'field' }, h('span', {}, 'Cameras'), h('span', {}, 'auto: 10 per scene'))),
+      h('label', { class: 'field', dataset: { field: 'heatmap' } }, h('span', {}, 'Cameras'),
+        h('select', { name: 'cameras_mode' }, [['auto', 'auto: 10 per scene'], ['floor', 'heatmap: floor grid'], ['sphere', 'heatmap: sphere']]
+          .map(([value, text]) => h('option', { value, selected: value === 'auto' }, text)))),
+      field('Heatmap grid', h('input', { name: 'heatmap_grid', value: '8x4' }), 'floor: cells along x × z; sphere: rings × segments', 'heatmap.cells'),
+      field('Heatmap yaws', h('input', { name: 'heatmap_yaws', value: '4', inputmode: 'numeric' }), 'floor: directions per cell', 'heatmap.yaws')),
     h('button', { type: 'submit' }, 'Start capture'),
     h('div', { class: 'form-error', role: 'alert' }));
   form.addEventListener('submit', (e) => {
@@ -278,7 +293,8 @@ function progressPanel(job) {
     job.error ? h('div', { class: 'error' }, job.error) : null,
     attemptErrors(job),
     done && job.sweeps && job.sweeps.length ? h('a', { href: `#/sweeps/${job.sweeps[0]}` }, 'See its sweep') : null,
-    done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null);
+    done && !job.spec.sweep ? h('a', { href: `#/runs?capture=${job.id}` }, 'See its runs') : null,
+    done && job.spec.heatmap ? [' · ', h('a', { href: `#/heatmap?capture=${job.id}`, dataset: { heatmapLink: job.id } }, 'See its heatmap')] : null);
 }
 
 function summary(spec) {
@@ -288,7 +304,8 @@ function summary(spec) {
   const scenes = (spec.scenes || ['atrium']).map((s) => (typeof s === 'string' ? s : s.name || s.gltf)).join(', ');
   const res = (spec.resolutions || []).map((r) => (Array.isArray(r) ? r.join('×') : String(r))).join(', ');
   const variant = (r) => (typeof r === 'string' ? r : [r.renderer, ...Object.entries(r.options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`)].join(' '));
-  return `${[...(spec.renderers || []), ...(spec.workloads || [])].map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}`;
+  const heatmap = spec.heatmap ? ` · heatmap ${spec.heatmap.layout}${spec.heatmap.cells ? ` ${spec.heatmap.cells.join('×')}` : ''}` : '';
+  return `${[...(spec.renderers || []), ...(spec.workloads || [])].map(variant).join(', ')} · ${scenes} · ${res}${spec.counting && spec.counting !== 'exact' ? ` · ${spec.counting}` : ''}${heatmap}`;
 }
 
 function jobTable(jobs, onCancel) {
@@ -305,7 +322,8 @@ function jobTable(jobs, onCancel) {
       h('td', {}, fmt.date(j.finished_at)),
       h('td', { class: 'error', style: 'white-space: normal; min-width: 12rem' }, j.error || ''),
       h('td', {}, kFinished.includes(j.status)
-        ? (j.status === 'done' ? (j.spec.sweep ? h('a', { href: `#/sweeps?capture=${j.id}` }, 'sweep') : h('a', { href: `#/runs?capture=${j.id}` }, 'runs')) : '')
+        ? (j.status === 'done' ? (j.spec.sweep ? h('a', { href: `#/sweeps?capture=${j.id}` }, 'sweep') : [h('a', { href: `#/runs?capture=${j.id}` }, 'runs'),
+          j.spec.heatmap ? [' · ', h('a', { href: `#/heatmap?capture=${j.id}`, dataset: { heatmapLink: j.id } }, 'heatmap')] : null]) : '')
         : h('button', { type: 'button', class: 'secondary', onclick: () => onCancel(j.id) }, 'Cancel')))))));
 }
 

@@ -500,7 +500,7 @@ function significanceTable(c) {
   }
   const pct = Math.round(c.confidence * 1000) / 10;
   return h('div', {},
-    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'significance', dataset: { table: 'significance', confidence: c.confidence } },
+    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'significance', dataset: { table: 'significance', confidence: c.confidence, strata: c.significance.find((s) => s.frame)?.frame.strata ?? '' } },
       h('thead', {}, h('tr', {}, ['Run', 'Figure', 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
       h('tbody', {}, rows))),
     h('ul', { class: 'counts-verdicts' }, counts));
@@ -511,20 +511,22 @@ function significanceTable(c) {
 // new request).
 function significance(page, c, ids, signal) {
   page.append(h('h2', {}, 'Is it real? Times tested, counts exact'),
-    h('p', { class: 'muted' }, 'Each run against the reference: per-frame times pooled over the cameras both measured. The interval is Hodges-Lehmann on log times, the test Mann-Whitney U, widened by the spread of repeated captures of the same configuration where there are any (docs/statistics.md).'));
+    h('p', { class: 'muted' }, 'Each run against the reference, over the per-frame times of the cameras both measured, each camera\'s frames aligned on their median so that differences between cameras do not hide one between runs. The interval is Hodges-Lehmann on log times, the test Mann-Whitney U, widened by the spread of repeated captures of the same configuration where there are any (docs/statistics.md).'));
   const confidence = h('select', { name: 'confidence' }, [0.9, 0.95, 0.99].map((v) => h('option', { value: v, selected: v === 0.95 }, `${v * 100}%`)));
   const threshold = h('select', { name: 'threshold' }, [0, 0.01, 0.02, 0.05, 0.1].map((v) => h('option', { value: v, selected: v === 0 }, v === 0 ? 'none' : `${v * 100}%`)));
   const across = h('input', { type: 'checkbox', name: 'across_capture', checked: true });
+  const strata = h('input', { type: 'checkbox', name: 'strata', checked: true });
   const field = (label, control) => h('label', { class: 'field' }, h('span', {}, label), control);
   const out = h('div', { dataset: { significance: 'table' } }, significanceTable(c));
   page.append(h('form', { class: 'filters', 'aria-label': 'Significance' },
-    field('Level', confidence), field('Practical threshold', threshold), field('Widen by repeated captures', across)), out);
+    field('Level', confidence), field('Practical threshold', threshold), field('Align each camera', strata),
+    field('Widen by repeated captures', across)), out);
   let asked = 0;
   const redraw = async () => {
     const ticket = ++asked;
     out.dataset.significance = 'loading';
     try {
-      const again = await get('/compare' + queryString({ runs: ids.join(','), confidence: confidence.value, threshold: threshold.value, across_capture: across.checked }), signal);
+      const again = await get('/compare' + queryString({ runs: ids.join(','), confidence: confidence.value, threshold: threshold.value, across_capture: across.checked, strata: strata.checked ? 'cameras' : 'none' }), signal);
       if (ticket !== asked) return;
       out.replaceChildren(significanceTable(again));
       out.dataset.significance = 'table';
@@ -532,7 +534,7 @@ function significance(page, c, ids, signal) {
       if (!signal.aborted) out.replaceChildren(h('p', { class: 'panel error', role: 'alert' }, error.message));
     }
   };
-  for (const control of [confidence, threshold, across]) control.addEventListener('change', redraw);
+  for (const control of [confidence, threshold, strata, across]) control.addEventListener('change', redraw);
 }
 
 function chooser() {
