@@ -49,6 +49,7 @@ std::vector<std::pair<std::string, std::string>> filterParams(const RunFilters& 
   if (f.capture) p.emplace_back("capture", *f.capture);
   if (f.runs) p.emplace_back("runs", *f.runs);
   if (f.host) p.emplace_back("host", *f.host);
+  if (f.label) p.emplace_back("label", *f.label);
   return p;
 }
 
@@ -157,6 +158,8 @@ Result<ApiClient::Raw> ApiClient::send(const std::string& method, const std::str
     res = http_->Get(path, headers);
   } else if (method == "POST") {
     res = http_->Post(path, headers, body, "application/json");
+  } else if (method == "PATCH") {
+    res = http_->Patch(path, headers, body, "application/json");
   } else if (method == "DELETE") {
     res = http_->Delete(path, headers);
   } else {
@@ -234,6 +237,42 @@ Result<json> ApiClient::listRuns(const RunFilters& filters, std::optional<int> l
 Result<json> ApiClient::listAllRuns(const RunFilters& filters, std::optional<int> limit) {
   return allPages(
       "runs", [&](const std::string& cursor) { return listRuns(filters, limit, cursor); }, runList);
+}
+
+Result<json> ApiClient::setBaseline(const std::string& runId, std::optional<double> threshold,
+                                    const std::optional<std::string>& name) {
+  json body;
+  try {
+    size_t used = 0;
+    long long id = std::stoll(runId, &used);
+    if (used != runId.size() || id < 1) throw std::invalid_argument("not positive");
+    body["run"] = id;
+  } catch (const std::exception&) {
+    return makeError("RUN: must be a run id (a positive integer), got '" + runId + "'");
+  }
+  if (threshold) body["threshold"] = *threshold;
+  if (name) body["name"] = *name;
+  return sendJson("POST", "/api/baselines", body.dump());
+}
+
+Result<json> ApiClient::listBaselines(bool all) {
+  return sendJson("GET", "/api/baselines" + (all ? query({{"all", "true"}}) : std::string()));
+}
+
+Result<json> ApiClient::removeBaseline(const std::string& id) {
+  return sendJson("DELETE", "/api/baselines/" + pathId(id));
+}
+
+Result<json> ApiClient::listAlerts(const std::optional<std::string>& status, const std::optional<std::string>& baseline,
+                                   std::optional<int> limit, const std::string& cursor) {
+  Params params;
+  if (status) params.emplace_back("status", *status);
+  if (baseline) params.emplace_back("baseline", *baseline);
+  return sendJson("GET", "/api/alerts" + pageQuery(params, limit, cursor));
+}
+
+Result<json> ApiClient::setAlertStatus(const std::string& id, const std::string& status) {
+  return sendJson("PATCH", "/api/alerts/" + pathId(id), json{{"status", status}}.dump());
 }
 
 Result<json> ApiClient::getRun(const std::string& id) { return sendJson("GET", "/api/runs/" + pathId(id)); }
@@ -373,6 +412,11 @@ RunView runView(const json& run) {
   v.counting = str(run, "counting");
   v.createdAt = str(run, "created_at");
   v.host = str(run, "host");
+  if (const json* l = field(run, "labels"); l && l->is_object()) {
+    for (const auto& [k, value] : l->items()) {
+      v.labels += (v.labels.empty() ? "" : ",") + k + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
+    }
+  }
   v.tallyVersion = str(run, "tally_version");
   v.tallyCommit = str(run, "tally_commit");
   v.width = integer(run, "width");

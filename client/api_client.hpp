@@ -45,6 +45,7 @@ struct RunFilters {
   std::optional<std::string> renderer, scene, device, capture, runs;
   std::optional<std::string> variant;  // exact variant label
   std::optional<std::string> host;     // exact host name; /api/runs only (the export takes no host)
+  std::optional<std::string> label;    // NAME=VALUE; /api/runs only
   std::optional<int> width, height;
 };
 
@@ -93,6 +94,15 @@ class ApiClient {
   Result<std::string> exportRuns(const std::string& format, const RunFilters& filters);
   // GET /api/samples/{id}/trace: the sample as Chrome trace-event JSON, verbatim.
   Result<std::string> sampleTrace(const std::string& sampleId);
+  // Baselines and alerts (docs/api.md, "Baselines and alerts").
+  Result<json> setBaseline(const std::string& runId, std::optional<double> threshold,
+                           const std::optional<std::string>& name);
+  Result<json> listBaselines(bool all);
+  Result<json> removeBaseline(const std::string& id);
+  // One page of alerts, newest first; status and baseline empty: any.
+  Result<json> listAlerts(const std::optional<std::string>& status, const std::optional<std::string>& baseline,
+                          std::optional<int> limit, const std::string& cursor = "");
+  Result<json> setAlertStatus(const std::string& id, const std::string& status);
 
  private:
   struct Raw {
@@ -139,6 +149,7 @@ std::vector<json> jobList(const json& page);  // the "captures" array
 struct RunView {
   std::string id, capture, renderer, scene, device, counting, createdAt;
   std::string host;  // the host that captured it; "" for runs stored before hosts existed
+  std::string labels;  // its capture's labels, "commit=4f2a9c1,branch=main"; "" for none
   std::string tallyVersion, tallyCommit;  // the build that made it; "" for runs stored before builds recorded it
   // The variant label ("visbuffer barycentrics=float32"; the renderer for a
   // run without options or from a server before variants) and its options.

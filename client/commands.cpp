@@ -112,10 +112,27 @@ namespace {
 int submitAndFollow(ApiClient& api, const json& spec, const CaptureArgs& args, Io& io);
 }  // namespace
 
+Result<json> withLabels(json spec, const std::vector<std::string>& labels) {
+  if (labels.empty()) return spec;
+  if (!spec.is_object()) return makeError("--label: the spec must be a JSON object");
+  if (!spec.contains("labels")) spec["labels"] = json::object();
+  if (!spec["labels"].is_object()) return makeError("--label: the spec's \"labels\" is not an object");
+  for (const auto& kv : labels) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == kv.size()) {
+      return makeError("--label: expected NAME=VALUE, got '" + kv + "'");
+    }
+    spec["labels"][kv.substr(0, eq)] = kv.substr(eq + 1);
+  }
+  return spec;
+}
+
 int runCapture(ApiClient& api, const CaptureArgs& args, Io& io) {
   auto spec = readSpec(args.spec);
   if (!spec) return fail(io, spec.error());
-  return submitAndFollow(api, *spec, args, io);
+  auto labelled = withLabels(*spec, args.labels);
+  if (!labelled) return fail(io, labelled.error());
+  return submitAndFollow(api, *labelled, args, io);
 }
 
 Result<json> profileSpec(const ProfileArgs& args) {
@@ -331,12 +348,13 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
   auto res = args.all ? api.listAllRuns(args.filters, args.limit) : api.listRuns(args.filters, args.limit);
   // A page with footprint runs says which bytes are which: requested beside footprint.
   // A page of runs from named hosts (a fleet) says which host made each.
-  bool footprint = false, hosts = false;
+  bool footprint = false, hosts = false, labels = false;
   if (res) {
     for (const auto& run : runList(*res)) {
       RunView r = runView(run);
       footprint = footprint || r.hasFootprint();
       hosts = hosts || !r.host.empty();
+      labels = labels || !r.labels.empty();
     }
   }
   std::vector<Table::Column> columns = {{"ID", Align::Right},
@@ -354,7 +372,8 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
     columns.push_back({"FOOTPRINT/FRAME", Align::Right});
     columns.push_back({"REUSE", Align::Right});
   }
-  return printListing(io, res, args.all, "runs", columns, [footprint, hosts](const json& page, Table& t) {
+  if (labels) columns.push_back({"LABELS"});
+  return printListing(io, res, args.all, "runs", columns, [footprint, hosts, labels](const json& page, Table& t) {
     for (const auto& run : runList(page)) {
       RunView r = runView(run);
       std::vector<std::string> row = {r.id, orMissing(r.capture), r.variant, r.scene, size(r), orMissing(r.device),
@@ -365,6 +384,7 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
         row.push_back(humanBytes(r.footprintBytes));
         row.push_back(ratio(r.reuse));
       }
+      if (labels) row.push_back(orMissing(r.labels));
       t.addRow(row);
     }
   });
@@ -933,6 +953,119 @@ int runExport(ApiClient& api, const ExportArgs& args, Io& io) {
   auto written = writeFileAtomically(args.output, *body);
   if (!written) return fail(io, written.error());
   io.err << "wrote " << args.output << " (" << humanBytes(static_cast<double>(body->size())) << ")\n";
+  return 0;
+}
+
+// ---- baselines and alerts -------------------------------------------------------
+
+namespace {
+
+std::string numberCell(const json& j, const char* key, int digits) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return kMissing;
+  return fixed(std::optional<double>(j[key].get<double>()), digits);
+}
+
+std::string labelsCell(const json& labels) {
+  std::string out;
+  if (!labels.is_object()) return kMissing;
+  for (const auto& [k, v] : labels.items()) out += (out.empty() ? "" : ",") + k + "=" + (v.is_string() ? v.get<std::string>() : v.dump());
+  return orMissing(out);
+}
+
+std::string configurationCell(const json& b) {
+  const json c = b.value("configuration", json::object());
+  return c.value("variant", "") + " " + c.value("scene", "") + " " + std::to_string(c.value("width", 0)) + "x" +
+         std::to_string(c.value("height", 0)) + " " + c.value("device", "") + " " + c.value("counting", "");
+}
+
+void addBaselineRow(Table& t, const json& b) {
+  t.addRow({idString(b.value("id", json())), idString(b.value("run", json())), b.value("name", json()).is_string() ? b["name"].get<std::string>() : kMissing,
+            configurationCell(b), numberCell(b, "threshold", 3), b.value("status", ""), labelsCell(b.value("labels", json())),
+            idString(b.value("open_alerts", json(0)))});
+}
+
+std::vector<Table::Column> baselineColumns() {
+  return {{"ID", Align::Right}, {"RUN", Align::Right}, {"NAME"}, {"CONFIGURATION"}, {"THRESHOLD", Align::Right},
+          {"STATUS"}, {"LABELS"}, {"OPEN ALERTS", Align::Right}};
+}
+
+}  // namespace
+
+int runBaselineSet(ApiClient& api, const BaselineSetArgs& args, Io& io) {
+  auto res = api.setBaseline(args.run, args.threshold, args.name);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  Table t(baselineColumns());
+  addBaselineRow(t, *res);
+  t.print(io.out);
+  if (res->contains("replaced") && (*res)["replaced"].is_number()) {
+    io.err << "replaced baseline " << idString((*res)["replaced"]) << " of the same configuration\n";
+  }
+  return 0;
+}
+
+int runBaselineList(ApiClient& api, bool all, Io& io) {
+  auto res = api.listBaselines(all);
+  return printListing(io, res, true, "baselines", baselineColumns(), [](const json& page, Table& t) {
+    if (!page.contains("baselines") || !page["baselines"].is_array()) return;
+    for (const auto& b : page["baselines"]) addBaselineRow(t, b);
+  });
+}
+
+int runBaselineRemove(ApiClient& api, const std::string& id, Io& io) {
+  auto res = api.removeBaseline(id);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  io.out << "baseline " << id << " " << res->value("status", "") << "\n";
+  return 0;
+}
+
+int runAlerts(ApiClient& api, const AlertsArgs& args, Io& io) {
+  auto res = api.listAlerts(args.status, args.baseline, args.limit);
+  std::vector<Table::Column> columns = {{"ID", Align::Right},      {"STATUS"},       {"BASELINE", Align::Right},
+                                        {"RUN", Align::Right},     {"METRIC"},       {"VERDICT"},
+                                        {"RATIO", Align::Right},   {"INTERVAL"},     {"P", Align::Right},
+                                        {"A", Align::Right},       {"B", Align::Right}, {"CREATED"}};
+  int rc = printListing(io, res, false, "alerts", columns, [](const json& page, Table& t) {
+    if (!page.contains("alerts") || !page["alerts"].is_array()) return;
+    for (const auto& a : page["alerts"]) {
+      std::string interval = kMissing;
+      if (a.contains("interval") && a["interval"].is_array() && a["interval"].size() == 2) {
+        interval = "[" + fixed(std::optional<double>(a["interval"][0].get<double>()), 3) + ", " +
+                   fixed(std::optional<double>(a["interval"][1].get<double>()), 3) + "]";
+      }
+      std::string metric = a.value("metric", "");
+      if (a.value("kind", "") == "counts" && a.contains("details") && a["details"].is_object()) {
+        metric += " (" + idString(a["details"].value("changed", json(0))) + " lines)";
+      }
+      bool counts = a.value("kind", "") == "counts";
+      t.addRow({idString(a.value("id", json())), a.value("status", ""), idString(a.value("baseline", json())),
+                idString(a.value("run", json())), metric, a.value("verdict", ""), numberCell(a, "ratio", 3), interval,
+                numberCell(a, "p_value", 4), counts ? humanBytes(a.value("value_a", json()).is_number() ? std::optional<double>(a["value_a"].get<double>()) : std::nullopt) : numberCell(a, "value_a", 3),
+                counts ? humanBytes(a.value("value_b", json()).is_number() ? std::optional<double>(a["value_b"].get<double>()) : std::nullopt) : numberCell(a, "value_b", 3),
+                a.value("created_at", "")});
+    }
+  });
+  if (rc == 0 && res && !io.json && res->contains("counts") && (*res)["counts"].is_object()) {
+    io.err << "open: " << idString((*res)["counts"].value("open", json(0))) << "\n";
+  }
+  return rc;
+}
+
+int runAlertStatus(ApiClient& api, const std::string& id, const std::string& status, Io& io) {
+  auto res = api.setAlertStatus(id, status);
+  if (!res) return fail(io, res.error());
+  if (io.json) {
+    printJson(io, *res);
+    return 0;
+  }
+  io.out << "alert " << id << " " << res->value("status", "") << "\n";
   return 0;
 }
 

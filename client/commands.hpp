@@ -24,7 +24,10 @@ struct CaptureArgs {
   bool noWait = false;
   std::string idempotencyKey;
   double intervalS = 1.0;  // between status polls
+  std::vector<std::string> labels;  // --label NAME=VALUE, added to the spec's "labels"
 };
+// The spec with `labels` (NAME=VALUE each) added to its "labels", or the one that is wrong.
+Result<nlohmann::json> withLabels(nlohmann::json spec, const std::vector<std::string>& labels);
 int runCapture(ApiClient& api, const CaptureArgs& args, Io& io);
 
 // `tally profile -- COMMAND ARGS...`: an application capture spec built from
@@ -111,6 +114,24 @@ struct ExportArgs {
   std::optional<std::string> trace;
 };
 int runExport(ApiClient& api, const ExportArgs& args, Io& io);
+
+// Baselines and alerts (docs/api.md, "Baselines and alerts").
+struct BaselineSetArgs {
+  std::string run;
+  std::optional<double> threshold;  // the server's default (0.05) when absent
+  std::optional<std::string> name;
+};
+int runBaselineSet(ApiClient& api, const BaselineSetArgs& args, Io& io);
+int runBaselineList(ApiClient& api, bool all, Io& io);
+int runBaselineRemove(ApiClient& api, const std::string& id, Io& io);
+struct AlertsArgs {
+  std::optional<std::string> status;    // open | acknowledged | invalid | fixed
+  std::optional<std::string> baseline;  // a baseline id
+  std::optional<int> limit;
+};
+int runAlerts(ApiClient& api, const AlertsArgs& args, Io& io);
+// Sets an alert's status (ack: acknowledged).
+int runAlertStatus(ApiClient& api, const std::string& id, const std::string& status, Io& io);
 
 // Writes data to path via a temporary file in the same folder and rename().
 Result<bool> writeFileAtomically(const std::string& path, const std::string& data);

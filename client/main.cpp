@@ -52,6 +52,8 @@ int main(int argc, char** argv) {
                   "Capture spec JSON file, or - for stdin (docs/result-schema.md); a spec with \"sweep\" runs a "
                   "stability sweep")
       ->required();
+  cap->add_option("--label", capture.labels,
+                  "NAME=VALUE added to the spec's \"labels\" (repeatable): commit, branch, ... shown on its runs");
   cap->add_flag("--no-wait", capture.noWait, "Print the capture id and exit without waiting");
   cap->add_option("--idempotency-key", capture.idempotencyKey,
                   "A key that makes resubmitting the same capture return the first one");
@@ -60,7 +62,8 @@ int main(int argc, char** argv) {
   cap->footer(
       "Exit status: 0 when the capture is done, 1 when it failed or was cancelled.\n"
       "Example:\n  tally capture --spec atrium.json\n  echo '{\"renderers\":[\"forward\"],"
-      "\"resolutions\":[[320,180]]}' | tally capture --spec - --no-wait");
+      "\"resolutions\":[[320,180]]}' | tally capture --spec - --no-wait\n"
+      "  tally capture --spec atrium.json --label commit=$(git rev-parse --short HEAD) --label branch=main");
 
   ProfileArgs profile;
   auto* prof = app.add_subcommand(
@@ -114,6 +117,7 @@ int main(int argc, char** argv) {
   addFilters(runsCmd, runs.filters);
   runsCmd->add_option("--host", runs.filters.host,
                       "Only runs captured on this host (its exact name; see `tally hosts`)");
+  runsCmd->add_option("--label", runs.filters.label, "Only runs of captures with this label, NAME=VALUE");
   runsCmd->add_option("--limit", runs.limit, "Page size (1..1000)")->check(CLI::Range(1, 1000));
   runsCmd->add_flag("--all", runs.all, "Fetch every page");
   runsCmd->footer(
@@ -222,6 +226,47 @@ int main(int argc, char** argv) {
       "Example:\n  tally export --format csv --scene atrium -o atrium.csv\n"
       "  tally export --trace 42 -o sample42.trace.json");
 
+  auto* baselineCmd = app.add_subcommand(
+      "baseline", "Mark a run's configuration with that run as its baseline; list or remove baselines");
+  baselineCmd->require_subcommand(1);
+  BaselineSetArgs baselineSet;
+  auto* baselineSetCmd = baselineCmd->add_subcommand(
+      "set", "Make RUN the baseline of its configuration (renderer, options, scene, resolution, device, counting)");
+  baselineSetCmd->add_option("RUN", baselineSet.run, "Run id")->required();
+  baselineSetCmd->add_option("--threshold", baselineSet.threshold,
+                             "|ratio - 1| beyond which a significant time change alerts (default 0.05)")
+      ->check(CLI::Range(0.0, 10.0));
+  baselineSetCmd->add_option("--name", baselineSet.name, "A name for the baseline");
+  bool baselineAll = false;
+  auto* baselineListCmd = baselineCmd->add_subcommand("list", "List the active baselines");
+  baselineListCmd->add_flag("--all", baselineAll, "Also the replaced and removed ones");
+  std::string baselineRmId;
+  auto* baselineRmCmd = baselineCmd->add_subcommand("rm", "Remove a baseline (its alerts stay)");
+  baselineRmCmd->add_option("ID", baselineRmId, "Baseline id")->required();
+  baselineCmd->footer(
+      "New runs of a baselined configuration are tested against the baseline run: a significant change of\n"
+      "frame or pass time beyond the threshold, or any change of counts, raises an alert (`tally alerts`).\n"
+      "Example:\n  tally baseline set 12 --threshold 0.03\n  tally baseline list\n  tally baseline rm 2");
+
+  AlertsArgs alertsArgs;
+  auto* alertsCmd = app.add_subcommand("alerts", "List regression alerts, newest first; acknowledge one");
+  alertsCmd->add_option("--status", alertsArgs.status, "open, acknowledged, invalid or fixed")
+      ->check(CLI::IsMember({"open", "acknowledged", "invalid", "fixed"}));
+  alertsCmd->add_option("--baseline", alertsArgs.baseline, "Only alerts of this baseline id");
+  alertsCmd->add_option("--limit", alertsArgs.limit, "Page size (1..1000)")->check(CLI::Range(1, 1000));
+  std::string alertId, alertStatus;
+  auto* alertAckCmd = alertsCmd->add_subcommand("ack", "Acknowledge an alert");
+  alertAckCmd->add_option("ID", alertId, "Alert id")->required();
+  auto* alertSetCmd = alertsCmd->add_subcommand("set", "Set an alert's status");
+  alertSetCmd->add_option("ID", alertId, "Alert id")->required();
+  alertSetCmd->add_option("STATUS", alertStatus, "open, acknowledged, invalid or fixed")
+      ->required()
+      ->check(CLI::IsMember({"open", "acknowledged", "invalid", "fixed"}));
+  alertsCmd->footer(
+      "RATIO: B / A of the medians (time) or of the total bytes (counts); INTERVAL: its 95% interval; A, B:\n"
+      "the baseline's and the run's medians in ms, or total bytes per frame.\n"
+      "Example:\n  tally alerts --status open\n  tally alerts ack 7\n  tally alerts set 7 invalid");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -256,6 +301,12 @@ int main(int argc, char** argv) {
   if (sweepsCmd->parsed()) return runSweeps(api, sweeps, io);
   if (sweepCmd->parsed()) return runSweep(api, sweepId, io);
   if (exportCmd->parsed()) return runExport(api, exportArgs, io);
+  if (baselineSetCmd->parsed()) return runBaselineSet(api, baselineSet, io);
+  if (baselineListCmd->parsed()) return runBaselineList(api, baselineAll, io);
+  if (baselineRmCmd->parsed()) return runBaselineRemove(api, baselineRmId, io);
+  if (alertAckCmd->parsed()) return runAlertStatus(api, alertId, "acknowledged", io);
+  if (alertSetCmd->parsed()) return runAlertStatus(api, alertId, alertStatus, io);
+  if (alertsCmd->parsed()) return runAlerts(api, alertsArgs, io);
   std::cout << app.help();
   return 0;
 }

@@ -119,6 +119,13 @@ int main(int argc, char** argv) {
   serve->add_option("--request-timeout", serveArgs.requestTimeoutSeconds,
                     "Seconds from a connection to its whole request (header and body), else 408")
       ->capture_default_str()->check(CLI::Range(0.1, 3600.0));
+  serve->add_option("--alert-webhook", serveArgs.alertWebhook,
+                    "POST each regression alert as JSON to this http:// URL (retried with backoff; docs/api.md)");
+  serve->add_option("--alert-webhook-attempts", serveArgs.alertWebhookAttempts,
+                    "Posts of one alert before its delivery fails for good")
+      ->capture_default_str()->check(CLI::Range(1, 100));
+  serve->add_option("--dashboard-url", serveArgs.dashboardUrl,
+                    "The dashboard's public address, for links in webhook bodies (default: none)");
   serve->add_option("--max-connections-per-peer", serveArgs.maxConnectionsPerPeer,
                     "Open connections one remote address may hold, else 503 (behind a reverse proxy, raise it)")
       ->capture_default_str()->check(CLI::Range(1, 100000));

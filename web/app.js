@@ -3,10 +3,12 @@
 // Each view draws into its own page element; leaving it aborts its signal,
 // which cancels its requests and timers, and detaches the page, so a view
 // that is still finishing cannot draw over the next one.
+import { startBadge } from './alert_badge.js';
 import { ApiError, setToken, token } from './api.js';
 import { destroyCharts } from './charts.js';
 import { h } from './dom.js';
 import * as accuracy from './views/accuracy.js';
+import * as alerts from './views/alerts.js';
 import * as capture from './views/capture.js';
 import * as compare from './views/compare.js';
 import * as heatmap from './views/heatmap.js';
@@ -15,6 +17,7 @@ import * as run from './views/run.js';
 import * as runs from './views/runs.js';
 import * as sweep from './views/sweep.js';
 import * as sweeps from './views/sweeps.js';
+import * as trend from './views/trend.js';
 
 // pattern -> view; ":id" captures one path segment.
 const kRoutes = [
@@ -27,6 +30,9 @@ const kRoutes = [
   ['/capture', capture, 'capture'],
   ['/heatmap', heatmap, 'capture'],
   ['/hosts', hosts, 'hosts'],
+  ['/alerts', alerts, 'alerts'],
+  ['/alerts/:id', alerts, 'alerts'],
+  ['/trend/:id', trend, 'alerts'],
 ];
 
 function match(path) {
@@ -68,6 +74,7 @@ function showError(root, error) {
 async function route() {
   const root = document.getElementById('view');
   const hash = location.hash.replace(/^#/, '') || '/runs';
+  startBadge();  // polls the open alerts' count; again after a token is given
   const [path, search = ''] = hash.split('?');
   leave(root);
   const found = match(path);

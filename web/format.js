@@ -64,3 +64,6 @@ export function imageError(run) {
   if (e.identical === e.samples) return 'identical';
   return psnr(e.mean_psnr);
 }
+
+// A capture's labels as "commit=4f2a9c1, branch=main"; '' for none.
+export const labels = (l) => Object.entries(l || {}).map(([k, v]) => `${k}=${v}`).join(', ');

@@ -77,16 +77,44 @@ RendererVariant RendererVariant::reference() const {
   return out;
 }
 
+Result<std::map<std::string, std::string>> parseLabels(const nlohmann::json& labels) {
+  if (!labels.is_object()) return fieldError("labels", "must be an object of name: text, got " + show(labels));
+  if (labels.size() > kMaxLabels) {
+    return fieldError("labels", "at most " + std::to_string(kMaxLabels) + " labels, got " + std::to_string(labels.size()));
+  }
+  std::map<std::string, std::string> out;
+  for (const auto& [key, value] : labels.items()) {
+    bool nameOk = !key.empty() && key.size() <= kMaxLabelKey &&
+                  std::all_of(key.begin(), key.end(), [](char c) {
+                    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.' || c == '/';
+                  });
+    if (!nameOk) {
+      return fieldError("labels", "label name '" + key.substr(0, kMaxLabelKey) + "' must be 1 to " +
+                                      std::to_string(kMaxLabelKey) + " letters, digits, '_', '-', '.' or '/'");
+    }
+    std::string field = "labels." + key;
+    if (!value.is_string()) return fieldError(field, "must be a string, got " + show(value));
+    std::string text = value.get<std::string>();
+    bool control = std::any_of(text.begin(), text.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+    if (text.empty() || text.size() > kMaxLabelValue || control) {
+      return fieldError(field, "must be 1 to " + std::to_string(kMaxLabelValue) +
+                                   " characters without control characters");
+    }
+    out[key] = text;
+  }
+  return out;
+}
+
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
   static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
                                                  "frames",    "counted_frames", "counting", "lights",
-                                                 "footprint", "ceilings",       "heatmap"};
+                                                 "footprint", "ceilings",       "heatmap", "labels"};
   for (const auto& [key, value] : j.items()) {
     if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
       return fieldError(key,
                         "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights, footprint, ceilings, heatmap)");
+                        "counted_frames, counting, lights, footprint, ceilings, heatmap, labels)");
     }
   }
   CaptureSpec spec;
@@ -253,6 +281,11 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   if (j.contains("ceilings")) {
     if (!j["ceilings"].is_boolean()) return fieldError("ceilings", "must be true or false, got " + show(j["ceilings"]));
     spec.ceilings = j["ceilings"].get<bool>();
+  }
+  if (j.contains("labels")) {
+    auto labels = parseLabels(j["labels"]);
+    if (!labels) return makeError(labels.error());
+    spec.labels = std::move(labels).value();
   }
 
   if (j.contains("footprint")) {

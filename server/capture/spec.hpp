@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -79,6 +80,10 @@ struct CaptureSpec {
   // for the roofline; "ceilings": false skips them (and every pass's
   // roofline then has null fractions of peak).
   bool ceilings = true;
+  // The spec's "labels" (parseLabels): what the capture measured, in the
+  // user's words ({"commit": "4f2a9c1", "branch": "main"}); stored with the
+  // job and shown on its runs. They are not part of a run's configuration.
+  std::map<std::string, std::string> labels;
   nlohmann::json source;  // the spec as given, stored with the result
 
   // Cameras per scene as the matrix limit counts them: automatic 10, a
@@ -100,6 +105,14 @@ Result<RendererVariant> makeVariant(const std::string& name, const nlohmann::jso
 // kMaxDimension, at most kMaxPixels in all; errors name `field`
 // ("resolutions[0][1]: must be an integer between 1 and 16384, got 0").
 Result<Resolution> parseResolution(const nlohmann::json& r, const std::string& field);
+
+// Labels: at most kMaxLabels keys of 1..kMaxLabelKey characters (letters,
+// digits, '_', '-', '.', '/'), each a string of 1..kMaxLabelValue characters
+// without control characters. Errors name the label ("labels.commit: ...").
+inline constexpr size_t kMaxLabels = 16;
+inline constexpr size_t kMaxLabelKey = 64;
+inline constexpr size_t kMaxLabelValue = 256;
+Result<std::map<std::string, std::string>> parseLabels(const nlohmann::json& labels);
 
 // `knownRenderers` is the list to check names against. Errors read
 // "renderers[2]: unknown renderer 'x' (expected one of ...)" or

@@ -115,6 +115,12 @@ struct ServeArgs {
   int jobDeadlineSeconds = 1800;    // per capture job
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address
+  // Regression alerts (docs/api.md, "Baselines and alerts"): API daemons
+  // evaluate new runs against their baselines; with a webhook, each alert is
+  // posted to it from the store's outbox.
+  std::string alertWebhook;           // http:// URL; "": none
+  int alertWebhookAttempts = 8;       // posts of one alert before its delivery fails
+  std::string dashboardUrl;           // for links in webhook bodies; "": none
 };
 
 // Serves the REST API (and the dashboard) until SIGINT/SIGTERM; runs queued

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "api/builtin_routes.hpp"
+#include "api/http_post.hpp"
 #include "api/http_server.hpp"
 #include "commands/commands.hpp"
 #include "common/log.hpp"
@@ -25,7 +26,9 @@
 #include "jobs/worker.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
+#include "service/alert_evaluator.hpp"
 #include "service/service.hpp"
+#include "service/webhook.hpp"
 #include "store/store.hpp"
 
 namespace tally::cli {
@@ -71,6 +74,9 @@ void declareMetrics(metrics::Registry& m) {
   m.declare("tally_capture_duration_seconds", Type::kHistogram,
             "Time from claiming a job to its end, by kind (capture, sweep) and status", metrics::kCaptureSeconds);
   m.declare("tally_store_bytes", Type::kGauge, "Size of the SQLite store on disk, by file (db, wal, shm)");
+  m.declare("tally_alerts", Type::kGauge, "Regression alerts in the store, by status (open, acknowledged, invalid, fixed)");
+  m.declare("tally_alerts_raised_total", Type::kCounter,
+            "Regression alerts this daemon's evaluator raised since it started");
   m.declare("tally_device_info", Type::kGauge,
             "The capture device: the --device selector (\"auto\": the first discrete GPU) and the name of "
             "the device the last capture ran on (\"\" until one has); always 1");
@@ -103,6 +109,17 @@ int runServe(const ServeArgs& args) {
 
   const bool serveHttp = args.role != "worker";
   const bool runWorker = args.role != "api";
+  if (!args.alertWebhook.empty()) {
+    auto target = api::parseHttpUrl(args.alertWebhook);
+    if (!target) {
+      std::fprintf(stderr, "tallyd serve: --alert-webhook %s: %s\n", args.alertWebhook.c_str(), target.error().c_str());
+      return 1;
+    }
+    if (!serveHttp) {
+      std::fprintf(stderr, "tallyd serve: --alert-webhook is for daemons that serve the API (role api or all)\n");
+      return 1;
+    }
+  }
   const bool postgres = store::isPostgresUrl(args.db);
 
   // The defaults: the user's data folder for the database, the installed
@@ -163,7 +180,25 @@ int runServe(const ServeArgs& args) {
   workerOptions.lease = lease;
   workerOptions.staleAfter = staleAfter;
   workerOptions.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
+  // Alerts (role api or all): new runs against their baselines, and the
+  // webhook's outbox, each on its own thread and connection; workers never
+  // wait on them.
+  service::AlertEvaluator::Options evaluatorOptions;
+  evaluatorOptions.location = dbPath;
+  evaluatorOptions.deliver = !args.alertWebhook.empty();
+  evaluatorOptions.log = [](std::string_view line) { log::info(std::string(line)); };
+  metrics.add("tally_alerts_raised_total", {}, 0);
+  evaluatorOptions.onEvaluated = [&metrics](const store::Evaluated& done) {
+    metrics.add("tally_alerts_raised_total", {}, double(done.alertIds.size()));
+  };
+  service::AlertEvaluator evaluator(evaluatorOptions);
+  service::WebhookOptions webhookOptions;
+  webhookOptions.url = args.alertWebhook;
+  webhookOptions.dashboardUrl = args.dashboardUrl;
+  webhookOptions.maxAttempts = args.alertWebhookAttempts;
+  service::WebhookSender webhook(dbPath, webhookOptions, [](std::string_view line) { log::warning(std::string(line)); });
   workerOptions.onFinished = [&](const jobs::JobOutcome& outcome) {
+    if (serveHttp) evaluator.wake();
     metrics.add("tally_jobs_finished_total", {{"status", outcome.status}});
     metrics.observe("tally_capture_duration_seconds", {{"kind", outcome.kind}, {"status", outcome.status}},
                     outcome.seconds);
@@ -263,6 +298,10 @@ int runServe(const ServeArgs& args) {
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
     }
+    auto alerts = writer->get()->alertCounts();
+    if (alerts) {
+      for (const auto& [status, n] : *alerts) m.set("tally_alerts", {{"status", status}}, double(n));
+    }
     if (postgres) return;  // the server's files are not this host's
     for (const auto& [file, suffix] : {std::pair{"db", ""}, std::pair{"wal", "-wal"}, std::pair{"shm", "-shm"}}) {
       std::error_code sizeError;
@@ -295,6 +334,8 @@ int runServe(const ServeArgs& args) {
   }
 
   if (runWorker) worker.start();
+  evaluator.start();
+  if (!args.alertWebhook.empty()) webhook.start();
   std::thread signals([&] {
     int received = 0;
     sigwait(&stopSignals, &received);
@@ -311,6 +352,8 @@ int runServe(const ServeArgs& args) {
   pthread_kill(signals.native_handle(), SIGTERM);
   signals.join();
   worker.stop();
+  webhook.stop();
+  evaluator.stop();
   stopReaper();
   log::info("stopped");
   return 0;

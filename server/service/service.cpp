@@ -12,11 +12,13 @@
 #include "capture/spec.hpp"
 #include "sweeps/sweep.hpp"
 #include "service/accuracy.hpp"
+#include "service/alerts.hpp"
 #include "service/crossover.hpp"
 #include "service/heatmap.hpp"
 #include "service/repeats.hpp"
 #include "service/run_significance.hpp"
 #include "service/trace.hpp"
+#include "service/routes.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -24,30 +26,7 @@ using api::Request;
 using api::Response;
 using nlohmann::json;
 
-namespace {
-
-// A bad request, thrown by the validators and answered as 400 (or `status`).
-struct RequestError : std::runtime_error {
-  RequestError(int s, std::string c, std::string m, std::string f = {})
-      : std::runtime_error(m), status(s), code(std::move(c)), field(std::move(f)) {}
-  int status;
-  std::string code, field;
-};
-
-[[noreturn]] void invalid(const std::string& field, const std::string& message) {
-  throw RequestError(400, api::code::kInvalidField, field + ": " + message, field);
-}
-
-// A store failure: logged, answered 500 without detail.
-struct StoreError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-template <class T>
-T check(Result<T> r) {
-  if (!r) throw StoreError(r.error());
-  return std::move(r).value();
-}
+namespace detail {
 
 // ---- query parameters -----------------------------------------------------------
 
@@ -68,7 +47,7 @@ std::optional<int64_t> queryInt(const Request& req, const std::string& key, int6
   return n;
 }
 
-std::optional<std::string> queryString(const Request& req, const std::string& key, size_t maxLength = 256) {
+std::optional<std::string> queryString(const Request& req, const std::string& key, size_t maxLength) {
   const std::string* v = req.queryValue(key);
   if (!v) return std::nullopt;
   if (v->empty() || v->size() > maxLength) {
@@ -176,17 +155,20 @@ store::RunFilter queryFilter(const Request& req) {
   }
   f.jobId = queryInt(req, "capture", 1, INT64_MAX);
   f.host = queryString(req, "host");
+  if (auto label = queryString(req, "label", 512)) {
+    // NAME=VALUE: the runs of captures that carry that label.
+    size_t eq = label->find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == label->size()) {
+      invalid("label", "must be NAME=VALUE (commit=4f2a9c1)");
+    }
+    f.labels.emplace_back(label->substr(0, eq), label->substr(eq + 1));
+  }
   f.createdSince = queryTime(req, "since");
   f.createdUntil = queryTime(req, "until");
   return f;
 }
 
 // ---- JSON ------------------------------------------------------------------------
-
-template <class T>
-json opt(const std::optional<T>& v) {
-  return v ? json(*v) : json(nullptr);
-}
 
 // Reuse: requested bytes over the footprint of the same lines (how many
 // times each distinct byte was asked for); null without a footprint or at 0.
@@ -300,6 +282,7 @@ json runRowJson(const store::RunRow& r) {
           {"tally_version", opt(r.tallyVersion)},
           {"tally_commit", opt(r.tallyCommit)},
           {"host", opt(r.host)},
+          {"labels", r.labels},
           {"sample_count", r.sampleCount},
           {"mean_frame_ms", opt(r.meanFrameMs)},
           {"mean_bytes", opt(r.meanBytes)},
@@ -681,7 +664,7 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
 }
 
 Response listRuns(ServiceContext& ctx, const Request& req) {
-  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "host", "since", "until", "limit",
+  allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "host", "label", "since", "until", "limit",
                   "cursor"});
   auto filter = queryFilter(req);
   auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
@@ -1024,7 +1007,9 @@ Response listScenes(ServiceContext& ctx, const Request& req) {
   return Response::ok({{"procedural", procedural}, {"gltf", folders}});
 }
 
-}  // namespace
+}  // namespace detail
+
+using namespace detail;
 
 std::string csvCell(const std::string& value) {
   std::string v = value;
@@ -1065,6 +1050,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/devices", route(listDevices));
   router.get("/api/hosts", route(listHosts));
   router.get("/api/scenes", route(listScenes));
+  addAlertRoutes(router, ctx);
 }
 
 }  // namespace tally::service

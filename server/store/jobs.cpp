@@ -87,6 +87,21 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
       insert.bind(4, nullptr);
     }
     out.job = returnedJob(insert).value();
+    // The spec's labels (checked by the service: an object of short strings);
+    // anything else is not a label and is not stored as one.
+    const json* labels = spec.is_object() && spec.contains("labels") ? &spec["labels"] : nullptr;
+    if (labels && labels->is_object()) {
+      json kept = json::object();
+      Statement label(db_, "INSERT INTO job_labels (job_id, name, value) VALUES (?1, ?2, ?3)");
+      for (const auto& [name, value] : labels->items()) {
+        if (!value.is_string()) continue;
+        label.reset();
+        label.bind(1, out.job.id).bind(2, name).bind(3, value.get<std::string>()).run();
+        kept[name] = value;
+      }
+      Statement setLabels(db_, "UPDATE jobs SET labels = ?1 WHERE id = ?2");
+      setLabels.bind(1, kept).bind(2, out.job.id).run();
+    }
     out.created = true;
     tx.commit();
     return out;

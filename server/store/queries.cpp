@@ -25,7 +25,8 @@ const char* const kRunSelect =
     "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
     "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
     "(SELECT AVG(s.footprint_bytes) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id), r.host "
+    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id), r.host, "
+    "(SELECT j.labels FROM jobs j WHERE j.id = r.job_id) "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
 RunRow readRunRow(const Statement& row) {
@@ -61,6 +62,7 @@ RunRow readRunRow(const Statement& row) {
   run.meanFootprintBytes = row.getOptDouble(28);
   run.meanFootprintRequestedBytes = row.getOptDouble(29);
   run.host = row.getOptText(30);
+  run.labels = row.isNull(31) ? json::object() : row.getJson(31);
   return run;
 }
 
@@ -76,6 +78,9 @@ std::string runFilterSql(const RunFilter& f) {
   if (f.deviceName) sql += " AND r.device_id IN (SELECT id FROM devices WHERE name = ?)";
   if (f.jobId) sql += " AND r.job_id = ?";
   if (f.host) sql += " AND r.host = ?";
+  for (size_t i = 0; i < f.labels.size(); ++i) {
+    sql += " AND r.job_id IN (SELECT job_id FROM job_labels WHERE name = ? AND value = ?)";  // placeholders only
+  }
   if (!f.runIds.empty()) {
     sql += " AND r.id IN (?";
     for (size_t i = 1; i < f.runIds.size(); ++i) sql += ", ?";  // placeholders only
@@ -97,6 +102,10 @@ int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
   if (f.deviceName) statement.bind(i++, *f.deviceName);
   if (f.jobId) statement.bind(i++, *f.jobId);
   if (f.host) statement.bind(i++, *f.host);
+  for (const auto& [name, value] : f.labels) {
+    statement.bind(i++, name);
+    statement.bind(i++, value);
+  }
   for (int64_t id : f.runIds) statement.bind(i++, id);
   if (f.createdSince) statement.bind(i++, *f.createdSince);
   if (f.createdUntil) {

@@ -164,6 +164,8 @@ struct RunFilter {
   std::optional<std::string> deviceName;  // exact device name
   std::optional<int64_t> jobId;
   std::optional<std::string> host;  // exact host name
+  // Every one of these labels (name, value), exactly (0009): the capture's spec "labels".
+  std::vector<std::pair<std::string, std::string>> labels;
   std::vector<int64_t> runIds;  // any of these runs (at most 1000); empty: any run
   // Creation time bounds, as prefixes of the stored UTC ISO-8601 text
   // ("2026-11-21", "2026-11-21T06:30"): since is compared with created_at,
@@ -217,6 +219,7 @@ struct RunRow {
   std::optional<int64_t> footprintBlockBytes;
   std::optional<double> meanFootprintBytes, meanFootprintRequestedBytes;
   std::optional<std::string> host;  // the host it was captured on (0007); absent before
+  nlohmann::json labels = nlohmann::json::object();  // its capture's labels (0009); {} for none
 };
 
 struct RunPage {
@@ -396,6 +399,93 @@ struct ExportRow {
   std::optional<double> footprintBytes, footprintRequestedBytes;
 };
 
+// ---- baselines and alerts (0009) -------------------------------------------------
+
+// A configuration's baseline: the run new runs of the configuration are
+// tested against (docs/statistics.md, "Alerts"). The configuration is the
+// run's renderer and canonical options, scene (with its parameters),
+// resolution, device and counting mode; not its lights, nor its labels.
+struct Baseline {
+  int64_t id = 0;
+  std::optional<std::string> name;
+  int64_t runId = 0;
+  std::string renderer, variant;
+  nlohmann::json options = nlohmann::json::object();
+  std::string scene;
+  nlohmann::json sceneParams = nlohmann::json::object();
+  int width = 0, height = 0;
+  int64_t deviceId = 0;
+  std::string deviceName, counting;
+  double threshold = 0.05;  // |ratio - 1| beyond which a significant time change alerts
+  std::string status;       // active | replaced | removed
+  std::string createdAt;
+  std::optional<std::string> endedAt;
+  std::optional<int64_t> replacedBy;
+  nlohmann::json labels = nlohmann::json::object();  // the baseline run's labels
+  int64_t openAlerts = 0;
+};
+
+struct NewBaseline {
+  int64_t runId = 0;
+  double threshold = 0.05;
+  std::optional<std::string> name;
+};
+
+struct SetBaseline {
+  Baseline baseline;
+  std::optional<int64_t> replaced;  // the active baseline of the configuration it replaced
+};
+
+enum class AlertStatus { Open, Acknowledged, Invalid, Fixed };
+const char* toString(AlertStatus status);  // "open", "acknowledged", ...
+std::optional<AlertStatus> parseAlertStatus(std::string_view name);
+
+// One change of a run against its baseline run, as the evaluator found it.
+struct NewAlert {
+  std::string kind;     // time | counts
+  std::string metric;   // "frame", "pass NAME" or "counts"
+  std::string verdict;  // slower | faster | changed
+  std::optional<double> ratio, ratioLower, ratioUpper, pValue, cliffsDelta;
+  std::optional<double> valueA, valueB;  // medians in ms (time), total bytes per frame (counts)
+  nlohmann::json details = nlohmann::json::object();
+};
+
+struct Alert {
+  int64_t id = 0;
+  int64_t baselineId = 0, runId = 0, baselineRunId = 0;
+  NewAlert figures;
+  std::string status;  // open | acknowledged | invalid | fixed
+  std::string createdAt;
+  std::optional<std::string> updatedAt;
+  // The webhook's outbox: none | pending | delivered | failed.
+  std::string delivery;
+  int deliveryAttempts = 0;
+  std::optional<int64_t> nextAttemptMs;
+  std::optional<std::string> deliveryError, deliveredAt;
+};
+
+struct AlertFilter {
+  std::optional<AlertStatus> status;
+  std::optional<int64_t> baselineId;
+  std::optional<int64_t> runId;
+};
+
+struct AlertPage {
+  std::vector<Alert> alerts;  // newest first (descending id)
+  std::string nextCursor;     // empty when this was the last page
+};
+
+// Tests a run against its baseline's run: the alerts to raise (none: no
+// change). Called by evaluatePendingRuns (on PostgreSQL inside its write
+// transaction), so it must read through another connection, never this Store.
+using RunEvaluator = std::function<Result<std::vector<NewAlert>>(const RunRow& run, const Baseline& baseline)>;
+
+struct Evaluated {
+  int64_t runs = 0;               // runs marked evaluated
+  int64_t tested = 0;             // of those, runs with a baseline to test against
+  std::vector<int64_t> alertIds;  // the alerts raised
+};
+
 // ---- the store ----------------------------------------------------------------
 
 class Store {
@@ -516,6 +606,47 @@ class Store {
   Result<std::vector<int64_t>> jobSweepIds(int64_t jobId);
   // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
   Result<std::vector<ExportRow>> exportRuns(const RunFilter& filter);
+
+  // Baselines (0009). setBaseline: the run's configuration gets the run as
+  // its baseline, replacing (and recording) an active one; empty: no such run.
+  Result<std::optional<SetBaseline>> setBaseline(const NewBaseline& baseline);
+  // Active baselines (with every status when `all`), newest first.
+  Result<std::vector<Baseline>> listBaselines(bool all = false);
+  Result<std::optional<Baseline>> getBaseline(int64_t baselineId);
+  // active -> removed (its alerts stay); empty: no such baseline. A baseline
+  // already ended is returned unchanged.
+  Result<std::optional<Baseline>> removeBaseline(int64_t baselineId);
+  // The runs of a baseline's configuration, oldest first, at most `limit`
+  // (the newest ones when there are more).
+  Result<std::vector<RunRow>> configurationRuns(int64_t baselineId, int limit);
+
+  // Alerts. Takes up to `limit` runs not yet evaluated, tests each run that
+  // has an active baseline older than it with `evaluate`, inserts the alerts
+  // (delivery pending when `deliver`, else none) and marks the runs
+  // evaluated. On PostgreSQL the runs are claimed FOR UPDATE SKIP LOCKED and
+  // all of it is one transaction: two daemons never test one run. On SQLite
+  // the runs are tested before the write transaction (the file's one write
+  // lock is not held while they are), which then marks each run still
+  // unevaluated and stores its alerts: a run raises its alerts once. An
+  // evaluator error stores nothing of the pass.
+  Result<Evaluated> evaluatePendingRuns(const RunEvaluator& evaluate, int limit, bool deliver);
+  Result<AlertPage> listAlerts(const AlertFilter& filter, const Page& page);
+  Result<std::optional<Alert>> getAlert(int64_t alertId);
+  // Alerts by status, each status present; for `baselineId` only when given.
+  Result<std::map<std::string, int64_t>> alertCounts(std::optional<int64_t> baselineId = {});
+  // Empty: no such alert.
+  Result<std::optional<Alert>> setAlertStatus(int64_t alertId, AlertStatus status);
+  // Every alert of a baseline's configuration's runs (any baseline of it), oldest first, at most limit.
+  Result<std::vector<Alert>> configurationAlerts(int64_t baselineId, int limit);
+
+  // The webhook's outbox. Claims up to `limit` pending alerts whose next
+  // attempt is due: attempts + 1, and the next attempt pushed claimMs ahead,
+  // so no other daemon takes them while this one posts (SKIP LOCKED on
+  // PostgreSQL). Then finishDelivery records the outcome: delivered, or the
+  // error with a retry after retryInMs, or failed for good (no retry).
+  Result<std::vector<Alert>> claimDeliveries(int limit, int64_t claimMs);
+  Result<bool> finishDelivery(int64_t alertId, bool delivered, const std::string& error,
+                              std::optional<int64_t> retryInMs);
 
   // SQLite: PRAGMA integrity_check's first line ("ok" when healthy) and no
   // foreign key violations. PostgreSQL enforces both as it writes: "ok" when

@@ -66,6 +66,33 @@ TEST(CaptureSpec, FootprintBlockSize) {
   }
 }
 
+TEST(CaptureSpec, Labels) {
+  auto spec = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],
+    "labels":{"commit":"4f2a9c1","branch":"feature/alerts","ci.job":"1234"}})");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  EXPECT_EQ(spec->labels, (std::map<std::string, std::string>{
+                              {"commit", "4f2a9c1"}, {"branch", "feature/alerts"}, {"ci.job", "1234"}}));
+  EXPECT_TRUE(parse(R"({"renderers":["forward"],"resolutions":[[8,8]]})")->labels.empty());
+  std::string many = "{";
+  for (size_t i = 0; i <= capture::kMaxLabels; ++i) many += (i ? "," : "") + std::string("\"k") + std::to_string(i) + "\":\"v\"";
+  many += "}";
+  const std::string longValue(capture::kMaxLabelValue + 1, 'x');
+  const std::string longName(capture::kMaxLabelKey + 1, 'k');
+  for (auto [labels, prefix] : std::vector<std::pair<std::string, std::string>>{
+           {R"(["commit"])", "labels: must be an object"},
+           {R"({"commit":3})", "labels.commit: must be a string"},
+           {R"({"commit":""})", "labels.commit: must be 1 to 256 characters"},
+           {"{\"commit\":\"" + longValue + "\"}", "labels.commit: must be 1 to 256 characters"},
+           {R"({"commit":"a\nb"})", "labels.commit: must be 1 to 256 characters without control characters"},
+           {R"({"bad key":"x"})", "labels: label name 'bad key' must be"},
+           {"{\"" + longName + "\":\"x\"}", "labels: label name"},
+           {many, "labels: at most 16 labels, got 17"}}) {
+    auto bad = parse(R"({"renderers":["forward"],"resolutions":[[8,8]],"labels":)" + labels + "}");
+    ASSERT_FALSE(bad.ok()) << labels;
+    EXPECT_EQ(bad.error().rfind(prefix, 0), 0u) << bad.error();
+  }
+}
+
 TEST(CaptureSpec, CountingModesAreAMatrixDimension) {
   auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[[32,18]],
     "counting":["exact","subgroup","sampled:4","sampled:64"]})");

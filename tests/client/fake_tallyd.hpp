@@ -7,6 +7,9 @@
 // with a waiting reason after a lost attempt, capture 10 runs on gpu-a on
 // its second attempt, capture 11 (a spec with "waits") waits, then runs to
 // the end; runs filtered by host (and run 21) carry their host.
+// Baselines (run 99: none) and alerts (a time and a counts alert of run 15;
+// alert 99: none), with the last body and query kept; runs filtered by label
+// carry labels.
 #pragma once
 
 #include <arpa/inet.h>
@@ -273,6 +276,11 @@ class FakeTallyd {
         lastRunsQuery_ = req.params;
       }
       std::string cursor = req.get_param_value("cursor");
+      if (req.has_param("label")) {  // a run of a labelled capture
+        json run = runJson(15, "deferred", 320);
+        run["labels"] = {{"branch", "main"}, {"commit", "4f2a9c1"}};
+        return reply(res, {{"runs", {run}}, {"next_cursor", nullptr}});
+      }
       if (req.has_param("host")) {
         json run = runJson(21, "deferred", 320);
         run["host"] = req.get_param_value("host");
@@ -449,6 +457,76 @@ class FakeTallyd {
     server_.Get("/api/health", [reply](const httplib::Request&, httplib::Response& res) {
       reply(res, {{"status", "ok"}, {"version", "0.1.0"}, {"api_version", 1}});
     });
+    // Baselines and alerts: canned answers; the last body and query kept.
+    auto baseline = [](int id, const std::string& status) {
+      return json{{"id", id},
+                  {"name", "deferred atrium"},
+                  {"run", 12},
+                  {"threshold", 0.03},
+                  {"status", status},
+                  {"configuration",
+                   {{"renderer", "deferred"}, {"variant", "deferred"}, {"options", json::object()},
+                    {"scene", "atrium"}, {"scene_params", json::object()}, {"width", 320}, {"height", 180},
+                    {"device_id", 1}, {"device", "llvmpipe"}, {"counting", "exact"}}},
+                  {"labels", {{"commit", "4f2a9c1"}}},
+                  {"open_alerts", 2},
+                  {"created_at", "2026-11-25T10:00:00.000Z"},
+                  {"ended_at", nullptr},
+                  {"replaced_by", nullptr}};
+    };
+    server_.Post("/api/baselines", [this, reply, baseline](const httplib::Request& req, httplib::Response& res) {
+      json body = json::parse(req.body, nullptr, false);
+      {
+        std::lock_guard lock(mutex_);
+        lastAlertsBody_ = body;
+      }
+      if (body.value("run", 0) == 99) return reply(res, apiError("not_found", "no run 99"), 404);
+      json b = baseline(3, "active");
+      b["replaced"] = 2;
+      reply(res, b, 201);
+    });
+    server_.Get("/api/baselines", [this, reply, baseline](const httplib::Request& req, httplib::Response& res) {
+      {
+        std::lock_guard lock(mutex_);
+        lastAlertsQuery_ = req.params;
+      }
+      json list = json::array({baseline(3, "active")});
+      if (req.get_param_value("all") == "true") list.push_back(baseline(2, "replaced"));
+      reply(res, {{"baselines", list}});
+    });
+    server_.Delete(R"(/api/baselines/(\d+))", [reply, baseline](const httplib::Request& req, httplib::Response& res) {
+      int id = std::stoi(req.matches[1]);
+      if (id == 99) return reply(res, apiError("not_found", "no baseline 99"), 404);
+      reply(res, baseline(id, "removed"));
+    });
+    server_.Get("/api/alerts", [this, reply](const httplib::Request& req, httplib::Response& res) {
+      {
+        std::lock_guard lock(mutex_);
+        lastAlertsQuery_ = req.params;
+      }
+      json time = {{"id", 5}, {"baseline", 3}, {"run", 15}, {"baseline_run", 12}, {"kind", "time"},
+                   {"metric", "frame"}, {"verdict", "slower"}, {"ratio", 1.25}, {"interval", {1.18, 1.31}},
+                   {"p_value", 0.00016}, {"cliffs_delta", 1.0}, {"value_a", 1.834}, {"value_b", 2.2925},
+                   {"details", json::object()}, {"status", "open"}, {"created_at", "2026-11-25T10:05:00.000Z"}};
+      json counts = {{"id", 6}, {"baseline", 3}, {"run", 15}, {"baseline_run", 12}, {"kind", "counts"},
+                     {"metric", "counts"}, {"verdict", "changed"}, {"ratio", 2.0}, {"interval", nullptr},
+                     {"p_value", nullptr}, {"cliffs_delta", nullptr}, {"value_a", 3145728.0}, {"value_b", 6291456.0},
+                     {"details", {{"lines", 12}, {"changed", 3}, {"changes", json::array()}}}, {"status", "open"},
+                     {"created_at", "2026-11-25T10:05:00.000Z"}};
+      reply(res, {{"alerts", {counts, time}},
+                  {"next_cursor", nullptr},
+                  {"counts", {{"open", 2}, {"acknowledged", 0}, {"invalid", 0}, {"fixed", 0}}}});
+    });
+    server_.Patch(R"(/api/alerts/(\d+))", [this, reply](const httplib::Request& req, httplib::Response& res) {
+      json body = json::parse(req.body, nullptr, false);
+      {
+        std::lock_guard lock(mutex_);
+        lastAlertsBody_ = body;
+      }
+      int id = std::stoi(req.matches[1]);
+      if (id == 99) return reply(res, apiError("not_found", "no alert 99"), 404);
+      reply(res, {{"id", id}, {"status", body.value("status", "")}});
+    });
     server_.Get("/api/broken", [](const httplib::Request&, httplib::Response& res) {
       res.status = 502;
       res.set_content("<html>bad gateway</html>\n", "text/html");
@@ -493,6 +571,14 @@ class FakeTallyd {
     std::lock_guard lock(mutex_);
     return lastRunsQuery_;
   }
+  json lastAlertsBody() {
+    std::lock_guard lock(mutex_);
+    return lastAlertsBody_;
+  }
+  httplib::Params lastAlertsQuery() {
+    std::lock_guard lock(mutex_);
+    return lastAlertsQuery_;
+  }
   httplib::Params lastExportQuery() {
     std::lock_guard lock(mutex_);
     return lastExportQuery_;
@@ -505,7 +591,8 @@ class FakeTallyd {
   std::mutex mutex_;
   std::map<int, int> polls_;  // GETs per capture id
   std::string lastSpec_, lastIdempotencyKey_, lastAuthorization_;
-  httplib::Params lastRunsQuery_, lastExportQuery_;
+  httplib::Params lastRunsQuery_, lastExportQuery_, lastAlertsQuery_;
+  json lastAlertsBody_;
 };
 
 // A loopback port with nothing listening: bound, then closed.

@@ -148,7 +148,8 @@ class Daemon {
     if (!idempotencyKey.empty()) headers.emplace("Idempotency-Key", idempotencyKey);
     httplib::Result res = method == "GET"    ? client.Get(path.c_str(), headers)
                           : method == "POST" ? client.Post(path.c_str(), headers, body, "application/json")
-                                             : client.Delete(path.c_str(), headers);
+                          : method == "PATCH" ? client.Patch(path.c_str(), headers, body, "application/json")
+                                              : client.Delete(path.c_str(), headers);
     Reply r;
     if (!res) return r;
     r.status = res->status;

@@ -2,7 +2,9 @@
 // serves is documented, and every response of a real daemon (after a real
 // capture on lavapipe) matches its documented schema field by field, with no
 // undocumented field, for successes and errors alike.
+#include <chrono>
 #include <set>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -86,7 +88,9 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/samples/{id}/trace",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
       "/api/crossover",    "/api/heatmap",      "/api/heatmap/{id}/topdown.png",
-      "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics"};
+      "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics",
+      "/api/baselines",    "/api/baselines/{id}", "/api/alerts",          "/api/alerts/{id}",
+      "/api/trend"};
   std::set<std::string> documented;
   for (const auto& [path, unused] : (*document_)["paths"].items()) documented.insert(path);
   EXPECT_EQ(documented, served);
@@ -289,6 +293,60 @@ TEST_F(OpenApiTest, CancelAnswersTheDocumentedJob) {
   json cancelled = expect("DELETE", "/api/captures/" + std::to_string(posted.j()["id"].get<int64_t>()),
                           "/api/captures/{id}", 200);
   EXPECT_EQ(cancelled["status"], "cancelled");
+}
+
+// Baselines, alerts and trends: a baseline on the first capture's forward
+// run, then the same spec with more lights and labels, whose alerts (counts
+// change with the lights) and trend must match their schemas, as must the
+// replies to bad and unknown ids.
+TEST_F(OpenApiTest, BaselinesAlertsAndTrendsMatchTheirSchemas) {
+  json runs = daemon_->request("GET", "/api/runs?capture=" + std::to_string(captureId_) + "&renderer=forward").j();
+  ASSERT_EQ(runs["runs"].size(), 1u);
+  int64_t run = runs["runs"][0]["id"];
+  Reply set = daemon_->request("POST", "/api/baselines", json{{"run", run}, {"name", "forward planes"}}.dump());
+  ASSERT_EQ(set.status, 201) << set.body;
+  expectMatches(set.j(), "POST", "/api/baselines", 201);
+  std::string id = std::to_string(set.j()["id"].get<int64_t>());
+  expect("GET", "/api/baselines", "/api/baselines", 200);
+  expect("GET", "/api/baselines?all=true", "/api/baselines", 200);
+  expect("GET", "/api/baselines/" + id, "/api/baselines/{id}", 200);
+
+  json more = tinySpec();
+  more["lights"] = 64;
+  more["labels"] = {{"commit", "more-lights"}};
+  Reply posted = daemon_->request("POST", "/api/captures", more.dump());
+  ASSERT_EQ(posted.status, 202) << posted.body;
+  ASSERT_EQ(daemon_->waitFinished(posted.j()["id"]).value("status", ""), "done");
+  json labelled = expect("GET", "/api/runs?label=commit%3Dmore-lights", "/api/runs", 200);
+  EXPECT_EQ(labelled["runs"].size(), 2u);
+  json alerts;
+  for (int i = 0; i < 100; ++i) {
+    alerts = expect("GET", "/api/alerts?baseline=" + id, "/api/alerts", 200);
+    if (!alerts["alerts"].empty()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  ASSERT_FALSE(alerts["alerts"].empty()) << "more lights changed no count";
+  std::string alert = std::to_string(alerts["alerts"][0]["id"].get<int64_t>());
+  expect("GET", "/api/alerts/" + alert, "/api/alerts/{id}", 200);
+  for (const char* method : {"PATCH", "POST"}) {
+    Reply changed = daemon_->request(method, "/api/alerts/" + alert, R"({"status":"acknowledged"})");
+    ASSERT_EQ(changed.status, 200) << changed.body;
+    expectMatches(changed.j(), method, "/api/alerts/{id}", 200);
+  }
+  json trend = expect("GET", "/api/trend?baseline=" + id, "/api/trend", 200);
+  // The baseline run, other captures of this configuration by the other
+  // tests, and last the run with more lights.
+  ASSERT_GE(trend["runs"].size(), 2u);
+  EXPECT_EQ(trend["runs"][0]["id"], run);
+  EXPECT_TRUE(trend["runs"][0]["baseline"].get<bool>());
+  EXPECT_EQ(trend["runs"].back()["lights"], 64);
+  EXPECT_FALSE(trend["runs"].back()["alerts"].empty());
+
+  expect("GET", "/api/alerts/987654", "/api/alerts/{id}", 404);
+  expect("GET", "/api/alerts?status=closed", "/api/alerts", 400);
+  expect("GET", "/api/trend", "/api/trend", 400);
+  expect("GET", "/api/baselines/987654", "/api/baselines/{id}", 404);
+  expect("DELETE", "/api/baselines/" + id, "/api/baselines/{id}", 200);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the dashboard's browser tests (dashboard.test.mjs, application.test.mjs,
-# hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs) with node's test runner. ctest calls it as: run.sh TALLYD WEB_ROOT SCREENSHOT_DIR.
+# hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs, alerts.test.mjs) with node's test runner. ctest calls it as: run.sh TALLYD WEB_ROOT SCREENSHOT_DIR.
 # Without node, Chromium or the npm packages (scripts/setup.sh installs them)
 # it skips (exit 77), except under CI=true, where a missing tool is a failure.
 set -euo pipefail
@@ -20,4 +20,4 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cd "$here"
-exec node --test --test-reporter=spec dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs
+exec node --test --test-reporter=spec dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs alerts.test.mjs

@@ -5,7 +5,7 @@
 // (counter headroom). Time figures carry their IQR over frames
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
-import { downloadSource, get, hasToken, imageSource } from '../api.js';
+import { downloadSource, get, hasToken, imageSource, request } from '../api.js';
 import { barChart, color, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch, table } from '../dom.js';
 import * as fmt from '../format.js';
@@ -467,6 +467,26 @@ function headroomSection(run) {
         `the ${inUse} counters in use at ${factor(hr.wrap_factor)}×.`));
 }
 
+// "Mark as baseline": this run becomes its configuration's baseline (POST
+// /api/baselines); later runs of the configuration are tested against it.
+function baselineControl(run) {
+  const status = h('span', { role: 'status', dataset: { baselineStatus: '' } });
+  const threshold = h('input', { type: 'number', name: 'threshold', min: '0', max: '1000', step: '0.5', value: '5', 'aria-label': 'Threshold (%)', class: 'narrow' });
+  const button = h('button', { type: 'button', dataset: { markBaseline: String(run.id) }, onclick: async () => {
+    button.disabled = true;
+    try {
+      const b = await request('/baselines', { method: 'POST', body: { run: run.id, threshold: Number(threshold.value) / 100 } });
+      status.replaceChildren(` baseline #${b.id}${b.replaced ? ` (replaced #${b.replaced})` : ''}: `,
+        h('a', { href: `#/trend/${b.id}` }, 'trend'));
+    } catch (error) {
+      status.textContent = ` ${error.message}`;
+    } finally {
+      button.disabled = false;
+    }
+  } }, 'Mark as baseline');
+  return h('span', { class: 'baseline-control' }, button, ' threshold ', threshold, ' %', status);
+}
+
 export async function render(page, { params, signal }) {
   const [run, { samples }] = await Promise.all([get(`/runs/${params.id}`, signal), get(`/runs/${params.id}/samples`, signal)]);
   // Per-pass spreads live with each sample: one request per camera.
@@ -491,9 +511,12 @@ export async function render(page, { params, signal }) {
       app ? null : h('li', {}, `${run.lights} lights`),
       h('li', {}, app ? `${run.sample_count} frames` : `${run.sample_count} samples`),
       h('li', {}, `${fmt.date(run.created_at)} UTC`),
+      fmt.labels(run.labels) ? h('li', { dataset: { labels: '' } }, 'labels: ', Object.entries(run.labels).map(([k, v], i) =>
+        [i ? ', ' : '', h('a', { href: `#/runs?label=${encodeURIComponent(`${k}=${v}`)}`, title: `runs labelled ${k}=${v}` }, `${k}=${v}`)])) : null,
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
-      h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution'))),
+      h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
+      app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
       tile(app ? 'GPU time per frame (under the layer)' : 'Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
       ...(app ? [] : [

@@ -21,6 +21,8 @@ const kColumns = [
   // null for runs stored before hosts existed
   { key: 'host', label: 'Host', sort: (r) => r.host, cell: (r) => (r.host ? h('span', { class: 'clip', title: r.host }, r.host) : '–') },
   { key: 'counting', label: 'Counting', sort: (r) => r.counting, cell: (r) => r.counting },
+  // The capture's labels (commit, branch, ...); {} for none
+  { key: 'labels', label: 'Labels', sort: (r) => fmt.labels(r.labels), cell: (r) => fmt.labels(r.labels) || '–' },
   { key: 'sample_count', label: 'Samples', sort: (r) => r.sample_count, cell: (r) => String(r.sample_count), num: true },
   { key: 'mean_frame_ms', label: 'Frame time', sort: (r) => r.mean_frame_ms, cell: (r) => fmt.ms(r.mean_frame_ms), num: true },
   { key: 'mean_overhead_ratio', label: 'Overhead', sort: (r) => r.mean_overhead_ratio, cell: (r) => fmt.ratio(r.mean_overhead_ratio), num: true },
@@ -49,7 +51,7 @@ function compareRows(column, direction) {
 // The API query for the filters in the URL: "resolution=320x180" becomes width and height.
 function apiFilters(query) {
   const f = {};
-  for (const key of ['renderer', 'scene', 'device', 'host', 'since', 'until', 'capture']) f[key] = query.get(key);
+  for (const key of ['renderer', 'scene', 'device', 'host', 'label', 'since', 'until', 'capture']) f[key] = query.get(key);
   const res = /^(\d+)\s*[x×]\s*(\d+)$/.exec(query.get('resolution') || '');
   if (res) [f.width, f.height] = [res[1], res[2]];
   return f;
@@ -67,6 +69,7 @@ function filterForm(query, { renderers, scenes, devices, hosts }, onApply) {
     field('Resolution', h('input', { name: 'resolution', value: query.get('resolution') || '', placeholder: 'e.g. 320x180', pattern: '\\s*\\d+\\s*[x×]\\s*\\d+\\s*', size: 10 })),
     field('Device', select('device', devices.map((d) => [d.id, d.name]))),
     hosts.length ? field('Host', select('host', hosts)) : null,
+    field('Label', h('input', { name: 'label', value: query.get('label') || '', placeholder: 'commit=4f2a9c1', pattern: '\\s*[^=\\s]+=.+', size: 14, title: 'NAME=VALUE: runs of captures with this label' })),
     field('From', h('input', { type: 'date', name: 'since', value: query.get('since') || '' })),
     field('To', h('input', { type: 'date', name: 'until', value: query.get('until') || '' })),
     query.get('capture') ? h('input', { type: 'hidden', name: 'capture', value: query.get('capture') }) : null,

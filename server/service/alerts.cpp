@@ -1,0 +1,245 @@
+// Baselines, alerts and a configuration's trend as JSON routes
+// (docs/api.md, "Baselines and alerts"). The evaluation that raises alerts
+// runs elsewhere (alert_evaluator.cpp); these routes read and change rows.
+#include "service/alerts.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "service/routes.hpp"
+#include "service/webhook.hpp"
+
+namespace tally::service {
+
+using api::Request;
+using api::Response;
+using nlohmann::json;
+using namespace detail;
+
+namespace {
+
+// The longest name a baseline may have.
+constexpr size_t kMaxBaselineName = 128;
+// Runs a trend gives at most (the newest), and by default.
+constexpr int kMaxTrendRuns = 500;
+constexpr int kDefaultTrendRuns = 100;
+
+// The body's fields other than `known` are refused, naming the first.
+void allowFields(const json& body, const std::vector<std::string>& known) {
+  if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a JSON object");
+  for (const auto& [key, value] : body.items()) {
+    if (std::find(known.begin(), known.end(), key) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      invalid(key, "unknown field (expected " + list + ")");
+    }
+  }
+}
+
+// POST /api/baselines {"run": ID, "threshold": 0.05, "name": "..."}
+Response postBaseline(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  const json& body = req.body;
+  allowFields(body, {"run", "threshold", "name"});
+  if (!body.contains("run")) invalid("run", "required: the id of the run to make the baseline");
+  if (!body["run"].is_number_integer() || body["run"].get<int64_t>() < 1)
+    invalid("run", "must be a positive integer");
+  store::NewBaseline nb;
+  nb.runId = body["run"].get<int64_t>();
+  if (body.contains("threshold")) {
+    const json& t = body["threshold"];
+    if (!t.is_number() || !std::isfinite(t.get<double>()) || t.get<double>() < 0 || t.get<double>() > 10) {
+      invalid("threshold",
+              "must be a number from 0 to 10 (|ratio - 1| beyond which a time change alerts; 0.05: 5%)");
+    }
+    nb.threshold = t.get<double>();
+  }
+  if (body.contains("name") && !body["name"].is_null()) {
+    const json& n = body["name"];
+    bool control = n.is_string() &&
+                   std::any_of(n.get_ref<const std::string&>().begin(), n.get_ref<const std::string&>().end(),
+                               [](char c) { return static_cast<unsigned char>(c) < 0x20; });
+    if (!n.is_string() || n.get<std::string>().empty() || n.get<std::string>().size() > kMaxBaselineName ||
+        control) {
+      invalid("name",
+              "must be 1 to " + std::to_string(kMaxBaselineName) + " characters without control characters");
+    }
+    nb.name = n.get<std::string>();
+  }
+  auto set = check(ctx.writer->setBaseline(nb));
+  if (!set) return api::notFound("no run " + std::to_string(nb.runId));
+  json out = baselineJson(set->baseline);
+  out["replaced"] = opt(set->replaced);
+  Response r = Response::ok(out, 201);
+  r.headers.emplace_back("Location", "/api/baselines/" + std::to_string(set->baseline.id));
+  return r;
+}
+
+bool queryBool(const Request& req, const std::string& key) {
+  const std::string* v = req.queryValue(key);
+  if (!v) return false;
+  if (*v == "true" || *v == "1") return true;
+  if (*v == "false" || *v == "0") return false;
+  invalid(key, "must be true or false");
+}
+
+Response listBaselines(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"all"});
+  json out = json::array();
+  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all"))))
+    out.push_back(baselineJson(b));
+  return Response::ok({{"baselines", out}});
+}
+
+Response getBaseline(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto b = check(reader(ctx).getBaseline(id));
+  if (!b) return api::notFound("no baseline " + std::to_string(id));
+  return Response::ok(baselineJson(*b));
+}
+
+Response deleteBaseline(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto b = check(ctx.writer->removeBaseline(id));
+  if (!b) return api::notFound("no baseline " + std::to_string(id));
+  return Response::ok(baselineJson(*b));
+}
+
+std::optional<store::AlertStatus> queryStatus(const Request& req) {
+  auto s = queryString(req, "status", 32);
+  if (!s) return std::nullopt;
+  auto status = store::parseAlertStatus(*s);
+  if (!status) invalid("status", "must be open, acknowledged, invalid or fixed");
+  return status;
+}
+
+Response listAlerts(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"status", "baseline", "run", "limit", "cursor"});
+  store::AlertFilter filter;
+  filter.status = queryStatus(req);
+  filter.baselineId = queryInt(req, "baseline", 1, INT64_MAX);
+  filter.runId = queryInt(req, "run", 1, INT64_MAX);
+  auto& store = reader(ctx);
+  auto page = check(store.listAlerts(filter, queryPage(req)));
+  json alerts = json::array();
+  for (const auto& a : page.alerts) alerts.push_back(alertJson(a));
+  return Response::ok({{"alerts", alerts},
+                       {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)},
+                       {"counts", check(store.alertCounts(filter.baselineId))}});
+}
+
+Response getAlert(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  auto& store = reader(ctx);
+  auto a = check(store.getAlert(id));
+  if (!a) return api::notFound("no alert " + std::to_string(id));
+  json out = alertJson(*a);
+  auto run = check(store.getRun(a->runId));
+  out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
+  auto baseline = check(store.getBaseline(a->baselineId));
+  out["baseline_row"] = baseline ? baselineJson(*baseline) : json(nullptr);
+  return Response::ok(out);
+}
+
+// PATCH or POST /api/alerts/{id} {"status": "acknowledged"}
+Response updateAlert(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {});
+  int64_t id = pathId(req);
+  allowFields(req.body, {"status"});
+  if (!req.body.contains("status")) invalid("status", "required: open, acknowledged, invalid or fixed");
+  const json& s = req.body["status"];
+  auto status = s.is_string() ? store::parseAlertStatus(s.get<std::string>()) : std::nullopt;
+  if (!status) invalid("status", "must be open, acknowledged, invalid or fixed");
+  auto a = check(ctx.writer->setAlertStatus(id, *status));
+  if (!a) return api::notFound("no alert " + std::to_string(id));
+  return Response::ok(alertJson(*a));
+}
+
+// A run's frame time over every per-frame time of its samples: the median and
+// its distribution-free 95% interval (order statistics k and n + 1 - k of the
+// n sorted times, k from the normal approximation to Binomial(n, 1/2)); the
+// mean of the samples' frame times, without interval, where a sample has none.
+json frameFigure(store::Store& store, const store::RunRow& run) {
+  std::vector<double> times;
+  bool complete = true;
+  for (const auto& row : check(store.listSamples(run.id))) {
+    auto sample = check(store.getSample(row.id));
+    if (!sample || sample->row.frameMsFrames.empty()) {
+      complete = false;
+      break;
+    }
+    times.insert(times.end(), sample->row.frameMsFrames.begin(), sample->row.frameMsFrames.end());
+  }
+  if (!complete || times.empty()) {
+    return {{"median", opt(run.meanFrameMs)}, {"lower", nullptr}, {"upper", nullptr}, {"frames", 0}};
+  }
+  std::sort(times.begin(), times.end());
+  const size_t n = times.size();
+  double median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
+  // k = floor(n/2 - 1.96 sqrt(n)/2): P(X < k) <= 2.5% for X ~ Binomial(n, 1/2).
+  double k = std::floor(n / 2.0 - 0.98 * std::sqrt(static_cast<double>(n)));
+  json lower = nullptr, upper = nullptr;
+  if (k >= 1) {
+    lower = times[static_cast<size_t>(k) - 1];
+    upper = times[n - static_cast<size_t>(k)];
+  }
+  return {{"median", median}, {"lower", lower}, {"upper", upper}, {"frames", n}};
+}
+
+// GET /api/trend?baseline=ID[&limit=N]: every run of the baseline's
+// configuration, oldest first, with its date, labels, frame time and bytes,
+// and every alert raised on the configuration.
+Response trend(ServiceContext& ctx, const Request& req) {
+  allowOnly(req, {"baseline", "limit"});
+  auto id = queryInt(req, "baseline", 1, INT64_MAX);
+  if (!id) invalid("baseline", "required: a baseline id (GET /api/baselines)");
+  int limit = static_cast<int>(queryInt(req, "limit", 1, kMaxTrendRuns).value_or(kDefaultTrendRuns));
+  auto& store = reader(ctx);
+  auto baseline = check(store.getBaseline(*id));
+  if (!baseline) return api::notFound("no baseline " + std::to_string(*id));
+  auto alerts = check(store.configurationAlerts(*id, 1000));
+  std::map<int64_t, json> alertsByRun;
+  json alertList = json::array();
+  for (const auto& a : alerts) {
+    alertsByRun[a.runId].push_back(a.id);
+    alertList.push_back(alertJson(a));
+  }
+  json runs = json::array();
+  for (const auto& r : check(store.configurationRuns(*id, limit))) {
+    runs.push_back({{"id", r.id},
+                    {"capture", r.jobId},
+                    {"created_at", r.createdAt},
+                    {"labels", r.labels},
+                    {"lights", r.lights},
+                    {"host", opt(r.host)},
+                    {"tally_commit", opt(r.tallyCommit)},
+                    {"frame_ms", frameFigure(store, r)},
+                    {"mean_bytes", opt(r.meanBytes)},
+                    {"baseline", r.id == baseline->runId},
+                    {"alerts", alertsByRun.count(r.id) ? alertsByRun[r.id] : json::array()}});
+  }
+  return Response::ok({{"baseline", baselineJson(*baseline)}, {"runs", runs}, {"alerts", alertList}});
+}
+
+}  // namespace
+
+void addAlertRoutes(api::Router& router, ServiceContext& ctx) {
+  auto route = [&ctx](Response (*fn)(ServiceContext&, const Request&)) {
+    return [&ctx, fn](const Request& req) { return wrap(ctx, [&] { return fn(ctx, req); }); };
+  };
+  router.post("/api/baselines", route(postBaseline));
+  router.get("/api/baselines", route(listBaselines));
+  router.get("/api/baselines/{id}", route(getBaseline));
+  router.del("/api/baselines/{id}", route(deleteBaseline));
+  router.get("/api/alerts", route(listAlerts));
+  router.get("/api/alerts/{id}", route(getAlert));
+  router.add("PATCH", "/api/alerts/{id}", route(updateAlert));
+  router.post("/api/alerts/{id}", route(updateAlert));
+  router.get("/api/trend", route(trend));
+}
+
+}  // namespace tally::service

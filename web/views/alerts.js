@@ -1,0 +1,156 @@
+// Alerts (#/alerts, #/alerts/ID): regression alerts, newest first (GET
+// /api/alerts), filtered by status, each with its figures, its run and the
+// trend of its baseline's configuration; an open alert can be acknowledged,
+// and any alert's status set (PATCH /api/alerts/{id}). The active baselines
+// are listed above, each with its trend. The list is fetched again every
+// few seconds while shown.
+import { refreshBadge } from '../alert_badge.js';
+import { get, queryString, request } from '../api.js';
+import { append, h, table } from '../dom.js';
+import * as fmt from '../format.js';
+import { sleep } from '../poll.js';
+
+const kRefreshMs = 5000;
+const kStatuses = ['open', 'acknowledged', 'invalid', 'fixed'];
+
+function interval(a) {
+  return a.interval ? `[${a.interval[0].toFixed(3)}, ${a.interval[1].toFixed(3)}]` : '–';
+}
+
+// A: the baseline's value, B: the run's: medians in ms for time, bytes per frame for counts.
+const value = (a, v) => (a.kind === 'counts' ? fmt.bytes(v) : fmt.ms(v));
+
+function whatChanged(a) {
+  if (a.kind !== 'counts') return `${a.metric} ${a.verdict}`;
+  const changes = a.details?.changes || [];
+  const shown = changes.slice(0, 3).map((c) => `${c.line} ${fmt.count(c.a)} → ${fmt.count(c.b)}`).join('; ');
+  return `counts changed in ${changes.length} line${changes.length === 1 ? '' : 's'}${shown ? `: ${shown}${changes.length > 3 ? '; …' : ''}` : ''}`;
+}
+
+function statusControl(a, onChange) {
+  const select = h('select', { name: 'status', 'aria-label': `Status of alert ${a.id}` },
+    kStatuses.map((s) => h('option', { value: s, selected: s === a.status }, s)));
+  select.addEventListener('change', () => onChange(a, select.value));
+  const ack = a.status === 'open'
+    ? h('button', { type: 'button', dataset: { ack: String(a.id) }, onclick: () => onChange(a, 'acknowledged') }, 'Acknowledge')
+    : null;
+  return h('span', {}, select, ' ', ack);
+}
+
+function alertColumns(onChange) {
+  return [
+    { label: 'Alert', value: (a) => h('a', { href: `#/alerts/${a.id}` }, `#${a.id}`) },
+    { label: 'Status', value: (a) => h('span', { dataset: { status: a.status } }, a.status) },
+    { label: 'What', value: (a) => h('span', { class: 'clip', title: whatChanged(a) }, whatChanged(a)) },
+    { label: 'Ratio', className: 'num', value: (a) => fmt.ratio(a.ratio) },
+    { label: '95% interval', className: 'num', value: interval },
+    { label: 'p', className: 'num', value: (a) => (a.p_value === null ? '–' : a.p_value.toPrecision(3)) },
+    { label: 'Baseline (A)', className: 'num', value: (a) => value(a, a.value_a) },
+    { label: 'Run (B)', className: 'num', value: (a) => value(a, a.value_b) },
+    { label: 'Run', value: (a) => h('a', { href: `#/runs/${a.run}` }, `#${a.run}`) },
+    { label: 'Trend', value: (a) => h('a', { href: `#/trend/${a.baseline}`, dataset: { trend: String(a.baseline) } }, `baseline #${a.baseline}`) },
+    { label: 'Raised (UTC)', value: (a) => fmt.date(a.created_at) },
+    { label: 'Webhook', value: (a) => (a.delivery.state === 'none' ? '–' : h('span', { title: a.delivery.last_error || '' }, `${a.delivery.state} (${a.delivery.attempts})`)) },
+    { label: '', value: (a) => statusControl(a, onChange) },
+  ];
+}
+
+function alertTable(alerts, onChange, highlight) {
+  const wrap = table(alertColumns(onChange), alerts, { class: 'alerts', 'aria-label': 'Alerts' });
+  wrap.querySelectorAll('tbody tr').forEach((tr, i) => {
+    const a = alerts[i];
+    tr.dataset.alert = String(a.id);
+    tr.dataset.status = a.status;
+    tr.classList.toggle('alert-open', a.status === 'open');
+    tr.classList.toggle('alert-highlight', String(a.id) === highlight);
+  });
+  return wrap;
+}
+
+function baselineTable(baselines) {
+  const columns = [
+    { label: 'Baseline', value: (b) => `#${b.id}${b.name ? ` ${b.name}` : ''}` },
+    { label: 'Configuration', value: (b) => `${b.configuration.variant} · ${b.configuration.scene} · ${b.configuration.width}×${b.configuration.height} · ${b.configuration.device} · ${b.configuration.counting}` },
+    { label: 'Run', value: (b) => h('a', { href: `#/runs/${b.run}` }, `#${b.run}`) },
+    { label: 'Labels', value: (b) => fmt.labels(b.labels) || '–' },
+    { label: 'Threshold', className: 'num', value: (b) => fmt.percent(b.threshold) },
+    { label: 'Open alerts', className: 'num', value: (b) => String(b.open_alerts) },
+    { label: 'Trend', value: (b) => h('a', { href: `#/trend/${b.id}`, dataset: { trend: String(b.id) } }, 'trend') },
+  ];
+  return table(columns, baselines, { class: 'baselines', 'aria-label': 'Baselines' });
+}
+
+export async function render(page, { params, query, signal }) {
+  const status = query.get('status') ?? 'open';
+  const filter = h('select', { name: 'status', 'aria-label': 'Status' },
+    h('option', { value: '', selected: status === '' || status === 'all' }, 'all'),
+    kStatuses.map((s) => h('option', { value: s, selected: s === status }, s)));
+  filter.addEventListener('change', () => { location.hash = `#/alerts${queryString({ status: filter.value || 'all' })}`; });
+  const apiStatus = kStatuses.includes(status) ? status : '';
+  const path = `/alerts${queryString({ status: apiStatus, limit: 200 })}`;
+  const [first, { baselines }] = await Promise.all([get(path, signal), get('/baselines', signal)]);
+  const list = h('div', { dataset: { refreshes: '0' } });
+  const summary = h('p', { class: 'muted', role: 'status' });
+  const highlight = params.id;
+  let refreshes = 0;
+
+  async function setStatus(a, next) {
+    try {
+      await request(`/alerts/${a.id}`, { method: 'PATCH', body: { status: next }, signal });
+      draw(await get(path, signal));
+      refreshBadge();
+    } catch (error) {
+      if (!signal.aborted) summary.textContent = `Could not change alert #${a.id}: ${error.message}`;
+    }
+  }
+
+  function draw(reply) {
+    const c = reply.counts;
+    list.replaceChildren(reply.alerts.length ? alertTable(reply.alerts, setStatus, highlight)
+      : h('p', { class: 'panel', dataset: { empty: '' } }, apiStatus ? `No ${apiStatus} alert.` : 'No alert yet.'));
+    list.dataset.refreshes = String(refreshes);
+    summary.textContent = `${c.open} open, ${c.acknowledged} acknowledged, ${c.invalid} invalid, ${c.fixed} fixed.${reply.next_cursor ? ' Showing the newest 200.' : ''}`;
+  }
+
+  let detail = null;
+  if (highlight) {
+    const a = await get(`/alerts/${encodeURIComponent(highlight)}`, signal);
+    detail = h('section', { class: 'panel', dataset: { alertDetail: String(a.id) } },
+      h('h2', {}, `Alert #${a.id}: ${whatChanged(a)}`),
+      h('p', {}, `Run `, h('a', { href: `#/runs/${a.run}` }, `#${a.run}`), ` against baseline run `,
+        h('a', { href: `#/runs/${a.baseline_run}` }, `#${a.baseline_run}`), ' (', h('a', { href: `#/trend/${a.baseline}` }, 'trend'), ')',
+        a.run_row && fmt.labels(a.run_row.labels) ? `; labels ${fmt.labels(a.run_row.labels)}` : ''),
+      a.kind === 'time' ? h('p', {}, `ratio ${fmt.ratio(a.ratio)} ${interval(a)}, p = ${a.p_value?.toPrecision(3)}, Cliff's delta ${a.cliffs_delta?.toFixed(3)}; ${a.details?.reason || ''}`) : null,
+      a.kind === 'counts' ? table([
+        { label: 'Line', value: (c) => c.line },
+        { label: 'Baseline', className: 'num', value: (c) => fmt.count(c.a) },
+        { label: 'Run', className: 'num', value: (c) => fmt.count(c.b) },
+        { label: 'Change', className: 'num', value: (c) => fmt.count(c.delta) },
+      ], a.details?.changes || [], { 'aria-label': 'Count changes' }) : null);
+  }
+
+  async function refresh() {
+    while (!signal.aborted) {
+      await sleep(kRefreshMs, signal);
+      if (signal.aborted) return;
+      try {
+        const reply = await get(path, signal);
+        ++refreshes;
+        draw(reply);
+      } catch (error) {
+        if (!signal.aborted) summary.textContent = `Could not refresh the alerts: ${error.message}`;
+      }
+    }
+  }
+
+  append(page, [
+    h('h1', {}, 'Alerts'),
+    h('p', { class: 'muted' }, 'Each new run of a configuration with a baseline is tested against the baseline run: a significant change of frame or pass time beyond the baseline\'s threshold, or any change of counts, raises an alert.'),
+    detail,
+    h('h2', {}, 'Baselines'),
+    baselines.length ? baselineTable(baselines) : h('p', { class: 'panel' }, 'No baseline yet: mark a run as its configuration\'s baseline in its run view.'),
+    h('h2', {}, 'Alerts'),
+    h('label', {}, 'Status ', filter), summary, list]);
+  draw(first);
+  refresh();
+}
