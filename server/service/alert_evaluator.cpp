@@ -89,25 +89,12 @@ AlertEvaluator::AlertEvaluator(Options options) : options_(std::move(options)) {
 AlertEvaluator::~AlertEvaluator() { stop(); }
 
 void AlertEvaluator::start() {
-  thread_ = std::thread([this] { loop(); });
+  thread_.start([this] { loop(); });
 }
 
-void AlertEvaluator::stop() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
+void AlertEvaluator::stop() { thread_.stop(); }
 
-void AlertEvaluator::wake() {
-  {
-    std::lock_guard lock(mutex_);
-    woken_ = true;
-  }
-  cv_.notify_all();
-}
+void AlertEvaluator::wake() { thread_.wake(); }
 
 void AlertEvaluator::loop() {
   auto log = [this](const std::string& line) {
@@ -153,11 +140,7 @@ void AlertEvaluator::loop() {
         }
       }
     }
-    std::unique_lock lock(mutex_);
-    if (stop_) return;
-    if (!busy) cv_.wait_for(lock, options_.idle, [this] { return stop_ || woken_; });
-    woken_ = false;
-    if (stop_) return;
+    if (!thread_.next(busy, options_.idle)) return;
   }
 }
 

@@ -7,17 +7,14 @@
 // transaction.
 #pragma once
 
-#include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <string>
 #include <string_view>
-#include <thread>
 #include <vector>
 
 #include "common/result.hpp"
+#include "service/loop_thread.hpp"
 #include "store/store.hpp"
 
 namespace tally::service {
@@ -65,11 +62,7 @@ class AlertEvaluator {
  private:
   void loop();
   Options options_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool stop_ = false;
-  bool woken_ = false;
+  LoopThread thread_;
 };
 
 }  // namespace tally::service

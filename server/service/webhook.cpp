@@ -174,25 +174,12 @@ WebhookSender::WebhookSender(std::string location, WebhookOptions options,
 WebhookSender::~WebhookSender() { stop(); }
 
 void WebhookSender::start() {
-  thread_ = std::thread([this] { loop(); });
+  thread_.start([this] { loop(); });
 }
 
-void WebhookSender::stop() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  cv_.notify_all();
-  if (thread_.joinable()) thread_.join();
-}
+void WebhookSender::stop() { thread_.stop(); }
 
-void WebhookSender::wake() {
-  {
-    std::lock_guard lock(mutex_);
-    woken_ = true;
-  }
-  cv_.notify_all();
-}
+void WebhookSender::wake() { thread_.wake(); }
 
 void WebhookSender::loop() {
   auto log = [this](std::string_view line) {
@@ -225,11 +212,7 @@ void WebhookSender::loop() {
         busy = *done > 0;
       }
     }
-    std::unique_lock lock(mutex_);
-    if (stop_) return;
-    if (!busy) cv_.wait_for(lock, options_.idle, [this] { return stop_ || woken_; });
-    woken_ = false;
-    if (stop_) return;
+    if (!thread_.next(busy, options_.idle)) return;
   }
 }
 

@@ -8,18 +8,16 @@
 #pragma once
 
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <string>
 #include <string_view>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
 #include "api/http_post.hpp"
 #include "common/result.hpp"
+#include "service/loop_thread.hpp"
 #include "store/store.hpp"
 
 namespace tally::service {
@@ -65,10 +63,7 @@ class WebhookSender {
   WebhookOptions options_;
   api::HttpTarget target_;
   std::function<void(std::string_view)> log_;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  bool stop_ = false, woken_ = false;
+  LoopThread thread_;
 };
 
 // The JSON of an alert and of a baseline, as the API gives them.
