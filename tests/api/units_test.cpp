@@ -263,7 +263,8 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
        {"/api/captures", "/api/captures/{id}", "/api/runs", "/api/runs/{id}", "/api/runs/{id}/samples",
         "/api/samples/{id}", "/api/samples/{id}/screenshot.png", "/api/compare", "/api/export", "/api/health",
         "/api/devices", "/api/renderers", "/api/scenes", "/api/openapi.json", "/api/sweeps", "/api/sweeps/{id}",
-        "/api/hosts"}) {
+        "/api/hosts", "/api/crossover", "/api/heatmap", "/api/heatmap/{id}/topdown.png", "/api/baselines",
+        "/api/baselines/{id}", "/api/alerts", "/api/alerts/{id}", "/api/trend"}) {
     EXPECT_TRUE(embedded["paths"].contains(path)) << path;
   }
   EXPECT_TRUE(embedded["paths"]["/api/captures"].contains("post"));
@@ -272,7 +273,7 @@ TEST(OpenApi, EmbeddedDocumentMatchesFileAndCoversThePlannedApi) {
   std::set<std::string> runFilters;
   for (auto& p : embedded["paths"]["/api/runs"]["get"]["parameters"]) runFilters.insert(p["name"]);
   EXPECT_EQ(runFilters, (std::set<std::string>{"renderer", "variant", "scene", "width", "height", "device", "capture",
-                                               "host", "since", "until", "limit", "cursor"}));
+                                               "host", "label", "since", "until", "limit", "cursor"}));
 }
 
 }  // namespace
