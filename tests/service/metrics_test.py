@@ -149,8 +149,18 @@ try:
     check(value(final, "tally_jobs", state="queued") == 0 and value(final, "tally_jobs", state="running") == 0,
           "the queue is empty again")
 
-    # Every request of this test, counted under its route and code (the last
-    # scrape is counted once its response is written, so it is not in `final`).
+    # Every request of this test, counted under its route and code. A request
+    # is counted once its response is written, so a scrape sent as soon as the
+    # previous response arrived may come before that one is counted (it is
+    # handled on another thread): scrape again, a bounded number of times,
+    # until every earlier scrape is in. The last scrape is never in its own
+    # answer.
+    for _ in range(50):
+        made = d.counted[("/metrics", "200")]
+        if value(final, "tally_http_requests_total", route="/metrics", code="200") >= made - 1:
+            break
+        time.sleep(0.05)
+        final = d.scrape()
     d.counted[("/metrics", "200")] -= 1
     for (route, code), n in sorted(d.counted.items()):
         got = value(final, "tally_http_requests_total", route=route, code=code)
