@@ -25,6 +25,9 @@ packages=(
   xvfb xauth gfxreconstruct
   # The fleet store and its tests (PostgreSQL server and client, libpq).
   postgresql libpq-dev
+  # The suite on a busy machine: TALLY_TEST_LOAD=N scripts/test.sh runs the
+  # tests beside N CPU-bound stress-ng workers.
+  stress-ng
 )
 # The dashboard's npm packages need node and npm; take Debian's only when there are none.
 if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi

@@ -15,7 +15,13 @@ export function bytes(n) {
   return `${n < 0 ? '−' : ''}${text} ${units[u]}`;
 }
 
-export const ms = (n) => (n === null || n === undefined ? '–' : `${n.toFixed(n < 10 ? 3 : 2)} ms`);
+// Milliseconds: three decimals below 10 ms, two from 10 ms, by magnitude, so
+// that a negative time gets as many decimals as a positive one (one minus sign, −).
+export function ms(n) {
+  if (n === null || n === undefined) return '–';
+  const v = Math.abs(n);
+  return `${n < 0 ? '−' : ''}${v.toFixed(v < 10 ? 3 : 2)} ms`;
+}
 export const ratio = (n) => (n === null || n === undefined ? '–' : `×${n.toFixed(3)}`);
 // Percentages keep two significant digits below 1 % (0.052 %), one decimal above.
 export function percent(n) {

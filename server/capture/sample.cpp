@@ -46,6 +46,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
       // -1: not measured (footprint off, or a line the model cannot see).
       if (a.footprintBytes >= 0) it->second.footprint.push_back(double(a.footprintBytes));
       if (a.footprintBytes >= 0 && a.footprintBlocks >= 0) it->second.footprintBlocks.push_back(double(a.footprintBlocks));
+      if (a.footprintBytes >= 0 && a.footprintClamped) ++it->second.footprintClampedFrames;
     }
   }
   m.instrumentedFrameMs.push_back(total);
@@ -127,6 +128,9 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
         // The blocks behind it: x the block size, the strict bound, which
         // exceeds the requested bytes where accesses are sparser than a block.
         if (!line.footprintBlocks.empty()) r["footprint_blocks"] = spreadOf(line.footprintBlocks).mean;
+        // Whether footprint_bytes was clamped to the requested bytes (blocks
+        // x block size above them) in any frame: the reuse of 1 is then a floor.
+        r["footprint_clamped"] = line.footprintClampedFrames > 0;
         passFootprint += footprint;
         passHasFootprint = true;
       }

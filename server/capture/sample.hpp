@@ -26,6 +26,7 @@ struct Line {
   // where no frame did (footprint off, or a line the model cannot see).
   std::vector<double> footprint;
   std::vector<double> footprintBlocks;  // Access::footprintBlocks of the same frames
+  uint32_t footprintClampedFrames = 0;  // frames whose Access::footprintClamped was set
 };
 
 // F instrumented frames: counts per frame; F uninstrumented frames: times.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <vector>
@@ -25,6 +27,10 @@ constexpr uint32_t kOpsPerIteration = 64;  // ceiling_fma: 8 chains x 4 componen
 constexpr double kArithmeticTargetS = 0.02;
 constexpr uint32_t kMinIterations = 16, kMaxIterations = 1u << 20;
 constexpr uint32_t kCopyPerInvocation = 4;  // ceiling_copy's kPerInvocation
+// The copy's source holds this word everywhere and its destination starts at
+// zero, so a copy that skipped or misplaced elements shows in the readback.
+constexpr uint32_t kCopyPattern = 0x7A11C0DEu;
+constexpr uint64_t kCopyCheckWindow = 64 * 1024;  // bytes read back at the start, middle and end
 
 bool isCpu(const Context& ctx) { return ctx.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; }
 
@@ -175,7 +181,8 @@ Result<Ceilings> measureCeilings(const Context& ctx, const std::string& shaderDi
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     o.source = createBuffer(ctx, out.copyBytes, storage, MemoryUse::DeviceLocal);
     o.destination = createBuffer(ctx, out.copyBytes, storage, MemoryUse::DeviceLocal);
-    zeroBuffer(ctx, o.source);
+    fillBuffer(ctx, o.source, kCopyPattern);
+    zeroBuffer(ctx, o.destination);
     VkDescriptorSet copySet = bindBuffers(ctx, o.pool, o.copy, {&o.source, &o.destination});
     const uint32_t elements = static_cast<uint32_t>(std::min<uint64_t>(out.copyBytes / 16, UINT32_MAX));
     // kCopyPerInvocation elements per invocation, a dispatch's width apart;
@@ -201,6 +208,23 @@ Result<Ceilings> measureCeilings(const Context& ctx, const std::string& shaderDi
     out.copySeconds = fastest(copyTimes);
     if (out.copySeconds <= 0) return makeError("ceilings: the copy took no measurable time");
     out.bandwidthBytesPerS = 2.0 * double(out.copyBytes) / out.copySeconds;
+    // The copy must have written what it read: windows at the start, the
+    // middle and the end of the destination (the whole of a small one).
+    const uint64_t window = std::min(kCopyCheckWindow, out.copyBytes);
+    for (uint64_t offset : {uint64_t(0), (out.copyBytes - window) / 2 / 16 * 16, out.copyBytes - window}) {
+      auto bytes = readBuffer(ctx, o.destination, offset, window);
+      for (size_t i = 0; i + sizeof(uint32_t) <= bytes.size(); i += sizeof(uint32_t)) {
+        uint32_t word;
+        std::memcpy(&word, bytes.data() + i, sizeof word);
+        if (word != kCopyPattern) {
+          char text[128];
+          std::snprintf(text, sizeof text, "ceilings: the copy wrote 0x%08x at byte %llu, not 0x%08x", word,
+                        static_cast<unsigned long long>(offset + i), kCopyPattern);
+          return makeError(text);
+        }
+      }
+      out.copyVerifiedBytes += bytes.size();
+    }
     destroyBuffer(ctx, o.source);
     destroyBuffer(ctx, o.destination);
 
@@ -255,6 +279,7 @@ nlohmann::json toJson(const Ceilings& c) {
         {"repetitions", c.repetitions},
         {"copy_seconds", c.copySeconds},
         {"copy_invocations", c.copyInvocations},
+        {"copy_verified_bytes", c.copyVerifiedBytes},
         {"arithmetic_ops", c.arithmeticOps},
         {"arithmetic_seconds", c.arithmeticSeconds},
         {"arithmetic_invocations", c.fmaInvocations},

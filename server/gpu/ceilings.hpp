@@ -32,6 +32,7 @@ struct Ceilings {
   std::string timing;              // "timestamps", or "host" where the queue writes none
   uint32_t copyInvocations = 0, fmaInvocations = 0, fmaIterations = 0;
   double measureSeconds = 0;       // host wall time of the whole measurement, set-up included
+  uint64_t copyVerifiedBytes = 0;  // destination bytes read back and found equal to the source
 };
 
 // The copy size for this device: well past any last-level cache on a GPU

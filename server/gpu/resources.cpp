@@ -339,12 +339,16 @@ std::vector<uint8_t> readBuffer(const Context& ctx, const Buffer& buffer, VkDevi
   });
 }
 
-void zeroBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize size) {
+void fillBuffer(const Context& ctx, const Buffer& buffer, uint32_t word, VkDeviceSize offset, VkDeviceSize size) {
   submitAndWait(ctx, [&](VkCommandBuffer cmd) {
     fullBarrier(cmd);
-    vkCmdFillBuffer(cmd, buffer.buffer, offset, size, 0);
+    vkCmdFillBuffer(cmd, buffer.buffer, offset, size, word);
     fullBarrier(cmd);
   });
+}
+
+void zeroBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset, VkDeviceSize size) {
+  fillBuffer(ctx, buffer, 0, offset, size);
 }
 
 void uploadImage(const Context& ctx, const Image& image, std::span<const uint8_t> texels,

@@ -81,7 +81,10 @@ void uploadBuffer(const Context& ctx, const Buffer& buffer, std::span<const uint
                   VkDeviceSize offset = 0);
 std::vector<uint8_t> readBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset = 0,
                                 VkDeviceSize size = VK_WHOLE_SIZE);
-// Fills `size` bytes from `offset` with zero (vkCmdFillBuffer), then waits.
+// Fills `size` bytes from `offset` with the 32-bit `word` repeated
+// (vkCmdFillBuffer), then waits; zeroBuffer fills with zero.
+void fillBuffer(const Context& ctx, const Buffer& buffer, uint32_t word, VkDeviceSize offset = 0,
+                VkDeviceSize size = VK_WHOLE_SIZE);
 void zeroBuffer(const Context& ctx, const Buffer& buffer, VkDeviceSize offset = 0,
                 VkDeviceSize size = VK_WHOLE_SIZE);
 

@@ -165,6 +165,7 @@ void RendererBase::indexFootprint(const Pass& pass, std::vector<Access>& accesse
     if (a.resource != "indices" || a.write || a.source != "derived") continue;
     a.footprintBlocks = int64_t(total);
     a.footprintBytes = int64_t(std::min<uint64_t>(total * block, a.bytes));
+    a.footprintClamped = total * block > a.bytes;
   }
 }
 
@@ -181,6 +182,7 @@ void RendererBase::attributeFootprint(uint32_t passIndex, std::vector<Access>& a
     // than it holds reports the bytes it requested (docs/measurement.md).
     a.footprintBytes = int64_t(std::min<uint64_t>(blocks * footprint_.blockBytes(), a.bytes));
     a.footprintBlocks = int64_t(blocks);
+    a.footprintClamped = blocks * footprint_.blockBytes() > a.bytes;
   }
 }
 

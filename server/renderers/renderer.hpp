@@ -73,6 +73,9 @@ struct Access {
   // The blocks behind footprintBytes (x the block size may exceed bytes:
   // footprintBytes is the smaller of the two). -1 where not measured.
   int64_t footprintBlocks = -1;
+  // footprintBlocks x the block size exceeded the requested bytes, so
+  // footprintBytes was clamped to them (accesses sparser than a block).
+  bool footprintClamped = false;
 };
 
 struct PassResult {

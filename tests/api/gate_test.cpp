@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -77,12 +78,13 @@ void sendAll(int fd, const std::string& bytes) {
   }
 }
 
-// What the server sends until it closes, or `limit` passes.
-std::string readUntilClosed(int fd, std::chrono::milliseconds limit) {
+// What the server sends until it closes, `until` appears in it (when not
+// empty), or `limit` passes.
+std::string readUntilClosed(int fd, std::chrono::milliseconds limit, std::string_view until = {}) {
   std::string out;
   auto deadline = Clock::now() + limit;
   char buf[4096];
-  while (Clock::now() < deadline) {
+  while (Clock::now() < deadline && (until.empty() || out.find(until) == std::string::npos)) {
     pollfd p{fd, POLLIN, 0};
     if (::poll(&p, 1, 20) <= 0) continue;
     ssize_t n = ::recv(fd, buf, sizeof buf, 0);
@@ -128,12 +130,13 @@ TEST_F(GateTest, HalfAHeaderIsCutAtTheDeadline) {
   ASSERT_GE(fd, 0);
   auto start = Clock::now();
   sendAll(fd, "GET /api/health HTTP/1.1\r\nHost: 127.");
-  std::string reply = readUntilClosed(fd, 3s);
+  // The 408 itself says the deadline cut it; the read's own deadline only
+  // bounds a hang. Not before the deadline, however busy the machine.
+  std::string reply = readUntilClosed(fd, 30s);
   double waited = std::chrono::duration<double>(Clock::now() - start).count();
   EXPECT_EQ(statusOf(reply), 408) << reply;
   EXPECT_NE(reply.find("\"request_timeout\""), std::string::npos) << reply;
   EXPECT_GE(waited, 0.35);
-  EXPECT_LT(waited, 2.0);
   EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "timeout"}}), 1);
 }
 
@@ -142,16 +145,19 @@ TEST_F(GateTest, TheDeadlineIsOnTheWholeRequestNotEachRead) {
   int fd = keep(connectFrom("127.0.0.1", port_));
   ASSERT_GE(fd, 0);
   const std::string request = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + std::string(200, 'a');
-  auto start = Clock::now();
+  // Sent whole, the request takes at least 50 ms x its length (over 13 s),
+  // far past the 400 ms deadline: it must be cut before its last byte. A
+  // busy machine only slows the sending, so it is cut sooner, not later.
   int status = 0;
-  for (size_t i = 0; i < request.size() && status == 0; ++i) {
-    sendAll(fd, request.substr(i, 1));
+  size_t sent = 0;
+  for (; sent < request.size() && status == 0; ++sent) {
+    sendAll(fd, request.substr(sent, 1));
     std::string reply = readUntilClosed(fd, 50ms);
     status = statusOf(reply);
   }
-  double waited = std::chrono::duration<double>(Clock::now() - start).count();
+  if (status == 0) status = statusOf(readUntilClosed(fd, 30s));
   EXPECT_EQ(status, 408);
-  EXPECT_LT(waited, 1.5);
+  EXPECT_LT(sent, request.size()) << "the whole header was read: the deadline is per read";
 }
 
 TEST_F(GateTest, ABodyThatNeverComesIsCutToo) {
@@ -159,33 +165,38 @@ TEST_F(GateTest, ABodyThatNeverComesIsCutToo) {
   ASSERT_GE(fd, 0);
   sendAll(fd, "POST /api/test/echo HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
               "Content-Length: 100\r\n\r\n{\"a\":");
-  EXPECT_EQ(statusOf(readUntilClosed(fd, 3s)), 408);
+  EXPECT_EQ(statusOf(readUntilClosed(fd, 30s)), 408);
 }
 
 TEST_F(GateTest, APeerPastItsLimitIsTurnedAwayOthersAreNot) {
   for (int i = 0; i < 4; ++i) ASSERT_GE(keep(connectFrom("127.0.0.3", port_)), 0);
-  // Let the gate accept all four before the fifth.
-  std::this_thread::sleep_for(50ms);
+  // The gate has accepted all four before the fifth: wait for its count, not a time.
+  for (auto until = Clock::now() + 30s; Clock::now() < until; std::this_thread::sleep_for(5ms)) {
+    (void)metrics_.text();  // fills tally_http_connections_open
+    if (metrics_.value("tally_http_connections_open") >= 4) break;
+  }
+  ASSERT_EQ(metrics_.value("tally_http_connections_open"), 4);
   int fifth = keep(connectFrom("127.0.0.3", port_));
   ASSERT_GE(fifth, 0);
-  std::string reply = readUntilClosed(fifth, 1s);
+  std::string reply = readUntilClosed(fifth, 30s);
   EXPECT_EQ(statusOf(reply), 503) << reply;
   EXPECT_NE(reply.find("Retry-After: 1"), std::string::npos) << reply;
   EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "peer_limit"}}), 1);
-  // Another address is served meanwhile, and quickly.
+  // Another address is served meanwhile: while the first peer still holds
+  // its four connections (the read's deadline only bounds a hang).
   int other = keep(connectFrom("127.0.0.4", port_));
-  auto start = Clock::now();
   sendAll(other, "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
-  std::string ok = readUntilClosed(other, 2s);
+  std::string ok = readUntilClosed(other, 30s);
   EXPECT_EQ(statusOf(ok), 200) << ok;
-  EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 0.3);
+  EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "peer_limit"}}), 1)
+      << "the other address was refused too";
 }
 
 TEST_F(GateTest, AHugeHeaderIsRefused) {
   int fd = keep(connectFrom("127.0.0.1", port_));
   ASSERT_GE(fd, 0);
   sendAll(fd, "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + std::string(70 * 1024, 'b'));
-  EXPECT_EQ(statusOf(readUntilClosed(fd, 3s)), 431);
+  EXPECT_EQ(statusOf(readUntilClosed(fd, 30s)), 431);
   EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "header_too_large"}}), 1);
 }
 
@@ -196,10 +207,10 @@ TEST_F(GateTest, ExpectContinueGetsItsInterimAnswer) {
   const std::string body = "{\"x\":1}";
   sendAll(fd, "POST /api/test/echo HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
               "Expect: 100-continue\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n");
-  std::string interim = readUntilClosed(fd, 200ms);
+  std::string interim = readUntilClosed(fd, 30s, "\r\n\r\n");
   EXPECT_EQ(interim.rfind("HTTP/1.1 100 Continue\r\n\r\n", 0), 0u) << interim;
   sendAll(fd, body);
-  std::string reply = readUntilClosed(fd, 2s);
+  std::string reply = readUntilClosed(fd, 30s, "\"body\":{\"x\":1}");
   size_t final = reply.find("HTTP/1.1 200");
   ASSERT_NE(final, std::string::npos) << reply;
   EXPECT_NE(reply.find("\"body\":{\"x\":1}"), std::string::npos) << reply;

@@ -5,6 +5,8 @@
 // result is stored in a Store and served by the service's routes in-process.
 // No Vulkan device is needed.
 #include <gtest/gtest.h>
+
+#include "strict.hpp"
 #include <signal.h>
 #include <unistd.h>
 
@@ -248,7 +250,6 @@ TEST_F(ApplicationCapture, FailuresNameTheReason) {
     const std::string line = r.lastLine();
     EXPECT_EQ(line.rfind("tallyd capture: ", 0), 0u) << c.mode << ": " << line;
     for (const auto& e : c.expected) EXPECT_NE(line.find(e), std::string::npos) << c.mode << ": " << line << "\n  expected: " << e;
-    if (c.mode == "hang") EXPECT_LT(r.elapsed, 10s);
   }
 }
 
@@ -268,8 +269,7 @@ TEST_F(ApplicationCapture, LingeringApplicationIsStopped) {
   spec["application"]["env"]["FAKE_APP_IGNORE_TERM"] = "1";
   Capture c = capture(spec);
   ASSERT_EQ(c.rc, 0) << c.err;
-  EXPECT_GE(c.elapsed, 3500ms);
-  EXPECT_LT(c.elapsed, 20s);
+  EXPECT_GE(c.elapsed, 3500ms);  // not before its 2 s + 2 s; how much later depends on the machine's load
   EXPECT_EQ(c.result["runs"][0]["notes"]["application_exit"], "was killed by tallyd (SIGKILL): it did not exit on SIGTERM");
   EXPECT_EQ(c.result["runs"][0]["samples"].size(), 3u);
 }
@@ -278,7 +278,7 @@ TEST_F(ApplicationCapture, LingeringApplicationIsStopped) {
 // capture's own, which is gone afterwards. The program is found on $PATH.
 TEST_F(ApplicationCapture, XvfbDisplayAndProgramOnPath) {
   const char* path = std::getenv("PATH");
-  if (tally::capture::findOnPath("Xvfb", path ? path : "").empty()) GTEST_SKIP() << "Xvfb is not installed (apt install xvfb)";
+  if (tally::capture::findOnPath("Xvfb", path ? path : "").empty()) TALLY_SKIP_UNLESS_STRICT("Xvfb is not installed (apt install xvfb)");
   json spec = appSpec("ok", 2, {{"display", "xvfb"}});
   spec["application"]["command"] = {"fake_app.sh"};
   Capture c = capture(spec, {"PATH=" + fs::path(FAKE_APP).parent_path().string() + ":" + (path ? path : "")});

@@ -30,6 +30,9 @@ import sys
 import tempfile
 from collections import defaultdict
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from strict import skip_or_fail, strict  # noqa: E402
+
 MAX_SETS = 4  # shaders/shared.h kSetPassInput + 1
 VARIANTS = [
     ("forward", {}),
@@ -237,8 +240,7 @@ def main():
         print(__doc__)
         return 2
     if not layer_installed():
-        print("skipped: gfxreconstruct (VkLayer_gfxreconstruct, gfxrecon-convert) is not installed")
-        return 77
+        skip_or_fail("gfxreconstruct (VkLayer_gfxreconstruct, gfxrecon-convert) is not installed")
     tallyd = os.path.realpath(sys.argv[1])
     runs = [(scene, variant) for scene in SCENES for variant in VARIANTS]
     sponza = sys.argv[2] if len(sys.argv) > 2 else ""
@@ -247,6 +249,9 @@ def main():
         runs += [(scene, (name, {})) for name in ("forward", "forward-zprepass", "deferred", "visbuffer",
                                                   "visbuffer-lean")]
     elif sponza:
+        if strict():
+            print(f"FAIL: no Sponza at {sponza} (required where CI=true or TALLY_TEST_STRICT=1)")
+            return 1
         print(f"no Sponza at {sponza}: planes and atrium only")
     failed = False
     with tempfile.TemporaryDirectory() as work:

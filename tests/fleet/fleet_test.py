@@ -6,7 +6,7 @@ submitted, some naming a device; one more names a device nobody has and must
 wait, saying why. One worker is killed with SIGKILL mid-capture.
 
 Checked afterwards:
-  - every job ended done (or failed with its reasons after its attempts);
+  - every job ended done, the killed worker's too;
   - the killed worker's job was queued again and finished elsewhere, its
     attempt errors naming the lost lease;
   - jobs naming a device ran only on the worker that has it;
@@ -42,6 +42,7 @@ import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from pgserver import PostgresServer  # noqa: E402
+from strict import strict  # noqa: E402
 
 JOBS = 30
 LEASE_S = 3
@@ -223,12 +224,13 @@ def main():
         status, reply = api.call("DELETE", "/api/captures/%d" % orphan)
         check(status == 200 and reply["status"] == "cancelled", "cancel the unrunnable job: %d %s" % (status, reply))
 
+        # Every job is done: the killed worker's job too, on its next attempt
+        # (max_attempts leaves room for it), and none is let off as failed.
         failed = [j for j in jobs.values() if j["status"] != "done"]
-        for j in failed:
-            check(j["status"] == "failed" and j["error"] and j["attempts"] == j["max_attempts"],
-                  "job %d ended %s without its attempts used and reasons: %s" % (j["id"], j["status"], j))
+        check(not failed, "%d of %d jobs not done: %s" %
+              (len(failed), JOBS, [(j["id"], j["status"], j["error"], j["attempt_errors"]) for j in failed]))
         done = [j for j in jobs.values() if j["status"] == "done"]
-        check(len(done) >= JOBS - 1, "only %d of %d jobs done: %s" % (len(done), JOBS, failed))
+        check(len(done) == JOBS, "%d of %d jobs done" % (len(done), JOBS))
         k = jobs[killed_job]
         check(k["attempts"] >= 2, "the killed worker's job was not claimed again: %s" % k)
         check(any("worker-a" in e and "lease expired" in e for e in k["attempt_errors"]),
@@ -239,8 +241,6 @@ def main():
         home = {"FakeGPU-B": "worker-b"}
         for job_id, device in wanted.items():
             j = jobs[job_id]
-            if j["status"] != "done":
-                continue
             if device == "FakeGPU-B":
                 check(j["host"] == "worker-b", "job %d for FakeGPU-B ran on %s" % (job_id, j["host"]))
             elif device is not None:
@@ -305,7 +305,7 @@ def main():
                                     capture_output=True, text=True, timeout=180, cwd=web_tests)
             check(result.returncode == 0, "dashboard check: %s%s" % (result.stdout[-2000:], result.stderr[-2000:]))
             print(result.stdout.strip(), flush=True)
-        elif os.environ.get("CI") == "true":
+        elif strict():
             fail("node, playwright-core or the dashboard check is missing")
 
         # The database goes away mid-capture: the worker keeps its capture,

@@ -5,6 +5,8 @@
 // with footprint on, its table filled from the sites, its bitmaps counted.
 #include <gtest/gtest.h>
 
+#include "strict.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -322,7 +324,7 @@ class Footprint : public ::testing::TestWithParam<uint32_t> {
   void SetUp() override {
     std::string error;
     ctx_ = testContext(&error);
-    if (ctx_ == nullptr) GTEST_SKIP() << "no Vulkan device: " << error;
+    if (ctx_ == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device: " << error);
   }
   Result<PassResult> run(PassDesc d) {
     d.blockBytes = GetParam();
@@ -471,7 +473,7 @@ TEST_P(Footprint, LightBufferReadByEveryPixelCountsOnce) {
 TEST(ExecutedArithmetic, LoopTripsTimesTheBody) {
   std::string error;
   const gpu::Context* ctx = testContext(&error);
-  if (ctx == nullptr) GTEST_SKIP() << "no Vulkan device: " << error;
+  if (ctx == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device: " << error);
   auto shader = [](int trips) {
     return "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
            "layout(set = 0, binding = 0) writeonly buffer Out { float data[]; } dst;\n"

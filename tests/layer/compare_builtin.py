@@ -12,6 +12,11 @@ with object names (gpu/debug_names), so both sides use the same names. Lines
 only one side can see are listed, not compared: derived lines (depth writes
 from the built-in counting-only fragment shaders) and the index reads the
 layer derives per draw.
+
+Equal is not enough where nothing was counted: the layer's output must be
+complete (every frame asked for), both sides must name the same passes, and
+each pass must have at least --min-lines-per-pass equal lines with a non-zero
+count (the fewest any built-in renderer's pass counts on the default scene).
 """
 import argparse
 import json
@@ -79,6 +84,23 @@ def compare(args, renderer, tmp, builtin_run):
     db = counted_lines(frame["passes"], "derived")
     mismatched += sorted((k, da[k], db[k]) for k in da.keys() & db.keys() if da[k] != db[k])
     derived_one_side = sorted(list(k) + ["built-in" if k in da else "layer"] for k in da.keys() ^ db.keys())
+    # Equal lines with something counted, per pass: a pass where neither side
+    # counted anything would otherwise pass as equal.
+    counted_equal = {}
+    for k in a.keys() & b.keys():
+        if a[k] == b[k] and a[k] > 0:
+            counted_equal[k[0]] = counted_equal.get(k[0], 0) + 1
+    passes_builtin = [p["name"] for p in builtin_run["samples"][0]["passes"]]
+    passes_layer = [p["name"] for p in frame["passes"]]
+    short = sorted(p for p in set(passes_builtin) | set(passes_layer)
+                   if counted_equal.get(p, 0) < args.min_lines_per_pass)
+    incomplete = []
+    if layer.get("complete") is not True:
+        incomplete.append("the layer's output says complete: %r" % layer.get("complete"))
+    if len(layer["frames"]) != args.layer_frames:
+        incomplete.append("%d frames in the layer's output, %d asked for" % (len(layer["frames"]), args.layer_frames))
+    if sorted(passes_builtin) != sorted(passes_layer):
+        incomplete.append("passes differ: built-in %s, layer %s" % (passes_builtin, passes_layer))
     times = {p["name"]: p["gpu_ms"] for p in frame["passes"]}
     plain = {p["name"]: p["gpu_ms"] for p in builtin_run["samples"][0]["passes"]}
     return {
@@ -88,8 +110,11 @@ def compare(args, renderer, tmp, builtin_run):
         "mismatched": [{"line": list(k), "builtin": x, "layer": y} for k, x, y in mismatched],
         "only_builtin": [list(k) for k in only_builtin],
         "only_layer": [list(k) for k in only_layer],
-        "passes_builtin": [p["name"] for p in builtin_run["samples"][0]["passes"]],
-        "passes_layer": [p["name"] for p in frame["passes"]],
+        "passes_builtin": passes_builtin,
+        "passes_layer": passes_layer,
+        "counted_equal_per_pass": counted_equal,
+        "passes_short_of_lines": short,
+        "incomplete": incomplete,
         "frame_ms_layer": frame["frame_ms"],
         "frame_ms_layer_median": median([f["frame_ms"] for f in layer["frames"]]),
         "layer_frames": len(layer["frames"]),
@@ -114,6 +139,8 @@ def main():
     parser.add_argument("--builtin-frames", type=int, default=1, help="the capture's uninstrumented frames")
     parser.add_argument("--layer-frames", type=int, default=1, help="frames read back under the layer (after one skipped)")
     parser.add_argument("--device", default="")
+    parser.add_argument("--min-lines-per-pass", type=int, default=1,
+                        help="equal lines with a non-zero count each pass must have")
     parser.add_argument("--out", default="")
     args = parser.parse_args()
     args.layer_dir = os.path.abspath(args.layer_dir)
@@ -139,7 +166,8 @@ def main():
             r["samples"] = r["samples"][:1]  # camera 0 of the auto set
             entry = compare(args, r["renderer"], tmp, r)
             report["renderers"].append(entry)
-            ok = not entry["mismatched"] and not entry["only_builtin"] and not entry["only_layer"]
+            ok = (not entry["mismatched"] and not entry["only_builtin"] and not entry["only_layer"]
+                  and not entry["passes_short_of_lines"] and not entry["incomplete"])
             failed = failed or not ok
             print("%-28s %-8s %3d lines equal, %d differ, %d built-in only, %d layer only" %
                   (entry["renderer"], "ok" if ok else "DIFFERS", entry["lines_equal"], len(entry["mismatched"]),
@@ -150,6 +178,11 @@ def main():
                 print("    built-in only: " + "/".join(k))
             for k in entry["only_layer"]:
                 print("    layer only: " + "/".join(k))
+            for p in entry["passes_short_of_lines"]:
+                print("    pass %s: %d equal counted lines, at least %d required" %
+                      (p, entry["counted_equal_per_pass"].get(p, 0), args.min_lines_per_pass))
+            for why in entry["incomplete"]:
+                print("    " + why)
     if args.out:
         with open(args.out, "w") as f:
             json.dump(report, f, indent=1)

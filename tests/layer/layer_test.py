@@ -24,6 +24,17 @@ def fail(message):
     sys.exit(1)
 
 
+def statistic(p, key, what):
+    """A pass's pipeline statistic, required: the one check independent of
+    the layer's counters must not vanish if the layer's query broke (-1 or
+    absent). Every device the tests run on (lavapipe, the GPU) has
+    pipelineStatisticsQuery."""
+    value = p.get(key, -1)
+    if value is None or value < 0:
+        fail("%s: no %s (the layer's pipeline statistics query gave %r)" % (what, key, value))
+    return value
+
+
 def layer_env(build, output, frames, skip, frame_submits=0):
     env = dict(os.environ)
     env.update({
@@ -89,13 +100,13 @@ def check_vkcube_frame(frame):
     # The pipeline statistic counts invocations too, helper lanes of partly
     # covered quads included on lavapipe: it brackets the count from above,
     # within the quads of the cube's edges.
-    stat = p["fragment_invocations_statistic"]
-    if stat >= 0 and not (fragments <= stat <= fragments * 1.25):
+    stat = statistic(p, "fragment_invocations_statistic", "vkcube frame %d" % frame["index"])
+    if not (fragments <= stat <= fragments * 1.25):
         fail("vkcube frame %d: statistic %d does not bracket %d counted" % (frame["index"], stat, fragments))
     # 12 triangles, 36 vertices, each reading the MVP, its position and its attribute.
     if p["vertex_invocations"] != 36:
         fail("vkcube: %d vertex invocations, expected 36" % p["vertex_invocations"])
-    if p.get("vertex_invocations_statistic", -1) not in (-1, 36):
+    if statistic(p, "vertex_invocations_statistic", "vkcube") != 36:
         fail("vkcube: vertex statistic %d, expected 36" % p["vertex_invocations_statistic"])
     uniforms = by_kind.get(("buffer", "read"), [])
     if sum(u["count"] for u in uniforms) != 36 * 3:
@@ -177,14 +188,14 @@ def case_all_sets(build, tmp):
         fill, bump = passes["fill"], passes["bump"]
         if fill["compute_invocations"] != count:
             fail("fill: %d invocations counted, expected %d" % (fill["compute_invocations"], count))
-        if fill["compute_invocations_statistic"] not in (-1, count):
+        if statistic(fill, "compute_invocations_statistic", "fill") != count:
             fail("fill: statistic %d, expected %d" % (fill["compute_invocations_statistic"], count))
         out_lines = [r for r in fill["resources"] if r["name"] == "out" and r["access"] == "write"]
         if len(out_lines) != 1 or out_lines[0]["count"] != count or out_lines[0]["bytes"] != count * 4:
             fail("fill: writes of 'out' %s, expected %d of 4 bytes" % (fill["resources"], count))
         if bump["resources"] or bump["compute_invocations"] != 0 or bump["dispatches"] != 1:
             fail("bump ran counted, or was not seen: %s" % bump)
-        if bump["compute_invocations_statistic"] not in (-1, count):
+        if statistic(bump, "compute_invocations_statistic", "bump") != count:
             fail("bump: statistic %d, expected %d (it ran)" % (bump["compute_invocations_statistic"], count))
     print("all-sets: refused layout noted, its pass ran uncounted; fill counted %d writes per frame" % count)
 

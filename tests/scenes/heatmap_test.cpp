@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "strict.hpp"
+
 #include "scenes/bvh.hpp"
 #include "scenes/gltf.hpp"
 #include "scenes/heatmap.hpp"
@@ -261,8 +263,7 @@ TEST(HeatmapSpecTest, ErrorsNameTheField) {
 // and the eyes stand 1.7 m above it in open space.
 TEST(HeatmapPlacement, SponzaCellsAreOnTheGroundInsideTheBuilding) {
   if (!std::filesystem::exists(TALLY_SPONZA_GLTF)) {
-    if (std::getenv("CI") != nullptr) FAIL() << "Sponza not found at " << TALLY_SPONZA_GLTF;
-    GTEST_SKIP() << "Sponza not found at " << TALLY_SPONZA_GLTF;
+    TALLY_SKIP_UNLESS_STRICT("Sponza not found at " << TALLY_SPONZA_GLTF);
   }
   auto scene = makeSceneGeometry({{"gltf", TALLY_SPONZA_GLTF}});
   ASSERT_TRUE(scene) << scene.error();

@@ -24,7 +24,9 @@ constexpr int kClients = 50;
 constexpr int kMaxRequestsPerClient = 2000;  // bounds each client's loop by count...
 constexpr auto kReadLimit = 150s;            // ...and by time, whatever the capture does
 constexpr auto kAfterFinish = 1500ms;        // reads go on this long past the capture's end
-constexpr int kMinRequestsPerClient = 20;    // each client's share, at the least
+// Each client's share, at the least, against the mean over clients: a ratio
+// within the run, so that a busy machine (fewer requests for all) does not fail it.
+constexpr int kFairShareDivisor = 4;
 constexpr size_t kMaxReportedProblems = 20;
 
 // What the clients know before they start.
@@ -291,7 +293,9 @@ TEST(ServiceConcurrency, FiftyClientsReadWhileACaptureRuns) {
     fewest = std::min(fewest, r->requests());
     sawTheCapturesRuns += r->sawTheCapturesRuns();
   }
-  EXPECT_GE(fewest, kMinRequestsPerClient) << "a client was starved";
+  EXPECT_GE(fewest, 1) << "a client was starved";
+  EXPECT_GE(fewest * kFairShareDivisor, total / kClients)
+      << "a client was starved: " << fewest << " requests against a mean of " << total / kClients;
   EXPECT_GT(sawTheCapturesRuns, 0) << "no client read the runs of the capture once it was ingested";
 
   // The finished capture: every run with every sample.

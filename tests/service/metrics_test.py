@@ -47,7 +47,7 @@ class Daemon:
         self.proc = subprocess.Popen([TALLYD, "serve", "--db", os.path.join(folder, "tally.db"), "--port", "0"],
                                      stdout=open(self.out, "w"), stderr=self.err, env=env)
         self.url = None
-        for _ in range(300):
+        for _ in range(1200):  # a minute at most: polls end as soon as the address is printed
             m = re.search(r"serving (http://127\.0\.0\.1:\d+)/", open(self.out).read())
             if m:
                 self.url = m.group(1)
@@ -139,7 +139,7 @@ try:
     check(code == 200, "the waiting job is cancelled")
     code, _ = d.call("DELETE", f"/api/captures/{running['id']}", "/api/captures/{id}")
     check(code == 200, "the running job is cancelled")
-    for _ in range(100):  # the worker reports the running one when its child has stopped
+    for _ in range(600):  # the worker reports the running one when its child has stopped (a minute at most)
         if value(d.scrape(), "tally_jobs_finished_total", status="cancelled") >= 2:
             break
         time.sleep(0.1)
@@ -155,7 +155,7 @@ try:
     # handled on another thread): scrape again, a bounded number of times,
     # until every earlier scrape is in. The last scrape is never in its own
     # answer.
-    for _ in range(50):
+    for _ in range(600):  # bounded (30 s), ended by the count, not by a time
         made = d.counted[("/metrics", "200")]
         if value(final, "tally_http_requests_total", route="/metrics", code="200") >= made - 1:
             break

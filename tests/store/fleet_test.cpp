@@ -154,12 +154,20 @@ TEST_F(Fleet, RenewedLeasesHoldAndIngestFinishesOnce) {
   auto claimed = store_->claimNextJob(claimer("a", device(), 200));
   ASSERT_TRUE(claimed && *claimed);
   Lease lease{id, 1, "a"};
-  for (int i = 0; i < 4; ++i) {  // renewed past the first lease's end
+  // Renewed past the first lease's end (200 ms), each renewal for 10 s from
+  // the database's now: a busy machine may stretch the sleeps, which only
+  // takes the renewals further past the first end, while a renewal is never
+  // seconds from the reaping that follows it.
+  int64_t expires = *(**store_->getJob(id)).leaseExpiresMs;
+  for (int i = 0; i < 4; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    ASSERT_TRUE(*store_->renewLease(lease, 200));
+    ASSERT_TRUE(*store_->renewLease(lease, 10000));
     auto reaped = store_->requeueExpired();
     ASSERT_TRUE(reaped);
     EXPECT_TRUE(reaped->requeued.empty() && reaped->failed.empty());
+    int64_t renewed = *(**store_->getJob(id)).leaseExpiresMs;
+    EXPECT_GT(renewed, expires) << "renewal " << i << " did not move the lease's end";
+    expires = renewed;
   }
   auto hosts = *store_->listHosts(30000);
   ASSERT_EQ(hosts.size(), 1u);

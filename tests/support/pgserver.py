@@ -11,7 +11,8 @@ and all, at stop(), at the end of a with block, or at exit.
         pg.psql("fleet", "SELECT 1")          # "1\n"
 
 A test script that needs one calls require_postgres(), which exits 77
-(ctest's SKIP_RETURN_CODE) when PostgreSQL is missing, or 1 under CI=true.
+(ctest's SKIP_RETURN_CODE) when PostgreSQL is missing, or 1 where tests are
+strict (strict.py: CI=true, or scripts/test.sh).
 
 The binaries are the installed server's (pg_config --bindir, else the highest
 /usr/lib/postgresql/*/bin, else PATH). initdb and postgres refuse to run as
@@ -34,7 +35,8 @@ import tempfile
 import time
 import urllib.parse
 
-SKIP = 77  # ctest's SKIP_RETURN_CODE for the tests that use this
+from strict import SKIP, skip_or_fail  # SKIP: ctest's SKIP_RETURN_CODE for the tests that use this
+
 SERVER_USER = "postgres"  # who initdb and postgres run as under root
 
 
@@ -312,13 +314,12 @@ _shared = None
 def require_postgres():
     """The process's shared server, started on first use and stopped at exit.
     Where it cannot start, says why on stderr and exits SKIP (77), or 1 when
-    the environment has CI=true, where PostgreSQL must be installed."""
+    tests are strict (strict.py: CI=true, or scripts/test.sh), where PostgreSQL
+    must be installed."""
     global _shared
     if _shared is None:
         try:
             _shared = PostgresServer().start()
         except PostgresError as e:
-            ci = os.environ.get("CI") == "true"
-            print(f"PostgreSQL test server{' (required under CI=true)' if ci else ''}: {e}", file=sys.stderr)
-            sys.exit(1 if ci else SKIP)
+            skip_or_fail(f"PostgreSQL test server: {e}")
     return _shared

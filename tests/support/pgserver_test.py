@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The throwaway PostgreSQL server of tests/support/pgserver.py, through psql:
 two databases, each seeing only its own table, and stop() leaving no server
-behind. Exits 77 (skipped) without PostgreSQL, except under CI=true.
+behind. Exits 77 (skipped) without PostgreSQL, except where tests are strict (strict.py).
 
   pgserver_test.py
 """

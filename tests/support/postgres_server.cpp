@@ -23,6 +23,7 @@
 #include <thread>
 #include <vector>
 
+#include "strict.hpp"
 #include "proc_file.hpp"
 #include "read_file.hpp"
 
@@ -370,13 +371,10 @@ std::string PostgresServer::createDatabase(std::string_view name) {
 
 namespace {
 
-// Skips the current test, or fails it under CI=true (PostgreSQL required there).
+// Skips the current test, or fails it where tests are strict (strict.hpp:
+// CI=true, or scripts/test.sh), where PostgreSQL is required.
 void skipOrFail(const std::string& error) {
-  const char* ci = std::getenv("CI");
-  if (ci != nullptr && std::string_view(ci) == "true")
-    [&] { FAIL() << "PostgreSQL test server (required under CI=true): " << error; }();
-  else
-    [&] { GTEST_SKIP() << "PostgreSQL test server: " << error; }();
+  [&] { TALLY_SKIP_UNLESS_STRICT("PostgreSQL test server: " << error); }();
 }
 
 }  // namespace

@@ -16,7 +16,7 @@
 //
 //   TEST(Fleet, Something) {
 //     auto* pg = tally::testing::requirePostgres();
-//     if (pg == nullptr) return;  // skipped, or failed under CI=true
+//     if (pg == nullptr) return;  // skipped, or failed where tests are strict (strict.hpp)
 //     std::string url = pg->createDatabase();  // postgresql://tally@127.0.0.1:PORT/test_1
 //     ...
 //   }
@@ -84,7 +84,7 @@ class PostgresServer {
 
 // The process's shared server, started on first use and stopped at exit.
 // nullptr when it cannot start: the current test is then marked skipped, or
-// failed (a fatal failure) when the environment has CI=true, where
+// failed (a fatal failure) where tests are strict (strict.hpp: CI=true, or scripts/test.sh), where
 // PostgreSQL must be installed. Either way the test body should return; a
 // fixture's SetUp() may call it too (gtest then runs no body).
 PostgresServer* requirePostgres();

@@ -15,11 +15,16 @@ import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
 import { mkdirSync, writeFileSync } from 'node:fs';
 import { join } from 'node:path';
+import { pathToFileURL } from 'node:url';
 import { after, before, describe, test } from 'node:test';
 
 import { chromium } from 'playwright-core';
 
 import { Daemon } from './daemon.mjs';
+
+// The dashboard's own number formatting, so that the expected text follows its
+// one rule (web/format.js) instead of a copy of it.
+const fmt = await import(pathToFileURL(join(process.env.TALLY_WEB_ROOT, 'format.js')).href);
 
 const env = process.env;
 const kViewports = { wide: { width: 1280, height: 800 }, narrow: { width: 400, height: 800 } };
@@ -281,9 +286,9 @@ describe('dashboard', () => {
     assert.deepEqual(iqrCells, samples.map((s) => [s.frame_ms_spread.q1, s.frame_ms_spread.q3]));
 
     // Tiles: overhead ratio and image error against forward, as the API gives them.
-    assert.equal((await page.locator('[data-tile="overhead"] .value').textContent()), `×${run.mean_overhead_ratio.toFixed(3)}`);
-    assert.equal((await page.locator('[data-tile="image-error"] .value').textContent()), `${run.image_error.mean_psnr.toFixed(1)} dB`);
-    assert.equal((await page.locator('[data-tile="frame-ms"] .value').textContent()), `${run.mean_frame_ms.toFixed(run.mean_frame_ms < 10 ? 3 : 2)} ms`);
+    assert.equal((await page.locator('[data-tile="overhead"] .value').textContent()), fmt.ratio(run.mean_overhead_ratio));
+    assert.equal((await page.locator('[data-tile="image-error"] .value').textContent()), fmt.psnr(run.image_error.mean_psnr));
+    assert.equal((await page.locator('[data-tile="frame-ms"] .value').textContent()), fmt.ms(run.mean_frame_ms));
 
     // Gallery: one screenshot per camera, at the run's resolution, with its sky fraction.
     const shots = page.locator('.gallery figure');

@@ -15,11 +15,16 @@
 import assert from 'node:assert/strict';
 import { mkdirSync } from 'node:fs';
 import { join } from 'node:path';
+import { pathToFileURL } from 'node:url';
 import { after, before, describe, test } from 'node:test';
 
 import { chromium } from 'playwright-core';
 
 import { Daemon } from './daemon.mjs';
+
+// The dashboard's own number formatting, so that the expected text follows its
+// one rule (web/format.js) instead of a copy of it.
+const fmt = await import(pathToFileURL(join(process.env.TALLY_WEB_ROOT, 'format.js')).href);
 
 const env = process.env;
 const kViewMs = 30_000;
@@ -123,7 +128,7 @@ describe('heatmap', () => {
         if (want.ratio < 0.999) assert.ok(b > r, `ratio ${want.ratio} drawn ${got.fill}`);
         if (want.ratio > 1.001) assert.ok(r > b, `ratio ${want.ratio} drawn ${got.fill}`);
         // The tooltip: both values, the ratio and the verdict.
-        assert.ok(got.title.includes(`deferred: ${want.value_a.toFixed(3)} ms`), got.title);
+        assert.ok(got.title.includes(`deferred: ${fmt.ms(want.value_a)}`), got.title);
         assert.ok(got.title.includes(`visbuffer / deferred: ${want.ratio.toFixed(3)}`), got.title);
         assert.ok(got.title.includes(`verdict: ${want.verdict}`), got.title);
       }

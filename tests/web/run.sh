@@ -2,7 +2,8 @@
 # Runs the dashboard's browser tests (dashboard.test.mjs, application.test.mjs,
 # hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs, alerts.test.mjs) with node's test runner. ctest calls it as: run.sh TALLYD WEB_ROOT SCREENSHOT_DIR.
 # Without node, Chromium or the npm packages (scripts/setup.sh installs them)
-# it skips (exit 77), except under CI=true, where a missing tool is a failure.
+# it skips (exit 77), except where tests are strict (CI=true, or
+# TALLY_TEST_STRICT=1 from scripts/test.sh), where a missing tool is a failure.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 export TALLYD="$1" TALLY_WEB_ROOT="$2" TALLY_SCREENSHOTS="$3"
@@ -15,7 +16,7 @@ command -v node >/dev/null || missing+=("node")
 [ -f "$TALLY_WEB_ROOT/vendor/chart.umd.min.js" ] || missing+=("web/vendor/chart.umd.min.js (scripts/setup.sh)")
 if [ ${#missing[@]} -gt 0 ]; then
   echo "browser tests: missing ${missing[*]}; run scripts/setup.sh" >&2
-  if [ "${CI:-}" = "true" ]; then exit 1; fi
+  if [ "${CI:-}" = "true" ] || [ "${TALLY_TEST_STRICT:-}" = "1" ]; then exit 1; fi
   exit 77
 fi
 

@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include "strict.hpp"
+
 #include "analysis/image.hpp"
 #include "render_fixture.hpp"
 #include "renderers/techniques/lod.hpp"
@@ -250,7 +252,7 @@ uint64_t accessCount(const PassResult& p, const std::string& resource, const std
 }
 
 TEST(Lod, ChosenLevelsCountsAndImage) {
-  if (context() == nullptr) GTEST_SKIP() << "no device";
+  if (context() == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device");
   LodScene& s = lodScene();
   auto built = s.gpu.lod();
   ASSERT_TRUE(built.ok()) << (built ? "" : built.error());
@@ -324,7 +326,7 @@ TEST(Lod, ChosenLevelsCountsAndImage) {
 }
 
 TEST(Lod, VisibilityBufferShadesTheChosenLevelsTriangles) {
-  if (context() == nullptr) GTEST_SKIP() << "no device";
+  if (context() == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device");
   // The shading pass fetches its triangle through draws[id].firstIndex: with
   // the per-frame draws buffer it is the level the visibility pass drew. A
   // mismatch would shade other triangles' attributes; so visbuffer with
