@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs the dashboard's browser tests (dashboard.test.mjs, application.test.mjs,
-# hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs, alerts.test.mjs) with node's test runner. ctest calls it as: run.sh TALLYD WEB_ROOT SCREENSHOT_DIR.
+# hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs, alerts.test.mjs) with node's test runner. ctest calls it as:
+# run.sh TALLYD WEB_ROOT SCREENSHOT_DIR [FILE.test.mjs ...] (one file per ctest test; all without).
 # Without node, Chromium or the npm packages (scripts/setup.sh installs them)
 # it skips (exit 77), except where tests are strict (CI=true, or
 # TALLY_TEST_STRICT=1 from scripts/test.sh), where a missing tool is a failure.
@@ -21,4 +22,8 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cd "$here"
-exec node --test --test-reporter=spec dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs alerts.test.mjs
+files=("${@:4}")
+if [ ${#files[@]} -eq 0 ]; then
+  files=(dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs alerts.test.mjs)
+fi
+exec node --test --test-reporter=spec "${files[@]}"
