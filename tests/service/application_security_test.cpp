@@ -46,7 +46,9 @@ class ApplicationSecurity : public ::testing::Test {
     ASSERT_TRUE(daemon_->start()) << "tallyd serve did not start";
   }
   static void TearDownTestSuite() {
-    if (daemon_) EXPECT_EQ(daemon_->stop(SIGTERM), 0);
+    if (daemon_) {
+      EXPECT_EQ(daemon_->stop(SIGTERM), 0);
+    }
     delete daemon_;
     daemon_ = nullptr;
     unsetenv("TALLY_LAYER_PATH");
