@@ -14,12 +14,14 @@
 namespace tally::api {
 
 // Who is asking. A route needs kRead (GET, HEAD) or kCapture (POST, DELETE);
-// a capture token may also read. Without tokens (loopback only) every request
-// is kCapture.
-enum class Principal { kRead, kCapture };
+// a capture token may also read. kApplication (the token file's optional
+// application= line) may do what kCapture may, and also post specs that run
+// a program on the daemon's host (the service checks that per spec). Without
+// tokens (loopback only) every request is kCapture.
+enum class Principal { kRead, kCapture, kApplication };
 
 inline bool allows(Principal have, Principal need) {
-  return have == Principal::kCapture || need == Principal::kRead;
+  return static_cast<int>(have) >= static_cast<int>(need);
 }
 const char* principalName(Principal p);
 

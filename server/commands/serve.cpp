@@ -14,9 +14,11 @@
 #include <thread>
 #include <utility>
 
+#include "api/auth.hpp"
 #include "api/builtin_routes.hpp"
 #include "api/http_post.hpp"
 #include "api/http_server.hpp"
+#include "capture/application_policy.hpp"
 #include "commands/commands.hpp"
 #include "common/log.hpp"
 #include "common/metrics.hpp"
@@ -82,6 +84,74 @@ void declareMetrics(metrics::Registry& m) {
             "the device the last capture ran on (\"\" until one has); always 1");
 }
 
+// The rules for running applications (docs/operating.md, "Security model"),
+// checked before anything starts: --allow-applications needs an application
+// token (to serve the API), roots, and a user to run them as when tallyd is
+// root (to run them). Returns the policy, and the arguments every capture
+// child gets so that it checks each spec again where it runs.
+struct ApplicationSetup {
+  capture::ApplicationPolicy policy;
+  std::vector<std::string> captureArgs;
+};
+
+Result<ApplicationSetup> applicationSetup(const ServeArgs& args, bool serveHttp, bool runWorker) {
+  ApplicationSetup setup;
+  setup.captureArgs = {"--confine-applications"};
+  if (!args.allowApplications) {
+    if (!args.applicationRoots.empty() || !args.applicationEnv.empty() || !args.runAs.empty()) {
+      return makeError("--application-root, --application-env and --run-as go with --allow-applications");
+    }
+    return setup;  // the capture child refuses every application spec: no roots
+  }
+  if (serveHttp) {
+    const std::string how =
+        "a token file with an application=<token> line beside read= and capture= (e.g. from "
+        "`openssl rand -hex 32`): only its holders may run applications";
+    if (args.tokenFile.empty()) return makeError("--allow-applications needs --token-file: " + how);
+    auto tokens = api::loadTokenFile(args.tokenFile);
+    if (!tokens) return makeError(tokens.error());
+    if (tokens->application.empty()) {
+      return makeError("--allow-applications: " + args.tokenFile +
+                       " has no application=<token> line; it needs " + how);
+    }
+  }
+  if (args.applicationRoots.empty()) {
+    return makeError(
+        "--allow-applications needs at least one --application-root DIR: the folders an application's "
+        "program or a replay file must lie in (links followed), e.g. /opt/tally-apps");
+  }
+  auto roots = capture::checkApplicationRoots(args.applicationRoots);
+  if (!roots) return makeError(roots.error());
+  setup.policy.roots = *roots;
+  for (const auto& pattern : args.applicationEnv) {
+    if (auto checked = capture::checkApplicationEnvPattern(pattern); !checked)
+      return makeError(checked.error());
+    setup.policy.env.push_back(pattern);
+  }
+  if (!args.runAs.empty()) {
+    if (geteuid() != 0) {
+      return makeError("--run-as " + args.runAs +
+                       ": tallyd runs as a user of its own already (not root), and applications run as that "
+                       "user; drop --run-as");
+    }
+    auto user = jobs::lookupUser(args.runAs);
+    if (!user) return makeError("--run-as: " + user.error());
+  } else if (runWorker && geteuid() == 0) {
+    return makeError(
+        "refusing to run applications as root: give --run-as USER, an unprivileged user they run as "
+        "(useradd --system --no-create-home tally-apps), or start tallyd as a user of its own (the "
+        "systemd unit's DynamicUser=yes does: docs/operating.md, \"Security model\")");
+  }
+  for (const auto& root : setup.policy.roots) {
+    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-root", root.string()});
+  }
+  for (const auto& pattern : setup.policy.env) {
+    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-env", pattern});
+  }
+  if (!args.runAs.empty()) setup.captureArgs.insert(setup.captureArgs.end(), {"--run-as", args.runAs});
+  return setup;
+}
+
 }  // namespace
 
 int runServe(const ServeArgs& args) {
@@ -109,6 +179,11 @@ int runServe(const ServeArgs& args) {
 
   const bool serveHttp = args.role != "worker";
   const bool runWorker = args.role != "api";
+  auto applications = applicationSetup(args, serveHttp, runWorker);
+  if (!applications) {
+    std::fprintf(stderr, "tallyd serve: %s\n", applications.error().c_str());
+    return 1;
+  }
   if (!args.alertWebhook.empty()) {
     auto target = api::parseHttpUrl(args.alertWebhook);
     if (!target) {
@@ -175,6 +250,7 @@ int runServe(const ServeArgs& args) {
   jobs::WorkerOptions workerOptions;
   workerOptions.tallydPath = self.string();
   workerOptions.device = args.device;
+  workerOptions.captureArgs = applications->captureArgs;
   workerOptions.deadline = std::chrono::seconds(args.jobDeadlineSeconds);
   workerOptions.maxAttempts = args.maxAttempts;
   workerOptions.lease = lease;
@@ -285,6 +361,7 @@ int runServe(const ServeArgs& args) {
   context.rendererNames = renderers::rendererNames();
   for (const auto& folder : args.scenes) context.options.sceneFolders.emplace_back(folder);
   context.options.allowApplications = args.allowApplications;
+  context.options.applicationPolicy = applications->policy;
   context.options.staleAfterMs = staleAfter.count();
   context.options.maxAttempts = args.maxAttempts;
   context.onJobQueued = [&worker] { worker.wake(); };

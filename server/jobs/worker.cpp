@@ -270,6 +270,7 @@ void Worker::runJob(const store::Job& job) {
     child.argv.push_back("--device");
     child.argv.push_back(options_.device);
   }
+  child.argv.insert(child.argv.end(), options_.captureArgs.begin(), options_.captureArgs.end());
   child.deadline = options_.deadline;
   bool cancelled = false;
   auto lastCheck = std::chrono::steady_clock::now();

@@ -29,6 +29,9 @@ namespace tally::jobs {
 struct WorkerOptions {
   std::string tallydPath;  // the executable run as `tallyd capture ...`
   std::string device;      // passed as --device when not empty
+  // More arguments of every `tallyd capture` (the daemon's application
+  // policy: --confine-applications, --application-root, ...).
+  std::vector<std::string> captureArgs;
   std::chrono::milliseconds deadline{std::chrono::minutes(30)};  // per job
   int maxAttempts = 3;              // a job interrupted this often fails on restart
   std::filesystem::path tempRoot;   // empty: std::filesystem::temp_directory_path()

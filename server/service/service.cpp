@@ -485,51 +485,47 @@ std::string resolveGltf(const ServiceOptions& options, const std::string& given,
 }
 
 // An application or a replay under the Vulkan layer: a program runs on this
-// host, so only where the daemon allows it. Paths are the host's: a program
-// by name (looked up on the daemon's $PATH) or absolute, a replay file absolute.
-json validateApplicationSpec(const ServiceContext& ctx, const json& body) {
+// host, so only where the daemon allows it, for the application token, and
+// only as the policy lets it (capture/application_policy.hpp). Paths are the
+// host's: a program by name (looked up on the daemon's $PATH) or absolute, a
+// replay file absolute, each resolving inside an --application-root.
+json validateApplicationSpec(const ServiceContext& ctx, const json& body, api::Principal principal) {
   const std::string key = body.contains("application") ? "application" : "replay";
   if (!ctx.options.allowApplications) {
     invalid(key, "this daemon does not run applications (tallyd serve --allow-applications enables them)");
   }
-  if (key == "application" && body["application"].is_object()) {
-    const json& app = body["application"];
-    if (app.contains("command") && app["command"].is_array() && !app["command"].empty() &&
-        app["command"][0].is_string()) {
-      const std::string program = app["command"][0].get<std::string>();
-      if (program.find('/') != std::string::npos && program[0] != '/') {
-        invalid("application.command[0]", "must be a program name (looked up on the daemon's $PATH) or an absolute path");
-      }
-    }
+  if (principal != api::Principal::kApplication) {
+    throw RequestError(
+        403, api::code::kForbidden,
+        "running an application needs the application token (the token file's application= line); "
+        "this token may capture but not run programs",
+        "Authorization");
   }
-  if (key == "replay" && body["replay"].is_string() && body["replay"].get<std::string>().rfind('/', 0) != 0) {
-    invalid("replay", "must be an absolute path on the daemon's host");
-  }
-  auto parsed = capture::parseApplicationSpec(body, "/");
+  auto parsed = capture::parseConfinedApplicationSpec(body, ctx.options.applicationPolicy);
   if (!parsed) throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
   return body;
 }
 
-json validateContent(const ServiceContext& ctx, const json& body);
+json validateContent(const ServiceContext& ctx, const json& body, api::Principal principal);
 
 // The spec's "device" picks the hosts that may run it (docs/fleet.md); the
 // rest is the capture, sweep or application spec, checked by its parser.
-json validateSpec(const ServiceContext& ctx, const json& body) {
+json validateSpec(const ServiceContext& ctx, const json& body, api::Principal principal) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
-  if (!body.contains("device")) return validateContent(ctx, body);
+  if (!body.contains("device")) return validateContent(ctx, body, principal);
   auto requirement = store::parseDeviceRequirement(body);
   if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), fieldOf(requirement.error()));
   json content = body;
   content.erase("device");
-  json stored = validateContent(ctx, content);
+  json stored = validateContent(ctx, content, principal);
   stored["device"] = body["device"];
   return stored;
 }
 
-json validateContent(const ServiceContext& ctx, const json& body) {
+json validateContent(const ServiceContext& ctx, const json& body, api::Principal principal) {
   // {"application": ...} or {"replay": ...}: its parser names any field of a
   // capture matrix or a sweep beside it.
-  if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body);
+  if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body, principal);
   // A stability sweep ({"sweep": NAME, ...}) is checked by its own parser; its
   // limits on points and resolution are the sweep's (sweeps/sweep.hpp).
   if (sweeps::isSweepSpec(body)) {
@@ -593,7 +589,7 @@ Response wrap(ServiceContext& ctx, const std::function<Response()>& handler) {
 
 Response postCapture(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
-  json spec = validateSpec(ctx, req.body);
+  json spec = validateSpec(ctx, req.body, req.principal);
   std::optional<std::string> key;
   if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
   auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts));

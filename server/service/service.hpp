@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "api/router.hpp"
+#include "capture/application_policy.hpp"
 #include "store/store.hpp"
 
 namespace tally::service {
@@ -21,8 +22,11 @@ struct ServiceOptions {
   uint64_t maxMatrix = 1000;               // samples per job ("auto" cameras count 10 per scene)
   std::vector<std::filesystem::path> sceneFolders;  // glTF files are allowed only under these
   // {"application": ...} and {"replay": ...} specs run a program on the
-  // daemon's host (tallyd serve --allow-applications); refused when false.
+  // daemon's host (tallyd serve --allow-applications); refused when false,
+  // and from any principal but the application token (403) when true.
   bool allowApplications = false;
+  // Where their programs and replay files may lie, what env they may set.
+  capture::ApplicationPolicy applicationPolicy;
   // The fleet (docs/fleet.md): a host without a heartbeat this long is not
   // alive (GET /api/hosts, a queued job's "waiting"); claims of a new job.
   int64_t staleAfterMs = 30000;

@@ -173,6 +173,26 @@ TEST(Tokens, RefusesWeakOrIncompleteFiles) {
   }
 }
 
+// application= is optional; when given, its token runs applications and is unlike the others.
+TEST(Tokens, ApplicationLine) {
+  const std::string kApplication = "d41d8cd98f00b204e9800998ecf8427e-apps";
+  auto without = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\n");
+  ASSERT_TRUE(without.ok()) << without.error();
+  EXPECT_EQ(without->application, "");
+  auto with = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kApplication + "\n");
+  ASSERT_TRUE(with.ok()) << with.error();
+  EXPECT_EQ(with->application, kApplication);
+  for (const std::string& text : {"read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kCapture,
+                                  "read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kRead}) {
+    auto t = parseTokens(text);
+    ASSERT_FALSE(t.ok()) << text;
+    EXPECT_NE(t.error().find("application token must differ"), std::string::npos) << t.error();
+  }
+  auto weak = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\napplication=short");
+  ASSERT_FALSE(weak.ok());
+  EXPECT_NE(weak.error().find("application token is too short"), std::string::npos) << weak.error();
+}
+
 TEST(Tokens, FileMustBePrivate) {
   test::TempDir dir;
   auto p = dir.write("tokens", "read=" + kRead + "\ncapture=" + kCapture + "\n");
@@ -208,6 +228,24 @@ TEST(Auth, Authenticate) {
   EXPECT_FALSE(a.authenticate("Basic " + kRead));
   EXPECT_FALSE(a.authenticate("Bearer " + kRead + "x"));
   EXPECT_FALSE(a.authenticate("Bearer " + kRead.substr(1)));
+}
+
+// Only the application token is kApplication; it may do what a capture token may.
+TEST(Auth, ApplicationToken) {
+  const std::string kApplication = "d41d8cd98f00b204e9800998ecf8427e-apps";
+  auto a = Auth::withTokens({kRead, kCapture, kApplication});
+  EXPECT_TRUE(a.hasApplicationToken());
+  EXPECT_EQ(a.authenticate("Bearer " + kApplication), Principal::kApplication);
+  EXPECT_EQ(a.authenticate("Bearer " + kCapture), Principal::kCapture);
+  EXPECT_EQ(a.authenticate("Bearer " + kRead), Principal::kRead);
+  EXPECT_FALSE(a.authenticate("Bearer " + kApplication + "x"));
+  EXPECT_FALSE(Auth::withTokens({kRead, kCapture}).hasApplicationToken());
+  EXPECT_FALSE(Auth::withTokens({kRead, kCapture}).authenticate("Bearer "));
+  EXPECT_FALSE(Auth::open().hasApplicationToken());
+  EXPECT_TRUE(allows(Principal::kApplication, Principal::kCapture));
+  EXPECT_TRUE(allows(Principal::kApplication, Principal::kRead));
+  EXPECT_FALSE(allows(Principal::kCapture, Principal::kApplication));
+  EXPECT_STREQ(principalName(Principal::kApplication), "application");
 }
 
 TEST(Auth, LoopbackRule) {
