@@ -355,6 +355,9 @@ int runServe(const ServeArgs& args) {
     int received = 0;
     sigwait(&stopSignals, &received);
     (*server)->stop();
+    // At once, beside the requests still being answered: the capture is
+    // killed and its job queued again (docs/operating.md, "Stopping").
+    worker.stop();
   });
   std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), (*server)->port());
   std::printf("tallyd: database %s, dashboard %s\n", dbName.c_str(), webRoot.c_str());
