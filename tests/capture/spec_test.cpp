@@ -230,19 +230,31 @@ TEST(CaptureSpec, VariantsAreCanonical) {
   EXPECT_EQ(spec->sampleCount(10), 3u * 10u);
 }
 
+// Ten distinct scenes, within the list caps: the matrix grows by multiplying lists.
+std::string tenScenes() {
+  std::string scenes;
+  for (int i = 1; i <= 10; ++i)
+    scenes += (i > 1 ? "," : "") + std::string(R"({"name":"planes","layers":)") + std::to_string(i) + "}";
+  return "[" + scenes + "]";
+}
+
 TEST(CaptureSpec, MatrixLimit) {
   std::string resolutions;
-  for (int i = 1; i <= 600; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
-  auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[)" + resolutions + "]}");
+  for (int i = 1; i <= 60; ++i)
+    resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec = parse(R"({"renderers":["forward","deferred"],"scenes":)" + tenScenes() + R"(,"resolutions":[)" +
+                    resolutions + "]}");
   ASSERT_FALSE(spec.ok());
   EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
 }
 
 TEST(CaptureSpec, MatrixLimitCountsModes) {
   std::string resolutions;
-  for (int i = 1; i <= 300; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
-  auto spec = parse(R"({"renderers":["forward"],"counting":["exact","subgroup","sampled:4","sampled:16"],"resolutions":[)" +
-                    resolutions + "]}");
+  for (int i = 1; i <= 30; ++i)
+    resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec =
+      parse(R"({"renderers":["forward"],"counting":["exact","subgroup","sampled:4","sampled:16"],"scenes":)" +
+            tenScenes() + R"(,"resolutions":[)" + resolutions + "]}");
   ASSERT_FALSE(spec.ok());
   EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
 }
