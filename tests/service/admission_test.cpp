@@ -340,7 +340,7 @@ TEST(Daemon, SigtermMidCaptureEndsWithin5sAndRequeuesTheJob) {
     });
     std::this_thread::sleep_for(200ms);
     auto signalled = std::chrono::steady_clock::now();
-    int status = d.stop(SIGTERM);
+    int status = d.stopWithin(10s);  // -1: still running after 10 s (then killed)
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
     posting = false;
     clients.join();
