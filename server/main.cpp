@@ -154,6 +154,25 @@ int main(int argc, char** argv) {
   serve->add_option("--max-connections-per-peer", serveArgs.maxConnectionsPerPeer,
                     "Open connections one remote address may hold, else 503 (behind a reverse proxy, raise it)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
+  serve
+      ->add_option(
+          "--max-queued", serveArgs.maxQueued,
+          "Queued captures the store may hold, else 429 with Retry-After (0: no limit; with PostgreSQL, "
+          "the store's queue, shared by every API daemon)")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  serve
+      ->add_option("--max-queued-per-client", serveArgs.maxQueuedPerClient,
+                   "Queued captures per client (per token; per peer address without tokens), else 429 with "
+                   "Retry-After (0: no limit)")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  serve
+      ->add_option(
+          "--max-cost", serveArgs.maxCost,
+          "Pixel-frames one capture may render (samples x frames x pixels), else 400 naming max_cost")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e18));
 
   try {
     app.parse(argc, argv);

@@ -317,6 +317,8 @@ void HttpServer::Impl::handle(const httplib::Request& req, httplib::Response& re
   for (const auto& [k, v] : req.params) request.query.emplace(k, v);
   request.principal = admitted.principal;
   request.remoteAddr = req.remote_addr;
+  request.client =
+      auth.required() ? std::string("token:") + principalName(admitted.principal) : "peer:" + req.remote_addr;
   request.idempotencyKey = req.get_header_value("Idempotency-Key");
   if (!req.body.empty()) {
     auto body = parseJsonBody(req.body);

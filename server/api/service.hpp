@@ -34,6 +34,10 @@ struct Request {
   std::string idempotencyKey;                 // the Idempotency-Key header; empty when absent
   Principal principal = Principal::kRead;
   std::string remoteAddr;  // the socket's peer address, never a header
+  // Who is asking, for per-client limits: "token:capture" (the token the
+  // request carried, by its role) when the server has tokens, else
+  // "peer:<remoteAddr>". Empty outside the HTTP server (tests).
+  std::string client;
 
   // The query value for key, or nullptr.
   const std::string* queryValue(std::string_view key) const;
@@ -79,6 +83,7 @@ inline constexpr const char* kUriTooLong = "uri_too_long";              // 414
 inline constexpr const char* kUnsupportedMediaType = "unsupported_media_type";  // 415, Content-Type
 inline constexpr const char* kUnsupportedEncoding = "unsupported_encoding";     // 415, Content-Encoding
 inline constexpr const char* kRangeNotSatisfiable = "range_not_satisfiable";    // 416
+inline constexpr const char* kTooManyRequests = "too_many_requests";            // 429, with Retry-After
 inline constexpr const char* kInternal = "internal";                            // 500, no detail on the wire
 inline constexpr const char* kUnavailable = "unavailable";                      // 503
 }  // namespace code

@@ -126,6 +126,11 @@ struct ServeArgs {
   int jobDeadlineSeconds = 1800;    // per capture job
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address
+  // Limits on the queue (docs/operating.md, "Limits"); 0: none. Beyond
+  // either, POST /api/captures answers 429 with Retry-After.
+  int64_t maxQueued = 1000;          // queued jobs in the store
+  int64_t maxQueuedPerClient = 100;  // queued jobs per token (or per peer address without tokens)
+  double maxCost = 1e11;             // pixel-frames (samples x frames x pixels) of one capture
   // Regression alerts (docs/api.md, "Baselines and alerts"): API daemons
   // evaluate new runs against their baselines; with a webhook, each alert is
   // posted to it from the store's outbox.

@@ -79,6 +79,11 @@ void declareMetrics(metrics::Registry& m) {
   m.declare("tally_alerts", Type::kGauge, "Regression alerts in the store, by status (open, acknowledged, invalid, fixed)");
   m.declare("tally_alerts_raised_total", Type::kCounter,
             "Regression alerts this daemon's evaluator raised since it started");
+  m.declare("tally_captures_limited_total", Type::kCounter,
+            "POST /api/captures answered 429 by a queue limit, by limit (queue: --max-queued, client: "
+            "--max-queued-per-client)");
+  m.declare("tally_queue_limit", Type::kGauge,
+            "The queue's limits, by limit (queue: --max-queued, client: --max-queued-per-client; 0: none)");
   m.declare("tally_device_info", Type::kGauge,
             "The capture device: the --device selector (\"auto\": the first discrete GPU) and the name of "
             "the device the last capture ran on (\"\" until one has); always 1");
@@ -364,6 +369,16 @@ int runServe(const ServeArgs& args) {
   context.options.applicationPolicy = applications->policy;
   context.options.staleAfterMs = staleAfter.count();
   context.options.maxAttempts = args.maxAttempts;
+  context.options.maxQueued = args.maxQueued;
+  context.options.maxQueuedPerClient = args.maxQueuedPerClient;
+  context.options.maxCost = uint64_t(args.maxCost);
+  for (const char* limit : {"queue", "client"})
+    metrics.add("tally_captures_limited_total", {{"limit", limit}}, 0);
+  metrics.set("tally_queue_limit", {{"limit", "queue"}}, double(args.maxQueued));
+  metrics.set("tally_queue_limit", {{"limit", "client"}}, double(args.maxQueuedPerClient));
+  context.onQueueLimited = [&metrics](const std::string& limit) {
+    metrics.add("tally_captures_limited_total", {{"limit", limit}});
+  };
   context.onJobQueued = [&worker] { worker.wake(); };
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
@@ -417,6 +432,9 @@ int runServe(const ServeArgs& args) {
     int received = 0;
     sigwait(&stopSignals, &received);
     (*server)->stop();
+    // At once, beside the requests still being answered: the capture is
+    // killed and its job queued again (docs/operating.md, "Stopping").
+    worker.stop();
   });
   std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), (*server)->port());
   std::printf("tallyd: database %s, dashboard %s\n", dbName.c_str(), webRoot.c_str());

@@ -231,6 +231,16 @@ void Worker::runJob(const store::Job& job) {
     std::atomic<int64_t>& job;
     ~Release() { job = 0; }
   } release{currentJob_};
+  // This daemon is stopping: the job goes back to the queue with the reason
+  // (never left running), for this host's next start or another host.
+  auto giveBack = [&](const std::string& why) {
+    auto r = store_.requeueJob(lease, "stopped: " + why + "; queued again");
+    if (!r) {
+      log(log::Level::kError, job.id, "cannot queue it again (" + r.error() + "); its lease will expire");
+    } else if (*r) {
+      log(log::Level::kWarning, job.id, "stopped: " + why + "; queued again");
+    }
+  };
   auto fail = [&](const std::string& reason) {
     log(log::Level::kError, job.id, "failed: " + reason);
     auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
@@ -296,7 +306,7 @@ void Worker::runJob(const store::Job& job) {
 
   log(log::Level::kInfo, job.id, "running");
   auto ran = runChild(child);
-  if (stopping_) return;  // left running: recovery at the next start retries it
+  if (stopping_) return giveBack("the daemon is shutting down (the capture was killed)");
   if (cancelled) {
     auto now = store_.getJob(job.id);
     bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
@@ -331,6 +341,8 @@ void Worker::runJob(const store::Job& job) {
     }
     int64_t sweep = 0;
     std::string error = ingest(lease, result, {}, /*sweep=*/true, &sweep);
+    if (error == kLost && stopping_)
+      return giveBack("the daemon shut down before the database stored the result");
     if (error == kLost) return;
     if (!error.empty()) return fail("cannot store the sweep: " + error);
     log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(sweep));
@@ -359,6 +371,8 @@ void Worker::runJob(const store::Job& job) {
 
   int64_t runs = 0;
   std::string error = ingest(lease, result, screenshots, /*sweep=*/false, &runs);
+  if (error == kLost && stopping_)
+    return giveBack("the daemon shut down before the database stored the result");
   if (error == kLost) return;
   if (!error.empty()) return fail("cannot store the result: " + error);
   log(log::Level::kInfo, job.id, "done, " + std::to_string(runs) + " runs");

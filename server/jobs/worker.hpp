@@ -80,8 +80,8 @@ class Worker {
   // name) and requeues this host's interrupted jobs; call before start().
   Result<store::Recovery> recover();
   void start();
-  // Stops after the current step; a running child is killed and its job left
-  // running, so the next start's recovery retries it.
+  // Stops after the current step; a running child is killed and its job
+  // queued again with the reason (Store::requeueJob), never left running.
   void stop();
   // A job was queued: look now instead of at the next poll.
   void wake();

@@ -556,13 +556,30 @@ json validateContent(const ServiceContext& ctx, const json& body, api::Principal
                         std::to_string(spec.sampleCount(cameras)) + " samples; at most " +
                         std::to_string(options.maxMatrix) + " on this server");
   }
+  // What it renders: samples x frames x pixels (capture::CaptureSpec::cost).
+  if (uint64_t cost = spec.cost(); cost > options.maxCost) {
+    invalid("spec", "the capture's cost (samples x frames x pixels) is " + std::to_string(cost) +
+                        " pixel-frames; at most " + std::to_string(options.maxCost) +
+                        " on this server (max_cost; fewer frames, resolutions or cameras)");
+  }
+  // glTF paths are resolved (a stat per scene folder; the file is loaded by
+  // the capture), and two spellings of one file are one scene.
   json stored = body;
   if (stored.contains("scenes")) {
+    std::vector<std::pair<std::string, size_t>> files;  // resolved path, index
     for (size_t i = 0; i < stored["scenes"].size(); ++i) {
       json& s = stored["scenes"][i];
       if (s.is_object() && s.contains("gltf")) {
         std::string field = "scenes[" + std::to_string(i) + "].gltf";
         s["gltf"] = resolveGltf(options, s["gltf"].get<std::string>(), field);
+        for (const auto& [path, k] : files) {
+          if (path == s["gltf"] &&
+              stored["scenes"][k].value("max_texture_size", json()) == s.value("max_texture_size", json())) {
+            invalid("scenes[" + std::to_string(i) + "]",
+                    "a duplicate of scenes[" + std::to_string(k) + "] (each entry must differ)");
+          }
+        }
+        files.emplace_back(s["gltf"].get<std::string>(), i);
       }
     }
   }
@@ -592,7 +609,24 @@ Response postCapture(ServiceContext& ctx, const Request& req) {
   json spec = validateSpec(ctx, req.body, req.principal);
   std::optional<std::string> key;
   if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
-  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts));
+  store::QueueLimits limits;
+  limits.client = req.client;
+  limits.maxQueued = ctx.options.maxQueued;
+  limits.maxQueuedPerClient = ctx.options.maxQueuedPerClient;
+  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts, limits));
+  if (!created.refused.empty()) {
+    if (ctx.onQueueLimited) ctx.onQueueLimited(created.refused);
+    const bool mine = created.refused == "client";
+    Response r = api::errorResponse(
+        429, api::code::kTooManyRequests,
+        (mine ? "this client has " : "the queue holds ") + std::to_string(created.queued) +
+            " queued captures, the limit " + (mine ? "per client" : "of this server") + " (" +
+            (mine ? "max_queued_per_client " + std::to_string(ctx.options.maxQueuedPerClient)
+                  : "max_queued " + std::to_string(ctx.options.maxQueued)) +
+            "); try again once some have run");
+    r.headers.emplace_back("Retry-After", std::to_string(ctx.options.retryAfterSeconds));
+    return r;
+  }
   if (created.conflict) {
     throw RequestError(409, api::code::kConflict,
                        "Idempotency-Key was used before with a different spec (capture " +

@@ -31,6 +31,16 @@ struct ServiceOptions {
   // alive (GET /api/hosts, a queued job's "waiting"); claims of a new job.
   int64_t staleAfterMs = 30000;
   int maxAttempts = 3;
+  // What one capture may render, in pixel-frames (capture::CaptureSpec::cost:
+  // samples x frames x pixels; tallyd serve --max-cost). The largest spec in
+  // the tree (tests/gpu/crossover-atrium.json) costs 1.8e10.
+  uint64_t maxCost = 100'000'000'000ull;
+  // Queued jobs (tallyd serve --max-queued, --max-queued-per-client): beyond
+  // either, POST /api/captures answers 429 with Retry-After. 0: no limit.
+  // With PostgreSQL the count is the store's, shared by every API daemon.
+  int64_t maxQueued = 1000;
+  int64_t maxQueuedPerClient = 100;
+  int retryAfterSeconds = 30;  // the Retry-After of those 429s
 };
 
 struct ServiceContext {
@@ -40,6 +50,8 @@ struct ServiceContext {
   ServiceOptions options;
   std::function<void()> onJobQueued;  // wakes the worker; may be empty
   std::function<void(int64_t)> onQueuedJobCancelled;  // a job cancelled before it ran (metrics); may be empty
+  // A capture refused by a queue limit, "queue" or "client" (metrics); may be empty.
+  std::function<void(const std::string&)> onQueueLimited;
   std::function<void(std::string_view)> log;  // internal errors; default stderr
 };
 

@@ -137,6 +137,15 @@ TEST(RequestChecks, HeadersAndBodies) {
   auto r = parseJsonBody(deep);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().find("deeper"), std::string::npos);
+  // At most kMaxJsonValues values: the parser stops at the first one over.
+  std::string many = "{\"a\":[0";
+  for (size_t i = 1; i < kMaxJsonValues - 2; ++i) many += ",0";
+  EXPECT_TRUE(parseJsonBody(many + "]}").ok());  // the object, the array and its values
+  auto tooMany = parseJsonBody(many + ",0]}");
+  ASSERT_FALSE(tooMany.ok());
+  EXPECT_NE(tooMany.error().find("more than 16384 JSON values"), std::string::npos) << tooMany.error();
+  EXPECT_FALSE(parseJsonBody(R"({"a":[1,2,3]})", kMaxJsonDepth, 3).ok());
+  EXPECT_TRUE(parseJsonBody(R"({"a":[1,2]})", kMaxJsonDepth, 4).ok());
 }
 
 const std::string kRead = "r3ad-0123456789abcdefghijklmnopqrstuv";

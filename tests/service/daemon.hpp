@@ -107,6 +107,25 @@ class Daemon {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
 
+  // Sends `sig` and waits at most `timeout` for the daemon to exit: its exit
+  // status (or 128 + signal), or -1 when it was still running (it is then
+  // killed with SIGKILL, so that a test fails instead of hanging).
+  int stopWithin(std::chrono::milliseconds timeout, int sig = SIGTERM) {
+    if (pid_ <= 0) return -1;
+    kill(pid_, sig);
+    auto deadline = std::chrono::steady_clock::now() + timeout;
+    int status = 0;
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() >= deadline) {
+        stop(SIGKILL);
+        return -1;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    pid_ = 0;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
   // Capture children of this daemon that are still running (zombies waiting
   // for whoever adopted them do not count): the worker names their temp files
   // under tmp(), and they appear on the command line.
