@@ -79,6 +79,7 @@ inline constexpr const char* kUnsupportedEncoding = "unsupported_encoding";     
 inline constexpr const char* kRangeNotSatisfiable = "range_not_satisfiable";    // 416
 inline constexpr const char* kInternal = "internal";                            // 500, no detail on the wire
 inline constexpr const char* kUnavailable = "unavailable";                      // 503
+inline constexpr const char* kStoreUnavailable = "store_unavailable";  // 503, the store's fault, named
 }  // namespace code
 
 // {"error":{"code":..,"message":..,"field":..}}; "field" is left out when empty.

@@ -113,6 +113,9 @@ struct ServeArgs {
   // layer: refused (400 naming the field) unless this is set.
   bool allowApplications = false;
   int jobDeadlineSeconds = 1800;    // per capture job
+  // The store's health check (SQLite quick_check) at start and then this
+  // often; 0: at start only (docs/operating.md, "Store faults").
+  int storeCheckSeconds = 3600;
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address
   // Regression alerts (docs/api.md, "Baselines and alerts"): API daemons
