@@ -141,6 +141,9 @@ int main(int argc, char** argv) {
       "  JOURNAL_STREAM   set by systemd: log lines then carry their syslog priority (<6>) and no time");
   serve->add_option("--job-deadline", serveArgs.jobDeadlineSeconds, "Seconds a capture job may run")
       ->capture_default_str()->check(CLI::Range(1, 7 * 24 * 3600));
+  serve->add_option("--store-check-interval", serveArgs.storeCheckSeconds,
+                    "Seconds between the store's health checks (SQLite quick_check; 0: at start only)")
+      ->capture_default_str()->check(CLI::Range(0, 7 * 24 * 3600));
   serve->add_option("--request-timeout", serveArgs.requestTimeoutSeconds,
                     "Seconds from a connection to its whole request (header and body), else 408")
       ->capture_default_str()->check(CLI::Range(0.1, 3600.0));

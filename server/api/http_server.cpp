@@ -241,7 +241,11 @@ Verdict HttpServer::Impl::admit(const httplib::Request& req) const {
                     it->first);
   }
 
-  // 3. Who is asking. Without tokens (loopback only) the Host must be a
+  // 3. Who is asking. One Host only: which of two a proxy, a cache or the
+  //    checks below would use is anybody's guess (RFC 9112 3.2: answer 400).
+  if (req.get_header_value_count("Host") > 1)
+    return refuse(400, code::kBadHeader, "more than one Host header", "Host");
+  //    Without tokens (loopback only) the Host must be a
   //    loopback name too, so a web page cannot reach us through DNS rebinding.
   if (!auth.required()) {
     if (req.has_header("Host") && !isLoopbackHost(req.get_header_value("Host")))

@@ -86,6 +86,7 @@ inline constexpr const char* kRangeNotSatisfiable = "range_not_satisfiable";    
 inline constexpr const char* kTooManyRequests = "too_many_requests";            // 429, with Retry-After
 inline constexpr const char* kInternal = "internal";                            // 500, no detail on the wire
 inline constexpr const char* kUnavailable = "unavailable";                      // 503
+inline constexpr const char* kStoreUnavailable = "store_unavailable";  // 503, the store's fault, named
 }  // namespace code
 
 // {"error":{"code":..,"message":..,"field":..}}; "field" is left out when empty.

@@ -124,6 +124,9 @@ struct ServeArgs {
   std::vector<std::string> applicationEnv;    // env names (or PREFIX*) a spec may set, over the defaults
   std::string runAs;                          // the user applications run as when tallyd is root
   int jobDeadlineSeconds = 1800;    // per capture job
+  // The store's health check (SQLite quick_check) at start and then this
+  // often; 0: at start only (docs/operating.md, "Store faults").
+  int storeCheckSeconds = 3600;
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address
   // Limits on the queue (docs/operating.md, "Limits"); 0: none. Beyond

@@ -30,6 +30,7 @@
 #include "renderers/renderer.hpp"
 #include "service/alert_evaluator.hpp"
 #include "service/service.hpp"
+#include "service/store_health.hpp"
 #include "service/webhook.hpp"
 #include "store/store.hpp"
 
@@ -84,6 +85,12 @@ void declareMetrics(metrics::Registry& m) {
             "--max-queued-per-client)");
   m.declare("tally_queue_limit", Type::kGauge,
             "The queue's limits, by limit (queue: --max-queued, client: --max-queued-per-client; 0: none)");
+  m.declare("tally_store_up", Type::kGauge,
+            "1 while the store is healthy: its last check passed and no fault is open (docs/operating.md)");
+  m.declare("tally_store_fault", Type::kGauge,
+            "The store's open fault, by kind (damaged, full, io_error, read_only, unreachable); always 1");
+  m.declare("tally_store_check_seconds", Type::kGauge,
+            "How long the store's last health check took (SQLite quick_check, PostgreSQL round trip)");
   m.declare("tally_device_info", Type::kGauge,
             "The capture device: the --device selector (\"auto\": the first discrete GPU) and the name of "
             "the device the last capture ran on (\"\" until one has); always 1");
@@ -242,6 +249,22 @@ int runServe(const ServeArgs& args) {
     return 1;
   }
 
+  // The store's health: checked now, before any job runs, then on a
+  // schedule on a thread and connection of its own. A damaged store still
+  // serves what it can read and says what is wrong (/api/health 503), but
+  // takes no job: the worker does not start.
+  service::StoreHealthOptions healthOptions;
+  healthOptions.location = dbPath;
+  healthOptions.checkInterval = std::chrono::seconds(args.storeCheckSeconds);
+  healthOptions.log = [](std::string_view line) { log::warning(std::string(line)); };
+  service::StoreHealth storeHealth(healthOptions);
+  storeHealth.checkNow();
+  const bool damagedAtStart = storeHealth.state().fault == store::Fault::kDamaged;
+  if (damagedAtStart) {
+    log::error("the store is damaged (" + storeHealth.state().reason +
+               "); serving what can be read, taking no jobs until it is repaired");
+  }
+
   metrics::Registry metrics;
   declareMetrics(metrics);
   metrics.set("tally_build_info", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}, 1);
@@ -261,6 +284,9 @@ int runServe(const ServeArgs& args) {
   workerOptions.lease = lease;
   workerOptions.staleAfter = staleAfter;
   workerOptions.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
+  workerOptions.onStoreFault = [&storeHealth](store::Fault fault, const std::string& detail) {
+    storeHealth.noteFault(fault, detail);
+  };
   // Alerts (role api or all): new runs against their baselines, and the
   // webhook's outbox, each on its own thread and connection; workers never
   // wait on them.
@@ -306,7 +332,8 @@ int runServe(const ServeArgs& args) {
     }
   }
   jobs::Worker worker(**writer, workerOptions);
-  if (runWorker) {
+  const bool startWorker = runWorker && !damagedAtStart;
+  if (startWorker) {
     if (auto recovered = worker.recover(); !recovered) {
       std::fprintf(stderr, "tallyd serve: %s\n", recovered.error().c_str());
       return 1;
@@ -346,8 +373,9 @@ int runServe(const ServeArgs& args) {
     if (reaper.joinable()) reaper.join();
   };
 
+  storeHealth.start();
   if (!serveHttp) {
-    worker.start();
+    if (startWorker) worker.start();
     std::printf("tallyd: worker %s on %s, database %s\n", hostName.c_str(),
                 workerOptions.host.device.is_object() ? workerOptions.host.device.value("name", "").c_str() : "no device",
                 dbName.c_str());
@@ -380,12 +408,19 @@ int runServe(const ServeArgs& args) {
     metrics.add("tally_captures_limited_total", {{"limit", limit}});
   };
   context.onJobQueued = [&worker] { worker.wake(); };
+  context.health = &storeHealth;
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
   };
 
   // Read at each scrape: the queue by state and the store's size on disk.
   metrics.onScrape([&](metrics::Registry& m) {
+    const service::StoreHealth::State health = storeHealth.state();
+    m.set("tally_store_up", {}, health.fault == store::Fault::kNone ? 1 : 0);
+    m.clear("tally_store_fault");
+    if (health.fault != store::Fault::kNone)
+      m.set("tally_store_fault", {{"fault", store::toString(health.fault)}}, 1);
+    m.set("tally_store_check_seconds", {}, health.checkSeconds);
     auto counts = writer->get()->jobCounts();
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
@@ -404,7 +439,7 @@ int runServe(const ServeArgs& args) {
 
   api::Router router;
   api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson(),
-                        renderers::workloadNames());
+                        renderers::workloadNames(), [&storeHealth] { return storeHealth.toJson(); });
   service::addServiceRoutes(router, context);
   router.get("/metrics", [&metrics](const api::Request&) {
     return api::Response::raw(metrics.text(), "text/plain; version=0.0.4; charset=utf-8");
@@ -425,7 +460,7 @@ int runServe(const ServeArgs& args) {
     return 1;
   }
 
-  if (runWorker) worker.start();
+  if (startWorker) worker.start();
   evaluator.start();
   if (!args.alertWebhook.empty()) webhook.start();
   std::thread signals([&] {
@@ -449,6 +484,7 @@ int runServe(const ServeArgs& args) {
   worker.stop();
   webhook.stop();
   evaluator.stop();
+  storeHealth.stop();
   stopReaper();
   log::info("stopped");
   return 0;

@@ -243,9 +243,34 @@ void Worker::runJob(const store::Job& job) {
   };
   auto fail = [&](const std::string& reason) {
     log(log::Level::kError, job.id, "failed: " + reason);
-    auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
-    if (!r) log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
-    if (r && !*r) log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
+    // A store that refuses the write (a full disk, a lost server, a lock)
+    // gets it again every ingestRetry until it takes it: the job is failed
+    // with its reason as soon as the store accepts writes again, never left
+    // running. Stopping meanwhile leaves it running for the next start's
+    // recovery (queued again, or failed after max_attempts interruptions).
+    for (int attempt = 1;; ++attempt) {
+      auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
+      if (r) {
+        if (!*r)
+          log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
+        if (attempt > 1) log(log::Level::kInfo, job.id, "the failure is recorded");
+        break;
+      }
+      const store::Fault fault = store::lastFault();
+      if (fault == store::Fault::kNone || fault == store::Fault::kDamaged) {
+        if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+        log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
+        break;
+      }
+      if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+      if (attempt == 1 || attempt % 30 == 0) {
+        log(log::Level::kWarning, job.id,
+            "cannot record the failure yet (" + store::describe(fault) + "); retrying every " +
+                std::to_string(options_.ingestRetry.count()) + " ms: " + r.error());
+      }
+      std::unique_lock lock(mutex_);
+      if (cv_.wait_for(lock, options_.ingestRetry, [this] { return stopping_.load(); })) return;
+    }
     finished("failed");
   };
 
@@ -389,9 +414,12 @@ std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& resu
       return "";
     }
     // Unreachable database: keep the result and try again until it answers
-    // (or this daemon stops: the lease then expires and another host reruns it).
-    auto alive = store_.integrityCheck();
-    if (alive) {
+    // (or this daemon stops: the lease then expires and another host reruns
+    // it). Any other store fault (a full disk) fails the job with its reason.
+    const store::Fault fault = store::lastFault();
+    if (fault != store::Fault::kUnreachable) {
+      if (fault != store::Fault::kNone && options_.onStoreFault)
+        options_.onStoreFault(fault, ingested.error());
       if (ingested.error().find("is no longer held by") != std::string::npos) {
         log(log::Level::kWarning, lease.jobId, "result dropped: " + ingested.error());
         return kLost;
@@ -399,8 +427,9 @@ std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& resu
       return ingested.error();
     }
     if (attempt == 1 || attempt % 30 == 0) {
+      if (options_.onStoreFault) options_.onStoreFault(fault, ingested.error());
       log(log::Level::kWarning, lease.jobId,
-          "cannot reach the database to store the result (" + alive.error() + "); retrying every " +
+          "cannot reach the database to store the result (" + ingested.error() + "); retrying every " +
               std::to_string(options_.ingestRetry.count()) + " ms");
     }
     std::unique_lock lock(mutex_);

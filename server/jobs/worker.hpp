@@ -49,8 +49,13 @@ struct WorkerOptions {
   std::chrono::milliseconds lease{std::chrono::seconds(30)};
   std::chrono::milliseconds staleAfter{std::chrono::seconds(30)};
   std::function<Result<std::unique_ptr<store::Store>>()> openHeartbeatStore;
-  // How long to wait between ingest attempts while the database is unreachable.
+  // How long to wait between ingest attempts while the database is
+  // unreachable, and between attempts to record a job's failure while the
+  // store refuses writes (a full disk).
   std::chrono::milliseconds ingestRetry{std::chrono::seconds(2)};
+  // A store fault met while storing or finishing a job (the daemon's health
+  // hears of it); may be empty.
+  std::function<void(store::Fault, const std::string&)> onStoreFault;
 };
 
 // How a job ended, for the daemon's metrics.

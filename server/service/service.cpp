@@ -10,15 +10,16 @@
 #include <system_error>
 
 #include "capture/spec.hpp"
-#include "sweeps/sweep.hpp"
 #include "service/accuracy.hpp"
 #include "service/alerts.hpp"
 #include "service/crossover.hpp"
 #include "service/heatmap.hpp"
 #include "service/repeats.hpp"
-#include "service/run_significance.hpp"
-#include "service/trace.hpp"
 #include "service/routes.hpp"
+#include "service/run_significance.hpp"
+#include "service/store_health.hpp"
+#include "service/trace.hpp"
+#include "sweeps/sweep.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -431,7 +432,14 @@ store::Store& reader(const ServiceContext& ctx) {
   if (!store || path != ctx.dbPath) {
     store.reset();
     auto opened = store::Store::open(ctx.dbPath, {.readOnly = true});
-    if (!opened) throw StoreError("cannot open a reader: " + opened.error());
+    if (!opened) {
+      // A store that cannot be opened is a fault of the store, named or not.
+      store::Fault fault = store::lastFault();
+      if (fault == store::Fault::kNone) {
+        fault = store::isPostgresUrl(ctx.dbPath) ? store::Fault::kUnreachable : store::Fault::kDamaged;
+      }
+      throw StoreUnavailable(fault, "cannot open a reader: " + opened.error());
+    }
     store = std::move(opened).value();
     path = ctx.dbPath;
   }
@@ -588,18 +596,50 @@ json validateContent(const ServiceContext& ctx, const json& body, api::Principal
 
 // ---- handlers ------------------------------------------------------------------------
 
+int retryAfterSeconds(store::Fault fault) {
+  switch (fault) {
+    case store::Fault::kBusy: return 1;
+    case store::Fault::kFull:
+    case store::Fault::kIoError:
+    case store::Fault::kReadOnly:
+    case store::Fault::kUnreachable: return 5;
+    default: return 60;  // damage: not before it is repaired
+  }
+}
+
+void requireWritable(const ServiceContext& ctx) {
+  if (!ctx.health) return;
+  StoreHealth::State state = ctx.health->state();
+  if (state.fault == store::Fault::kDamaged) throw StoreUnavailable(state.fault, state.reason);
+}
+
 Response wrap(ServiceContext& ctx, const std::function<Response()>& handler) {
-  try {
-    return handler();
-  } catch (const RequestError& e) {
-    return api::errorResponse(e.status, e.code, e.what(), e.field);
-  } catch (const std::exception& e) {
-    std::string line = std::string("service: ") + e.what();
+  auto log = [&](const std::string& line) {
     if (ctx.log) {
       ctx.log(line);
     } else {
       std::fprintf(stderr, "%s\n", line.c_str());
     }
+  };
+  try {
+    return handler();
+  } catch (const RequestError& e) {
+    return api::errorResponse(e.status, e.code, e.what(), e.field);
+  } catch (const StoreUnavailable& e) {
+    // The store's own fault, named: 503, never a bare 500.
+    std::string reason = store::describe(e.fault);
+    if (ctx.health) {
+      ctx.health->noteFault(e.fault, e.what());
+      StoreHealth::State state = ctx.health->state();
+      if (state.fault == e.fault && !state.reason.empty()) reason = state.reason;
+    } else {
+      log(std::string("service: store ") + store::toString(e.fault) + ": " + e.what());
+    }
+    Response r = api::errorResponse(503, api::code::kStoreUnavailable, reason, "store");
+    r.headers.emplace_back("Retry-After", std::to_string(retryAfterSeconds(e.fault)));
+    return r;
+  } catch (const std::exception& e) {
+    log(std::string("service: ") + e.what());
     return api::errorResponse(500, api::code::kInternal, "internal error");
   }
 }
@@ -613,7 +653,9 @@ Response postCapture(ServiceContext& ctx, const Request& req) {
   limits.client = req.client;
   limits.maxQueued = ctx.options.maxQueued;
   limits.maxQueuedPerClient = ctx.options.maxQueuedPerClient;
+  requireWritable(ctx);
   auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts, limits));
+  if (ctx.health) ctx.health->noteWriteOk();
   if (!created.refused.empty()) {
     if (ctx.onQueueLimited) ctx.onQueueLimited(created.refused);
     const bool mine = created.refused == "client";
@@ -681,7 +723,9 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
   auto before = check(ctx.writer->getJob(id));
   if (!before) return api::notFound("no capture " + std::to_string(id));
   auto finished = [](store::JobStatus s) { return s != store::JobStatus::Queued && s != store::JobStatus::Running; };
+  if (!finished(before->status)) requireWritable(ctx);
   auto job = finished(before->status) ? before : check(ctx.writer->cancelJob(id));
+  if (!finished(before->status) && ctx.health) ctx.health->noteWriteOk();
   if (!job) return api::notFound("no capture " + std::to_string(id));
   // Finished before (a second cancel included) or meanwhile: nothing to cancel.
   if (finished(before->status) || job->status != store::JobStatus::Cancelled) {
@@ -912,7 +956,7 @@ Response heatmap(ServiceContext& ctx, const Request& req) {
   if (!check(store.getJob(q.capture))) return api::notFound("no capture " + std::to_string(q.capture));
   HeatmapAnswer answer = heatmapMap(store, q);
   if (answer.failure) {
-    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    if (answer.failure->status >= 500) check(Result<bool>(makeError(answer.failure->message)));
     throw RequestError(answer.failure->status, answer.failure->status == 404 ? api::code::kNotFound : api::code::kInvalidField,
                        answer.failure->field + ": " + answer.failure->message, answer.failure->field);
   }
@@ -928,7 +972,7 @@ Response heatmapTopDownPng(ServiceContext& ctx, const Request& req) {
   if (!check(store.getJob(id))) return api::notFound("no capture " + std::to_string(id));
   HeatmapAnswer answer = heatmapTopDown(store, id, scene, ctx.options.sceneFolders);
   if (answer.failure) {
-    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    if (answer.failure->status >= 500) check(Result<bool>(makeError(answer.failure->message)));
     if (answer.failure->status == 404) return api::notFound(answer.failure->message);
     throw RequestError(answer.failure->status, api::code::kInvalidField,
                        answer.failure->field + ": " + answer.failure->message, answer.failure->field);
@@ -1027,9 +1071,14 @@ Response listScenes(ServiceContext& ctx, const Request& req) {
           continue;
         }
         auto ext = it->path().extension().string();
-        if ((ext == ".gltf" || ext == ".glb") && it->is_regular_file(ec)) {
-          files.push_back(fs::relative(it->path(), root, ec).string());
-        }
+        if (ext != ".gltf" && ext != ".glb") continue;
+        // Only files inside the folder, listed by their own name: a link is
+        // listed when its target is a file inside too (resolveGltf accepts
+        // it), and never by where it points.
+        std::error_code fileError;
+        fs::path real = fs::canonical(it->path(), fileError);
+        if (fileError || !under(real, root) || !fs::is_regular_file(real, fileError)) continue;
+        files.push_back(it->path().lexically_relative(root).string());
       }
     }
     folders.push_back({{"folder", folder.string()}, {"files", files}});

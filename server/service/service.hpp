@@ -16,6 +16,8 @@
 
 namespace tally::service {
 
+class StoreHealth;
+
 struct ServiceOptions {
   uint64_t maxPixels = 3840ull * 2160ull;  // per resolution: 4K; larger belongs to `tallyd capture`
   uint32_t maxFrames = 200;                // per sample
@@ -53,6 +55,9 @@ struct ServiceContext {
   // A capture refused by a queue limit, "queue" or "client" (metrics); may be empty.
   std::function<void(const std::string&)> onQueueLimited;
   std::function<void(std::string_view)> log;  // internal errors; default stderr
+  // Store faults met by requests are reported to it, and write routes are
+  // refused while it says the store is damaged; may be null.
+  StoreHealth* health = nullptr;
 };
 
 // POST/GET /api/captures, GET/DELETE /api/captures/{id}, /api/runs...,

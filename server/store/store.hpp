@@ -35,7 +35,7 @@
 
 #include "common/result.hpp"
 #include "store/db.hpp"
-
+#include "store/fault.hpp"
 
 namespace tally::store {
 
@@ -674,6 +674,16 @@ class Store {
   // foreign key violations. PostgreSQL enforces both as it writes: "ok" when
   // the server answers.
   Result<std::string> integrityCheck();
+  // The store's health check, cheap enough to run on a schedule: SQLite's
+  // PRAGMA quick_check (its first three lines; "ok" when healthy; O(N) in the
+  // file's size, without integrity_check's index cross-checks), PostgreSQL's
+  // round trip ("ok" when the server answers). Run it on a connection of its
+  // own: it holds this one for as long as it reads.
+  Result<std::string> quickCheck();
+  // Whether the store takes a write again (after a full disk): SQLite
+  // rewrites one header field with its own value and commits; PostgreSQL
+  // answers a round trip.
+  Result<bool> probeWrite();
 
   // The connection, for tests and tools; not for concurrent use.
   Connection& connection() { return *db_; }
