@@ -87,7 +87,9 @@ int main(int argc, char** argv) {
   prof->add_option("--interval", profile.capture.intervalS, "Seconds between status polls")
       ->check(CLI::Range(0.01, 3600.0));
   prof->footer(
-      "The daemon must run with --allow-applications; the application runs on its host.\n"
+      "The daemon must run with --allow-applications; the application runs on its host. $TALLY_TOKEN\n"
+      "must be the daemon's application token, the program must lie in one of its --application-root\n"
+      "folders, and --env may set only the variables it allows (docs/operating.md, \"Security model\").\n"
       "Exit status: 0 when the capture is done, 1 when it failed or was cancelled.\n"
       "Example:\n  tally profile --xvfb --skip-frames 20 --frames 10 -- vkcube --c 100\n"
       "  tally profile --frame-submits 1 --frames 5 -- ./my-compute-app --iterations 50");

@@ -43,6 +43,18 @@ int main(int argc, char** argv) {
   capture->add_option("--device", captureArgs.device, "Device index or name substring");
   capture->add_flag("--quiet", captureArgs.quiet, "No progress lines on standard error");
   capture->add_flag("--summary", captureArgs.summary, "Print a per-pass, per-resource summary (with --out)");
+  capture->add_flag(
+      "--confine-applications", captureArgs.confineApplications,
+      "Hold an application or replay spec to the daemon's policy: its program and replay file inside "
+      "an --application-root, its env from the allowlist (what tallyd serve's worker passes)");
+  capture->add_option(
+      "--application-root", captureArgs.applicationRoots,
+      "With --confine-applications: a folder programs and replay files may come from (repeatable)");
+  capture->add_option(
+      "--application-env", captureArgs.applicationEnv,
+      "With --confine-applications: a variable (NAME or PREFIX*) a spec's env may set (repeatable)");
+  capture->add_option("--run-as", captureArgs.runAs,
+                      "Run the application as this user (tallyd must run as root)");
 
   tally::cli::PlayArgs playArgs;
   auto* play = app.add_subcommand(
@@ -99,9 +111,22 @@ int main(int argc, char** argv) {
   serve->add_option("--device", serveArgs.device, "Device index or name substring for captures");
   serve->add_option("--web", serveArgs.web, "Dashboard folder (default: the installed dashboard)");
   serve->add_option("--scenes", serveArgs.scenes, "Folder glTF scenes may be loaded from (repeatable)");
-  serve->add_flag("--allow-applications", serveArgs.allowApplications,
-                  "Accept capture specs that run a program on this host ({\"application\": ...} and {\"replay\": ...}, "
-                  "under the Vulkan layer): anyone who may post a capture may then run any command as this user");
+  serve->add_flag(
+      "--allow-applications", serveArgs.allowApplications,
+      "Accept capture specs that run a program on this host ({\"application\": ...} and {\"replay\": ...}, "
+      "under the Vulkan layer) from holders of the token file's application token; needs "
+      "--application-root, and --run-as when tallyd runs as root (docs/operating.md, \"Security model\")");
+  serve->add_option("--application-root", serveArgs.applicationRoots,
+                    "A folder an application's program or a replay file must resolve into, links followed "
+                    "(repeatable; with --allow-applications)");
+  serve->add_option(
+      "--application-env", serveArgs.applicationEnv,
+      "A variable a spec's env may set, NAME or PREFIX*, over the defaults (display, Vulkan driver "
+      "choice, MESA_*); LD_*, PATH and VK_*LAYER* never (repeatable)");
+  serve->add_option(
+      "--run-as", serveArgs.runAs,
+      "The unprivileged user applications run as when tallyd runs as root (e.g. a user of their own: "
+      "useradd --system tally-apps)");
   serve->footer(
       "Environment:\n"
       "  XDG_DATA_HOME    the database's folder is $XDG_DATA_HOME/tally without --db (else HOME)\n"
@@ -116,6 +141,9 @@ int main(int argc, char** argv) {
       "  JOURNAL_STREAM   set by systemd: log lines then carry their syslog priority (<6>) and no time");
   serve->add_option("--job-deadline", serveArgs.jobDeadlineSeconds, "Seconds a capture job may run")
       ->capture_default_str()->check(CLI::Range(1, 7 * 24 * 3600));
+  serve->add_option("--store-check-interval", serveArgs.storeCheckSeconds,
+                    "Seconds between the store's health checks (SQLite quick_check; 0: at start only)")
+      ->capture_default_str()->check(CLI::Range(0, 7 * 24 * 3600));
   serve->add_option("--request-timeout", serveArgs.requestTimeoutSeconds,
                     "Seconds from a connection to its whole request (header and body), else 408")
       ->capture_default_str()->check(CLI::Range(0.1, 3600.0));
@@ -129,6 +157,25 @@ int main(int argc, char** argv) {
   serve->add_option("--max-connections-per-peer", serveArgs.maxConnectionsPerPeer,
                     "Open connections one remote address may hold, else 503 (behind a reverse proxy, raise it)")
       ->capture_default_str()->check(CLI::Range(1, 100000));
+  serve
+      ->add_option(
+          "--max-queued", serveArgs.maxQueued,
+          "Queued captures the store may hold, else 429 with Retry-After (0: no limit; with PostgreSQL, "
+          "the store's queue, shared by every API daemon)")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  serve
+      ->add_option("--max-queued-per-client", serveArgs.maxQueuedPerClient,
+                   "Queued captures per client (per token; per peer address without tokens), else 429 with "
+                   "Retry-After (0: no limit)")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t{0}, int64_t{1'000'000'000}));
+  serve
+      ->add_option(
+          "--max-cost", serveArgs.maxCost,
+          "Pixel-frames one capture may render (samples x frames x pixels), else 400 naming max_cost")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e18));
 
   try {
     app.parse(argc, argv);

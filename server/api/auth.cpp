@@ -37,7 +37,7 @@ std::optional<std::string> tokenWeakness(std::string_view token) {
 }  // namespace
 
 Result<Tokens> parseTokens(std::string_view text) {
-  std::optional<std::string> read, capture;
+  std::optional<std::string> read, capture, application;
   size_t lineNo = 0;
   while (!text.empty()) {
     size_t end = text.find('\n');
@@ -48,13 +48,16 @@ Result<Tokens> parseTokens(std::string_view text) {
     size_t eq = line.find('=');
     if (eq == std::string_view::npos)
       return makeError("token file line " + std::to_string(lineNo) +
-                       ": expected read=<token> or capture=<token>");
+                       ": expected read=<token>, capture=<token> or application=<token>");
     std::string_view key = trim(line.substr(0, eq));
     std::string value(trim(line.substr(eq + 1)));
-    std::optional<std::string>* slot = key == "read" ? &read : key == "capture" ? &capture : nullptr;
+    std::optional<std::string>* slot = key == "read"          ? &read
+                                       : key == "capture"     ? &capture
+                                       : key == "application" ? &application
+                                                              : nullptr;
     if (!slot)
       return makeError("token file line " + std::to_string(lineNo) + ": unknown key '" + std::string(key) +
-                       "' (expected read or capture)");
+                       "' (expected read, capture or application)");
     if (slot->has_value()) return makeError("token file: '" + std::string(key) + "' given twice");
     if (auto weak = tokenWeakness(value))
       return makeError("token file: the " + std::string(key) + " token " + *weak);
@@ -63,7 +66,9 @@ Result<Tokens> parseTokens(std::string_view text) {
   if (!read) return makeError("token file: no read=<token> line");
   if (!capture) return makeError("token file: no capture=<token> line");
   if (*read == *capture) return makeError("token file: the read and capture tokens must differ");
-  return Tokens{std::move(*read), std::move(*capture)};
+  if (application && (*application == *read || *application == *capture))
+    return makeError("token file: the application token must differ from the read and capture tokens");
+  return Tokens{std::move(*read), std::move(*capture), application.value_or("")};
 }
 
 Result<Tokens> loadTokenFile(const std::filesystem::path& path) {
@@ -133,9 +138,12 @@ std::optional<Principal> Auth::authenticate(std::string_view authorization) cons
     if (c != kScheme[i]) return std::nullopt;
   }
   std::string_view token = authorization.substr(kScheme.size());
-  // Both comparisons always run, so timing does not tell which token matched.
+  // Every comparison runs, so timing does not tell which token matched. An
+  // absent application token matches nothing (a token is never empty here).
+  bool isApplication = !tokens_->application.empty() && constantTimeEquals(token, tokens_->application);
   bool isCapture = constantTimeEquals(token, tokens_->capture);
   bool isRead = constantTimeEquals(token, tokens_->read);
+  if (isApplication) return Principal::kApplication;
   if (isCapture) return Principal::kCapture;
   if (isRead) return Principal::kRead;
   return std::nullopt;

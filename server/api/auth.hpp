@@ -1,4 +1,5 @@
-// Bearer tokens: one for reading, one for capturing (which may also read).
+// Bearer tokens: one for reading, one for capturing (which may also read),
+// and optionally one for running applications (which may also capture).
 // Loopback without a token file: no checks. Any bind with a token file:
 // every /api request needs a token. A non-loopback bind needs a token file.
 #pragma once
@@ -21,10 +22,12 @@ inline constexpr size_t kMaxTokenLength = 512;
 struct Tokens {
   std::string read;
   std::string capture;
+  std::string application;  // "" when the file has no application= line
 };
 
-// Lines "read=<token>" and "capture=<token>"; blank lines and '#' comments are
-// skipped. Both tokens are required, strong, and different.
+// Lines "read=<token>", "capture=<token>" and, optionally,
+// "application=<token>"; blank lines and '#' comments are skipped. Read and
+// capture are required; every token given is strong and unlike the others.
 Result<Tokens> parseTokens(std::string_view text);
 // Reads and parses a token file; refuses one that other users can read.
 Result<Tokens> loadTokenFile(const std::filesystem::path& path);
@@ -44,8 +47,10 @@ class Auth {
   static Result<Auth> forBind(std::string_view bindAddress, const std::filesystem::path& tokenFile);
 
   bool required() const { return tokens_.has_value(); }
+  // Whether some token may run applications (tallyd serve --allow-applications needs one).
+  bool hasApplicationToken() const { return tokens_ && !tokens_->application.empty(); }
   // The principal for an Authorization header value ("Bearer <token>"), or
-  // nullopt when it names no known token. Without tokens: kCapture.
+  // nullopt when it names no known token. Without tokens: kCapture, never kApplication.
   std::optional<Principal> authenticate(std::string_view authorization) const;
 
  private:

@@ -254,6 +254,13 @@ bool ConnectionGate::run() {
         break;
       }
       RequestExtent extent = requestExtent(p.bytes, options_.maxBodyBytes);
+      // The header limit holds however the bytes came: a whole oversized
+      // header in one read is as refused as one that is still arriving.
+      if (extent.headerComplete && extent.headerBytes > options_.maxHeaderBytes) {
+        refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",
+               "the request header is too large");
+        continue;
+      }
       if (!extent.headerComplete) {
         if (p.bytes.size() > options_.maxHeaderBytes) {
           refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",

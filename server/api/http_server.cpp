@@ -241,7 +241,11 @@ Verdict HttpServer::Impl::admit(const httplib::Request& req) const {
                     it->first);
   }
 
-  // 3. Who is asking. Without tokens (loopback only) the Host must be a
+  // 3. Who is asking. One Host only: which of two a proxy, a cache or the
+  //    checks below would use is anybody's guess (RFC 9112 3.2: answer 400).
+  if (req.get_header_value_count("Host") > 1)
+    return refuse(400, code::kBadHeader, "more than one Host header", "Host");
+  //    Without tokens (loopback only) the Host must be a
   //    loopback name too, so a web page cannot reach us through DNS rebinding.
   if (!auth.required()) {
     if (req.has_header("Host") && !isLoopbackHost(req.get_header_value("Host")))
@@ -317,6 +321,8 @@ void HttpServer::Impl::handle(const httplib::Request& req, httplib::Response& re
   for (const auto& [k, v] : req.params) request.query.emplace(k, v);
   request.principal = admitted.principal;
   request.remoteAddr = req.remote_addr;
+  request.client =
+      auth.required() ? std::string("token:") + principalName(admitted.principal) : "peer:" + req.remote_addr;
   request.idempotencyKey = req.get_header_value("Idempotency-Key");
   if (!req.body.empty()) {
     auto body = parseJsonBody(req.body);

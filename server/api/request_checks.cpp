@@ -84,16 +84,68 @@ bool isValidIdempotencyKey(std::string_view key) {
   return true;
 }
 
-Result<nlohmann::json> parseJsonBody(std::string_view text, int maxDepth) {
-  bool tooDeep = false;
-  auto callback = [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
-    if (depth > maxDepth) tooDeep = true;
-    return !tooDeep;
-  };
-  nlohmann::json value =
-      nlohmann::json::parse(text.begin(), text.end(), callback, /*allow_exceptions=*/false);
-  if (tooDeep) return makeError("body nests deeper than " + std::to_string(maxDepth) + " levels");
-  if (value.is_discarded()) return makeError("body is not valid JSON");
+namespace {
+
+// nlohmann's DOM builder behind a count of values and depth: false stops the
+// parser at once (a callback parser would read the rest of the input).
+class BoundedDom {
+ public:
+  using Json = nlohmann::json;
+  BoundedDom(Json& root, int maxDepth, size_t maxValues)
+      : dom_(root, false), maxDepth_(maxDepth), maxValues_(maxValues) {}
+
+  bool null() { return counted() && dom_.null(); }
+  bool boolean(bool v) { return counted() && dom_.boolean(v); }
+  bool number_integer(Json::number_integer_t v) { return counted() && dom_.number_integer(v); }
+  bool number_unsigned(Json::number_unsigned_t v) { return counted() && dom_.number_unsigned(v); }
+  bool number_float(Json::number_float_t v, const Json::string_t& s) {
+    return counted() && dom_.number_float(v, s);
+  }
+  bool string(Json::string_t& v) { return counted() && dom_.string(v); }
+  bool binary(Json::binary_t& v) { return counted() && dom_.binary(v); }
+  bool key(Json::string_t& v) { return dom_.key(v); }
+  bool start_object(std::size_t n) { return counted() && deeper() && dom_.start_object(n); }
+  bool end_object() { return --depth_, dom_.end_object(); }
+  bool start_array(std::size_t n) { return counted() && deeper() && dom_.start_array(n); }
+  bool end_array() { return --depth_, dom_.end_array(); }
+  bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception& e) {
+    malformed_ = true;
+    return dom_.parse_error(position, token, e);
+  }
+
+  bool tooDeep() const { return tooDeep_; }
+  bool tooMany() const { return tooMany_; }
+  bool malformed() const { return malformed_ || dom_.is_errored(); }
+
+ private:
+  bool counted() {
+    tooMany_ = ++values_ > maxValues_;
+    return !tooMany_;
+  }
+  bool deeper() {
+    tooDeep_ = ++depth_ > maxDepth_;
+    return !tooDeep_;
+  }
+  nlohmann::detail::json_sax_dom_parser<Json> dom_;
+  int maxDepth_;
+  size_t maxValues_;
+  int depth_ = 0;
+  size_t values_ = 0;
+  bool tooDeep_ = false, tooMany_ = false, malformed_ = false;
+};
+
+}  // namespace
+
+Result<nlohmann::json> parseJsonBody(std::string_view text, int maxDepth, size_t maxValues) {
+  nlohmann::json value;
+  BoundedDom sax(value, maxDepth, maxValues);
+  const bool parsed = nlohmann::json::sax_parse(text.begin(), text.end(), &sax);
+  if (sax.tooDeep()) return makeError("body nests deeper than " + std::to_string(maxDepth) + " levels");
+  if (sax.tooMany()) {
+    return makeError("body holds more than " + std::to_string(maxValues) +
+                     " JSON values (a capture spec within its limits holds a few thousand)");
+  }
+  if (!parsed || sax.malformed()) return makeError("body is not valid JSON");
   if (!value.is_object()) return makeError("body must be a JSON object");
   return value;
 }

@@ -4,7 +4,14 @@
 
 namespace tally::api {
 
-const char* principalName(Principal p) { return p == Principal::kCapture ? "capture" : "read"; }
+const char* principalName(Principal p) {
+  switch (p) {
+    case Principal::kRead: return "read";
+    case Principal::kCapture: return "capture";
+    case Principal::kApplication: return "application";
+  }
+  return "read";
+}
 
 const std::string* Request::queryValue(std::string_view key) const {
   auto it = query.find(std::string(key));

@@ -14,12 +14,14 @@
 namespace tally::api {
 
 // Who is asking. A route needs kRead (GET, HEAD) or kCapture (POST, DELETE);
-// a capture token may also read. Without tokens (loopback only) every request
-// is kCapture.
-enum class Principal { kRead, kCapture };
+// a capture token may also read. kApplication (the token file's optional
+// application= line) may do what kCapture may, and also post specs that run
+// a program on the daemon's host (the service checks that per spec). Without
+// tokens (loopback only) every request is kCapture.
+enum class Principal { kRead, kCapture, kApplication };
 
 inline bool allows(Principal have, Principal need) {
-  return have == Principal::kCapture || need == Principal::kRead;
+  return static_cast<int>(have) >= static_cast<int>(need);
 }
 const char* principalName(Principal p);
 
@@ -32,6 +34,10 @@ struct Request {
   std::string idempotencyKey;                 // the Idempotency-Key header; empty when absent
   Principal principal = Principal::kRead;
   std::string remoteAddr;  // the socket's peer address, never a header
+  // Who is asking, for per-client limits: "token:capture" (the token the
+  // request carried, by its role) when the server has tokens, else
+  // "peer:<remoteAddr>". Empty outside the HTTP server (tests).
+  std::string client;
 
   // The query value for key, or nullptr.
   const std::string* queryValue(std::string_view key) const;
@@ -77,8 +83,10 @@ inline constexpr const char* kUriTooLong = "uri_too_long";              // 414
 inline constexpr const char* kUnsupportedMediaType = "unsupported_media_type";  // 415, Content-Type
 inline constexpr const char* kUnsupportedEncoding = "unsupported_encoding";     // 415, Content-Encoding
 inline constexpr const char* kRangeNotSatisfiable = "range_not_satisfiable";    // 416
+inline constexpr const char* kTooManyRequests = "too_many_requests";            // 429, with Retry-After
 inline constexpr const char* kInternal = "internal";                            // 500, no detail on the wire
 inline constexpr const char* kUnavailable = "unavailable";                      // 503
+inline constexpr const char* kStoreUnavailable = "store_unavailable";  // 503, the store's fault, named
 }  // namespace code
 
 // {"error":{"code":..,"message":..,"field":..}}; "field" is left out when empty.

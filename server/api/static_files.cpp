@@ -45,10 +45,14 @@ std::optional<StaticFile> StaticFiles::lookup(std::string_view urlPath) const {
   auto canon = std::filesystem::canonical(root_ / rel, ec);
   if (ec || !isWithin(root_, canon)) return std::nullopt;
 
-  // Open the resolved path without following a symlink swapped in since.
-  int fd = ::open(canon.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
-  if (fd < 0) return std::nullopt;
+  // The type first, without opening: open() on a FIFO blocks until a writer
+  // comes (for ever), and on a device it may do anything. Only regular files.
   struct stat st {};
+  if (::lstat(canon.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
+  // O_NONBLOCK: a FIFO swapped in since the lstat does not block the open
+  // either; O_NOFOLLOW: nor does a symlink. fstat then checks what was opened.
+  int fd = ::open(canon.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (fd < 0) return std::nullopt;
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) ||
       static_cast<std::uintmax_t>(st.st_size) > kMaxStaticFileBytes) {
     ::close(fd);

@@ -1,6 +1,8 @@
 // The dashboard's static files, from one directory only: "/" is index.html;
 // hidden files, directories, and anything whose real path (symlinks
-// resolved) leaves the root are not served.
+// resolved) leaves the root are not served. Only regular files are: a FIFO,
+// socket or device answers "not found" without being opened (an open of a
+// FIFO would wait for a writer for ever).
 #pragma once
 
 #include <filesystem>

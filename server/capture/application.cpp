@@ -577,6 +577,11 @@ Result<json> runApplication(const ApplicationSpec& spec, const ApplicationOption
 
   auto temp = TempDir::make(options.tempRoot);
   if (!temp) return makeError(temp.error());
+  // The layer, inside the application, writes its output here.
+  if (options.runAs && chown(temp->path.c_str(), options.runAs->uid, options.runAs->gid) != 0) {
+    return makeError("cannot give " + temp->path.string() + " to user " + options.runAs->user + ": " +
+                     std::strerror(errno));
+  }
   const fs::path output = temp->path / "layer-output.json";
 
   std::unique_ptr<XServer> xserver;
@@ -591,6 +596,12 @@ Result<json> runApplication(const ApplicationSpec& spec, const ApplicationOption
 
   jobs::ChildOptions child;
   child.argv = argv;
+  if (options.runAs) {
+    child.runAs = options.runAs;
+    child.environment.push_back("HOME=" + options.runAs->home);
+    child.environment.push_back("USER=" + options.runAs->user);
+    child.environment.push_back("LOGNAME=" + options.runAs->user);
+  }
   for (const auto& [name, value] : env) child.environment.push_back(name + "=" + value);
   child.deadline = std::chrono::seconds(spec.timeoutSeconds);
   child.grace = options.exitGrace;

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "capture/spec.hpp"
 #include "common/progress.hpp"
 #include "common/result.hpp"
+#include "jobs/child_process.hpp"
 
 namespace tally::capture {
 
@@ -51,6 +53,11 @@ struct ApplicationOptions {
   // is made: "" for the system's ($TMPDIR). tallyd capture puts it beside
   // --out, in the worker's job folder, which goes even when the job is killed.
   std::filesystem::path tempRoot;
+  // The user the application (or gfxrecon-replay) runs as (tallyd serve
+  // --run-as): its temporary folder becomes that user's, and HOME, USER and
+  // LOGNAME are that user's. Xvfb, which runs nothing of the spec's, stays
+  // this process's. nullopt: this process's user.
+  std::optional<jobs::Credentials> runAs;
 };
 
 // Runs the capture. Every failure ends only this capture, with one line

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <system_error>
 
 #include <unistd.h>
@@ -21,6 +22,18 @@ std::string show(const nlohmann::json& j) {
 }
 
 Error fieldError(const std::string& field, const std::string& message) { return makeError(field + ": " + message); }
+
+// "scenes: at most 32 entries, got 40", before any entry is looked at.
+std::optional<Error> tooMany(const nlohmann::json& list, const std::string& field, size_t most) {
+  if (!list.is_array() || list.size() <= most) return std::nullopt;
+  return fieldError(field,
+                    "at most " + std::to_string(most) + " entries, got " + std::to_string(list.size()));
+}
+
+// "scenes[3]: a duplicate of scenes[0]".
+Error duplicate(const std::string& field, const std::string& first) {
+  return fieldError(field, "a duplicate of " + first + " (each entry must differ)");
+}
 
 Result<uint32_t> boundedInt(const nlohmann::json& j, const std::string& field, uint32_t low, uint32_t high) {
   if (!j.is_number_integer() || j.get<int64_t>() < low || j.get<int64_t>() > high) {
@@ -123,6 +136,7 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   // renderers, then workloads (renderers::workloadNames(): compute workloads,
   // listed only under "workloads"): one variant list. At least one of the two.
   if (!j.contains("renderers") && !j.contains("workloads")) return fieldError("renderers", "required");
+  std::vector<std::string> variantFields;  // where each of spec.renderers was given
   for (const char* list : {"renderers", "workloads"}) {
     if (!j.contains(list)) continue;
     const bool workloads = std::string(list) == "workloads";
@@ -130,6 +144,12 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     const std::string noun = workloads ? "workload" : "renderer";
     const auto& entries = j[list];
     if (!entries.is_array() || entries.empty()) return fieldError(list, "must be a non-empty array of names");
+    if (auto e = tooMany(entries, list, kMaxVariants)) return *e;
+    if (spec.renderers.size() + entries.size() > kMaxVariants) {
+      return fieldError(list, "at most " + std::to_string(kMaxVariants) +
+                                  " renderers and workloads together, got " +
+                                  std::to_string(spec.renderers.size() + entries.size()));
+    }
     std::string known;
     for (const auto& k : knownNames) known += (known.empty() ? "" : ", ") + k;
     for (size_t i = 0; i < entries.size(); ++i) {
@@ -169,34 +189,44 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
       auto made = makeVariant(name, options);
       if (!made) return makeError(field + "." + made.error());
       RendererVariant variant = std::move(made).value();
-      for (const auto& seen : spec.renderers) {
+      for (size_t k = 0; k < spec.renderers.size(); ++k) {
+        const auto& seen = spec.renderers[k];
         if (seen.name == variant.name && seen.options == variant.options) {
-          return fieldError(field, noun + " '" + variant.label() + "' listed twice");
+          return fieldError(field, noun + " '" + variant.label() + "' listed twice (a duplicate of " +
+                                       variantFields[k] + ")");
         }
       }
       spec.renderers.push_back(std::move(variant));
+      variantFields.push_back(field);
     }
   }
 
-  // scenes: checked here by building their parameters only; the capture loads them.
+  // scenes: their names and parameters are checked here, nothing is built;
+  // the capture builds them (and loads glTF files, reporting what is wrong
+  // with one as the job's error).
   if (!j.contains("scenes")) {
     spec.scenes.push_back("atrium");  // the default scene
   } else {
     const auto& scenesJson = j["scenes"];
     if (!scenesJson.is_array() || scenesJson.empty()) return fieldError("scenes", "must be a non-empty array");
+    if (auto e = tooMany(scenesJson, "scenes", kMaxScenes)) return *e;
+    std::vector<nlohmann::json> canonical;
     for (size_t i = 0; i < scenesJson.size(); ++i) {
       const auto& s = scenesJson[i];
       std::string field = "scenes[" + std::to_string(i) + "]";
       if (!s.is_string() && !s.is_object()) {
         return fieldError(field, "must be a scene name or an object, got " + show(s));
       }
-      // glTF files are loaded (and their errors reported) when the capture runs.
-      if (!(s.is_object() && s.contains("gltf"))) {
-        auto scene = scenes::makeScene(s);
-        if (!scene) return fieldError(field, scene.error());
-      } else if (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty()) {
+      if (s.is_object() && s.contains("gltf") &&
+          (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty())) {
         return fieldError(field + ".gltf", "must be a file path");
       }
+      auto checked = scenes::checkSceneSpec(s);
+      if (!checked) return fieldError(field, checked.error());
+      for (size_t k = 0; k < canonical.size(); ++k) {
+        if (canonical[k] == *checked) return duplicate(field, "scenes[" + std::to_string(k) + "]");
+      }
+      canonical.push_back(std::move(checked).value());
       spec.scenes.push_back(s);
     }
   }
@@ -207,9 +237,17 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   if (!resolutions.is_array() || resolutions.empty()) {
     return fieldError("resolutions", "must be a non-empty array of [width, height]");
   }
+  if (auto e = tooMany(resolutions, "resolutions", kMaxResolutions)) return *e;
   for (size_t i = 0; i < resolutions.size(); ++i) {
-    auto resolution = parseResolution(resolutions[i], "resolutions[" + std::to_string(i) + "]");
+    std::string field = "resolutions[" + std::to_string(i) + "]";
+    auto resolution = parseResolution(resolutions[i], field);
     if (!resolution) return makeError(resolution.error());
+    for (size_t k = 0; k < spec.resolutions.size(); ++k) {
+      if (spec.resolutions[k].width == resolution->width &&
+          spec.resolutions[k].height == resolution->height) {
+        return duplicate(field, "resolutions[" + std::to_string(k) + "]");
+      }
+    }
     spec.resolutions.push_back(*resolution);
   }
 
@@ -221,9 +259,25 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
         return fieldError("cameras", "must be \"auto\" or a list of cameras, got " + show(cameras));
       }
     } else {
+      if (auto e = tooMany(cameras, "cameras", kMaxCameras)) return *e;
       auto list = scenes::camerasFromJson(cameras);
       if (!list) return makeError("cameras" + (list.error().starts_with("[") ? list.error() : ": " + list.error()));
       if (list->empty()) return fieldError("cameras", "must not be empty");
+      // A camera is its pose and lens; the label only names it.
+      for (size_t i = 0; i < list->size(); ++i) {
+        const scenes::Camera& c = (*list)[i];
+        std::string field = "cameras[" + std::to_string(i) + "]";
+        if (c.label.size() > kMaxCameraLabel) {
+          return fieldError(field + ".label", "at most " + std::to_string(kMaxCameraLabel) + " characters");
+        }
+        for (size_t k = 0; k < i; ++k) {
+          const scenes::Camera& seen = (*list)[k];
+          if (seen.eye == c.eye && seen.target == c.target && seen.fovDeg == c.fovDeg &&
+              seen.skyFraction == c.skyFraction) {
+            return duplicate(field, "cameras[" + std::to_string(k) + "]");
+          }
+        }
+      }
       spec.autoCameras = false;
       spec.cameras = std::move(list).value();
     }
@@ -257,6 +311,7 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     if (!counting.is_string() && !(counting.is_array() && !counting.empty())) {
       return fieldError("counting", "must be a mode or a non-empty array of modes, got " + show(counting));
     }
+    if (auto e = tooMany(counting, "counting", kMaxModes)) return *e;
     bool single = counting.is_string();
     spec.modes.clear();
     for (size_t i = 0; i < (single ? 1 : counting.size()); ++i) {
@@ -265,9 +320,10 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
       if (!entry.is_string()) return fieldError(field, "must be a string, got " + show(entry));
       auto mode = spirv::parseMode(entry.get<std::string>());
       if (!mode) return fieldError(field, mode.error());
-      for (const auto& seen : spec.modes) {
-        if (spirv::toString(seen) == spirv::toString(*mode)) {
-          return fieldError(field, "mode '" + spirv::toString(*mode) + "' listed twice");
+      for (size_t k = 0; k < spec.modes.size(); ++k) {
+        if (spirv::toString(spec.modes[k]) == spirv::toString(*mode)) {
+          return fieldError(field, "mode '" + spirv::toString(*mode) +
+                                       "' listed twice (a duplicate of counting[" + std::to_string(k) + "])");
         }
       }
       spec.modes.push_back(*mode);

@@ -27,6 +27,15 @@ inline constexpr uint32_t kMaxFrames = 1000;
 inline constexpr uint32_t kDefaultFrames = 20;  // 20 frames per sample, as in the founding study
 inline constexpr uint32_t kDefaultCountedFrames = 2;  // instrumented frames per sample unless the spec says
 inline constexpr uint32_t kMaxMatrix = 10000;   // samples (renderers x scenes x resolutions x modes x cameras)
+// Entries per list, checked before any entry is (docs/api.md, "Limits"). The
+// largest specs in the tree use 9 variants, 2 scenes, 10 resolutions and 4
+// cameras; a matrix within these still meets kMaxMatrix and the service's cost.
+inline constexpr size_t kMaxVariants = 32;      // renderers and workloads together (each a variant)
+inline constexpr size_t kMaxScenes = 32;        // "scenes"
+inline constexpr size_t kMaxResolutions = 64;   // "resolutions"
+inline constexpr size_t kMaxCameras = 256;      // "cameras" when a list
+inline constexpr size_t kMaxModes = 16;         // "counting" when a list
+inline constexpr size_t kMaxCameraLabel = 256;  // characters of a camera's "label"
 // "footprint": true is this block size; an integer must be one of 32, 64, 128.
 inline constexpr uint32_t kDefaultFootprintBlockBytes = 64;
 
@@ -94,6 +103,20 @@ struct CaptureSpec {
   size_t sampleCount(size_t camerasPerScene) const {
     return renderers.size() * scenes.size() * resolutions.size() * modes.size() * camerasPerScene;
   }
+  // What the capture renders, in pixel-frames: every sample's frames times
+  // its pixels, i.e. frames x (renderers x scenes x modes x cameras) x the
+  // sum of the resolutions' pixels. The service bounds it (--max-cost).
+  // Saturates at UINT64_MAX rather than wrap.
+  uint64_t cost() const {
+    uint64_t pixels = 0;
+    for (const auto& r : resolutions) pixels += uint64_t(r.width) * r.height;
+    uint64_t out = pixels;
+    for (uint64_t factor : {uint64_t(frames), uint64_t(renderers.size()), uint64_t(scenes.size()),
+                            uint64_t(modes.size()), uint64_t(camerasPerScene())}) {
+      if (__builtin_mul_overflow(out, factor, &out)) return UINT64_MAX;
+    }
+    return out;
+  }
 };
 
 // The variant of a renderer (or workload) `name` with `options` made
@@ -116,7 +139,11 @@ Result<std::map<std::string, std::string>> parseLabels(const nlohmann::json& lab
 
 // `knownRenderers` is the list to check names against. Errors read
 // "renderers[2]: unknown renderer 'x' (expected one of ...)" or
-// "renderers[1].options.output: ...".
+// "renderers[1].options.output: ...". Cheap whatever the spec holds: the
+// lists' lengths are checked first (kMaxVariants, ...), scenes are checked
+// without being built (scenes::checkSceneSpec) and nothing is read from
+// disk; a repeated entry is refused at its index, naming the first
+// ("scenes[3]: repeats scenes[0]").
 Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers);
 
 // ---- Applications ----------------------------------------------------------------

@@ -1,3 +1,5 @@
+#include <unistd.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -5,13 +7,14 @@
 #include <iterator>
 
 #include "capture/application.hpp"
+#include "capture/application_policy.hpp"
 #include "capture/runner.hpp"
 #include "capture/spec.hpp"
 #include "capture/summary.hpp"
-#include "sweeps/sweep.hpp"
 #include "commands/commands.hpp"
 #include "gpu/vk_check.hpp"
 #include "renderers/renderer.hpp"
+#include "sweeps/sweep.hpp"
 
 namespace tally::cli {
 namespace {
@@ -51,9 +54,33 @@ int runApplicationCapture(const CaptureArgs& args, const nlohmann::json& json) {
   };
   std::filesystem::path base;
   if (args.spec != "-") base = std::filesystem::absolute(args.spec).parent_path();
-  auto spec = capture::parseApplicationSpec(json, base);
-  if (!spec) return fail("spec: " + spec.error());
   capture::ApplicationOptions options;
+  if (!args.runAs.empty()) {
+    if (geteuid() != 0) {
+      return fail("--run-as " + args.runAs + ": tallyd must run as root to run applications as another user");
+    }
+    auto user = jobs::lookupUser(args.runAs);
+    if (!user) return fail("--run-as: " + user.error());
+    options.runAs = std::move(*user);
+  }
+  Result<capture::ApplicationSpec> spec = makeError("not parsed");
+  if (args.confineApplications) {
+    // The daemon's job: its policy again, on this host, just before the program runs.
+    if (geteuid() == 0 && !options.runAs)
+      return fail("refusing to run an application as root (tallyd serve --run-as USER)");
+    capture::ApplicationPolicy policy;
+    auto roots = capture::checkApplicationRoots(args.applicationRoots);
+    if (!roots) return fail(roots.error());
+    policy.roots = std::move(*roots);
+    for (const auto& pattern : args.applicationEnv) {
+      if (auto checked = capture::checkApplicationEnvPattern(pattern); !checked) return fail(checked.error());
+      policy.env.push_back(pattern);
+    }
+    spec = capture::parseConfinedApplicationSpec(json, policy);
+  } else {
+    spec = capture::parseApplicationSpec(json, base);
+  }
+  if (!spec) return fail("spec: " + spec.error());
   if (!args.out.empty() && args.out != "-") {
     options.tempRoot = std::filesystem::absolute(args.out).parent_path();
   }

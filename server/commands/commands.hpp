@@ -38,6 +38,12 @@ struct CaptureArgs {
   std::string device;  // index or name substring
   bool quiet = false;
   bool summary = false;  // print the per-pass, per-resource summary table
+  // An application or replay spec held to the daemon's policy (the worker
+  // passes these; capture/application_policy.hpp): without a root, none runs.
+  bool confineApplications = false;
+  std::vector<std::string> applicationRoots;  // --application-root
+  std::vector<std::string> applicationEnv;    // --application-env NAME or PREFIX*
+  std::string runAs;                          // --run-as: the application's user (tallyd runs as root)
 };
 
 // Runs one capture and writes the result JSON (docs/result-schema.md);
@@ -110,11 +116,24 @@ struct ServeArgs {
   std::string web;                  // dashboard files; "": the data folder's web/ (common/paths.hpp)
   std::vector<std::string> scenes;  // folders glTF scenes may come from
   // Application and replay specs run a program on this host under the Vulkan
-  // layer: refused (400 naming the field) unless this is set.
+  // layer: refused (400 naming the field) unless this is set. It needs a token
+  // file with an application= line (to serve the API), at least one
+  // application root, and, when tallyd starts as root, --run-as (to run them).
   bool allowApplications = false;
+  std::vector<std::string> applicationRoots;  // programs and replay files resolve inside these
+  std::vector<std::string> applicationEnv;    // env names (or PREFIX*) a spec may set, over the defaults
+  std::string runAs;                          // the user applications run as when tallyd is root
   int jobDeadlineSeconds = 1800;    // per capture job
+  // The store's health check (SQLite quick_check) at start and then this
+  // often; 0: at start only (docs/operating.md, "Store faults").
+  int storeCheckSeconds = 3600;
   double requestTimeoutSeconds = 10;  // a request must arrive whole within this of its connection
   int maxConnectionsPerPeer = 64;     // open connections per remote address
+  // Limits on the queue (docs/operating.md, "Limits"); 0: none. Beyond
+  // either, POST /api/captures answers 429 with Retry-After.
+  int64_t maxQueued = 1000;          // queued jobs in the store
+  int64_t maxQueuedPerClient = 100;  // queued jobs per token (or per peer address without tokens)
+  double maxCost = 1e11;             // pixel-frames (samples x frames x pixels) of one capture
   // Regression alerts (docs/api.md, "Baselines and alerts"): API daemons
   // evaluate new runs against their baselines; with a webhook, each alert is
   // posted to it from the store's outbox.

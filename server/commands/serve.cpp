@@ -14,9 +14,11 @@
 #include <thread>
 #include <utility>
 
+#include "api/auth.hpp"
 #include "api/builtin_routes.hpp"
 #include "api/http_post.hpp"
 #include "api/http_server.hpp"
+#include "capture/application_policy.hpp"
 #include "commands/commands.hpp"
 #include "common/log.hpp"
 #include "common/metrics.hpp"
@@ -28,6 +30,7 @@
 #include "renderers/renderer.hpp"
 #include "service/alert_evaluator.hpp"
 #include "service/service.hpp"
+#include "service/store_health.hpp"
 #include "service/webhook.hpp"
 #include "store/store.hpp"
 
@@ -77,9 +80,88 @@ void declareMetrics(metrics::Registry& m) {
   m.declare("tally_alerts", Type::kGauge, "Regression alerts in the store, by status (open, acknowledged, invalid, fixed)");
   m.declare("tally_alerts_raised_total", Type::kCounter,
             "Regression alerts this daemon's evaluator raised since it started");
+  m.declare("tally_captures_limited_total", Type::kCounter,
+            "POST /api/captures answered 429 by a queue limit, by limit (queue: --max-queued, client: "
+            "--max-queued-per-client)");
+  m.declare("tally_queue_limit", Type::kGauge,
+            "The queue's limits, by limit (queue: --max-queued, client: --max-queued-per-client; 0: none)");
+  m.declare("tally_store_up", Type::kGauge,
+            "1 while the store is healthy: its last check passed and no fault is open (docs/operating.md)");
+  m.declare("tally_store_fault", Type::kGauge,
+            "The store's open fault, by kind (damaged, full, io_error, read_only, unreachable); always 1");
+  m.declare("tally_store_check_seconds", Type::kGauge,
+            "How long the store's last health check took (SQLite quick_check, PostgreSQL round trip)");
   m.declare("tally_device_info", Type::kGauge,
             "The capture device: the --device selector (\"auto\": the first discrete GPU) and the name of "
             "the device the last capture ran on (\"\" until one has); always 1");
+}
+
+// The rules for running applications (docs/operating.md, "Security model"),
+// checked before anything starts: --allow-applications needs an application
+// token (to serve the API), roots, and a user to run them as when tallyd is
+// root (to run them). Returns the policy, and the arguments every capture
+// child gets so that it checks each spec again where it runs.
+struct ApplicationSetup {
+  capture::ApplicationPolicy policy;
+  std::vector<std::string> captureArgs;
+};
+
+Result<ApplicationSetup> applicationSetup(const ServeArgs& args, bool serveHttp, bool runWorker) {
+  ApplicationSetup setup;
+  setup.captureArgs = {"--confine-applications"};
+  if (!args.allowApplications) {
+    if (!args.applicationRoots.empty() || !args.applicationEnv.empty() || !args.runAs.empty()) {
+      return makeError("--application-root, --application-env and --run-as go with --allow-applications");
+    }
+    return setup;  // the capture child refuses every application spec: no roots
+  }
+  if (serveHttp) {
+    const std::string how =
+        "a token file with an application=<token> line beside read= and capture= (e.g. from "
+        "`openssl rand -hex 32`): only its holders may run applications";
+    if (args.tokenFile.empty()) return makeError("--allow-applications needs --token-file: " + how);
+    auto tokens = api::loadTokenFile(args.tokenFile);
+    if (!tokens) return makeError(tokens.error());
+    if (tokens->application.empty()) {
+      return makeError("--allow-applications: " + args.tokenFile +
+                       " has no application=<token> line; it needs " + how);
+    }
+  }
+  if (args.applicationRoots.empty()) {
+    return makeError(
+        "--allow-applications needs at least one --application-root DIR: the folders an application's "
+        "program or a replay file must lie in (links followed), e.g. /opt/tally-apps");
+  }
+  auto roots = capture::checkApplicationRoots(args.applicationRoots);
+  if (!roots) return makeError(roots.error());
+  setup.policy.roots = *roots;
+  for (const auto& pattern : args.applicationEnv) {
+    if (auto checked = capture::checkApplicationEnvPattern(pattern); !checked)
+      return makeError(checked.error());
+    setup.policy.env.push_back(pattern);
+  }
+  if (!args.runAs.empty()) {
+    if (geteuid() != 0) {
+      return makeError("--run-as " + args.runAs +
+                       ": tallyd runs as a user of its own already (not root), and applications run as that "
+                       "user; drop --run-as");
+    }
+    auto user = jobs::lookupUser(args.runAs);
+    if (!user) return makeError("--run-as: " + user.error());
+  } else if (runWorker && geteuid() == 0) {
+    return makeError(
+        "refusing to run applications as root: give --run-as USER, an unprivileged user they run as "
+        "(useradd --system --no-create-home tally-apps), or start tallyd as a user of its own (the "
+        "systemd unit's DynamicUser=yes does: docs/operating.md, \"Security model\")");
+  }
+  for (const auto& root : setup.policy.roots) {
+    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-root", root.string()});
+  }
+  for (const auto& pattern : setup.policy.env) {
+    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-env", pattern});
+  }
+  if (!args.runAs.empty()) setup.captureArgs.insert(setup.captureArgs.end(), {"--run-as", args.runAs});
+  return setup;
 }
 
 }  // namespace
@@ -109,6 +191,11 @@ int runServe(const ServeArgs& args) {
 
   const bool serveHttp = args.role != "worker";
   const bool runWorker = args.role != "api";
+  auto applications = applicationSetup(args, serveHttp, runWorker);
+  if (!applications) {
+    std::fprintf(stderr, "tallyd serve: %s\n", applications.error().c_str());
+    return 1;
+  }
   if (!args.alertWebhook.empty()) {
     auto target = api::parseHttpUrl(args.alertWebhook);
     if (!target) {
@@ -162,6 +249,22 @@ int runServe(const ServeArgs& args) {
     return 1;
   }
 
+  // The store's health: checked now, before any job runs, then on a
+  // schedule on a thread and connection of its own. A damaged store still
+  // serves what it can read and says what is wrong (/api/health 503), but
+  // takes no job: the worker does not start.
+  service::StoreHealthOptions healthOptions;
+  healthOptions.location = dbPath;
+  healthOptions.checkInterval = std::chrono::seconds(args.storeCheckSeconds);
+  healthOptions.log = [](std::string_view line) { log::warning(std::string(line)); };
+  service::StoreHealth storeHealth(healthOptions);
+  storeHealth.checkNow();
+  const bool damagedAtStart = storeHealth.state().fault == store::Fault::kDamaged;
+  if (damagedAtStart) {
+    log::error("the store is damaged (" + storeHealth.state().reason +
+               "); serving what can be read, taking no jobs until it is repaired");
+  }
+
   metrics::Registry metrics;
   declareMetrics(metrics);
   metrics.set("tally_build_info", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}, 1);
@@ -175,11 +278,15 @@ int runServe(const ServeArgs& args) {
   jobs::WorkerOptions workerOptions;
   workerOptions.tallydPath = self.string();
   workerOptions.device = args.device;
+  workerOptions.captureArgs = applications->captureArgs;
   workerOptions.deadline = std::chrono::seconds(args.jobDeadlineSeconds);
   workerOptions.maxAttempts = args.maxAttempts;
   workerOptions.lease = lease;
   workerOptions.staleAfter = staleAfter;
   workerOptions.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
+  workerOptions.onStoreFault = [&storeHealth](store::Fault fault, const std::string& detail) {
+    storeHealth.noteFault(fault, detail);
+  };
   // Alerts (role api or all): new runs against their baselines, and the
   // webhook's outbox, each on its own thread and connection; workers never
   // wait on them.
@@ -225,7 +332,8 @@ int runServe(const ServeArgs& args) {
     }
   }
   jobs::Worker worker(**writer, workerOptions);
-  if (runWorker) {
+  const bool startWorker = runWorker && !damagedAtStart;
+  if (startWorker) {
     if (auto recovered = worker.recover(); !recovered) {
       std::fprintf(stderr, "tallyd serve: %s\n", recovered.error().c_str());
       return 1;
@@ -265,8 +373,9 @@ int runServe(const ServeArgs& args) {
     if (reaper.joinable()) reaper.join();
   };
 
+  storeHealth.start();
   if (!serveHttp) {
-    worker.start();
+    if (startWorker) worker.start();
     std::printf("tallyd: worker %s on %s, database %s\n", hostName.c_str(),
                 workerOptions.host.device.is_object() ? workerOptions.host.device.value("name", "").c_str() : "no device",
                 dbName.c_str());
@@ -285,15 +394,33 @@ int runServe(const ServeArgs& args) {
   context.rendererNames = renderers::rendererNames();
   for (const auto& folder : args.scenes) context.options.sceneFolders.emplace_back(folder);
   context.options.allowApplications = args.allowApplications;
+  context.options.applicationPolicy = applications->policy;
   context.options.staleAfterMs = staleAfter.count();
   context.options.maxAttempts = args.maxAttempts;
+  context.options.maxQueued = args.maxQueued;
+  context.options.maxQueuedPerClient = args.maxQueuedPerClient;
+  context.options.maxCost = uint64_t(args.maxCost);
+  for (const char* limit : {"queue", "client"})
+    metrics.add("tally_captures_limited_total", {{"limit", limit}}, 0);
+  metrics.set("tally_queue_limit", {{"limit", "queue"}}, double(args.maxQueued));
+  metrics.set("tally_queue_limit", {{"limit", "client"}}, double(args.maxQueuedPerClient));
+  context.onQueueLimited = [&metrics](const std::string& limit) {
+    metrics.add("tally_captures_limited_total", {{"limit", limit}});
+  };
   context.onJobQueued = [&worker] { worker.wake(); };
+  context.health = &storeHealth;
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
   };
 
   // Read at each scrape: the queue by state and the store's size on disk.
   metrics.onScrape([&](metrics::Registry& m) {
+    const service::StoreHealth::State health = storeHealth.state();
+    m.set("tally_store_up", {}, health.fault == store::Fault::kNone ? 1 : 0);
+    m.clear("tally_store_fault");
+    if (health.fault != store::Fault::kNone)
+      m.set("tally_store_fault", {{"fault", store::toString(health.fault)}}, 1);
+    m.set("tally_store_check_seconds", {}, health.checkSeconds);
     auto counts = writer->get()->jobCounts();
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
@@ -312,7 +439,7 @@ int runServe(const ServeArgs& args) {
 
   api::Router router;
   api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson(),
-                        renderers::workloadNames());
+                        renderers::workloadNames(), [&storeHealth] { return storeHealth.toJson(); });
   service::addServiceRoutes(router, context);
   router.get("/metrics", [&metrics](const api::Request&) {
     return api::Response::raw(metrics.text(), "text/plain; version=0.0.4; charset=utf-8");
@@ -333,13 +460,16 @@ int runServe(const ServeArgs& args) {
     return 1;
   }
 
-  if (runWorker) worker.start();
+  if (startWorker) worker.start();
   evaluator.start();
   if (!args.alertWebhook.empty()) webhook.start();
   std::thread signals([&] {
     int received = 0;
     sigwait(&stopSignals, &received);
     (*server)->stop();
+    // At once, beside the requests still being answered: the capture is
+    // killed and its job queued again (docs/operating.md, "Stopping").
+    worker.stop();
   });
   std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), (*server)->port());
   std::printf("tallyd: database %s, dashboard %s\n", dbName.c_str(), webRoot.c_str());
@@ -354,6 +484,7 @@ int runServe(const ServeArgs& args) {
   worker.stop();
   webhook.stop();
   evaluator.stop();
+  storeHealth.stop();
   stopReaper();
   log::info("stopped");
   return 0;

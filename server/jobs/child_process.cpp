@@ -5,7 +5,9 @@
 #include <cstring>
 
 #include <fcntl.h>
+#include <grp.h>
 #include <poll.h>
+#include <pwd.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -47,8 +49,7 @@ Result<pid_t> spawnProcess(const std::vector<char*>& argv, const SpawnOptions& o
   if (pid == 0) {
     // Its own process group, so that a deadline kills the child's children too.
     if (options.ownProcessGroup) setpgid(0, 0);
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (getppid() != parent) _exit(127);  // the daemon died before prctl took effect
+    // Files first, as this process's user (the stdout file may be where only it may write).
     int in = open("/dev/null", O_RDONLY);
     int out = open(options.stdoutPath.empty() ? "/dev/null" : options.stdoutPath.c_str(),
                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -62,7 +63,17 @@ Result<pid_t> spawnProcess(const std::vector<char*>& argv, const SpawnOptions& o
       e = errno;
     } else if (options.passFd >= 0 && options.passFd != options.passAs && dup2(options.passFd, options.passAs) < 0) {
       e = errno;
+    } else if (options.runAs != nullptr &&
+               (setgroups(options.runAs->groups.size(), options.runAs->groups.data()) != 0 ||
+                setgid(options.runAs->gid) != 0 || setuid(options.runAs->uid) != 0)) {
+      e = errno;  // never exec as the wrong user
+    } else if (options.runAs != nullptr &&
+               (getuid() != options.runAs->uid || geteuid() != options.runAs->uid)) {
+      e = EPERM;
     } else {
+      // After the change of user, which clears the parent-death signal.
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(127);  // the daemon died before prctl took effect
       execve(argv[0], argv.data(), envp);
       e = errno;
     }
@@ -116,6 +127,40 @@ std::vector<std::string> mergedEnvironment(const std::vector<std::string>& overr
 
 }  // namespace
 
+Result<Credentials> lookupUser(const std::string& user) {
+  if (user.empty()) return makeError("no user named");
+  std::vector<char> buffer(16384);
+  passwd entry{};
+  passwd* found = nullptr;
+  int rc = getpwnam_r(user.c_str(), &entry, buffer.data(), buffer.size(), &found);
+  if (rc == 0 && found == nullptr && user.find_first_not_of("0123456789") == std::string::npos &&
+      user.size() < 10) {
+    rc = getpwuid_r(static_cast<uid_t>(std::stoul(user)), &entry, buffer.data(), buffer.size(), &found);
+  }
+  if (rc != 0) return makeError("user " + user + ": " + std::strerror(rc));
+  if (found == nullptr) return makeError("no user " + user + " on this host (useradd --system " + user + ")");
+  if (found->pw_uid == 0) return makeError("user " + user + " is root: name an unprivileged user");
+  Credentials c;
+  c.user = found->pw_name;
+  c.uid = found->pw_uid;
+  c.gid = found->pw_gid;
+  c.home = found->pw_dir ? found->pw_dir : "/";
+  int count = 64;
+  std::vector<gid_t> groups(static_cast<size_t>(count));
+  if (getgrouplist(found->pw_name, found->pw_gid, groups.data(), &count) < 0) {
+    groups.resize(static_cast<size_t>(count));
+    if (getgrouplist(found->pw_name, found->pw_gid, groups.data(), &count) < 0) {
+      return makeError("user " + user + ": cannot list its groups");
+    }
+  }
+  groups.resize(static_cast<size_t>(count));
+  for (gid_t g : groups) {
+    if (g == 0) return makeError("user " + user + " is in group root (0): name an unprivileged user");
+  }
+  c.groups = std::move(groups);
+  return c;
+}
+
 std::string ChildResult::reason() const {
   switch (end) {
     case End::Exited: {
@@ -153,7 +198,8 @@ Result<ChildResult> runChild(const ChildOptions& options) {
     envp.push_back(nullptr);
   }
   auto start = std::chrono::steady_clock::now();
-  auto spawned = spawnProcess(argv, {out, errPipe[1], true, -1, 3, envp.empty() ? environ : envp.data()});
+  auto spawned = spawnProcess(argv, {out, errPipe[1], true, -1, 3, envp.empty() ? environ : envp.data(),
+                                     options.runAs ? &*options.runAs : nullptr});
   close(errPipe[1]);
   if (!spawned) {
     close(errPipe[0]);

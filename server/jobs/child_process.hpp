@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,20 @@
 #include "common/result.hpp"
 
 namespace tally::jobs {
+
+// A user a child process runs as (tallyd serve --run-as): set between fork and
+// exec, supplementary groups first, then the group, then the user.
+struct Credentials {
+  std::string user;
+  uid_t uid = 0;
+  gid_t gid = 0;
+  std::vector<gid_t> groups;  // supplementary, from /etc/group
+  std::string home;
+};
+
+// The user named `user` (or a number), from the password database. Refuses
+// root (uid 0): running as root is what --run-as is there to avoid.
+Result<Credentials> lookupUser(const std::string& user);
 
 struct ChildOptions {
   std::vector<std::string> argv;          // argv[0] is the program path
@@ -32,6 +47,8 @@ struct ChildOptions {
   // (a later entry of the same name wins; a bare "NAME" removes it). Empty:
   // the parent's environment as it is.
   std::vector<std::string> environment;
+  // Run as this user (the caller must be root); nullopt: as this process.
+  std::optional<Credentials> runAs;
 };
 
 struct ChildResult {
@@ -64,9 +81,11 @@ struct SpawnOptions {
   int passFd = -1;              // a descriptor the child gets as passAs (e.g. Xvfb's -displayfd)
   int passAs = 3;
   char** envp = nullptr;        // nullptr: this process's environment
+  const Credentials* runAs = nullptr;  // nullptr: this process's user
 };
 // fork + exec with PR_SET_PDEATHSIG (the child dies with its parent, even on
-// kill -9); stdin is /dev/null. An exec failure is the error, with its errno's text.
+// kill -9); stdin is /dev/null. An exec failure is the error, with its errno's
+// text, as is a failure to become options.runAs (the child never execs then).
 Result<pid_t> spawnProcess(const std::vector<char*>& argv, const SpawnOptions& options);
 
 }  // namespace tally::jobs

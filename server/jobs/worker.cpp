@@ -231,11 +231,46 @@ void Worker::runJob(const store::Job& job) {
     std::atomic<int64_t>& job;
     ~Release() { job = 0; }
   } release{currentJob_};
+  // This daemon is stopping: the job goes back to the queue with the reason
+  // (never left running), for this host's next start or another host.
+  auto giveBack = [&](const std::string& why) {
+    auto r = store_.requeueJob(lease, "stopped: " + why + "; queued again");
+    if (!r) {
+      log(log::Level::kError, job.id, "cannot queue it again (" + r.error() + "); its lease will expire");
+    } else if (*r) {
+      log(log::Level::kWarning, job.id, "stopped: " + why + "; queued again");
+    }
+  };
   auto fail = [&](const std::string& reason) {
     log(log::Level::kError, job.id, "failed: " + reason);
-    auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
-    if (!r) log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
-    if (r && !*r) log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
+    // A store that refuses the write (a full disk, a lost server, a lock)
+    // gets it again every ingestRetry until it takes it: the job is failed
+    // with its reason as soon as the store accepts writes again, never left
+    // running. Stopping meanwhile leaves it running for the next start's
+    // recovery (queued again, or failed after max_attempts interruptions).
+    for (int attempt = 1;; ++attempt) {
+      auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
+      if (r) {
+        if (!*r)
+          log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
+        if (attempt > 1) log(log::Level::kInfo, job.id, "the failure is recorded");
+        break;
+      }
+      const store::Fault fault = store::lastFault();
+      if (fault == store::Fault::kNone || fault == store::Fault::kDamaged) {
+        if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+        log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
+        break;
+      }
+      if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+      if (attempt == 1 || attempt % 30 == 0) {
+        log(log::Level::kWarning, job.id,
+            "cannot record the failure yet (" + store::describe(fault) + "); retrying every " +
+                std::to_string(options_.ingestRetry.count()) + " ms: " + r.error());
+      }
+      std::unique_lock lock(mutex_);
+      if (cv_.wait_for(lock, options_.ingestRetry, [this] { return stopping_.load(); })) return;
+    }
     finished("failed");
   };
 
@@ -270,6 +305,7 @@ void Worker::runJob(const store::Job& job) {
     child.argv.push_back("--device");
     child.argv.push_back(options_.device);
   }
+  child.argv.insert(child.argv.end(), options_.captureArgs.begin(), options_.captureArgs.end());
   child.deadline = options_.deadline;
   bool cancelled = false;
   auto lastCheck = std::chrono::steady_clock::now();
@@ -295,7 +331,7 @@ void Worker::runJob(const store::Job& job) {
 
   log(log::Level::kInfo, job.id, "running");
   auto ran = runChild(child);
-  if (stopping_) return;  // left running: recovery at the next start retries it
+  if (stopping_) return giveBack("the daemon is shutting down (the capture was killed)");
   if (cancelled) {
     auto now = store_.getJob(job.id);
     bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
@@ -330,6 +366,8 @@ void Worker::runJob(const store::Job& job) {
     }
     int64_t sweep = 0;
     std::string error = ingest(lease, result, {}, /*sweep=*/true, &sweep);
+    if (error == kLost && stopping_)
+      return giveBack("the daemon shut down before the database stored the result");
     if (error == kLost) return;
     if (!error.empty()) return fail("cannot store the sweep: " + error);
     log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(sweep));
@@ -358,6 +396,8 @@ void Worker::runJob(const store::Job& job) {
 
   int64_t runs = 0;
   std::string error = ingest(lease, result, screenshots, /*sweep=*/false, &runs);
+  if (error == kLost && stopping_)
+    return giveBack("the daemon shut down before the database stored the result");
   if (error == kLost) return;
   if (!error.empty()) return fail("cannot store the result: " + error);
   log(log::Level::kInfo, job.id, "done, " + std::to_string(runs) + " runs");
@@ -374,9 +414,12 @@ std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& resu
       return "";
     }
     // Unreachable database: keep the result and try again until it answers
-    // (or this daemon stops: the lease then expires and another host reruns it).
-    auto alive = store_.integrityCheck();
-    if (alive) {
+    // (or this daemon stops: the lease then expires and another host reruns
+    // it). Any other store fault (a full disk) fails the job with its reason.
+    const store::Fault fault = store::lastFault();
+    if (fault != store::Fault::kUnreachable) {
+      if (fault != store::Fault::kNone && options_.onStoreFault)
+        options_.onStoreFault(fault, ingested.error());
       if (ingested.error().find("is no longer held by") != std::string::npos) {
         log(log::Level::kWarning, lease.jobId, "result dropped: " + ingested.error());
         return kLost;
@@ -384,8 +427,9 @@ std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& resu
       return ingested.error();
     }
     if (attempt == 1 || attempt % 30 == 0) {
+      if (options_.onStoreFault) options_.onStoreFault(fault, ingested.error());
       log(log::Level::kWarning, lease.jobId,
-          "cannot reach the database to store the result (" + alive.error() + "); retrying every " +
+          "cannot reach the database to store the result (" + ingested.error() + "); retrying every " +
               std::to_string(options_.ingestRetry.count()) + " ms");
     }
     std::unique_lock lock(mutex_);

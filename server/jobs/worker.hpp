@@ -29,6 +29,9 @@ namespace tally::jobs {
 struct WorkerOptions {
   std::string tallydPath;  // the executable run as `tallyd capture ...`
   std::string device;      // passed as --device when not empty
+  // More arguments of every `tallyd capture` (the daemon's application
+  // policy: --confine-applications, --application-root, ...).
+  std::vector<std::string> captureArgs;
   std::chrono::milliseconds deadline{std::chrono::minutes(30)};  // per job
   int maxAttempts = 3;              // a job interrupted this often fails on restart
   std::filesystem::path tempRoot;   // empty: std::filesystem::temp_directory_path()
@@ -46,8 +49,13 @@ struct WorkerOptions {
   std::chrono::milliseconds lease{std::chrono::seconds(30)};
   std::chrono::milliseconds staleAfter{std::chrono::seconds(30)};
   std::function<Result<std::unique_ptr<store::Store>>()> openHeartbeatStore;
-  // How long to wait between ingest attempts while the database is unreachable.
+  // How long to wait between ingest attempts while the database is
+  // unreachable, and between attempts to record a job's failure while the
+  // store refuses writes (a full disk).
   std::chrono::milliseconds ingestRetry{std::chrono::seconds(2)};
+  // A store fault met while storing or finishing a job (the daemon's health
+  // hears of it); may be empty.
+  std::function<void(store::Fault, const std::string&)> onStoreFault;
 };
 
 // How a job ended, for the daemon's metrics.
@@ -77,8 +85,8 @@ class Worker {
   // name) and requeues this host's interrupted jobs; call before start().
   Result<store::Recovery> recover();
   void start();
-  // Stops after the current step; a running child is killed and its job left
-  // running, so the next start's recovery retries it.
+  // Stops after the current step; a running child is killed and its job
+  // queued again with the reason (Store::requeueJob), never left running.
   void stop();
   // A job was queued: look now instead of at the next poll.
   void wake();

@@ -95,6 +95,11 @@ Bvh Bvh::build(const Scene& scene) {
   tris.reserve(scene.triangleCount());
   bvh.triangles_.reserve(scene.triangleCount());
   for (const Mesh& m : scene.meshes) {
+    // As the renderers draw it (renderers/gpu_scene.cpp): the mesh's
+    // material, clamped to the last one; double-sided when there is none.
+    const bool singleSided =
+        !scene.materials.empty() &&
+        !scene.materials[std::min<size_t>(m.material, scene.materials.size() - 1)].doubleSided;
     for (size_t i = 0; i + 2 < m.indices.size(); i += 3) {
       const glm::vec3& a = m.vertices[m.indices[i]].position;
       const glm::vec3& b = m.vertices[m.indices[i + 1]].position;
@@ -105,7 +110,7 @@ Bvh Bvh::build(const Scene& scene) {
       t.box.extend(c);
       t.centroid = (a + b + c) / 3.0f;
       tris.push_back(t);
-      bvh.triangles_.push_back({a, b - a, c - a, uint32_t(bvh.triangles_.size())});
+      bvh.triangles_.push_back({a, b - a, c - a, uint32_t(bvh.triangles_.size()), singleSided});
     }
   }
   if (tris.empty()) return bvh;
@@ -216,6 +221,7 @@ bool Bvh::traverse(const Ray& ray, Hit* hit) const {
         if (v < -kEdgeEpsilon || u + v > 1.0f + kEdgeEpsilon) continue;
         float t = glm::dot(tri.e2, q) * invDet;
         if (!(t > 0.0f) || t >= tMax) continue;
+        if (ray.cullBackFaces && tri.singleSided && det < 0.0f) continue;  // culled when drawn
         found = true;
         if constexpr (kAnyHit) return true;
         tMax = t;

@@ -17,6 +17,11 @@ struct Ray {
   glm::vec3 origin;
   glm::vec3 direction;  // need not be unit length; t is in units of it
   float tMax = 3.0e38f;
+  // As drawn: the back faces of single-sided triangles (a material without
+  // doubleSided, which the renderers cull) are not hits; the ray goes on to
+  // what lies behind them, as the rasteriser shows it. Off: both sides of
+  // every triangle are hits (what is solid, for open-space tests).
+  bool cullBackFaces = false;
 };
 
 struct Hit {
@@ -29,7 +34,8 @@ class Bvh {
  public:
   static Bvh build(const Scene& scene);
 
-  // Both sides of every triangle count as hits (Sponza's materials are double-sided).
+  // Both sides of every triangle count as hits (Sponza's materials are
+  // double-sided), except single-sided back faces on a ray that culls them.
   bool anyHit(const Ray& ray) const;
   std::optional<Hit> closestHit(const Ray& ray) const;
 
@@ -46,6 +52,7 @@ class Bvh {
   struct Triangle {
     glm::vec3 v0, e1, e2;  // v0 and the edges to v1, v2
     uint32_t id;           // index in the scene's triangle order
+    bool singleSided;      // its material is not double-sided: back faces are culled when drawn
   };
 
   template <bool kAnyHit>

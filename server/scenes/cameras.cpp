@@ -74,7 +74,10 @@ Measure cast(const Bvh& bvh, const Camera& camera, float aspect, int raysX, int 
     float y = (1.0f - 2.0f * (float(j) + 0.5f) / float(raysY)) * tanHalf;
     for (int i = 0; i < raysX; ++i) {
       float x = (2.0f * (float(i) + 0.5f) / float(raysX) - 1.0f) * tanHalf * aspect;
+      // As drawn: a single-sided triangle seen from behind is culled, so the
+      // pixel shows what lies beyond it (sky, when nothing does).
       Ray ray{camera.eye, glm::normalize(b.forward + b.right * x + b.up * y)};
+      ray.cullBackFaces = true;
       if (distances) {
         std::optional<Hit> h = bvh.closestHit(ray);
         if (!h) {
@@ -404,9 +407,13 @@ std::vector<Camera> autoCameras(const Scene& scene) {
     }
   }
 
+  // One that still sees only sky (no candidate left that sees any geometry)
+  // is dropped: a view of sky alone measures nothing of the scene. A
+  // scene's fixed cameras stay as they are.
   std::vector<Camera> out;
   for (size_t k = 0; k < chosen.size(); ++k) {
     Candidate& c = cands[chosen[k]];
+    if (!c.fixed && full(c) >= 1.0f) continue;
     Camera cam = c.camera;
     cam.skyFraction = full(c);
     cam.label = categories[k].empty() ? c.description : categories[k] + ": " + c.description;

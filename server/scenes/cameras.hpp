@@ -27,7 +27,9 @@ constexpr float kSkyAspect = 16.0f / 9.0f;
 
 // Fraction of a raysX x raysY grid of primary rays (through pixel centres of a
 // viewport of the given aspect, camera as in viewMatrix(), vertical fovDeg)
-// that hit no triangle, either side. Rays are unbounded: a renderer must put
+// that hit no triangle as the renderers draw it: either side of a
+// double-sided triangle, the front only of a single-sided one (its back face
+// is culled, and the ray goes on). Rays are unbounded: a renderer must put
 // its far plane beyond the scene bounds to match. Alpha-masked texels count as
 // geometry. The renderer later measures the exact fraction from its stencil.
 float skyFraction(const Bvh& bvh, const Camera& camera, float aspect = kSkyAspect, int raysX = kSkyRaysX,
@@ -50,8 +52,10 @@ float skyFraction(const Scene& scene, const Camera& camera, float aspect = kSkyA
 // category and the rest spread over sky-fraction bins, then position and
 // direction. When no grid eye is in open space (a closed object), views from
 // outside the bounds instead. Every camera of a scene with triangles sees
-// some of them (full-grid sky fraction below 1): one that would not is
-// replaced. Empty for a scene without triangles.
+// some of them as drawn (full-grid sky fraction below 1; a single-sided
+// triangle only from its front): one that would not is replaced by the
+// unchosen candidate that sees the most, or dropped when none sees any.
+// Empty for a scene without triangles.
 std::vector<Camera> autoCameras(const Scene& scene);
 
 // An explicit list: [{"eye":[x,y,z], "target":[x,y,z], "fov_deg":60,

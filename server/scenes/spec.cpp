@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scenes/gltf.hpp"
@@ -73,7 +74,7 @@ Result<double> numberField(const nlohmann::json& spec, const char* key, double l
   return v.get<double>();
 }
 
-Result<Scene> planes(const nlohmann::json& spec) {
+Result<PlanesParams> planesParams(const nlohmann::json& spec) {
   if (auto e = checkKeys(spec, {"name", "layers", "order", "coverage"}, "scene \"planes\"")) return *e;
   PlanesParams p;
   Result<int64_t> layers = integerField(spec, "layers", 1, kMaxPlaneLayers, p.layers);
@@ -91,19 +92,20 @@ Result<Scene> planes(const nlohmann::json& spec) {
   Result<double> coverage = numberField(spec, "coverage", 0.0, true, 1.0, p.coverage);
   if (!coverage) return makeError(coverage.error());
   p.coverage = *coverage;
-  return makePlanes(p);
+  return p;
 }
 
-Result<Scene> sky(const nlohmann::json& spec) {
+Result<SkyParams> skyParams(const nlohmann::json& spec) {
   if (auto e = checkKeys(spec, {"name", "coverage"}, "scene \"sky\"")) return *e;
   SkyParams p;
   Result<double> coverage = numberField(spec, "coverage", 0.0, false, 1.0, p.coverage);
   if (!coverage) return makeError(coverage.error());
   p.coverage = *coverage;
-  return makeSky(p);
+  return p;
 }
 
-Result<Scene> gltf(const nlohmann::json& spec, bool geometryOnly) {
+// A glTF scene's path and options, checked without opening the file.
+Result<std::pair<std::string, GltfOptions>> gltfParams(const nlohmann::json& spec) {
   if (auto e = checkKeys(spec, {"gltf", "max_texture_size"}, "a glTF scene")) return *e;
   const nlohmann::json& path = spec["gltf"];
   if (!path.is_string() || path.get<std::string>().empty())
@@ -112,40 +114,104 @@ Result<Scene> gltf(const nlohmann::json& spec, bool geometryOnly) {
   Result<int64_t> maxSize = integerField(spec, "max_texture_size", 1, kMaxTextureSizeLimit, 0);
   if (!maxSize) return makeError(maxSize.error());
   options.maxTextureSize = uint32_t(*maxSize);
-  options.geometryOnly = geometryOnly;
-  Result<Scene> scene = loadGltf(path.get<std::string>(), options);
-  if (!scene) return makeError("gltf: " + scene.error());
-  return scene;
+  return std::pair{path.get<std::string>(), options};
 }
 
-Result<Scene> makeScene(const nlohmann::json& spec, bool geometryOnly) {
+// What a spec names, checked: a built-in scene and its parameters, or a glTF
+// file. Nothing is built or read.
+struct Checked {
+  enum class Kind { Atrium, Planes, Sky, Gltf } kind = Kind::Atrium;
+  PlanesParams planes;
+  SkyParams sky;
+  std::string path;
+  GltfOptions gltf;
+};
+
+Result<Checked> check(const nlohmann::json& spec) {
+  Checked c;
   if (spec.is_string()) {
     const std::string name = spec.get<std::string>();
-    if (name == "atrium") return makeAtrium();
-    if (name == "planes") return makePlanes({});
-    if (name == "sky") return makeSky({});
-    return makeError("unknown scene " + spec.dump() + ", expected " + kNames);
+    if (name == "planes") {
+      c.kind = Checked::Kind::Planes;
+    } else if (name == "sky") {
+      c.kind = Checked::Kind::Sky;
+    } else if (name != "atrium") {
+      return makeError("unknown scene " + spec.dump() + ", expected " + kNames);
+    }
+    return c;
   }
   if (!spec.is_object()) return makeError("must be a scene name or an object, got " + spec.dump());
   if (spec.contains("gltf")) {
     if (spec.contains("name"))
       return makeError("name: cannot be combined with gltf (a glTF scene is named after its file)");
-    return gltf(spec, geometryOnly);
+    auto params = gltfParams(spec);
+    if (!params) return makeError(params.error());
+    c.kind = Checked::Kind::Gltf;
+    c.path = params->first;
+    c.gltf = params->second;
+    return c;
   }
   if (!spec.contains("name")) return makeError("name: missing, expected " + std::string(kNames));
   const nlohmann::json& name = spec["name"];
   if (name == "atrium") {
     if (auto e = checkKeys(spec, {"name"}, "scene \"atrium\"")) return *e;
-    return makeAtrium();
+    return c;
   }
-  if (name == "planes") return planes(spec);
-  if (name == "sky") return sky(spec);
+  if (name == "planes") {
+    auto p = planesParams(spec);
+    if (!p) return makeError(p.error());
+    c.kind = Checked::Kind::Planes;
+    c.planes = *p;
+    return c;
+  }
+  if (name == "sky") {
+    auto p = skyParams(spec);
+    if (!p) return makeError(p.error());
+    c.kind = Checked::Kind::Sky;
+    c.sky = *p;
+    return c;
+  }
   return makeError("name: unknown scene " + name.dump() + ", expected " + kNames);
+}
+
+Result<Scene> makeScene(const nlohmann::json& spec, bool geometryOnly) {
+  auto c = check(spec);
+  if (!c) return makeError(c.error());
+  switch (c->kind) {
+    case Checked::Kind::Atrium: return makeAtrium();
+    case Checked::Kind::Planes: return makePlanes(c->planes);
+    case Checked::Kind::Sky: return makeSky(c->sky);
+    case Checked::Kind::Gltf: {
+      GltfOptions options = c->gltf;
+      options.geometryOnly = geometryOnly;
+      Result<Scene> scene = loadGltf(c->path, options);
+      if (!scene) return makeError("gltf: " + scene.error());
+      return scene;
+    }
+  }
+  return makeError("unknown scene kind");
 }
 
 }  // namespace
 
 Result<Scene> makeScene(const nlohmann::json& spec) { return makeScene(spec, false); }
+
+Result<nlohmann::json> checkSceneSpec(const nlohmann::json& spec) {
+  auto c = check(spec);
+  if (!c) return makeError(c.error());
+  switch (c->kind) {
+    case Checked::Kind::Atrium: return nlohmann::json{{"name", "atrium"}};
+    case Checked::Kind::Planes:
+      return nlohmann::json{{"name", "planes"},
+                            {"layers", c->planes.layers},
+                            {"order", toString(c->planes.order)},
+                            {"coverage", c->planes.coverage}};
+    case Checked::Kind::Sky: return nlohmann::json{{"name", "sky"}, {"coverage", c->sky.coverage}};
+    case Checked::Kind::Gltf:
+      return nlohmann::json{{"gltf", c->path}, {"max_texture_size", c->gltf.maxTextureSize}};
+  }
+  return makeError("unknown scene kind");
+}
 Result<Scene> makeSceneGeometry(const nlohmann::json& spec) { return makeScene(spec, true); }
 
 }  // namespace tally::scenes

@@ -21,6 +21,15 @@ namespace tally::scenes {
 // ("scenes[2]."). A bare-string spec's error names no field.
 Result<Scene> makeScene(const nlohmann::json& spec);
 
+// Checks a spec as makeScene does, with the same errors, without building
+// anything: no geometry is made and no file is opened (a glTF path is only
+// checked to be a non-empty string; makeScene loads it and reports what is
+// wrong with it). Cheap enough for a request thread. Returns the spec in a
+// canonical form, every parameter given ({"name": "planes", "layers": 8,
+// "order": "back-to-front", "coverage": 1.0}), so that two specs of one
+// scene compare equal.
+Result<nlohmann::json> checkSceneSpec(const nlohmann::json& spec);
+
 // The same scene's triangles only: a glTF file's images are not decoded
 // (GltfOptions::geometryOnly), so its textures have no texels. For CPU work
 // on the geometry (heatmap placement, the top-down plan).

@@ -35,11 +35,28 @@ struct StoreError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A fault of the store itself (store/fault.hpp): answered 503 with
+// Retry-After and the fault's reason; the detail is logged.
+struct StoreUnavailable : std::runtime_error {
+  StoreUnavailable(store::Fault f, const std::string& detail) : std::runtime_error(detail), fault(f) {}
+  store::Fault fault;
+};
+
+// Seconds a client should wait before it tries again, by fault.
+int retryAfterSeconds(store::Fault fault);
+
 template <class T>
 T check(Result<T> r) {
-  if (!r) throw StoreError(r.error());
+  if (!r) {
+    if (store::Fault f = store::lastFault(); f != store::Fault::kNone) throw StoreUnavailable(f, r.error());
+    throw StoreError(r.error());
+  }
   return std::move(r).value();
 }
+
+// Before a write: refused while the store is damaged (writing into a
+// damaged file may spread the damage).
+void requireWritable(const ServiceContext& ctx);
 
 template <class T>
 nlohmann::json opt(const std::optional<T>& v) {

@@ -10,15 +10,16 @@
 #include <system_error>
 
 #include "capture/spec.hpp"
-#include "sweeps/sweep.hpp"
 #include "service/accuracy.hpp"
 #include "service/alerts.hpp"
 #include "service/crossover.hpp"
 #include "service/heatmap.hpp"
 #include "service/repeats.hpp"
-#include "service/run_significance.hpp"
-#include "service/trace.hpp"
 #include "service/routes.hpp"
+#include "service/run_significance.hpp"
+#include "service/store_health.hpp"
+#include "service/trace.hpp"
+#include "sweeps/sweep.hpp"
 
 namespace tally::service {
 namespace fs = std::filesystem;
@@ -431,7 +432,14 @@ store::Store& reader(const ServiceContext& ctx) {
   if (!store || path != ctx.dbPath) {
     store.reset();
     auto opened = store::Store::open(ctx.dbPath, {.readOnly = true});
-    if (!opened) throw StoreError("cannot open a reader: " + opened.error());
+    if (!opened) {
+      // A store that cannot be opened is a fault of the store, named or not.
+      store::Fault fault = store::lastFault();
+      if (fault == store::Fault::kNone) {
+        fault = store::isPostgresUrl(ctx.dbPath) ? store::Fault::kUnreachable : store::Fault::kDamaged;
+      }
+      throw StoreUnavailable(fault, "cannot open a reader: " + opened.error());
+    }
     store = std::move(opened).value();
     path = ctx.dbPath;
   }
@@ -485,51 +493,47 @@ std::string resolveGltf(const ServiceOptions& options, const std::string& given,
 }
 
 // An application or a replay under the Vulkan layer: a program runs on this
-// host, so only where the daemon allows it. Paths are the host's: a program
-// by name (looked up on the daemon's $PATH) or absolute, a replay file absolute.
-json validateApplicationSpec(const ServiceContext& ctx, const json& body) {
+// host, so only where the daemon allows it, for the application token, and
+// only as the policy lets it (capture/application_policy.hpp). Paths are the
+// host's: a program by name (looked up on the daemon's $PATH) or absolute, a
+// replay file absolute, each resolving inside an --application-root.
+json validateApplicationSpec(const ServiceContext& ctx, const json& body, api::Principal principal) {
   const std::string key = body.contains("application") ? "application" : "replay";
   if (!ctx.options.allowApplications) {
     invalid(key, "this daemon does not run applications (tallyd serve --allow-applications enables them)");
   }
-  if (key == "application" && body["application"].is_object()) {
-    const json& app = body["application"];
-    if (app.contains("command") && app["command"].is_array() && !app["command"].empty() &&
-        app["command"][0].is_string()) {
-      const std::string program = app["command"][0].get<std::string>();
-      if (program.find('/') != std::string::npos && program[0] != '/') {
-        invalid("application.command[0]", "must be a program name (looked up on the daemon's $PATH) or an absolute path");
-      }
-    }
+  if (principal != api::Principal::kApplication) {
+    throw RequestError(
+        403, api::code::kForbidden,
+        "running an application needs the application token (the token file's application= line); "
+        "this token may capture but not run programs",
+        "Authorization");
   }
-  if (key == "replay" && body["replay"].is_string() && body["replay"].get<std::string>().rfind('/', 0) != 0) {
-    invalid("replay", "must be an absolute path on the daemon's host");
-  }
-  auto parsed = capture::parseApplicationSpec(body, "/");
+  auto parsed = capture::parseConfinedApplicationSpec(body, ctx.options.applicationPolicy);
   if (!parsed) throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
   return body;
 }
 
-json validateContent(const ServiceContext& ctx, const json& body);
+json validateContent(const ServiceContext& ctx, const json& body, api::Principal principal);
 
 // The spec's "device" picks the hosts that may run it (docs/fleet.md); the
 // rest is the capture, sweep or application spec, checked by its parser.
-json validateSpec(const ServiceContext& ctx, const json& body) {
+json validateSpec(const ServiceContext& ctx, const json& body, api::Principal principal) {
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
-  if (!body.contains("device")) return validateContent(ctx, body);
+  if (!body.contains("device")) return validateContent(ctx, body, principal);
   auto requirement = store::parseDeviceRequirement(body);
   if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), fieldOf(requirement.error()));
   json content = body;
   content.erase("device");
-  json stored = validateContent(ctx, content);
+  json stored = validateContent(ctx, content, principal);
   stored["device"] = body["device"];
   return stored;
 }
 
-json validateContent(const ServiceContext& ctx, const json& body) {
+json validateContent(const ServiceContext& ctx, const json& body, api::Principal principal) {
   // {"application": ...} or {"replay": ...}: its parser names any field of a
   // capture matrix or a sweep beside it.
-  if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body);
+  if (capture::isApplicationSpec(body)) return validateApplicationSpec(ctx, body, principal);
   // A stability sweep ({"sweep": NAME, ...}) is checked by its own parser; its
   // limits on points and resolution are the sweep's (sweeps/sweep.hpp).
   if (sweeps::isSweepSpec(body)) {
@@ -560,13 +564,30 @@ json validateContent(const ServiceContext& ctx, const json& body) {
                         std::to_string(spec.sampleCount(cameras)) + " samples; at most " +
                         std::to_string(options.maxMatrix) + " on this server");
   }
+  // What it renders: samples x frames x pixels (capture::CaptureSpec::cost).
+  if (uint64_t cost = spec.cost(); cost > options.maxCost) {
+    invalid("spec", "the capture's cost (samples x frames x pixels) is " + std::to_string(cost) +
+                        " pixel-frames; at most " + std::to_string(options.maxCost) +
+                        " on this server (max_cost; fewer frames, resolutions or cameras)");
+  }
+  // glTF paths are resolved (a stat per scene folder; the file is loaded by
+  // the capture), and two spellings of one file are one scene.
   json stored = body;
   if (stored.contains("scenes")) {
+    std::vector<std::pair<std::string, size_t>> files;  // resolved path, index
     for (size_t i = 0; i < stored["scenes"].size(); ++i) {
       json& s = stored["scenes"][i];
       if (s.is_object() && s.contains("gltf")) {
         std::string field = "scenes[" + std::to_string(i) + "].gltf";
         s["gltf"] = resolveGltf(options, s["gltf"].get<std::string>(), field);
+        for (const auto& [path, k] : files) {
+          if (path == s["gltf"] &&
+              stored["scenes"][k].value("max_texture_size", json()) == s.value("max_texture_size", json())) {
+            invalid("scenes[" + std::to_string(i) + "]",
+                    "a duplicate of scenes[" + std::to_string(k) + "] (each entry must differ)");
+          }
+        }
+        files.emplace_back(s["gltf"].get<std::string>(), i);
       }
     }
   }
@@ -575,28 +596,79 @@ json validateContent(const ServiceContext& ctx, const json& body) {
 
 // ---- handlers ------------------------------------------------------------------------
 
+int retryAfterSeconds(store::Fault fault) {
+  switch (fault) {
+    case store::Fault::kBusy: return 1;
+    case store::Fault::kFull:
+    case store::Fault::kIoError:
+    case store::Fault::kReadOnly:
+    case store::Fault::kUnreachable: return 5;
+    default: return 60;  // damage: not before it is repaired
+  }
+}
+
+void requireWritable(const ServiceContext& ctx) {
+  if (!ctx.health) return;
+  StoreHealth::State state = ctx.health->state();
+  if (state.fault == store::Fault::kDamaged) throw StoreUnavailable(state.fault, state.reason);
+}
+
 Response wrap(ServiceContext& ctx, const std::function<Response()>& handler) {
-  try {
-    return handler();
-  } catch (const RequestError& e) {
-    return api::errorResponse(e.status, e.code, e.what(), e.field);
-  } catch (const std::exception& e) {
-    std::string line = std::string("service: ") + e.what();
+  auto log = [&](const std::string& line) {
     if (ctx.log) {
       ctx.log(line);
     } else {
       std::fprintf(stderr, "%s\n", line.c_str());
     }
+  };
+  try {
+    return handler();
+  } catch (const RequestError& e) {
+    return api::errorResponse(e.status, e.code, e.what(), e.field);
+  } catch (const StoreUnavailable& e) {
+    // The store's own fault, named: 503, never a bare 500.
+    std::string reason = store::describe(e.fault);
+    if (ctx.health) {
+      ctx.health->noteFault(e.fault, e.what());
+      StoreHealth::State state = ctx.health->state();
+      if (state.fault == e.fault && !state.reason.empty()) reason = state.reason;
+    } else {
+      log(std::string("service: store ") + store::toString(e.fault) + ": " + e.what());
+    }
+    Response r = api::errorResponse(503, api::code::kStoreUnavailable, reason, "store");
+    r.headers.emplace_back("Retry-After", std::to_string(retryAfterSeconds(e.fault)));
+    return r;
+  } catch (const std::exception& e) {
+    log(std::string("service: ") + e.what());
     return api::errorResponse(500, api::code::kInternal, "internal error");
   }
 }
 
 Response postCapture(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
-  json spec = validateSpec(ctx, req.body);
+  json spec = validateSpec(ctx, req.body, req.principal);
   std::optional<std::string> key;
   if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
-  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts));
+  store::QueueLimits limits;
+  limits.client = req.client;
+  limits.maxQueued = ctx.options.maxQueued;
+  limits.maxQueuedPerClient = ctx.options.maxQueuedPerClient;
+  requireWritable(ctx);
+  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts, limits));
+  if (ctx.health) ctx.health->noteWriteOk();
+  if (!created.refused.empty()) {
+    if (ctx.onQueueLimited) ctx.onQueueLimited(created.refused);
+    const bool mine = created.refused == "client";
+    Response r = api::errorResponse(
+        429, api::code::kTooManyRequests,
+        (mine ? "this client has " : "the queue holds ") + std::to_string(created.queued) +
+            " queued captures, the limit " + (mine ? "per client" : "of this server") + " (" +
+            (mine ? "max_queued_per_client " + std::to_string(ctx.options.maxQueuedPerClient)
+                  : "max_queued " + std::to_string(ctx.options.maxQueued)) +
+            "); try again once some have run");
+    r.headers.emplace_back("Retry-After", std::to_string(ctx.options.retryAfterSeconds));
+    return r;
+  }
   if (created.conflict) {
     throw RequestError(409, api::code::kConflict,
                        "Idempotency-Key was used before with a different spec (capture " +
@@ -651,7 +723,9 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
   auto before = check(ctx.writer->getJob(id));
   if (!before) return api::notFound("no capture " + std::to_string(id));
   auto finished = [](store::JobStatus s) { return s != store::JobStatus::Queued && s != store::JobStatus::Running; };
+  if (!finished(before->status)) requireWritable(ctx);
   auto job = finished(before->status) ? before : check(ctx.writer->cancelJob(id));
+  if (!finished(before->status) && ctx.health) ctx.health->noteWriteOk();
   if (!job) return api::notFound("no capture " + std::to_string(id));
   // Finished before (a second cancel included) or meanwhile: nothing to cancel.
   if (finished(before->status) || job->status != store::JobStatus::Cancelled) {
@@ -882,7 +956,7 @@ Response heatmap(ServiceContext& ctx, const Request& req) {
   if (!check(store.getJob(q.capture))) return api::notFound("no capture " + std::to_string(q.capture));
   HeatmapAnswer answer = heatmapMap(store, q);
   if (answer.failure) {
-    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    if (answer.failure->status >= 500) check(Result<bool>(makeError(answer.failure->message)));
     throw RequestError(answer.failure->status, answer.failure->status == 404 ? api::code::kNotFound : api::code::kInvalidField,
                        answer.failure->field + ": " + answer.failure->message, answer.failure->field);
   }
@@ -898,7 +972,7 @@ Response heatmapTopDownPng(ServiceContext& ctx, const Request& req) {
   if (!check(store.getJob(id))) return api::notFound("no capture " + std::to_string(id));
   HeatmapAnswer answer = heatmapTopDown(store, id, scene, ctx.options.sceneFolders);
   if (answer.failure) {
-    if (answer.failure->status >= 500) throw StoreError(answer.failure->message);
+    if (answer.failure->status >= 500) check(Result<bool>(makeError(answer.failure->message)));
     if (answer.failure->status == 404) return api::notFound(answer.failure->message);
     throw RequestError(answer.failure->status, api::code::kInvalidField,
                        answer.failure->field + ": " + answer.failure->message, answer.failure->field);
@@ -997,9 +1071,14 @@ Response listScenes(ServiceContext& ctx, const Request& req) {
           continue;
         }
         auto ext = it->path().extension().string();
-        if ((ext == ".gltf" || ext == ".glb") && it->is_regular_file(ec)) {
-          files.push_back(fs::relative(it->path(), root, ec).string());
-        }
+        if (ext != ".gltf" && ext != ".glb") continue;
+        // Only files inside the folder, listed by their own name: a link is
+        // listed when its target is a file inside too (resolveGltf accepts
+        // it), and never by where it points.
+        std::error_code fileError;
+        fs::path real = fs::canonical(it->path(), fileError);
+        if (fileError || !under(real, root) || !fs::is_regular_file(real, fileError)) continue;
+        files.push_back(it->path().lexically_relative(root).string());
       }
     }
     folders.push_back({{"folder", folder.string()}, {"files", files}});

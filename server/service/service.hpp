@@ -11,9 +11,12 @@
 #include <vector>
 
 #include "api/router.hpp"
+#include "capture/application_policy.hpp"
 #include "store/store.hpp"
 
 namespace tally::service {
+
+class StoreHealth;
 
 struct ServiceOptions {
   uint64_t maxPixels = 3840ull * 2160ull;  // per resolution: 4K; larger belongs to `tallyd capture`
@@ -21,12 +24,25 @@ struct ServiceOptions {
   uint64_t maxMatrix = 1000;               // samples per job ("auto" cameras count 10 per scene)
   std::vector<std::filesystem::path> sceneFolders;  // glTF files are allowed only under these
   // {"application": ...} and {"replay": ...} specs run a program on the
-  // daemon's host (tallyd serve --allow-applications); refused when false.
+  // daemon's host (tallyd serve --allow-applications); refused when false,
+  // and from any principal but the application token (403) when true.
   bool allowApplications = false;
+  // Where their programs and replay files may lie, what env they may set.
+  capture::ApplicationPolicy applicationPolicy;
   // The fleet (docs/fleet.md): a host without a heartbeat this long is not
   // alive (GET /api/hosts, a queued job's "waiting"); claims of a new job.
   int64_t staleAfterMs = 30000;
   int maxAttempts = 3;
+  // What one capture may render, in pixel-frames (capture::CaptureSpec::cost:
+  // samples x frames x pixels; tallyd serve --max-cost). The largest spec in
+  // the tree (tests/gpu/crossover-atrium.json) costs 1.8e10.
+  uint64_t maxCost = 100'000'000'000ull;
+  // Queued jobs (tallyd serve --max-queued, --max-queued-per-client): beyond
+  // either, POST /api/captures answers 429 with Retry-After. 0: no limit.
+  // With PostgreSQL the count is the store's, shared by every API daemon.
+  int64_t maxQueued = 1000;
+  int64_t maxQueuedPerClient = 100;
+  int retryAfterSeconds = 30;  // the Retry-After of those 429s
 };
 
 struct ServiceContext {
@@ -36,7 +52,12 @@ struct ServiceContext {
   ServiceOptions options;
   std::function<void()> onJobQueued;  // wakes the worker; may be empty
   std::function<void(int64_t)> onQueuedJobCancelled;  // a job cancelled before it ran (metrics); may be empty
+  // A capture refused by a queue limit, "queue" or "client" (metrics); may be empty.
+  std::function<void(const std::string&)> onQueueLimited;
   std::function<void(std::string_view)> log;  // internal errors; default stderr
+  // Store faults met by requests are reported to it, and write routes are
+  // refused while it says the store is damaged; may be null.
+  StoreHealth* health = nullptr;
 };
 
 // POST/GET /api/captures, GET/DELETE /api/captures/{id}, /api/runs...,

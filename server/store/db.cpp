@@ -1,6 +1,7 @@
 // The engine-neutral half of db.hpp: Statement's JSON and optional getters,
 // Transaction, the dialect fragments and the parameter rewriting for PostgreSQL.
 #include "store/db.hpp"
+#include "store/fault.hpp"
 
 #include <sqlite3.h>
 
@@ -18,6 +19,75 @@ bool DbError::isConnectionLost() const {
   return sqlState_.compare(0, 2, "08") == 0 || sqlState_ == "57P01" || sqlState_ == "57P02" ||
          sqlState_ == "57P03";
 }
+
+const char* toString(Fault fault) {
+  switch (fault) {
+    case Fault::kNone: return "none";
+    case Fault::kBusy: return "busy";
+    case Fault::kFull: return "full";
+    case Fault::kIoError: return "io_error";
+    case Fault::kReadOnly: return "read_only";
+    case Fault::kDamaged: return "damaged";
+    case Fault::kUnreachable: return "unreachable";
+  }
+  return "none";
+}
+
+std::string describe(Fault fault) {
+  switch (fault) {
+    case Fault::kNone: return "no fault";
+    case Fault::kBusy: return "the store is busy (a lock was held past the busy timeout)";
+    case Fault::kFull: return "the disk holding the store is full";
+    case Fault::kIoError: return "the store's file cannot be read or written (I/O error)";
+    case Fault::kReadOnly: return "the store cannot be written (read-only file or folder)";
+    case Fault::kDamaged: return "the store's file is damaged";
+    case Fault::kUnreachable: return "the store's server cannot be reached";
+  }
+  return "no fault";
+}
+
+bool isWriteFault(Fault fault) {
+  return fault == Fault::kFull || fault == Fault::kIoError || fault == Fault::kReadOnly;
+}
+
+Fault faultOf(const DbError& error) {
+  if (!error.sqlState().empty() || error.code() == 0) {
+    const std::string& s = error.sqlState();
+    if (error.isConnectionLost()) return Fault::kUnreachable;
+    if (s == "53100") return Fault::kFull;  // disk_full
+    if (s.compare(0, 2, "53") == 0 || s == "55P03" || s == "40001" || s == "40P01" || s == "57014") {
+      return Fault::kBusy;  // insufficient resources, lock timeout, serialisation, deadlock, cancelled
+    }
+    if (s == "58030") return Fault::kIoError;                  // io_error
+    if (s == "XX001" || s == "XX002") return Fault::kDamaged;  // data or index corrupted
+    if (s == "25006") return Fault::kReadOnly;                 // read_only_sql_transaction
+    return Fault::kNone;
+  }
+  switch (error.code() & 0xff) {
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED: return Fault::kBusy;
+    case SQLITE_FULL: return Fault::kFull;
+    case SQLITE_IOERR:
+    case SQLITE_CANTOPEN:
+    case SQLITE_NOLFS: return Fault::kIoError;
+    case SQLITE_READONLY: return Fault::kReadOnly;
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB: return Fault::kDamaged;
+    default: return Fault::kNone;
+  }
+}
+
+Fault faultOf(const std::exception& error) {
+  const auto* db = dynamic_cast<const DbError*>(&error);
+  return db ? faultOf(*db) : Fault::kNone;
+}
+
+namespace {
+thread_local Fault tLastFault = Fault::kNone;
+}  // namespace
+
+Fault lastFault() { return tLastFault; }
+void setLastFault(Fault fault) { tLastFault = fault; }
 
 bool isPostgresUrl(std::string_view location) {
   return location.starts_with("postgresql://") || location.starts_with("postgres://");

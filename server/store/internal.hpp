@@ -7,6 +7,7 @@
 
 #include "common/result.hpp"
 #include "store/db.hpp"
+#include "store/fault.hpp"
 #include "store/store.hpp"
 
 namespace tally::store::detail {
@@ -25,12 +26,15 @@ class WriteLock {
   std::unique_lock<std::mutex> lock_;
 };
 
-// Runs body, turning exceptions (DbError, JSON errors, bad input) into an Error.
+// Runs body, turning exceptions (DbError, JSON errors, bad input) into an
+// Error, and recording the store fault behind it, if any (lastFault()).
 template <class T, class F>
 Result<T> guarded(const char* what, F&& body) {
+  setLastFault(Fault::kNone);
   try {
     return body();
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return makeError(std::string(what) + ": " + e.what());
   }
 }

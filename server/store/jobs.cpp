@@ -56,6 +56,11 @@ std::optional<Job> returnedJob(Statement& statement) {
 
 Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
                                     int maxAttempts) {
+  return createJob(spec, std::move(idempotencyKey), maxAttempts, QueueLimits{});
+}
+
+Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+                                    int maxAttempts, const QueueLimits& limits) {
   if (idempotencyKey && (idempotencyKey->empty() || idempotencyKey->size() > 255)) {
     return makeError("idempotency_key: must be 1 to 255 characters");
   }
@@ -76,11 +81,43 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
         return out;  // nothing written; the transaction rolls back
       }
     }
-    Statement insert(db_,
-                     std::string("INSERT INTO jobs (spec, idempotency_key, max_attempts, device_requirement) "
-                                 "VALUES (?1, ?2, ?3, ?4) RETURNING ") +
-                         kJobColumns);
+    if (limits.maxQueued > 0 || (limits.maxQueuedPerClient > 0 && !limits.client.empty())) {
+      // Counted and inserted under one lock: SQLite's write transaction is
+      // one already; PostgreSQL's API daemons take this advisory lock.
+      if (db_->engine() == Engine::Postgres) {
+        Statement serialise(db_, "SELECT pg_advisory_xact_lock(7310)");  // 7310: the queue's limits
+        serialise.step();
+        serialise.run();
+      }
+      if (limits.maxQueued > 0) {
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE status = 'queued'");
+        count.step();
+        out.queued = count.getInt(0);
+        count.run();
+        if (out.queued >= limits.maxQueued) {
+          out.refused = "queue";
+          return out;
+        }
+      }
+      if (limits.maxQueuedPerClient > 0 && !limits.client.empty()) {
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE client = ?1 AND status = 'queued'");
+        count.bind(1, limits.client);
+        count.step();
+        out.queued = count.getInt(0);
+        count.run();
+        if (out.queued >= limits.maxQueuedPerClient) {
+          out.refused = "client";
+          return out;
+        }
+      }
+      out.queued = 0;
+    }
+    Statement insert(
+        db_, std::string("INSERT INTO jobs (spec, idempotency_key, max_attempts, device_requirement, client) "
+                         "VALUES (?1, ?2, ?3, ?4, ?5) RETURNING ") +
+                 kJobColumns);
     insert.bind(1, spec).bind(2, idempotencyKey).bind(3, maxAttempts);
+    insert.bind(5, limits.client.empty() ? std::optional<std::string>() : std::optional(limits.client));
     if (*requirement) {
       insert.bind(4, (*requirement)->toJson());
     } else {
@@ -342,6 +379,28 @@ void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std:
 }
 
 }  // namespace detail
+
+Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
+  std::lock_guard lock(mutex_);
+  detail::WriteLock writer(*db_);
+  return guarded<bool>("requeueJob", [&]() -> Result<bool> {
+    Transaction tx(db_, Transaction::Kind::Write);
+    if (!holds(db_, lease)) return false;
+    auto job = findJob(db_, lease.jobId);
+    json errors = job && job->attemptErrors.is_array() ? job->attemptErrors : json::array();
+    errors.push_back("attempt " + std::to_string(lease.attempt) + " on " + lease.host + ": " + reason);
+    Statement requeue(
+        db_,
+        "UPDATE jobs SET status = 'queued', attempts = attempts - 1, worker_pid = NULL, "
+        "lease_expires_ms = NULL, progress_done = 0, progress_current = NULL, attempt_errors = ?2 "
+        "WHERE id = ?1");
+    requeue.bind(1, lease.jobId).bind(2, errors).run();
+    Statement host(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
+    host.bind(1, lease.host).bind(2, lease.jobId).run();
+    tx.commit();
+    return true;
+  });
+}
 
 Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
   std::lock_guard lock(mutex_);

@@ -1,5 +1,7 @@
 #include "store/migrations.hpp"
 
+#include "store/fault.hpp"
+
 #include <string>
 
 namespace tally::store {
@@ -54,6 +56,7 @@ Result<int> schemaVersion(Connection& db) {
   try {
     return readVersion(db);
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return makeError(e.what());
   }
 }
@@ -88,6 +91,7 @@ Result<int> migrate(Connection& db, std::span<const Migration> migrations) {
     }
     return found;
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return makeError(std::string("migrating the database: ") + e.what());
   }
 }

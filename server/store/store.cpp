@@ -66,6 +66,7 @@ Result<std::unique_ptr<Connection>> openSqliteStore(const std::string& path, con
   try {
     db = openSqlite(path, !options.readOnly, options.busyTimeoutMs);
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return makeError(e.what());
   }
   auto fail = [&](const std::string& message) -> Result<std::unique_ptr<Connection>> {
@@ -91,6 +92,7 @@ Result<std::unique_ptr<Connection>> openSqliteStore(const std::string& path, con
     db->exec("PRAGMA foreign_keys = ON");
     if (options.readOnly) db->exec("PRAGMA query_only = ON");
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return fail(e.what());
   }
   return db;
@@ -104,6 +106,7 @@ Result<std::unique_ptr<Connection>> openPostgresStore(const std::string& url, co
     db->exec("SET lock_timeout = " + std::to_string(options.busyTimeoutMs));
     if (options.readOnly) db->exec("SET default_transaction_read_only = on");
   } catch (const std::exception& e) {
+    setLastFault(faultOf(e));
     return makeError(e.what());
   }
   return db;
@@ -112,6 +115,7 @@ Result<std::unique_ptr<Connection>> openPostgresStore(const std::string& url, co
 }  // namespace
 
 Result<std::unique_ptr<Store>> Store::open(const std::string& location, Options options) {
+  setLastFault(Fault::kNone);
   const bool postgres = isPostgresUrl(location);
   auto db = postgres ? openPostgresStore(location, options) : openSqliteStore(location, options);
   if (!db) return makeError(db.error());
@@ -140,6 +144,40 @@ Result<std::string> Store::integrityCheck() {
     keys.step();
     if (int64_t n = keys.getInt(0)) return std::to_string(n) + " foreign key violations";
     return first;
+  });
+}
+
+Result<std::string> Store::quickCheck() {
+  std::lock_guard lock(mutex_);
+  return detail::guarded<std::string>("health check", [&]() -> Result<std::string> {
+    if (db_->engine() == Engine::Postgres) {
+      Statement ping(db_, "SELECT 1");
+      return ping.step() ? std::string("ok") : std::string("no answer");
+    }
+    // Its first lines name the damage; "ok" alone when there is none.
+    Statement check(db_, "PRAGMA quick_check(3)");
+    std::string lines;
+    while (check.step()) lines += (lines.empty() ? "" : "\n") + check.getText(0);
+    // One line ("*** in database main ***; Page 118: ..."), for logs and messages.
+    for (size_t at = lines.find('\n'); at != std::string::npos; at = lines.find('\n', at)) {
+      lines.replace(at, 1, "; ");
+    }
+    return lines.empty() ? std::string("no answer") : lines;
+  });
+}
+
+Result<bool> Store::probeWrite() {
+  std::lock_guard lock(mutex_);
+  return detail::guarded<bool>("write probe", [&]() -> Result<bool> {
+    if (db_->engine() == Engine::Postgres) {
+      Statement ping(db_, "SELECT 1");
+      return ping.step();
+    }
+    // Rewrites the header's user_version with the value it holds: one page
+    // written and committed, nothing changed.
+    detail::WriteLock writing(*db_);
+    db_->exec("PRAGMA user_version = " + std::to_string(schemaVersion_));
+    return true;
   });
 }
 

@@ -35,7 +35,7 @@
 
 #include "common/result.hpp"
 #include "store/db.hpp"
-
+#include "store/fault.hpp"
 
 namespace tally::store {
 
@@ -133,6 +133,19 @@ struct CreatedJob {
   Job job;
   bool created = false;   // false: the idempotency key was seen before; job is that job
   bool conflict = false;  // the key was seen before with a different spec (job is the old one)
+  // A QueueLimits limit was reached and nothing was stored: "queue" (the
+  // store's queued jobs) or "client" (the client's); empty otherwise.
+  std::string refused;
+  int64_t queued = 0;  // when refused: the queued jobs counted against that limit
+};
+
+// Limits on queued jobs that createJob checks in the transaction that
+// inserts, so concurrent requests (on PostgreSQL, of several API daemons)
+// cannot overshoot them. 0: no limit.
+struct QueueLimits {
+  std::string client;     // who asks, stored with the job ("token:capture", "peer:127.0.0.1"); "": nobody
+  int64_t maxQueued = 0;  // queued jobs in the store
+  int64_t maxQueuedPerClient = 0;  // queued jobs of `client`
 };
 
 struct JobPage {
@@ -511,6 +524,10 @@ class Store {
   // The spec's "device" is stored as its requirement (an error names a bad one).
   Result<CreatedJob> createJob(const nlohmann::json& spec, std::optional<std::string> idempotencyKey = {},
                                int maxAttempts = 3);
+  // As above, refused (CreatedJob::refused) when a limit is reached; a
+  // repeated idempotency key returns its job whatever the limits.
+  Result<CreatedJob> createJob(const nlohmann::json& spec, std::optional<std::string> idempotencyKey,
+                               int maxAttempts, const QueueLimits& limits);
   // Oldest queued job -> running, attempts + 1, started_at, worker_pid; empty when none.
   Result<std::optional<Job>> claimNextJob(int64_t workerPid = 0);
   // The oldest queued job whose device requirement the claimer's device
@@ -533,6 +550,11 @@ class Store {
   Result<bool> finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error = {});
   // As above, only while `lease` holds the job; counts the job on the host.
   Result<bool> finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error = {});
+  // running -> queued while `lease` holds the job, when its host stops before
+  // the job ends (tallyd serve's shutdown): the claim is given back
+  // (attempts - 1, so a stop does not count towards max_attempts) and
+  // `reason` is added to attempt_errors. False when the lease no longer holds it.
+  Result<bool> requeueJob(const Lease& lease, const std::string& reason);
   // queued | running -> cancelled; a finished job is returned unchanged. Empty: no such job.
   Result<std::optional<Job>> cancelJob(int64_t jobId);
   // Jobs by status ("queued", "running", "done", "failed", "cancelled"), each present.
@@ -652,6 +674,16 @@ class Store {
   // foreign key violations. PostgreSQL enforces both as it writes: "ok" when
   // the server answers.
   Result<std::string> integrityCheck();
+  // The store's health check, cheap enough to run on a schedule: SQLite's
+  // PRAGMA quick_check (its first three lines; "ok" when healthy; O(N) in the
+  // file's size, without integrity_check's index cross-checks), PostgreSQL's
+  // round trip ("ok" when the server answers). Run it on a connection of its
+  // own: it holds this one for as long as it reads.
+  Result<std::string> quickCheck();
+  // Whether the store takes a write again (after a full disk): SQLite
+  // rewrites one header field with its own value and commits; PostgreSQL
+  // answers a round trip.
+  Result<bool> probeWrite();
 
   // The connection, for tests and tools; not for concurrent use.
   Connection& connection() { return *db_; }

@@ -200,6 +200,37 @@ TEST_F(GateTest, AHugeHeaderIsRefused) {
   EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "header_too_large"}}), 1);
 }
 
+// The whole header in one write: the gate reads it in one go and finds its
+// end, but 120 KB is still over the 64 KiB limit.
+TEST_F(GateTest, AHugeHeaderInOneWriteIsRefused) {
+  int fd = keep(connectFrom("127.0.0.1", port_));
+  ASSERT_GE(fd, 0);
+  std::string header = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+  for (int i = 0; i < 120; ++i)
+    header += "X-Big-" + std::to_string(i) + ": " + std::string(1000, 'b') + "\r\n";
+  header += "\r\n";
+  ASSERT_GT(header.size(), 120000u);
+  sendAll(fd, header);
+  EXPECT_EQ(statusOf(readUntilClosed(fd, 3s)), 431);
+  EXPECT_EQ(metrics_.value("tally_http_connections_refused_total", {{"reason", "header_too_large"}}), 1);
+  // Just under the limit still passes.
+  int ok = keep(connectFrom("127.0.0.1", port_));
+  ASSERT_GE(ok, 0);
+  std::string under = "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+  for (int i = 0; i < 50; ++i) under += "X-Big-" + std::to_string(i) + ": " + std::string(1200, 'b') + "\r\n";
+  sendAll(ok, under + "\r\n");
+  EXPECT_EQ(statusOf(readUntilClosed(ok, 3s)), 200);
+}
+
+TEST_F(GateTest, TwoHostHeadersAreRefused) {
+  int fd = keep(connectFrom("127.0.0.1", port_));
+  ASSERT_GE(fd, 0);
+  sendAll(fd, "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nHost: evil.example\r\n\r\n");
+  std::string answer = readUntilClosed(fd, 3s);
+  EXPECT_EQ(statusOf(answer), 400) << answer;
+  EXPECT_NE(answer.find("more than one Host header"), std::string::npos) << answer;
+}
+
 TEST_F(GateTest, ExpectContinueGetsItsInterimAnswer) {
   // curl sends bodies over 1 KiB this way and waits a second for "100 Continue".
   int fd = keep(connectFrom("127.0.0.1", port_));

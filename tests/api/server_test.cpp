@@ -1,6 +1,14 @@
 // The server end to end on 127.0.0.1: built-in routes, what handlers see,
 // static files, internal errors.
+#include <fcntl.h>
 #include <httplib.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 
 #include <future>
 #include <thread>
@@ -124,6 +132,41 @@ TEST_F(ServerTest, StaticFiles) {
     EXPECT_EQ(r.json()["error"]["code"], "not_found") << missing;
     EXPECT_EQ(r.body.find("secret"), std::string::npos);
   }
+}
+
+// A FIFO, a device and a link out of the folder: each answers 404 at once.
+// The FIFO is never opened: opened blocking it would wait for a writer and
+// hold a request thread for ever.
+TEST_F(ServerTest, OnlyRegularFilesInsideTheFolderAreServed) {
+  const auto web = dir_.path() / "web";
+  const auto fifo = web / "pipe.js";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0) << std::strerror(errno);
+  std::filesystem::create_symlink("/etc/passwd", web / "passwd.txt");
+  // A device node needs root (CI runs as root); a link to one inside the folder does not.
+  bool device = ::mknod((web / "null.txt").c_str(), S_IFCHR | 0644, makedev(1, 3)) == 0;
+  // Whatever happens below, set free a request thread that a build opening
+  // the FIFO blocking left waiting in open(), so that the server can stop.
+  struct Release {
+    std::filesystem::path fifo;
+    ~Release() {
+      int writer = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+      if (writer >= 0) ::close(writer);
+    }
+  } release{fifo};
+  std::vector<std::string> targets = {"/pipe.js", "/passwd.txt"};
+  if (device) targets.push_back("/null.txt");
+  for (const auto& target : targets) {
+    auto start = std::chrono::steady_clock::now();
+    auto r = get(port_, target);
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.status, 404) << target;
+    const nlohmann::json body = r.json();
+    EXPECT_TRUE(body.is_object() && body.contains("error") && body["error"]["code"] == "not_found") << target;
+    EXPECT_EQ(r.body.find("root:"), std::string::npos) << target;
+    EXPECT_LT(seconds, 2.0) << target;
+  }
+  // The server still answers.
+  EXPECT_EQ(get(port_, "/").status, 200);
 }
 
 // Browsers accept brotli, which cpp-httplib 0.11.4 runs at its slowest

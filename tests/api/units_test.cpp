@@ -137,6 +137,15 @@ TEST(RequestChecks, HeadersAndBodies) {
   auto r = parseJsonBody(deep);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.error().find("deeper"), std::string::npos);
+  // At most kMaxJsonValues values: the parser stops at the first one over.
+  std::string many = "{\"a\":[0";
+  for (size_t i = 1; i < kMaxJsonValues - 2; ++i) many += ",0";
+  EXPECT_TRUE(parseJsonBody(many + "]}").ok());  // the object, the array and its values
+  auto tooMany = parseJsonBody(many + ",0]}");
+  ASSERT_FALSE(tooMany.ok());
+  EXPECT_NE(tooMany.error().find("more than 16384 JSON values"), std::string::npos) << tooMany.error();
+  EXPECT_FALSE(parseJsonBody(R"({"a":[1,2,3]})", kMaxJsonDepth, 3).ok());
+  EXPECT_TRUE(parseJsonBody(R"({"a":[1,2]})", kMaxJsonDepth, 4).ok());
 }
 
 const std::string kRead = "r3ad-0123456789abcdefghijklmnopqrstuv";
@@ -171,6 +180,26 @@ TEST(Tokens, RefusesWeakOrIncompleteFiles) {
     ASSERT_FALSE(t.ok()) << c.text;
     EXPECT_NE(t.error().find(c.mention), std::string::npos) << t.error();
   }
+}
+
+// application= is optional; when given, its token runs applications and is unlike the others.
+TEST(Tokens, ApplicationLine) {
+  const std::string kApplication = "d41d8cd98f00b204e9800998ecf8427e-apps";
+  auto without = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\n");
+  ASSERT_TRUE(without.ok()) << without.error();
+  EXPECT_EQ(without->application, "");
+  auto with = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kApplication + "\n");
+  ASSERT_TRUE(with.ok()) << with.error();
+  EXPECT_EQ(with->application, kApplication);
+  for (const std::string& text : {"read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kCapture,
+                                  "read=" + kRead + "\ncapture=" + kCapture + "\napplication=" + kRead}) {
+    auto t = parseTokens(text);
+    ASSERT_FALSE(t.ok()) << text;
+    EXPECT_NE(t.error().find("application token must differ"), std::string::npos) << t.error();
+  }
+  auto weak = parseTokens("read=" + kRead + "\ncapture=" + kCapture + "\napplication=short");
+  ASSERT_FALSE(weak.ok());
+  EXPECT_NE(weak.error().find("application token is too short"), std::string::npos) << weak.error();
 }
 
 TEST(Tokens, FileMustBePrivate) {
@@ -208,6 +237,24 @@ TEST(Auth, Authenticate) {
   EXPECT_FALSE(a.authenticate("Basic " + kRead));
   EXPECT_FALSE(a.authenticate("Bearer " + kRead + "x"));
   EXPECT_FALSE(a.authenticate("Bearer " + kRead.substr(1)));
+}
+
+// Only the application token is kApplication; it may do what a capture token may.
+TEST(Auth, ApplicationToken) {
+  const std::string kApplication = "d41d8cd98f00b204e9800998ecf8427e-apps";
+  auto a = Auth::withTokens({kRead, kCapture, kApplication});
+  EXPECT_TRUE(a.hasApplicationToken());
+  EXPECT_EQ(a.authenticate("Bearer " + kApplication), Principal::kApplication);
+  EXPECT_EQ(a.authenticate("Bearer " + kCapture), Principal::kCapture);
+  EXPECT_EQ(a.authenticate("Bearer " + kRead), Principal::kRead);
+  EXPECT_FALSE(a.authenticate("Bearer " + kApplication + "x"));
+  EXPECT_FALSE(Auth::withTokens({kRead, kCapture}).hasApplicationToken());
+  EXPECT_FALSE(Auth::withTokens({kRead, kCapture}).authenticate("Bearer "));
+  EXPECT_FALSE(Auth::open().hasApplicationToken());
+  EXPECT_TRUE(allows(Principal::kApplication, Principal::kCapture));
+  EXPECT_TRUE(allows(Principal::kApplication, Principal::kRead));
+  EXPECT_FALSE(allows(Principal::kCapture, Principal::kApplication));
+  EXPECT_STREQ(principalName(Principal::kApplication), "application");
 }
 
 TEST(Auth, LoopbackRule) {

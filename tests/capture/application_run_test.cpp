@@ -5,9 +5,9 @@
 // result is stored in a Store and served by the service's routes in-process.
 // No Vulkan device is needed.
 #include <gtest/gtest.h>
-
-#include "strict.hpp"
+#include <pwd.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -27,6 +27,7 @@
 #include "service/service.hpp"
 #include "store/store.hpp"
 #include "read_file.hpp"
+#include "strict.hpp"
 
 namespace {
 
@@ -294,8 +295,10 @@ TEST_F(ApplicationCapture, XvfbDisplayAndProgramOnPath) {
   EXPECT_FALSE(fs::exists("/tmp/.X11-unix/X" + env["DISPLAY"].substr(1)));
 }
 
-// POST /api/captures: refused unless the daemon allows applications; fields
-// named as tallyd capture names them; the host's paths only.
+// POST /api/captures: refused unless the daemon allows applications, and
+// then to any token but the application token (403); fields named as tallyd
+// capture names them; the host's paths inside the application roots only;
+// the env from the allowlist.
 TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
   fs::path db = dir_ / "tally.db";
   auto opened = tally::store::Store::open(db.string());
@@ -306,12 +309,12 @@ TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
   ctx.rendererNames = {"forward"};
   tally::api::Router router;
   tally::service::addServiceRoutes(router, ctx);
-  auto post = [&](const json& body) {
+  auto post = [&](const json& body, tally::api::Principal principal = tally::api::Principal::kApplication) {
     tally::api::Request req;
     req.method = "POST";
     req.path = "/api/captures";
     req.body = body;
-    req.principal = tally::api::Principal::kCapture;
+    req.principal = principal;
     return router.dispatch(req);
   };
   auto refused = post(appSpec("ok"));
@@ -320,6 +323,20 @@ TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
   EXPECT_NE(refused.json["error"]["message"].get<std::string>().find("--allow-applications"), std::string::npos);
 
   ctx.options.allowApplications = true;
+  ctx.options.applicationPolicy.roots = {fs::canonical(fs::path(FAKE_APP).parent_path()),
+                                         fs::canonical(dir_)};
+  ctx.options.applicationPolicy.env = {"FAKE_APP_*"};
+  // The capture token (and the open loopback daemon's kCapture) may not run programs.
+  for (auto principal : {tally::api::Principal::kCapture, tally::api::Principal::kRead}) {
+    auto forbidden = post(appSpec("ok"), principal);
+    EXPECT_EQ(forbidden.status, 403) << forbidden.json.dump();
+    EXPECT_EQ(forbidden.json["error"]["code"], "forbidden");
+    EXPECT_EQ(forbidden.json["error"]["field"], "Authorization");
+  }
+  fs::create_directories(dir_ / "inside");
+  fs::create_symlink("/etc/shadow", dir_ / "inside" / "shadow.gfxr");
+  fs::create_symlink("/bin/sh", dir_ / "inside" / "sh");
+  json withEnv = appSpec("ok");
   struct Case {
     json spec;
     std::string field;
@@ -331,6 +348,18 @@ TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
       {{{"replay", (dir_ / "missing.gfxr").string()}}, "replay"},
       {{{"application", {{"command", {FAKE_APP}}}}, {"renderers", {"forward"}}}, "renderers"},
       {{{"application", {{"command", {FAKE_APP}}}}, {"sweep", "depth-reconstruction"}}, "sweep"},
+      // Outside the roots: by path, by $PATH lookup, through a link.
+      {{{"application", {{"command", {"/bin/sh", "-c", "id > pwned"}}}}}, "application.command[0]"},
+      {{{"application", {{"command", {"sh", "-c", "id > pwned"}}}}}, "application.command[0]"},
+      {{{"application", {{"command", {(dir_ / "inside" / "sh").string()}}}}}, "application.command[0]"},
+      {{{"replay", "/etc/shadow"}}, "replay"},
+      {{{"replay", (dir_ / "inside" / "shadow.gfxr").string()}}, "replay"},
+      // The loader's injection points, and a name off the allowlist.
+      {appSpec("ok", 3, {{"env", {{"LD_PRELOAD", "/tmp/x.so"}}}}), "application.env.LD_PRELOAD"},
+      {appSpec("ok", 3, {{"env", {{"PATH", "/tmp"}}}}), "application.env.PATH"},
+      {appSpec("ok", 3, {{"env", {{"VK_INSTANCE_LAYERS", "VK_LAYER_x"}}}}),
+       "application.env.VK_INSTANCE_LAYERS"},
+      {appSpec("ok", 3, {{"env", {{"MY_SETTING", "on"}}}}), "application.env.MY_SETTING"},
   };
   for (const auto& c : cases) {
     auto r = post(c.spec);
@@ -339,6 +368,104 @@ TEST_F(ApplicationCapture, ServiceChecksApplicationSpecs) {
   }
   auto accepted = post(appSpec("ok"));
   EXPECT_EQ(accepted.status, 202) << accepted.json.dump();
+  // The operator's --application-env lets a name through; LD_* never.
+  ctx.options.applicationPolicy.env = {"FAKE_APP_*", "MY_SETTING", "LD_PRELOAD"};
+  EXPECT_EQ(post(appSpec("ok", 3, {{"env", {{"MY_SETTING", "on"}}}})).status, 202);
+  EXPECT_EQ(post(appSpec("ok", 3, {{"env", {{"LD_PRELOAD", "/tmp/x.so"}}}})).status, 400);
+}
+
+// tallyd capture --confine-applications (what the worker runs): the policy
+// again, where the program runs. Nothing outside the roots starts; without a
+// root no application does; as root, only with --run-as.
+TEST_F(ApplicationCapture, ConfinedCaptureRefusesBeforeRunning) {
+  auto confined = [&](const json& spec, std::vector<std::string> flags) {
+    static int count = 0;
+    fs::path specPath = dir_ / ("confined-" + std::to_string(++count) + ".json");
+    std::ofstream(specPath) << spec.dump();
+    tally::jobs::ChildOptions child;
+    child.argv = {TALLYD_PATH,
+                  "capture",
+                  "--spec",
+                  specPath.string(),
+                  "--out",
+                  (dir_ / "out.json").string(),
+                  "--confine-applications"};
+    child.argv.insert(child.argv.end(), flags.begin(), flags.end());
+    child.environment = {"TALLY_LAYER_PATH=" + layerDir().string()};
+    child.deadline = 60s;
+    auto ran = tally::jobs::runChild(child);
+    EXPECT_TRUE(ran.ok());
+    return ran.ok() ? *ran : tally::jobs::ChildResult{};
+  };
+  const fs::path pwned = dir_ / "pwned";
+  const json shell = {{"application", {{"command", {"/bin/sh", "-c", "id > " + pwned.string()}}}}};
+  const std::string root = fs::path(FAKE_APP).parent_path().string();
+  std::vector<std::string> runAs;
+  if (geteuid() == 0) runAs = {"--run-as", "nobody"};
+
+  auto noRoot = confined(shell, runAs);
+  EXPECT_EQ(noRoot.exitCode, 1);
+  EXPECT_NE(noRoot.stderrTail.find("application: this host runs no applications"), std::string::npos)
+      << noRoot.stderrTail;
+  std::vector<std::string> flags = {"--application-root", root};
+  flags.insert(flags.end(), runAs.begin(), runAs.end());
+  auto outside = confined(shell, flags);
+  EXPECT_EQ(outside.exitCode, 1);
+  EXPECT_NE(outside.stderrTail.find("application.command[0]"), std::string::npos) << outside.stderrTail;
+  auto env = confined(appSpec("ok", 3, {{"env", {{"LD_PRELOAD", "/tmp/x.so"}}}}), flags);
+  EXPECT_EQ(env.exitCode, 1);
+  EXPECT_NE(env.stderrTail.find("application.env.LD_PRELOAD"), std::string::npos) << env.stderrTail;
+  EXPECT_FALSE(fs::exists(pwned));
+  if (geteuid() == 0) {
+    auto asRoot = confined(appSpec("ok"), {"--application-root", root, "--application-env", "FAKE_APP_*"});
+    EXPECT_EQ(asRoot.exitCode, 1);
+    EXPECT_NE(asRoot.stderrTail.find("refusing to run an application as root"), std::string::npos)
+        << asRoot.stderrTail;
+    EXPECT_FALSE(fs::exists(dir_ / "record.txt")) << "the application ran as root";
+  }
+}
+
+// tallyd capture --run-as USER (root only): the application runs as that
+// user, with its HOME, and writes the layer's output into a folder made its own.
+TEST_F(ApplicationCapture, RunsAsTheRunAsUser) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root (CI runs as root)";
+  // The user must reach the record's folder and the capture's temporary folder.
+  ::chmod(dir_.c_str(), 0755);
+  fs::create_directories(dir_ / "shared");
+  ::chmod((dir_ / "shared").c_str(), 01777);
+  json spec = appSpec("ok");
+  spec["application"]["env"]["FAKE_APP_RECORD"] = (dir_ / "shared" / "record.txt").string();
+  fs::path specPath = dir_ / "runas.json", out = dir_ / "runas-result.json";
+  std::ofstream(specPath) << spec.dump();
+  tally::jobs::ChildOptions child;
+  child.argv = {TALLYD_PATH,
+                "capture",
+                "--spec",
+                specPath.string(),
+                "--out",
+                out.string(),
+                "--confine-applications",
+                "--application-root",
+                fs::path(FAKE_APP).parent_path().string(),
+                "--application-env",
+                "FAKE_APP_*",
+                "--run-as",
+                "nobody"};
+  child.environment = {"TALLY_LAYER_PATH=" + layerDir().string()};
+  child.deadline = 60s;
+  child.stderrTailBytes = 1 << 16;
+  auto ran = tally::jobs::runChild(child);
+  ASSERT_TRUE(ran.ok()) << ran.error();
+  ASSERT_TRUE(ran->ok()) << ran->stderrTail;
+  const passwd* nobody = getpwnam("nobody");
+  ASSERT_NE(nobody, nullptr);
+  auto seen = record(dir_ / "shared" / "record.txt");
+  EXPECT_EQ(seen["RUN_UID"], std::to_string(nobody->pw_uid)) << "not nobody";
+  EXPECT_EQ(seen["USER"], "nobody");
+  EXPECT_EQ(seen["HOME"], nobody->pw_dir);
+  json result = json::parse(tally::test::readFile(out), nullptr, false);
+  ASSERT_TRUE(result.is_object());
+  EXPECT_EQ(result["runs"][0]["samples"].size(), 3u);
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 #   badjson     write an output that is not JSON
 #   silent      exit 0 without output (as when the layer did not load)
 # FAKE_APP_RECORD=FILE: the environment and arguments it saw go there first,
-# with, under an X server, XVFB_PID (the Xvfb whose parent is ours) and
+# with RUN_UID (the user it runs as) and, under an X server, XVFB_PID (the Xvfb whose parent is ours) and
 # XVFB_SOCKET (yes if the display's socket exists).
 set -u
 mode=${FAKE_APP_MODE:-ok}
@@ -24,6 +24,7 @@ if [ -n "${FAKE_APP_RECORD:-}" ]; then
   {
     env
     echo "ARGS=$*"
+    echo "RUN_UID=$(id -u)"
     if [ -n "${DISPLAY:-}" ]; then
       n=${DISPLAY#:}
       n=${n%%.*}

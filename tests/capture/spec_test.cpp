@@ -124,54 +124,95 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{R"({"resolutions":[[8,8]]})", "renderers: required"},
         BadCase{R"({"renderers":[],"resolutions":[[8,8]]})", "renderers: must be a non-empty array"},
         BadCase{R"({"renderers":["fwd"],"resolutions":[[8,8]]})", "renderers[0]: unknown renderer 'fwd'"},
-        BadCase{R"({"renderers":["forward","forward"],"resolutions":[[8,8]]})", "renderers[1]: renderer 'forward' listed twice"},
+        BadCase{R"({"renderers":["forward","forward"],"resolutions":[[8,8]]})",
+                "renderers[1]: renderer 'forward' listed twice"},
+        BadCase{R"({"renderers":["forward","deferred","forward"],"resolutions":[[8,8]]})",
+                "renderers[2]: renderer 'forward' listed twice (a duplicate of renderers[0])"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":["atrium","atrium"]})",
+                "scenes[1]: a duplicate of scenes[0]"},
+        BadCase{
+            R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":["sky","planes",{"name":"planes","layers":8}]})",
+            "scenes[2]: a duplicate of scenes[1]"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8],[4,4],[8,8]]})",
+                "resolutions[2]: a duplicate of resolutions[0]"},
+        BadCase{
+            R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":[{"eye":[0,0,1],"target":[0,0,0]},{"eye":[0,0,1],"target":[0,0,0],"label":"b"}]})",
+            "cameras[1]: a duplicate of cameras[0]"},
         BadCase{R"({"renderers":[3],"resolutions":[[8,8]]})", "renderers[0]: must be a renderer name"},
         BadCase{R"({"renderers":["forward"]})", "resolutions: required"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[0,8]]})", "resolutions[0][0]: must be an integer between 1 and 16384"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8],[640,"x"]]})", "resolutions[1][1]: must be an integer"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[640]]})", "resolutions[0]: must be [width, height]"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[16384,16384]]})", "resolutions[0]: 16384x16384 is more than"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[0,8]]})",
+                "resolutions[0][0]: must be an integer between 1 and 16384"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8],[640,"x"]]})",
+                "resolutions[1][1]: must be an integer"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[640]]})",
+                "resolutions[0]: must be [width, height]"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[16384,16384]]})",
+                "resolutions[0]: 16384x16384 is more than"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":["mars"]})", "scenes[0]: "},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"name":"planes","layers":0}]})", "scenes[0]: layers: "},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"gltf":""}]})", "scenes[0].gltf: must be a file path"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":"random"})", "cameras: must be \"auto\""},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":[{"eye":[1,2],"target":[0,0,0]}]})", "cameras[0].eye"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":0})", "frames: must be an integer between 1 and 1000"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"name":"planes","layers":0}]})",
+                "scenes[0]: layers: "},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"scenes":[{"gltf":""}]})",
+                "scenes[0].gltf: must be a file path"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":"random"})",
+                "cameras: must be \"auto\""},
+        BadCase{
+            R"({"renderers":["forward"],"resolutions":[[8,8]],"cameras":[{"eye":[1,2],"target":[0,0,0]}]})",
+            "cameras[0].eye"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":0})",
+                "frames: must be an integer between 1 and 1000"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frames":4,"counted_frames":5})",
                 "counted_frames: must be an integer between 1 and 4"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counted_frames":0})",
                 "counted_frames: must be an integer between 1 and 20"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"fast"})", "counting: unknown mode 'fast'"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"sampled:1"})", "counting: mode 'sampled:1'"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact","subgroup","fast"]})", "counting[2]: unknown mode 'fast'"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact",4]})", "counting[1]: must be a string"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["sampled:4","sampled:4"]})", "counting[1]: mode 'sampled:4' listed twice"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":[]})", "counting: must be a mode or a non-empty array"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})", "counting: must be a mode or a non-empty array"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})", "lights: must be an integer between 0 and 400"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"fast"})",
+                "counting: unknown mode 'fast'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":"sampled:1"})",
+                "counting: mode 'sampled:1'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact","subgroup","fast"]})",
+                "counting[2]: unknown mode 'fast'"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["exact",4]})",
+                "counting[1]: must be a string"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":["sampled:4","sampled:4"]})",
+                "counting[1]: mode 'sampled:4' listed twice"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":[]})",
+                "counting: must be a mode or a non-empty array"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"counting":7})",
+                "counting: must be a mode or a non-empty array"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"lights":401})",
+                "lights: must be an integer between 0 and 400"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"frame":20})", "frame: unknown field"},
         // Footprint: a flag or one of the three block sizes.
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":48})",
                 "footprint: must be true, false or a block size of 32, 64 or 128 bytes, got 48"},
         BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":"64"})",
                 "footprint: must be true, false or a block size of 32, 64 or 128 bytes, got \"64\""},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":64.5})", "footprint: must be true, false"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":null})", "footprint: must be true, false"},
-        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":"yes"})", "ceilings: must be true or false, got \"yes\""},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":64.5})",
+                "footprint: must be true, false"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"footprint":null})",
+                "footprint: must be true, false"},
+        BadCase{R"({"renderers":["forward"],"resolutions":[[8,8]],"ceilings":"yes"})",
+                "ceilings: must be true or false, got \"yes\""},
         // Variants: {"renderer", "options"} entries.
         BadCase{R"({"renderers":[{"options":{}}],"resolutions":[[8,8]]})", "renderers[0].renderer: required"},
-        BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})", "renderers[0].renderer: unknown renderer 'fwd'"},
-        BadCase{R"({"renderers":[{"renderer":"visbuffer","option":{}}],"resolutions":[[8,8]]})", "renderers[0].option: unknown field"},
-        BadCase{R"({"renderers":["forward",{"renderer":"visbuffer","options":[]}],"resolutions":[[8,8]]})", "renderers[1].options: must be an object"},
-        BadCase{R"({"renderers":["forward",{"renderer":"visbuffer","options":{"barycentrics":"half"}}],"resolutions":[[8,8]]})",
-                "renderers[1].options.barycentrics: \"half\" is not one of unorm16, float32"},
-        BadCase{R"({"renderers":["forward",{"renderer":"deferred","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
-                "renderers[1].options.barycentrics: deferred takes no option barycentrics"},
+        BadCase{R"({"renderers":[{"renderer":"fwd"}],"resolutions":[[8,8]]})",
+                "renderers[0].renderer: unknown renderer 'fwd'"},
+        BadCase{R"({"renderers":[{"renderer":"visbuffer","option":{}}],"resolutions":[[8,8]]})",
+                "renderers[0].option: unknown field"},
+        BadCase{R"({"renderers":["forward",{"renderer":"visbuffer","options":[]}],"resolutions":[[8,8]]})",
+                "renderers[1].options: must be an object"},
+        BadCase{
+            R"({"renderers":["forward",{"renderer":"visbuffer","options":{"barycentrics":"half"}}],"resolutions":[[8,8]]})",
+            "renderers[1].options.barycentrics: \"half\" is not one of unorm16, float32"},
+        BadCase{
+            R"({"renderers":["forward",{"renderer":"deferred","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
+            "renderers[1].options.barycentrics: deferred takes no option barycentrics"},
         // The same canonical options twice: the default value written out is the renderer as it is.
-        BadCase{R"({"renderers":["visbuffer",{"renderer":"visbuffer","options":{"barycentrics":"unorm16"}}],"resolutions":[[8,8]]})",
-                "renderers[1]: renderer 'visbuffer' listed twice"},
-        BadCase{R"({"renderers":[{"renderer":"visbuffer","options":{"barycentrics":"float32"}},{"renderer":"visbuffer","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
-                "renderers[1]: renderer 'visbuffer barycentrics=float32' listed twice"}));
+        BadCase{
+            R"({"renderers":["visbuffer",{"renderer":"visbuffer","options":{"barycentrics":"unorm16"}}],"resolutions":[[8,8]]})",
+            "renderers[1]: renderer 'visbuffer' listed twice"},
+        BadCase{
+            R"({"renderers":[{"renderer":"visbuffer","options":{"barycentrics":"float32"}},{"renderer":"visbuffer","options":{"barycentrics":"float32"}}],"resolutions":[[8,8]]})",
+            "renderers[1]: renderer 'visbuffer barycentrics=float32' listed twice"}));
 
 TEST(CaptureSpec, VariantsAreCanonical) {
   auto spec = parse(R"({"renderers":["visbuffer",{"renderer":"visbuffer","options":{"uv_derivatives":"float32",
@@ -189,19 +230,31 @@ TEST(CaptureSpec, VariantsAreCanonical) {
   EXPECT_EQ(spec->sampleCount(10), 3u * 10u);
 }
 
+// Ten distinct scenes, within the list caps: the matrix grows by multiplying lists.
+std::string tenScenes() {
+  std::string scenes;
+  for (int i = 1; i <= 10; ++i)
+    scenes += (i > 1 ? "," : "") + std::string(R"({"name":"planes","layers":)") + std::to_string(i) + "}";
+  return "[" + scenes + "]";
+}
+
 TEST(CaptureSpec, MatrixLimit) {
   std::string resolutions;
-  for (int i = 1; i <= 600; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
-  auto spec = parse(R"({"renderers":["forward","deferred"],"resolutions":[)" + resolutions + "]}");
+  for (int i = 1; i <= 60; ++i)
+    resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec = parse(R"({"renderers":["forward","deferred"],"scenes":)" + tenScenes() + R"(,"resolutions":[)" +
+                    resolutions + "]}");
   ASSERT_FALSE(spec.ok());
   EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
 }
 
 TEST(CaptureSpec, MatrixLimitCountsModes) {
   std::string resolutions;
-  for (int i = 1; i <= 300; ++i) resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
-  auto spec = parse(R"({"renderers":["forward"],"counting":["exact","subgroup","sampled:4","sampled:16"],"resolutions":[)" +
-                    resolutions + "]}");
+  for (int i = 1; i <= 30; ++i)
+    resolutions += (i > 1 ? "," : "") + std::string("[") + std::to_string(i) + ",8]";
+  auto spec =
+      parse(R"({"renderers":["forward"],"counting":["exact","subgroup","sampled:4","sampled:16"],"scenes":)" +
+            tenScenes() + R"(,"resolutions":[)" + resolutions + "]}");
   ASSERT_FALSE(spec.ok());
   EXPECT_NE(spec.error().find("12000 samples"), std::string::npos) << spec.error();
 }

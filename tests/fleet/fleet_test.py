@@ -19,7 +19,7 @@ Checked afterwards:
     and jobs done per host add up;
   - a queued job nobody can run says why, and cancelling it works;
   - with the database stopped mid-capture, the worker keeps its capture and
-    retries the ingest until it is back; the API answers 500 meanwhile; the
+    retries the ingest until it is back; the API answers 503 meanwhile; the
     result is stored once;
   - with node and Chromium present, the dashboard's hosts view and runs
     browser show the hosts (tests/web/fleet_check.mjs).
@@ -311,8 +311,9 @@ def main():
         # The database goes away mid-capture: the worker keeps its capture,
         # retries the ingest until the database is back, and the result is
         # stored once (by it, or, had its lease been taken meanwhile, by the
-        # worker that ran the job again). The API answers 500 meanwhile and
-        # reconnects afterwards.
+        # worker that ran the job again). The API answers 503
+        # store_unavailable meanwhile (with Retry-After; health says the store
+        # is unreachable) and reconnects afterwards.
         status, reply = api.call("POST", "/api/captures", dict(spec(1), frames=4))
         check(status == 202, "POST the outage capture: %d %s" % (status, reply))
         outage = reply["id"]
@@ -328,7 +329,10 @@ def main():
                 time.sleep(0.05)
         server.pause()
         status, reply = api.call("GET", "/api/captures/%d" % outage)
-        check(status == 500 and reply["error"]["code"] == "internal", "GET with the database down: %d %s" % (status, reply))
+        check(status == 503 and reply["error"]["code"] == "store_unavailable" and
+              "cannot be reached" in reply["error"]["message"], "GET with the database down: %d %s" % (status, reply))
+        status, reply = api.call("GET", "/api/health")
+        check(status == 503 and reply["store"]["status"] == "unreachable", "health with the database down: %d %s" % (status, reply))
         end = time.time() + 240
         while "cannot reach the database to store the result" not in open(logs[holder], errors="replace").read():
             check(time.time() < end, "%s never retried its ingest: %s" % (holder, open(logs[holder]).read()[-1500:]))

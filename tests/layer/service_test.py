@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Applications through the daemon with the real layer, on lavapipe:
-`tallyd serve --allow-applications`, then capture jobs of vkcube under Xvfb
+`tallyd serve --allow-applications` (posting with its application token; a
+copy of vkcube and the compute application in its --application-root; as
+nobody when the test runs as root), then capture jobs of vkcube under Xvfb
 (stored and served like any run, named as the application names it), of the
 compute application crashing, hanging past its deadline and using every
 descriptor set in every layout (each job fails with its reason), and vkcube
@@ -11,6 +13,7 @@ again afterwards: the daemon kept running and stored nothing half-written.
 import argparse
 import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -31,16 +34,18 @@ def free_port():
 
 
 class Api:
-    def __init__(self, port):
+    def __init__(self, port, token):
         self.base = "http://127.0.0.1:%d" % port
+        self.auth = {"Authorization": "Bearer " + token}
 
     def get(self, path):
-        with urllib.request.urlopen(self.base + path, timeout=30) as r:
+        with urllib.request.urlopen(urllib.request.Request(self.base + path, headers=self.auth), timeout=30) as r:
             return json.loads(r.read())
 
     def post(self, path, body):
         request = urllib.request.Request(self.base + path, data=json.dumps(body).encode(),
-                                         headers={"Content-Type": "application/json"}, method="POST")
+                                         headers=dict(self.auth, **{"Content-Type": "application/json"}),
+                                         method="POST")
         with urllib.request.urlopen(request, timeout=30) as r:
             return json.loads(r.read())
 
@@ -59,22 +64,36 @@ def main():
     parser.add_argument("--tallyd", required=True)
     parser.add_argument("--build", required=True)
     args = parser.parse_args()
-    app = os.path.join(os.path.abspath(args.build), "tests", "layer", "tally_layer_compute_app")
     with tempfile.TemporaryDirectory(prefix="tally-layer-service-") as tmp:
+        # The applications' root: copies of vkcube and the compute application
+        # (nobody, whom they run as under root, must reach them).
+        os.chmod(tmp, 0o755)
+        apps = os.path.join(tmp, "apps")
+        os.mkdir(apps)
+        vkcube_path = shutil.copy2(shutil.which("vkcube") or fail("vkcube is not installed"), apps)
+        app = shutil.copy2(os.path.join(os.path.abspath(args.build), "tests", "layer", "tally_layer_compute_app"), apps)
+        tokens = os.path.join(tmp, "tokens")
+        token = "app1ication-0123456789abcdefghijklmnop"
+        with open(os.open(tokens, os.O_WRONLY | os.O_CREAT, 0o600), "w") as f:
+            f.write("read=r3ad-0123456789abcdefghijklmnopqrstuv\ncapture=c4pture-0123456789abcdefghijklmnopqrst\n"
+                    "application=%s\n" % token)
         port = free_port()
         env = dict(os.environ, TALLY_LAYER_PATH=os.path.join(os.path.abspath(args.build), "layer"))
         log = open(os.path.join(tmp, "tallyd.log"), "w")
-        daemon = subprocess.Popen([args.tallyd, "serve", "--db", os.path.join(tmp, "tally.db"), "--port", str(port),
-                                   "--allow-applications"], env=env, stdout=log, stderr=subprocess.STDOUT)
+        flags = ["--allow-applications", "--token-file", tokens, "--application-root", apps]
+        if os.geteuid() == 0:
+            flags += ["--run-as", "nobody"]
+        daemon = subprocess.Popen([args.tallyd, "serve", "--db", os.path.join(tmp, "tally.db"), "--port", str(port)]
+                                  + flags, env=env, stdout=log, stderr=subprocess.STDOUT)
         try:
-            api = Api(port)
+            api = Api(port, token)
             for _ in range(100):
                 try:
                     api.get("/api/health")
                     break
                 except OSError:
                     time.sleep(0.1)
-            vkcube = {"application": {"command": ["vkcube", "--c", "20"], "frames": 3, "skip_frames": 2,
+            vkcube = {"application": {"command": [vkcube_path, "--c", "20"], "frames": 3, "skip_frames": 2,
                                       "display": "xvfb"}}
             jobs = {
                 "vkcube": api.post("/api/captures", vkcube)["id"],

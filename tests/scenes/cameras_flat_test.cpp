@@ -177,5 +177,55 @@ TEST(AutoCamerasFlat, ToyCarHasNoNearPlaneHolesAndEveryCameraSeesIt) {
   for (const Camera& cam : autoCameras(*scene)) EXPECT_LT(cam.skyFraction, 1.0f) << cam.label;
 }
 
+// A single-sided triangle (a material without doubleSided) in the XY plane,
+// written as a glTF file: its back face is culled when drawn, so a camera
+// behind it sees only sky. Every automatic camera must look at its front
+// (the +Z side: counter-clockwise there), see some of it as drawn, and have
+// a sky fraction measured as drawn.
+TEST(AutoCamerasFlat, ASingleSidedTriangleIsSeenFromItsFront) {
+  test::TempDir dir;
+  test::GltfWriter w;
+  std::vector<float> pos = {-0.5f, -0.4f, 0.0f, 0.6f, -0.3f, 0.0f, 0.1f, 0.5f, 0.0f};
+  std::vector<float> nrm = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  nlohmann::json prim = {
+      {"attributes",
+       {{"POSITION", w.accessor(pos, 5126, "VEC3", 3)}, {"NORMAL", w.accessor(nrm, 5126, "VEC3", 3)}}},
+      {"material", 0}};
+  w.doc["materials"] = {
+      {{"name", "one side"}, {"pbrMetallicRoughness", {{"baseColorFactor", {1, 1, 1, 1}}}}}};
+  w.meshNode({prim});
+  auto loaded = loadGltf(w.write(dir, "triangle.gltf"));
+  ASSERT_TRUE(loaded.ok()) << loaded.error();
+  const Scene& scene = *loaded;
+  ASSERT_EQ(scene.triangleCount(), 1u);
+  ASSERT_FALSE(scene.materials[scene.meshes[0].material].doubleSided);
+
+  // The ray caster as drawn: the front is a hit, the back is not.
+  const Bvh bvh = Bvh::build(scene);
+  Ray front{glm::vec3(0.05f, 0.0f, 2.0f), glm::vec3(0, 0, -1)};
+  Ray back{glm::vec3(0.05f, 0.0f, -2.0f), glm::vec3(0, 0, 1)};
+  front.cullBackFaces = back.cullBackFaces = true;
+  EXPECT_TRUE(bvh.anyHit(front));
+  EXPECT_FALSE(bvh.anyHit(back));
+  back.cullBackFaces = false;
+  EXPECT_TRUE(bvh.anyHit(back)) << "without culling both sides are hits";
+
+  const std::vector<Camera> cameras = autoCameras(scene);
+  ASSERT_FALSE(cameras.empty());
+  const glm::vec3 normal(0, 0, 1), centre(0.067f, -0.067f, 0.0f);
+  for (const Camera& cam : cameras) {
+    EXPECT_GT(glm::dot(cam.eye - centre, normal), 0.0f) << "behind the triangle: " << cam.label;
+    EXPECT_TRUE(seesGeometry(scene, cam)) << cam.label;
+    EXPECT_LT(cam.skyFraction, 1.0f) << cam.label;
+    EXPECT_FLOAT_EQ(cam.skyFraction, skyFraction(bvh, cam)) << cam.label;
+  }
+  // The same triangle double-sided is seen from both sides.
+  Scene both = scene;
+  both.materials[both.meshes[0].material].doubleSided = true;
+  int behind = 0;
+  for (const Camera& cam : autoCameras(both)) behind += glm::dot(cam.eye - centre, normal) < 0.0f ? 1 : 0;
+  EXPECT_GT(behind, 0);
+}
+
 }  // namespace
 }  // namespace tally::scenes

@@ -1,5 +1,7 @@
 // makeScene: specs in, scenes or errors naming the field out (table-driven).
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -53,7 +55,34 @@ TEST(Spec, BadSpecsNameTheField) {
     ASSERT_FALSE(r.ok()) << c.spec.dump();
     EXPECT_EQ(r.error().rfind(c.prefix, 0), 0u) << c.spec.dump() << " -> " << r.error();
     EXPECT_NE(r.error().find(c.mentions), std::string::npos) << c.spec.dump() << " -> " << r.error();
+    // The cheap check refuses the same specs with the same error, except a
+    // file it does not open.
+    Result<json> checked = checkSceneSpec(c.spec);
+    if (c.mentions == "file not found") {
+      EXPECT_TRUE(checked.ok()) << c.spec.dump() << " -> " << checked.error();
+    } else {
+      ASSERT_FALSE(checked.ok()) << c.spec.dump();
+      EXPECT_EQ(checked.error(), r.error());
+    }
   }
+}
+
+TEST(Spec, CheckedSpecsAreCanonical) {
+  const std::vector<std::pair<json, json>> same = {
+      {"atrium", {{"name", "atrium"}}},
+      {"planes", {{"name", "planes"}, {"layers", 8}, {"order", "back-to-front"}, {"coverage", 1.0}}},
+      {{{"name", "planes"}, {"coverage", 1}}, {{"name", "planes"}, {"layers", 8}}},
+      {"sky", {{"name", "sky"}, {"coverage", 0.5}}},
+  };
+  for (const auto& [a, b] : same) {
+    auto ca = checkSceneSpec(a), cb = checkSceneSpec(b);
+    ASSERT_TRUE(ca.ok() && cb.ok()) << a.dump() << " " << b.dump();
+    EXPECT_EQ(*ca, *cb) << a.dump() << " vs " << b.dump();
+  }
+  auto planes2 = checkSceneSpec({{"name", "planes"}, {"layers", 2}});
+  auto planes8 = checkSceneSpec("planes");
+  ASSERT_TRUE(planes2.ok() && planes8.ok());
+  EXPECT_NE(*planes2, *planes8);
 }
 
 TEST(Spec, CorruptGltfIsAnError) {

@@ -1,4 +1,6 @@
-// Applications through the daemon: `tallyd serve --allow-applications` with
+// Applications through the daemon: `tallyd serve --allow-applications` (its
+// application token, tests/capture as the application root, as nobody when
+// the test runs as root) with
 // tests/capture/fake_app.sh standing in for the application and a manifest
 // folder of the test's own ($TALLY_LAYER_PATH, inherited by the capture
 // children). A crash, an early exit, a hang and an incomplete output each fail
@@ -27,8 +29,11 @@ class ApplicationService : public ::testing::Test {
     std::ofstream(dir_ / "layer" / "VkLayer_tally_counters.json") << "{}";
     // The daemon copies this process's environment: its capture children find the manifest here.
     setenv("TALLY_LAYER_PATH", (dir_ / "layer").string().c_str(), 1);
-    daemon_ = new Daemon(dir_, dir_ / "tally.db", {"--allow-applications"});
+    tokens_ = writeApplicationTokens(dir_);
+    daemon_ = new Daemon(dir_, dir_ / "tally.db",
+                         applicationFlags(tokens_, {fs::path(FAKE_APP).parent_path()}, {"FAKE_APP_*"}));
     ASSERT_TRUE(daemon_->start()) << "tallyd serve did not start";
+    daemon_->setToken(tokens_.application);
   }
   static void TearDownTestSuite() {
     if (daemon_) EXPECT_EQ(daemon_->stop(SIGTERM), 0);
@@ -57,7 +62,7 @@ class ApplicationService : public ::testing::Test {
     tally::jobs::ChildOptions child;
     child.argv = {TALLY_PATH, "--server", daemon_->url()};
     child.argv.insert(child.argv.end(), args.begin(), args.end());
-    child.environment = {"TALLY_SERVER", "TALLY_TOKEN"};
+    child.environment = {"TALLY_SERVER", "TALLY_TOKEN=" + tokens_.application};
     child.stdoutPath = out.string();
     child.deadline = std::chrono::seconds(60);
     auto r = tally::jobs::runChild(child);
@@ -66,6 +71,7 @@ class ApplicationService : public ::testing::Test {
   }
 
   static inline fs::path dir_;
+  static inline ApplicationTokens tokens_;
   static inline Daemon* daemon_ = nullptr;
 };
 

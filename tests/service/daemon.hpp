@@ -107,6 +107,25 @@ class Daemon {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
 
+  // Sends `sig` and waits at most `timeout` for the daemon to exit: its exit
+  // status (or 128 + signal), or -1 when it was still running (it is then
+  // killed with SIGKILL, so that a test fails instead of hanging).
+  int stopWithin(std::chrono::milliseconds timeout, int sig = SIGTERM) {
+    if (pid_ <= 0) return -1;
+    kill(pid_, sig);
+    auto deadline = std::chrono::steady_clock::now() + timeout;
+    int status = 0;
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() >= deadline) {
+        stop(SIGKILL);
+        return -1;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    pid_ = 0;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
   // Capture children of this daemon that are still running (zombies waiting
   // for whoever adopted them do not count): the worker names their temp files
   // under tmp(), and they appear on the command line.
@@ -140,12 +159,16 @@ class Daemon {
     for (pid_t pid : runningJobChildren()) kill(pid, SIGKILL);
   }
 
+  // Requests then carry "Authorization: Bearer <token>" ("": none).
+  void setToken(std::string token) { token_ = std::move(token); }
+
   Reply request(const std::string& method, const std::string& path, const std::string& body = {},
                 const std::string& idempotencyKey = {}) {
     httplib::Client client("127.0.0.1", port_);
     client.set_read_timeout(10, 0);
     httplib::Headers headers;
     if (!idempotencyKey.empty()) headers.emplace("Idempotency-Key", idempotencyKey);
+    if (!token_.empty()) headers.emplace("Authorization", "Bearer " + token_);
     httplib::Result res = method == "GET"    ? client.Get(path.c_str(), headers)
                           : method == "POST" ? client.Post(path.c_str(), headers, body, "application/json")
                           : method == "PATCH" ? client.Patch(path.c_str(), headers, body, "application/json")
@@ -195,6 +218,7 @@ class Daemon {
  private:
   fs::path dir_, db_;
   std::vector<std::string> extra_;
+  std::string token_;
   pid_t pid_ = 0;
   int port_ = 0;
   int starts_ = 0;
@@ -205,6 +229,35 @@ inline fs::path makeTempDir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
+}
+
+// A token file (mode 600) with read, capture and application tokens, for a
+// daemon that runs applications (docs/operating.md, "Security model").
+struct ApplicationTokens {
+  std::string read = "r3ad-0123456789abcdefghijklmnopqrstuv";
+  std::string capture = "c4pture-0123456789abcdefghijklmnopqrst";
+  std::string application = "app1ication-0123456789abcdefghijklmnop";
+  fs::path file;
+};
+inline ApplicationTokens writeApplicationTokens(const fs::path& dir) {
+  ApplicationTokens t;
+  t.file = dir / "tokens";
+  std::ofstream(t.file) << "read=" << t.read << "\ncapture=" << t.capture << "\napplication=" << t.application
+                        << "\n";
+  fs::permissions(t.file, fs::perms::owner_read | fs::perms::owner_write);
+  return t;
+}
+
+// The flags of a daemon that runs applications from `roots` with the spec env
+// names `env` allowed: as root (CI), they run as nobody.
+inline std::vector<std::string> applicationFlags(const ApplicationTokens& tokens,
+                                                 const std::vector<fs::path>& roots,
+                                                 const std::vector<std::string>& env = {}) {
+  std::vector<std::string> flags = {"--allow-applications", "--token-file", tokens.file.string()};
+  for (const auto& root : roots) flags.insert(flags.end(), {"--application-root", root.string()});
+  for (const auto& name : env) flags.insert(flags.end(), {"--application-env", name});
+  if (geteuid() == 0) flags.insert(flags.end(), {"--run-as", "nobody"});
+  return flags;
 }
 
 // 2 renderers x 1 camera at 64x36, 2 frames: the quickest capture with two runs.

@@ -108,6 +108,13 @@ try:
     check(value(before, "tally_jobs", state="queued") == 0, "queue depth 0 at start")
     check(value(before, "tally_store_bytes", file="db") == os.path.getsize(os.path.join(folder, "tally.db")),
           "store size is the database file's size")
+    check(value(before, "tally_queue_limit", limit="queue") == 1000 and
+          value(before, "tally_queue_limit", limit="client") == 100, "the queue's limits are the defaults")
+    check(all(("tally_captures_limited_total", (("limit", l),)) in before for l in ("queue", "client")),
+          "429s by queue limit are counted from 0")
+    check(value(before, "tally_store_up") == 1, "the store is healthy at start")
+    check(not any(name == "tally_store_fault" for name, _ in before), "no store fault is open at start")
+    check(value(before, "tally_store_check_seconds") >= 0, "the start check's time is there")
 
     code, job = d.call("POST", "/api/captures", "/api/captures", TINY)
     check(code == 202, f"capture accepted ({code})")

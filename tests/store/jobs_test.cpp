@@ -239,5 +239,64 @@ TEST_F(Jobs, ConcurrentClaimsTakeEachJobOnce) {
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM jobs WHERE status = 'running' AND attempts = 1"), kJobs);
 }
 
+// The queue's limits are counted in the transaction that inserts: queued
+// jobs only, per client where one is named; a repeated key passes.
+TEST_F(Jobs, QueueLimitsCountQueuedJobs) {
+  QueueLimits limits{"peer:a", 3, 2};
+  auto a1 = store_->createJob(kSpec, std::nullopt, 3, limits);
+  auto a2 = store_->createJob(kSpec, "k", 3, limits);
+  ASSERT_TRUE(a1 && a2);
+  EXPECT_TRUE(a1->created && a2->created);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM jobs WHERE client = 'peer:a'"), 2);
+  auto a3 = store_->createJob(kSpec, std::nullopt, 3, limits);
+  ASSERT_TRUE(a3);
+  EXPECT_FALSE(a3->created);
+  EXPECT_EQ(a3->refused, "client");
+  EXPECT_EQ(a3->queued, 2);
+  auto again = store_->createJob(kSpec, "k", 3, limits);  // its job, whatever the limits
+  ASSERT_TRUE(again);
+  EXPECT_TRUE(again->refused.empty());
+  EXPECT_EQ(again->job.id, a2->job.id);
+
+  QueueLimits b{"peer:b", 3, 2};
+  auto b1 = store_->createJob(kSpec, std::nullopt, 3, b);
+  ASSERT_TRUE(b1 && b1->created);
+  auto b2 = store_->createJob(kSpec, std::nullopt, 3, b);
+  ASSERT_TRUE(b2);
+  EXPECT_EQ(b2->refused, "queue");
+  EXPECT_EQ(b2->queued, 3);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM jobs"), 3);
+
+  // A claimed job no longer counts.
+  auto claimed = store_->claimNextJob(1);
+  ASSERT_TRUE(claimed && claimed->has_value());
+  auto b3 = store_->createJob(kSpec, std::nullopt, 3, b);
+  ASSERT_TRUE(b3);
+  EXPECT_TRUE(b3->created) << b3->refused;
+}
+
+// A job its host gives up when it stops goes back to the queue with the
+// reason, and the claim does not count as an attempt.
+TEST_F(Jobs, RequeueJobGivesTheClaimBack) {
+  int64_t id = newJob();
+  Claimer claimer;
+  claimer.host = "a";
+  auto claimed = store_->claimNextJob(claimer);
+  ASSERT_TRUE(claimed && claimed->has_value());
+  Lease lease{id, 1, "a"};
+  auto requeued = store_->requeueJob(lease, "stopped: shutting down");
+  ASSERT_TRUE(requeued) << requeued.error();
+  EXPECT_TRUE(*requeued);
+  auto job = store_->getJob(id);
+  ASSERT_TRUE(job && job->has_value());
+  EXPECT_EQ((*job)->status, JobStatus::Queued);
+  EXPECT_EQ((*job)->attempts, 0);
+  ASSERT_EQ((*job)->attemptErrors.size(), 1u);
+  EXPECT_EQ((*job)->attemptErrors[0], "attempt 1 on a: stopped: shutting down");
+  auto stale = store_->requeueJob(lease, "again");  // no longer held
+  ASSERT_TRUE(stale);
+  EXPECT_FALSE(*stale);
+}
+
 }  // namespace
 }  // namespace tally::store::testing

@@ -2,6 +2,8 @@
 // errors, rollback by default.
 #include "store/sqlite.hpp"
 
+#include "store/fault.hpp"
+
 #include <gtest/gtest.h>
 
 namespace tally::store {
@@ -74,6 +76,42 @@ TEST(Transaction, RollsBackUnlessCommitted) {
   Statement count(d.db, "SELECT group_concat(x) FROM t");
   ASSERT_TRUE(count.step());
   EXPECT_EQ(count.getText(0), "2");
+}
+
+// Store faults are named from the engine's code, not its message.
+TEST(Faults, NamedFromTheEngineCodes) {
+  struct Case {
+    DbError error;
+    Fault fault;
+  };
+  const Case cases[] = {
+      {DbError(SQLITE_FULL, "", "x"), Fault::kFull},
+      {DbError(SQLITE_IOERR_WRITE, "", "x"), Fault::kIoError},
+      {DbError(SQLITE_IOERR_FSYNC, "", "x"), Fault::kIoError},
+      {DbError(SQLITE_CORRUPT, "", "x"), Fault::kDamaged},
+      {DbError(SQLITE_NOTADB, "", "x"), Fault::kDamaged},
+      {DbError(SQLITE_BUSY, "", "x"), Fault::kBusy},
+      {DbError(SQLITE_BUSY_SNAPSHOT, "", "x"), Fault::kBusy},
+      {DbError(SQLITE_READONLY, "", "x"), Fault::kReadOnly},
+      {DbError(SQLITE_CONSTRAINT_UNIQUE, "", "x"), Fault::kNone},
+      {DbError(SQLITE_ERROR, "", "x"), Fault::kNone},
+      {DbError(0, "08006", "x"), Fault::kUnreachable},
+      {DbError(0, "57P01", "x"), Fault::kUnreachable},
+      {DbError(0, "53100", "x"), Fault::kFull},
+      {DbError(0, "55P03", "x"), Fault::kBusy},
+      {DbError(0, "XX001", "x"), Fault::kDamaged},
+      {DbError(0, "23505", "x"), Fault::kNone},
+      {DbError(0, "42601", "x"), Fault::kNone},
+  };
+  for (const Case& c : cases) {
+    EXPECT_EQ(faultOf(c.error), c.fault) << c.error.code() << " " << c.error.sqlState();
+    EXPECT_EQ(faultOf(static_cast<const std::exception&>(c.error)), c.fault);
+  }
+  EXPECT_EQ(faultOf(std::runtime_error("not the store's")), Fault::kNone);
+  EXPECT_TRUE(isWriteFault(Fault::kFull));
+  EXPECT_FALSE(isWriteFault(Fault::kDamaged));
+  EXPECT_STREQ(toString(Fault::kIoError), "io_error");
+  EXPECT_NE(describe(Fault::kFull).find("full"), std::string::npos);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // Browser test of an application's run (docs/layer.md): a `tallyd serve
-// --allow-applications` whose capture runs tests/capture/fake_app.sh in place
+// --allow-applications` (its application token in the page's storage and the
+// test's requests, tests/capture as the application root, as nobody when the
+// test runs as root) whose capture runs tests/capture/fake_app.sh in place
 // of a Vulkan application under the layer (a manifest folder of our own in
 // $TALLY_LAYER_PATH). The run view must show its frames, the layer's notes
 // and the shaders left uninstrumented, and do without cameras, screenshots,
@@ -9,7 +11,7 @@
 // Environment (tests/web/run.sh sets it): TALLYD, TALLY_WEB_ROOT,
 // TALLY_SCREENSHOTS, CHROMIUM.
 import assert from 'node:assert/strict';
-import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
+import { chmodSync, mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
 import { after, before, describe, test } from 'node:test';
@@ -23,6 +25,11 @@ const env = process.env;
 const here = dirname(fileURLToPath(import.meta.url));
 const kFakeApp = join(here, '..', 'capture', 'fake_app.sh');
 const kViewMs = 30_000;
+const kTokens = {
+  read: 'r3ad-0123456789abcdefghijklmnopqrstuv',
+  capture: 'c4pture-0123456789abcdefghijklmnopqrst',
+  application: 'app1ication-0123456789abcdefghijklmnop',
+};
 
 let daemon;
 let browser;
@@ -30,6 +37,8 @@ let layer;
 
 async function open(hash, viewport = { width: 1280, height: 800 }) {
   const context = await browser.newContext({ viewport });
+  // The dashboard keeps its token in this browser's storage (web/api.js).
+  await context.addInitScript((token) => localStorage.setItem('tally.token', token), kTokens.application);
   const page = await context.newPage();
   const errors = [];
   page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
@@ -47,7 +56,15 @@ before(async () => {
   mkdirSync(env.TALLY_SCREENSHOTS, { recursive: true });
   layer = mkdtempSync(join(tmpdir(), 'tally-web-layer-'));
   writeFileSync(join(layer, 'VkLayer_tally_counters.json'), '{}');
-  daemon = await new Daemon(env.TALLYD, env.TALLY_WEB_ROOT, { args: ['--allow-applications'], env: { TALLY_LAYER_PATH: layer } }).start();
+  const tokens = join(layer, 'tokens');
+  writeFileSync(tokens, Object.entries(kTokens).map(([k, v]) => `${k}=${v}\n`).join(''), { mode: 0o600 });
+  const args = ['--allow-applications', '--token-file', tokens, '--application-root', dirname(kFakeApp), '--application-env', 'FAKE_APP_*'];
+  if (process.geteuid() === 0) args.push('--run-as', 'nobody');
+  daemon = new Daemon(env.TALLYD, env.TALLY_WEB_ROOT, { args, env: { TALLY_LAYER_PATH: layer }, token: kTokens.application });
+  // Its job folders live in the daemon's folder, which the application's user must reach.
+  chmodSync(daemon.dir, 0o755);
+  chmodSync(layer, 0o755);
+  daemon = await daemon.start();
   browser = await chromium.launch({ executablePath: env.CHROMIUM });
 });
 

@@ -12,12 +12,14 @@ const kStartMs = 30_000;  // the daemon prints its address within this
 const kStopMs = 10_000;   // SIGTERM, then SIGKILL
 
 export class Daemon {
-  // options.args: more `tallyd serve` flags; options.env: more environment.
+  // options.args: more `tallyd serve` flags; options.env: more environment;
+  // options.token: the bearer token api() sends (none by default).
   constructor(tallyd, webRoot, options = {}) {
     this.tallyd = tallyd;
     this.webRoot = webRoot;
     this.args = options.args || [];
     this.env = options.env || {};
+    this.token = options.token || '';
     this.dir = mkdtempSync(join(tmpdir(), 'tally-web-'));
     // glTF scenes the tests write (--scenes: the daemon reads glTF files only from here).
     this.scenes = join(this.dir, 'scenes');
@@ -62,6 +64,7 @@ export class Daemon {
   // JSON from the API: {status, body}.
   async api(path, { method = 'GET', body } = {}) {
     const init = { method, headers: {} };
+    if (this.token) init.headers.Authorization = `Bearer ${this.token}`;
     if (body !== undefined) {
       init.headers['Content-Type'] = 'application/json';
       init.body = JSON.stringify(body);

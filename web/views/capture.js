@@ -167,7 +167,7 @@ function appForm(onSubmit) {
   const display = h('select', { name: 'application.display' }, h('option', { value: 'none' }, 'none'), h('option', { value: 'xvfb' }, 'xvfb (a virtual X server)'));
   const name = h('input', { name: 'application.name', placeholder: 'from the application', size: 16 });
   const form = h('form', { class: 'app-form', novalidate: true, 'aria-label': 'New application capture' },
-    field('Command', command, 'the program and its arguments, run on the daemon\'s host (the daemon needs --allow-applications)'),
+    field('Command', command, 'the program and its arguments, run on the daemon\'s host: the daemon needs --allow-applications, the program must lie in its --application-root, and the token must be its application token'),
     field('Or replay', replay, 'a GFXReconstruct capture file on the daemon\'s host, replayed by gfxrecon-replay'),
     h('div', { class: 'form-grid' },
       field('Frames', frames), field('Skip frames', skip, 'frames to let pass first'),
