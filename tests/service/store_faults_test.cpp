@@ -37,10 +37,14 @@ struct Answer {
   json j() const { return json::parse(body, nullptr, false); }
 };
 
+// The bearer token requests carry, where the daemon has a token file.
+std::string gToken;
+
 Answer ask(const Daemon& d, const std::string& method, const std::string& path,
            const std::string& body = {}) {
   httplib::Client client("127.0.0.1", d.port());
   client.set_read_timeout(15, 0);
+  if (!gToken.empty()) client.set_bearer_token_auth(gToken);
   httplib::Result res = method == "GET"    ? client.Get(path.c_str())
                         : method == "POST" ? client.Post(path.c_str(), body, "application/json")
                                            : client.Delete(path.c_str());
@@ -192,6 +196,7 @@ class FullDisk : public ::testing::Test {
     setenv("TALLY_LAYER_PATH", (dir_ / "layer").string().c_str(), 1);
   }
   void TearDown() override {
+    gToken.clear();
     unsetenv("TALLY_LAYER_PATH");
     std::error_code ec;
     fs::remove_all(dir_, ec);
@@ -206,7 +211,13 @@ TEST_F(FullDisk, WritesAnswer503AndTheRunningJobIsFailedOnceThereIsRoom) {
   if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs (" << disk.error() << "); run as root";
   {
     // The daemon stops before the tmpfs goes (declared after it).
-    Daemon d(dir_, dir_ / "disk" / "tally.db", {"--allow-applications", "--job-deadline", "6"});
+    // Applications as the security model allows them (docs/operating.md): the
+    // application token, tests/capture as the root, nobody's user under root.
+    ApplicationTokens tokens = writeApplicationTokens(dir_);
+    std::vector<std::string> flags = applicationFlags(tokens, {fs::path(FAKE_APP).parent_path()}, {"FAKE_APP_*"});
+    flags.insert(flags.end(), {"--job-deadline", "6"});
+    gToken = tokens.application;
+    Daemon d(dir_, dir_ / "disk" / "tally.db", flags);
     ASSERT_TRUE(d.start()) << "tallyd serve did not start";
     EXPECT_EQ(ask(d, "GET", "/api/health").status, 200);
 
