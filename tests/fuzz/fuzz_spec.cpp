@@ -41,7 +41,7 @@ struct Daemon {
   }
 };
 
-std::unique_ptr<Daemon> daemon;
+std::unique_ptr<Daemon> instance;
 
 }  // namespace
 
@@ -49,18 +49,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto body = api::parseJsonBody(std::string_view(reinterpret_cast<const char*>(data), size));
   if (!body.ok()) return 0;
   // A fresh store now and then, so that the queued jobs do not pile up.
-  if (!daemon || daemon->queued >= 4096) daemon = std::make_unique<Daemon>();
+  if (!instance || instance->queued >= 4096) instance = std::make_unique<Daemon>();
   api::Request request;
   request.method = "POST";
   request.path = "/api/captures";
   request.body = std::move(*body);
   request.principal = api::Principal::kCapture;
   request.remoteAddr = "127.0.0.1";
-  api::Response response = daemon->router.dispatch(std::move(request));
+  api::Response response = instance->router.dispatch(std::move(request));
   if (response.status >= 500) {
     std::fprintf(stderr, "fuzz_spec: %d %s\n", response.status, response.json.dump().c_str());
     std::abort();
   }
-  if (response.status < 300) ++daemon->queued;
+  if (response.status < 300) ++instance->queued;
   return 0;
 }

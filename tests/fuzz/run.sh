@@ -11,6 +11,7 @@ if [ ! -d "$seeds" ]; then
 fi
 mkdir -p "$work/corpus"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(cd "$(dirname "$0")/.." && pwd)/lsan.supp:print_suppressions=0}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 # -rss_limit_mb and -timeout: an input that takes more than 2 GiB or 25 s is
 # a finding too (the daemon reads these inputs from its users).
