@@ -25,6 +25,9 @@ packages=(
   xvfb xauth gfxreconstruct
   # The fleet store and its tests (PostgreSQL server and client, libpq).
   postgresql libpq-dev
+  # The sanitizer tree and the fuzz harnesses (tests/fuzz/, TALLY_FUZZ=ON):
+  # clang, and its runtimes (ASan, UBSan and libFuzzer's libclang_rt.fuzzer).
+  clang libclang-rt-14-dev
   # The suite on a busy machine: TALLY_TEST_LOAD=N scripts/test.sh runs the
   # tests beside N CPU-bound stress-ng workers.
   stress-ng

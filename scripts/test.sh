@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test: installs what is missing, builds, runs ctest (unit, SPIR-V
 # corpus, lavapipe integration), then the SPIR-V layer again under
-# AddressSanitizer + UndefinedBehaviorSanitizer.
+# AddressSanitizer + UndefinedBehaviorSanitizer, and the fuzz harnesses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,11 +29,21 @@ tests_started=$(date +%s)
 
 ctest --test-dir build --output-on-failure -j"$jobs"
 
-# Sanitizer build: only the targets whose input is untrusted SPIR-V.
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTALLY_SANITIZE=ON >/dev/null
-cmake --build build-asan -j"$jobs" --target tally_unit_tests tally_corpus_tests tallyd
+# Sanitizer build, with clang: the targets whose input is untrusted SPIR-V,
+# and the fuzz harnesses (TALLY_FUZZ: ASan, UBSan and libFuzzer; tests/fuzz/).
+# -O1: the fuzzers run several times faster than at -O0.
+if [ -f build-asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang' build-asan/CMakeCache.txt; then
+  rm -rf build-asan  # a tree configured with gcc before the switch to clang
+fi
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTALLY_FUZZ=ON -DTALLY_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build build-asan -j"$jobs" --target tally_unit_tests tally_corpus_tests tallyd \
+  fuzz_spirv fuzz_gltf fuzz_spec fuzz_http fuzz_ingest fuzz_corpus
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 LSAN_OPTIONS=suppressions="$PWD/tests/lsan.supp":print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan -L spirv --output-on-failure -j"$jobs"
+# Each harness for TALLY_FUZZ_SECONDS (60) over its seeds; a crash, leak or
+# UB fails it, the input left in build-asan/fuzz/work/<harness>/.
+ctest --test-dir build-asan -L fuzz --output-on-failure -j"$jobs"
 echo "test.sh: the tests took $(( $(date +%s) - tests_started )) s${TALLY_TEST_LOAD:+ beside stress-ng --cpu $TALLY_TEST_LOAD}"

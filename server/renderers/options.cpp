@@ -236,7 +236,10 @@ Result<json> canonicalOptions(std::string_view renderer, const json& options) {
   std::string takes;
   for (const auto* def : own) takes += (takes.empty() ? "" : ", ") + def->name;
   json out = json::object();  // nlohmann's object keeps keys sorted
-  for (const auto& [key, value] : options.items()) {
+  for (const auto& item : options.items()) {
+    // Not a structured binding: clang before 16 cannot capture one in a lambda.
+    const std::string& key = item.key();
+    const json& value = item.value();
     auto it = std::find_if(own.begin(), own.end(), [&](const OptionDef* d) { return d->name == key; });
     if (it == own.end()) {
       return makeError(key + ": " + std::string(renderer) + " takes no option " + key +

@@ -1,6 +1,7 @@
 #include "scenes/gltf_check.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -79,6 +80,26 @@ std::optional<uint64_t> unsignedField(const json& o, const char* key, uint64_t d
   if (v.is_number_unsigned()) return v.get<uint64_t>();
   if (v.is_number_integer() && v.get<int64_t>() >= 0) return uint64_t(v.get<int64_t>());
   return std::nullopt;
+}
+
+// Typed reads that never throw: a field of the wrong type (or an element
+// that is not an object) reads as `dflt`, and the checks below refuse it.
+int64_t intField(const json& o, const char* key, int64_t dflt) {
+  if (!o.is_object() || !o.contains(key) || !o[key].is_number_integer()) return dflt;
+  return o[key].is_number_unsigned() && o[key].get<uint64_t>() > uint64_t(INT64_MAX) ? dflt
+                                                                                     : o[key].get<int64_t>();
+}
+
+std::string stringField(const json& o, const char* key) {
+  return o.is_object() && o.contains(key) && o[key].is_string() ? o[key].get<std::string>() : std::string();
+}
+
+json objectField(const json& o, const char* key) {
+  return o.is_object() && o.contains(key) && o[key].is_object() ? o[key] : json::object();
+}
+
+json fieldOrNull(const json& o, const char* key) {
+  return o.is_object() && o.contains(key) ? o[key] : json();
 }
 
 std::string percentDecoded(const std::string& s) {
@@ -262,10 +283,15 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
     const std::string what = "accessor " + std::to_string(i);
     auto count = unsignedField(a, "count", kSaturated);
     if (!count || *count == kSaturated) return makeError(what + ": count missing or not a non-negative integer");
-    const int bytes = componentBytes(a.value("componentType", 0));
-    const int components = componentsOf(a.value("type", std::string()));
-    if (bytes == 0) return makeError(what + ": componentType " + a.value("componentType", json()).dump() + " is not a glTF type");
-    if (components == 0) return makeError(what + ": type " + a.value("type", json()).dump() + " is not a glTF type");
+    const int64_t componentType = intField(a, "componentType", 0);
+    const int bytes =
+        componentType < INT32_MIN || componentType > INT32_MAX ? 0 : componentBytes(int(componentType));
+    const int components = componentsOf(stringField(a, "type"));
+    if (bytes == 0)
+      return makeError(what + ": componentType " + fieldOrNull(a, "componentType").dump() +
+                       " is not a glTF type");
+    if (components == 0)
+      return makeError(what + ": type " + fieldOrNull(a, "type").dump() + " is not a glTF type");
     accessorCounts.push_back(*count);
     if (!a.contains("bufferView")) continue;  // zeros (or sparse, or compressed: the loader says)
     auto view = unsignedField(a, "bufferView", kSaturated);
@@ -296,7 +322,7 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
       if (prim.contains("extensions") && prim["extensions"].is_object()) {
         for (const auto& [name, ext] : prim["extensions"].items()) {
           auto c = kCompressed.find(name);
-          if (c != kCompressed.end() && !prim.value("attributes", json::object()).contains("POSITION"))
+          if (c != kCompressed.end() && !objectField(prim, "attributes").contains("POSITION"))
             return makeError(what + ": " + c->second + ", which Tally cannot decode");
           if (c != kCompressed.end()) {
             const json& position = prim["attributes"]["POSITION"];
@@ -306,7 +332,7 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
           }
         }
       }
-      const json attributes = prim.value("attributes", json::object());
+      const json attributes = objectField(prim, "attributes");
       uint64_t vertices = 0;
       if (attributes.contains("POSITION") && attributes["POSITION"].is_number_unsigned() &&
           attributes["POSITION"].get<uint64_t>() < accessorCounts.size())
@@ -315,7 +341,7 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
       if (prim.contains("indices") && prim["indices"].is_number_unsigned() &&
           prim["indices"].get<uint64_t>() < accessorCounts.size())
         elements = accessorCounts[prim["indices"].get<size_t>()];
-      const int mode = prim.value("mode", 4);
+      const int64_t mode = intField(prim, "mode", 4);
       const uint64_t triangles = mode == 4 ? elements / 3 : (mode == 5 || mode == 6) && elements >= 3 ? elements - 2 : 0;
       cost.primitives += 1;
       cost.triangles = addSat(cost.triangles, triangles);

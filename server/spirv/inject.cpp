@@ -1258,8 +1258,10 @@ class Injector {
                          {op(b, spv::Op::OpShiftRightLogical, u, {sampler, constantU32(shift)}), constantU32(7)});
       return std::make_pair(wrap(b, c0, size, mode), wrap(b, c1, size, mode));
     };
-    auto [x0, x1] = axis(f->params[2], footprint::kWidth, footprint::kAddressUShift, f->params[6]);
-    auto [y0, y1] = axis(f->params[3], footprint::kHeight, footprint::kAddressVShift, f->params[7]);
+    // Not structured bindings: clang before 16 cannot capture them in the lambda below.
+    std::pair<uint32_t, uint32_t> xs = axis(f->params[2], footprint::kWidth, footprint::kAddressUShift, f->params[6]);
+    std::pair<uint32_t, uint32_t> ys = axis(f->params[3], footprint::kHeight, footprint::kAddressVShift, f->params[7]);
+    uint32_t x0 = xs.first, x1 = xs.second, y0 = ys.first, y1 = ys.second;
     uint32_t texel = fpTexelLevelFn(), layer = f->params[4];
     fnCall(b, texel, {entry, x0, y0, layer, level});
     when(b, linear, [&](Body& bb) {

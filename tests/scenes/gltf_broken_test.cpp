@@ -159,12 +159,11 @@ const Row kRows[] = {
        w.declaredBufferBytes = uint64_t(1) << 40;  // 1 TiB declared, a few bytes on disk
      },
      "buffer 0: byteLength 1099511627776 exceeds the"},
-    {"instances-2-to-the-30",
-     [](GltfWriter& w) { doublingChain(w, 30); },
-     "over Tally's limit of 65536"},
+    {"instances-2-to-the-30", [](GltfWriter& w) { doublingChain(w, 30); }, "over Tally's limit of 65536"},
     {"instances-just-over-the-limit",
      [](GltfWriter& w) { doublingChain(w, 17); },  // 131072 draws of one quad
-     "node 0: instances 131072 mesh primitives (draws), over Tally's limit of 65536"},  // node k holds 2^(17-k)
+     "node 0: instances 131072 mesh primitives (draws), over Tally's limit of 65536"},  // node k holds
+                                                                                        // 2^(17-k)
     {"node-cycle",
      [](GltfWriter& w) {
        w.meshNode({w.quadPrimitive()});
@@ -232,6 +231,26 @@ const Row kRows[] = {
        w.doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
      },
      "sampler 0: wrapS 1234"},
+    // Fields of the wrong JSON type (found by tests/fuzz/fuzz_gltf): the
+    // pre-check threw nlohmann's type_error instead of refusing the file.
+    {"accessor-type-not-a-string",
+     [](GltfWriter& w) {
+       w.meshNode({w.quadPrimitive()});
+       w.doc["accessors"][0]["type"] = {0.0, 0.0, 0.0};
+     },
+     "accessor 0: type [0.0,0.0,0.0] is not a glTF type"},
+    {"accessor-component-type-a-string",
+     [](GltfWriter& w) {
+       w.meshNode({w.quadPrimitive()});
+       w.doc["accessors"][0]["componentType"] = "5126";
+     },
+     "accessor 0: componentType \"5126\" is not a glTF type"},
+    {"accessor-not-an-object",
+     [](GltfWriter& w) {
+       w.meshNode({w.quadPrimitive()});
+       w.doc["accessors"].push_back(7);
+     },
+     "count missing"},
     {"invalid-json", [](GltfWriter& w) { w.rawText = "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [ }"; },
      "invalid JSON"},
     {"huge-image",
@@ -300,6 +319,33 @@ TEST(GltfBroken, TruncatedAndLyingGlbFiles) {
     ASSERT_TRUE(o.refused) << c.path << ": " << o.message;
     EXPECT_NE(o.message.find(c.mentions), std::string::npos) << o.message;
     EXPECT_NE(o.message.find(c.path), std::string::npos) << o.message;
+  }
+}
+
+// A primitive's mode or attributes of the wrong type, or a primitive that is
+// not an object (found by tests/fuzz/fuzz_gltf): the pre-check answers (the
+// loader judges the rest) instead of throwing.
+TEST(GltfBroken, PrimitiveFieldsOfTheWrongTypeDoNotThrow) {
+  TempDir dir;
+  const std::function<void(json&)> edits[] = {
+      [](json& p) { p["mode"] = "4"; },
+      [](json& p) {
+        p["attributes"] = {1, 2};
+      },
+      [](json& p) { p = 3; },
+      [](json& p) {
+        p["extensions"] = {{"KHR_draco_mesh_compression", json::object()}};
+        p["attributes"] = "POSITION";
+      },
+  };
+  int i = 0;
+  for (const auto& edit : edits) {
+    GltfWriter w;
+    json p = w.quadPrimitive();
+    edit(p);
+    w.meshNode({p});
+    const std::string path = w.write(dir, "primitive-" + std::to_string(i++) + ".gltf");
+    EXPECT_NO_THROW((void)precheckGltf(path)) << path;
   }
 }
 
