@@ -28,6 +28,8 @@ packages=(
   # The sanitizer tree and the fuzz harnesses (tests/fuzz/, TALLY_FUZZ=ON):
   # clang, and its runtimes (ASan, UBSan and libFuzzer's libclang_rt.fuzzer).
   clang libclang-rt-14-dev
+  # Builds reuse the objects of earlier builds on the same machine (test.sh).
+  ccache
   # The suite on a busy machine: TALLY_TEST_LOAD=N scripts/test.sh runs the
   # tests beside N CPU-bound stress-ng workers.
   stress-ng

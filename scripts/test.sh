@@ -5,15 +5,34 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+phase_started=$(date +%s)
+phases=()
+phase() {  # phase NAME: the time since the last call, printed at the end
+  local now
+  now=$(date +%s)
+  phases+=("$(printf '%-22s %5d s' "$1" $((now - phase_started)))")
+  phase_started=$now
+}
+
 bash scripts/setup.sh
+phase "setup"
 jobs=$(nproc)
+# ccache (setup.sh installs it) where the machine keeps a cache: a build of a
+# clone in any folder of this machine reuses the objects of earlier builds,
+# paths being taken relative to the clone. A new machine builds everything.
+launcher=()
+if command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1 CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-20G}"
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 # setup.sh installed every tool the suite needs, so a test that finds one
 # missing (a Vulkan device, Xvfb, Chromium, PostgreSQL, Sponza in ../shared)
 # fails here as under CI, instead of skipping (tests/support/strict.hpp).
 export TALLY_TEST_STRICT=1
 
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${launcher[@]}" >/dev/null
 cmake --build build -j"$jobs"
+phase "build"
 
 # TALLY_TEST_LOAD=N: the tests run on a busy machine, N processes of
 # stress-ng spinning on the CPU beside them from here to the end (the suite
@@ -28,6 +47,7 @@ fi
 tests_started=$(date +%s)
 
 ctest --test-dir build --output-on-failure -j"$jobs"
+phase "tests"
 
 # Sanitizer build, with clang: the targets whose input is untrusted SPIR-V,
 # and the fuzz harnesses (TALLY_FUZZ: ASan, UBSan and libFuzzer; tests/fuzz/).
@@ -36,14 +56,20 @@ if [ -f build-asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang' b
   rm -rf build-asan  # a tree configured with gcc before the switch to clang
 fi
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
-  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTALLY_FUZZ=ON -DTALLY_BUILD_BENCHMARKS=OFF >/dev/null
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTALLY_FUZZ=ON -DTALLY_BUILD_BENCHMARKS=OFF \
+  "${launcher[@]}" >/dev/null
 cmake --build build-asan -j"$jobs" --target tally_unit_tests tally_corpus_tests tallyd \
   fuzz_spirv fuzz_gltf fuzz_spec fuzz_http fuzz_ingest fuzz_corpus
+phase "sanitizer build"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 LSAN_OPTIONS=suppressions="$PWD/tests/lsan.supp":print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan -L spirv --output-on-failure -j"$jobs"
+phase "sanitizer tests"
 # Each harness for TALLY_FUZZ_SECONDS (60) over its seeds; a crash, leak or
 # UB fails it, the input left in build-asan/fuzz/work/<harness>/.
 ctest --test-dir build-asan -L fuzz --output-on-failure -j"$jobs"
+phase "fuzz"
 echo "test.sh: the tests took $(( $(date +%s) - tests_started )) s${TALLY_TEST_LOAD:+ beside stress-ng --cpu $TALLY_TEST_LOAD}"
+echo "test.sh: phase times"
+printf '  %s\n' "${phases[@]}"
