@@ -218,6 +218,7 @@ TEST_F(FullDisk, WritesAnswer503AndTheRunningJobIsFailedOnceThereIsRoom) {
     flags.insert(flags.end(), {"--job-deadline", "6"});
     gToken = tokens.application;
     Daemon d(dir_, dir_ / "disk" / "tally.db", flags);
+    d.setToken(tokens.application);
     ASSERT_TRUE(d.start()) << "tallyd serve did not start";
     EXPECT_EQ(ask(d, "GET", "/api/health").status, 200);
 
