@@ -67,7 +67,7 @@ UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build-asan -L spirv --output-on-failure -j"$jobs"
 phase "sanitizer tests"
 # Each harness for TALLY_FUZZ_SECONDS (60) over its seeds; a crash, leak or
-# UB fails it, the input left in build-asan/fuzz/work/<harness>/.
+# UB fails it, the input left in build-asan/fuzz/runs/<harness>/.
 ctest --test-dir build-asan -L fuzz --output-on-failure -j"$jobs"
 phase "fuzz"
 echo "test.sh: the tests took $(( $(date +%s) - tests_started )) s${TALLY_TEST_LOAD:+ beside stress-ng --cpu $TALLY_TEST_LOAD}"
