@@ -263,6 +263,7 @@ void destroyCounting(DeviceState& dev) {
   for (auto& [handle, cb] : dev.commandBuffers) {
     if (cb->timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb->timestampPool, nullptr);
     if (cb->statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb->statisticsPool, nullptr);
+    destroyIndirect(dev, *cb);
   }
   for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
   if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
@@ -296,10 +297,15 @@ Bound resolveSlot(const DeviceState& dev, const CommandBufferState& cb, const Co
     return v == cb.vertexBuffers.end() ? Bound{} : Bound{v->second};
   }
   if (site.set < 0 || site.binding < 0 || site.set >= int64_t(bp.sets.size())) return {};
-  auto set = dev.sets.find(bp.sets[size_t(site.set)]);
-  if (set == dev.sets.end()) return {};
-  auto binding = set->second.bindings.find(uint32_t(site.binding));
-  if (binding == set->second.bindings.end()) return {};
+  const DescriptorSetState* state = nullptr;
+  if (auto pushed = bp.pushed.find(uint32_t(site.set)); pushed != bp.pushed.end()) {
+    state = &pushed->second;
+  } else if (auto set = dev.sets.find(bp.sets[size_t(site.set)]); set != dev.sets.end()) {
+    state = &set->second;
+  }
+  if (state == nullptr) return {};
+  auto binding = state->bindings.find(uint32_t(site.binding));
+  if (binding == state->bindings.end()) return {};
   const size_t element = site.slotCount > 1 ? i : site.index.value_or(0);
   return element < binding->second.size() ? binding->second[element] : Bound{};
 }
@@ -449,7 +455,8 @@ void processHarvest(DeviceState& dev, Harvest& h) {
   if (frame == dev.frames.end() || dev.written) return;
   const auto* base = static_cast<const uint8_t*>(h.mapped);
   const double period = dev.properties.limits.timestampPeriod;
-  for (const auto& part : h.parts) {
+  for (auto& part : h.parts) {
+    addIndirectReads(part, base);
     const size_t first = frame->second.passes.size();
     std::vector<uint64_t> timestamps(part.timestamps), statistics(size_t(part.statistics) * 3);
     std::memcpy(timestamps.data(), base + part.timestampsAt, timestamps.size() * 8);
@@ -629,6 +636,11 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     part.statisticsAt = at;
     part.statistics = cb.statisticsUsed;
     at += VkDeviceSize(cb.statisticsUsed) * 24;
+    for (const auto& draw : cb.indirectDraws) {
+      if (draw.copied) part.indirectDraws.push_back(draw);
+    }
+    part.indirectAt = at;
+    if (!part.indirectDraws.empty()) at += cb.indirectUsed;
     parts.push_back(std::move(part));
     sources.push_back(&cb);
   }
@@ -663,6 +675,10 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     if (part.statistics > 0) {
       dev.d.CmdCopyQueryPoolResults(h->cmd, cb.statisticsPool, 0, part.statistics, h->buffer, part.statisticsAt, 24,
                                     VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT);
+    }
+    if (!part.indirectDraws.empty()) {
+      const VkBufferCopy copy = {0, part.indirectAt, cb.indirectUsed};
+      dev.d.CmdCopyBuffer(h->cmd, cb.indirectBuffer, h->buffer, 1, &copy);
     }
   }
   memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string_view>
 
+#include "libraries.hpp"
 #include "names.hpp"
 #include "state.hpp"
 
@@ -162,6 +163,18 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   if (dev->d.QueueSubmit2 == nullptr) {
     dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
   }
+  // VK_EXT_debug_utils is an instance extension: the loader fills a device's
+  // entries for its commands through vkGetInstanceProcAddr, and the layer below
+  // may answer only there (validation does when the application did not enable
+  // the extension, and reports each call). The layer calls what the loader would.
+#define TALLY_LAYER_FROM_INSTANCE(name)                                                              \
+  if (dev->d.name == nullptr) {                                                                      \
+    dev->d.name = reinterpret_cast<PFN_vk##name>(gipa(inst->instance, "vk" #name));                  \
+  }
+  TALLY_LAYER_FROM_INSTANCE(SetDebugUtilsObjectNameEXT)
+  TALLY_LAYER_FROM_INSTANCE(CmdBeginDebugUtilsLabelEXT)
+  TALLY_LAYER_FROM_INSTANCE(CmdEndDebugUtilsLabelEXT)
+#undef TALLY_LAYER_FROM_INSTANCE
   inst->getProperties(physical, &dev->properties);
   inst->getMemoryProperties(physical, &dev->memory);
   uint32_t familyCount = 0;
@@ -262,7 +275,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateImage(VkDevice device, const VkImageCreateI
 VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice device, const VkBufferCreateInfo* info,
                                             const VkAllocationCallbacks* alloc, VkBuffer* buffer) {
   DeviceState* dev = deviceOf(device);
-  VkResult result = dev->d.CreateBuffer(device, info, alloc, buffer);
+  // Indirect parameters are copied after their draws (indirect.cpp).
+  VkBufferCreateInfo patched = *info;
+  if (dev->counting && (info->usage & VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)) patched.usage |= VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+  VkResult result = dev->d.CreateBuffer(device, &patched, alloc, buffer);
   if (result != VK_SUCCESS) return result;
   Resource r;
   r.handle = u64(*buffer);
@@ -481,38 +497,52 @@ void writeElement(DescriptorSetState& set, uint32_t binding, uint32_t element, B
   elements[element] = bound;
 }
 
+// One write of vkUpdateDescriptorSets or vkCmdPushDescriptorSetKHR.
+void applyWrite(DeviceState& dev, DescriptorSetState& set, const VkWriteDescriptorSet& write) {
+  for (uint32_t i = 0; i < write.descriptorCount; ++i) {
+    const void* element = nullptr;
+    if (write.pImageInfo != nullptr &&
+        (write.descriptorType == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ||
+         write.descriptorType == VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE ||
+         write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE ||
+         write.descriptorType == VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT)) {
+      element = &write.pImageInfo[i];
+    } else if (write.pBufferInfo != nullptr &&
+               (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER ||
+                write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER ||
+                write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC ||
+                write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC)) {
+      element = &write.pBufferInfo[i];
+    } else if (write.pTexelBufferView != nullptr &&
+               (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER ||
+                write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER)) {
+      element = &write.pTexelBufferView[i];
+    }
+    if (element == nullptr) continue;
+    writeElement(set, write.dstBinding, write.dstArrayElement + i, boundOf(dev, write.descriptorType, element));
+  }
+}
+
+// A descriptor update template's entries applied to `data`.
+void applyTemplate(DeviceState& dev, DescriptorSetState& set, const std::vector<VkDescriptorUpdateTemplateEntry>& entries,
+                   const void* data) {
+  for (const auto& entry : entries) {
+    if (entry.descriptorType == VK_DESCRIPTOR_TYPE_INLINE_UNIFORM_BLOCK) continue;
+    for (uint32_t i = 0; i < entry.descriptorCount; ++i) {
+      const void* element = static_cast<const uint8_t*>(data) + entry.offset + size_t(i) * entry.stride;
+      writeElement(set, entry.dstBinding, entry.dstArrayElement + i, boundOf(dev, entry.descriptorType, element));
+    }
+  }
+}
+
 VKAPI_ATTR void VKAPI_CALL UpdateDescriptorSets(VkDevice device, uint32_t writeCount, const VkWriteDescriptorSet* writes,
                                                 uint32_t copyCount, const VkCopyDescriptorSet* copies) {
   DeviceState* dev = deviceOf(device);
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t w = 0; w < writeCount; ++w) {
-      const auto& write = writes[w];
-      auto it = dev->sets.find(u64(write.dstSet));
-      if (it == dev->sets.end()) continue;
-      for (uint32_t i = 0; i < write.descriptorCount; ++i) {
-        const void* element = nullptr;
-        if (write.pImageInfo != nullptr &&
-            (write.descriptorType == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER ||
-             write.descriptorType == VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE ||
-             write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_IMAGE ||
-             write.descriptorType == VK_DESCRIPTOR_TYPE_INPUT_ATTACHMENT)) {
-          element = &write.pImageInfo[i];
-        } else if (write.pBufferInfo != nullptr &&
-                   (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER ||
-                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER ||
-                    write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC ||
-                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC)) {
-          element = &write.pBufferInfo[i];
-        } else if (write.pTexelBufferView != nullptr &&
-                   (write.descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER ||
-                    write.descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER)) {
-          element = &write.pTexelBufferView[i];
-        }
-        if (element == nullptr) continue;
-        writeElement(it->second, write.dstBinding, write.dstArrayElement + i,
-                     boundOf(*dev, write.descriptorType, element));
-      }
+      auto it = dev->sets.find(u64(writes[w].dstSet));
+      if (it != dev->sets.end()) applyWrite(*dev, it->second, writes[w]);
     }
     for (uint32_t c = 0; c < copyCount; ++c) {
       const auto& copy = copies[c];
@@ -540,6 +570,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDescriptorUpdateTemplate(VkDevice device,
   if (info->templateType == VK_DESCRIPTOR_UPDATE_TEMPLATE_TYPE_DESCRIPTOR_SET) {
     dev->templates[u64(*handle)].assign(info->pDescriptorUpdateEntries,
                                          info->pDescriptorUpdateEntries + info->descriptorUpdateEntryCount);
+  } else if (info->templateType == VK_DESCRIPTOR_UPDATE_TEMPLATE_TYPE_PUSH_DESCRIPTORS_KHR) {
+    dev->pushTemplates[u64(*handle)] = {info->pipelineBindPoint,
+                                        {info->pDescriptorUpdateEntries,
+                                         info->pDescriptorUpdateEntries + info->descriptorUpdateEntryCount}};
   }
   return result;
 }
@@ -551,16 +585,7 @@ VKAPI_ATTR void VKAPI_CALL UpdateDescriptorSetWithTemplate(VkDevice device, VkDe
     std::lock_guard lock(dev->mutex);
     auto t = dev->templates.find(u64(handle));
     auto s = dev->sets.find(u64(set));
-    if (t != dev->templates.end() && s != dev->sets.end()) {
-      for (const auto& entry : t->second) {
-        if (entry.descriptorType == VK_DESCRIPTOR_TYPE_INLINE_UNIFORM_BLOCK) continue;
-        for (uint32_t i = 0; i < entry.descriptorCount; ++i) {
-          const void* element = static_cast<const uint8_t*>(data) + entry.offset + size_t(i) * entry.stride;
-          writeElement(s->second, entry.dstBinding, entry.dstArrayElement + i,
-                       boundOf(*dev, entry.descriptorType, element));
-        }
-      }
-    }
+    if (t != dev->templates.end() && s != dev->sets.end()) applyTemplate(*dev, s->second, t->second, data);
   }
   dev->d.UpdateDescriptorSetWithTemplate(device, set, handle, data);
 }
@@ -614,21 +639,45 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
   VkPipelineLayoutCreateInfo extended = *info;
   extended.setLayoutCount = uint32_t(sets.size());
   extended.pSetLayouts = sets.data();
+  // Independent sets (graphics pipeline libraries): the application's
+  // handle leaves the sets between null, as a library's layout may lack a set
+  // another library of the same pipeline defines; complete pipelines get a
+  // twin with empty sets there, through which the counter set is bound
+  // (lavapipe cannot bind past a null set layout).
+  VkPipelineLayout twin = VK_NULL_HANDLE;
+  if (info->flags & VK_PIPELINE_LAYOUT_CREATE_INDEPENDENT_SETS_BIT_EXT) {
+    if (dev->d.CreatePipelineLayout(device, &extended, alloc, &twin) != VK_SUCCESS) twin = VK_NULL_HANDLE;
+    for (size_t s = info->setLayoutCount; s < dev->counterSet; ++s) sets[s] = VK_NULL_HANDLE;
+  }
   VkResult result = dev->d.CreatePipelineLayout(device, &extended, alloc, layout);
-  if (result != VK_SUCCESS) return result;
+  if (result != VK_SUCCESS) {
+    if (twin != VK_NULL_HANDLE) dev->d.DestroyPipelineLayout(device, twin, alloc);
+    return result;
+  }
   std::lock_guard lock(dev->mutex);
   dev->countedLayouts.insert(u64(*layout));
+  if (twin != VK_NULL_HANDLE) {
+    dev->countedLayouts.insert(u64(twin));
+    dev->completeLayouts[u64(*layout)] = twin;
+  }
   return result;
 }
 
 VKAPI_ATTR void VKAPI_CALL DestroyPipelineLayout(VkDevice device, VkPipelineLayout layout,
                                                 const VkAllocationCallbacks* alloc) {
   DeviceState* dev = deviceOf(device);
+  VkPipelineLayout twin = VK_NULL_HANDLE;
   {
     std::lock_guard lock(dev->mutex);
     dev->countedLayouts.erase(u64(layout));  // a later layout may reuse the handle
+    if (auto it = dev->completeLayouts.find(u64(layout)); it != dev->completeLayouts.end()) {
+      twin = it->second;
+      dev->countedLayouts.erase(u64(twin));
+      dev->completeLayouts.erase(it);
+    }
   }
   dev->d.DestroyPipelineLayout(device, layout, alloc);
+  if (twin != VK_NULL_HANDLE) dev->d.DestroyPipelineLayout(device, twin, alloc);
 }
 
 spirv::Stage stageOf(VkShaderStageFlagBits stage) {
@@ -647,13 +696,18 @@ spirv::Stage stageOf(VkShaderStageFlagBits stage) {
 
 // Instruments a pipeline's stages into `modules` (temporary modules to
 // destroy after creation) and fills `info`. Stages that cannot be
-// instrumented keep the application's module; each is reported.
+// instrumented keep the application's module; each is reported. `split`:
+// a pipeline made of libraries, whose fragment stages count from
+// kPreRasterizationSlots (libraries.hpp).
 void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateInfo>& stages, PipelineInfo& info,
-                      std::vector<VkShaderModule>& modules) {
-  uint32_t nextSlot = 0;
+                      std::vector<VkShaderModule>& modules, bool split = false) {
+  uint32_t nextSlot = 0, fragmentSlot = kPreRasterizationSlots;
   const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
   for (auto& stage : stages) {
+    if (!stageInParts(stage.stage, info.libraryParts)) continue;  // a library ignores the parts it does not define
     const spirv::Stage s = stageOf(stage.stage);
+    uint32_t& next = split && s == spirv::Stage::Fragment ? fragmentSlot : nextSlot;
+    const uint32_t limit = split && s != spirv::Stage::Fragment ? kPreRasterizationSlots : maxSlots;
     if (s == spirv::Stage::Fragment) info.hasFragment = true;
     nlohmann::json report = {{"stage", std::string(spirv::toString(s))}, {"instrumented", false}, {"sites", 0}};
     auto shader = dev.shaders.find(u64(stage.module));
@@ -672,7 +726,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
                          : "shader " + hexHandle(u64(stage.module));
     if (why.empty()) {
       spirv::InstrumentOptions options = dev.instrumentOptions;
-      options.firstSlot = nextSlot;
+      options.firstSlot = next;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.
       if (dev.llvmpipe && spirv::usesDemote(shader->second.words)) {
@@ -681,9 +735,9 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
       auto result = spirv::instrument(shader->second.words, options);
       if (!result) {
         why = result.error();
-      } else if (nextSlot + result->layout().reserved() > maxSlots) {
+      } else if (next + result->layout().reserved() > limit) {
         why = "needs " + std::to_string(result->layout().reserved()) + " counter slots; the layer's region holds " +
-              std::to_string(maxSlots - nextSlot);
+              std::to_string(limit - next) + (limit < maxSlots ? " (a pre-rasterization library's share)" : "");
       } else {
         VkShaderModuleCreateInfo moduleInfo = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
         moduleInfo.codeSize = result->words.size() * 4;
@@ -694,7 +748,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
         } else {
           modules.push_back(module);
           stage.module = module;
-          nextSlot += result->layout().reserved();
+          next += result->layout().reserved();
           if (result->copies > 1) info.foldLayouts.push_back(result->layout());
           for (auto& site : result->sites) info.sites.push_back(std::move(site));
           report["instrumented"] = true;
@@ -706,23 +760,12 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
     report["reason"] = why;
     dev.shaderReports.push_back(report);
   }
-  info.slots = nextSlot;
-  info.counted = nextSlot > 0;
+  info.slots = std::max({info.slots, nextSlot, fragmentSlot > kPreRasterizationSlots ? fragmentSlot : 0});
+  info.counted = info.slots > 0;
 }
 
 bool layoutCounted(DeviceState& dev, VkPipelineLayout layout) {
   return dev.countedLayouts.count(u64(layout)) > 0;
-}
-
-bool isLibraryPipeline(const void* next, VkPipelineCreateFlags flags) {
-  if (flags & VK_PIPELINE_CREATE_LIBRARY_BIT_KHR) return true;
-  for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
-    if (p->sType == VK_STRUCTURE_TYPE_PIPELINE_LIBRARY_CREATE_INFO_KHR ||
-        p->sType == VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_LIBRARY_CREATE_INFO_EXT) {
-      return true;
-    }
-  }
-  return false;
 }
 
 void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipelines,
@@ -731,6 +774,10 @@ void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipel
   for (uint32_t i = 0; i < count; ++i) {
     if (pipelines[i] == VK_NULL_HANDLE) continue;  // a failed creation in a batch
     states[i]->handle = u64(pipelines[i]);
+    if (states[i]->library) {  // counted once linked, as part of the pipelines it makes
+      dev.libraries[u64(pipelines[i])] = states[i];
+      continue;
+    }
     dev.pipelines[u64(pipelines[i])] = states[i];
     ++dev.pipelinesCreated;
     dev.pipelinesCounted += states[i]->counted ? 1 : 0;
@@ -750,19 +797,32 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
       state->layout = infos[i].layout;
-      if (infos[i].pVertexInputState != nullptr) {
+      // Graphics pipeline libraries: a library's stages are instrumented as
+      // a pipeline's are; a pipeline linked from libraries counts their sites.
+      const LibraryUse use = libraryUse(infos[i]);
+      state->library = use.library;
+      state->libraryParts = use.parts;
+      if (infos[i].pVertexInputState != nullptr &&
+          (use.parts & VK_GRAPHICS_PIPELINE_LIBRARY_VERTEX_INPUT_INTERFACE_BIT_EXT)) {
         for (uint32_t a = 0; a < infos[i].pVertexInputState->vertexAttributeDescriptionCount; ++a) {
           const auto& attr = infos[i].pVertexInputState->pVertexAttributeDescriptions[a];
           state->vertexLocationBinding[attr.location] = attr.binding;
         }
       }
-      if (isLibraryPipeline(infos[i].pNext, infos[i].flags)) {
-        dev->notes.insert("graphics pipeline libraries are not instrumented: their pipelines run uncounted");
-      } else if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+      state->libraryParts |= mergeLibraries(*dev, use.linked, *state);
+      if (dev->counting && layoutCounted(*dev, infos[i].layout) && infos[i].stageCount > 0 &&
+          (use.parts & (VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT |
+                        VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_SHADER_BIT_EXT))) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
-        instrumentStages(*dev, stages[i], *state, modules);
+        instrumentStages(*dev, stages[i], *state, modules, use.split());
         patched[i].pStages = stages[i].data();
       }
+      // The counter set is bound through the pipeline's layout.
+      if (auto twin = dev->completeLayouts.find(u64(state->layout)); !use.library && twin != dev->completeLayouts.end()) {
+        state->layout = twin->second;
+        if (patched[i].layout != VK_NULL_HANDLE) patched[i].layout = twin->second;
+      }
+      state->counted = state->counted && dev->counting && layoutCounted(*dev, state->layout);
       states[i] = state;
     }
   }
@@ -803,6 +863,7 @@ VKAPI_ATTR void VKAPI_CALL DestroyPipeline(VkDevice device, VkPipeline pipeline,
   {
     std::lock_guard lock(dev->mutex);
     dev->pipelines.erase(u64(pipeline));  // recorded regions keep their own reference
+    dev->libraries.erase(u64(pipeline));  // pipelines linked from it keep its sites
   }
   dev->d.DestroyPipeline(device, pipeline, alloc);
 }
@@ -821,6 +882,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateCommandPool(VkDevice device, const VkComman
 
 void destroyCommandBufferState(DeviceState& dev, CommandBufferState& cb) {
   releaseRegions(dev, cb);
+  destroyIndirect(dev, cb);
   if (cb.timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.timestampPool, nullptr);
   if (cb.statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.statisticsPool, nullptr);
 }
@@ -896,6 +958,9 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.bind = {};
   cb.vertexBuffers.clear();
   cb.indexBuffer = 0;
+  cb.renderingSuspended = false;
+  cb.indirectDraws.clear();
+  cb.indirectUsed = 0;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkCommandBufferBeginInfo* info) {
@@ -1007,6 +1072,7 @@ VKAPI_ATTR VkResult VKAPI_CALL EndCommandBuffer(VkCommandBuffer cmd) {
     std::lock_guard lock(dev->mutex);
     CommandBufferState* cb = cbState(*dev, cmd);
     if (tracked(*dev, cb) && !cb->inRenderPass) closePass(*dev, *cb);
+    if (tracked(*dev, cb) && !cb->inRenderPass && !cb->renderingSuspended) recordIndirectCopies(*dev, *cb);
   }
   return dev->d.EndCommandBuffer(cmd);
 }
@@ -1079,7 +1145,11 @@ void endRenderPass(VkCommandBuffer cmd, CallDown callDown) {
   CommandBufferState* cb = cbState(*dev, cmd);
   if (tracked(*dev, cb)) closePass(*dev, *cb);
   callDown(*dev);
-  if (cb != nullptr) cb->inRenderPass = false;
+  if (cb == nullptr) return;
+  cb->inRenderPass = false;
+  // The pass's indirect parameters are copied once it has ended, unless a
+  // suspended rendering scope forbids any command until it resumes.
+  if (tracked(*dev, cb) && !cb->renderingSuspended) recordIndirectCopies(*dev, *cb);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
@@ -1118,6 +1188,8 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
   }
   // A resumed scope continues the suspended one's pass.
   const bool resuming = (info->flags & VK_RENDERING_RESUMING_BIT) != 0;
+  cb->renderingSuspends = (info->flags & VK_RENDERING_SUSPENDING_BIT) != 0;
+  cb->renderingSuspended = false;
   cb->inRenderPass = true;
   if (tracked(*dev, cb) && !(resuming && !cb->passes.empty() && cb->passes.back().kind == "rendering")) {
     openPass(*dev, *cb, "rendering");
@@ -1128,7 +1200,10 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdEndRendering(VkCommandBuffer cmd) {
-  endRenderPass(cmd, [&](DeviceState& dev) { dev.d.CmdEndRendering(cmd); });
+  endRenderPass(cmd, [&](DeviceState& dev) {
+    if (CommandBufferState* cb = cbState(dev, cmd)) cb->renderingSuspended = cb->renderingSuspends;
+    dev.d.CmdEndRendering(cmd);
+  });
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginDebugUtilsLabelEXT(VkCommandBuffer cmd, const VkDebugUtilsLabelEXT* label) {
@@ -1212,8 +1287,50 @@ VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorSets(VkCommandBuffer cmd, VkPipeline
   CommandBufferState* cb = cbState(*dev, cmd);
   if (cb == nullptr) return;
   auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
-  for (uint32_t i = 0; i < count && first + i < bp.sets.size(); ++i) bp.sets[first + i] = u64(sets[i]);
+  for (uint32_t i = 0; i < count && first + i < bp.sets.size(); ++i) {
+    bp.sets[first + i] = u64(sets[i]);
+    bp.pushed.erase(first + i);
+  }
   bp.dirty = true;
+}
+
+// Push descriptors resolve as bound sets do: the command buffer holds the
+// pushed set's descriptors, updated incrementally, until a bind replaces it.
+template <class Update>
+void pushDescriptors(VkCommandBuffer cmd, VkPipelineBindPoint point, uint32_t set, Update update) {
+  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  DeviceState* dev = deviceOf(cmd);
+  std::lock_guard lock(dev->mutex);
+  CommandBufferState* cb = cbState(*dev, cmd);
+  if (cb == nullptr) return;
+  auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
+  if (set >= bp.sets.size()) return;
+  update(*dev, bp.pushed[set]);
+  bp.sets[set] = 0;
+  bp.dirty = true;
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdPushDescriptorSetKHR(VkCommandBuffer cmd, VkPipelineBindPoint point,
+                                                   VkPipelineLayout layout, uint32_t set, uint32_t count,
+                                                   const VkWriteDescriptorSet* writes) {
+  deviceOf(cmd)->d.CmdPushDescriptorSetKHR(cmd, point, layout, set, count, writes);
+  pushDescriptors(cmd, point, set, [&](DeviceState& dev, DescriptorSetState& pushed) {
+    for (uint32_t i = 0; i < count; ++i) applyWrite(dev, pushed, writes[i]);
+  });
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdPushDescriptorSetWithTemplateKHR(VkCommandBuffer cmd, VkDescriptorUpdateTemplate handle,
+                                                               VkPipelineLayout layout, uint32_t set, const void* data) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdPushDescriptorSetWithTemplateKHR(cmd, handle, layout, set, data);
+  VkPipelineBindPoint point = VK_PIPELINE_BIND_POINT_MAX_ENUM;
+  {
+    std::lock_guard lock(dev->mutex);
+    if (auto t = dev->pushTemplates.find(u64(handle)); t != dev->pushTemplates.end()) point = t->second.first;
+  }
+  pushDescriptors(cmd, point, set, [&](DeviceState& device, DescriptorSetState& pushed) {
+    applyTemplate(device, pushed, device.pushTemplates[u64(handle)].second, data);
+  });
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBindVertexBuffers(VkCommandBuffer cmd, uint32_t first, uint32_t count,
@@ -1291,14 +1408,20 @@ VKAPI_ATTR void VKAPI_CALL CmdDrawIndirect(VkCommandBuffer cmd, VkBuffer buffer,
   dev->d.CmdDrawIndirect(cmd, buffer, offset, count, stride);
 }
 
+// Indexed indirect draws: their parameters are read back after their pass (indirect.cpp).
+void noteIndirect(DeviceState& dev, VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset, uint32_t maxDraws,
+                  uint32_t stride, VkBuffer countBuffer = VK_NULL_HANDLE, VkDeviceSize countOffset = 0) {
+  std::lock_guard lock(dev.mutex);
+  if (CommandBufferState* cb = cbState(dev, cmd)) {
+    noteIndexedIndirect(dev, *cb, buffer, offset, maxDraws, stride, countBuffer, countOffset);
+  }
+}
+
 VKAPI_ATTR void VKAPI_CALL CmdDrawIndexedIndirect(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset,
                                                   uint32_t count, uint32_t stride) {
   DeviceState* dev = deviceOf(cmd);
   prepareDraw(*dev, cmd, false);
-  {
-    std::lock_guard lock(dev->mutex);
-    dev->notes.insert("indexed indirect draws: their index reads are not derived (the counts are on the GPU)");
-  }
+  noteIndirect(*dev, cmd, buffer, offset, count, stride);
   dev->d.CmdDrawIndexedIndirect(cmd, buffer, offset, count, stride);
 }
 
@@ -1315,6 +1438,7 @@ VKAPI_ATTR void VKAPI_CALL CmdDrawIndexedIndirectCount(VkCommandBuffer cmd, VkBu
                                                        uint32_t maxCount, uint32_t stride) {
   DeviceState* dev = deviceOf(cmd);
   prepareDraw(*dev, cmd, false);
+  noteIndirect(*dev, cmd, buffer, offset, maxCount, stride, countBuffer, countOffset);
   dev->d.CmdDrawIndexedIndirectCount(cmd, buffer, offset, countBuffer, countOffset, maxCount, stride);
 }
 
@@ -1498,9 +1622,12 @@ VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL GetInstanceProcAddr(VkInstance instance
   TALLY_INSTANCE(EnumerateInstanceExtensionProperties)
 #undef TALLY_INSTANCE
   if (instance == VK_NULL_HANDLE) return nullptr;
-  if (PFN_vkVoidFunction f = interceptedDevice(n)) return f;
   InstanceState* inst = instanceOf(instance);
-  return inst == nullptr ? nullptr : inst->gipa(instance, name);
+  if (inst == nullptr) return nullptr;
+  PFN_vkVoidFunction next = inst->gipa(instance, name);
+  // A command the chain below does not offer stays null, as without the layer.
+  if (PFN_vkVoidFunction f = interceptedDevice(n)) return next == nullptr ? nullptr : f;
+  return next;
 }
 
 PFN_vkVoidFunction interceptedDevice(std::string_view n) {
@@ -1566,6 +1693,8 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CmdEndQuery)
   TALLY_DEVICE(CmdBindPipeline)
   TALLY_DEVICE(CmdBindDescriptorSets)
+  TALLY_DEVICE(CmdPushDescriptorSetKHR)
+  TALLY_DEVICE(CmdPushDescriptorSetWithTemplateKHR)
   TALLY_DEVICE(CmdBindVertexBuffers)
   TALLY_DEVICE(CmdBindIndexBuffer)
   TALLY_DEVICE(CmdBindVertexBuffers2)

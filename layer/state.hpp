@@ -81,7 +81,8 @@ struct DeviceDispatch {
   X(WaitForFences) X(GetFenceStatus) X(ResetFences) X(CreateSwapchainKHR) X(GetSwapchainImagesKHR)           \
   X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)    \
   X(CmdBindVertexBuffers2) X(CmdDrawMeshTasksEXT) X(CmdDrawMeshTasksIndirectEXT)                              \
-  X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)
+  X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)                          \
+  X(CmdPushDescriptorSetKHR) X(CmdPushDescriptorSetWithTemplateKHR)
 #define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
 #undef TALLY_LAYER_MEMBER
@@ -133,6 +134,25 @@ struct PipelineInfo {
   std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
   std::map<uint32_t, uint32_t> vertexLocationBinding;  // attribute Location -> vertex buffer binding
   bool hasFragment = false;
+  // Graphics pipeline libraries: the parts this pipeline holds
+  // (VkGraphicsPipelineLibraryFlagsEXT; all four for a complete pipeline).
+  uint32_t libraryParts = 0;
+  bool library = false;  // VK_PIPELINE_CREATE_LIBRARY_BIT_KHR: linked into others, never bound
+};
+
+// An indexed indirect draw whose parameters the layer copies, after the
+// draw's pass, into its command buffer's indirect buffer (indirect.cpp).
+struct IndirectDraw {
+  uint32_t pass = 0;
+  uint64_t indexBuffer = 0;
+  uint32_t indexBytes = 4;
+  VkBuffer source = VK_NULL_HANDLE, countSource = VK_NULL_HANDLE;
+  VkDeviceSize offset = 0, countOffset = 0;
+  uint32_t stride = 0;
+  uint32_t maxDraws = 0;      // drawCount, or maxDrawCount with a count buffer
+  VkDeviceSize paramsAt = 0;  // maxDraws (indexCount, instanceCount) pairs of 8 bytes
+  VkDeviceSize countAt = 0;   // the draw count's 4 bytes, with a count buffer
+  bool copied = false;        // its copy is recorded
 };
 
 // The resource behind each slot of a region, resolved at the draw.
@@ -185,12 +205,19 @@ struct CommandBufferState {
     std::array<uint64_t, 32> sets{};
     VkDeviceSize boundOffset = ~VkDeviceSize(0);
     bool dirty = true;
+    std::map<uint32_t, DescriptorSetState> pushed;  // push descriptor sets, by set number
   };
   std::array<BindPoint, 2> bind;  // graphics, compute
   std::map<uint32_t, uint64_t> vertexBuffers;
   uint64_t indexBuffer = 0;
   uint32_t indexBytes = 4;
   bool overflowNoted = false;
+  bool renderingSuspends = false;   // the current rendering scope has VK_RENDERING_SUSPENDING_BIT
+  bool renderingSuspended = false;  // the last one ended so: nothing may be recorded until it resumes
+  std::vector<IndirectDraw> indirectDraws;
+  VkBuffer indirectBuffer = VK_NULL_HANDLE;  // where indirect parameters are copied (indirect.cpp)
+  VkDeviceMemory indirectMemory = VK_NULL_HANDLE;
+  VkDeviceSize indirectUsed = 0;
 };
 
 // One vkQueueSubmit's counters and queries, copied into a host-visible
@@ -209,6 +236,8 @@ struct Harvest {
     std::vector<VkDeviceSize> regionAt;  // where each region's counters lie in the buffer
     VkDeviceSize timestampsAt = 0, statisticsAt = 0;
     uint32_t timestamps = 0, statistics = 0;
+    std::vector<IndirectDraw> indirectDraws;  // copied ones only
+    VkDeviceSize indirectAt = 0;              // where the command buffer's indirect buffer lies
   };
   std::vector<Part> parts;  // one per command buffer submitted
 };
@@ -271,10 +300,16 @@ struct DeviceState {
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
   std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
+  // Independent-sets layouts (null between the application's sets and the
+  // counter set) -> their twin with empty sets there, for complete pipelines.
+  std::unordered_map<uint64_t, VkPipelineLayout> completeLayouts;
   std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> pipelines;
   std::unordered_map<uint64_t, DescriptorSetState> sets;
   std::unordered_map<uint64_t, std::set<uint64_t>> poolSets;
   std::unordered_map<uint64_t, std::vector<VkDescriptorUpdateTemplateEntry>> templates;
+  std::unordered_map<uint64_t, std::pair<VkPipelineBindPoint, std::vector<VkDescriptorUpdateTemplateEntry>>>
+      pushTemplates;  // templates of push descriptors: their bind point and entries
+  std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> libraries;  // graphics pipeline libraries
   std::unordered_map<uint64_t, Resource> resources;  // destroyed ones stay: their counts may still be read back
   std::unordered_map<uint64_t, ImageView> views;
   std::unordered_map<uint64_t, uint64_t> bufferViews;  // view -> buffer
@@ -312,6 +347,13 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
 void endFrame(DeviceState& dev);
 void finish(DeviceState& dev, bool complete);  // waits for every harvest and writes the output
 void releaseRegions(DeviceState& dev, CommandBufferState& cb);
+
+// indirect.cpp: index reads of indexed indirect draws, from their parameters read back.
+void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buffer, VkDeviceSize offset,
+                         uint32_t maxDraws, uint32_t stride, VkBuffer countBuffer, VkDeviceSize countOffset);
+void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb);  // outside a render pass only
+void destroyIndirect(DeviceState& dev, CommandBufferState& cb);
+void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the parts' passes' indexReads
 nlohmann::json outputJson(DeviceState& dev, bool complete);
 
 }  // namespace tally::layer

@@ -7,7 +7,10 @@
 // It checks its own results, so a layer that changed what the application
 // computes fails the test. --crash-after N: SIGSEGV after N frames;
 // --hang-after N: sleeps forever after N frames; --all-sets-only 1: "fill"
-// uses the full layout too, so the layer can count nothing.
+// uses the full layout too, so the layer can count nothing; --debug-utils 0:
+// the instance does not enable VK_EXT_debug_utils, yet the application names
+// its buffer every frame through vkSetDebugUtilsObjectNameEXT (a misuse some
+// applications commit, which the validation layer reports each time).
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -53,7 +56,7 @@ void main() { v[gl_GlobalInvocationID.x] += 1000u; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  uint32_t frames = 3, crashAfter = 0, hangAfter = 0, allSetsOnly = 0;
+  uint32_t frames = 3, crashAfter = 0, hangAfter = 0, allSetsOnly = 0, enableDebugUtils = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     const uint32_t value = uint32_t(std::strtoul(argv[i + 1], nullptr, 10));
@@ -61,6 +64,7 @@ int main(int argc, char** argv) {
     else if (flag == "--crash-after") crashAfter = value;
     else if (flag == "--hang-after") hangAfter = value;
     else if (flag == "--all-sets-only") allSetsOnly = value;
+    else if (flag == "--debug-utils") enableDebugUtils = value;
   }
   constexpr uint32_t kCount = 64 * 50;
 
@@ -73,6 +77,7 @@ int main(int argc, char** argv) {
   vkEnumerateInstanceExtensionProperties(nullptr, &extCount, exts.data());
   bool debugUtils = false;
   for (const auto& e : exts) debugUtils = debugUtils || std::strcmp(e.extensionName, VK_EXT_DEBUG_UTILS_EXTENSION_NAME) == 0;
+  debugUtils = debugUtils && enableDebugUtils != 0;
   const char* debugExt = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
   VkInstanceCreateInfo ici = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
   ici.pApplicationInfo = &app;
@@ -116,13 +121,14 @@ int main(int argc, char** argv) {
   bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   VkBuffer buffer;
   check(vkCreateBuffer(device, &bci, nullptr, &buffer), "vkCreateBuffer");
-  if (debugUtils && setName != nullptr) {
+  auto nameBuffer = [&] {
     VkDebugUtilsObjectNameInfoEXT name = {VK_STRUCTURE_TYPE_DEBUG_UTILS_OBJECT_NAME_INFO_EXT};
     name.objectType = VK_OBJECT_TYPE_BUFFER;
     name.objectHandle = reinterpret_cast<uint64_t>(buffer);
     name.pObjectName = "out";
     setName(device, &name);
-  }
+  };
+  if (debugUtils && setName != nullptr) nameBuffer();
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(device, buffer, &req);
   VkPhysicalDeviceMemoryProperties mem;
@@ -223,6 +229,7 @@ int main(int argc, char** argv) {
     if (hangAfter > 0 && frame == hangAfter) {
       for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
     }
+    if (!enableDebugUtils && setName != nullptr) nameBuffer();
     VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     vkBeginCommandBuffer(cmd, &begin);
     auto label = [&](const char* name) {
