@@ -761,6 +761,8 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"counting_enabled", dev.counting},
         {"pipelines", dev.pipelinesCreated},
         {"pipelines_counted", dev.pipelinesCounted},
+        {"pipeline_libraries", dev.librariesCreated},
+        {"pipelines_linked", dev.pipelinesLinked},
         {"layouts_refused", dev.layoutsRefused},
         {"not_counting", dev.notCounting}}},
       {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},

@@ -776,9 +776,11 @@ void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipel
     states[i]->handle = u64(pipelines[i]);
     if (states[i]->library) {  // counted once linked, as part of the pipelines it makes
       dev.libraries[u64(pipelines[i])] = states[i];
+      ++dev.librariesCreated;
       continue;
     }
     dev.pipelines[u64(pipelines[i])] = states[i];
+    dev.pipelinesLinked += states[i]->linked ? 1 : 0;
     ++dev.pipelinesCreated;
     dev.pipelinesCounted += states[i]->counted ? 1 : 0;
   }
@@ -810,6 +812,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
         }
       }
       state->libraryParts |= mergeLibraries(*dev, use.linked, *state);
+      state->linked = !use.linked.empty();
       if (dev->counting && layoutCounted(*dev, infos[i].layout) && infos[i].stageCount > 0 &&
           (use.parts & (VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT |
                         VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_SHADER_BIT_EXT))) {

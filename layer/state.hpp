@@ -138,6 +138,7 @@ struct PipelineInfo {
   // (VkGraphicsPipelineLibraryFlagsEXT; all four for a complete pipeline).
   uint32_t libraryParts = 0;
   bool library = false;  // VK_PIPELINE_CREATE_LIBRARY_BIT_KHR: linked into others, never bound
+  bool linked = false;   // made from libraries (VkPipelineLibraryCreateInfoKHR)
 };
 
 // An indexed indirect draw whose parameters the layer copies, after the
@@ -335,6 +336,7 @@ struct DeviceState {
   bool written = false;
   std::vector<nlohmann::json> shaderReports;
   uint32_t pipelinesCreated = 0, pipelinesCounted = 0, layoutsRefused = 0;
+  uint32_t librariesCreated = 0, pipelinesLinked = 0;  // graphics pipeline libraries; pipelines linked from them
   std::set<std::string> notes;
 };
 
