@@ -110,6 +110,11 @@ int main(int argc, char** argv) {
   vkGetDeviceQueue(device, family, 0, &queue);
   auto setName = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
       vkGetInstanceProcAddr(instance, "vkSetDebugUtilsObjectNameEXT"));
+  // Without the extension the instance gives none; the device still does (as libplacebo finds it).
+  if (!enableDebugUtils) {
+    setName = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(
+        vkGetDeviceProcAddr(device, "vkSetDebugUtilsObjectNameEXT"));
+  }
   auto beginLabel = reinterpret_cast<PFN_vkCmdBeginDebugUtilsLabelEXT>(
       vkGetInstanceProcAddr(instance, "vkCmdBeginDebugUtilsLabelEXT"));
   auto endLabel = reinterpret_cast<PFN_vkCmdEndDebugUtilsLabelEXT>(
