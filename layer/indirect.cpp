@@ -84,9 +84,16 @@ void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buff
   cb.indirectDraws.push_back(draw);
 }
 
-void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb) {
+void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb, bool end) {
   auto pending = std::find_if(cb.indirectDraws.begin(), cb.indirectDraws.end(), [](const IndirectDraw& d) { return !d.copied; });
   if (pending == cb.indirectDraws.end()) return;
+  if (cb.inRenderPass || cb.renderingSuspended) {
+    if (end) {
+      dev.notes.insert("a command buffer ended inside a suspended rendering scope: the index reads of its indexed "
+                       "indirect draws there are not derived");
+    }
+    return;
+  }
   // The parameters were written before the draws read them (by a shader, a
   // transfer or the host): every earlier write is visible to the copies.
   VkMemoryBarrier before = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};

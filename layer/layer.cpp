@@ -1075,7 +1075,7 @@ VKAPI_ATTR VkResult VKAPI_CALL EndCommandBuffer(VkCommandBuffer cmd) {
     std::lock_guard lock(dev->mutex);
     CommandBufferState* cb = cbState(*dev, cmd);
     if (tracked(*dev, cb) && !cb->inRenderPass) closePass(*dev, *cb);
-    if (tracked(*dev, cb) && !cb->inRenderPass && !cb->renderingSuspended) recordIndirectCopies(*dev, *cb);
+    if (tracked(*dev, cb)) recordIndirectCopies(*dev, *cb, true);
   }
   return dev->d.EndCommandBuffer(cmd);
 }
@@ -1152,7 +1152,7 @@ void endRenderPass(VkCommandBuffer cmd, CallDown callDown) {
   cb->inRenderPass = false;
   // The pass's indirect parameters are copied once it has ended, unless a
   // suspended rendering scope forbids any command until it resumes.
-  if (tracked(*dev, cb) && !cb->renderingSuspended) recordIndirectCopies(*dev, *cb);
+  if (tracked(*dev, cb)) recordIndirectCopies(*dev, *cb, false);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,

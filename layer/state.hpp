@@ -353,7 +353,10 @@ void releaseRegions(DeviceState& dev, CommandBufferState& cb);
 // indirect.cpp: index reads of indexed indirect draws, from their parameters read back.
 void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buffer, VkDeviceSize offset,
                          uint32_t maxDraws, uint32_t stride, VkBuffer countBuffer, VkDeviceSize countOffset);
-void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb);  // outside a render pass only
+// Records the copies of the draws' parameters where commands may be recorded
+// (outside a render pass or a suspended rendering scope); `end`: the command
+// buffer ends, and a note says what could not be copied.
+void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb, bool end);
 void destroyIndirect(DeviceState& dev, CommandBufferState& cb);
 void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the parts' passes' indexReads
 nlohmann::json outputJson(DeviceState& dev, bool complete);
