@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "names.hpp"
+#include "shader_options.hpp"
 #include "state.hpp"
 
 namespace tally::layer {
@@ -163,6 +164,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
     dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
   }
   inst->getProperties(physical, &dev->properties);
+  dev->instrumentOptions.target = validationTarget(*info, inst->apiVersion, dev->properties.apiVersion);
   inst->getMemoryProperties(physical, &dev->memory);
   uint32_t familyCount = 0;
   inst->getQueueFamilies(physical, &familyCount, nullptr);
@@ -648,8 +650,9 @@ spirv::Stage stageOf(VkShaderStageFlagBits stage) {
 // Instruments a pipeline's stages into `modules` (temporary modules to
 // destroy after creation) and fills `info`. Stages that cannot be
 // instrumented keep the application's module; each is reported.
+// `lateTestsWhy`: what in the pipeline's state forbids early fragment tests.
 void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateInfo>& stages, PipelineInfo& info,
-                      std::vector<VkShaderModule>& modules) {
+                      std::vector<VkShaderModule>& modules, const std::string& lateTestsWhy = {}) {
   uint32_t nextSlot = 0;
   const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
   for (auto& stage : stages) {
@@ -673,6 +676,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
     if (why.empty()) {
       spirv::InstrumentOptions options = dev.instrumentOptions;
       options.firstSlot = nextSlot;
+      if (s == spirv::Stage::Fragment && !lateTestsWhy.empty()) options.earlyFragmentTests = false;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.
       if (dev.llvmpipe && spirv::usesDemote(shader->second.words)) {
@@ -699,7 +703,13 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
           for (auto& site : result->sites) info.sites.push_back(std::move(site));
           report["instrumented"] = true;
           report["sites"] = result->sites.size();
-          for (const auto& note : result->notes) dev.notes.insert(note);
+          for (const auto& note : result->notes) {
+            dev.notes.insert(note);
+            if (!lateTestsWhy.empty() && note.find("early_fragment_tests") != std::string::npos) {
+              dev.notes.insert("a pipeline keeps its fragment shader's late depth and stencil tests (" + lateTestsWhy +
+                               "): early tests would write depth and stencil for samples it removes");
+            }
+          }
         }
       }
     }
@@ -760,7 +770,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
         dev->notes.insert("graphics pipeline libraries are not instrumented: their pipelines run uncounted");
       } else if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
-        instrumentStages(*dev, stages[i], *state, modules);
+        instrumentStages(*dev, stages[i], *state, modules, earlyTestsPipelineBlocker(infos[i]));
         patched[i].pStages = stages[i].data();
       }
       states[i] = state;
