@@ -172,6 +172,8 @@ void setupCounting(DeviceState& dev) {
   o.binding = 0;
   // 32-bit atomics in pairs: no 64-bit features asked of the application's device.
   o.width = spirv::CounterWidth::Uint32Pair;
+  // The application's shaders keep their early depth and stencil tests where that is safe (docs/layer.md).
+  o.earlyFragmentTests = true;
   if (dev.instance->getProperties2 != nullptr) {
     VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};

@@ -9,6 +9,7 @@
 
 #include "libraries.hpp"
 #include "names.hpp"
+#include "shader_options.hpp"
 #include "state.hpp"
 
 namespace tally::layer {
@@ -176,6 +177,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   TALLY_LAYER_FROM_INSTANCE(CmdEndDebugUtilsLabelEXT)
 #undef TALLY_LAYER_FROM_INSTANCE
   inst->getProperties(physical, &dev->properties);
+  dev->instrumentOptions.target = validationTarget(*info, inst->apiVersion, dev->properties.apiVersion);
   inst->getMemoryProperties(physical, &dev->memory);
   uint32_t familyCount = 0;
   inst->getQueueFamilies(physical, &familyCount, nullptr);
@@ -698,9 +700,11 @@ spirv::Stage stageOf(VkShaderStageFlagBits stage) {
 // destroy after creation) and fills `info`. Stages that cannot be
 // instrumented keep the application's module; each is reported. `split`:
 // a pipeline made of libraries, whose fragment stages count from
-// kPreRasterizationSlots (libraries.hpp).
+// kPreRasterizationSlots (libraries.hpp). `lateTestsWhy`: what in the
+// pipeline's state forbids early fragment tests.
 void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateInfo>& stages, PipelineInfo& info,
-                      std::vector<VkShaderModule>& modules, bool split = false) {
+                      std::vector<VkShaderModule>& modules, bool split = false,
+                      const std::string& lateTestsWhy = {}) {
   uint32_t nextSlot = 0, fragmentSlot = kPreRasterizationSlots;
   const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
   for (auto& stage : stages) {
@@ -727,6 +731,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
     if (why.empty()) {
       spirv::InstrumentOptions options = dev.instrumentOptions;
       options.firstSlot = next;
+      if (s == spirv::Stage::Fragment && !lateTestsWhy.empty()) options.earlyFragmentTests = false;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.
       if (dev.llvmpipe && spirv::usesDemote(shader->second.words)) {
@@ -753,7 +758,13 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
           for (auto& site : result->sites) info.sites.push_back(std::move(site));
           report["instrumented"] = true;
           report["sites"] = result->sites.size();
-          for (const auto& note : result->notes) dev.notes.insert(note);
+          for (const auto& note : result->notes) {
+            dev.notes.insert(note);
+            if (!lateTestsWhy.empty() && note.find("early_fragment_tests") != std::string::npos) {
+              dev.notes.insert("a pipeline keeps its fragment shader's late depth and stencil tests (" + lateTestsWhy +
+                               "): early tests would write depth and stencil for samples it removes");
+            }
+          }
         }
       }
     }
@@ -817,7 +828,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
           (use.parts & (VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT |
                         VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_SHADER_BIT_EXT))) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
-        instrumentStages(*dev, stages[i], *state, modules, use.split());
+        instrumentStages(*dev, stages[i], *state, modules, use.split(), earlyTestsPipelineBlocker(infos[i]));
         patched[i].pStages = stages[i].data();
       }
       // The counter set is bound through the pipeline's layout.

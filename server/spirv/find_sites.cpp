@@ -192,18 +192,6 @@ class Scanner {
     s.entryIndex = e;
     scan_.sites.push_back(std::move(s));
     if (ep.stage == Stage::Vertex) addVertexInputSites(e);
-    if (ep.stage == Stage::Fragment && !hasExecutionMode(ep.function, spv::ExecutionMode::EarlyFragmentTests)) {
-      scan_.notes.push_back("fragment entry point '" + ep.name +
-                            "' has no early_fragment_tests: its counters are side effects, so depth and stencil "
-                            "tests run after it and rejected fragments are counted too");
-    }
-  }
-
-  bool hasExecutionMode(uint32_t function, spv::ExecutionMode mode) const {
-    for (const auto& inst : module_.executionModes) {
-      if (inst.word(1) == function && static_cast<spv::ExecutionMode>(inst.word(2)) == mode) return true;
-    }
-    return false;
   }
 
   // Vertex attributes are fetched from vertex buffers once per vertex

@@ -4,6 +4,7 @@
 #include <map>
 #include <tuple>
 
+#include "spirv/early_tests.hpp"
 #include "spirv/find_sites.hpp"
 #include "spirv/inject.hpp"
 #include "spirv/module.hpp"
@@ -123,7 +124,12 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   auto parsed = Module::parse(input);
   if (!parsed) return makeError(parsed.error());
   if (options.validate) {
-    if (auto error = validate(input)) return makeError("invalid SPIR-V: " + *error);
+    if (auto error = validate(input, options.target)) {
+      // A device's target is named, so a reason says what the module was held to.
+      return makeError(options.target == ValidationTarget{}
+                           ? "invalid SPIR-V: " + *error
+                           : "invalid SPIR-V (validated for " + describe(options.target) + "): " + *error);
+    }
   }
   for (const auto& cap : parsed->capabilities) {
     if (static_cast<spv::Capability>(cap.word(1)) == spv::Capability::Kernel) {
@@ -181,6 +187,8 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     result.notes.push_back("functions inlined: " + reason);
   }
   result.notes.insert(result.notes.end(), scan->notes.begin(), scan->notes.end());
+  // Before the counters: whether early tests are safe is a question about the application's own code.
+  preserveEarlyTests(module, *defs, *types, scan->entryPoints, rewrite && options.earlyFragmentTests, result.notes);
 
   // Slots.
   std::map<SlotKey, std::pair<uint32_t, uint32_t>> slotOf;
@@ -216,7 +224,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   result.versionOut = module.version;
   result.words = module.serialize();
   if (options.validate) {
-    if (auto error = validate(result.words)) {
+    if (auto error = validate(result.words, options.target)) {
       return makeError("internal error: the instrumented module does not validate: " + *error);
     }
   }

@@ -12,6 +12,7 @@
 #include "common/result.hpp"
 #include "spirv/arith.hpp"
 #include "spirv/sites.hpp"
+#include "spirv/validate.hpp"
 
 namespace tally::spirv {
 
@@ -81,8 +82,18 @@ struct InstrumentOptions {
   // (each block adds its operations, as spirv/arith.hpp counts them, to a
   // register flushed with the others into Instrumented::arithmeticSlot).
   bool countArithmetic = false;
-  // Validate input and output with SPIRV-Tools.
+  // Validate input and output with SPIRV-Tools, for this device: a layer
+  // validates for the application's device (its Vulkan version and the
+  // block layouts it enabled); the default is the strictest reading.
   bool validate = true;
+  ValidationTarget target;
+  // Fragment entry points without EarlyFragmentTests get it where adding it
+  // changes nothing the shader does (no discard or demote, no depth,
+  // stencil or sample-mask output, no stores or atomics of its own): the
+  // counters' atomics would otherwise move the depth and stencil tests after
+  // the shader, and fragments they reject would run and be counted.
+  // Elsewhere a note says why the mode was not added.
+  bool earlyFragmentTests = false;
 };
 
 // Where a module's counters lie in the counter buffer. Slot s (in
