@@ -270,6 +270,7 @@ struct DeviceState {
 
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
+  std::set<uint64_t> descriptorBufferLayouts;  // set layouts made for descriptor buffers (uncounted.cpp)
   std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
   std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> pipelines;
   std::unordered_map<uint64_t, DescriptorSetState> sets;
@@ -302,6 +303,11 @@ struct DeviceState {
   uint32_t pipelinesCreated = 0, pipelinesCounted = 0, layoutsRefused = 0;
   std::set<std::string> notes;
 };
+
+// layer.cpp: the state behind a dispatchable handle (null for one the layer
+// never saw), and a command buffer's recording state (null likewise).
+DeviceState* deviceOf(const void* handle);
+CommandBufferState* commandBufferOf(DeviceState& dev, VkCommandBuffer cb);
 
 // capture.cpp
 void setupCounting(DeviceState& dev);
