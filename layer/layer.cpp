@@ -11,6 +11,7 @@
 #include "names.hpp"
 #include "shader_options.hpp"
 #include "state.hpp"
+#include "uncounted.hpp"
 
 namespace tally::layer {
 namespace {
@@ -24,18 +25,23 @@ InstanceState* instanceOf(const void* handle) {
   auto it = g_instances.find(dispatchKey(handle));
   return it == g_instances.end() ? nullptr : it->second.get();
 }
-DeviceState* deviceOf(const void* handle) {
-  std::lock_guard lock(g_mutex);
-  auto it = g_devices.find(dispatchKey(handle));
-  return it == g_devices.end() ? nullptr : it->second.get();
-}
-
 CommandBufferState* cbState(DeviceState& dev, VkCommandBuffer cb) {
   auto it = dev.commandBuffers.find(cb);
   return it == dev.commandBuffers.end() ? nullptr : it->second.get();
 }
 
 void log(const std::string& line) { std::fprintf(stderr, "tally layer: %s\n", line.c_str()); }
+
+}  // namespace
+
+DeviceState* deviceOf(const void* handle) {
+  std::lock_guard lock(g_mutex);
+  auto it = g_devices.find(dispatchKey(handle));
+  return it == g_devices.end() ? nullptr : it->second.get();
+}
+CommandBufferState* commandBufferOf(DeviceState& dev, VkCommandBuffer cb) { return cbState(dev, cb); }
+
+namespace {
 
 // ---------------------------------------------------------------- instance
 
@@ -622,7 +628,11 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
   std::vector<VkDescriptorSetLayout> sets;
   {
     std::lock_guard lock(dev->mutex);
-    if (dev->counting && info->setLayoutCount <= dev->counterSet) {
+    const std::string uncounted = layoutRefusal(*dev, *info);
+    if (!uncounted.empty()) {
+      if (dev->notes.insert(uncounted).second) log(uncounted);
+      ++dev->layoutsRefused;
+    } else if (dev->counting && info->setLayoutCount <= dev->counterSet) {
       sets.assign(info->pSetLayouts, info->pSetLayouts + info->setLayoutCount);
       sets.resize(dev->counterSet, dev->emptySetLayout);
       sets.push_back(dev->counterSetLayout);
@@ -1737,7 +1747,7 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(QueuePresentKHR)
 #undef TALLY_DEVICE
 #undef TALLY_DEVICE_ALIAS
-  return nullptr;
+  return interceptedUncounted(n);
 }
 
 }  // namespace

@@ -300,6 +300,7 @@ struct DeviceState {
 
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
+  std::set<uint64_t> descriptorBufferLayouts;  // set layouts made for descriptor buffers (uncounted.cpp)
   std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
   // Independent-sets layouts (null between the application's sets and the
   // counter set) -> their twin with empty sets there, for complete pipelines.
@@ -339,6 +340,11 @@ struct DeviceState {
   uint32_t librariesCreated = 0, pipelinesLinked = 0;  // graphics pipeline libraries; pipelines linked from them
   std::set<std::string> notes;
 };
+
+// layer.cpp: the state behind a dispatchable handle (null for one the layer
+// never saw), and a command buffer's recording state (null likewise).
+DeviceState* deviceOf(const void* handle);
+CommandBufferState* commandBufferOf(DeviceState& dev, VkCommandBuffer cb);
 
 // capture.cpp
 void setupCounting(DeviceState& dev);
