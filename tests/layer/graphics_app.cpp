@@ -155,12 +155,14 @@ Context createContext() {
   VkPhysicalDeviceVulkan12Features v12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
   VkPhysicalDeviceFeatures2 features = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
   vkGetPhysicalDeviceFeatures2(c.physical, &features);
-  if (!gpl.graphicsPipelineLibrary || !v13.dynamicRendering || !v12.drawIndirectCount) {
-    fail("the device lacks graphicsPipelineLibrary, dynamicRendering or drawIndirectCount");
+  if (!gpl.graphicsPipelineLibrary || !v13.dynamicRendering || !v12.drawIndirectCount ||
+      !features.features.multiDrawIndirect) {
+    fail("the device lacks graphicsPipelineLibrary, dynamicRendering, drawIndirectCount or multiDrawIndirect");
   }
   VkPhysicalDeviceFeatures2 enabled = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
   v12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
   v12.drawIndirectCount = VK_TRUE;
+  enabled.features.multiDrawIndirect = VK_TRUE;
   v13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES, &gpl};
   v13.dynamicRendering = VK_TRUE;
   gpl.graphicsPipelineLibrary = VK_TRUE;
