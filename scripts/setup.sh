@@ -23,6 +23,10 @@ packages=(
   # above), GFXReconstruct's capture layer and replayer (replays, the layer's
   # tests and tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
+  # The layer's feature tests (tests/layer/features_test.py): the Khronos
+  # validation layer (an application's misuse still reported under the
+  # layer) and ffmpeg (its libplacebo filter pushes its descriptors).
+  vulkan-validationlayers ffmpeg
   # The fleet store and its tests (PostgreSQL server and client, libpq).
   postgresql libpq-dev
   # The sanitizer tree and the fuzz harnesses (tests/fuzz/, TALLY_FUZZ=ON):

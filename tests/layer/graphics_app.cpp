@@ -27,6 +27,7 @@
 #include <vulkan/vulkan.h>
 
 #include "gpu/glsl.hpp"
+#include "graphics_app.hpp"
 
 namespace {
 
@@ -81,39 +82,6 @@ void main() {
 }
 )";
 
-struct Options {
-  uint32_t frames = 3, width = 96, height = 64, pushSet = 0;
-  std::string pipeline = "monolithic", descriptors = "sets", draw = "direct";
-  std::vector<std::pair<uint32_t, uint32_t>> indirect = {{6, 1}, {3, 2}};
-};
-
-Options parse(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i], value = argv[i + 1];
-    if (flag == "--frames") o.frames = uint32_t(std::stoul(value));
-    else if (flag == "--width") o.width = uint32_t(std::stoul(value));
-    else if (flag == "--height") o.height = uint32_t(std::stoul(value));
-    else if (flag == "--push-set") o.pushSet = uint32_t(std::stoul(value)) ? 1 : 0;
-    else if (flag == "--pipeline") o.pipeline = value;
-    else if (flag == "--descriptors") o.descriptors = value;
-    else if (flag == "--draw") o.draw = value;
-    else if (flag == "--indirect-draws") {
-      o.indirect.clear();
-      for (size_t at = 0; at < value.size();) {
-        size_t end = value.find(',', at);
-        if (end == std::string::npos) end = value.size();
-        const std::string item = value.substr(at, end - at);
-        const size_t x = item.find('x');
-        if (x == std::string::npos) fail("--indirect-draws: expected COUNTxINSTANCES, got " + item);
-        o.indirect.emplace_back(uint32_t(std::stoul(item.substr(0, x))), uint32_t(std::stoul(item.substr(x + 1))));
-        at = end + 1;
-      }
-    } else fail("unknown flag " + flag);
-  }
-  return o;
-}
-
 struct Context {
   VkInstance instance = VK_NULL_HANDLE;
   VkPhysicalDevice physical = VK_NULL_HANDLE;
@@ -155,12 +123,14 @@ Context createContext() {
   VkPhysicalDeviceVulkan12Features v12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
   VkPhysicalDeviceFeatures2 features = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
   vkGetPhysicalDeviceFeatures2(c.physical, &features);
-  if (!gpl.graphicsPipelineLibrary || !v13.dynamicRendering || !v12.drawIndirectCount) {
-    fail("the device lacks graphicsPipelineLibrary, dynamicRendering or drawIndirectCount");
+  if (!gpl.graphicsPipelineLibrary || !v13.dynamicRendering || !v12.drawIndirectCount ||
+      !features.features.multiDrawIndirect) {
+    fail("the device lacks graphicsPipelineLibrary, dynamicRendering, drawIndirectCount or multiDrawIndirect");
   }
   VkPhysicalDeviceFeatures2 enabled = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v12};
   v12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &v13};
   v12.drawIndirectCount = VK_TRUE;
+  enabled.features.multiDrawIndirect = VK_TRUE;
   v13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES, &gpl};
   v13.dynamicRendering = VK_TRUE;
   gpl.graphicsPipelineLibrary = VK_TRUE;
@@ -297,103 +267,129 @@ VkPipelineLayout pipelineLayout(const Context& c, std::vector<VkDescriptorSetLay
 
 }  // namespace
 
-// The graphics pipeline, monolithic or linked from four libraries
-// (graphics_app_pipeline.cpp).
-VkPipeline createGraphicsPipeline(VkDevice device, const std::string& kind, VkShaderModule vertex,
-                                  VkShaderModule fragment, VkPipelineLayout layout, VkPipelineLayout vertexLayout,
-                                  VkPipelineLayout fragmentLayout, VkFormat format);
 
-int main(int argc, char** argv) {
-  const Options o = parse(argc, argv);
-  if (o.pipeline != "monolithic" && o.pipeline != "library" && o.pipeline != "library-independent") {
-    fail("--pipeline: monolithic, library or library-independent");
-  }
-  if (o.descriptors != "sets" && o.descriptors != "push" && o.descriptors != "push-template") {
-    fail("--descriptors: sets, push or push-template");
-  }
-  if (o.draw != "direct" && o.draw != "indirect" && o.draw != "indirect-count") {
-    fail("--draw: direct, indirect or indirect-count");
-  }
-  Context c = createContext();
-  const uint32_t fragmentSet = o.pushSet, vertexSet = 1 - o.pushSet;
-  const bool pushing = o.descriptors != "sets";
+namespace {
 
-  // Resources.
+// The application's resources, named through VK_EXT_debug_utils.
+struct Scene {
+  Buffer vertices, indices, tint, offset, staging, readback, spec, params, count;
+  Image checker, target;
+  VkSampler sampler = VK_NULL_HANDLE;
+  uint32_t records = 0;  // indirect records: the draws asked for, and one beyond
+};
+
+Scene createScene(const Context& c, const Options& o) {
+  Scene s;
   const float quad[] = {-1, -1, 1, -1, -1, 1, 1, 1};
   const uint16_t indices[] = {0, 1, 2, 2, 1, 3};
   const float tint[] = {1.0f, 0.5f, 0.25f, 1.0f}, offset[] = {0, 0, 0, 0};
-  Buffer vertices = createBuffer(c, sizeof quad, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "quad", quad);
-  Buffer indexBuffer = createBuffer(c, sizeof indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "indices", indices);
-  Buffer tintBuffer = createBuffer(c, sizeof tint, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "tint", tint);
-  Buffer offsetBuffer = createBuffer(c, sizeof offset, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "offset", offset);
+  s.vertices = createBuffer(c, sizeof quad, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "quad", quad);
+  s.indices = createBuffer(c, sizeof indices, VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "indices", indices);
+  s.tint = createBuffer(c, sizeof tint, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "tint", tint);
+  s.offset = createBuffer(c, sizeof offset, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "offset", offset);
   std::vector<uint32_t> texels(64);
   for (uint32_t i = 0; i < 64; ++i) texels[i] = ((i % 8) + (i / 8)) % 2 ? 0xff20c0f0u : 0xff402010u;
-  Buffer staging = createBuffer(c, 256, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, "checker upload", texels.data());
-  Image checker = createImage(c, 8, 8, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "checker");
-  Image target = createImage(c, o.width, o.height,
-                             VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, "target");
-  Buffer readback = createBuffer(c, VkDeviceSize(o.width) * o.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, "readback");
-  const uint32_t records = uint32_t(o.indirect.size()) + 1;
+  s.staging = createBuffer(c, 256, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, "checker upload", texels.data());
+  s.checker = createImage(c, 8, 8, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, "checker");
+  s.target = createImage(c, o.width, o.height, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                         "target");
+  s.readback = createBuffer(c, VkDeviceSize(o.width) * o.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, "readback");
+  s.records = uint32_t(o.indirect.size()) + 1;
   std::vector<uint32_t> spec = {uint32_t(o.indirect.size())};
   for (auto [n, instances] : o.indirect) spec.insert(spec.end(), {n, instances});
-  Buffer specBuffer = createBuffer(c, spec.size() * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "spec", spec.data());
-  Buffer params = createBuffer(c, records * sizeof(VkDrawIndexedIndirectCommand),
-                               VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "params");
-  Buffer countBuffer =
-      createBuffer(c, 4, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "count");
+  s.spec = createBuffer(c, spec.size() * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "spec", spec.data());
+  s.params = createBuffer(c, s.records * sizeof(VkDrawIndexedIndirectCommand),
+                          VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "params");
+  s.count = createBuffer(c, 4, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "count");
   VkSamplerCreateInfo sci = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-  VkSampler sampler;
-  check(vkCreateSampler(c.device, &sci, nullptr, &sampler), "vkCreateSampler");
+  check(vkCreateSampler(c.device, &sci, nullptr, &s.sampler), "vkCreateSampler");
+  return s;
+}
 
-  // Layouts: the fragment set (pushed where asked) and the vertex set.
-  VkDescriptorSetLayoutBinding fragmentBindings[] = {
-      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
-      {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr}};
-  VkDescriptorSetLayoutBinding vertexBinding = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT,
-                                                nullptr};
-  VkDescriptorSetLayoutCreateInfo dslci = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  dslci.flags = pushing ? VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR : 0;
-  dslci.bindingCount = 2;
-  dslci.pBindings = fragmentBindings;
-  VkDescriptorSetLayout fragmentSetLayout, vertexSetLayout;
-  check(vkCreateDescriptorSetLayout(c.device, &dslci, nullptr, &fragmentSetLayout), "vkCreateDescriptorSetLayout");
-  dslci.flags = 0;
-  dslci.bindingCount = 1;
-  dslci.pBindings = &vertexBinding;
-  check(vkCreateDescriptorSetLayout(c.device, &dslci, nullptr, &vertexSetLayout), "vkCreateDescriptorSetLayout");
+struct FragmentDescriptors {  // a push template's data
+  VkDescriptorImageInfo image;
+  VkDescriptorBufferInfo tint;
+};
+
+// Layouts, pipelines and descriptors.
+struct Bindings {
+  uint32_t fragmentSet = 0, vertexSet = 1;
+  bool pushing = false;
+  VkDescriptorSetLayout fragmentSetLayout = VK_NULL_HANDLE, vertexSetLayout = VK_NULL_HANDLE,
+                        computeSetLayout = VK_NULL_HANDLE;
+  VkPipelineLayout layout = VK_NULL_HANDLE, computeLayout = VK_NULL_HANDLE;
+  VkPipeline pipeline = VK_NULL_HANDLE, compute = VK_NULL_HANDLE;
+  VkDescriptorSet vertexDescriptors = VK_NULL_HANDLE, computeDescriptors = VK_NULL_HANDLE,
+                  fragmentDescriptors = VK_NULL_HANDLE;
+  FragmentDescriptors fragmentData{};
+  VkDescriptorUpdateTemplate pushTemplate = VK_NULL_HANDLE;
+};
+
+VkDescriptorSetLayout setLayout(const Context& c, std::vector<VkDescriptorSetLayoutBinding> bindings,
+                                VkDescriptorSetLayoutCreateFlags flags = 0) {
+  VkDescriptorSetLayoutCreateInfo info = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  info.flags = flags;
+  info.bindingCount = uint32_t(bindings.size());
+  info.pBindings = bindings.data();
+  VkDescriptorSetLayout layout;
+  check(vkCreateDescriptorSetLayout(c.device, &info, nullptr, &layout), "vkCreateDescriptorSetLayout");
+  return layout;
+}
+
+void createPipelines(const Context& c, const Options& o, Bindings& b) {
+  b.fragmentSet = o.pushSet;
+  b.vertexSet = 1 - o.pushSet;
+  b.pushing = o.descriptors != "sets";
+  b.fragmentSetLayout = setLayout(c,
+                                  {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+                                   {1, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr}},
+                                  b.pushing ? VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR : 0);
+  b.vertexSetLayout = setLayout(c, {{0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr}});
   const bool independent = o.pipeline == "library-independent";
   // Each library's layout ends at its own set, so their set counts differ.
-  std::vector<VkDescriptorSetLayout> both(2), vertexOnly(vertexSet + 1, VK_NULL_HANDLE),
-      fragmentOnly(fragmentSet + 1, VK_NULL_HANDLE);
-  both[fragmentSet] = fragmentOnly[fragmentSet] = fragmentSetLayout;
-  both[vertexSet] = vertexOnly[vertexSet] = vertexSetLayout;
-  VkPipelineLayout layout = pipelineLayout(c, both, independent);
-  VkPipelineLayout vertexLayout = independent ? pipelineLayout(c, vertexOnly, true) : layout;
-  VkPipelineLayout fragmentLayout = independent ? pipelineLayout(c, fragmentOnly, true) : layout;
-  VkShaderModule vs = moduleOf(c, compile(kVertex, tally::spirv::Stage::Vertex, vertexSet, fragmentSet));
-  VkShaderModule fs = moduleOf(c, compile(kFragment, tally::spirv::Stage::Fragment, vertexSet, fragmentSet));
-  VkPipeline pipeline = createGraphicsPipeline(c.device, o.pipeline, vs, fs, layout, vertexLayout, fragmentLayout,
-                                               VK_FORMAT_R8G8B8A8_UNORM);
+  std::vector<VkDescriptorSetLayout> both(2), vertexOnly(b.vertexSet + 1, VK_NULL_HANDLE),
+      fragmentOnly(b.fragmentSet + 1, VK_NULL_HANDLE);
+  both[b.fragmentSet] = fragmentOnly[b.fragmentSet] = b.fragmentSetLayout;
+  both[b.vertexSet] = vertexOnly[b.vertexSet] = b.vertexSetLayout;
+  b.layout = pipelineLayout(c, both, independent);
+  VkPipelineLayout vertexLayout = independent ? pipelineLayout(c, vertexOnly, true) : b.layout;
+  VkPipelineLayout fragmentLayout = independent ? pipelineLayout(c, fragmentOnly, true) : b.layout;
+  VkShaderModule vs = moduleOf(c, compile(kVertex, tally::spirv::Stage::Vertex, b.vertexSet, b.fragmentSet));
+  VkShaderModule fs = moduleOf(c, compile(kFragment, tally::spirv::Stage::Fragment, b.vertexSet, b.fragmentSet));
+  b.pipeline = createGraphicsPipeline(c.device, o.pipeline, vs, fs, b.layout, vertexLayout, fragmentLayout,
+                                      VK_FORMAT_R8G8B8A8_UNORM);
 
   // The compute pipeline that writes the indirect parameters.
-  VkDescriptorSetLayoutBinding computeBindings[3];
+  std::vector<VkDescriptorSetLayoutBinding> storage;
   for (uint32_t i = 0; i < 3; ++i) {
-    computeBindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    storage.push_back({i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr});
   }
-  dslci.bindingCount = 3;
-  dslci.pBindings = computeBindings;
-  VkDescriptorSetLayout computeSetLayout;
-  check(vkCreateDescriptorSetLayout(c.device, &dslci, nullptr, &computeSetLayout), "vkCreateDescriptorSetLayout");
-  VkPipelineLayout computeLayout = pipelineLayout(c, {computeSetLayout}, false);
+  b.computeSetLayout = setLayout(c, storage);
+  b.computeLayout = pipelineLayout(c, {b.computeSetLayout}, false);
   VkComputePipelineCreateInfo cpci = {VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT,
                 moduleOf(c, compile(kParameters, tally::spirv::Stage::Compute, 0, 0)), "main", nullptr};
-  cpci.layout = computeLayout;
-  VkPipeline computePipeline;
-  check(vkCreateComputePipelines(c.device, VK_NULL_HANDLE, 1, &cpci, nullptr, &computePipeline),
-        "vkCreateComputePipelines");
+  cpci.layout = b.computeLayout;
+  check(vkCreateComputePipelines(c.device, VK_NULL_HANDLE, 1, &cpci, nullptr, &b.compute), "vkCreateComputePipelines");
+}
 
-  // Descriptor sets: the vertex set and the compute set always; the fragment set unless pushed.
+// The fragment set's two writes (to push, or to update a set with).
+std::vector<VkWriteDescriptorSet> fragmentWrites(const Bindings& b, VkDescriptorSet set) {
+  std::vector<VkWriteDescriptorSet> writes(2, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET});
+  for (uint32_t i = 0; i < 2; ++i) {
+    writes[i].dstSet = set;
+    writes[i].dstBinding = i;
+    writes[i].descriptorCount = 1;
+  }
+  writes[0].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  writes[0].pImageInfo = &b.fragmentData.image;
+  writes[1].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+  writes[1].pBufferInfo = &b.fragmentData.tint;
+  return writes;
+}
+
+// The vertex and compute sets always, the fragment set unless pushed; the push template.
+void createDescriptors(const Context& c, const Options& o, const Scene& s, Bindings& b) {
   VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 2},
                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3}};
@@ -403,42 +399,33 @@ int main(int argc, char** argv) {
   dpci.pPoolSizes = sizes;
   VkDescriptorPool pool;
   check(vkCreateDescriptorPool(c.device, &dpci, nullptr, &pool), "vkCreateDescriptorPool");
-  VkDescriptorSetLayout setLayouts[] = {vertexSetLayout, computeSetLayout, fragmentSetLayout};
+  VkDescriptorSetLayout layouts[] = {b.vertexSetLayout, b.computeSetLayout, b.fragmentSetLayout};
   VkDescriptorSetAllocateInfo dsai = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   dsai.descriptorPool = pool;
-  dsai.descriptorSetCount = pushing ? 2 : 3;
-  dsai.pSetLayouts = setLayouts;
+  dsai.descriptorSetCount = b.pushing ? 2 : 3;
+  dsai.pSetLayouts = layouts;
   VkDescriptorSet sets[3] = {};
   check(vkAllocateDescriptorSets(c.device, &dsai, sets), "vkAllocateDescriptorSets");
-  struct FragmentDescriptors {
-    VkDescriptorImageInfo image;
-    VkDescriptorBufferInfo tint;
-  } fragmentData = {{sampler, checker.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-                    {tintBuffer.buffer, 0, VK_WHOLE_SIZE}};
-  VkDescriptorBufferInfo offsetInfo = {offsetBuffer.buffer, 0, VK_WHOLE_SIZE};
+  b.vertexDescriptors = sets[0];
+  b.computeDescriptors = sets[1];
+  b.fragmentDescriptors = sets[2];
+  b.fragmentData = {{s.sampler, s.checker.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}, {s.tint.buffer, 0, VK_WHOLE_SIZE}};
+  VkDescriptorBufferInfo offsetInfo = {s.offset.buffer, 0, VK_WHOLE_SIZE};
   VkDescriptorBufferInfo computeInfos[] = {
-      {specBuffer.buffer, 0, VK_WHOLE_SIZE}, {params.buffer, 0, VK_WHOLE_SIZE}, {countBuffer.buffer, 0, VK_WHOLE_SIZE}};
-  VkWriteDescriptorSet writes[4] = {};
-  for (auto& w : writes) w = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  writes[0].dstSet = sets[0];
+      {s.spec.buffer, 0, VK_WHOLE_SIZE}, {s.params.buffer, 0, VK_WHOLE_SIZE}, {s.count.buffer, 0, VK_WHOLE_SIZE}};
+  std::vector<VkWriteDescriptorSet> writes(2, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET});
+  writes[0].dstSet = b.vertexDescriptors;
   writes[0].descriptorCount = 1;
   writes[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
   writes[0].pBufferInfo = &offsetInfo;
-  writes[1].dstSet = sets[1];
+  writes[1].dstSet = b.computeDescriptors;
   writes[1].descriptorCount = 3;
   writes[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   writes[1].pBufferInfo = computeInfos;
-  writes[2].dstSet = sets[2];
-  writes[2].descriptorCount = 1;
-  writes[2].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  writes[2].pImageInfo = &fragmentData.image;
-  writes[3] = writes[2];
-  writes[3].dstBinding = 1;
-  writes[3].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-  writes[3].pImageInfo = nullptr;
-  writes[3].pBufferInfo = &fragmentData.tint;
-  vkUpdateDescriptorSets(c.device, pushing ? 2 : 4, writes, 0, nullptr);
-  VkDescriptorUpdateTemplate pushTemplate = VK_NULL_HANDLE;
+  if (!b.pushing) {
+    for (const auto& w : fragmentWrites(b, b.fragmentDescriptors)) writes.push_back(w);
+  }
+  vkUpdateDescriptorSets(c.device, uint32_t(writes.size()), writes.data(), 0, nullptr);
   if (o.descriptors == "push-template") {
     VkDescriptorUpdateTemplateEntry entries[] = {
         {0, 0, 1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, offsetof(FragmentDescriptors, image), 0},
@@ -448,10 +435,105 @@ int main(int argc, char** argv) {
     info.pDescriptorUpdateEntries = entries;
     info.templateType = VK_DESCRIPTOR_UPDATE_TEMPLATE_TYPE_PUSH_DESCRIPTORS_KHR;
     info.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    info.pipelineLayout = layout;
-    info.set = fragmentSet;
-    check(vkCreateDescriptorUpdateTemplate(c.device, &info, nullptr, &pushTemplate), "vkCreateDescriptorUpdateTemplate");
+    info.pipelineLayout = b.layout;
+    info.set = b.fragmentSet;
+    check(vkCreateDescriptorUpdateTemplate(c.device, &info, nullptr, &b.pushTemplate),
+          "vkCreateDescriptorUpdateTemplate");
   }
+}
+
+void upload(VkCommandBuffer cmd, const Scene& s) {
+  transition(cmd, s.checker.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+             VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
+  VkBufferImageCopy region = {};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  region.imageExtent = {8, 8, 1};
+  vkCmdCopyBufferToImage(cmd, s.staging.buffer, s.checker.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+  transition(cmd, s.checker.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+             VK_ACCESS_SHADER_READ_BIT);
+}
+
+void drawQuad(const Context& c, const Options& o, const Scene& s, const Bindings& b, VkCommandBuffer cmd) {
+  VkViewport viewport = {0, 0, float(o.width), float(o.height), 0, 1};
+  VkRect2D scissor = {{0, 0}, {o.width, o.height}};
+  vkCmdSetViewport(cmd, 0, 1, &viewport);
+  vkCmdSetScissor(cmd, 0, 1, &scissor);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, b.pipeline);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, b.layout, b.vertexSet, 1, &b.vertexDescriptors, 0,
+                          nullptr);
+  if (o.descriptors == "sets") {
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, b.layout, b.fragmentSet, 1, &b.fragmentDescriptors,
+                            0, nullptr);
+  } else if (o.descriptors == "push") {
+    const auto writes = fragmentWrites(b, VK_NULL_HANDLE);
+    c.push(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, b.layout, b.fragmentSet, uint32_t(writes.size()), writes.data());
+  } else {
+    c.pushTemplate(cmd, b.pushTemplate, b.layout, b.fragmentSet, &b.fragmentData);
+  }
+  VkDeviceSize zero = 0;
+  vkCmdBindVertexBuffers(cmd, 0, 1, &s.vertices.buffer, &zero);
+  vkCmdBindIndexBuffer(cmd, s.indices.buffer, 0, VK_INDEX_TYPE_UINT16);
+  const uint32_t stride = sizeof(VkDrawIndexedIndirectCommand);
+  if (o.draw == "direct") {
+    vkCmdDrawIndexed(cmd, 6, 1, 0, 0, 0);
+  } else if (o.draw == "indirect") {
+    vkCmdDrawIndexedIndirect(cmd, s.params.buffer, 0, s.records - 1, stride);
+  } else {
+    vkCmdDrawIndexedIndirectCount(cmd, s.params.buffer, 0, s.count.buffer, 0, s.records, stride);
+  }
+}
+
+// One frame: the indirect parameters (where drawn indirectly), the quad, the target read back.
+void recordFrame(const Context& c, const Options& o, const Scene& s, const Bindings& b, VkCommandBuffer cmd) {
+  if (o.draw != "direct") {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, b.compute);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, b.computeLayout, 0, 1, &b.computeDescriptors, 0,
+                            nullptr);
+    vkCmdDispatch(cmd, 1, 1, 1);
+    VkMemoryBarrier written = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
+                               VK_ACCESS_INDIRECT_COMMAND_READ_BIT};
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, 0, 1,
+                         &written, 0, nullptr, 0, nullptr);
+  }
+  transition(cmd, s.target.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+             VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+             VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
+  VkRenderingAttachmentInfo color = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  color.imageView = s.target.view;
+  color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  VkRenderingInfo rendering = {VK_STRUCTURE_TYPE_RENDERING_INFO};
+  rendering.renderArea = {{0, 0}, {o.width, o.height}};
+  rendering.layerCount = 1;
+  rendering.colorAttachmentCount = 1;
+  rendering.pColorAttachments = &color;
+  vkCmdBeginRendering(cmd, &rendering);
+  drawQuad(c, o, s, b, cmd);
+  vkCmdEndRendering(cmd);
+  transition(cmd, s.target.image, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+             VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
+  VkBufferImageCopy back = {};
+  back.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  back.imageExtent = {o.width, o.height, 1};
+  vkCmdCopyImageToBuffer(cmd, s.target.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &back);
+  VkMemoryBarrier host = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_TRANSFER_WRITE_BIT,
+                          VK_ACCESS_HOST_READ_BIT};
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
+                       nullptr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parseOptions(argc, argv);
+  Context c = createContext();
+  const Scene scene = createScene(c, o);
+  Bindings bindings;
+  createPipelines(c, o, bindings);
+  createDescriptors(c, o, scene, bindings);
 
   VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
@@ -467,7 +549,12 @@ int main(int argc, char** argv) {
   VkFenceCreateInfo fci = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
   VkFence fence;
   check(vkCreateFence(c.device, &fci, nullptr, &fence), "vkCreateFence");
-  auto submit = [&] {
+  // Each recording is one submission; the texture's upload has no draw, so no frame of its own.
+  for (uint32_t frame = 0; frame <= o.frames; ++frame) {
+    VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    vkBeginCommandBuffer(cmd, &begin);
+    if (frame == 0) upload(cmd, scene);
+    else recordFrame(c, o, scene, bindings, cmd);
     check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
     VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
     info.commandBufferCount = 1;
@@ -475,90 +562,10 @@ int main(int argc, char** argv) {
     check(vkQueueSubmit(c.queue, 1, &info, fence), "vkQueueSubmit");
     check(vkWaitForFences(c.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
     vkResetFences(c.device, 1, &fence);
-  };
-  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-
-  // The texture's upload: a submission without draws, so no frame of its own.
-  vkBeginCommandBuffer(cmd, &begin);
-  transition(cmd, checker.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-             VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT);
-  VkBufferImageCopy region = {};
-  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  region.imageExtent = {8, 8, 1};
-  vkCmdCopyBufferToImage(cmd, staging.buffer, checker.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
-  transition(cmd, checker.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-             VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
-             VK_ACCESS_SHADER_READ_BIT);
-  submit();
-
-  for (uint32_t frame = 0; frame < o.frames; ++frame) {
-    vkBeginCommandBuffer(cmd, &begin);
-    if (o.draw != "direct") {
-      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computePipeline);
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, computeLayout, 0, 1, &sets[1], 0, nullptr);
-      vkCmdDispatch(cmd, 1, 1, 1);
-      VkMemoryBarrier written = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
-                                 VK_ACCESS_INDIRECT_COMMAND_READ_BIT};
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, 0, 1,
-                           &written, 0, nullptr, 0, nullptr);
-    }
-    transition(cmd, target.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-               VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-               VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
-    VkRenderingAttachmentInfo color = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    color.imageView = target.view;
-    color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    VkRenderingInfo rendering = {VK_STRUCTURE_TYPE_RENDERING_INFO};
-    rendering.renderArea = {{0, 0}, {o.width, o.height}};
-    rendering.layerCount = 1;
-    rendering.colorAttachmentCount = 1;
-    rendering.pColorAttachments = &color;
-    vkCmdBeginRendering(cmd, &rendering);
-    VkViewport viewport = {0, 0, float(o.width), float(o.height), 0, 1};
-    VkRect2D scissor = {{0, 0}, {o.width, o.height}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, vertexSet, 1, &sets[0], 0, nullptr);
-    if (o.descriptors == "sets") {
-      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, fragmentSet, 1, &sets[2], 0, nullptr);
-    } else if (o.descriptors == "push") {
-      VkWriteDescriptorSet pushed[] = {writes[2], writes[3]};
-      pushed[0].dstSet = pushed[1].dstSet = VK_NULL_HANDLE;
-      c.push(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, fragmentSet, 2, pushed);
-    } else {
-      c.pushTemplate(cmd, pushTemplate, layout, fragmentSet, &fragmentData);
-    }
-    VkDeviceSize zero = 0;
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vertices.buffer, &zero);
-    vkCmdBindIndexBuffer(cmd, indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
-    const uint32_t stride = sizeof(VkDrawIndexedIndirectCommand);
-    if (o.draw == "direct") {
-      vkCmdDrawIndexed(cmd, 6, 1, 0, 0, 0);
-    } else if (o.draw == "indirect") {
-      vkCmdDrawIndexedIndirect(cmd, params.buffer, 0, records - 1, stride);
-    } else {
-      vkCmdDrawIndexedIndirectCount(cmd, params.buffer, 0, countBuffer.buffer, 0, records, stride);
-    }
-    vkCmdEndRendering(cmd);
-    transition(cmd, target.image, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-               VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
-               VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
-    VkBufferImageCopy back = {};
-    back.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    back.imageExtent = {o.width, o.height, 1};
-    vkCmdCopyImageToBuffer(cmd, target.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback.buffer, 1, &back);
-    VkMemoryBarrier host = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_TRANSFER_WRITE_BIT,
-                            VK_ACCESS_HOST_READ_BIT};
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0, nullptr, 0,
-                         nullptr);
-    submit();
   }
   // FNV-1a of the last frame's pixels.
   uint64_t hash = 1469598103934665603ull;
-  const auto* bytes = static_cast<const uint8_t*>(readback.mapped);
+  const auto* bytes = static_cast<const uint8_t*>(scene.readback.mapped);
   for (VkDeviceSize i = 0; i < VkDeviceSize(o.width) * o.height * 4; ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
   vkDeviceWaitIdle(c.device);
   vkDestroyDevice(c.device, nullptr);  // the layer writes its output here; the rest goes with the process

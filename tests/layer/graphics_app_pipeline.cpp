@@ -9,6 +9,8 @@
 
 #include <vulkan/vulkan.h>
 
+#include "graphics_app.hpp"
+
 namespace {
 
 void check(VkResult r, const char* what) {
