@@ -211,6 +211,7 @@ struct Harvest {
     uint32_t timestamps = 0, statistics = 0;
   };
   std::vector<Part> parts;  // one per command buffer submitted
+  std::vector<VkQueryPool> queryPools;  // the submitted command buffers' pools its copies read
 };
 
 // A frame's passes as read back, before they are written out.
@@ -312,6 +313,8 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
 void endFrame(DeviceState& dev);
 void finish(DeviceState& dev, bool complete);  // waits for every harvest and writes the output
 void releaseRegions(DeviceState& dev, CommandBufferState& cb);
+// Waits for the readbacks that copy from the command buffer's query pools, then destroys the pools.
+void destroyQueryPools(DeviceState& dev, CommandBufferState& cb);
 nlohmann::json outputJson(DeviceState& dev, bool complete);
 
 }  // namespace tally::layer
