@@ -694,6 +694,11 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
                 VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT,
                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_HOST_READ_BIT);
   dev.d.EndCommandBuffer(h->cmd);
+  h->queryPools.clear();
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (parts[p].timestamps > 0) h->queryPools.push_back(sources[p]->timestampPool);
+    if (parts[p].statistics > 0) h->queryPools.push_back(sources[p]->statisticsPool);
+  }
   VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &h->cmd;
@@ -711,6 +716,26 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     frame.pendingHarvests += 1;
   }
   if (dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
+}
+
+// The application waited for its own submission before freeing the command
+// buffer, not for the readback submitted after it, which may still be copying
+// from the pools (VUID-vkDestroyQueryPool-queryPool-00793).
+void destroyQueryPools(DeviceState& dev, CommandBufferState& cb) {
+  bool waited = false;
+  for (const auto& h : dev.pending) {
+    for (VkQueryPool pool : h->queryPools) {
+      if (pool != VK_NULL_HANDLE && (pool == cb.timestampPool || pool == cb.statisticsPool)) {
+        dev.d.WaitForFences(dev.device, 1, &h->fence, VK_TRUE, UINT64_MAX);
+        waited = true;
+        break;
+      }
+    }
+  }
+  if (waited) collect(dev, std::nullopt);
+  if (cb.timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.timestampPool, nullptr);
+  if (cb.statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.statisticsPool, nullptr);
+  cb.timestampPool = cb.statisticsPool = VK_NULL_HANDLE;
 }
 
 void endFrame(DeviceState& dev) {

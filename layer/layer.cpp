@@ -906,9 +906,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateCommandPool(VkDevice device, const VkComman
 
 void destroyCommandBufferState(DeviceState& dev, CommandBufferState& cb) {
   releaseRegions(dev, cb);
+  destroyQueryPools(dev, cb);  // waits for the readbacks still copying this command buffer's work
   destroyIndirect(dev, cb);
-  if (cb.timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.timestampPool, nullptr);
-  if (cb.statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.statisticsPool, nullptr);
 }
 
 VKAPI_ATTR void VKAPI_CALL DestroyCommandPool(VkDevice device, VkCommandPool pool, const VkAllocationCallbacks* alloc) {

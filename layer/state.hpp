@@ -241,6 +241,7 @@ struct Harvest {
     VkDeviceSize indirectAt = 0;              // where the command buffer's indirect buffer lies
   };
   std::vector<Part> parts;  // one per command buffer submitted
+  std::vector<VkQueryPool> queryPools;  // the submitted command buffers' pools its copies read
 };
 
 // A frame's passes as read back, before they are written out.
@@ -365,6 +366,8 @@ void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buff
 void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb, bool end);
 void destroyIndirect(DeviceState& dev, CommandBufferState& cb);
 void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the parts' passes' indexReads
+// Waits for the readbacks that copy from the command buffer's query pools, then destroys the pools.
+void destroyQueryPools(DeviceState& dev, CommandBufferState& cb);
 nlohmann::json outputJson(DeviceState& dev, bool complete);
 
 }  // namespace tally::layer

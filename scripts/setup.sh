@@ -23,10 +23,13 @@ packages=(
   # above), GFXReconstruct's capture layer and replayer (replays, the layer's
   # tests and tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
-  # The layer's feature tests (tests/layer/features_test.py): the Khronos
-  # validation layer (an application's misuse still reported under the
-  # layer) and ffmpeg (its libplacebo filter pushes its descriptors).
-  vulkan-validationlayers ffmpeg
+  # The layer's real clients (tests/layer/clients_test.py) and feature tests
+  # (features_test.py): glmark2 through Mesa's zink (OpenGL on Vulkan:
+  # zink_dri.so is libgl1-mesa-dri's, which glmark2, loading libGL at run
+  # time, does not depend on), ffmpeg's Vulkan filters (its libplacebo filter
+  # pushes its descriptors), and the Khronos validation layer they also run
+  # under, stacked with Tally's (an application's misuse still reported).
+  glmark2-x11 libgl1-mesa-dri ffmpeg vulkan-validationlayers
   # The fleet store and its tests (PostgreSQL server and client, libpq).
   postgresql libpq-dev
   # The sanitizer tree and the fuzz harnesses (tests/fuzz/, TALLY_FUZZ=ON):
