@@ -748,6 +748,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"pipelines", dev.pipelinesCreated},
         {"pipelines_counted", dev.pipelinesCounted},
         {"layouts_refused", dev.layoutsRefused},
+        {"spirv_validation", spirv::describe(dev.instrumentOptions.target)},
         {"not_counting", dev.notCounting}}},
       {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},
       {"device",

@@ -81,7 +81,8 @@ struct DeviceDispatch {
   X(WaitForFences) X(GetFenceStatus) X(ResetFences) X(CreateSwapchainKHR) X(GetSwapchainImagesKHR)           \
   X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)    \
   X(CmdBindVertexBuffers2) X(CmdDrawMeshTasksEXT) X(CmdDrawMeshTasksIndirectEXT)                              \
-  X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)
+  X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)                            \
+  X(CmdSetAlphaToCoverageEnableEXT)
 #define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
 #undef TALLY_LAYER_MEMBER
@@ -133,6 +134,10 @@ struct PipelineInfo {
   std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
   std::map<uint32_t, uint32_t> vertexLocationBinding;  // attribute Location -> vertex buffer binding
   bool hasFragment = false;
+  // Where alpha to coverage is dynamic, the layer's copy whose fragment
+  // shader was given early tests: bound in the application's pipeline's
+  // place while alpha to coverage is off (early_tests_twin.hpp).
+  VkPipeline earlyTestsTwin = VK_NULL_HANDLE;
 };
 
 // The resource behind each slot of a region, resolved at the draw.
@@ -191,6 +196,12 @@ struct CommandBufferState {
   uint64_t indexBuffer = 0;
   uint32_t indexBytes = 4;
   bool overflowNoted = false;
+  struct Coverage {
+    bool known = false;                    // vkCmdSetAlphaToCoverageEnableEXT was recorded
+    bool alphaToCoverage = false;          // its last value
+    VkPipeline pipeline = VK_NULL_HANDLE;  // the graphics pipeline the application bound
+    bool twinBound = false;                // its late-tests twin is bound in its place
+  } coverage;
 };
 
 // One vkQueueSubmit's counters and queries, copied into a host-visible
