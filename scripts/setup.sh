@@ -23,6 +23,8 @@ packages=(
   # above), GFXReconstruct's capture layer and replayer (replays, the layer's
   # tests and tallyd play's trace: tests/capture/play_trace.py).
   xvfb xauth gfxreconstruct
+  # OpenGL applications through Mesa's zink under the layer (layer.zink).
+  glmark2-x11 libgl1-mesa-dri
   # The fleet store and its tests (PostgreSQL server and client, libpq).
   postgresql libpq-dev
   # The sanitizer tree and the fuzz harnesses (tests/fuzz/, TALLY_FUZZ=ON):
