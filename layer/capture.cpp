@@ -791,6 +791,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"pipeline_libraries", dev.librariesCreated},
         {"pipelines_linked", dev.pipelinesLinked},
         {"layouts_refused", dev.layoutsRefused},
+        {"spirv_validation", spirv::describe(dev.instrumentOptions.target)},
         {"not_counting", dev.notCounting}}},
       {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},
       {"device",

@@ -6,7 +6,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <string_view>
+#include <utility>
 
+#include "early_tests_twin.hpp"
 #include "libraries.hpp"
 #include "names.hpp"
 #include "shader_options.hpp"
@@ -710,11 +712,10 @@ spirv::Stage stageOf(VkShaderStageFlagBits stage) {
 // destroy after creation) and fills `info`. Stages that cannot be
 // instrumented keep the application's module; each is reported. `split`:
 // a pipeline made of libraries, whose fragment stages count from
-// kPreRasterizationSlots (libraries.hpp). `lateTestsWhy`: what in the
-// pipeline's state forbids early fragment tests.
+// kPreRasterizationSlots (libraries.hpp). `plan`: whether the fragment shader
+// may be given early tests (graphics pipelines).
 void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateInfo>& stages, PipelineInfo& info,
-                      std::vector<VkShaderModule>& modules, bool split = false,
-                      const std::string& lateTestsWhy = {}) {
+                      std::vector<VkShaderModule>& modules, bool split = false, EarlyTestsPlan* plan = nullptr) {
   uint32_t nextSlot = 0, fragmentSlot = kPreRasterizationSlots;
   const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
   for (auto& stage : stages) {
@@ -741,7 +742,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
     if (why.empty()) {
       spirv::InstrumentOptions options = dev.instrumentOptions;
       options.firstSlot = next;
-      if (s == spirv::Stage::Fragment && !lateTestsWhy.empty()) options.earlyFragmentTests = false;
+      if (s == spirv::Stage::Fragment && plan != nullptr && !plan->early()) options.earlyFragmentTests = false;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.
       if (dev.llvmpipe && spirv::usesDemote(shader->second.words)) {
@@ -768,10 +769,14 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
           for (auto& site : result->sites) info.sites.push_back(std::move(site));
           report["instrumented"] = true;
           report["sites"] = result->sites.size();
-          for (const auto& note : result->notes) {
+          std::vector<std::string> notes = result->notes;
+          if (s == spirv::Stage::Fragment && plan != nullptr && plan->twin) {
+            plan->earlyFragment = earlyTestsFragment(dev, shader->second.words, options, *result, notes);
+          }
+          for (const auto& note : notes) {
             dev.notes.insert(note);
-            if (!lateTestsWhy.empty() && note.find("early_fragment_tests") != std::string::npos) {
-              dev.notes.insert("a pipeline keeps its fragment shader's late depth and stencil tests (" + lateTestsWhy +
+            if (plan != nullptr && !plan->lateWhy.empty() && note.find("early_fragment_tests") != std::string::npos) {
+              dev.notes.insert("a pipeline keeps its fragment shader's late depth and stencil tests (" + plan->lateWhy +
                                "): early tests would write depth and stencil for samples it removes");
             }
           }
@@ -814,7 +819,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
   std::vector<VkGraphicsPipelineCreateInfo> patched(infos, infos + count);
   std::vector<std::vector<VkPipelineShaderStageCreateInfo>> stages(count);
   std::vector<std::shared_ptr<PipelineInfo>> states(count);
-  std::vector<VkShaderModule> modules;
+  std::vector<VkShaderModule> modules, earlyFragments(count, VK_NULL_HANDLE);
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
@@ -838,7 +843,9 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
           (use.parts & (VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT |
                         VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_SHADER_BIT_EXT))) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
-        instrumentStages(*dev, stages[i], *state, modules, use.split(), earlyTestsPipelineBlocker(infos[i]));
+        EarlyTestsPlan plan = earlyTestsPlan(infos[i]);
+        instrumentStages(*dev, stages[i], *state, modules, use.split(), &plan);
+        earlyFragments[i] = plan.earlyFragment;
         patched[i].pStages = stages[i].data();
       }
       // The counter set is bound through the pipeline's layout.
@@ -851,6 +858,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     }
   }
   VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, patched.data(), alloc, pipelines);
+  createEarlyTestsTwins(*dev, cache, patched, earlyFragments, pipelines, states);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
   registerPipelines(*dev, count, pipelines, states);
   return result;
@@ -884,11 +892,15 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
 
 VKAPI_ATTR void VKAPI_CALL DestroyPipeline(VkDevice device, VkPipeline pipeline, const VkAllocationCallbacks* alloc) {
   DeviceState* dev = deviceOf(device);
+  VkPipeline twin = VK_NULL_HANDLE;
   {
     std::lock_guard lock(dev->mutex);
+    auto it = dev->pipelines.find(u64(pipeline));
+    if (it != dev->pipelines.end()) twin = std::exchange(it->second->earlyTestsTwin, VK_NULL_HANDLE);
     dev->pipelines.erase(u64(pipeline));  // recorded regions keep their own reference
     dev->libraries.erase(u64(pipeline));  // pipelines linked from it keep its sites
   }
+  if (twin != VK_NULL_HANDLE) dev->d.DestroyPipeline(device, twin, nullptr);
   dev->d.DestroyPipeline(device, pipeline, alloc);
 }
 
@@ -979,6 +991,7 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.labels.clear();
   cb.colorAttachments.clear();
   cb.bind = {};
+  cb.coverage = {};
   cb.vertexBuffers.clear();
   cb.indexBuffer = 0;
   cb.renderingSuspended = false;
@@ -1286,6 +1299,10 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
   CommandBufferState* cb = cbState(*dev, cmd);
   if (cb == nullptr) return;
   auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
+  if (point == VK_PIPELINE_BIND_POINT_GRAPHICS) {
+    cb->coverage.pipeline = pipeline;
+    cb->coverage.twinBound = false;
+  }
   auto it = dev->pipelines.find(u64(pipeline));
   bp.pipeline = it == dev->pipelines.end() ? nullptr : it->second;
   bp.dirty = true;
@@ -1297,6 +1314,16 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
     dev->d.CmdBindDescriptorSets(cmd, point, bp.pipeline->layout, dev->counterSet, 1, &dev->counterDescriptorSet, 1,
                                  &sink);
     bp.boundOffset = 0;
+  }
+}
+
+VKAPI_ATTR void VKAPI_CALL CmdSetAlphaToCoverageEnableEXT(VkCommandBuffer cmd, VkBool32 enable) {
+  DeviceState* dev = deviceOf(cmd);
+  dev->d.CmdSetAlphaToCoverageEnableEXT(cmd, enable);
+  std::lock_guard lock(dev->mutex);
+  if (CommandBufferState* cb = cbState(*dev, cmd)) {
+    cb->coverage.known = true;
+    cb->coverage.alphaToCoverage = enable == VK_TRUE;
   }
 }
 
@@ -1407,6 +1434,7 @@ void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t 
     (dispatch ? pass.dispatches : pass.draws) += 1;
     if (indices > 0) pass.indexReads[{cb->indexBuffer, cb->indexBytes}] += indices;
   }
+  if (!dispatch) bindForCoverage(dev, *cb);
   beforeDraw(dev, *cb, dispatch ? 1 : 0, dispatch);
 }
 
@@ -1723,6 +1751,7 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CmdBindVertexBuffers2)
   TALLY_DEVICE_ALIAS(CmdBindVertexBuffers2EXT, CmdBindVertexBuffers2)
   TALLY_DEVICE(CmdDrawMultiEXT)
+  TALLY_DEVICE(CmdSetAlphaToCoverageEnableEXT)
   TALLY_DEVICE(CmdDrawMultiIndexedEXT)
   TALLY_DEVICE(CmdDrawMeshTasksEXT)
   TALLY_DEVICE(CmdDrawMeshTasksIndirectEXT)

@@ -53,20 +53,20 @@ spirv::ValidationTarget validationTarget(const VkDeviceCreateInfo& info, uint32_
   return target;
 }
 
-std::string earlyTestsPipelineBlocker(const VkGraphicsPipelineCreateInfo& info) {
+AlphaToCoverage alphaToCoverage(const VkGraphicsPipelineCreateInfo& info) {
   if (info.pDynamicState != nullptr) {
     for (uint32_t i = 0; i < info.pDynamicState->dynamicStateCount; ++i) {
       if (info.pDynamicState->pDynamicStates[i] == VK_DYNAMIC_STATE_ALPHA_TO_COVERAGE_ENABLE_EXT) {
-        return "alpha to coverage is dynamic state";
+        return AlphaToCoverage::Dynamic;
       }
     }
   }
   // pMultisampleState may dangle where rasterization is discarded, and then no fragment runs anyway.
   const bool discarded = info.pRasterizationState != nullptr && info.pRasterizationState->rasterizerDiscardEnable;
   if (!discarded && info.pMultisampleState != nullptr && info.pMultisampleState->alphaToCoverageEnable == VK_TRUE) {
-    return "it enables alpha to coverage";
+    return AlphaToCoverage::On;
   }
-  return {};
+  return AlphaToCoverage::Off;
 }
 
 }  // namespace tally::layer

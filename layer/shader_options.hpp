@@ -3,8 +3,6 @@
 // fragment shader may be given early fragment tests (docs/layer.md).
 #pragma once
 
-#include <string>
-
 #include <vulkan/vulkan.h>
 
 #include "spirv/validate.hpp"
@@ -18,10 +16,10 @@ namespace tally::layer {
 spirv::ValidationTarget validationTarget(const VkDeviceCreateInfo& info, uint32_t instanceVersion,
                                          uint32_t deviceVersion);
 
-// Why early fragment tests would change what this pipeline does, whatever
-// its fragment shader: alpha to coverage (set or dynamic) removes samples
-// after the shader, and early tests would already have written their depth
-// and stencil. "" when nothing in the pipeline's state stands against them.
-std::string earlyTestsPipelineBlocker(const VkGraphicsPipelineCreateInfo& info);
+// Alpha to coverage removes samples after the fragment shader; early tests
+// would already have written their depth and stencil. Dynamic: set by
+// vkCmdSetAlphaToCoverageEnableEXT at each draw.
+enum class AlphaToCoverage { Off, On, Dynamic };
+AlphaToCoverage alphaToCoverage(const VkGraphicsPipelineCreateInfo& info);
 
 }  // namespace tally::layer

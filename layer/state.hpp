@@ -82,7 +82,7 @@ struct DeviceDispatch {
   X(QueuePresentKHR) X(SetDebugUtilsObjectNameEXT) X(CmdBeginDebugUtilsLabelEXT) X(CmdEndDebugUtilsLabelEXT)    \
   X(CmdBindVertexBuffers2) X(CmdDrawMeshTasksEXT) X(CmdDrawMeshTasksIndirectEXT)                              \
   X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)                          \
-  X(CmdPushDescriptorSetKHR) X(CmdPushDescriptorSetWithTemplateKHR)
+  X(CmdPushDescriptorSetKHR) X(CmdPushDescriptorSetWithTemplateKHR) X(CmdSetAlphaToCoverageEnableEXT)
 #define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
 #undef TALLY_LAYER_MEMBER
@@ -139,6 +139,10 @@ struct PipelineInfo {
   uint32_t libraryParts = 0;
   bool library = false;  // VK_PIPELINE_CREATE_LIBRARY_BIT_KHR: linked into others, never bound
   bool linked = false;   // made from libraries (VkPipelineLibraryCreateInfoKHR)
+  // Where alpha to coverage is dynamic, the layer's copy whose fragment
+  // shader was given early tests: bound in the application's pipeline's
+  // place while alpha to coverage is off (early_tests_twin.hpp).
+  VkPipeline earlyTestsTwin = VK_NULL_HANDLE;
 };
 
 // An indexed indirect draw whose parameters the layer copies, after the
@@ -219,6 +223,12 @@ struct CommandBufferState {
   VkBuffer indirectBuffer = VK_NULL_HANDLE;  // where indirect parameters are copied (indirect.cpp)
   VkDeviceMemory indirectMemory = VK_NULL_HANDLE;
   VkDeviceSize indirectUsed = 0;
+  struct Coverage {
+    bool known = false;                    // vkCmdSetAlphaToCoverageEnableEXT was recorded
+    bool alphaToCoverage = false;          // its last value
+    VkPipeline pipeline = VK_NULL_HANDLE;  // the graphics pipeline the application bound
+    bool twinBound = false;                // its late-tests twin is bound in its place
+  } coverage;
 };
 
 // One vkQueueSubmit's counters and queries, copied into a host-visible

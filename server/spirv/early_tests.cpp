@@ -133,8 +133,9 @@ std::string earlyTestsBlocker(const Module& module, const DefIndex& defs, const 
   return {};
 }
 
-void preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types,
+bool preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types,
                         const std::vector<EntryPoint>& entryPoints, bool add, std::vector<std::string>& notes) {
+  bool added = false;
   for (const auto& ep : entryPoints) {
     if (ep.stage != Stage::Fragment) continue;
     bool declared = false;
@@ -150,6 +151,7 @@ void preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types
         module.executionModes.emplace_back(
             spv::Op::OpExecutionMode,
             std::vector<uint32_t>{ep.function, static_cast<uint32_t>(spv::ExecutionMode::EarlyFragmentTests)});
+        added = true;
         continue;
       }
       why = " and cannot be given them (" + why + ")";
@@ -158,6 +160,7 @@ void preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types
                     ": its counters are side effects, so depth and stencil tests run after it and rejected "
                     "fragments are counted too");
   }
+  return added;
 }
 
 }  // namespace tally::spirv

@@ -23,8 +23,8 @@ std::string earlyTestsBlocker(const Module& module, const DefIndex& defs, const 
 
 // For each fragment entry point without EarlyFragmentTests: with `add`, gives
 // it the mode where earlyTestsBlocker allows; appends a note for each that
-// keeps its late tests, saying why.
-void preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types,
+// keeps its late tests, saying why. Returns whether it added the mode.
+bool preserveEarlyTests(Module& module, const DefIndex& defs, const Types& types,
                         const std::vector<EntryPoint>& entryPoints, bool add, std::vector<std::string>& notes);
 
 }  // namespace tally::spirv

@@ -188,7 +188,8 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   }
   result.notes.insert(result.notes.end(), scan->notes.begin(), scan->notes.end());
   // Before the counters: whether early tests are safe is a question about the application's own code.
-  preserveEarlyTests(module, *defs, *types, scan->entryPoints, rewrite && options.earlyFragmentTests, result.notes);
+  result.earlyTestsAdded = preserveEarlyTests(module, *defs, *types, scan->entryPoints,
+                                              rewrite && options.earlyFragmentTests, result.notes);
 
   // Slots.
   std::map<SlotKey, std::pair<uint32_t, uint32_t>> slotOf;

@@ -122,6 +122,7 @@ struct Instrumented {
   uint32_t versionIn = 0;        // SPIR-V version word of the input (0x00010000 = 1.0)
   uint32_t versionOut = 0;       // raised to 1.3 when subgroup mode needs it
   bool inlined = false;          // functions were inlined to resolve resources
+  bool earlyTestsAdded = false;  // a fragment entry point was given EarlyFragmentTests (options.earlyFragmentTests)
   std::vector<std::string> notes;  // fallbacks taken, for the user
   // Arithmetic per invocation of each entry point, counted on the input
   // module (the counters' own instructions excluded): spirv/arith.hpp.
