@@ -204,22 +204,12 @@ uint32_t vertexElementBytes(const spirv::Site& site, VkFormat format) {
 }
 
 std::string lineKind(const spirv::Site& site, const Resource* resource, VkFormat viewFormat) {
-  using spirv::SiteKind;
   if (resource != nullptr && !resource->image) return "buffer";  // texel buffers too
-  switch (site.kind) {
-    case SiteKind::OutputWrite: return "attachment";
-    case SiteKind::AttachmentRead: {
-      const VkFormat format = viewFormat != VK_FORMAT_UNDEFINED || resource == nullptr ? viewFormat : resource->format;
-      return depthOrStencil(format) ? "depth" : "attachment";
-    }
-    case SiteKind::ImageWrite:
-    case SiteKind::ImageAtomic: return "storage image";
-    // OpImageRead outside subpass data reads a storage image; sampling and
-    // fetches read a sampled one.
-    case SiteKind::TextureRead:
-      return site.opcode == "OpImageRead" || site.opcode == "OpImageSparseRead" ? "storage image" : "texture";
-    default: return "buffer";
+  if (site.kind == spirv::SiteKind::AttachmentRead) {
+    const VkFormat format = viewFormat != VK_FORMAT_UNDEFINED || resource == nullptr ? viewFormat : resource->format;
+    if (depthOrStencil(format)) return "depth";
   }
+  return std::string(spirv::useKind(site));
 }
 
 std::vector<PassRecord> distinctPasses(const std::vector<PassRecord>& passes) {
@@ -239,6 +229,21 @@ std::vector<PassRecord> distinctPasses(const std::vector<PassRecord>& passes) {
     if (n > 1) out.back().name += " #" + std::to_string(n);
   }
   return out;
+}
+
+std::string imageRole(VkImageUsageFlags usage, Kind kind) {
+  const std::pair<VkImageUsageFlags, const char*> roles[] = {
+      {VK_IMAGE_USAGE_SAMPLED_BIT, "texture"},
+      {VK_IMAGE_USAGE_STORAGE_BIT, "storage image"},
+      {VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT, "attachment"},
+      {VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth"}};
+  std::string out;
+  for (const auto& [bits, role] : roles) {
+    if (!(usage & bits)) continue;
+    if (!out.empty()) return "image";
+    out = role;
+  }
+  return out.empty() ? toString(kind) : out;
 }
 
 uint32_t viewCount(uint32_t viewMask) { return std::max(1, std::popcount(viewMask)); }

@@ -21,6 +21,7 @@
 
 namespace tally::layer {
 
+enum class Kind;
 struct Bound;
 struct Resource;
 struct Region;
@@ -83,6 +84,10 @@ Bound vertexSource(const CommandBufferState& cb, const PipelineInfo& pipeline, u
 // Bytes of one vertex attribute read: the shader type's, or the attribute
 // format's element where the shader's type says less.
 uint32_t vertexElementBytes(const spirv::Site& site, VkFormat format);
+// What an unnamed image is called: its one role ("texture", "storage image",
+// "attachment", "depth"), or "image" where its usage allows several (zink
+// creates every image for attachment and sampled use); `kind` where none.
+std::string imageRole(VkImageUsageFlags usage, Kind kind);
 // A line's kind from its use: "texture", "storage image", "attachment",
 // "depth" or "buffer".
 std::string lineKind(const spirv::Site& site, const Resource* resource, VkFormat viewFormat);

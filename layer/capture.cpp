@@ -129,7 +129,7 @@ const char* toString(Kind kind) {
 std::string Resource::displayName() const {
   if (!name.empty()) return name;
   if (!image) return "buffer " + hexHandle(handle) + " (" + std::to_string(size) + " B)";
-  return std::string(shaderAndAttachment ? "image" : toString(kind)) + " " + hexHandle(handle) + " " + formatName(format) + " " +
+  return imageRole(imageUsage, kind) + " " + hexHandle(handle) + " " + formatName(format) + " " +
          std::to_string(width) + "x" + std::to_string(height);
 }
 

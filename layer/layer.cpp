@@ -251,9 +251,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateImage(VkDevice device, const VkImageCreateI
   r.kind = (info->usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT) ? Kind::Depth
            : (info->usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)       ? Kind::Attachment
                                                                         : Kind::Texture;
-  r.shaderAndAttachment =
-      (info->usage & (VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)) &&
-      (info->usage & (VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT));
+  r.imageUsage = info->usage;
   r.format = info->format;
   r.width = info->extent.width;
   r.height = info->extent.height;

@@ -100,7 +100,7 @@ struct Resource {
   uint64_t handle = 0;
   bool image = false;
   Kind kind = Kind::Buffer;    // from its creation usage; each line's kind comes from its use
-  bool shaderAndAttachment = false;  // created for both: named "image", not by one of its roles
+  VkImageUsageFlags imageUsage = 0;  // an unnamed image is named by its role, "image" where it has several
   VkFormat format = VK_FORMAT_UNDEFINED;
   uint32_t width = 0, height = 0, samples = 1;
   uint64_t size = 0;             // buffers: VkBufferCreateInfo::size; images: the memory requirement
