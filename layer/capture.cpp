@@ -129,7 +129,7 @@ const char* toString(Kind kind) {
 std::string Resource::displayName() const {
   if (!name.empty()) return name;
   if (!image) return "buffer " + hexHandle(handle) + " (" + std::to_string(size) + " B)";
-  return std::string(toString(kind)) + " " + hexHandle(handle) + " " + formatName(format) + " " +
+  return imageRole(imageUsage, kind) + " " + hexHandle(handle) + " " + formatName(format) + " " +
          std::to_string(width) + "x" + std::to_string(height);
 }
 
@@ -288,16 +288,8 @@ namespace {
 Bound resolveSlot(const DeviceState& dev, const CommandBufferState& cb, const CommandBufferState::BindPoint& bp,
                   const PipelineInfo& pipeline, const spirv::Site& site, uint32_t i) {
   using spirv::SiteKind;
-  if (site.kind == SiteKind::OutputWrite) {
-    const uint32_t location = site.location.value_or(0);
-    return location < cb.colorAttachments.size() ? cb.colorAttachments[location] : Bound{};
-  }
-  if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
-    auto b = pipeline.vertexLocationBinding.find(*site.location);
-    if (b == pipeline.vertexLocationBinding.end()) return {};
-    auto v = cb.vertexBuffers.find(b->second);
-    return v == cb.vertexBuffers.end() ? Bound{} : Bound{v->second};
-  }
+  if (site.kind == SiteKind::OutputWrite) return outputTarget(cb, pipeline, site.location.value_or(0));
+  if (site.kind == SiteKind::BufferRead && site.location) return vertexSource(cb, pipeline, *site.location);
   if (site.set < 0 || site.binding < 0 || site.set >= int64_t(bp.sets.size())) return {};
   const DescriptorSetState* state = nullptr;
   if (auto pushed = bp.pushed.find(uint32_t(site.set)); pushed != bp.pushed.end()) {
@@ -419,12 +411,17 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
       const uint64_t n = value(slot);
       if (n == 0 && site.slotCount > 1) continue;
       const Bound bound = slot < region.slotResources.size() ? region.slotResources[slot] : Bound{};
-      std::string name, kind = isBuffer ? "buffer" : "texture", format;
-      uint64_t bytes = site.elementBytes;
+      // An output with no attachment, or masked: its counter ran, nothing was written.
+      if (site.kind == SiteKind::OutputWrite && bound.resource == kNotWritten) continue;
       auto r = dev.resources.find(bound.resource);
+      std::string name, format;
+      const std::string kind = lineKind(site, r != dev.resources.end() ? &r->second : nullptr, bound.format);
+      uint64_t bytes = site.elementBytes;
+      if (isBuffer && site.location && bound.format != VK_FORMAT_UNDEFINED) {
+        bytes = vertexElementBytes(site, bound.format);
+      }
       if (r != dev.resources.end()) {
         name = r->second.displayName();
-        kind = toString(r->second.kind);
         if (r->second.image) {
           const VkFormat f = bound.format != VK_FORMAT_UNDEFINED ? bound.format : r->second.format;
           format = formatName(r->second.format);
@@ -432,10 +429,8 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         }
       } else if (site.kind == SiteKind::OutputWrite) {
         name = "output " + std::to_string(site.location.value_or(0));
-        kind = "attachment";
       } else if (site.location) {
         name = "vertex input " + std::to_string(*site.location);
-        kind = "buffer";
       } else {
         name = site.set >= 0 ? "set " + std::to_string(site.set) + " binding " + std::to_string(site.binding)
                              : (site.resource.empty() ? "unresolved" : site.resource);
@@ -468,8 +463,13 @@ void processHarvest(DeviceState& dev, Harvest& h) {
       pass.name = scope.label;
       pass.draws = scope.draws;
       pass.dispatches = scope.dispatches;
-      if (scope.timestampBegin != UINT32_MAX && scope.timestampBegin + 1 < timestamps.size()) {
-        const uint64_t begin = timestamps[scope.timestampBegin], end = timestamps[scope.timestampBegin + 1];
+      // Under multiview each timestamp has one index per view: the first is
+      // a timestamp, the others the same or zero.
+      const size_t views = scope.views;
+      if (scope.timestampBegin != UINT32_MAX && scope.timestampBegin + 2 * views - 1 < timestamps.size()) {
+        const uint64_t begin = timestamps[scope.timestampBegin];
+        uint64_t end = 0;
+        for (size_t v = 0; v < views; ++v) end = std::max(end, timestamps[scope.timestampBegin + views + v]);
         pass.gpuMs = end >= begin ? double(end - begin) * period / 1e6 : 0.0;
         pass.timed = true;
       }
@@ -487,10 +487,14 @@ void processHarvest(DeviceState& dev, Harvest& h) {
         addLine(pass, r != dev.resources.end() ? r->second.displayName() : "index buffer", false, "derived", indices,
                 key.second, "buffer", "");
       }
-      // Unnamed passes take their kind and their place among the frame's passes of that kind.
-      if (pass.name.empty() && scope.continues >= 0 && first + size_t(scope.continues) < frame->second.passes.size()) {
+      // A later subpass under its first one's label (or none) is part of
+      // that pass; one labelled on its own is a pass of its own.
+      if (scope.continues >= 0 && first + size_t(scope.continues) < frame->second.passes.size() &&
+          (scope.label.empty() || scope.label == part.passes[size_t(scope.continues)].label)) {
         pass.name = frame->second.passes[first + size_t(scope.continues)].name;
+        pass.joins = int(first) + scope.continues;
       }
+      // Unnamed passes take their kind and their place among the frame's passes of that kind.
       if (pass.name.empty()) {
         std::set<std::string> named;
         for (const auto& p : frame->second.passes) {
@@ -658,6 +662,14 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
   VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   dev.d.BeginCommandBuffer(h->cmd, &begin);
+  // A multiview query leaves its views' indices to the implementation: each
+  // view's share, or the whole in the first and zero (or, on lavapipe,
+  // nothing) in the others. Zeroed first, every layout sums right.
+  for (const auto& part : parts) {
+    const bool multiview = std::any_of(part.passes.begin(), part.passes.end(), [](const PassScope& p) { return p.views > 1; });
+    const VkDeviceSize queryBytes = VkDeviceSize(part.timestamps) * 8 + VkDeviceSize(part.statistics) * 24;
+    if (multiview && queryBytes > 0) dev.d.CmdFillBuffer(h->cmd, h->buffer, part.timestampsAt, queryBytes, 0);
+  }
   // Everything the submission wrote is visible to the copies, which then
   // zero the regions for the next submission.
   memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_MEMORY_WRITE_BIT,
@@ -810,35 +822,8 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
   json frames = json::array();
   for (const auto& [index, frame] : dev.frames) {
     if (!frame.closed || frame.pendingHarvests > 0) continue;
-    // Passes of one name (a label around several render pass instances) are one pass.
-    std::vector<PassRecord> merged;
-    for (const auto& p : frame.passes) {
-      auto it = std::find_if(merged.begin(), merged.end(), [&](const PassRecord& m) { return m.name == p.name; });
-      if (it == merged.end()) {
-        merged.push_back(p);
-        continue;
-      }
-      it->gpuMs += p.gpuMs;
-      it->timed = it->timed || p.timed;
-      it->draws += p.draws;
-      it->dispatches += p.dispatches;
-      it->fragmentInvocations += p.fragmentInvocations;
-      it->vertexInvocations += p.vertexInvocations;
-      it->computeInvocations += p.computeInvocations;
-      auto addStat = [](int64_t& into, int64_t v) {
-        if (v >= 0) into = std::max<int64_t>(into, 0) + v;
-      };
-      addStat(it->fragmentStatistic, p.fragmentStatistic);
-      addStat(it->vertexStatistic, p.vertexStatistic);
-      addStat(it->computeStatistic, p.computeStatistic);
-      for (const auto& [key, line] : p.lines) {
-        auto& into = it->lines[key];
-        into.count += line.count;
-        into.bytes += line.bytes;
-        into.kind = line.kind;
-        into.format = line.format;
-      }
-    }
+    // Later subpasses join their render pass instance's pass; passes that share a label stay apart, numbered.
+    const std::vector<PassRecord> merged = distinctPasses(frame.passes);
     json passes = json::array();
     double frameMs = 0;
     for (const auto& p : merged) {

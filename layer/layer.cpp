@@ -159,6 +159,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   dev->config = Config::fromEnvironment();
 #define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(*device, "vk" #name));
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
+  TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(TALLY_LAYER_LOAD)
 #undef TALLY_LAYER_LOAD
   // Dynamic rendering and submit2 under their extension names on 1.2 devices.
   if (dev->d.CmdBeginRendering == nullptr) {
@@ -168,6 +169,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   if (dev->d.CmdBindVertexBuffers2 == nullptr) {
     dev->d.CmdBindVertexBuffers2 =
         reinterpret_cast<PFN_vkCmdBindVertexBuffers2>(gdpa(*device, "vkCmdBindVertexBuffers2EXT"));
+  }
+  if (dev->d.CmdSetRasterizerDiscardEnable == nullptr) {
+    dev->d.CmdSetRasterizerDiscardEnable = reinterpret_cast<PFN_vkCmdSetRasterizerDiscardEnable>(
+        gdpa(*device, "vkCmdSetRasterizerDiscardEnableEXT"));
   }
   if (dev->d.QueueSubmit2 == nullptr) {
     dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
@@ -269,6 +274,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateImage(VkDevice device, const VkImageCreateI
   r.kind = (info->usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT) ? Kind::Depth
            : (info->usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)       ? Kind::Attachment
                                                                         : Kind::Texture;
+  r.imageUsage = info->usage;
   r.format = info->format;
   r.width = info->extent.width;
   r.height = info->extent.height;
@@ -381,10 +387,11 @@ std::vector<std::vector<uint32_t>> subpassColors(const Info& info) {
 }
 
 void recordRenderPass(DeviceState& dev, VkRenderPass pass, std::vector<std::vector<uint32_t>> subpasses,
-                      bool multiview) {
+                      std::vector<uint32_t> viewMasks) {
   std::lock_guard lock(dev.mutex);
   dev.renderPasses[u64(pass)] = std::move(subpasses);
-  if (multiview) dev.multiviewPasses.insert(u64(pass));
+  dev.subpassViewMasks.erase(u64(pass));  // a later render pass may reuse the handle
+  if (!viewMasks.empty()) dev.subpassViewMasks[u64(pass)] = std::move(viewMasks);
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass(VkDevice device, const VkRenderPassCreateInfo* info,
@@ -392,12 +399,13 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass(VkDevice device, const VkRenderP
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.CreateRenderPass(device, info, alloc, pass);
   if (result != VK_SUCCESS) return result;
-  bool multiview = false;
+  std::vector<uint32_t> viewMasks;
   for (auto* p = static_cast<const VkBaseInStructure*>(info->pNext); p != nullptr; p = p->pNext) {
-    multiview = multiview || (p->sType == VK_STRUCTURE_TYPE_RENDER_PASS_MULTIVIEW_CREATE_INFO &&
-                              reinterpret_cast<const VkRenderPassMultiviewCreateInfo*>(p)->subpassCount > 0);
+    if (p->sType != VK_STRUCTURE_TYPE_RENDER_PASS_MULTIVIEW_CREATE_INFO) continue;
+    const auto* multiview = reinterpret_cast<const VkRenderPassMultiviewCreateInfo*>(p);
+    viewMasks.assign(multiview->pViewMasks, multiview->pViewMasks + multiview->subpassCount);
   }
-  recordRenderPass(*dev, *pass, subpassColors(*info), multiview);
+  recordRenderPass(*dev, *pass, subpassColors(*info), std::move(viewMasks));
   return result;
 }
 
@@ -406,9 +414,9 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRenderPass2(VkDevice device, const VkRender
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.CreateRenderPass2(device, info, alloc, pass);
   if (result != VK_SUCCESS) return result;
-  bool multiview = false;
-  for (uint32_t s = 0; s < info->subpassCount; ++s) multiview = multiview || info->pSubpasses[s].viewMask != 0;
-  recordRenderPass(*dev, *pass, subpassColors(*info), multiview);
+  std::vector<uint32_t> viewMasks;
+  for (uint32_t s = 0; s < info->subpassCount; ++s) viewMasks.push_back(info->pSubpasses[s].viewMask);
+  recordRenderPass(*dev, *pass, subpassColors(*info), std::move(viewMasks));
   return result;
 }
 
@@ -825,6 +833,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
       state->layout = infos[i].layout;
+      state->fixed = fixedFunctionOf(*dev, infos[i]);
       // Graphics pipeline libraries: a library's stages are instrumented as
       // a pipeline's are; a pipeline linked from libraries counts their sites.
       const LibraryUse use = libraryUse(infos[i]);
@@ -990,6 +999,10 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.appStatisticsActive = false;
   cb.labels.clear();
   cb.colorAttachments.clear();
+  cb.dynamic = {};
+  cb.views = 1;
+  cb.secondaryContents = cb.suspending = false;
+  cb.owedEnd = -1;
   cb.bind = {};
   cb.coverage = {};
   cb.vertexBuffers.clear();
@@ -1007,6 +1020,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
   CommandBufferState* cb = cbState(*dev, cmd);
   if (cb == nullptr) return result;
   resetRecording(*dev, *cb);
+  if (cb->secondary) inheritTargets(*dev, *cb, *info);
   if (cb->secondary || !cb->graphicsOrCompute || !dev->counting) return result;
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
@@ -1050,26 +1064,53 @@ VKAPI_ATTR VkResult VKAPI_CALL ResetCommandPool(VkDevice device, VkCommandPool p
 // on a query around one), once per subpass.
 void beginStatistic(DeviceState& dev, CommandBufferState& cb) {
   if (cb.statisticsPool == VK_NULL_HANDLE || cb.currentPass < 0 || cb.openStatistic || cb.appStatisticsActive) return;
-  if (cb.multiview && cb.inRenderPass) return;  // a query there takes one index per view
-  if (cb.statisticsUsed >= kQueriesPerCommandBuffer) return;
-  const uint32_t q = cb.statisticsUsed++;
+  // No query may be active while secondaries execute (without inheritedQueries).
+  if (cb.secondaryContents) return;
+  // Under multiview a query takes one index per view, each holding a view's
+  // share or the first the whole: the pass sums them all.
+  const uint32_t views = cb.inRenderPass ? cb.views : 1;
+  if (cb.statisticsUsed + views > kQueriesPerCommandBuffer) return;
+  const uint32_t q = cb.statisticsUsed;
+  cb.statisticsUsed += views;
   dev.d.CmdBeginQuery(cb.handle, cb.statisticsPool, q, 0);
-  cb.passes[size_t(cb.currentPass)].statisticQueries.push_back(q);
+  for (uint32_t v = 0; v < views; ++v) cb.passes[size_t(cb.currentPass)].statisticQueries.push_back(q + v);
   cb.openStatistic = true;
 }
 void endStatistic(DeviceState& dev, CommandBufferState& cb) {
   if (!cb.openStatistic) return;
-  dev.d.CmdEndQuery(cb.handle, cb.statisticsPool, cb.passes[size_t(cb.currentPass)].statisticQueries.back());
+  const auto& queries = cb.passes[size_t(cb.currentPass)].statisticQueries;
+  const uint32_t views = cb.inRenderPass ? cb.views : 1;
+  dev.d.CmdEndQuery(cb.handle, cb.statisticsPool, queries[queries.size() - views]);
   cb.openStatistic = false;
 }
 
+// A subpass whose contents are secondary command buffers takes no commands
+// but theirs: a scope there has its timestamps outside (capture.cpp waits on
+// every index it allocates, so each one is written).
+bool canWriteTimestamp(const CommandBufferState& cb, uint32_t views) {
+  return !cb.inRenderPass || (!cb.secondaryContents && cb.views == views);
+}
+// The end timestamp of a scope that closed where none could be written.
+void settleEnd(DeviceState& dev, CommandBufferState& cb) {
+  if (cb.owedEnd < 0 || cb.owedEnd >= int(cb.passes.size()) || cb.suspending) return;
+  const PassScope& pass = cb.passes[size_t(cb.owedEnd)];
+  if (!canWriteTimestamp(cb, pass.views)) return;
+  dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, cb.timestampPool,
+                          pass.timestampBegin + pass.views);
+  cb.owedEnd = -1;
+}
+
 void openPass(DeviceState& dev, CommandBufferState& cb, const char* kind) {
+  settleEnd(dev, cb);
   PassScope pass;
   pass.kind = kind;
   pass.label = cb.labels.empty() ? "" : cb.labels.back();
-  if (cb.timestamps && cb.timestampsUsed + 2 <= kQueriesPerCommandBuffer && !(cb.multiview && cb.inRenderPass)) {
+  // Under multiview a timestamp takes one index per view: begin's, then end's.
+  pass.views = cb.inRenderPass ? cb.views : 1;
+  if (cb.timestamps && cb.timestampsUsed + 2 * pass.views <= kQueriesPerCommandBuffer &&
+      canWriteTimestamp(cb, pass.views) && cb.owedEnd < 0) {
     pass.timestampBegin = cb.timestampsUsed;
-    cb.timestampsUsed += 2;
+    cb.timestampsUsed += 2 * pass.views;
     dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, cb.timestampPool, pass.timestampBegin);
   }
   cb.passes.push_back(std::move(pass));
@@ -1081,9 +1122,11 @@ void closePass(DeviceState& dev, CommandBufferState& cb) {
   if (cb.currentPass < 0) return;
   endStatistic(dev, cb);
   const PassScope& pass = cb.passes[size_t(cb.currentPass)];
-  if (pass.timestampBegin != UINT32_MAX) {
+  if (pass.timestampBegin != UINT32_MAX && (cb.suspending || !canWriteTimestamp(cb, pass.views))) {
+    cb.owedEnd = cb.currentPass;  // written once the scope is out of the secondaries' subpass, or not resumed
+  } else if (pass.timestampBegin != UINT32_MAX) {
     dev.d.CmdWriteTimestamp(cb.handle, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, cb.timestampPool,
-                            pass.timestampBegin + 1);
+                            pass.timestampBegin + pass.views);
   }
   cb.currentPass = -1;
 }
@@ -1107,7 +1150,11 @@ VKAPI_ATTR VkResult VKAPI_CALL EndCommandBuffer(VkCommandBuffer cmd) {
   {
     std::lock_guard lock(dev->mutex);
     CommandBufferState* cb = cbState(*dev, cmd);
-    if (tracked(*dev, cb) && !cb->inRenderPass) closePass(*dev, *cb);
+    if (tracked(*dev, cb) && !cb->inRenderPass) {
+      closePass(*dev, *cb);
+      cb->suspending = false;  // a scope suspended here is resumed elsewhere: its end is now
+      settleEnd(*dev, *cb);
+    }
     if (tracked(*dev, cb)) recordIndirectCopies(*dev, *cb, true);
   }
   return dev->d.EndCommandBuffer(cmd);
@@ -1118,7 +1165,9 @@ void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPas
   cb.passAttachments.clear();
   cb.subpassColors.clear();
   cb.subpass = 0;
-  cb.multiview = dev.multiviewPasses.count(u64(pass)) > 0;
+  cb.subpassViewMasks.clear();
+  if (auto m = dev.subpassViewMasks.find(u64(pass)); m != dev.subpassViewMasks.end()) cb.subpassViewMasks = m->second;
+  cb.views = viewCount(cb.subpassViewMasks.empty() ? 0 : cb.subpassViewMasks[0]);
   std::vector<uint64_t> views;
   if (auto f = dev.framebuffers.find(u64(framebuffer)); f != dev.framebuffers.end()) views = f->second;
   for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
@@ -1131,38 +1180,38 @@ void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPas
   for (uint64_t v : views) cb.passAttachments.push_back(boundImage(dev, reinterpret_cast<VkImageView>(v)));
   if (auto r = dev.renderPasses.find(u64(pass)); r != dev.renderPasses.end()) cb.subpassColors = r->second;
   cb.colorAttachments.clear();
-  if (!cb.subpassColors.empty()) {
-    for (uint32_t a : cb.subpassColors[0]) {
-      cb.colorAttachments.push_back(a < cb.passAttachments.size() ? cb.passAttachments[a] : Bound{});
-    }
-  }
+  if (!cb.subpassColors.empty()) cb.colorAttachments = subpassTargets(cb.passAttachments, cb.subpassColors[0]);
 }
 
 void nextSubpassCommon(CommandBufferState& cb) {
   ++cb.subpass;
   cb.colorAttachments.clear();
   if (cb.subpass < cb.subpassColors.size()) {
-    for (uint32_t a : cb.subpassColors[cb.subpass]) {
-      cb.colorAttachments.push_back(a < cb.passAttachments.size() ? cb.passAttachments[a] : Bound{});
-    }
+    cb.colorAttachments = subpassTargets(cb.passAttachments, cb.subpassColors[cb.subpass]);
   }
+  cb.views = viewCount(cb.subpass < cb.subpassViewMasks.size() ? cb.subpassViewMasks[cb.subpass] : 0);
 }
 
 // The render pass commands: the layer's work around the call down.
+// A first subpass of secondaries opens its scope before the render pass, so
+// that its begin timestamp lies outside.
 template <class CallDown>
-void beginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info, CallDown callDown) {
+void beginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info, VkSubpassContents contents,
+                     CallDown callDown) {
   DeviceState* dev = deviceOf(cmd);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
   if (tracked(*dev, cb)) closePass(*dev, *cb);
+  if (cb != nullptr) cb->secondaryContents = contents == VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS;
+  if (tracked(*dev, cb) && cb->secondaryContents) openPass(*dev, *cb, "render pass");
   callDown(*dev);
   if (cb == nullptr) return;
   beginRenderPassCommon(*dev, *cb, info->renderPass, info->framebuffer, info->pNext);
   cb->inRenderPass = true;
-  if (tracked(*dev, cb)) openPass(*dev, *cb, "render pass");
+  if (tracked(*dev, cb) && !cb->secondaryContents) openPass(*dev, *cb, "render pass");
 }
 template <class CallDown>
-void nextSubpass(VkCommandBuffer cmd, CallDown callDown) {
+void nextSubpass(VkCommandBuffer cmd, VkSubpassContents contents, CallDown callDown) {
   DeviceState* dev = deviceOf(cmd);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
@@ -1171,6 +1220,7 @@ void nextSubpass(VkCommandBuffer cmd, CallDown callDown) {
   callDown(*dev);
   if (cb == nullptr) return;
   nextSubpassCommon(*cb);
+  cb->secondaryContents = contents == VK_SUBPASS_CONTENTS_SECONDARY_COMMAND_BUFFERS;
   if (tracked(*dev, cb)) openSubpass(*dev, *cb, first);
 }
 // Also the end of a dynamic-rendering scope.
@@ -1183,6 +1233,8 @@ void endRenderPass(VkCommandBuffer cmd, CallDown callDown) {
   callDown(*dev);
   if (cb == nullptr) return;
   cb->inRenderPass = false;
+  if (tracked(*dev, cb)) settleEnd(*dev, *cb);
+  cb->secondaryContents = false;
   // The pass's indirect parameters are copied once it has ended, unless a
   // suspended rendering scope forbids any command until it resumes.
   if (tracked(*dev, cb)) recordIndirectCopies(*dev, *cb, false);
@@ -1190,18 +1242,19 @@ void endRenderPass(VkCommandBuffer cmd, CallDown callDown) {
 
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
                                               VkSubpassContents contents) {
-  beginRenderPass(cmd, info, [&](DeviceState& dev) { dev.d.CmdBeginRenderPass(cmd, info, contents); });
+  beginRenderPass(cmd, info, contents, [&](DeviceState& dev) { dev.d.CmdBeginRenderPass(cmd, info, contents); });
 }
 VKAPI_ATTR void VKAPI_CALL CmdBeginRenderPass2(VkCommandBuffer cmd, const VkRenderPassBeginInfo* info,
                                                const VkSubpassBeginInfo* begin) {
-  beginRenderPass(cmd, info, [&](DeviceState& dev) { dev.d.CmdBeginRenderPass2(cmd, info, begin); });
+  beginRenderPass(cmd, info, begin->contents,
+                  [&](DeviceState& dev) { dev.d.CmdBeginRenderPass2(cmd, info, begin); });
 }
 VKAPI_ATTR void VKAPI_CALL CmdNextSubpass(VkCommandBuffer cmd, VkSubpassContents contents) {
-  nextSubpass(cmd, [&](DeviceState& dev) { dev.d.CmdNextSubpass(cmd, contents); });
+  nextSubpass(cmd, contents, [&](DeviceState& dev) { dev.d.CmdNextSubpass(cmd, contents); });
 }
 VKAPI_ATTR void VKAPI_CALL CmdNextSubpass2(VkCommandBuffer cmd, const VkSubpassBeginInfo* begin,
                                            const VkSubpassEndInfo* end) {
-  nextSubpass(cmd, [&](DeviceState& dev) { dev.d.CmdNextSubpass2(cmd, begin, end); });
+  nextSubpass(cmd, begin->contents, [&](DeviceState& dev) { dev.d.CmdNextSubpass2(cmd, begin, end); });
 }
 VKAPI_ATTR void VKAPI_CALL CmdEndRenderPass(VkCommandBuffer cmd) {
   endRenderPass(cmd, [&](DeviceState& dev) { dev.d.CmdEndRenderPass(cmd); });
@@ -1215,24 +1268,31 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
   if (tracked(*dev, cb)) closePass(*dev, *cb);
+  // A resumed scope continues the suspended one's pass, and owes its end
+  // timestamp until it ends without suspending. A scope of secondaries opens
+  // before the call down, so that its timestamps lie outside.
+  const bool resuming = (info->flags & VK_RENDERING_RESUMING_BIT) != 0 && cb != nullptr && !cb->passes.empty() &&
+                        cb->passes.back().kind == "rendering";
+  if (cb != nullptr) {
+    cb->secondaryContents = (info->flags & VK_RENDERING_CONTENTS_SECONDARY_COMMAND_BUFFERS_BIT) != 0;
+    cb->suspending = false;
+  }
+  if (tracked(*dev, cb) && !resuming && cb->secondaryContents) openPass(*dev, *cb, "rendering");
   dev->d.CmdBeginRendering(cmd, info);
   if (cb == nullptr) return;
-  cb->colorAttachments.clear();
-  cb->multiview = info->viewMask != 0;
-  for (uint32_t i = 0; i < info->colorAttachmentCount; ++i) {
-    cb->colorAttachments.push_back(boundImage(*dev, info->pColorAttachments[i].imageView));
-  }
-  // A resumed scope continues the suspended one's pass.
-  const bool resuming = (info->flags & VK_RENDERING_RESUMING_BIT) != 0;
+  cb->colorAttachments = renderingTargets(*dev, *info);
+  cb->views = viewCount(info->viewMask);
   cb->renderingSuspends = (info->flags & VK_RENDERING_SUSPENDING_BIT) != 0;
   cb->renderingSuspended = false;
   cb->inRenderPass = true;
-  if (tracked(*dev, cb) && !(resuming && !cb->passes.empty() && cb->passes.back().kind == "rendering")) {
+  if (tracked(*dev, cb) && !resuming && !cb->secondaryContents) {
     openPass(*dev, *cb, "rendering");
-  } else if (tracked(*dev, cb)) {
+  } else if (tracked(*dev, cb) && resuming) {
     cb->currentPass = int(cb->passes.size()) - 1;
+    if (cb->owedEnd == cb->currentPass) cb->owedEnd = -1;
     beginStatistic(*dev, *cb);
   }
+  cb->suspending = (info->flags & VK_RENDERING_SUSPENDING_BIT) != 0;
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdEndRendering(VkCommandBuffer cmd) {
@@ -1555,11 +1615,17 @@ VKAPI_ATTR void VKAPI_CALL CmdDispatchIndirect(VkCommandBuffer cmd, VkBuffer buf
 
 VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t count, const VkCommandBuffer* secondaries) {
   DeviceState* dev = deviceOf(cmd);
-  dev->d.CmdExecuteCommands(cmd, count, secondaries);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (!tracked(*dev, cb)) return;
-  if (cb->currentPass < 0) openPass(*dev, *cb, "secondary");
+  // Outside a render pass the secondaries are a pass of their own, timed
+  // around them, with no query active while they run.
+  if (tracked(*dev, cb) && !cb->inRenderPass) {
+    closePass(*dev, *cb);
+    cb->secondaryContents = true;
+    openPass(*dev, *cb, "secondary");
+  }
+  dev->d.CmdExecuteCommands(cmd, count, secondaries);
+  if (!tracked(*dev, cb) || cb->currentPass < 0) return;
   // The secondaries' regions count for the pass that executes them; a region
   // executed twice in one primary is read back once.
   std::set<VkDeviceSize> have;
@@ -1569,13 +1635,17 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
     if (s == nullptr) continue;
     for (Region r : s->regions) {
       if (!have.insert(r.offset).second) continue;
+      resolveInherited(*cb, r);
       r.pass = uint32_t(cb->currentPass);
       r.owned = false;
       cb->regions.push_back(std::move(r));
     }
     cb->passes[size_t(cb->currentPass)].draws += uint32_t(s->regions.size());
   }
-  if (!cb->inRenderPass) closePass(*dev, *cb);
+  if (!cb->inRenderPass) {
+    closePass(*dev, *cb);
+    cb->secondaryContents = false;
+  }
 }
 
 // ---------------------------------------------------------------- submission and frames
@@ -1775,10 +1845,13 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(QueuePresentKHR)
 #undef TALLY_DEVICE
 #undef TALLY_DEVICE_ALIAS
+  if (PFN_vkVoidFunction f = interceptedDynamicState(n)) return f;
   return interceptedUncounted(n);
 }
 
 }  // namespace
+
+DeviceState* deviceFor(const void* handle) { return deviceOf(handle); }
 }  // namespace tally::layer
 
 extern "C" {

@@ -20,6 +20,7 @@
 #include <vulkan/vk_layer.h>
 #include <nlohmann/json.hpp>
 
+#include "attribution.hpp"
 #include "spirv/instrument.hpp"
 
 namespace tally::layer {
@@ -83,8 +84,12 @@ struct DeviceDispatch {
   X(CmdBindVertexBuffers2) X(CmdDrawMeshTasksEXT) X(CmdDrawMeshTasksIndirectEXT)                              \
   X(CmdDrawMeshTasksIndirectCountEXT) X(CmdDrawMultiEXT) X(CmdDrawMultiIndexedEXT)                          \
   X(CmdPushDescriptorSetKHR) X(CmdPushDescriptorSetWithTemplateKHR) X(CmdSetAlphaToCoverageEnableEXT)
+// The dynamic state that decides what draws write and read (dynamic_state.cpp).
+#define TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(X)                                                                \
+  X(CmdSetVertexInputEXT) X(CmdSetColorWriteEnableEXT) X(CmdSetColorWriteMaskEXT) X(CmdSetRasterizerDiscardEnable)
 #define TALLY_LAYER_MEMBER(name) PFN_vk##name name = nullptr;
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_MEMBER)
+  TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(TALLY_LAYER_MEMBER)
 #undef TALLY_LAYER_MEMBER
 };
 
@@ -95,7 +100,8 @@ const char* toString(Kind kind);
 struct Resource {
   uint64_t handle = 0;
   bool image = false;
-  Kind kind = Kind::Buffer;
+  Kind kind = Kind::Buffer;    // from its creation usage; each line's kind comes from its use
+  VkImageUsageFlags imageUsage = 0;  // an unnamed image is named by its role, "image" where it has several
   VkFormat format = VK_FORMAT_UNDEFINED;
   uint32_t width = 0, height = 0, samples = 1;
   uint64_t size = 0;             // buffers: VkBufferCreateInfo::size; images: the memory requirement
@@ -132,7 +138,7 @@ struct PipelineInfo {
   uint32_t slots = 0;
   std::vector<spirv::Site> sites;
   std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
-  std::map<uint32_t, uint32_t> vertexLocationBinding;  // attribute Location -> vertex buffer binding
+  FixedFunction fixed;  // what its draws write, where its vertex attributes come from
   bool hasFragment = false;
   // Graphics pipeline libraries: the parts this pipeline holds
   // (VkGraphicsPipelineLibraryFlagsEXT; all four for a complete pipeline).
@@ -180,6 +186,7 @@ struct PassScope {
   std::vector<uint32_t> statisticQueries;
   uint32_t draws = 0, dispatches = 0;
   std::map<std::pair<uint64_t, uint32_t>, uint64_t> indexReads;  // (index buffer, index bytes) -> indices
+  uint32_t views = 1;  // its timestamps' query indices each (multiview: one per view)
 };
 
 struct CommandBufferState {
@@ -198,12 +205,17 @@ struct CommandBufferState {
   bool inRenderPass = false;
   bool openStatistic = false;
   bool appStatisticsActive = false;
-  bool multiview = false;  // the current render pass instance has multiview on: no queries inside
+  uint32_t views = 1;  // of the current subpass or rendering scope: a query inside takes one index per view
+  bool secondaryContents = false;  // the current subpass or scope records only vkCmdExecuteCommands: no queries inside
+  bool suspending = false;         // the current rendering scope suspends: its end timestamp waits for the resume
+  int owedEnd = -1;                // a scope whose end timestamp is not written yet
   std::vector<std::string> labels;
   std::vector<Bound> colorAttachments;  // of the current subpass, by Location
+  DynamicState dynamic;
   // render pass instance: its attachments and each subpass's colour references
   std::vector<Bound> passAttachments;
   std::vector<std::vector<uint32_t>> subpassColors;
+  std::vector<uint32_t> subpassViewMasks;  // multiview: each subpass's
   uint32_t subpass = 0;
   struct BindPoint {
     std::shared_ptr<PipelineInfo> pipeline;
@@ -257,6 +269,7 @@ struct Harvest {
 // A frame's passes as read back, before they are written out.
 struct PassRecord {
   std::string name;
+  int joins = -1;  // a later subpass without a label of its own: the frame's pass of its first subpass
   double gpuMs = 0;
   bool timed = false;
   uint32_t draws = 0, dispatches = 0;
@@ -328,7 +341,7 @@ struct DeviceState {
   std::unordered_map<uint64_t, uint64_t> bufferViews;  // view -> buffer
   std::unordered_map<uint64_t, std::vector<std::vector<uint32_t>>> renderPasses;  // subpass -> colour attachment indices
   std::unordered_map<uint64_t, std::vector<uint64_t>> framebuffers;  // attachment views
-  std::set<uint64_t> multiviewPasses;  // render passes with a view mask: queries inside take N indices
+  std::unordered_map<uint64_t, std::vector<uint32_t>> subpassViewMasks;  // render passes with multiview: per subpass
   std::unordered_map<uint64_t, uint32_t> poolFamilies;  // command pool -> queue family
   std::unordered_map<VkCommandBuffer, std::unique_ptr<CommandBufferState>> commandBuffers;
   std::unordered_map<VkQueue, uint32_t> queueFamilies;

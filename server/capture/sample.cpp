@@ -39,6 +39,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
         it->second.resource = a.resource;
         it->second.write = a.write;
         it->second.source = a.source;
+        it->second.kind = a.kind;
         it->second.onChip = a.onChip;
       }
       it->second.counts.push_back(double(a.count));
@@ -110,7 +111,10 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
       json r = {
           {"name", line.resource},
           {"format", info != byName.end() ? json(info->second->formatName) : json(nullptr)},
-          {"kind", info != byName.end() ? json(std::string(renderers::toString(info->second->kind))) : json(nullptr)},
+          // How the pass uses the resource, else (derived lines) what it is.
+          {"kind", !line.kind.empty()     ? json(line.kind)
+                   : info != byName.end() ? json(std::string(renderers::toString(info->second->kind)))
+                                          : json(nullptr)},
           {"access", line.write ? "write" : "read"},
           {"count", count.mean},   // per frame, averaged over the sample's frames
           {"bytes", bytes.mean},

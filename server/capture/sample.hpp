@@ -19,6 +19,7 @@ namespace tally::capture {
 // Accumulates one (pass, resource, direction) over frames.
 struct Line {
   std::string pass, resource, source;
+  std::string kind;  // Access::kind of its first frame ("": the resource's kind)
   bool write = false;
   bool onChip = false;  // Access::onChip (the tile-memory model)
   std::vector<double> counts, bytes;

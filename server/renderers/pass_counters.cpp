@@ -39,7 +39,7 @@ const std::string& elementName(const std::vector<std::string>& names, size_t ele
 }
 
 void addAccess(std::vector<Access>& accesses, const std::string& resource, bool write, uint64_t count,
-               uint64_t elementBytes, const std::string& source) {
+               uint64_t elementBytes, const std::string& source, const std::string& kind) {
   auto it = std::find_if(accesses.begin(), accesses.end(), [&](const Access& a) {
     return a.resource == resource && a.write == write && a.source == source;
   });
@@ -48,6 +48,7 @@ void addAccess(std::vector<Access>& accesses, const std::string& resource, bool 
     a.resource = resource;
     a.write = write;
     a.source = source;
+    a.kind = kind;
     accesses.push_back(a);
     it = accesses.end() - 1;
   }
@@ -58,6 +59,14 @@ void addAccess(std::vector<Access>& accesses, const std::string& resource, bool 
 PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,
                              const PassBindings& bindings, const std::vector<ResourceInfo>& resources) {
   PassCounts out;
+  // The line's kind from the site's use; a texel buffer is a buffer, an
+  // input attachment of a depth target a depth read.
+  auto kindOf = [&](const spirv::Site& site, const std::string& name) -> std::string {
+    const ResourceInfo* r = findResource(resources, name);
+    if (r != nullptr && r->kind == ResourceKind::Buffer) return "buffer";
+    if (r != nullptr && r->kind == ResourceKind::Depth && site.kind == spirv::SiteKind::AttachmentRead) return "depth";
+    return std::string(spirv::useKind(site));
+  };
   auto bytesOf = [&](const std::string& name, uint32_t fallback) -> uint64_t {
     const ResourceInfo* r = findResource(resources, name);
     return r != nullptr && r->elementBytes != 0 ? r->elementBytes : fallback;
@@ -84,7 +93,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
     if (site.kind == SiteKind::OutputWrite) {
       const std::string name = lineNames(site, bindings)[0];
       addAccess(out.accesses, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes),
-                "counter");
+                "counter", kindOf(site, name));
       noteSlot(slotValue(counters, site.slot), name);
       continue;
     }
@@ -93,7 +102,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
     const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
     if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
       const std::string buffer = lineNames(site, bindings)[0];
-      addAccess(out.accesses, buffer, false, slotValue(counters, site.slot), site.elementBytes, "counter");
+      addAccess(out.accesses, buffer, false, slotValue(counters, site.slot), site.elementBytes, "counter", "buffer");
       noteSlot(slotValue(counters, site.slot), buffer);
       continue;
     }
@@ -108,7 +117,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       if (auto o = bindings.elementBytes.find({site.set, site.binding}); o != bindings.elementBytes.end()) {
         bytes = o->second;
       }
-      addAccess(out.accesses, name, write, n, bytes, "counter");
+      addAccess(out.accesses, name, write, n, bytes, "counter", kindOf(site, name));
       noteSlot(n, name);
     }
   }

@@ -57,6 +57,6 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
 
 // Adds (or merges into) a line.
 void addAccess(std::vector<Access>& accesses, const std::string& resource, bool write, uint64_t count,
-               uint64_t elementBytes, const std::string& source);
+               uint64_t elementBytes, const std::string& source, const std::string& kind = "");
 
 }  // namespace tally::renderers

@@ -55,6 +55,9 @@ struct ResourceInfo {
 // One line of a pass's traffic: a resource read or written.
 struct Access {
   std::string resource;  // ResourceInfo::name
+  // How the pass uses it (spirv::useKind: "texture", "storage image",
+  // "attachment", "depth", "buffer"); "": the resource's own kind (derived lines).
+  std::string kind;
   bool write = false;
   uint64_t count = 0;    // events (counter totals, or derived: see source)
   uint64_t bytes = 0;    // count x element size

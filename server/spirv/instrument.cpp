@@ -43,6 +43,21 @@ std::string_view toString(SiteKind kind) {
   return "invocation";
 }
 
+std::string_view useKind(const Site& site) {
+  switch (site.kind) {
+    case SiteKind::TextureRead:
+      return site.opcode == "OpImageRead" || site.opcode == "OpImageSparseRead" ? "storage image" : "texture";
+    case SiteKind::ImageWrite:
+    case SiteKind::ImageAtomic: return "storage image";
+    case SiteKind::AttachmentRead:
+    case SiteKind::OutputWrite: return "attachment";
+    case SiteKind::BufferRead:
+    case SiteKind::BufferWrite:
+    case SiteKind::Invocation: return "buffer";
+  }
+  return "buffer";
+}
+
 std::optional<SiteKind> siteKindFromString(std::string_view name) {
   for (auto k : {SiteKind::TextureRead, SiteKind::AttachmentRead, SiteKind::ImageWrite, SiteKind::ImageAtomic,
                  SiteKind::BufferRead, SiteKind::BufferWrite, SiteKind::OutputWrite, SiteKind::Invocation}) {

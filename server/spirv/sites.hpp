@@ -26,6 +26,14 @@ enum class SiteKind {
 std::string_view toString(Stage stage);
 std::string_view toString(SiteKind kind);
 std::optional<SiteKind> siteKindFromString(std::string_view name);
+
+struct Site;
+// How a site uses its resource, as a result line's kind: "texture" (sampled
+// or fetched), "storage image" (OpImageRead outside subpass data, image
+// writes and atomics), "attachment" (input attachments, fragment outputs),
+// "buffer" (vertex attributes too). The caller, who knows what is bound,
+// says "buffer" for a texel buffer and "depth" for a depth input attachment.
+std::string_view useKind(const Site& site);
 std::optional<Stage> stageFromString(std::string_view name);
 
 struct Site {

@@ -2,7 +2,9 @@
 """Tally's own renderers, run as an ordinary uninstrumented application
 (`tallyd play`) under the Vulkan layer, must give the per-pass, per-resource
 counts of their built-in instrumentation (`tallyd capture`, exact): every
-counted line, by pass and resource name, equal.
+counted line, by pass and resource name, equal, and of the same kind (both
+sides name a line's kind by its use: a G-buffer target sampled is a
+"texture", an image written by imageStore a "storage image").
 
   compare_builtin.py --tallyd PATH --layer-dir DIR --scene NAME_OR_JSON
                      [--renderers a,b] [--resolution WxH] [--out REPORT.json]
@@ -36,6 +38,11 @@ def counted_lines(passes, source="counter"):
             key = (p["name"], r["name"], r["access"])
             out[key] = out.get(key, 0) + r["count"]
     return out
+
+
+def line_kinds(passes):
+    """{(pass, resource, access, source): kind}."""
+    return {(p["name"], r["name"], r["access"], r["source"]): r["kind"] for p in passes for r in p["resources"]}
 
 
 def median(values):
@@ -84,6 +91,8 @@ def compare(args, renderer, tmp, builtin_run):
     db = counted_lines(frame["passes"], "derived")
     mismatched += sorted((k, da[k], db[k]) for k in da.keys() & db.keys() if da[k] != db[k])
     derived_one_side = sorted(list(k) + ["built-in" if k in da else "layer"] for k in da.keys() ^ db.keys())
+    ka, kb = line_kinds(builtin_run["samples"][0]["passes"]), line_kinds(frame["passes"])
+    kinds_differ = sorted((k, ka[k], kb[k]) for k in ka.keys() & kb.keys() if ka[k] != kb[k])
     # Equal lines with something counted, per pass: a pass where neither side
     # counted anything would otherwise pass as equal.
     counted_equal = {}
@@ -108,6 +117,7 @@ def compare(args, renderer, tmp, builtin_run):
         "lines_equal": len(a.keys() & b.keys()) + len(da.keys() & db.keys()) - len(mismatched),
         "derived_one_side": derived_one_side,
         "mismatched": [{"line": list(k), "builtin": x, "layer": y} for k, x, y in mismatched],
+        "kinds_differ": [{"line": list(k), "builtin": x, "layer": y} for k, x, y in kinds_differ],
         "only_builtin": [list(k) for k in only_builtin],
         "only_layer": [list(k) for k in only_layer],
         "passes_builtin": passes_builtin,
@@ -167,13 +177,15 @@ def main():
             entry = compare(args, r["renderer"], tmp, r)
             report["renderers"].append(entry)
             ok = (not entry["mismatched"] and not entry["only_builtin"] and not entry["only_layer"]
-                  and not entry["passes_short_of_lines"] and not entry["incomplete"])
+                  and not entry["kinds_differ"] and not entry["passes_short_of_lines"] and not entry["incomplete"])
             failed = failed or not ok
             print("%-28s %-8s %3d lines equal, %d differ, %d built-in only, %d layer only" %
                   (entry["renderer"], "ok" if ok else "DIFFERS", entry["lines_equal"], len(entry["mismatched"]),
                    len(entry["only_builtin"]), len(entry["only_layer"])))
             for m in entry["mismatched"]:
                 print("    %s: built-in %s, layer %s" % ("/".join(m["line"]), m["builtin"], m["layer"]))
+            for m in entry["kinds_differ"]:
+                print("    %s: kind %s built-in, %s under the layer" % ("/".join(m["line"]), m["builtin"], m["layer"]))
             for k in entry["only_builtin"]:
                 print("    built-in only: " + "/".join(k))
             for k in entry["only_layer"]:
