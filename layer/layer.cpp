@@ -833,19 +833,20 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
       state->layout = infos[i].layout;
-      state->fixed = fixedFunctionOf(*dev, infos[i]);
       // Graphics pipeline libraries: a library's stages are instrumented as
       // a pipeline's are; a pipeline linked from libraries counts their sites.
       const LibraryUse use = libraryUse(infos[i]);
       state->library = use.library;
       state->libraryParts = use.parts;
-      if (infos[i].pVertexInputState != nullptr &&
-          (use.parts & VK_GRAPHICS_PIPELINE_LIBRARY_VERTEX_INPUT_INTERFACE_BIT_EXT)) {
-        for (uint32_t a = 0; a < infos[i].pVertexInputState->vertexAttributeDescriptionCount; ++a) {
-          const auto& attr = infos[i].pVertexInputState->pVertexAttributeDescriptions[a];
-          state->vertexLocationBinding[attr.location] = attr.binding;
-        }
+      // A library's create info holds the state of its own parts only: the
+      // other pointers may be garbage.
+      VkGraphicsPipelineCreateInfo held = infos[i];
+      if (!(use.parts & VK_GRAPHICS_PIPELINE_LIBRARY_VERTEX_INPUT_INTERFACE_BIT_EXT)) held.pVertexInputState = nullptr;
+      if (!(use.parts & VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT)) {
+        held.pRasterizationState = nullptr;
       }
+      if (!(use.parts & VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_OUTPUT_INTERFACE_BIT_EXT)) held.pColorBlendState = nullptr;
+      state->fixed = fixedFunctionOf(*dev, held);
       state->libraryParts |= mergeLibraries(*dev, use.linked, *state);
       state->linked = !use.linked.empty();
       if (dev->counting && layoutCounted(*dev, infos[i].layout) && infos[i].stageCount > 0 &&

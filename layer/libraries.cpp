@@ -40,7 +40,16 @@ uint32_t mergeLibraries(const DeviceState& dev, const std::vector<uint64_t>& lib
     held |= library.libraryParts;
     info.sites.insert(info.sites.end(), library.sites.begin(), library.sites.end());
     info.foldLayouts.insert(info.foldLayouts.end(), library.foldLayouts.begin(), library.foldLayouts.end());
-    info.vertexLocationBinding.insert(library.vertexLocationBinding.begin(), library.vertexLocationBinding.end());
+    FixedFunction& fixed = info.fixed;  // each library holds its parts' state
+    const FixedFunction& part = library.fixed;
+    fixed.attributes.insert(part.attributes.begin(), part.attributes.end());
+    if (fixed.writeMasks.empty()) fixed.writeMasks = part.writeMasks;
+    if (fixed.writeEnables.empty()) fixed.writeEnables = part.writeEnables;
+    fixed.rasterizerDiscard = fixed.rasterizerDiscard || part.rasterizerDiscard;
+    fixed.dynamicWriteMask = fixed.dynamicWriteMask || part.dynamicWriteMask;
+    fixed.dynamicWriteEnable = fixed.dynamicWriteEnable || part.dynamicWriteEnable;
+    fixed.dynamicDiscard = fixed.dynamicDiscard || part.dynamicDiscard;
+    fixed.dynamicVertexInput = fixed.dynamicVertexInput || part.dynamicVertexInput;
     info.slots = std::max(info.slots, library.slots);
     info.hasFragment = info.hasFragment || library.hasFragment;
     if (info.layout == VK_NULL_HANDLE) info.layout = library.layout;
