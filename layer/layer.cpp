@@ -2,6 +2,7 @@
 // What each call records, and how the counts are attributed, is described in
 // docs/layer.md; capture.cpp holds the counter regions, the readback and the
 // output.
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -291,6 +292,39 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateBufferView(VkDevice device, const VkBufferV
   std::lock_guard lock(dev->mutex);
   dev->bufferViews[u64(*view)] = u64(info->buffer);
   return result;
+}
+
+// What the layer forgets of destroyed objects (lifetimes.cpp): views and
+// framebuffers at once (a recorded draw keeps what it resolved), resources
+// once no readback can name them.
+template <class Handle, class Forget, class CallDown>
+void destroyObject(VkDevice device, Handle handle, Forget forget, CallDown callDown) {
+  DeviceState* dev = deviceOf(device);
+  if (handle != VK_NULL_HANDLE) {
+    std::lock_guard lock(dev->mutex);
+    forget(*dev, u64(handle));
+  }
+  callDown(*dev);
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyImage(VkDevice device, VkImage image, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, image, retireResource, [&](DeviceState& dev) { dev.d.DestroyImage(device, image, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice device, VkBuffer buffer, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, buffer, retireResource, [&](DeviceState& dev) { dev.d.DestroyBuffer(device, buffer, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyImageView(VkDevice device, VkImageView view, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, view, [](DeviceState& dev, uint64_t h) { dev.views.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyImageView(device, view, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyBufferView(VkDevice device, VkBufferView view, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, view, [](DeviceState& dev, uint64_t h) { dev.bufferViews.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyBufferView(device, view, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyFramebuffer(VkDevice device, VkFramebuffer framebuffer,
+                                              const VkAllocationCallbacks* alloc) {
+  destroyObject(device, framebuffer, [](DeviceState& dev, uint64_t h) { dev.framebuffers.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyFramebuffer(device, framebuffer, alloc); });
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL SetDebugUtilsObjectNameEXT(VkDevice device, const VkDebugUtilsObjectNameInfoEXT* info) {
@@ -729,12 +763,23 @@ void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipel
                        const std::vector<std::shared_ptr<PipelineInfo>>& states) {
   std::lock_guard lock(dev.mutex);
   for (uint32_t i = 0; i < count; ++i) {
-    if (pipelines[i] == VK_NULL_HANDLE) continue;  // a failed creation in a batch
+    if (pipelines[i] == VK_NULL_HANDLE) {  // a failed creation in a batch
+      if (states[i]->instrumented != VK_NULL_HANDLE) dev.d.DestroyPipeline(dev.device, states[i]->instrumented, nullptr);
+      continue;
+    }
     states[i]->handle = u64(pipelines[i]);
     dev.pipelines[u64(pipelines[i])] = states[i];
     ++dev.pipelinesCreated;
     dev.pipelinesCounted += states[i]->counted ? 1 : 0;
   }
+}
+
+using Clock = std::chrono::steady_clock;
+void addPipelineTimes(DeviceState& dev, Clock::time_point start, Clock::time_point twins) {
+  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  std::lock_guard lock(dev.mutex);
+  dev.pipelineMsInstrumented += ms(twins - start);
+  dev.pipelineMsApplication += ms(Clock::now() - twins);
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
@@ -745,6 +790,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
   std::vector<std::vector<VkPipelineShaderStageCreateInfo>> stages(count);
   std::vector<std::shared_ptr<PipelineInfo>> states(count);
   std::vector<VkShaderModule> modules;
+  const auto start = Clock::now();
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
@@ -758,7 +804,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
       }
       if (isLibraryPipeline(infos[i].pNext, infos[i].flags)) {
         dev->notes.insert("graphics pipeline libraries are not instrumented: their pipelines run uncounted");
-      } else if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+      } else if (windowAhead(*dev) && layoutCounted(*dev, infos[i].layout)) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
         instrumentStages(*dev, stages[i], *state, modules);
         patched[i].pStages = stages[i].data();
@@ -766,8 +812,12 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
       states[i] = state;
     }
   }
-  VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, patched.data(), alloc, pipelines);
+  createGraphicsTwins(*dev, patched, states);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
+  const auto twins = Clock::now();
+  // Last, so that what the application's pNext receives (creation feedback) is its own pipeline's.
+  VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, infos, alloc, pipelines);
+  addPipelineTimes(*dev, start, twins);
   registerPipelines(*dev, count, pipelines, states);
   return result;
 }
@@ -779,12 +829,13 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
   std::vector<VkComputePipelineCreateInfo> patched(infos, infos + count);
   std::vector<std::shared_ptr<PipelineInfo>> states(count);
   std::vector<VkShaderModule> modules;
+  const auto start = Clock::now();
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
       state->layout = infos[i].layout;
-      if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+      if (windowAhead(*dev) && layoutCounted(*dev, infos[i].layout)) {
         std::vector<VkPipelineShaderStageCreateInfo> stage = {infos[i].stage};
         instrumentStages(*dev, stage, *state, modules);
         patched[i].stage = stage[0];
@@ -792,19 +843,25 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
       states[i] = state;
     }
   }
-  VkResult result = dev->d.CreateComputePipelines(device, cache, count, patched.data(), alloc, pipelines);
+  createComputeTwins(*dev, patched, states);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
+  const auto twins = Clock::now();
+  VkResult result = dev->d.CreateComputePipelines(device, cache, count, infos, alloc, pipelines);
+  addPipelineTimes(*dev, start, twins);
   registerPipelines(*dev, count, pipelines, states);
   return result;
 }
 
 VKAPI_ATTR void VKAPI_CALL DestroyPipeline(VkDevice device, VkPipeline pipeline, const VkAllocationCallbacks* alloc) {
   DeviceState* dev = deviceOf(device);
+  VkPipeline twin = VK_NULL_HANDLE;
   {
     std::lock_guard lock(dev->mutex);
+    if (auto it = dev->pipelines.find(u64(pipeline)); it != dev->pipelines.end()) twin = it->second->instrumented;
     dev->pipelines.erase(u64(pipeline));  // recorded regions keep their own reference
   }
   dev->d.DestroyPipeline(device, pipeline, alloc);
+  if (twin != VK_NULL_HANDLE) dev->d.DestroyPipeline(device, twin, nullptr);
 }
 
 // ---------------------------------------------------------------- command buffers
@@ -896,6 +953,7 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.bind = {};
   cb.vertexBuffers.clear();
   cb.indexBuffer = 0;
+  cb.work = cb.uncountedSecondaries = false;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkCommandBufferBeginInfo* info) {
@@ -906,7 +964,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
   CommandBufferState* cb = cbState(*dev, cmd);
   if (cb == nullptr) return result;
   resetRecording(*dev, *cb);
-  if (cb->secondary || !cb->graphicsOrCompute || !dev->counting) return result;
+  cb->counted = recordForCounting(*dev, *cb, info->flags);
+  if (cb->secondary || !cb->graphicsOrCompute || !dev->counting || !cb->counted) return result;
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     q.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -987,7 +1046,9 @@ void closePass(DeviceState& dev, CommandBufferState& cb) {
   cb.currentPass = -1;
 }
 
-bool tracked(DeviceState& dev, CommandBufferState* cb) { return cb != nullptr && !cb->secondary && dev.counting; }
+bool tracked(DeviceState& dev, CommandBufferState* cb) {
+  return cb != nullptr && !cb->secondary && dev.counting && cb->counted;
+}
 
 // Each subpass is a scope of its own, so that a label per subpass names it a
 // pass; an unlabelled later subpass takes the first one's name (one pass).
@@ -1026,6 +1087,7 @@ void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPas
                    reinterpret_cast<const uint64_t*>(a->pAttachments) + a->attachmentCount);
     }
   }
+  cb.work = true;
   for (uint64_t v : views) cb.passAttachments.push_back(boundImage(dev, reinterpret_cast<VkImageView>(v)));
   if (auto r = dev.renderPasses.find(u64(pass)); r != dev.renderPasses.end()) cb.subpassColors = r->second;
   cb.colorAttachments.clear();
@@ -1111,6 +1173,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
   if (tracked(*dev, cb)) closePass(*dev, *cb);
   dev->d.CmdBeginRendering(cmd, info);
   if (cb == nullptr) return;
+  cb->work = true;
   cb->colorAttachments.clear();
   cb->multiview = info->viewMask != 0;
   for (uint32_t i = 0; i < info->colorAttachmentCount; ++i) {
@@ -1182,14 +1245,22 @@ VKAPI_ATTR void VKAPI_CALL CmdEndQuery(VkCommandBuffer cmd, VkQueryPool pool, ui
 
 VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipeline pipeline) {
   DeviceState* dev = deviceOf(cmd);
-  dev->d.CmdBindPipeline(cmd, point, pipeline);
-  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) {
+    dev->d.CmdBindPipeline(cmd, point, pipeline);
+    return;
+  }
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (cb == nullptr) return;
+  // The instrumented twin only where the command buffer counts (twins.cpp).
+  std::shared_ptr<PipelineInfo> info;
+  if (cb != nullptr && cb->counted) {
+    auto it = dev->pipelines.find(u64(pipeline));
+    if (it != dev->pipelines.end() && it->second->instrumented != VK_NULL_HANDLE) info = it->second;
+  }
+  dev->d.CmdBindPipeline(cmd, point, info ? info->instrumented : pipeline);
+  if (cb == nullptr || !cb->counted) return;
   auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
-  auto it = dev->pipelines.find(u64(pipeline));
-  bp.pipeline = it == dev->pipelines.end() ? nullptr : it->second;
+  bp.pipeline = info;
   bp.dirty = true;
   // A counted pipeline always finds the counter set bound: at the sink (never
   // read) until a draw the layer sees binds the draw's region, so a draw
@@ -1253,6 +1324,8 @@ void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t 
   std::lock_guard lock(dev.mutex);
   CommandBufferState* cb = cbState(dev, cmd);
   if (cb == nullptr || !dev.counting) return;
+  cb->work = true;
+  if (!cb->counted) return;
   if (!cb->secondary) {
     if (dispatch) {
       const std::string label = cb->labels.empty() ? "" : cb->labels.back();
@@ -1378,12 +1451,31 @@ VKAPI_ATTR void VKAPI_CALL CmdDispatchIndirect(VkCommandBuffer cmd, VkBuffer buf
   dev->d.CmdDispatchIndirect(cmd, buffer, offset);
 }
 
+// A primary recorded outside the window that executes secondaries recorded
+// for counting: their regions are read only to zero them.
+void drainSecondaries(DeviceState& dev, CommandBufferState& cb, uint32_t count, const VkCommandBuffer* secondaries) {
+  std::set<VkDeviceSize> have;
+  for (const auto& r : cb.regions) have.insert(r.offset);
+  for (uint32_t i = 0; i < count; ++i) {
+    CommandBufferState* s = cbState(dev, secondaries[i]);
+    if (s == nullptr) continue;
+    for (Region r : s->regions) {
+      if (!have.insert(r.offset).second) continue;
+      r.pass = kDrainOnly;
+      r.owned = false;
+      cb.regions.push_back(std::move(r));
+    }
+  }
+}
+
 VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t count, const VkCommandBuffer* secondaries) {
   DeviceState* dev = deviceOf(cmd);
   dev->d.CmdExecuteCommands(cmd, count, secondaries);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (!tracked(*dev, cb)) return;
+  if (cb == nullptr || cb->secondary || !dev->counting) return;
+  cb->work = true;
+  if (!cb->counted) return drainSecondaries(*dev, *cb, count, secondaries);
   if (cb->currentPass < 0) openPass(*dev, *cb, "secondary");
   // The secondaries' regions count for the pass that executes them; a region
   // executed twice in one primary is read back once.
@@ -1392,6 +1484,7 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
   for (uint32_t i = 0; i < count; ++i) {
     CommandBufferState* s = cbState(*dev, secondaries[i]);
     if (s == nullptr) continue;
+    cb->uncountedSecondaries = cb->uncountedSecondaries || (s->work && !s->counted);
     for (Region r : s->regions) {
       if (!have.insert(r.offset).second) continue;
       r.pass = uint32_t(cb->currentPass);
@@ -1479,6 +1572,12 @@ VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL GetDeviceProcAddr(VkDevice device, cons
     // Functions the device does not have stay null.
     DeviceState* dev = deviceOf(device);
     if (dev != nullptr && dev->d.GetDeviceProcAddr(device, name) == nullptr) return nullptr;
+    // A device that counts nothing (no output asked for) calls below the
+    // layer directly; the layer keeps only its end, to write the output.
+    const std::string_view n = name;
+    if (dev != nullptr && !dev->counting && n != "vkGetDeviceProcAddr" && n != "vkDestroyDevice") {
+      return dev->d.GetDeviceProcAddr(device, name);
+    }
     return f;
   }
   DeviceState* dev = deviceOf(device);
@@ -1516,6 +1615,11 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CreateBuffer)
   TALLY_DEVICE(CreateImageView)
   TALLY_DEVICE(CreateBufferView)
+  TALLY_DEVICE(DestroyImage)
+  TALLY_DEVICE(DestroyBuffer)
+  TALLY_DEVICE(DestroyImageView)
+  TALLY_DEVICE(DestroyBufferView)
+  TALLY_DEVICE(DestroyFramebuffer)
   TALLY_DEVICE(SetDebugUtilsObjectNameEXT)
   TALLY_DEVICE(CreateSwapchainKHR)
   TALLY_DEVICE(GetSwapchainImagesKHR)
