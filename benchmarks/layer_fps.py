@@ -14,13 +14,19 @@ Modes:
   skipping   an output asked for, the run ends before skip_frames does
   counting   an output asked for, every frame after the first 100 counted
 Each round runs every mode once; a ratio is a mode's FPS over the plain run of
-the same round. With --tallyd, `tallyd play` (planes, forward, 320x180) is
+the same round. Beside FPS, the CPU time glmark2 used per frame it drew
+(start-up included): on a machine shared with other work, FPS follows the
+load and CPU time much less. Then one counting run of the scenes in --pipeline-scenes
+gives the pipelines' creation time as the layer measures it: the
+application's own pipelines, and their instrumented twins (instrumentation
+included). With --tallyd, `tallyd play` (planes, forward, 320x180) is
 timed the same way, plain against the layer with skip_frames beyond its end.
 """
 import argparse
 import json
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -58,41 +64,54 @@ def layer_env(layer_dir, tmp, mode):
     return env
 
 
-def glmark2(args, display, extra):
+def children_cpu():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def glmark2(args, display, extra, scenes=None):
+    """FPS of the first scene and CPU milliseconds per frame of the run."""
     env = dict(os.environ)
     for key in [k for k in env if k.startswith("TALLY_LAYER_") or "LAYER" in k and k.startswith("VK_")]:
         del env[key]
     env.update({"LIBGL_ALWAYS_SOFTWARE": "1", "GALLIUM_DRIVER": "zink", "MESA_LOADER_DRIVER_OVERRIDE": "zink",
                 "XDG_RUNTIME_DIR": tempfile.gettempdir(), "DISPLAY": display})
     env.update(extra)
-    command = ["glmark2", "-b", "%s:duration=%g" % (args.scene, args.duration), "-s", args.size]
+    command = ["glmark2", "-s", args.size]
+    for scene in scenes or [args.scene]:
+        command += ["-b", "%s:duration=%g" % (scene, args.duration)]
+    cpu = children_cpu()
     result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=120 + args.duration * 4)
+    cpu = children_cpu() - cpu
     match = FPS.search(result.stdout)
     if result.returncode != 0 or match is None:
         sys.exit("layer_fps: glmark2 failed (%d): %s%s" % (result.returncode, result.stdout[-800:], result.stderr[-800:]))
-    return int(match.group(2))
+    fps = int(match.group(2))
+    return fps, 1000.0 * cpu / max(fps * args.duration, 1)
 
 
 def play(args, extra, tmp):
-    """Frames per second of `tallyd play` from its own per-frame lines."""
+    """`tallyd play`'s whole run: wall and CPU seconds."""
     env = dict(os.environ)
     env.update(extra)
     command = [args.tallyd, "play", "--renderer", "forward", "--scene", "planes", "--resolution", "320x180",
                "--frames", str(args.play_frames)]
-    start = time.monotonic()
+    start, cpu = time.monotonic(), children_cpu()
     result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
-    seconds = time.monotonic() - start
+    seconds, cpu = time.monotonic() - start, children_cpu() - cpu
     if result.returncode != 0:
         sys.exit("layer_fps: tallyd play failed: " + result.stderr[-800:])
-    ms = [float(m) for m in re.findall(r"frame \d+/\d+, \d+ passes, ([\d.]+) ms", result.stderr)]
-    return seconds, statistics.median(ms) if ms else float("nan")
+    return seconds, cpu
 
 
-def summary(name, values, plain):
-    ratios = [v / p for v, p in zip(values, plain)]
-    return "%-10s FPS median %6.0f  (%s)  ratio to plain: median %.3f, min %.3f, max %.3f" % (
-        name, statistics.median(values), " ".join(str(v) for v in values), statistics.median(ratios), min(ratios),
-        max(ratios))
+def summary(name, runs, plain):
+    fps, cpu = [r[0] for r in runs], [r[1] for r in runs]
+    ratios = [r[0] / p[0] for r, p in zip(runs, plain)]
+    cpu_ratios = [r[1] / p[1] for r, p in zip(runs, plain)]
+    return ("%-10s FPS median %6.0f (%s); FPS / plain's: median %.3f, min %.3f, max %.3f; "
+            "CPU ms a frame median %.3f, / plain's %.3f") % (
+        name, statistics.median(fps), " ".join(str(v) for v in fps), statistics.median(ratios), min(ratios),
+        max(ratios), statistics.median(cpu), statistics.median(cpu_ratios))
 
 
 def main():
@@ -103,7 +122,8 @@ def main():
     parser.add_argument("--size", default="320x240")
     parser.add_argument("--scene", default="texture")
     parser.add_argument("--tallyd", help="also time `tallyd play` plain and under the layer outside its window")
-    parser.add_argument("--play-frames", type=int, default=200)
+    parser.add_argument("--play-frames", type=int, default=5, help="frames of each tallyd play run (lavapipe: 2.4 s each)")
+    parser.add_argument("--pipeline-scenes", default="texture,build,shading,terrain,shadow")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     layer_dir = os.path.abspath(args.layer_dir)
@@ -115,7 +135,9 @@ def main():
             for r in range(args.rounds):
                 for m in modes:
                     fps[m].append(glmark2(args, display, {} if m == "plain" else layer_env(layer_dir, tmp, m)))
-                print("round %d: %s" % (r + 1, ", ".join("%s %d" % (m, fps[m][-1]) for m in modes)), flush=True)
+                print("round %d: %s" % (r + 1, ", ".join("%s %d FPS %.3f CPU ms" % (m, *fps[m][-1]) for m in modes)),
+                      flush=True)
+            glmark2(args, display, layer_env(layer_dir, tmp, "counting"), args.pipeline_scenes.split(","))
             counted = json.load(open(os.path.join(tmp, "counting.json")))
             play_times = None
             if args.tallyd:
@@ -132,17 +154,17 @@ def main():
     for m in modes:
         print(summary(m, fps[m], fps["plain"]))
     creation = counted["layer"]["pipeline_creation_ms"]
-    print("pipeline creation (last counting run, %d pipelines, %d instrumented): application's %.1f ms, "
-          "instrumented twins %.1f ms (instrumentation included)" %
-          (counted["layer"]["pipelines"], counted["layer"]["pipelines_counted"], creation["application"],
-           creation["instrumented"]))
+    print("pipeline creation (glmark2 %s, counting): %d pipelines, %d instrumented; the application's %.1f ms, "
+          "the instrumented twins %.1f ms (instrumentation included)" %
+          (args.pipeline_scenes, counted["layer"]["pipelines"], counted["layer"]["pipelines_counted"],
+           creation["application"], creation["instrumented"]))
     if play_times:
-        print("\ntallyd play forward planes 320x180, %d frames (median ms of its frames; whole run s)" % args.play_frames)
+        print("\ntallyd play forward planes 320x180, %d frames a run (wall s, CPU s)" % args.play_frames)
         for m, runs in play_times.items():
-            print("%-10s frame %s ms, run %s s" % (m, " ".join("%.2f" % t[1] for t in runs),
-                                                  " ".join("%.2f" % t[0] for t in runs)))
-        ratios = [p[0] / s[0] for p, s in zip(play_times["plain"], play_times["skipping"])]
-        print("run time plain / under the layer: median %.3f" % statistics.median(ratios))
+            print("%-10s %s" % (m, "  ".join("%.2f, %.2f" % t for t in runs)))
+        for i, what in ((0, "wall"), (1, "CPU")):
+            ratios = [p[i] / s[i] for p, s in zip(play_times["plain"], play_times["skipping"])]
+            print("%s time plain / under the layer before its window: median %.3f" % (what, statistics.median(ratios)))
     if args.json:
         print(json.dumps({"fps": fps, "pipeline_creation_ms": creation}))
 

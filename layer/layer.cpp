@@ -118,9 +118,11 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
 
   // The features counting needs, where the device has them: stores and
   // atomics in fragment and vertex stages, and pipeline statistics. Patched
-  // in place for the call and restored after it.
+  // in place for the call and restored after it; not at all where nothing
+  // will be counted (no output asked for).
+  Config config = Config::fromEnvironment();
   VkPhysicalDeviceFeatures supported{};
-  inst->getFeatures(physical, &supported);
+  if (!config.output.empty() && config.error.empty()) inst->getFeatures(physical, &supported);
   VkPhysicalDeviceFeatures* features = const_cast<VkPhysicalDeviceFeatures*>(info->pEnabledFeatures);
   for (auto* p = static_cast<VkBaseOutStructure*>(const_cast<void*>(info->pNext)); p != nullptr; p = p->pNext) {
     if (p->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2) {
@@ -147,7 +149,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   dev->physical = physical;
   dev->instance = inst;
   dev->setLoaderData = setLoaderData;
-  dev->config = Config::fromEnvironment();
+  dev->config = std::move(config);
 #define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(*device, "vk" #name));
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
 #undef TALLY_LAYER_LOAD
