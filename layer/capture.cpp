@@ -161,7 +161,10 @@ void setupCounting(DeviceState& dev) {
     dev.notCounting = why;
     log("not counting: " + why);
   };
+  assignOutput(dev);
   if (!dev.config.error.empty()) return refuse(dev.config.error);
+  // Nothing would be read: the layer leaves the application's calls alone.
+  if (dev.config.output.empty()) return refuse("TALLY_LAYER_OUTPUT is not set: nothing is counted");
   if (dev.properties.apiVersion < VK_API_VERSION_1_1) return refuse("the device offers Vulkan 1.0; counting needs 1.1");
   if (dev.queueFamilies.empty()) return refuse("the application created no graphics or compute queue");
 
@@ -372,10 +375,6 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
 
 namespace {
 
-bool inRange(const DeviceState& dev, uint64_t frame) {
-  return frame >= dev.config.skipFrames && frame < uint64_t(dev.config.skipFrames) + dev.config.frames;
-}
-
 void addLine(PassRecord& pass, const std::string& name, bool write, const std::string& source, uint64_t count,
              uint64_t bytes, const std::string& kind, const std::string& format) {
   auto& line = pass.lines[{name, write, source}];
@@ -421,6 +420,7 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         bytes = vertexElementBytes(site, bound.format);
       }
       if (r != dev.resources.end()) {
+        r->second.counted = r->second.counted || n > 0;
         name = r->second.displayName();
         if (r->second.image) {
           const VkFormat f = bound.format != VK_FORMAT_UNDEFINED ? bound.format : r->second.format;
@@ -547,12 +547,6 @@ void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
   }
 }
 
-uint32_t framesFinished(const DeviceState& dev) {
-  uint32_t n = 0;
-  for (const auto& [index, f] : dev.frames) n += f.closed && f.pendingHarvests == 0 ? 1 : 0;
-  return n;
-}
-
 void writeOutput(DeviceState& dev, bool complete) {
   if (dev.written || dev.config.output.empty()) return;
   dev.written = true;
@@ -568,11 +562,21 @@ void writeOutput(DeviceState& dev, bool complete) {
   std::error_code ec;
   std::filesystem::rename(tmp, dev.config.output, ec);
   if (ec) log("cannot rename " + tmp + ": " + ec.message());
-  log("wrote " + dev.config.output + " (" + std::to_string(framesFinished(dev)) + " frames" +
+  log("wrote " + dev.config.output + " (" + std::to_string(framesCounted(dev)) + " frames" +
       (complete ? ")" : ", incomplete)"));
 }
 
+// Readbacks in flight at most. An application that waits for its own work
+// never has this many; one that runs further ahead of the device than this
+// waits for the oldest (counted in the output's readback_waits).
+constexpr size_t kReadbackRing = 64;
+
 Harvest* takeHarvest(DeviceState& dev, VkDeviceSize bytes, uint32_t family) {
+  if (dev.pending.size() >= kReadbackRing) {
+    ++dev.readbackWaits;
+    dev.d.WaitForFences(dev.device, 1, &dev.pending.front()->fence, VK_TRUE, UINT64_MAX);
+    collect(dev, std::nullopt);
+  }
   std::unique_ptr<Harvest> h;
   for (auto it = dev.idle.begin(); it != dev.idle.end(); ++it) {
     if ((*it)->pool == ownPool(dev, family)) {
@@ -618,40 +622,13 @@ Harvest* takeHarvest(DeviceState& dev, VkDeviceSize bytes, uint32_t family) {
 
 }  // namespace
 
-void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
-  if (!dev.counting) return;
-  collect(dev, std::nullopt);
-  std::vector<Harvest::Part> parts;
-  VkDeviceSize at = 0;
-  std::vector<const CommandBufferState*> sources;
-  for (VkCommandBuffer cmd : submitted) {
-    auto it = dev.commandBuffers.find(cmd);
-    if (it == dev.commandBuffers.end() || it->second->secondary) continue;
-    const CommandBufferState& cb = *it->second;
-    if (cb.passes.empty() && cb.regions.empty()) continue;
-    Harvest::Part part;
-    part.passes = cb.passes;
-    part.regions = cb.regions;
-    for (const auto& r : cb.regions) {
-      part.regionAt.push_back(at);
-      at += VkDeviceSize(r.pipeline->slots) * 8;
-    }
-    part.timestampsAt = at;
-    part.timestamps = cb.timestampsUsed;
-    at += VkDeviceSize(cb.timestampsUsed) * 8;
-    part.statisticsAt = at;
-    part.statistics = cb.statisticsUsed;
-    at += VkDeviceSize(cb.statisticsUsed) * 24;
-    for (const auto& draw : cb.indirectDraws) {
-      if (draw.copied) part.indirectDraws.push_back(draw);
-    }
-    part.indirectAt = at;
-    if (!part.indirectDraws.empty()) at += cb.indirectUsed;
-    parts.push_back(std::move(part));
-    sources.push_back(&cb);
-  }
-  if (parts.empty()) return;  // no draw, no dispatch: not part of any frame's work
+namespace {
 
+// One more submission after the application's: it copies the submitted
+// command buffers' counter regions and query results into a host-visible
+// buffer of the ring, zeroes the regions and signals the harvest's fence.
+void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> parts,
+                    const std::vector<const CommandBufferState*>& sources, VkDeviceSize at) {
   auto family = dev.queueFamilies.find(queue);
   Harvest* h = family == dev.queueFamilies.end() ? nullptr : takeHarvest(dev, std::max<VkDeviceSize>(at, 8), family->second);
   if (h == nullptr) {
@@ -659,6 +636,7 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     return;
   }
   h->frame = dev.frame;
+  h->serial = dev.nextHarvest++;
   VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   dev.d.BeginCommandBuffer(h->cmd, &begin);
@@ -721,13 +699,77 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     return;
   }
   h->parts = std::move(parts);
-  if (inRange(dev, dev.frame) && !dev.written) {
+  if (inWindow(dev, dev.frame)) {
     auto& frame = dev.frames[dev.frame];
     frame.index = dev.frame;
     frame.submissions += 1;
     frame.pendingHarvests += 1;
   }
-  if (dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
+}
+
+
+// Reads what has arrived, never waiting, and writes the output once the
+// window's frames are all read.
+void pollReadbacks(DeviceState& dev) {
+  collect(dev, std::nullopt);
+  forgetRetired(dev);
+  if (!dev.written && framesCounted(dev) >= dev.config.frames) writeOutput(dev, true);
+}
+
+// A frame of the window that ran work the layer did not count (a command
+// buffer recorded outside the window) is left out, and the window goes on
+// one frame longer.
+void leaveOut(DeviceState& dev, uint64_t index) {
+  auto& frame = dev.frames[index];
+  frame.index = index;
+  if (frame.leftOut) return;
+  frame.leftOut = true;
+  ++dev.framesLeftOut;
+}
+
+}  // namespace
+
+void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
+  if (!dev.counting) return;
+  pollReadbacks(dev);
+  std::vector<Harvest::Part> parts;
+  VkDeviceSize at = 0;
+  std::vector<const CommandBufferState*> sources;
+  bool work = false, uncounted = false;
+  for (VkCommandBuffer cmd : submitted) {
+    auto it = dev.commandBuffers.find(cmd);
+    if (it == dev.commandBuffers.end() || it->second->secondary) continue;
+    CommandBufferState& cb = *it->second;
+    ++cb.submitsOfRecording;
+    work = work || cb.work;
+    uncounted = uncounted || (cb.work && !cb.counted) || cb.uncountedSecondaries;
+    // Once the output is written nothing more is read.
+    if ((cb.passes.empty() && cb.regions.empty()) || dev.written) continue;
+    Harvest::Part part;
+    part.passes = cb.passes;
+    part.regions = cb.regions;
+    for (const auto& r : cb.regions) {
+      part.regionAt.push_back(at);
+      at += VkDeviceSize(r.pipeline->slots) * 8;
+    }
+    part.timestampsAt = at;
+    part.timestamps = cb.timestampsUsed;
+    at += VkDeviceSize(cb.timestampsUsed) * 8;
+    part.statisticsAt = at;
+    part.statistics = cb.statisticsUsed;
+    at += VkDeviceSize(cb.statisticsUsed) * 24;
+    for (const auto& draw : cb.indirectDraws) {
+      if (draw.copied) part.indirectDraws.push_back(draw);
+    }
+    part.indirectAt = at;
+    if (!part.indirectDraws.empty()) at += cb.indirectUsed;
+    parts.push_back(std::move(part));
+    sources.push_back(&cb);
+  }
+  if (uncounted && inWindow(dev, dev.frame)) leaveOut(dev, dev.frame);
+  if (!parts.empty()) submitReadback(dev, queue, std::move(parts), sources, at);
+  // Submissions without a draw, a dispatch or a pass (uploads) are no frame's work.
+  if (work && dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
 }
 
 // The application waited for its own submission before freeing the command
@@ -755,10 +797,7 @@ void endFrame(DeviceState& dev) {
   if (auto f = dev.frames.find(dev.frame); f != dev.frames.end()) f->second.closed = true;
   ++dev.frame;
   dev.frameWorkSubmits = 0;
-  // Stall at most one frame: the frame before the one just ended must be read back now.
-  if (dev.frame >= 2) collect(dev, dev.frame - 2);
-  collect(dev, std::nullopt);
-  if (!dev.written && framesFinished(dev) >= dev.config.frames) writeOutput(dev, true);
+  pollReadbacks(dev);
 }
 
 void finish(DeviceState& dev, bool complete) {
@@ -768,7 +807,7 @@ void finish(DeviceState& dev, bool complete) {
     f->second.closed = true;  // the last frame, cut short by the application's end
   }
   if (dev.written) return;
-  writeOutput(dev, complete || framesFinished(dev) >= dev.config.frames);
+  writeOutput(dev, complete || framesCounted(dev) >= dev.config.frames);
 }
 
 nlohmann::json outputJson(DeviceState& dev, bool complete) {
@@ -804,10 +843,18 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"pipelines_linked", dev.pipelinesLinked},
         {"layouts_refused", dev.layoutsRefused},
         {"spirv_validation", spirv::describe(dev.instrumentOptions.target)},
-        {"not_counting", dev.notCounting}}},
+        {"not_counting", dev.notCounting},
+        {"frames_wanted", dev.config.frames},
+        {"frames_counted", framesCounted(dev)},
+        {"frames_left_out", dev.framesLeftOut},
+        {"readbacks", dev.nextHarvest},
+        {"readback_waits", dev.readbackWaits},
+        {"pipeline_creation_ms",
+         {{"application", dev.pipelineMsApplication}, {"instrumented", dev.pipelineMsInstrumented}}}}},
       {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},
       {"device",
        {{"name", dev.properties.deviceName},
+        {"index", dev.index},
         {"vendorID", vendor},
         {"deviceID", deviceId},
         {"driverInfo", dev.driverInfo},
@@ -821,7 +868,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
   std::map<std::string, const Resource*> used;
   json frames = json::array();
   for (const auto& [index, frame] : dev.frames) {
-    if (!frame.closed || frame.pendingHarvests > 0) continue;
+    if (!frame.closed || frame.pendingHarvests > 0 || frame.leftOut) continue;
     // Later subpasses join their render pass instance's pass; passes that share a label stay apart, numbered.
     const std::vector<PassRecord> merged = distinctPasses(frame.passes);
     json passes = json::array();
@@ -876,7 +923,15 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
   out["extent"] = {extent.width, extent.height};
   out["resources"] = std::move(resources);
   out["shaders"] = dev.shaderReports;
-  out["notes"] = json(std::vector<std::string>(dev.notes.begin(), dev.notes.end()));
+  std::vector<std::string> notes(dev.notes.begin(), dev.notes.end());
+  if (dev.framesLeftOut > 0) {
+    auto first = std::find_if(dev.frames.begin(), dev.frames.end(), [](const auto& f) { return f.second.leftOut; });
+    notes.push_back(std::to_string(dev.framesLeftOut) + " frames of the window (the first: frame " +
+                    std::to_string(first == dev.frames.end() ? 0 : first->first) +
+                    ") ran command buffers recorded outside it, whose draws and dispatches were not counted: they are left out, "
+                    "and the window went on for as many more frames");
+  }
+  out["notes"] = json(std::move(notes));
   out["frames"] = std::move(frames);
   return out;
 }

@@ -2,6 +2,7 @@
 // What each call records, and how the counts are attributed, is described in
 // docs/layer.md; capture.cpp holds the counter regions, the readback and the
 // output.
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -127,9 +128,11 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
 
   // The features counting needs, where the device has them: stores and
   // atomics in fragment and vertex stages, and pipeline statistics. Patched
-  // in place for the call and restored after it.
+  // in place for the call and restored after it; not at all where nothing
+  // will be counted (no output asked for).
+  Config config = Config::fromEnvironment();
   VkPhysicalDeviceFeatures supported{};
-  inst->getFeatures(physical, &supported);
+  if (!config.output.empty() && config.error.empty()) inst->getFeatures(physical, &supported);
   VkPhysicalDeviceFeatures* features = const_cast<VkPhysicalDeviceFeatures*>(info->pEnabledFeatures);
   for (auto* p = static_cast<VkBaseOutStructure*>(const_cast<void*>(info->pNext)); p != nullptr; p = p->pNext) {
     if (p->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2) {
@@ -156,7 +159,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   dev->physical = physical;
   dev->instance = inst;
   dev->setLoaderData = setLoaderData;
-  dev->config = Config::fromEnvironment();
+  dev->config = std::move(config);
 #define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(*device, "vk" #name));
   TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
   TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(TALLY_LAYER_LOAD)
@@ -323,6 +326,39 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateBufferView(VkDevice device, const VkBufferV
   std::lock_guard lock(dev->mutex);
   dev->bufferViews[u64(*view)] = u64(info->buffer);
   return result;
+}
+
+// What the layer forgets of destroyed objects (lifetimes.cpp): views and
+// framebuffers at once (a recorded draw keeps what it resolved), resources
+// once no readback can name them.
+template <class Handle, class Forget, class CallDown>
+void destroyObject(VkDevice device, Handle handle, Forget forget, CallDown callDown) {
+  DeviceState* dev = deviceOf(device);
+  if (handle != VK_NULL_HANDLE) {
+    std::lock_guard lock(dev->mutex);
+    forget(*dev, u64(handle));
+  }
+  callDown(*dev);
+}
+
+VKAPI_ATTR void VKAPI_CALL DestroyImage(VkDevice device, VkImage image, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, image, retireResource, [&](DeviceState& dev) { dev.d.DestroyImage(device, image, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice device, VkBuffer buffer, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, buffer, retireResource, [&](DeviceState& dev) { dev.d.DestroyBuffer(device, buffer, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyImageView(VkDevice device, VkImageView view, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, view, [](DeviceState& dev, uint64_t h) { dev.views.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyImageView(device, view, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyBufferView(VkDevice device, VkBufferView view, const VkAllocationCallbacks* alloc) {
+  destroyObject(device, view, [](DeviceState& dev, uint64_t h) { dev.bufferViews.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyBufferView(device, view, alloc); });
+}
+VKAPI_ATTR void VKAPI_CALL DestroyFramebuffer(VkDevice device, VkFramebuffer framebuffer,
+                                              const VkAllocationCallbacks* alloc) {
+  destroyObject(device, framebuffer, [](DeviceState& dev, uint64_t h) { dev.framebuffers.erase(h); },
+                [&](DeviceState& dev) { dev.d.DestroyFramebuffer(device, framebuffer, alloc); });
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL SetDebugUtilsObjectNameEXT(VkDevice device, const VkDebugUtilsObjectNameInfoEXT* info) {
@@ -806,7 +842,10 @@ void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipel
                        const std::vector<std::shared_ptr<PipelineInfo>>& states) {
   std::lock_guard lock(dev.mutex);
   for (uint32_t i = 0; i < count; ++i) {
-    if (pipelines[i] == VK_NULL_HANDLE) continue;  // a failed creation in a batch
+    if (pipelines[i] == VK_NULL_HANDLE) {  // a failed creation in a batch
+      if (states[i]->instrumented != VK_NULL_HANDLE) dev.d.DestroyPipeline(dev.device, states[i]->instrumented, nullptr);
+      continue;
+    }
     states[i]->handle = u64(pipelines[i]);
     if (states[i]->library) {  // counted once linked, as part of the pipelines it makes
       dev.libraries[u64(pipelines[i])] = states[i];
@@ -820,6 +859,14 @@ void registerPipelines(DeviceState& dev, uint32_t count, const VkPipeline* pipel
   }
 }
 
+using Clock = std::chrono::steady_clock;
+void addPipelineTimes(DeviceState& dev, Clock::time_point start, Clock::time_point twins) {
+  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  std::lock_guard lock(dev.mutex);
+  dev.pipelineMsInstrumented += ms(twins - start);
+  dev.pipelineMsApplication += ms(Clock::now() - twins);
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipelineCache cache, uint32_t count,
                                                        const VkGraphicsPipelineCreateInfo* infos,
                                                        const VkAllocationCallbacks* alloc, VkPipeline* pipelines) {
@@ -828,6 +875,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
   std::vector<std::vector<VkPipelineShaderStageCreateInfo>> stages(count);
   std::vector<std::shared_ptr<PipelineInfo>> states(count);
   std::vector<VkShaderModule> modules, earlyFragments(count, VK_NULL_HANDLE);
+  const auto start = Clock::now();
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
@@ -849,7 +897,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
       state->fixed = fixedFunctionOf(*dev, held);
       state->libraryParts |= mergeLibraries(*dev, use.linked, *state);
       state->linked = !use.linked.empty();
-      if (dev->counting && layoutCounted(*dev, infos[i].layout) && infos[i].stageCount > 0 &&
+      if (windowAhead(*dev) && layoutCounted(*dev, infos[i].layout) && infos[i].stageCount > 0 &&
           (use.parts & (VK_GRAPHICS_PIPELINE_LIBRARY_PRE_RASTERIZATION_SHADERS_BIT_EXT |
                         VK_GRAPHICS_PIPELINE_LIBRARY_FRAGMENT_SHADER_BIT_EXT))) {
         stages[i].assign(infos[i].pStages, infos[i].pStages + infos[i].stageCount);
@@ -867,7 +915,24 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateGraphicsPipelines(VkDevice device, VkPipeli
       states[i] = state;
     }
   }
-  VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, patched.data(), alloc, pipelines);
+  // Graphics pipeline libraries, and pipelines linked from them, are created
+  // instrumented in the application's place: a linked pipeline names its
+  // libraries by the application's handles, so they can have no twins.
+  std::vector<VkGraphicsPipelineCreateInfo> own(infos, infos + count);
+  for (uint32_t i = 0; i < count; ++i) {
+    if (states[i]->library || states[i]->linked) {
+      own[i] = patched[i];
+      states[i]->inPlace = true;
+    }
+  }
+  createGraphicsTwins(*dev, patched, states);
+  const auto twins = Clock::now();
+  // Last, so that what the application's pNext receives (creation feedback) is its own pipeline's.
+  VkResult result = dev->d.CreateGraphicsPipelines(device, cache, count, own.data(), alloc, pipelines);
+  addPipelineTimes(*dev, start, twins);
+  for (uint32_t i = 0; i < count; ++i) {
+    if (states[i]->inPlace && states[i]->counted) states[i]->instrumented = pipelines[i];
+  }
   createEarlyTestsTwins(*dev, cache, patched, earlyFragments, pipelines, states);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
   registerPipelines(*dev, count, pipelines, states);
@@ -881,12 +946,13 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
   std::vector<VkComputePipelineCreateInfo> patched(infos, infos + count);
   std::vector<std::shared_ptr<PipelineInfo>> states(count);
   std::vector<VkShaderModule> modules;
+  const auto start = Clock::now();
   {
     std::lock_guard lock(dev->mutex);
     for (uint32_t i = 0; i < count; ++i) {
       auto state = std::make_shared<PipelineInfo>();
       state->layout = infos[i].layout;
-      if (dev->counting && layoutCounted(*dev, infos[i].layout)) {
+      if (windowAhead(*dev) && layoutCounted(*dev, infos[i].layout)) {
         std::vector<VkPipelineShaderStageCreateInfo> stage = {infos[i].stage};
         instrumentStages(*dev, stage, *state, modules);
         patched[i].stage = stage[0];
@@ -894,23 +960,29 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateComputePipelines(VkDevice device, VkPipelin
       states[i] = state;
     }
   }
-  VkResult result = dev->d.CreateComputePipelines(device, cache, count, patched.data(), alloc, pipelines);
+  createComputeTwins(*dev, patched, states);
   for (VkShaderModule m : modules) dev->d.DestroyShaderModule(device, m, nullptr);
+  const auto twins = Clock::now();
+  VkResult result = dev->d.CreateComputePipelines(device, cache, count, infos, alloc, pipelines);
+  addPipelineTimes(*dev, start, twins);
   registerPipelines(*dev, count, pipelines, states);
   return result;
 }
 
 VKAPI_ATTR void VKAPI_CALL DestroyPipeline(VkDevice device, VkPipeline pipeline, const VkAllocationCallbacks* alloc) {
   DeviceState* dev = deviceOf(device);
-  VkPipeline twin = VK_NULL_HANDLE;
+  VkPipeline twin = VK_NULL_HANDLE, early = VK_NULL_HANDLE;
   {
     std::lock_guard lock(dev->mutex);
-    auto it = dev->pipelines.find(u64(pipeline));
-    if (it != dev->pipelines.end()) twin = std::exchange(it->second->earlyTestsTwin, VK_NULL_HANDLE);
+    if (auto it = dev->pipelines.find(u64(pipeline)); it != dev->pipelines.end()) {
+      if (!it->second->inPlace) twin = it->second->instrumented;
+      early = std::exchange(it->second->earlyTestsTwin, VK_NULL_HANDLE);
+    }
     dev->pipelines.erase(u64(pipeline));  // recorded regions keep their own reference
     dev->libraries.erase(u64(pipeline));  // pipelines linked from it keep its sites
   }
   if (twin != VK_NULL_HANDLE) dev->d.DestroyPipeline(device, twin, nullptr);
+  if (early != VK_NULL_HANDLE) dev->d.DestroyPipeline(device, early, nullptr);
   dev->d.DestroyPipeline(device, pipeline, alloc);
 }
 
@@ -1011,6 +1083,7 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.renderingSuspended = false;
   cb.indirectDraws.clear();
   cb.indirectUsed = 0;
+  cb.work = cb.uncountedSecondaries = false;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkCommandBufferBeginInfo* info) {
@@ -1022,7 +1095,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
   if (cb == nullptr) return result;
   resetRecording(*dev, *cb);
   if (cb->secondary) inheritTargets(*dev, *cb, *info);
-  if (cb->secondary || !cb->graphicsOrCompute || !dev->counting) return result;
+  cb->counted = recordForCounting(*dev, *cb, info->flags);
+  if (cb->secondary || !cb->graphicsOrCompute || !dev->counting || !cb->counted) return result;
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     q.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -1132,7 +1206,9 @@ void closePass(DeviceState& dev, CommandBufferState& cb) {
   cb.currentPass = -1;
 }
 
-bool tracked(DeviceState& dev, CommandBufferState* cb) { return cb != nullptr && !cb->secondary && dev.counting; }
+bool tracked(DeviceState& dev, CommandBufferState* cb) {
+  return cb != nullptr && !cb->secondary && dev.counting && cb->counted;
+}
 
 // Each subpass is a scope of its own, so that a label per subpass names it a
 // pass; an unlabelled later subpass takes the first one's name (one pass).
@@ -1178,6 +1254,7 @@ void beginRenderPassCommon(DeviceState& dev, CommandBufferState& cb, VkRenderPas
                    reinterpret_cast<const uint64_t*>(a->pAttachments) + a->attachmentCount);
     }
   }
+  cb.work = true;
   for (uint64_t v : views) cb.passAttachments.push_back(boundImage(dev, reinterpret_cast<VkImageView>(v)));
   if (auto r = dev.renderPasses.find(u64(pass)); r != dev.renderPasses.end()) cb.subpassColors = r->second;
   cb.colorAttachments.clear();
@@ -1281,6 +1358,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBeginRendering(VkCommandBuffer cmd, const VkRender
   if (tracked(*dev, cb) && !resuming && cb->secondaryContents) openPass(*dev, *cb, "rendering");
   dev->d.CmdBeginRendering(cmd, info);
   if (cb == nullptr) return;
+  cb->work = true;
   cb->colorAttachments = renderingTargets(*dev, *info);
   cb->views = viewCount(info->viewMask);
   cb->renderingSuspends = (info->flags & VK_RENDERING_SUSPENDING_BIT) != 0;
@@ -1354,18 +1432,26 @@ VKAPI_ATTR void VKAPI_CALL CmdEndQuery(VkCommandBuffer cmd, VkQueryPool pool, ui
 
 VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipeline pipeline) {
   DeviceState* dev = deviceOf(cmd);
-  dev->d.CmdBindPipeline(cmd, point, pipeline);
-  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) {
+    dev->d.CmdBindPipeline(cmd, point, pipeline);
+    return;
+  }
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
-  if (cb == nullptr) return;
+  // The instrumented twin only where the command buffer counts (twins.cpp).
+  std::shared_ptr<PipelineInfo> info;
+  if (cb != nullptr && cb->counted) {
+    auto it = dev->pipelines.find(u64(pipeline));
+    if (it != dev->pipelines.end() && it->second->instrumented != VK_NULL_HANDLE) info = it->second;
+  }
+  dev->d.CmdBindPipeline(cmd, point, info ? info->instrumented : pipeline);
+  if (cb == nullptr || !cb->counted) return;
   auto& bp = cb->bind[point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0];
   if (point == VK_PIPELINE_BIND_POINT_GRAPHICS) {
-    cb->coverage.pipeline = pipeline;
+    cb->coverage.pipeline = info ? info->instrumented : pipeline;
     cb->coverage.twinBound = false;
   }
-  auto it = dev->pipelines.find(u64(pipeline));
-  bp.pipeline = it == dev->pipelines.end() ? nullptr : it->second;
+  bp.pipeline = info;
   bp.dirty = true;
   // A counted pipeline always finds the counter set bound: at the sink (never
   // read) until a draw the layer sees binds the draw's region, so a draw
@@ -1481,6 +1567,8 @@ void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t 
   std::lock_guard lock(dev.mutex);
   CommandBufferState* cb = cbState(dev, cmd);
   if (cb == nullptr || !dev.counting) return;
+  cb->work = true;
+  if (!cb->counted) return;
   if (!cb->secondary) {
     if (dispatch) {
       const std::string label = cb->labels.empty() ? "" : cb->labels.back();
@@ -1614,19 +1702,39 @@ VKAPI_ATTR void VKAPI_CALL CmdDispatchIndirect(VkCommandBuffer cmd, VkBuffer buf
   dev->d.CmdDispatchIndirect(cmd, buffer, offset);
 }
 
+// A primary recorded outside the window that executes secondaries recorded
+// for counting: their regions are read only to zero them.
+void drainSecondaries(DeviceState& dev, CommandBufferState& cb, uint32_t count, const VkCommandBuffer* secondaries) {
+  std::set<VkDeviceSize> have;
+  for (const auto& r : cb.regions) have.insert(r.offset);
+  for (uint32_t i = 0; i < count; ++i) {
+    CommandBufferState* s = cbState(dev, secondaries[i]);
+    if (s == nullptr) continue;
+    for (Region r : s->regions) {
+      if (!have.insert(r.offset).second) continue;
+      r.pass = kDrainOnly;
+      r.owned = false;
+      cb.regions.push_back(std::move(r));
+    }
+  }
+}
+
 VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t count, const VkCommandBuffer* secondaries) {
   DeviceState* dev = deviceOf(cmd);
   std::lock_guard lock(dev->mutex);
   CommandBufferState* cb = cbState(*dev, cmd);
   // Outside a render pass the secondaries are a pass of their own, timed
   // around them, with no query active while they run.
-  if (tracked(*dev, cb) && !cb->inRenderPass) {
+  if (tracked(*dev, cb) && cb->counted && !cb->inRenderPass) {
     closePass(*dev, *cb);
     cb->secondaryContents = true;
     openPass(*dev, *cb, "secondary");
   }
   dev->d.CmdExecuteCommands(cmd, count, secondaries);
-  if (!tracked(*dev, cb) || cb->currentPass < 0) return;
+  if (cb == nullptr || cb->secondary || !dev->counting) return;
+  cb->work = true;
+  if (!cb->counted) return drainSecondaries(*dev, *cb, count, secondaries);
+  if (cb->currentPass < 0) return;
   // The secondaries' regions count for the pass that executes them; a region
   // executed twice in one primary is read back once.
   std::set<VkDeviceSize> have;
@@ -1634,6 +1742,7 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
   for (uint32_t i = 0; i < count; ++i) {
     CommandBufferState* s = cbState(*dev, secondaries[i]);
     if (s == nullptr) continue;
+    cb->uncountedSecondaries = cb->uncountedSecondaries || (s->work && !s->counted);
     for (Region r : s->regions) {
       if (!have.insert(r.offset).second) continue;
       resolveInherited(*cb, r);
@@ -1725,6 +1834,12 @@ VKAPI_ATTR PFN_vkVoidFunction VKAPI_CALL GetDeviceProcAddr(VkDevice device, cons
     // Functions the device does not have stay null.
     DeviceState* dev = deviceOf(device);
     if (dev != nullptr && dev->d.GetDeviceProcAddr(device, name) == nullptr) return nullptr;
+    // A device that counts nothing (no output asked for) calls below the
+    // layer directly; the layer keeps only its end, to write the output.
+    const std::string_view n = name;
+    if (dev != nullptr && !dev->counting && n != "vkGetDeviceProcAddr" && n != "vkDestroyDevice") {
+      return dev->d.GetDeviceProcAddr(device, name);
+    }
     return f;
   }
   DeviceState* dev = deviceOf(device);
@@ -1765,6 +1880,11 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   TALLY_DEVICE(CreateBuffer)
   TALLY_DEVICE(CreateImageView)
   TALLY_DEVICE(CreateBufferView)
+  TALLY_DEVICE(DestroyImage)
+  TALLY_DEVICE(DestroyBuffer)
+  TALLY_DEVICE(DestroyImageView)
+  TALLY_DEVICE(DestroyBufferView)
+  TALLY_DEVICE(DestroyFramebuffer)
   TALLY_DEVICE(SetDebugUtilsObjectNameEXT)
   TALLY_DEVICE(CreateSwapchainKHR)
   TALLY_DEVICE(GetSwapchainImagesKHR)

@@ -107,6 +107,8 @@ struct Resource {
   uint64_t size = 0;             // buffers: VkBufferCreateInfo::size; images: the memory requirement
   std::string usage;
   std::string name;              // debug-utils name, "" for none
+  bool destroyed = false;        // by the application; forgotten once no readback can name it (lifetimes.cpp)
+  bool counted = false;          // named by a frame of the window: kept for the output's resource list
   std::string displayName() const;  // the name, else kind, handle, format and extent
 };
 
@@ -132,7 +134,9 @@ struct DescriptorSetState {
 // A pipeline the layer instrumented: its sites, with slots relative to the
 // pipeline's region of the counter buffer.
 struct PipelineInfo {
-  uint64_t handle = 0;
+  uint64_t handle = 0;  // the application's pipeline, created as it asked
+  VkPipeline instrumented = VK_NULL_HANDLE;  // its twin with counters, bound only in command buffers that count
+  bool inPlace = false;  // libraries and pipelines linked from them: the application's handle is instrumented
   VkPipelineLayout layout = VK_NULL_HANDLE;
   bool counted = false;
   uint32_t slots = 0;
@@ -195,6 +199,15 @@ struct CommandBufferState {
   bool secondary = false;
   bool graphicsOrCompute = true;
   bool timestamps = false;
+  // Recorded for counting (window.cpp, recordForCounting): instrumented
+  // pipelines, the counter set, queries. Otherwise the application's own
+  // pipelines and nothing of the layer's.
+  bool counted = false;
+  bool work = false;  // a draw, a dispatch, a render pass or secondaries recorded (a frame's work)
+  bool uncountedSecondaries = false;  // executes secondaries with work recorded outside the window
+  uint32_t recordings = 0;            // vkBeginCommandBuffer calls so far
+  uint32_t submitsOfRecording = 0;    // submissions of the current recording
+  bool resubmitted = false;           // some recording was submitted more than once
   std::vector<PassScope> passes;
   std::vector<Region> regions;
   std::map<std::tuple<uint32_t, uint64_t, std::vector<uint64_t>>, size_t> regionIndex;
@@ -247,6 +260,7 @@ struct CommandBufferState {
 // buffer by a command buffer the layer submits right after it.
 struct Harvest {
   uint64_t frame = 0;
+  uint64_t serial = 0;  // in submission order
   VkFence fence = VK_NULL_HANDLE;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
   VkCommandPool pool = VK_NULL_HANDLE;
@@ -287,6 +301,7 @@ struct FrameRecord {
   std::vector<PassRecord> passes;
   uint32_t pendingHarvests = 0;
   bool closed = false;
+  bool leftOut = false;  // ran a command buffer recorded outside the window: not written, the window grows by one
 };
 
 struct ShaderInfo {
@@ -307,6 +322,7 @@ struct DeviceState {
   std::string driverInfo;
   bool llvmpipe = false;  // Mesa's lavapipe (see instrumentStages)
   Config config;
+  uint32_t index = 0;  // the process's devices in creation order; device N > 0 writes <output>.deviceN
 
   std::mutex mutex;
   // Counting: off when the device cannot (the reason says why).
@@ -352,12 +368,17 @@ struct DeviceState {
   std::map<uint32_t, VkCommandPool> ownPools;
   std::deque<std::unique_ptr<Harvest>> pending;
   std::vector<std::unique_ptr<Harvest>> idle;
+  uint64_t nextHarvest = 0;  // the serial of the next readback
+  std::map<uint64_t, uint64_t> retired;  // destroyed resource -> the first readback that cannot name it
 
   // Frames.
   uint64_t frame = 0;            // the application's current frame
   uint32_t frameWorkSubmits = 0;  // submissions with draws or dispatches in this frame
   std::map<uint64_t, FrameRecord> frames;
   uint32_t framesDone = 0;
+  uint32_t framesLeftOut = 0;     // frames of the window that ran uncounted work: each extends it by one
+  uint64_t readbackWaits = 0;     // blocking waits for a readback before the end (the ring was full)
+  double pipelineMsApplication = 0, pipelineMsInstrumented = 0;  // creation time: the application's, the twins'
   bool written = false;
   std::vector<nlohmann::json> shaderReports;
   uint32_t pipelinesCreated = 0, pipelinesCounted = 0, layoutsRefused = 0;
@@ -392,5 +413,23 @@ void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the pa
 // Waits for the readbacks that copy from the command buffer's query pools, then destroys the pools.
 void destroyQueryPools(DeviceState& dev, CommandBufferState& cb);
 nlohmann::json outputJson(DeviceState& dev, bool complete);
+
+// window.cpp: which command buffers count, and the frames of the window.
+constexpr uint32_t kDrainOnly = UINT32_MAX;  // Region::pass of a region read only to zero it
+bool windowAhead(const DeviceState& dev);    // an output is wanted and frames are still to be read
+bool inWindow(const DeviceState& dev, uint64_t frame);
+bool recordForCounting(DeviceState& dev, CommandBufferState& cb, VkCommandBufferUsageFlags flags);
+void assignOutput(DeviceState& dev);  // the device's index and output path
+uint32_t framesCounted(const DeviceState& dev);
+
+// lifetimes.cpp: what the layer forgets of objects the application destroyed.
+void retireResource(DeviceState& dev, uint64_t handle);
+void forgetRetired(DeviceState& dev);  // after readbacks: resources no pending readback names
+
+// twins.cpp: each instrumented pipeline beside the application's own.
+void createGraphicsTwins(DeviceState& dev, const std::vector<VkGraphicsPipelineCreateInfo>& patched,
+                         const std::vector<std::shared_ptr<PipelineInfo>>& states);
+void createComputeTwins(DeviceState& dev, const std::vector<VkComputePipelineCreateInfo>& patched,
+                        const std::vector<std::shared_ptr<PipelineInfo>>& states);
 
 }  // namespace tally::layer

@@ -1,0 +1,228 @@
+#!/usr/bin/env python3
+"""The Vulkan layer (docs/layer.md) under applications that stress its model,
+on lavapipe: robust_app.cpp and swapchain_app.cpp, whose counts are derived
+here from their dispatch sizes and extents alone.
+
+  robust_test.py --build BUILD_DIR --case threads|devices|resize|reuse|prerecorded|steady|window
+
+- threads: two threads, each with its own command pool, record and submit at
+  once (on two queues where the device has them; lavapipe has one, which
+  they share under the application's lock); every frame has both passes with
+  their own counts.
+- devices: two VkDevices used in turn; each writes its own output, and says
+  which device it was.
+- resize: a swapchain recreated at another size; each frame counts the
+  extent it rendered at.
+- reuse: one command buffer recorded before the window and submitted every
+  frame; every counted frame is one submission's work (the readback zeroes
+  the counters).
+- prerecorded: command buffers recorded with ONE_TIME_SUBMIT before the
+  window: the layer cannot count them, leaves those frames out and says so.
+- steady: 10,000 frames, three in flight; the layer's heap stays bounded and
+  it never waits for a readback, with few frames kept and with all of them.
+- window: before skip_frames ends, and without an output, the layer adds
+  nothing to the application's command buffers and queues.
+"""
+import argparse
+import json
+import os
+import re
+import shutil
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from layer_test import fail, layer_env, load, run, statistic  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from strict import skip_or_fail  # noqa: E402
+
+
+def app(build):
+    return os.path.join(build, "tests", "layer", "tally_layer_robust_app")
+
+
+def check_fill(p, invocations, buffer, what):
+    """A pass of the fill kernel: one invocation and one 4-byte write each."""
+    if p["compute_invocations"] != invocations or p["dispatches"] != 1:
+        fail("%s: %d invocations in %d dispatches, expected %d in 1" %
+             (what, p["compute_invocations"], p["dispatches"], invocations))
+    if statistic(p, "compute_invocations_statistic", what) != invocations:
+        fail("%s: statistic %d, expected %d" % (what, p["compute_invocations_statistic"], invocations))
+    writes = [r for r in p["resources"] if r["access"] == "write"]
+    if len(writes) != 1 or writes[0]["name"] != buffer or writes[0]["count"] != invocations or \
+            writes[0]["bytes"] != invocations * 4:
+        fail("%s: writes %s, expected %d of 4 bytes to '%s'" % (what, writes, invocations, buffer))
+
+
+def case_threads(build, tmp):
+    out = os.path.join(tmp, "threads.json")
+    result = run([app(build), "--mode", "threads", "--frames", "10"],
+                 env=layer_env(build, out, frames=5, skip=2, frame_submits=2))
+    queues = re.search(r"threads on (\d+) queue", result.stdout).group(1)
+    counted = load(out)
+    if [f["index"] for f in counted["frames"]] != [2, 3, 4, 5, 6]:
+        fail("frames %s, expected 2..6" % [f["index"] for f in counted["frames"]])
+    for f in counted["frames"]:
+        passes = {p["name"]: p for p in f["passes"]}
+        if f["submissions"] != 2 or set(passes) != {"thread 0", "thread 1"}:
+            fail("frame %d: %d submissions, passes %s; expected one of each thread" %
+                 (f["index"], f["submissions"], sorted(passes)))
+        check_fill(passes["thread 0"], 1280, "out 0", "frame %d thread 0" % f["index"])
+        check_fill(passes["thread 1"], 2240, "out 1", "frame %d thread 1" % f["index"])
+    print("threads: %s queue(s), 5 frames of two concurrent submissions, each thread's counts its own" % queues)
+
+
+def case_devices(build, tmp):
+    out = os.path.join(tmp, "devices.json")
+    run([app(build), "--mode", "devices", "--frames", "10"], env=layer_env(build, out, frames=3, skip=1, frame_submits=1))
+    # Frame f runs on device f % 2: each device has 5 frames of its own.
+    for index, path, invocations in ((0, out, 640), (1, os.path.join(tmp, "devices.device1.json"), 1920)):
+        counted = load(path)
+        if counted["device"].get("index") != index:
+            fail("%s: device index %s, expected %d" % (path, counted["device"].get("index"), index))
+        if [f["index"] for f in counted["frames"]] != [1, 2, 3]:
+            fail("device %d: frames %s, expected 1..3 of its own" % (index, [f["index"] for f in counted["frames"]]))
+        for f in counted["frames"]:
+            if [p["name"] for p in f["passes"]] != ["fill"]:
+                fail("device %d frame %d: passes %s" % (index, f["index"], [p["name"] for p in f["passes"]]))
+            check_fill(f["passes"][0], invocations, "out", "device %d frame %d" % (index, f["index"]))
+    print("devices: device 0 wrote devices.json (640 a frame), device 1 devices.device1.json (1920 a frame)")
+
+
+def case_resize(build, tmp):
+    if shutil.which("xvfb-run") is None:
+        skip_or_fail("xvfb-run is not installed (scripts/setup.sh installs xvfb)")
+    out = os.path.join(tmp, "resize.json")
+    command = ["xvfb-run", "-a", os.path.join(build, "tests", "layer", "tally_layer_swapchain_app"), "--frames", "9",
+               "--resize-after", "4", "--first", "96x64", "--second", "160x120"]
+    result = run(command, env=layer_env(build, out, frames=6, skip=1))
+    extents = {int(f): (int(w), int(h)) for f, w, h in re.findall(r"frame (\d+) extent (\d+)x(\d+)", result.stdout)}
+    counted = load(out)
+    indices = [f["index"] for f in counted["frames"]]
+    if indices != [1, 2, 3, 4, 5, 6]:
+        fail("frames %s, expected 1..6" % indices)
+    if len(set(extents[i] for i in indices)) != 2:
+        fail("the application did not render at two sizes: %s" % extents)
+    for f in counted["frames"]:
+        w, h = extents[f["index"]]
+        p = f["passes"][0]
+        if len(f["passes"]) != 1 or p["fragment_invocations"] != w * h:
+            fail("frame %d at %dx%d: %d fragment invocations, expected %d" %
+                 (f["index"], w, h, p["fragment_invocations"], w * h))
+        writes = [r for r in p["resources"] if r["access"] == "write"]
+        if len(writes) != 1 or writes[0]["name"] != "swapchain" or writes[0]["count"] != w * h:
+            fail("frame %d: colour writes %s, expected %d to the swapchain" % (f["index"], writes, w * h))
+        if statistic(p, "fragment_invocations_statistic", "frame %d" % f["index"]) < w * h:
+            fail("frame %d: statistic %d below the %d pixels" % (f["index"], p["fragment_invocations_statistic"], w * h))
+        if p["vertex_invocations"] != 3:
+            fail("frame %d: %d vertex invocations, expected 3" % (f["index"], p["vertex_invocations"]))
+    if counted["extent"] != list(extents[max(extents)]):
+        fail("extent %s, expected the last swapchain's %s" % (counted["extent"], extents[max(extents)]))
+    print("resize: frames at %s then %s counted at their own extents" % (extents[indices[0]], extents[indices[-1]]))
+
+
+def case_reuse(build, tmp):
+    out = os.path.join(tmp, "reuse.json")
+    run([app(build), "--mode", "reuse", "--frames", "12"], env=layer_env(build, out, frames=5, skip=3, frame_submits=1))
+    counted = load(out)
+    if [f["index"] for f in counted["frames"]] != [3, 4, 5, 6, 7]:
+        fail("frames %s, expected 3..7" % [f["index"] for f in counted["frames"]])
+    for f in counted["frames"]:
+        check_fill(f["passes"][0], 2560, "out", "frame %d" % f["index"])
+    if counted["layer"]["frames_counted"] != 5 or counted["layer"]["frames_left_out"] != 0:
+        fail("layer: %s" % counted["layer"])
+    print("reuse: one recording before the window, submitted 12 times; frames 3..7 count one submission each")
+
+
+def case_prerecorded(build, tmp):
+    out = os.path.join(tmp, "prerecorded.json")
+    run([app(build), "--mode", "prerecorded", "--frames", "12"],
+        env=layer_env(build, out, frames=3, skip=3, frame_submits=1))
+    if not os.path.exists(out):
+        fail("the layer wrote no output")
+    counted = json.load(open(out))
+    layer = counted["layer"]
+    # Recorded at frame 0 for one submission each, before the window's first
+    # frame (3) was near: every frame from 3 to 11 ran them uncounted.
+    if counted["complete"] or counted["frames"] or layer["frames_counted"] != 0 or layer["frames_wanted"] != 3 or \
+            layer["frames_left_out"] != 9:
+        fail("expected nothing counted and frames 3..11 left out: complete %s, %d frames, layer %s" %
+             (counted["complete"], len(counted["frames"]), layer))
+    if not any("9 frames of the window" in n and "recorded outside it" in n for n in counted["notes"]):
+        fail("no note says why: %s" % counted["notes"])
+    print("prerecorded: frames_counted 0 of 3 wanted, 9 frames left out, with the reason in the notes")
+
+
+def steady(build, tmp, frames_kept):
+    out = os.path.join(tmp, "steady-%d.json" % frames_kept)
+    result = run([app(build), "--mode", "steady", "--frames", "10000"],
+                 env=layer_env(build, out, frames=frames_kept, skip=1, frame_submits=1), timeout=600)
+    heap = {int(f): int(b) for f, b in re.findall(r"memory at frame (\d+): rss \d+ KiB, heap (\d+) B", result.stdout)}
+    counted = load(out)
+    if len(counted["frames"]) != frames_kept or counted["layer"]["frames_counted"] != frames_kept:
+        fail("%d frames kept, expected %d" % (len(counted["frames"]), frames_kept))
+    for f in counted["frames"]:
+        p = f["passes"][0]
+        if p["compute_invocations"] != 256 or [(r["name"], r["count"]) for r in p["resources"]] != [("out", 256)]:
+            fail("frame %d: %s" % (f["index"], p))
+    # Three frames in flight and a ring of 64 readbacks: the layer never waits.
+    if counted["layer"]["readback_waits"] != 0:
+        fail("the layer waited for a readback %d times" % counted["layer"]["readback_waits"])
+    return heap[10000] - heap[1000], counted
+
+
+def case_steady(build, tmp):
+    # Few frames kept: the window ends at frame 6; from frame 1000 to 10000 the
+    # layer reads nothing and keeps nothing more. 64 KiB over 9,000 frames is
+    # 7 bytes a frame: anything the layer kept per frame would show.
+    growth, _ = steady(build, tmp, 5)
+    if growth >= 64 * 1024:
+        fail("with 5 frames kept, the heap grew %d bytes from frame 1000 to 10000 (bound 64 KiB)" % growth)
+    # Every frame kept: each holds a frame record with one pass and one line
+    # (about 460 bytes on lavapipe); 1 KiB a frame bounds it with the heap's rounding.
+    growth_kept, counted = steady(build, tmp, 10000 - 1)
+    kept = sum(1 for f in counted["frames"] if 1000 <= f["index"] < 10000)
+    if growth_kept > 1024 * kept:
+        fail("with every frame kept, the heap grew %d bytes over %d frames (bound 1 KiB a frame)" % (growth_kept, kept))
+    print("steady: heap growth from frame 1000 to 10000: %d B with 5 frames kept, %d B (%d B a frame) with all kept; "
+          "no readback waits" % (growth, growth_kept, growth_kept // kept))
+
+
+def case_window(build, tmp):
+    # No output: the application's calls go straight to the driver.
+    env = layer_env(build, "", frames=1, skip=0)
+    del env["TALLY_LAYER_OUTPUT"]
+    result = run([app(build), "--mode", "steady", "--frames", "300"], env=env)
+    library = re.search(r"vkQueueSubmit is in (\S+)", result.stdout).group(1)
+    if "VkLayer_tally" in os.path.basename(library):
+        fail("without an output the application's vkQueueSubmit still enters the layer (%s)" % library)
+    # An output, but the window never opens in 300 frames: the three slots'
+    # command buffers count their first recording (it might be submitted
+    # again, inside the window); the 297 recordings after it are the
+    # application's own, with no readback.
+    out = os.path.join(tmp, "window.json")
+    result = run([app(build), "--mode", "steady", "--frames", "300"],
+                 env=layer_env(build, out, frames=2, skip=1000, frame_submits=1))
+    if "VkLayer_tally" not in result.stdout:
+        fail("with an output, vkQueueSubmit does not enter the layer: %s" % result.stdout)
+    counted = json.load(open(out))
+    layer = counted["layer"]
+    if counted["frames"] or layer["readbacks"] != 3 or layer["readback_waits"] != 0:
+        fail("before the window: %d frames, %d readbacks (expected 3), %d waits" %
+             (len(counted["frames"]), layer["readbacks"], layer["readback_waits"]))
+    print("window: no output, the driver's vkQueueSubmit; before the window, 3 readbacks in 300 frames")
+
+
+def main():
+    cases = {"threads": case_threads, "devices": case_devices, "resize": case_resize, "reuse": case_reuse,
+             "prerecorded": case_prerecorded, "steady": case_steady, "window": case_window}
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--build", required=True)
+    parser.add_argument("--case", required=True, choices=sorted(cases))
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="tally-layer-robust-") as tmp:
+        cases[args.case](os.path.abspath(args.build), tmp)
+
+
+if __name__ == "__main__":
+    main()
