@@ -72,7 +72,7 @@ fi
 if [ "${LAYER_COST_ZINK:-1}" = 1 ]; then
   x=/tmp/tally-zink
   mkdir -p "$x"
-  xz -dc .xdebs-zink/zroot.tar.xz | tar -C "$x" -xf -
+  python3 -c "import sys, tarfile; tarfile.open(sys.argv[1]).extractall(sys.argv[2])" .xdebs-zink/zroot.tar.xz "$x"
   xlibs="$x/usr/lib/x86_64-linux-gnu:$x/lib/x86_64-linux-gnu"
   [ -x /usr/bin/xkbcomp ] || cp "$x/usr/bin/xkbcomp" /usr/bin/xkbcomp
   [ -d /usr/share/X11/xkb ] || { mkdir -p /usr/share/X11 && cp -r "$x/usr/share/X11/xkb" /usr/share/X11/; }
