@@ -53,7 +53,8 @@ if [ "${LAYER_COST_PLAY:-1}" = 1 ]; then
       for mode in plain counting idle; do
         log="$logs/play-$renderer-$mode-$rep"
         # shellcheck disable=SC2046
-        env $(mode_env "$mode" 100000 10 "$log") "$tallyd" play --renderer "$renderer" --scene "$sponza" \
+        # tallyd play never presents: one submission is a frame.
+        env TALLY_LAYER_FRAME_SUBMITS=1 $(mode_env "$mode" 100000 10 "$log") "$tallyd" play --renderer "$renderer" --scene "$sponza" \
           --resolution "$LAYER_RESOLUTION" --frames "$frames" > "$log.out" 2> "$log.err"
         rc=$?
         python3 - "$log.err" "$renderer" "$mode" "$rep" "$rc" >> "$rows" <<'EOF'
@@ -61,8 +62,14 @@ import json, re, statistics, sys
 path, renderer, mode, rep, rc = sys.argv[1:]
 ms = [float(m.group(1)) for m in re.finditer(r"tallyd play: frame \d+/\d+, \d+ passes, ([0-9.]+) ms", open(path).read())]
 kept = ms[10:]
+counted = None
+try:
+    counted = len(json.load(open(path[:-len(".err")] + ".json"))["frames"])
+except (OSError, ValueError, KeyError):
+    pass
 print(json.dumps({"app": "tallyd play " + renderer, "mode": mode, "repeat": int(rep), "exit": int(rc),
-                  "frames": len(kept), "frame_ms": statistics.median(kept) if kept else None}))
+                  "frames": len(kept), "frames_counted_by_layer": counted,
+                  "frame_ms": statistics.median(kept) if kept else None}))
 EOF
       done
     done
@@ -98,7 +105,13 @@ path, scene, mode, rep, rc = sys.argv[1:]
 text = open(path).read()
 fps = [float(m.group(1)) for m in re.finditer(r"FPS: ([0-9.]+)", text)]
 renderer = re.search(r"GL_RENDERER:\s*(.*)", text)
+counted = None
+try:
+    counted = len(json.load(open(path[:-len(".out")] + ".json"))["frames"])
+except (OSError, ValueError, KeyError):
+    pass
 print(json.dumps({"app": "glmark2 " + scene, "mode": mode, "repeat": int(rep), "exit": int(rc),
+                  "frames_counted_by_layer": counted,
                   "renderer": renderer.group(1).strip() if renderer else None,
                   "frame_ms": 1000.0 / fps[0] if fps else None}))
 EOF
@@ -125,7 +138,8 @@ for app in dict.fromkeys(r["app"] for r in rows):
     def ratio(m):
         return "n/a" if med[m] is None or not med["plain"] else "x%.3f" % (med[m] / med["plain"])
     print(f"| {app} | {cell('plain')} | {cell('counting')} | {ratio('counting')} | {cell('idle')} | {ratio('idle')} |")
-failed = [r for r in rows if r["exit"] != 0 or r["frame_ms"] is None]
+failed = [r for r in rows if r["exit"] != 0 or r["frame_ms"] is None or
+          (r["mode"] == "counting" and not r.get("frames_counted_by_layer"))]
 for r in failed:
     print("failed:", json.dumps(r))
 EOF
