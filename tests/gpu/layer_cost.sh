@@ -83,7 +83,8 @@ if [ "${LAYER_COST_ZINK:-1}" = 1 ]; then
   xlibs="$x/usr/lib/x86_64-linux-gnu:$x/lib/x86_64-linux-gnu"
   [ -x /usr/bin/xkbcomp ] || cp "$x/usr/bin/xkbcomp" /usr/bin/xkbcomp
   [ -d /usr/share/X11/xkb ] || { mkdir -p /usr/share/X11 && cp -r "$x/usr/share/X11/xkb" /usr/share/X11/; }
-  env LD_LIBRARY_PATH="$xlibs" "$x/usr/bin/Xvfb" :78 -screen 0 1920x1080x24 -nolisten tcp > "$logs/xvfb.log" 2>&1 &
+  # Xvfb's own GLX loads Mesa's swrast_dri.so: from the unpacked tree.
+  env LD_LIBRARY_PATH="$xlibs" LIBGL_DRIVERS_PATH="$x/usr/lib/x86_64-linux-gnu/dri" "$x/usr/bin/Xvfb" :78 -screen 0 1920x1080x24 -nolisten tcp > "$logs/xvfb.log" 2>&1 &
   xvfb=$!
   sleep 3
   zink_env=(DISPLAY=:78 XDG_RUNTIME_DIR=/tmp LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
