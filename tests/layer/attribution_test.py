@@ -32,14 +32,11 @@ import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from strict import skip_or_fail  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from layer_test import fail, load, run  # noqa: E402
 
 W, H = 64, 48
 N = W * H
-
-
-def fail(message):
-    print("FAIL: " + message)
-    sys.exit(1)
 
 
 def layer_env(build, output, frames, skip, frame_submits=0, below=""):
@@ -55,23 +52,6 @@ def layer_env(build, output, frames, skip, frame_submits=0, below=""):
         "TALLY_LAYER_FRAME_SUBMITS": str(frame_submits),
     })
     return env
-
-
-def run(command, env, timeout=240):
-    result = subprocess.run(command, env=env, timeout=timeout, capture_output=True, text=True)
-    if result.returncode != 0:
-        fail("%s exited %d\n%s%s" % (" ".join(command), result.returncode, result.stdout[-2000:], result.stderr[-4000:]))
-    return result
-
-
-def load(path):
-    if not os.path.exists(path):
-        fail("the layer wrote no output at " + path)
-    with open(path) as f:
-        out = json.load(f)
-    if not out["complete"]:
-        fail("the layer's output is incomplete: %d frames" % len(out["frames"]))
-    return out
 
 
 def lines_of(p):
