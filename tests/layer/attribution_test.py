@@ -33,7 +33,7 @@ import tempfile
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from strict import skip_or_fail  # noqa: E402
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from layer_test import fail, load, run  # noqa: E402
+from layer_test import fail, glmark2_exited_well, load, run  # noqa: E402
 
 W, H = 64, 48
 N = W * H
@@ -177,7 +177,10 @@ def glmark2(build, tmp, display, scene, frames, skip, duration):
     env = layer_env(build, out, frames=frames, skip=skip)
     env.update({"LIBGL_ALWAYS_SOFTWARE": "1", "GALLIUM_DRIVER": "zink", "MESA_LOADER_DRIVER_OVERRIDE": "zink",
                 "XDG_RUNTIME_DIR": tmp, "DISPLAY": display})
-    run(["glmark2", "-b", "%s:duration=%d" % (scene, duration), "-s", "320x240"], env=env)
+    command = ["glmark2", "-b", "%s:duration=%d" % (scene, duration), "-s", "320x240"]
+    result = subprocess.run(command, env=env, timeout=240, capture_output=True, text=True)
+    if not glmark2_exited_well(result):
+        fail("%s exited %d\n%s%s" % (" ".join(command), result.returncode, result.stdout[-2000:], result.stderr[-4000:]))
     output = load(out)
     if output["application"]["engine"] != "mesa zink":
         fail("%s: the engine is %r, not zink" % (scene, output["application"]["engine"]))

@@ -33,6 +33,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from strict import skip_or_fail  # noqa: E402
 import clients_relations as relations  # noqa: E402
 import validation  # noqa: E402
+from layer_test import glmark2_exited_well  # noqa: E402
 
 W, H = 320, 240
 # OpenGL through zink on lavapipe: software GL, the zink Gallium driver.
@@ -137,14 +138,6 @@ class Xvfb:
 
 def exited_well(p):
     return p.returncode == 0
-
-
-def glmark2_exited_well(p):
-    """glmark2 through zink exits 1 now and then, with or without any layer,
-    when X refuses the last software present to its window, already gone
-    (BadDrawable, X_PutImage): that ends a run that finished its scene."""
-    return p.returncode == 0 or (p.returncode == 1 and "glmark2 Score:" in p.stdout
-                                 and "BadDrawable" in p.stderr and "X_PutImage" in p.stderr)
 
 
 def validation_runs(failures, command, env, tmp, tally_dir, frame_submits=0, check=None, ended=exited_well):

@@ -56,6 +56,14 @@ def run(command, env=None, timeout=240):
     return result
 
 
+def glmark2_exited_well(p):
+    """glmark2 through zink exits 1 now and then, with or without any layer,
+    when X refuses the last software present to its window, already gone
+    (BadDrawable, X_PutImage): that ends a run that finished its scene."""
+    return p.returncode == 0 or (p.returncode == 1 and "glmark2 Score:" in p.stdout
+                                 and "BadDrawable" in p.stderr and "X_PutImage" in p.stderr)
+
+
 def load(path):
     if not os.path.exists(path):
         fail("the layer wrote no output at " + path)

@@ -23,6 +23,8 @@ import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from strict import skip_or_fail  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from layer_test import glmark2_exited_well  # noqa: E402
 
 # scene -> glmark2 seconds: enough for the skipped and counted frames (terrain's run ~1 s each instrumented).
 SCENES = {"texture": 4, "build": 4, "shading": 4, "shadow": 5, "terrain": 12}
@@ -56,7 +58,7 @@ def run_scene(build, scene, seconds, display, out):
                 "TALLY_LAYER_FRAMES": str(FRAMES), "TALLY_LAYER_SKIP_FRAMES": str(SKIP)})
     result = subprocess.run(["glmark2", "-b", "%s:duration=%d" % (scene, seconds), "-s", "320x240"], env=env,
                             timeout=180, capture_output=True, text=True)
-    if result.returncode != 0:
+    if not glmark2_exited_well(result):
         fail("glmark2 %s exited %d: %s" % (scene, result.returncode, result.stderr[-2000:]))
     if not os.path.exists(out):
         fail("%s: the layer wrote no output (zink not in use?): %s" % (scene, result.stdout[-1000:]))
