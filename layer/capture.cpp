@@ -151,6 +151,16 @@ Config Config::fromEnvironment() {
       c.mode = *parsed;
     }
   }
+  if (const char* timing = std::getenv("TALLY_LAYER_TIMING"); timing != nullptr && *timing != '\0' && error.empty()) {
+    const std::string value = timing;
+    if (value == "timestamps") {
+      c.statistics = false;
+    } else if (value == "none") {
+      c.timestamps = c.statistics = false;
+    } else if (value != "all") {
+      error = "TALLY_LAYER_TIMING: '" + value + "' is not all, timestamps or none";
+    }
+  }
   c.error = error;
   return c;
 }
@@ -281,9 +291,9 @@ void destroyCounting(DeviceState& dev) {
 }
 
 void releaseRegions(DeviceState& dev, CommandBufferState& cb) {
-  for (const auto& r : cb.regions) {
-    if (r.owned && r.offset != 0) dev.freeRegions[r.bytes].push_back(r.offset);
-  }
+  for (const auto& chunk : cb.chunks) dev.freeRegions[chunk.bytes].push_back(chunk.offset);
+  cb.chunks.clear();
+  cb.chunkNext = cb.chunkEnd = 0;
 }
 
 namespace {
@@ -308,16 +318,31 @@ Bound resolveSlot(const DeviceState& dev, const CommandBufferState& cb, const Co
   return element < binding->second.size() ? binding->second[element] : Bound{};
 }
 
-VkDeviceSize allocateRegion(DeviceState& dev, VkDeviceSize bytes) {
-  auto& free = dev.freeRegions[bytes];
-  if (!free.empty()) {
-    VkDeviceSize offset = free.back();
-    free.pop_back();
+// A region cut from the recording's current chunk; a new chunk, twice the
+// last one's size up to 1 MiB, when it is full. 0 when the arena is full.
+VkDeviceSize allocateRegion(DeviceState& dev, CommandBufferState& cb, VkDeviceSize bytes) {
+  if (cb.chunkNext != 0 && cb.chunkNext + bytes <= cb.chunkEnd) {
+    const VkDeviceSize offset = cb.chunkNext;
+    cb.chunkNext += bytes;
     return offset;
   }
-  if (dev.arenaNext + bytes > dev.arenaBytes) return 0;  // the sink
-  VkDeviceSize offset = dev.arenaNext;
-  dev.arenaNext += bytes;
+  constexpr VkDeviceSize kFirstChunk = 16u << 10, kLargestChunk = 1u << 20;
+  VkDeviceSize size = cb.chunks.empty() ? kFirstChunk : std::min(cb.chunks.back().bytes * 2, kLargestChunk);
+  size = std::max(size, bytes);
+  size = (size + dev.alignment - 1) / dev.alignment * dev.alignment;
+  VkDeviceSize offset = 0;
+  if (auto& free = dev.freeRegions[size]; !free.empty()) {
+    offset = free.back();
+    free.pop_back();
+  } else if (dev.arenaNext + size <= dev.arenaBytes) {
+    offset = dev.arenaNext;
+    dev.arenaNext += size;
+  } else {
+    return 0;  // the sink
+  }
+  cb.chunks.push_back({offset, size});
+  cb.chunkNext = offset + bytes;
+  cb.chunkEnd = offset + size;
   return offset;
 }
 
@@ -350,7 +375,7 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
     offset = cb.regions[it->second].offset;
   } else {
     const VkDeviceSize bytes = (VkDeviceSize(pipeline.slots) * 8 + dev.alignment - 1) / dev.alignment * dev.alignment;
-    offset = allocateRegion(dev, bytes);
+    offset = allocateRegion(dev, cb, bytes);
     if (offset == 0) {
       if (!cb.overflowNoted) dev.notes.insert("the counter arena is full: some draws were not counted");
       cb.overflowNoted = true;
@@ -656,9 +681,7 @@ void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> 
   for (size_t p = 0; p < parts.size(); ++p) {
     const auto& part = parts[p];
     std::vector<VkBufferCopy> copies;
-    for (size_t r = 0; r < part.regions.size(); ++r) {
-      copies.push_back({part.regions[r].offset, part.regionAt[r], VkDeviceSize(part.regions[r].pipeline->slots) * 8});
-    }
+    for (const auto& range : part.ranges) copies.push_back({range.offset, range.at, range.bytes});
     if (!copies.empty()) dev.d.CmdCopyBuffer(h->cmd, dev.counterBuffer, h->buffer, uint32_t(copies.size()), copies.data());
     const CommandBufferState& cb = *sources[p];
     if (part.timestamps > 0) {
@@ -677,9 +700,7 @@ void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> 
   memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
                 VK_ACCESS_TRANSFER_WRITE_BIT);
   for (const auto& part : parts) {
-    for (const auto& r : part.regions) {
-      dev.d.CmdFillBuffer(h->cmd, dev.counterBuffer, r.offset, VkDeviceSize(r.pipeline->slots) * 8, 0);
-    }
+    for (const auto& range : part.ranges) dev.d.CmdFillBuffer(h->cmd, dev.counterBuffer, range.offset, range.bytes, 0);
   }
   memoryBarrier(dev, h->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
                 VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT,
@@ -730,6 +751,36 @@ void leaveOut(DeviceState& dev, uint64_t index) {
 
 }  // namespace
 
+namespace {
+
+// Where the part's regions go in the harvest's buffer, from `at` on: their
+// arena merged into ranges where they are adjacent (a recording's regions
+// are, within each chunk), each range copied and zeroed whole. Returns the
+// end.
+VkDeviceSize placeRegions(Harvest::Part& part, VkDeviceSize at) {
+  std::vector<size_t> order(part.regions.size());
+  for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return part.regions[a].offset < part.regions[b].offset; });
+  part.regionAt.assign(part.regions.size(), 0);
+  for (size_t r : order) {
+    const Region& region = part.regions[r];
+    const VkDeviceSize end = region.offset + region.bytes;
+    if (part.ranges.empty() || region.offset > part.ranges.back().offset + part.ranges.back().bytes) {
+      if (!part.ranges.empty()) at += part.ranges.back().bytes;
+      part.ranges.push_back({region.offset, region.bytes, at});
+    } else if (end > part.ranges.back().offset + part.ranges.back().bytes) {
+      part.ranges.back().bytes = end - part.ranges.back().offset;
+    }
+    const ArenaRange& range = part.ranges.back();
+    part.regionAt[r] = range.at + (region.offset - range.offset);
+  }
+  if (!part.ranges.empty()) at += part.ranges.back().bytes;
+  return at;
+}
+
+}  // namespace
+
 void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
   if (!dev.counting) return;
   pollReadbacks(dev);
@@ -749,10 +800,7 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     Harvest::Part part;
     part.passes = cb.passes;
     part.regions = cb.regions;
-    for (const auto& r : cb.regions) {
-      part.regionAt.push_back(at);
-      at += VkDeviceSize(r.pipeline->slots) * 8;
-    }
+    at = placeRegions(part, at);
     part.timestampsAt = at;
     part.timestamps = cb.timestampsUsed;
     at += VkDeviceSize(cb.timestampsUsed) * 8;

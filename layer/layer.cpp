@@ -201,7 +201,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   inst->getQueueFamilies(physical, &familyCount, dev->families.data());
   dev->fragmentStores = enabled.fragmentStoresAndAtomics;
   dev->vertexStores = enabled.vertexPipelineStoresAndAtomics;
-  dev->statistics = enabled.pipelineStatisticsQuery;
+  dev->statistics = enabled.pipelineStatisticsQuery && dev->config.statistics;
   if (inst->getProperties2 != nullptr) {
     VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
     VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &driver};
@@ -1034,7 +1034,7 @@ VKAPI_ATTR VkResult VKAPI_CALL AllocateCommandBuffers(VkDevice device, const VkC
     cb->pool = info->commandPool;
     cb->secondary = info->level == VK_COMMAND_BUFFER_LEVEL_SECONDARY;
     cb->graphicsOrCompute = (props.queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) != 0;
-    cb->timestamps = props.timestampValidBits > 0 && cb->graphicsOrCompute;
+    cb->timestamps = props.timestampValidBits > 0 && cb->graphicsOrCompute && dev->config.timestamps;
     dev->commandBuffers[buffers[i]] = std::move(cb);
   }
   return result;
@@ -1713,7 +1713,6 @@ void drainSecondaries(DeviceState& dev, CommandBufferState& cb, uint32_t count, 
     for (Region r : s->regions) {
       if (!have.insert(r.offset).second) continue;
       r.pass = kDrainOnly;
-      r.owned = false;
       cb.regions.push_back(std::move(r));
     }
   }
@@ -1747,7 +1746,6 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
       if (!have.insert(r.offset).second) continue;
       resolveInherited(*cb, r);
       r.pass = uint32_t(cb->currentPass);
-      r.owned = false;
       cb->regions.push_back(std::move(r));
     }
     cb->passes[size_t(cb->currentPass)].draws += uint32_t(s->regions.size());

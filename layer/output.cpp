@@ -32,6 +32,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
        {{"name", "VK_LAYER_TALLY_counters"},
         {"version", "0.1.0"},
         {"counting", spirv::toString(dev.config.mode)},
+        {"timing", dev.config.statistics ? "all" : dev.config.timestamps ? "timestamps" : "none"},
         {"descriptor_set", dev.counterSet},
         {"frame_delimiter",
          dev.config.frameSubmits == 0 ? std::string("present") : "submits:" + std::to_string(dev.config.frameSubmits)},

@@ -40,6 +40,9 @@ struct Config {
   uint32_t skipFrames = 0;     // TALLY_LAYER_SKIP_FRAMES
   uint32_t frameSubmits = 0;   // TALLY_LAYER_FRAME_SUBMITS: 0, frames end at present
   spirv::Mode mode{spirv::CountMode::Accumulate};  // TALLY_LAYER_COUNTING
+  // TALLY_LAYER_TIMING: the queries around each pass. "all": timestamps and
+  // pipeline statistics; "timestamps"; "none": counts only.
+  bool timestamps = true, statistics = true;
   std::string error;           // a variable that did not parse: the layer counts nothing and says so
   static Config fromEnvironment();
 };
@@ -177,7 +180,13 @@ struct Region {
   std::shared_ptr<PipelineInfo> pipeline;
   std::vector<Bound> slotResources;  // per slot: what it counts
   uint32_t pass = 0;                 // index into the command buffer's passes
-  bool owned = true;                 // false: a secondary's region, executed by this primary
+};
+
+// A stretch of the counter arena: a recording's chunk, or what one readback
+// copies and zeroes at once.
+struct ArenaRange {
+  VkDeviceSize offset = 0, bytes = 0;
+  VkDeviceSize at = 0;  // in a readback: where the range lies in the harvest's buffer
 };
 
 // A render pass instance, a dynamic-rendering scope, or the compute
@@ -211,6 +220,11 @@ struct CommandBufferState {
   std::vector<PassScope> passes;
   std::vector<Region> regions;
   std::map<std::tuple<uint32_t, uint64_t, std::vector<uint64_t>>, size_t> regionIndex;
+  // The arena chunks this recording's regions are cut from, one after the
+  // other, so that its readback copies and zeroes a few ranges, not a region
+  // at a time (a fill per draw cost the GPU about a microsecond each).
+  std::vector<ArenaRange> chunks;
+  VkDeviceSize chunkNext = 0, chunkEnd = 0;
   VkQueryPool timestampPool = VK_NULL_HANDLE, statisticsPool = VK_NULL_HANDLE;
   uint32_t timestampsUsed = 0, statisticsUsed = 0;
   // recording state
@@ -271,6 +285,7 @@ struct Harvest {
     std::vector<PassScope> passes;
     std::vector<Region> regions;
     std::vector<VkDeviceSize> regionAt;  // where each region's counters lie in the buffer
+    std::vector<ArenaRange> ranges;      // the regions' arena, merged where adjacent: copied and zeroed
     VkDeviceSize timestampsAt = 0, statisticsAt = 0;
     uint32_t timestamps = 0, statistics = 0;
     std::vector<IndirectDraw> indirectDraws;  // copied ones only

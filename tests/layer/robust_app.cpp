@@ -18,6 +18,10 @@
 //       (a fill of 2560), submitted once a frame.
 //   --mode prerecorded: a command buffer per frame, all recorded with
 //       ONE_TIME_SUBMIT before the first frame (a fill of 2560 each).
+//   --mode many: one command buffer a frame, re-recorded each frame, with
+//       600 fills in one labelled scope ("many"), fill i writing buffer
+//       "out i" with 64 x (i % 5 + 1) invocations: 600 counter regions in one
+//       recording, more than the layer's first arena chunk holds.
 //   --mode steady: three frames in flight, a fill of 256 a frame into the
 //       frame's slot, which the application waits for three frames later,
 //       never the frame before. Each frame also creates and destroys a small
@@ -190,6 +194,50 @@ int recordedAhead(const app::Instance& instance, bool once) {
   return ok ? 0 : 1;
 }
 
+int many(const app::Instance& instance) {
+  constexpr uint32_t kFills = 600;
+  app::Device device = app::createDevice(instance, 1);
+  app::Fill fill = app::createFill(device, kFills);
+  std::vector<app::Buffer> outs;
+  std::vector<VkDescriptorSet> sets;
+  auto invocations = [](uint32_t i) { return 64 * (i % 5 + 1); };
+  for (uint32_t i = 0; i < kFills; ++i) {
+    outs.push_back(app::createBuffer(device, invocations(i) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                     "out " + std::to_string(i)));
+    sets.push_back(app::fillSet(device, fill, outs.back().buffer));
+  }
+  VkCommandPool pool = app::createPool(device);
+  VkCommandBuffer cmd = app::allocate(device, pool);
+  VkFence fence = app::createFence(device);
+  bool ok = true;
+  for (uint32_t f = 0; f < frames; ++f) {
+    for (uint32_t i = 0; i < kFills; ++i) std::memset(outs[i].mapped, 0, invocations(i) * 4);
+    app::check(vkResetCommandPool(device.device, pool, 0), "vkResetCommandPool");
+    begin(cmd, VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT);
+    app::label(device, cmd, "many");
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, fill.pipeline);
+    for (uint32_t i = 0; i < kFills; ++i) {
+      vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, fill.layout, 0, 1, &sets[i], 0, nullptr);
+      vkCmdDispatch(cmd, invocations(i) / 64, 1, 1);
+    }
+    app::unlabel(device, cmd);
+    VkMemoryBarrier host = {VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, VK_ACCESS_SHADER_WRITE_BIT,
+                            VK_ACCESS_HOST_READ_BIT};
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &host, 0,
+                         nullptr, 0, nullptr);
+    app::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+    app::submit(device.queues[0], cmd, fence);
+    app::wait(device, fence);
+    for (uint32_t i = 0; i < kFills; ++i) ok = ok && app::filled(outs[i].mapped, invocations(i), "many");
+  }
+  vkDestroyFence(device.device, fence, nullptr);
+  vkDestroyCommandPool(device.device, pool, nullptr);
+  for (auto& out : outs) app::destroyBuffer(device, out);
+  app::destroyFill(device, fill);
+  vkDestroyDevice(device.device, nullptr);
+  return ok ? 0 : 1;
+}
+
 // Which library answers the application's vkQueueSubmit: the layer's when it
 // intercepts the call, the driver's when the layer stays out of the way.
 void printSubmitLibrary(const app::Device& device) {
@@ -265,8 +313,9 @@ int main(int argc, char** argv) {
     if (flag == "--mode") mode = argv[i + 1];
     else if (flag == "--frames") frames = uint32_t(std::strtoul(argv[i + 1], nullptr, 10));
   }
-  if (mode != "threads" && mode != "devices" && mode != "reuse" && mode != "prerecorded" && mode != "steady") {
-    std::fprintf(stderr, "robust_app: --mode threads|devices|reuse|prerecorded|steady [--frames N]\n");
+  if (mode != "threads" && mode != "devices" && mode != "reuse" && mode != "prerecorded" && mode != "steady" &&
+      mode != "many") {
+    std::fprintf(stderr, "robust_app: --mode threads|devices|reuse|prerecorded|steady|many [--frames N]\n");
     return 2;
   }
   app::Instance instance = app::createInstance("robust_app", {});
@@ -274,6 +323,7 @@ int main(int argc, char** argv) {
                : mode == "devices"     ? devices(instance)
                : mode == "reuse"       ? recordedAhead(instance, true)
                : mode == "prerecorded" ? recordedAhead(instance, false)
+               : mode == "many"        ? many(instance)
                                        : steady(instance);
   vkDestroyInstance(instance.instance, nullptr);
   if (status == 0) std::printf("robust_app: %s, %u frames, results correct\n", mode.c_str(), frames);

@@ -3,7 +3,7 @@
 on lavapipe: robust_app.cpp and swapchain_app.cpp, whose counts are derived
 here from their dispatch sizes and extents alone.
 
-  robust_test.py --build BUILD_DIR --case threads|devices|resize|reuse|prerecorded|steady|window
+  robust_test.py --build BUILD_DIR --case threads|devices|resize|reuse|prerecorded|steady|window|many|timing
 
 - threads: two threads, each with its own command pool, record and submit at
   once (on two queues where the device has them; lavapipe has one, which
@@ -20,6 +20,13 @@ here from their dispatch sizes and extents alone.
   window: the layer cannot count them, leaves those frames out and says so.
 - steady: 10,000 frames, three in flight; the layer's heap stays bounded and
   it never waits for a readback, with few frames kept and with all of them.
+- many: 600 dispatches in one recording, each into its own buffer: 600
+  counter regions over more than one arena chunk, read back as merged
+  ranges; every buffer's line has its own dispatch's count, in every frame
+  (the readback zeroes every region it read).
+- timing: TALLY_LAYER_TIMING=timestamps and none leave the counts as they
+  are and drop the statistics (and the timestamps); a value it does not
+  know turns counting off and says why.
 - window: before skip_frames ends, and without an output, the layer adds
   nothing to the application's command buffers and queues.
 """
@@ -188,6 +195,61 @@ def case_steady(build, tmp):
           "no readback waits" % (growth, growth_kept, growth_kept // kept))
 
 
+def many(build, tmp, timing):
+    out = os.path.join(tmp, "many-%s.json" % timing)
+    env = layer_env(build, out, frames=3, skip=1, frame_submits=1)
+    env["TALLY_LAYER_TIMING"] = timing
+    run([app(build), "--mode", "many", "--frames", "5"], env=env)
+    counted = load(out)
+    if [f["index"] for f in counted["frames"]] != [1, 2, 3] or counted["layer"]["timing"] != timing:
+        fail("timing %s: frames %s, layer.timing %r" %
+             (timing, [f["index"] for f in counted["frames"]], counted["layer"]["timing"]))
+    expected = {"out %d" % i: 64 * (i % 5 + 1) for i in range(600)}
+    for f in counted["frames"]:
+        passes = f["passes"]
+        if len(passes) != 1 or passes[0]["name"] != "many" or passes[0]["dispatches"] != 600:
+            fail("timing %s, frame %d: passes %s, expected one 'many' of 600 dispatches" %
+                 (timing, f["index"], [(p["name"], p["dispatches"]) for p in passes]))
+        p = passes[0]
+        got = {r["name"]: r["count"] for r in p["resources"] if r["access"] == "write"}
+        if got != expected:
+            wrong = sorted(set(got.items()) ^ set(expected.items()))[:6]
+            fail("timing %s, frame %d: %d write lines, expected 600; first differences %s" %
+                 (timing, f["index"], len(got), wrong))
+        if p["compute_invocations"] != sum(expected.values()):
+            fail("timing %s, frame %d: %d invocations, expected %d" %
+                 (timing, f["index"], p["compute_invocations"], sum(expected.values())))
+    return counted["frames"][0]["passes"][0]
+
+
+def case_many(build, tmp):
+    p = many(build, tmp, "all")
+    total = 64 * 3 * 600
+    if statistic(p, "compute_invocations_statistic", "many") != total or p["gpu_ms"] < 0:
+        fail("many: statistic %s, gpu_ms %s; expected %d and a time" % (p["compute_invocations_statistic"], p["gpu_ms"],
+                                                                         total))
+    print("many: 600 regions in one recording, 3 frames, every line its dispatch's count; statistic %d" % total)
+
+
+def case_timing(build, tmp):
+    timestamps = many(build, tmp, "timestamps")
+    if timestamps["compute_invocations_statistic"] >= 0 or timestamps["gpu_ms"] < 0:
+        fail("timing timestamps: statistic %s, gpu_ms %s; expected none and a time" %
+             (timestamps["compute_invocations_statistic"], timestamps["gpu_ms"]))
+    none = many(build, tmp, "none")
+    if none["compute_invocations_statistic"] >= 0 or none["gpu_ms"] >= 0:
+        fail("timing none: statistic %s, gpu_ms %s; expected neither" %
+             (none["compute_invocations_statistic"], none["gpu_ms"]))
+    out = os.path.join(tmp, "bad.json")
+    env = layer_env(build, out, frames=1, skip=0, frame_submits=1)
+    env["TALLY_LAYER_TIMING"] = "sometimes"
+    result = run([app(build), "--mode", "reuse", "--frames", "2"], env=env)
+    said = json.load(open(out))["layer"]["not_counting"]
+    if "TALLY_LAYER_TIMING: 'sometimes' is not all, timestamps or none" not in said + result.stderr:
+        fail("an unknown TALLY_LAYER_TIMING: not_counting %r, stderr %r" % (said, result.stderr[-400:]))
+    print("timing: timestamps and none count as all does; no statistic (and no time); 'sometimes' refused: %s" % said)
+
+
 def case_window(build, tmp):
     # No output: the application's calls go straight to the driver.
     env = layer_env(build, "", frames=1, skip=0)
@@ -215,7 +277,8 @@ def case_window(build, tmp):
 
 def main():
     cases = {"threads": case_threads, "devices": case_devices, "resize": case_resize, "reuse": case_reuse,
-             "prerecorded": case_prerecorded, "steady": case_steady, "window": case_window}
+             "prerecorded": case_prerecorded, "steady": case_steady, "window": case_window, "many": case_many,
+             "timing": case_timing}
     parser = argparse.ArgumentParser()
     parser.add_argument("--build", required=True)
     parser.add_argument("--case", required=True, choices=sorted(cases))
