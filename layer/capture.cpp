@@ -281,6 +281,12 @@ void destroyCounting(DeviceState& dev) {
     if (cb->statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb->statisticsPool, nullptr);
     destroyIndirect(dev, *cb);
   }
+  for (const auto& [pool, statistics] : dev.retiringPools) dev.d.DestroyQueryPool(dev.device, pool, nullptr);
+  for (VkQueryPool pool : dev.freeTimestampPools) dev.d.DestroyQueryPool(dev.device, pool, nullptr);
+  for (VkQueryPool pool : dev.freeStatisticsPools) dev.d.DestroyQueryPool(dev.device, pool, nullptr);
+  dev.retiringPools.clear();
+  dev.freeTimestampPools.clear();
+  dev.freeStatisticsPools.clear();
   for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
   if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
   if (dev.counterMemory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, dev.counterMemory, nullptr);
@@ -541,6 +547,25 @@ void processHarvest(DeviceState& dev, Harvest& h) {
   }
 }
 
+namespace {
+
+bool readByPending(const DeviceState& dev, VkQueryPool pool) {
+  return std::any_of(dev.pending.begin(), dev.pending.end(), [&](const auto& h) {
+    return std::find(h->queryPools.begin(), h->queryPools.end(), pool) != h->queryPools.end();
+  });
+}
+
+// Retiring pools no pending readback reads any more are free again.
+void freeRetiredPools(DeviceState& dev) {
+  std::erase_if(dev.retiringPools, [&](const std::pair<VkQueryPool, bool>& retiring) {
+    if (readByPending(dev, retiring.first)) return false;
+    (retiring.second ? dev.freeStatisticsPools : dev.freeTimestampPools).push_back(retiring.first);
+    return true;
+  });
+}
+
+}  // namespace
+
 // Reads back every finished harvest; with `waitFrame`, first waits for those
 // of frames up to it.
 void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
@@ -571,6 +596,7 @@ void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
     dev.idle.push_back(std::move(*it));
     it = dev.pending.erase(it);
   }
+  if (!dev.retiringPools.empty()) freeRetiredPools(dev);
 }
 
 void writeOutput(DeviceState& dev, bool complete) {
@@ -707,9 +733,11 @@ void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> 
                 VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_HOST_READ_BIT);
   dev.d.EndCommandBuffer(h->cmd);
   h->queryPools.clear();
+  h->indirectBuffers.clear();
   for (size_t p = 0; p < parts.size(); ++p) {
     if (parts[p].timestamps > 0) h->queryPools.push_back(sources[p]->timestampPool);
     if (parts[p].statistics > 0) h->queryPools.push_back(sources[p]->statisticsPool);
+    if (!parts[p].indirectDraws.empty()) h->indirectBuffers.push_back(sources[p]->indirectBuffer);
   }
   VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
@@ -781,6 +809,10 @@ VkDeviceSize placeRegions(Harvest::Part& part, VkDeviceSize at) {
 
 }  // namespace
 
+void afterIdle(DeviceState& dev) {
+  if (dev.counting) pollReadbacks(dev);
+}
+
 void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
   if (!dev.counting) return;
   pollReadbacks(dev);
@@ -821,24 +853,47 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
   if (work && dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
 }
 
+
 // The application waited for its own submission before freeing the command
 // buffer, not for the readback submitted after it, which may still be copying
-// from the pools (VUID-vkDestroyQueryPool-queryPool-00793).
-void destroyQueryPools(DeviceState& dev, CommandBufferState& cb) {
+// from the pools (VUID-vkDestroyQueryPool-queryPool-00793): such a pool is
+// kept until that readback is read, then used again, and nobody waits.
+void retireQueryPools(DeviceState& dev, CommandBufferState& cb) {
+  auto retire = [&](VkQueryPool& pool, bool statistics) {
+    if (pool == VK_NULL_HANDLE) return;
+    if (readByPending(dev, pool)) {
+      dev.retiringPools.emplace_back(pool, statistics);
+    } else {
+      (statistics ? dev.freeStatisticsPools : dev.freeTimestampPools).push_back(pool);
+    }
+    pool = VK_NULL_HANDLE;
+  };
+  retire(cb.timestampPool, false);
+  retire(cb.statisticsPool, true);
+}
+
+// Before a freed command buffer's indirect-parameter buffer is destroyed:
+// the readbacks that still copy it.
+void waitForIndirectReadbacks(DeviceState& dev, const CommandBufferState& cb) {
+  if (cb.indirectBuffer == VK_NULL_HANDLE) return;
   bool waited = false;
   for (const auto& h : dev.pending) {
-    for (VkQueryPool pool : h->queryPools) {
-      if (pool != VK_NULL_HANDLE && (pool == cb.timestampPool || pool == cb.statisticsPool)) {
-        dev.d.WaitForFences(dev.device, 1, &h->fence, VK_TRUE, UINT64_MAX);
-        waited = true;
-        break;
-      }
+    if (std::find(h->indirectBuffers.begin(), h->indirectBuffers.end(), cb.indirectBuffer) != h->indirectBuffers.end()) {
+      ++dev.readbackWaits;
+      dev.d.WaitForFences(dev.device, 1, &h->fence, VK_TRUE, UINT64_MAX);
+      waited = true;
     }
   }
   if (waited) collect(dev, std::nullopt);
-  if (cb.timestampPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.timestampPool, nullptr);
-  if (cb.statisticsPool != VK_NULL_HANDLE) dev.d.DestroyQueryPool(dev.device, cb.statisticsPool, nullptr);
-  cb.timestampPool = cb.statisticsPool = VK_NULL_HANDLE;
+}
+
+// A free pool of the kind, or VK_NULL_HANDLE: the caller creates one.
+VkQueryPool takeQueryPool(DeviceState& dev, bool statistics) {
+  auto& free = statistics ? dev.freeStatisticsPools : dev.freeTimestampPools;
+  if (free.empty()) return VK_NULL_HANDLE;
+  VkQueryPool pool = free.back();
+  free.pop_back();
+  return pool;
 }
 
 void endFrame(DeviceState& dev) {

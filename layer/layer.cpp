@@ -1000,7 +1000,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateCommandPool(VkDevice device, const VkComman
 
 void destroyCommandBufferState(DeviceState& dev, CommandBufferState& cb) {
   releaseRegions(dev, cb);
-  destroyQueryPools(dev, cb);  // waits for the readbacks still copying this command buffer's work
+  retireQueryPools(dev, cb);  // kept for later recordings once the readbacks copying them are read
+  waitForIndirectReadbacks(dev, cb);
   destroyIndirect(dev, cb);
 }
 
@@ -1097,11 +1098,14 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
   if (cb->secondary) inheritTargets(*dev, *cb, *info);
   cb->counted = recordForCounting(*dev, *cb, info->flags);
   if (cb->secondary || !cb->graphicsOrCompute || !dev->counting || !cb->counted) return result;
+  if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) cb->timestampPool = takeQueryPool(*dev, false);
+  if (dev->statistics && cb->statisticsPool == VK_NULL_HANDLE) cb->statisticsPool = takeQueryPool(*dev, true);
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     q.queryType = VK_QUERY_TYPE_TIMESTAMP;
     q.queryCount = kQueriesPerCommandBuffer;
     if (dev->d.CreateQueryPool(dev->device, &q, nullptr, &cb->timestampPool) != VK_SUCCESS) cb->timestamps = false;
+    ++dev->queryPoolsCreated;
   }
   if (dev->statistics && cb->statisticsPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
@@ -1109,6 +1113,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
     q.queryCount = kQueriesPerCommandBuffer;
     q.pipelineStatistics = kStatistics;
     dev->d.CreateQueryPool(dev->device, &q, nullptr, &cb->statisticsPool);
+    ++dev->queryPoolsCreated;
   }
   if (cb->timestamps) dev->d.CmdResetQueryPool(cmd, cb->timestampPool, 0, kQueriesPerCommandBuffer);
   if (cb->statisticsPool != VK_NULL_HANDLE) dev->d.CmdResetQueryPool(cmd, cb->statisticsPool, 0, kQueriesPerCommandBuffer);
@@ -1798,6 +1803,26 @@ VKAPI_ATTR VkResult VKAPI_CALL QueuePresentKHR(VkQueue queue, const VkPresentInf
   return result;
 }
 
+// After the application waits for the device or a queue, the readbacks
+// submitted before are done: read them now. An application that exits
+// without vkDestroyDevice then still gets its output once the window's
+// frames are read.
+VKAPI_ATTR VkResult VKAPI_CALL DeviceWaitIdle(VkDevice device) {
+  DeviceState* dev = deviceOf(device);
+  VkResult result = dev->d.DeviceWaitIdle(device);
+  std::lock_guard lock(dev->mutex);
+  afterIdle(*dev);
+  return result;
+}
+
+VKAPI_ATTR VkResult VKAPI_CALL QueueWaitIdle(VkQueue queue) {
+  DeviceState* dev = deviceOf(queue);
+  VkResult result = dev->d.QueueWaitIdle(queue);
+  std::lock_guard lock(dev->mutex);
+  afterIdle(*dev);
+  return result;
+}
+
 // ---------------------------------------------------------------- loader interface
 
 constexpr const char* kLayerName = "VK_LAYER_TALLY_counters";
@@ -1872,6 +1897,8 @@ PFN_vkVoidFunction interceptedDevice(std::string_view n) {
   if (n == "vk" #alias) return reinterpret_cast<PFN_vkVoidFunction>(fn);
   TALLY_DEVICE(GetDeviceProcAddr)
   TALLY_DEVICE(DestroyDevice)
+  TALLY_DEVICE(DeviceWaitIdle)
+  TALLY_DEVICE(QueueWaitIdle)
   TALLY_DEVICE(GetDeviceQueue)
   TALLY_DEVICE(GetDeviceQueue2)
   TALLY_DEVICE(CreateImage)

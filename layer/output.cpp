@@ -50,6 +50,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"frames_left_out", dev.framesLeftOut},
         {"readbacks", dev.nextHarvest},
         {"readback_waits", dev.readbackWaits},
+        {"query_pools", dev.queryPoolsCreated},
         {"pipeline_creation_ms",
          {{"application", dev.pipelineMsApplication}, {"instrumented", dev.pipelineMsInstrumented}}}}},
       {"application", {{"name", appName}, {"engine", dev.instance->engineName}, {"executable", executable}}},

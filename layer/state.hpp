@@ -293,6 +293,7 @@ struct Harvest {
   };
   std::vector<Part> parts;  // one per command buffer submitted
   std::vector<VkQueryPool> queryPools;  // the submitted command buffers' pools its copies read
+  std::vector<VkBuffer> indirectBuffers;  // and their indirect-parameter copies
 };
 
 // A frame's passes as read back, before they are written out.
@@ -383,6 +384,12 @@ struct DeviceState {
   std::map<uint32_t, VkCommandPool> ownPools;
   std::deque<std::unique_ptr<Harvest>> pending;
   std::vector<std::unique_ptr<Harvest>> idle;
+  // Query pools of freed command buffers, for later recordings: creating two
+  // per command buffer cost an application that allocates one a frame more
+  // than all the counting. A pool a pending readback still copies from waits
+  // in `retiringPools` (true: statistics) until that readback is read.
+  std::vector<VkQueryPool> freeTimestampPools, freeStatisticsPools;
+  std::vector<std::pair<VkQueryPool, bool>> retiringPools;
   uint64_t nextHarvest = 0;  // the serial of the next readback
   std::map<uint64_t, uint64_t> retired;  // destroyed resource -> the first readback that cannot name it
 
@@ -392,7 +399,8 @@ struct DeviceState {
   std::map<uint64_t, FrameRecord> frames;
   uint32_t framesDone = 0;
   uint32_t framesLeftOut = 0;     // frames of the window that ran uncounted work: each extends it by one
-  uint64_t readbackWaits = 0;     // blocking waits for a readback before the end (the ring was full)
+  uint64_t readbackWaits = 0;     // blocking waits for a readback before the end (ring full, indirect buffer freed)
+  uint64_t queryPoolsCreated = 0;  // the rest of the command buffers' pools are used again
   double pipelineMsApplication = 0, pipelineMsInstrumented = 0;  // creation time: the application's, the twins'
   bool written = false;
   std::vector<nlohmann::json> shaderReports;
@@ -425,8 +433,11 @@ void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buff
 void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb, bool end);
 void destroyIndirect(DeviceState& dev, CommandBufferState& cb);
 void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the parts' passes' indexReads
-// Waits for the readbacks that copy from the command buffer's query pools, then destroys the pools.
-void destroyQueryPools(DeviceState& dev, CommandBufferState& cb);
+// Hands the command buffer's query pools back for later recordings (after the readbacks that copy them).
+void retireQueryPools(DeviceState& dev, CommandBufferState& cb);
+void afterIdle(DeviceState& dev);  // the device or a queue is idle: reads what arrived
+VkQueryPool takeQueryPool(DeviceState& dev, bool statistics);
+void waitForIndirectReadbacks(DeviceState& dev, const CommandBufferState& cb);
 nlohmann::json outputJson(DeviceState& dev, bool complete);
 
 // window.cpp: which command buffers count, and the frames of the window.

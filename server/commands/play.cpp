@@ -142,7 +142,7 @@ int runPlay(const PlayArgs& args) {
   options.onFrame = [&](uint32_t frame, const renderers::FrameResult& result) {
     if (args.quiet) return;
     char line[160];
-    std::snprintf(line, sizeof line, "tallyd play: frame %u/%u, %zu passes, %.1f ms\n", frame, frames,
+    std::snprintf(line, sizeof line, "tallyd play: frame %u/%u, %zu passes, %.3f ms\n", frame, frames,
                   result.passes.size(), result.submitSeconds * 1e3);
     std::cerr << line;
   };

@@ -21,6 +21,10 @@
 # libglapi-mesa, xvfb, x11-xkb-utils, xkb-data and the libraries they need
 # that the machine lacks, unpacked into one tree and packed with tar and xz.
 #   LAYER_COST_PLAY=0 skips 1, LAYER_COST_ZINK=0 skips 2.
+#   LAYER_MODES (default "plain counting idle") may add: counting-timestamps
+#   and counting-untimed (TALLY_LAYER_TIMING=timestamps, none: what the
+#   layer's queries cost), and counting-before (the layer in
+#   LAYER_DIR_BEFORE, another build, beside this one in the same run).
 #   OUT=dir (default ./gpu-out): layer-cost.txt, layer-cost.json, layer-cost-logs.tar.gz
 set -uo pipefail
 cd "$(dirname "$0")/../.."
@@ -37,10 +41,15 @@ layer_env=(VK_ADD_LAYER_PATH="$layer_dir" VK_INSTANCE_LAYERS=VK_LAYER_TALLY_coun
            VK_LOADER_LAYERS_ENABLE=VK_LAYER_TALLY_counters)
 
 # mode_env MODE FRAMES SKIP LOG: the environment of one mode, as words.
+modes="${LAYER_MODES:-plain counting idle}"
 mode_env() {
+  local counting="TALLY_LAYER_OUTPUT=$4.json TALLY_LAYER_SKIP_FRAMES=$3 TALLY_LAYER_FRAMES=$2"
   case "$1" in
     plain) ;;
-    counting) echo "${layer_env[*]} TALLY_LAYER_OUTPUT=$4.json TALLY_LAYER_SKIP_FRAMES=$3 TALLY_LAYER_FRAMES=$2" ;;
+    counting) echo "${layer_env[*]} $counting" ;;
+    counting-timestamps) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=timestamps" ;;
+    counting-untimed) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=none" ;;
+    counting-before) echo "${layer_env[*]/#VK_ADD_LAYER_PATH=*/VK_ADD_LAYER_PATH=$LAYER_DIR_BEFORE} $counting" ;;
     idle) echo "${layer_env[*]}" ;;
   esac
 }
@@ -50,7 +59,7 @@ if [ "${LAYER_COST_PLAY:-1}" = 1 ]; then
   frames="${PLAY_FRAMES:-60}"
   for renderer in ${LAYER_RENDERERS:-forward deferred visbuffer}; do
     for rep in $(seq 1 "$repeats"); do
-      for mode in plain counting idle; do
+      for mode in $modes; do
         log="$logs/play-$renderer-$mode-$rep"
         # shellcheck disable=SC2046
         # tallyd play never presents: one submission is a frame.
@@ -94,7 +103,7 @@ if [ "${LAYER_COST_ZINK:-1}" = 1 ]; then
   seconds="${ZINK_SECONDS:-5}"
   for scene in ${ZINK_SCENES:-texture terrain}; do
     for rep in $(seq 1 "$repeats"); do
-      for mode in plain counting idle; do
+      for mode in $modes; do
         log="$logs/glmark2-$scene-$mode-$rep"
         # shellcheck disable=SC2046
         env "${zink_env[@]}" $(mode_env "$mode" 100000 30 "$log") "$x/usr/bin/glmark2" \
@@ -130,17 +139,18 @@ by = collections.defaultdict(list)
 for r in rows:
     if r["frame_ms"] is not None:
         by[(r["app"], r["mode"])].append(r["frame_ms"])
-print("| application | plain frame ms | under the layer, counting | x plain | under the layer, not counting | x plain |")
-print("|---|---|---|---|---|---|")
+modes = [m for m in dict.fromkeys(r["mode"] for r in rows) if m != "plain"]
+print("| application | plain frame ms | " + " | ".join("%s ms | x plain" % m for m in modes) + " |")
+print("|---|---|" + "---|---|" * len(modes))
 for app in dict.fromkeys(r["app"] for r in rows):
-    med = {m: statistics.median(by[(app, m)]) if by[(app, m)] else None for m in ("plain", "counting", "idle")}
+    med = {m: statistics.median(by[(app, m)]) if by[(app, m)] else None for m in ["plain"] + modes}
     def cell(m):
         return "n/a" if med[m] is None else "%.3f" % med[m]
     def ratio(m):
         return "n/a" if med[m] is None or not med["plain"] else "x%.3f" % (med[m] / med["plain"])
-    print(f"| {app} | {cell('plain')} | {cell('counting')} | {ratio('counting')} | {cell('idle')} | {ratio('idle')} |")
+    print(f"| {app} | {cell('plain')} | " + " | ".join(f"{cell(m)} | {ratio(m)}" for m in modes) + " |")
 failed = [r for r in rows if r["exit"] != 0 or r["frame_ms"] is None or
-          (r["mode"] == "counting" and not r.get("frames_counted_by_layer"))]
+          (r["mode"].startswith("counting") and not r.get("frames_counted_by_layer"))]
 for r in failed:
     print("failed:", json.dumps(r))
 EOF

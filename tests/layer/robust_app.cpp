@@ -22,6 +22,8 @@
 //       600 fills in one labelled scope ("many"), fill i writing buffer
 //       "out i" with 64 x (i % 5 + 1) invocations: 600 counter regions in one
 //       recording, more than the layer's first arena chunk holds.
+//   --mode oneshot: a command buffer allocated, recorded, submitted, waited
+//       for and freed every frame (a fill of 2560), as one-shot helpers do.
 //   --mode steady: three frames in flight, a fill of 256 a frame into the
 //       frame's slot, which the application waits for three frames later,
 //       never the frame before. Each frame also creates and destroys a small
@@ -194,6 +196,34 @@ int recordedAhead(const app::Instance& instance, bool once) {
   return ok ? 0 : 1;
 }
 
+int oneshot(const app::Instance& instance) {
+  app::Device device = app::createDevice(instance, 1);
+  constexpr uint32_t kInvocations = 2560;
+  app::Fill fill = app::createFill(device, 1);
+  app::Buffer out = app::createBuffer(device, kInvocations * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "out");
+  VkDescriptorSet set = app::fillSet(device, fill, out.buffer);
+  VkCommandPool pool = app::createPool(device);
+  VkFence fence = app::createFence(device);
+  bool ok = true;
+  for (uint32_t f = 0; f < frames; ++f) {
+    std::memset(out.mapped, 0, kInvocations * 4);
+    VkCommandBuffer cmd = app::allocate(device, pool);
+    begin(cmd, VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT);
+    app::recordFill(device, cmd, fill, set, kInvocations, "fill");
+    app::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+    app::submit(device.queues[0], cmd, fence);
+    app::wait(device, fence);
+    vkFreeCommandBuffers(device.device, pool, 1, &cmd);
+    ok = ok && app::filled(out.mapped, kInvocations, "oneshot");
+  }
+  vkDestroyFence(device.device, fence, nullptr);
+  vkDestroyCommandPool(device.device, pool, nullptr);
+  app::destroyBuffer(device, out);
+  app::destroyFill(device, fill);
+  vkDestroyDevice(device.device, nullptr);
+  return ok ? 0 : 1;
+}
+
 int many(const app::Instance& instance) {
   constexpr uint32_t kFills = 600;
   app::Device device = app::createDevice(instance, 1);
@@ -314,8 +344,8 @@ int main(int argc, char** argv) {
     else if (flag == "--frames") frames = uint32_t(std::strtoul(argv[i + 1], nullptr, 10));
   }
   if (mode != "threads" && mode != "devices" && mode != "reuse" && mode != "prerecorded" && mode != "steady" &&
-      mode != "many") {
-    std::fprintf(stderr, "robust_app: --mode threads|devices|reuse|prerecorded|steady|many [--frames N]\n");
+      mode != "many" && mode != "oneshot") {
+    std::fprintf(stderr, "robust_app: --mode threads|devices|reuse|prerecorded|steady|many|oneshot [--frames N]\n");
     return 2;
   }
   app::Instance instance = app::createInstance("robust_app", {});
@@ -324,6 +354,7 @@ int main(int argc, char** argv) {
                : mode == "reuse"       ? recordedAhead(instance, true)
                : mode == "prerecorded" ? recordedAhead(instance, false)
                : mode == "many"        ? many(instance)
+               : mode == "oneshot"     ? oneshot(instance)
                                        : steady(instance);
   vkDestroyInstance(instance.instance, nullptr);
   if (status == 0) std::printf("robust_app: %s, %u frames, results correct\n", mode.c_str(), frames);

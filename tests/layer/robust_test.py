@@ -3,7 +3,7 @@
 on lavapipe: robust_app.cpp and swapchain_app.cpp, whose counts are derived
 here from their dispatch sizes and extents alone.
 
-  robust_test.py --build BUILD_DIR --case threads|devices|resize|reuse|prerecorded|steady|window|many|timing
+  robust_test.py --build BUILD_DIR --case threads|devices|resize|reuse|prerecorded|steady|window|many|timing|oneshot
 
 - threads: two threads, each with its own command pool, record and submit at
   once (on two queues where the device has them; lavapipe has one, which
@@ -24,6 +24,9 @@ here from their dispatch sizes and extents alone.
   counter regions over more than one arena chunk, read back as merged
   ranges; every buffer's line has its own dispatch's count, in every frame
   (the readback zeroes every region it read).
+- oneshot: a command buffer allocated and freed every frame: each frame
+  counts its own fill, the layer never waits for a readback, and it uses
+  its query pools again instead of creating two per command buffer.
 - timing: TALLY_LAYER_TIMING=timestamps and none leave the counts as they
   are and drop the statistics (and the timestamps); a value it does not
   know turns counting off and says why.
@@ -231,6 +234,26 @@ def case_many(build, tmp):
     print("many: 600 regions in one recording, 3 frames, every line its dispatch's count; statistic %d" % total)
 
 
+def case_oneshot(build, tmp):
+    out = os.path.join(tmp, "oneshot.json")
+    run([app(build), "--mode", "oneshot", "--frames", "40"], env=layer_env(build, out, frames=30, skip=5,
+                                                                          frame_submits=1))
+    counted = load(out)
+    if [f["index"] for f in counted["frames"]] != list(range(5, 35)):
+        fail("frames %s, expected 5..34" % [f["index"] for f in counted["frames"]])
+    for f in counted["frames"]:
+        check_fill(f["passes"][0], 2560, "out", "frame %d" % f["index"])
+    layer = counted["layer"]
+    # 40 command buffers, two pools each (timestamps, statistics) before;
+    # now a freed one's pools wait for its readback, then serve again: a few
+    # sets, however many frames.
+    if layer["readback_waits"] != 0 or not 2 <= layer["query_pools"] <= 8:
+        fail("oneshot: %d readback waits (expected 0), %d query pools created for 40 command buffers "
+             "(expected 2 to 8)" % (layer["readback_waits"], layer["query_pools"]))
+    print("oneshot: 40 command buffers freed after their fences; 30 frames counted; %d query pools, no wait" %
+          layer["query_pools"])
+
+
 def case_timing(build, tmp):
     timestamps = many(build, tmp, "timestamps")
     if timestamps["compute_invocations_statistic"] >= 0 or timestamps["gpu_ms"] < 0:
@@ -278,7 +301,7 @@ def case_window(build, tmp):
 def main():
     cases = {"threads": case_threads, "devices": case_devices, "resize": case_resize, "reuse": case_reuse,
              "prerecorded": case_prerecorded, "steady": case_steady, "window": case_window, "many": case_many,
-             "timing": case_timing}
+             "timing": case_timing, "oneshot": case_oneshot}
     parser = argparse.ArgumentParser()
     parser.add_argument("--build", required=True)
     parser.add_argument("--case", required=True, choices=sorted(cases))
