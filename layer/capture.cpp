@@ -143,7 +143,9 @@ Config Config::fromEnvironment() {
       parseCount("TALLY_LAYER_FRAME_SUBMITS", 0, 100000, c.frameSubmits, error);
   if (const char* mode = std::getenv("TALLY_LAYER_COUNTING"); mode != nullptr && *mode != '\0' && error.empty()) {
     auto parsed = spirv::parseMode(mode);
-    if (!parsed) {
+    if (std::string_view(mode) == "off") {
+      c.counts = false;
+    } else if (!parsed) {
       error = std::string("TALLY_LAYER_COUNTING: ") + parsed.error();
     } else if (parsed->kind == spirv::CountMode::Sampled) {
       error = "TALLY_LAYER_COUNTING: sampled modes are not offered by the layer (exact or accumulate)";

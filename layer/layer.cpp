@@ -1445,9 +1445,14 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
   CommandBufferState* cb = cbState(*dev, cmd);
   // The instrumented twin only where the command buffer counts (twins.cpp).
   std::shared_ptr<PipelineInfo> info;
+  // With counting off only pipelines instrumented in place (libraries) count:
+  // they have no uninstrumented twin to bind.
   if (cb != nullptr && cb->counted) {
     auto it = dev->pipelines.find(u64(pipeline));
-    if (it != dev->pipelines.end() && it->second->instrumented != VK_NULL_HANDLE) info = it->second;
+    if (it != dev->pipelines.end() && it->second->instrumented != VK_NULL_HANDLE &&
+        (dev->config.counts || it->second->inPlace)) {
+      info = it->second;
+    }
   }
   dev->d.CmdBindPipeline(cmd, point, info ? info->instrumented : pipeline);
   if (cb == nullptr || !cb->counted) return;

@@ -31,7 +31,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
       {"layer",
        {{"name", "VK_LAYER_TALLY_counters"},
         {"version", "0.1.0"},
-        {"counting", spirv::toString(dev.config.mode)},
+        {"counting", dev.config.counts ? spirv::toString(dev.config.mode) : "off"},
         {"timing", dev.config.statistics ? "all" : dev.config.timestamps ? "timestamps" : "none"},
         {"descriptor_set", dev.counterSet},
         {"frame_delimiter",

@@ -43,6 +43,10 @@ struct Config {
   // TALLY_LAYER_TIMING: the queries around each pass. "all": timestamps and
   // pipeline statistics; "timestamps"; "none": counts only.
   bool timestamps = true, statistics = true;
+  // TALLY_LAYER_COUNTING=off: passes timed (as TALLY_LAYER_TIMING says), the
+  // application's own pipelines bound, nothing counted: what the counters
+  // cost, per pass, beside a counting run.
+  bool counts = true;
   std::string error;           // a variable that did not parse: the layer counts nothing and says so
   static Config fromEnvironment();
 };

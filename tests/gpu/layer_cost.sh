@@ -23,7 +23,8 @@
 #   LAYER_COST_PLAY=0 skips 1, LAYER_COST_ZINK=0 skips 2.
 #   LAYER_MODES (default "plain counting idle") may add: counting-timestamps
 #   and counting-untimed (TALLY_LAYER_TIMING=timestamps, none: what the
-#   layer's queries cost), and counting-before (the layer in
+#   layer's queries cost), counting-off (passes timed, nothing counted: the
+#   second table compares each pass's GPU time with counting's), and counting-before (the layer in
 #   LAYER_DIR_BEFORE, another build, beside this one in the same run).
 #   OUT=dir (default ./gpu-out): layer-cost.txt, layer-cost.json, layer-cost-logs.tar.gz
 set -uo pipefail
@@ -49,6 +50,7 @@ mode_env() {
     counting) echo "${layer_env[*]} $counting" ;;
     counting-timestamps) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=timestamps" ;;
     counting-untimed) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=none" ;;
+    counting-off) echo "${layer_env[*]} $counting TALLY_LAYER_COUNTING=off" ;;
     counting-before) echo "${layer_env[*]/#VK_ADD_LAYER_PATH=*/VK_ADD_LAYER_PATH=$LAYER_DIR_BEFORE} $counting" ;;
     idle) echo "${layer_env[*]}" ;;
   esac
@@ -72,13 +74,20 @@ path, renderer, mode, rep, rc = sys.argv[1:]
 ms = [float(m.group(1)) for m in re.finditer(r"tallyd play: frame \d+/\d+, \d+ passes, ([0-9.]+) ms", open(path).read())]
 kept = ms[10:]
 counted = None
+passes = {}
 try:
-    counted = len(json.load(open(path[:-len(".err")] + ".json"))["frames"])
+    frames = json.load(open(path[:-len(".err")] + ".json"))["frames"]
+    counted = len(frames)
+    for f in frames:
+        for p in f["passes"]:
+            if p["gpu_ms"] >= 0:
+                passes.setdefault(p["name"], []).append(p["gpu_ms"])
 except (OSError, ValueError, KeyError):
     pass
 print(json.dumps({"app": "tallyd play " + renderer, "mode": mode, "repeat": int(rep), "exit": int(rc),
                   "frames": len(kept), "frames_counted_by_layer": counted,
-                  "frame_ms": statistics.median(kept) if kept else None}))
+                  "frame_ms": statistics.median(kept) if kept else None,
+                  "pass_gpu_ms": {name: statistics.median(ms) for name, ms in passes.items()}}))
 EOF
       done
     done
@@ -149,6 +158,21 @@ for app in dict.fromkeys(r["app"] for r in rows):
     def ratio(m):
         return "n/a" if med[m] is None or not med["plain"] else "x%.3f" % (med[m] / med["plain"])
     print(f"| {app} | {cell('plain')} | " + " | ".join(f"{cell(m)} | {ratio(m)}" for m in modes) + " |")
+# Each pass's GPU time (the layer's timestamps) in the modes that time passes.
+timed = [m for m in modes if any(r.get("pass_gpu_ms") for r in rows if r["mode"] == m)]
+if timed:
+    print()
+    print("| application | pass | " + " | ".join("%s GPU ms" % m for m in timed) + " |")
+    print("|---|---|" + "---|" * len(timed))
+    for app in dict.fromkeys(r["app"] for r in rows):
+        names = dict.fromkeys(n for r in rows if r["app"] == app for n in r.get("pass_gpu_ms", {}))
+        for name in names:
+            cells = []
+            for m in timed:
+                ms = [r["pass_gpu_ms"][name] for r in rows
+                      if r["app"] == app and r["mode"] == m and name in r.get("pass_gpu_ms", {})]
+                cells.append("%.3f" % statistics.median(ms) if ms else "n/a")
+            print(f"| {app} | {name} | " + " | ".join(cells) + " |")
 failed = [r for r in rows if r["exit"] != 0 or r["frame_ms"] is None or
           (r["mode"].startswith("counting") and not r.get("frames_counted_by_layer"))]
 for r in failed:

@@ -29,7 +29,8 @@ here from their dispatch sizes and extents alone.
   its query pools again instead of creating two per command buffer.
 - timing: TALLY_LAYER_TIMING=timestamps and none leave the counts as they
   are and drop the statistics (and the timestamps); a value it does not
-  know turns counting off and says why.
+  know turns counting off and says why. TALLY_LAYER_COUNTING=off times the
+  same passes and counts nothing.
 - window: before skip_frames ends, and without an output, the layer adds
   nothing to the application's command buffers and queues.
 """
@@ -263,6 +264,21 @@ def case_timing(build, tmp):
     if none["compute_invocations_statistic"] >= 0 or none["gpu_ms"] >= 0:
         fail("timing none: statistic %s, gpu_ms %s; expected neither" %
              (none["compute_invocations_statistic"], none["gpu_ms"]))
+    # Counting off: the same passes, timed, with the application's own
+    # pipeline (no line, no invocation counted), and the statistic as before.
+    out = os.path.join(tmp, "off.json")
+    env = layer_env(build, out, frames=3, skip=1, frame_submits=1)
+    env["TALLY_LAYER_COUNTING"] = "off"
+    run([app(build), "--mode", "many", "--frames", "5"], env=env)
+    counted = load(out)
+    total = 64 * 3 * 600
+    for f in counted["frames"]:
+        p = f["passes"][0]
+        if p["name"] != "many" or p["resources"] or p["compute_invocations"] != 0 or p["gpu_ms"] < 0 or \
+                statistic(p, "compute_invocations_statistic", "off") != total:
+            fail("counting off, frame %d: %s" % (f["index"], {k: v for k, v in p.items() if k != "resources"}))
+    if counted["layer"]["counting"] != "off" or len(counted["frames"]) != 3:
+        fail("counting off: layer.counting %r, %d frames" % (counted["layer"]["counting"], len(counted["frames"])))
     out = os.path.join(tmp, "bad.json")
     env = layer_env(build, out, frames=1, skip=0, frame_submits=1)
     env["TALLY_LAYER_TIMING"] = "sometimes"
