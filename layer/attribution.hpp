@@ -103,9 +103,4 @@ uint32_t viewCount(uint32_t viewMask);
 // The dynamic-state commands the layer records, by name ("vkCmdSetVertexInputEXT").
 PFN_vkVoidFunction interceptedDynamicState(std::string_view name);
 
-// ---- layer.cpp
-
-// The layer's state of the device a dispatchable handle belongs to.
-DeviceState* deviceFor(const void* handle);
-
 }  // namespace tally::layer

@@ -21,7 +21,7 @@ VKAPI_ATTR void VKAPI_CALL CmdSetVertexInputEXT(VkCommandBuffer cmd, uint32_t bi
                                                 const VkVertexInputBindingDescription2EXT* bindings,
                                                 uint32_t attributeCount,
                                                 const VkVertexInputAttributeDescription2EXT* attributes) {
-  DeviceState* dev = deviceFor(cmd);
+  DeviceState* dev = deviceOf(cmd);
   dev->d.CmdSetVertexInputEXT(cmd, bindingCount, bindings, attributeCount, attributes);
   std::lock_guard lock(dev->mutex);
   if (CommandBufferState* cb = recording(*dev, cmd)) {
@@ -34,7 +34,7 @@ VKAPI_ATTR void VKAPI_CALL CmdSetVertexInputEXT(VkCommandBuffer cmd, uint32_t bi
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdSetColorWriteEnableEXT(VkCommandBuffer cmd, uint32_t count, const VkBool32* enables) {
-  DeviceState* dev = deviceFor(cmd);
+  DeviceState* dev = deviceOf(cmd);
   dev->d.CmdSetColorWriteEnableEXT(cmd, count, enables);
   std::lock_guard lock(dev->mutex);
   if (CommandBufferState* cb = recording(*dev, cmd)) cb->dynamic.writeEnables.assign(enables, enables + count);
@@ -42,7 +42,7 @@ VKAPI_ATTR void VKAPI_CALL CmdSetColorWriteEnableEXT(VkCommandBuffer cmd, uint32
 
 VKAPI_ATTR void VKAPI_CALL CmdSetColorWriteMaskEXT(VkCommandBuffer cmd, uint32_t first, uint32_t count,
                                                    const VkColorComponentFlags* masks) {
-  DeviceState* dev = deviceFor(cmd);
+  DeviceState* dev = deviceOf(cmd);
   dev->d.CmdSetColorWriteMaskEXT(cmd, first, count, masks);
   std::lock_guard lock(dev->mutex);
   if (CommandBufferState* cb = recording(*dev, cmd)) {
@@ -54,7 +54,7 @@ VKAPI_ATTR void VKAPI_CALL CmdSetColorWriteMaskEXT(VkCommandBuffer cmd, uint32_t
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdSetRasterizerDiscardEnable(VkCommandBuffer cmd, VkBool32 enable) {
-  DeviceState* dev = deviceFor(cmd);
+  DeviceState* dev = deviceOf(cmd);
   dev->d.CmdSetRasterizerDiscardEnable(cmd, enable);
   std::lock_guard lock(dev->mutex);
   if (CommandBufferState* cb = recording(*dev, cmd)) cb->dynamic.rasterizerDiscard = enable == VK_TRUE;

@@ -1,6 +1,6 @@
 // The layer's output: what it counted, frame by frame, with the device, the
 // application, the resources it saw and its notes (docs/layer.md, "Running an
-// application under the layer by hand"). capture.cpp writes it.
+// application under the layer by hand"). readback.cpp writes it.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>

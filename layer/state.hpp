@@ -418,15 +418,30 @@ struct DeviceState {
 DeviceState* deviceOf(const void* handle);
 CommandBufferState* commandBufferOf(DeviceState& dev, VkCommandBuffer cb);
 
-// capture.cpp
+// counters.cpp: the counter buffer, its regions, and the counter set bound at each draw.
 void setupCounting(DeviceState& dev);
 void destroyCounting(DeviceState& dev);
 // Finds (or allocates) the region of this draw and binds the counter set at it.
 void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch);
+void releaseRegions(DeviceState& dev, CommandBufferState& cb);
+
+// readback.cpp: readbacks after submissions, frames, the output file.
 void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted);
+void afterIdle(DeviceState& dev);  // the device or a queue is idle: reads what arrived
 void endFrame(DeviceState& dev);
 void finish(DeviceState& dev, bool complete);  // waits for every harvest and writes the output
-void releaseRegions(DeviceState& dev, CommandBufferState& cb);
+// Hands the command buffer's query pools back for later recordings (after the readbacks that copy them).
+void retireQueryPools(DeviceState& dev, CommandBufferState& cb);
+VkQueryPool takeQueryPool(DeviceState& dev, bool statistics);
+void waitForIndirectReadbacks(DeviceState& dev, const CommandBufferState& cb);
+
+// harvest.cpp: a finished readback's counters and queries into its frames' passes.
+void processHarvest(DeviceState& dev, Harvest& h);
+
+// output.cpp
+nlohmann::json outputJson(DeviceState& dev, bool complete);
+
+void log(const std::string& line);  // layer.cpp: a line on stderr
 
 // indirect.cpp: index reads of indexed indirect draws, from their parameters read back.
 void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buffer, VkDeviceSize offset,
@@ -437,12 +452,6 @@ void noteIndexedIndirect(DeviceState& dev, CommandBufferState& cb, VkBuffer buff
 void recordIndirectCopies(DeviceState& dev, CommandBufferState& cb, bool end);
 void destroyIndirect(DeviceState& dev, CommandBufferState& cb);
 void addIndirectReads(Harvest::Part& part, const uint8_t* base);  // into the parts' passes' indexReads
-// Hands the command buffer's query pools back for later recordings (after the readbacks that copy them).
-void retireQueryPools(DeviceState& dev, CommandBufferState& cb);
-void afterIdle(DeviceState& dev);  // the device or a queue is idle: reads what arrived
-VkQueryPool takeQueryPool(DeviceState& dev, bool statistics);
-void waitForIndirectReadbacks(DeviceState& dev, const CommandBufferState& cb);
-nlohmann::json outputJson(DeviceState& dev, bool complete);
 
 // window.cpp: which command buffers count, and the frames of the window.
 constexpr uint32_t kDrainOnly = UINT32_MAX;  // Region::pass of a region read only to zero it
