@@ -105,6 +105,69 @@ VKAPI_ATTR void VKAPI_CALL DestroyInstance(VkInstance instance, const VkAllocati
 
 // ---------------------------------------------------------------- device
 
+// The next layer's device functions, and the names a 1.2 device offers
+// some of them under.
+void loadDispatch(DeviceState* dev, PFN_vkGetInstanceProcAddr gipa, PFN_vkGetDeviceProcAddr gdpa) {
+  const VkDevice device = dev->device;
+  const InstanceState* inst = dev->instance;
+#define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(device, "vk" #name));
+  TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
+  TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(TALLY_LAYER_LOAD)
+#undef TALLY_LAYER_LOAD
+  // Dynamic rendering and submit2 under their extension names on 1.2 devices.
+  if (dev->d.CmdBeginRendering == nullptr) {
+    dev->d.CmdBeginRendering = reinterpret_cast<PFN_vkCmdBeginRendering>(gdpa(device, "vkCmdBeginRenderingKHR"));
+    dev->d.CmdEndRendering = reinterpret_cast<PFN_vkCmdEndRendering>(gdpa(device, "vkCmdEndRenderingKHR"));
+  }
+  if (dev->d.CmdBindVertexBuffers2 == nullptr) {
+    dev->d.CmdBindVertexBuffers2 =
+        reinterpret_cast<PFN_vkCmdBindVertexBuffers2>(gdpa(device, "vkCmdBindVertexBuffers2EXT"));
+  }
+  if (dev->d.CmdSetRasterizerDiscardEnable == nullptr) {
+    dev->d.CmdSetRasterizerDiscardEnable = reinterpret_cast<PFN_vkCmdSetRasterizerDiscardEnable>(
+        gdpa(device, "vkCmdSetRasterizerDiscardEnableEXT"));
+  }
+  if (dev->d.QueueSubmit2 == nullptr) {
+    dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(device, "vkQueueSubmit2KHR"));
+  }
+  // VK_EXT_debug_utils is an instance extension: the loader fills a device's
+  // entries for its commands through vkGetInstanceProcAddr, and the layer below
+  // may answer only there (validation does when the application did not enable
+  // the extension, and reports each call). The layer calls what the loader would.
+#define TALLY_LAYER_FROM_INSTANCE(name)                                                              \
+  if (dev->d.name == nullptr) {                                                                      \
+    dev->d.name = reinterpret_cast<PFN_vk##name>(gipa(inst->instance, "vk" #name));                  \
+  }
+  TALLY_LAYER_FROM_INSTANCE(SetDebugUtilsObjectNameEXT)
+  TALLY_LAYER_FROM_INSTANCE(CmdBeginDebugUtilsLabelEXT)
+  TALLY_LAYER_FROM_INSTANCE(CmdEndDebugUtilsLabelEXT)
+#undef TALLY_LAYER_FROM_INSTANCE
+}
+
+// What the layer needs to know of the device: its properties, memory,
+// queue families, the features it enabled and its driver.
+void describeDevice(DeviceState* dev, const VkDeviceCreateInfo& info, const VkPhysicalDeviceFeatures& enabled) {
+  const InstanceState* inst = dev->instance;
+  VkPhysicalDevice physical = dev->physical;
+  inst->getProperties(physical, &dev->properties);
+  dev->instrumentOptions.target = validationTarget(info, inst->apiVersion, dev->properties.apiVersion);
+  inst->getMemoryProperties(physical, &dev->memory);
+  uint32_t familyCount = 0;
+  inst->getQueueFamilies(physical, &familyCount, nullptr);
+  dev->families.resize(familyCount);
+  inst->getQueueFamilies(physical, &familyCount, dev->families.data());
+  dev->fragmentStores = enabled.fragmentStoresAndAtomics;
+  dev->vertexStores = enabled.vertexPipelineStoresAndAtomics;
+  dev->statistics = enabled.pipelineStatisticsQuery && dev->config.statistics;
+  if (inst->getProperties2 != nullptr) {
+    VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+    VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &driver};
+    inst->getProperties2(physical, &props2);
+    dev->driverInfo = std::string(driver.driverName) + " " + driver.driverInfo;
+    dev->llvmpipe = driver.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+  }
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkDeviceCreateInfo* info,
                                             const VkAllocationCallbacks* alloc, VkDevice* device) {
   InstanceState* inst = instanceOf(physical);
@@ -161,55 +224,8 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   dev->instance = inst;
   dev->setLoaderData = setLoaderData;
   dev->config = std::move(config);
-#define TALLY_LAYER_LOAD(name) dev->d.name = reinterpret_cast<PFN_vk##name>(gdpa(*device, "vk" #name));
-  TALLY_LAYER_DEVICE_FUNCTIONS(TALLY_LAYER_LOAD)
-  TALLY_LAYER_DYNAMIC_STATE_FUNCTIONS(TALLY_LAYER_LOAD)
-#undef TALLY_LAYER_LOAD
-  // Dynamic rendering and submit2 under their extension names on 1.2 devices.
-  if (dev->d.CmdBeginRendering == nullptr) {
-    dev->d.CmdBeginRendering = reinterpret_cast<PFN_vkCmdBeginRendering>(gdpa(*device, "vkCmdBeginRenderingKHR"));
-    dev->d.CmdEndRendering = reinterpret_cast<PFN_vkCmdEndRendering>(gdpa(*device, "vkCmdEndRenderingKHR"));
-  }
-  if (dev->d.CmdBindVertexBuffers2 == nullptr) {
-    dev->d.CmdBindVertexBuffers2 =
-        reinterpret_cast<PFN_vkCmdBindVertexBuffers2>(gdpa(*device, "vkCmdBindVertexBuffers2EXT"));
-  }
-  if (dev->d.CmdSetRasterizerDiscardEnable == nullptr) {
-    dev->d.CmdSetRasterizerDiscardEnable = reinterpret_cast<PFN_vkCmdSetRasterizerDiscardEnable>(
-        gdpa(*device, "vkCmdSetRasterizerDiscardEnableEXT"));
-  }
-  if (dev->d.QueueSubmit2 == nullptr) {
-    dev->d.QueueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(gdpa(*device, "vkQueueSubmit2KHR"));
-  }
-  // VK_EXT_debug_utils is an instance extension: the loader fills a device's
-  // entries for its commands through vkGetInstanceProcAddr, and the layer below
-  // may answer only there (validation does when the application did not enable
-  // the extension, and reports each call). The layer calls what the loader would.
-#define TALLY_LAYER_FROM_INSTANCE(name)                                                              \
-  if (dev->d.name == nullptr) {                                                                      \
-    dev->d.name = reinterpret_cast<PFN_vk##name>(gipa(inst->instance, "vk" #name));                  \
-  }
-  TALLY_LAYER_FROM_INSTANCE(SetDebugUtilsObjectNameEXT)
-  TALLY_LAYER_FROM_INSTANCE(CmdBeginDebugUtilsLabelEXT)
-  TALLY_LAYER_FROM_INSTANCE(CmdEndDebugUtilsLabelEXT)
-#undef TALLY_LAYER_FROM_INSTANCE
-  inst->getProperties(physical, &dev->properties);
-  dev->instrumentOptions.target = validationTarget(*info, inst->apiVersion, dev->properties.apiVersion);
-  inst->getMemoryProperties(physical, &dev->memory);
-  uint32_t familyCount = 0;
-  inst->getQueueFamilies(physical, &familyCount, nullptr);
-  dev->families.resize(familyCount);
-  inst->getQueueFamilies(physical, &familyCount, dev->families.data());
-  dev->fragmentStores = enabled.fragmentStoresAndAtomics;
-  dev->vertexStores = enabled.vertexPipelineStoresAndAtomics;
-  dev->statistics = enabled.pipelineStatisticsQuery && dev->config.statistics;
-  if (inst->getProperties2 != nullptr) {
-    VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-    VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &driver};
-    inst->getProperties2(physical, &props2);
-    dev->driverInfo = std::string(driver.driverName) + " " + driver.driverInfo;
-    dev->llvmpipe = driver.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
-  }
+  loadDispatch(dev.get(), gipa, gdpa);
+  describeDevice(dev.get(), *info, enabled);
   // A queue the application asked for, for the layer's own set-up work.
   VkQueue setupQueue = VK_NULL_HANDLE;
   uint32_t setupFamily = 0;

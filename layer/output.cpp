@@ -10,6 +10,52 @@
 
 namespace tally::layer {
 
+namespace {
+
+// The window's frames that are read whole, each pass with its lines; `used`
+// gets every resource a line names.
+nlohmann::json framesJson(const DeviceState& dev, std::map<std::string, const Resource*>& used) {
+  using nlohmann::json;
+  json frames = json::array();
+  for (const auto& [index, frame] : dev.frames) {
+    if (!frame.closed || frame.pendingHarvests > 0 || frame.leftOut) continue;
+    // Later subpasses join their render pass instance's pass; passes that share a label stay apart, numbered.
+    const std::vector<PassRecord> merged = distinctPasses(frame.passes);
+    json passes = json::array();
+    double frameMs = 0;
+    for (const auto& p : merged) {
+      json resources = json::array();
+      for (const auto& [key, line] : p.lines) {
+        const auto& [name, write, source] = key;
+        resources.push_back({{"name", name},
+                             {"kind", line.kind},
+                             {"format", line.format},
+                             {"access", write ? "write" : "read"},
+                             {"count", line.count},
+                             {"bytes", line.bytes},
+                             {"source", source}});
+        used[name] = nullptr;
+      }
+      frameMs += p.timed ? p.gpuMs : 0;
+      passes.push_back({{"name", p.name},
+                        {"gpu_ms", p.timed ? p.gpuMs : -1.0},
+                        {"draws", p.draws},
+                        {"dispatches", p.dispatches},
+                        {"fragment_invocations", p.fragmentInvocations},
+                        {"fragment_invocations_statistic", p.fragmentStatistic},
+                        {"vertex_invocations", p.vertexInvocations},
+                        {"vertex_invocations_statistic", p.vertexStatistic},
+                        {"compute_invocations", p.computeInvocations},
+                        {"compute_invocations_statistic", p.computeStatistic},
+                        {"resources", std::move(resources)}});
+    }
+    frames.push_back({{"index", index}, {"submissions", frame.submissions}, {"frame_ms", frameMs}, {"passes", passes}});
+  }
+  return frames;
+}
+
+}  // namespace
+
 nlohmann::json outputJson(DeviceState& dev, bool complete) {
   using nlohmann::json;
   char vendor[16];
@@ -68,41 +114,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
   // The extent: the swapchain's, else the largest colour attachment seen.
   VkExtent2D extent = dev.extent;
   std::map<std::string, const Resource*> used;
-  json frames = json::array();
-  for (const auto& [index, frame] : dev.frames) {
-    if (!frame.closed || frame.pendingHarvests > 0 || frame.leftOut) continue;
-    // Later subpasses join their render pass instance's pass; passes that share a label stay apart, numbered.
-    const std::vector<PassRecord> merged = distinctPasses(frame.passes);
-    json passes = json::array();
-    double frameMs = 0;
-    for (const auto& p : merged) {
-      json resources = json::array();
-      for (const auto& [key, line] : p.lines) {
-        const auto& [name, write, source] = key;
-        resources.push_back({{"name", name},
-                             {"kind", line.kind},
-                             {"format", line.format},
-                             {"access", write ? "write" : "read"},
-                             {"count", line.count},
-                             {"bytes", line.bytes},
-                             {"source", source}});
-        used[name] = nullptr;
-      }
-      frameMs += p.timed ? p.gpuMs : 0;
-      passes.push_back({{"name", p.name},
-                        {"gpu_ms", p.timed ? p.gpuMs : -1.0},
-                        {"draws", p.draws},
-                        {"dispatches", p.dispatches},
-                        {"fragment_invocations", p.fragmentInvocations},
-                        {"fragment_invocations_statistic", p.fragmentStatistic},
-                        {"vertex_invocations", p.vertexInvocations},
-                        {"vertex_invocations_statistic", p.vertexStatistic},
-                        {"compute_invocations", p.computeInvocations},
-                        {"compute_invocations_statistic", p.computeStatistic},
-                        {"resources", std::move(resources)}});
-    }
-    frames.push_back({{"index", index}, {"submissions", frame.submissions}, {"frame_ms", frameMs}, {"passes", passes}});
-  }
+  json frames = framesJson(dev, used);
   json resources = json::array();
   std::set<std::string> listed;
   for (const auto& [handle, r] : dev.resources) {
