@@ -121,8 +121,8 @@ void setupCounting(DeviceState& dev) {
   o.mode = dev.config.mode;
   o.set = dev.counterSet;
   o.binding = 0;
-  // 32-bit atomics in pairs: no 64-bit features asked of the application's device.
-  o.width = spirv::CounterWidth::Uint32Pair;
+  // 64-bit atomics where the layer could enable them (CreateDevice), else 32-bit ones in pairs.
+  o.width = dev.int64Atomics ? spirv::CounterWidth::Int64 : spirv::CounterWidth::Uint32Pair;
   // The application's shaders keep their early depth and stencil tests where that is safe (docs/layer.md).
   o.earlyFragmentTests = true;
   if (dev.instance->getProperties2 != nullptr) {

@@ -82,6 +82,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateInstance(const VkInstanceCreateInfo* info, 
   TALLY_LOAD(getProperties, "vkGetPhysicalDeviceProperties");
   TALLY_LOAD(getProperties2, "vkGetPhysicalDeviceProperties2");
   TALLY_LOAD(getFeatures, "vkGetPhysicalDeviceFeatures");
+  TALLY_LOAD(getFeatures2, "vkGetPhysicalDeviceFeatures2");
   TALLY_LOAD(getMemoryProperties, "vkGetPhysicalDeviceMemoryProperties");
   TALLY_LOAD(getQueueFamilies, "vkGetPhysicalDeviceQueueFamilyProperties");
 #undef TALLY_LOAD
@@ -168,6 +169,47 @@ void describeDevice(DeviceState* dev, const VkDeviceCreateInfo& info, const VkPh
   }
 }
 
+// 64-bit counters where the device has 64-bit buffer atomics (Vulkan 1.2):
+// one atomic add per count, as the built-in renderers do, instead of a pair
+// of 32-bit adds whose carry needs the first add's result (on the H200 the
+// full-screen passes' counters cost about twice as much so). Enabled in the
+// application's own feature structure where it chains one, else in the
+// layer's, chained first; the application's is restored after the call.
+struct Int64Patch {
+  VkPhysicalDeviceShaderAtomicInt64Features own = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
+  VkBool32* field = nullptr;  // the application's shaderBufferInt64Atomics
+  VkBool32 saved = VK_FALSE;
+};
+
+bool int64AtomicsSupported(const InstanceState& inst, VkPhysicalDevice physical) {
+  if (inst.getFeatures2 == nullptr || inst.apiVersion < VK_API_VERSION_1_2) return false;
+  VkPhysicalDeviceProperties properties{};
+  inst.getProperties(physical, &properties);
+  if (properties.apiVersion < VK_API_VERSION_1_2) return false;
+  VkPhysicalDeviceShaderAtomicInt64Features atomics = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
+  VkPhysicalDeviceFeatures2 features = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &atomics};
+  inst.getFeatures2(physical, &features);
+  return features.features.shaderInt64 && atomics.shaderBufferInt64Atomics;
+}
+
+void enableInt64Atomics(VkDeviceCreateInfo& patched, Int64Patch& patch) {
+  for (auto* p = static_cast<VkBaseOutStructure*>(const_cast<void*>(patched.pNext)); p != nullptr; p = p->pNext) {
+    if (p->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES) {
+      patch.field = &reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(p)->shaderBufferInt64Atomics;
+    } else if (p->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES) {
+      patch.field = &reinterpret_cast<VkPhysicalDeviceShaderAtomicInt64Features*>(p)->shaderBufferInt64Atomics;
+    }
+  }
+  if (patch.field != nullptr) {
+    patch.saved = *patch.field;
+    *patch.field = VK_TRUE;
+    return;
+  }
+  patch.own.shaderBufferInt64Atomics = VK_TRUE;
+  patch.own.pNext = const_cast<void*>(patched.pNext);
+  patched.pNext = &patch.own;
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkDeviceCreateInfo* info,
                                             const VkAllocationCallbacks* alloc, VkDevice* device) {
   InstanceState* inst = instanceOf(physical);
@@ -213,9 +255,16 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   features->fragmentStoresAndAtomics |= supported.fragmentStoresAndAtomics;
   features->vertexPipelineStoresAndAtomics |= supported.vertexPipelineStoresAndAtomics;
   features->pipelineStatisticsQuery |= supported.pipelineStatisticsQuery;
+  Int64Patch int64;
+  const bool int64Atomics = !config.output.empty() && config.error.empty() && int64AtomicsSupported(*inst, physical);
+  if (int64Atomics) {
+    features->shaderInt64 = VK_TRUE;
+    enableInt64Atomics(patched, int64);
+  }
   const VkPhysicalDeviceFeatures enabled = *features;
   VkResult result = create(physical, &patched, alloc, device);
   if (features != &own) *features = saved;
+  if (int64.field != nullptr) *int64.field = int64.saved;
   if (result != VK_SUCCESS) return result;
 
   auto dev = std::make_unique<DeviceState>();
@@ -226,6 +275,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   dev->config = std::move(config);
   loadDispatch(dev.get(), gipa, gdpa);
   describeDevice(dev.get(), *info, enabled);
+  dev->int64Atomics = int64Atomics;
   // A queue the application asked for, for the layer's own set-up work.
   VkQueue setupQueue = VK_NULL_HANDLE;
   uint32_t setupFamily = 0;

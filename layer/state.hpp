@@ -58,6 +58,7 @@ struct InstanceState {
   PFN_vkGetPhysicalDeviceProperties getProperties = nullptr;
   PFN_vkGetPhysicalDeviceProperties2 getProperties2 = nullptr;
   PFN_vkGetPhysicalDeviceFeatures getFeatures = nullptr;
+  PFN_vkGetPhysicalDeviceFeatures2 getFeatures2 = nullptr;
   PFN_vkGetPhysicalDeviceMemoryProperties getMemoryProperties = nullptr;
   PFN_vkGetPhysicalDeviceQueueFamilyProperties getQueueFamilies = nullptr;
   std::string applicationName, engineName;
@@ -339,6 +340,7 @@ struct DeviceState {
   VkPhysicalDeviceMemoryProperties memory{};
   std::vector<VkQueueFamilyProperties> families;
   bool fragmentStores = false, vertexStores = false, statistics = false;
+  bool int64Atomics = false;  // shaderInt64 and shaderBufferInt64Atomics enabled: 64-bit counters
   std::string driverInfo;
   bool llvmpipe = false;  // Mesa's lavapipe (see instrumentStages)
   Config config;

@@ -104,6 +104,11 @@ def compare(args, renderer, tmp, builtin_run):
     short = sorted(p for p in set(passes_builtin) | set(passes_layer)
                    if counted_equal.get(p, 0) < args.min_lines_per_pass)
     incomplete = []
+    # 64-bit counters where the device has 64-bit buffer atomics, as the built-in renderers use them.
+    bits = 64 if args.int64_atomics else 32
+    if layer["layer"].get("counter_bits") != bits:
+        incomplete.append("the layer counted with %s-bit counters, expected %d (the device's int64Atomics: %s)" %
+                          (layer["layer"].get("counter_bits"), bits, args.int64_atomics))
     if layer.get("complete") is not True:
         incomplete.append("the layer's output says complete: %r" % layer.get("complete"))
     if len(layer["frames"]) != args.layer_frames:
@@ -172,6 +177,7 @@ def main():
             + (["--device", args.device] if args.device else []))
         with open(result_path) as f:
             builtin = json.load(f)
+        args.int64_atomics = bool(builtin["device"]["features"]["int64Atomics"])
         for r in builtin["runs"]:
             r["samples"] = r["samples"][:1]  # camera 0 of the auto set
             entry = compare(args, r["renderer"], tmp, r)

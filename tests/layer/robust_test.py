@@ -228,6 +228,10 @@ def many(build, tmp, timing):
 
 def case_many(build, tmp):
     p = many(build, tmp, "all")
+    # A Vulkan 1.1 application: the layer enables no 64-bit atomics and counts in pairs of 32-bit words.
+    bits = load(os.path.join(tmp, "many-all.json"))["layer"]["counter_bits"]
+    if bits != 32:
+        fail("many: a Vulkan 1.1 application counted with %d-bit counters, expected 32" % bits)
     total = 64 * 3 * 600
     if statistic(p, "compute_invocations_statistic", "many") != total or p["gpu_ms"] < 0:
         fail("many: statistic %s, gpu_ms %s; expected %d and a time" % (p["compute_invocations_statistic"], p["gpu_ms"],
