@@ -129,7 +129,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
   cb->counted = recordForCounting(*dev, *cb, info->flags);
   if (cb->secondary || !cb->graphicsOrCompute || !dev->counting || !cb->counted) return result;
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) cb->timestampPool = takeQueryPool(*dev, false);
-  if (dev->statistics && cb->statisticsPool == VK_NULL_HANDLE) cb->statisticsPool = takeQueryPool(*dev, true);
+  cb->statistics = dev->statistics && dev->frame < uint64_t(dev->config.skipFrames) + dev->config.statisticsFrames;
+  if (cb->statistics && cb->statisticsPool == VK_NULL_HANDLE) cb->statisticsPool = takeQueryPool(*dev, true);
   if (cb->timestamps && cb->timestampPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     q.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -137,7 +138,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
     if (dev->d.CreateQueryPool(dev->device, &q, nullptr, &cb->timestampPool) != VK_SUCCESS) cb->timestamps = false;
     ++dev->queryPoolsCreated;
   }
-  if (dev->statistics && cb->statisticsPool == VK_NULL_HANDLE) {
+  if (cb->statistics && cb->statisticsPool == VK_NULL_HANDLE) {
     VkQueryPoolCreateInfo q = {VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     q.queryType = VK_QUERY_TYPE_PIPELINE_STATISTICS;
     q.queryCount = kQueriesPerCommandBuffer;
@@ -146,7 +147,9 @@ VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkC
     ++dev->queryPoolsCreated;
   }
   if (cb->timestamps) dev->d.CmdResetQueryPool(cmd, cb->timestampPool, 0, kQueriesPerCommandBuffer);
-  if (cb->statisticsPool != VK_NULL_HANDLE) dev->d.CmdResetQueryPool(cmd, cb->statisticsPool, 0, kQueriesPerCommandBuffer);
+  if (cb->statistics && cb->statisticsPool != VK_NULL_HANDLE) {
+    dev->d.CmdResetQueryPool(cmd, cb->statisticsPool, 0, kQueriesPerCommandBuffer);
+  }
   return result;
 }
 
@@ -173,7 +176,10 @@ VKAPI_ATTR VkResult VKAPI_CALL ResetCommandPool(VkDevice device, VkCommandPool p
 // Statistics queries begin and end inside the render pass (lavapipe crashes
 // on a query around one), once per subpass.
 void beginStatistic(DeviceState& dev, CommandBufferState& cb) {
-  if (cb.statisticsPool == VK_NULL_HANDLE || cb.currentPass < 0 || cb.openStatistic || cb.appStatisticsActive) return;
+  if (!cb.statistics || cb.statisticsPool == VK_NULL_HANDLE || cb.currentPass < 0 || cb.openStatistic ||
+      cb.appStatisticsActive) {
+    return;
+  }
   // No query may be active while secondaries execute (without inheritedQueries).
   if (cb.secondaryContents) return;
   // Under multiview a query takes one index per view, each holding a view's

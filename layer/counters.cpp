@@ -98,6 +98,15 @@ Config Config::fromEnvironment() {
       error = "TALLY_LAYER_TIMING: '" + value + "' is not all, timestamps or none";
     }
   }
+  if (const char* frames = std::getenv("TALLY_LAYER_STATISTICS_FRAMES"); frames != nullptr && *frames != '\0' &&
+                                                                         error.empty()) {
+    if (std::string_view(frames) == "all") {
+      c.statisticsFrames = UINT32_MAX;
+    } else {
+      parseCount("TALLY_LAYER_STATISTICS_FRAMES", 0, 100000, c.statisticsFrames, error);
+      if (!error.empty()) error += " (or all)";
+    }
+  }
   c.error = error;
   return c;
 }

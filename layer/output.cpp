@@ -80,6 +80,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"counting", dev.config.counts ? spirv::toString(dev.config.mode) : "off"},
         {"timing", dev.config.statistics ? "all" : dev.config.timestamps ? "timestamps" : "none"},
         {"counter_bits", dev.int64Atomics ? 64 : 32},
+        {"statistics_frames", dev.config.statisticsFrames == UINT32_MAX ? json("all") : json(dev.config.statisticsFrames)},
         {"descriptor_set", dev.counterSet},
         {"frame_delimiter",
          dev.config.frameSubmits == 0 ? std::string("present") : "submits:" + std::to_string(dev.config.frameSubmits)},

@@ -384,6 +384,8 @@ std::vector<std::pair<std::string, std::string>> layerEnvironment(const Applicat
       {"TALLY_LAYER_SKIP_FRAMES", std::to_string(spec.skipFrames)},
       {"TALLY_LAYER_FRAME_SUBMITS", std::to_string(spec.frameSubmits)},
       {"TALLY_LAYER_COUNTING", spec.counting},
+      // Every stored frame keeps its statistic, the check on its counts.
+      {"TALLY_LAYER_STATISTICS_FRAMES", "all"},
   };
   env.insert(env.end(), spec.env.begin(), spec.env.end());
   return env;

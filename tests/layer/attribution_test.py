@@ -48,6 +48,7 @@ def layer_env(build, output, frames, skip, frame_submits=0, below=""):
         "VK_LOADER_LAYERS_ENABLE": layers.replace(":", ","),
         "TALLY_LAYER_OUTPUT": output,
         "TALLY_LAYER_FRAMES": str(frames),
+        "TALLY_LAYER_STATISTICS_FRAMES": "all",
         "TALLY_LAYER_SKIP_FRAMES": str(skip),
         "TALLY_LAYER_FRAME_SUBMITS": str(frame_submits),
     })

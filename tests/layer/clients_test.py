@@ -148,7 +148,7 @@ def validation_runs(failures, command, env, tmp, tally_dir, frame_submits=0, che
     folder = os.path.join(tmp, "validation")
     os.makedirs(folder, exist_ok=True)
     tally_env = {"TALLY_LAYER_FRAMES": "100000", "TALLY_LAYER_SKIP_FRAMES": "0",
-                 "TALLY_LAYER_FRAME_SUBMITS": str(frame_submits)}
+                 "TALLY_LAYER_FRAME_SUBMITS": str(frame_submits), "TALLY_LAYER_STATISTICS_FRAMES": "all"}
     try:
         found, processes, first = validation.run_stacks(command, env, folder, tally_dir, tally_env)
     except (validation.RunError, subprocess.TimeoutExpired) as e:

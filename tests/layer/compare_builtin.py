@@ -66,6 +66,7 @@ def compare(args, renderer, tmp, builtin_run):
         "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
         "TALLY_LAYER_OUTPUT": output,
         "TALLY_LAYER_FRAMES": str(args.layer_frames),
+        "TALLY_LAYER_STATISTICS_FRAMES": "all",
         "TALLY_LAYER_SKIP_FRAMES": "1",
         "TALLY_LAYER_FRAME_SUBMITS": "1",
         "TALLY_LAYER_COUNTING": args.counting,

@@ -101,6 +101,7 @@ def main():
     env.update({"VK_ADD_LAYER_PATH": os.path.join(args.build, "layer"),
                 "VK_INSTANCE_LAYERS": "VK_LAYER_TALLY_counters", "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
                 "TALLY_LAYER_OUTPUT": out, "TALLY_LAYER_FRAMES": str(FRAMES), "TALLY_LAYER_SKIP_FRAMES": str(SKIP),
+                "TALLY_LAYER_STATISTICS_FRAMES": "all",
                 "TALLY_LAYER_FRAME_SUBMITS": "1"})
     run(command + ["--queries", "0"], env=env)  # the application checks every pixel shows its front quad
     if not os.path.exists(out):

@@ -50,6 +50,7 @@ def layer_env(build, output, frames=2, skip=1):
         "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
         "TALLY_LAYER_OUTPUT": output,
         "TALLY_LAYER_FRAMES": str(frames),
+        "TALLY_LAYER_STATISTICS_FRAMES": "all",
         "TALLY_LAYER_SKIP_FRAMES": str(skip),
         "TALLY_LAYER_FRAME_SUBMITS": "1",
     })

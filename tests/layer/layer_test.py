@@ -43,6 +43,7 @@ def layer_env(build, output, frames, skip, frame_submits=0):
         "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters",
         "TALLY_LAYER_OUTPUT": output,
         "TALLY_LAYER_FRAMES": str(frames),
+        "TALLY_LAYER_STATISTICS_FRAMES": "all",
         "TALLY_LAYER_SKIP_FRAMES": str(skip),
         "TALLY_LAYER_FRAME_SUBMITS": str(frame_submits),
     })

@@ -30,7 +30,8 @@ here from their dispatch sizes and extents alone.
 - timing: TALLY_LAYER_TIMING=timestamps and none leave the counts as they
   are and drop the statistics (and the timestamps); a value it does not
   know turns counting off and says why. TALLY_LAYER_COUNTING=off times the
-  same passes and counts nothing.
+  same passes and counts nothing. By default only the window's first frame
+  queries pipeline statistics (TALLY_LAYER_STATISTICS_FRAMES).
 - window: before skip_frames ends, and without an output, the layer adds
   nothing to the application's command buffers and queues.
 """
@@ -283,6 +284,23 @@ def case_timing(build, tmp):
             fail("counting off, frame %d: %s" % (f["index"], {k: v for k, v in p.items() if k != "resources"}))
     if counted["layer"]["counting"] != "off" or len(counted["frames"]) != 3:
         fail("counting off: layer.counting %r, %d frames" % (counted["layer"]["counting"], len(counted["frames"])))
+    # By default only the window's first frame queries statistics; 2 asks for two.
+    for wanted, env_value in ((1, None), (2, "2")):
+        out = os.path.join(tmp, "statistics-%d.json" % wanted)
+        env = layer_env(build, out, frames=3, skip=1, frame_submits=1)
+        del env["TALLY_LAYER_STATISTICS_FRAMES"]
+        if env_value:
+            env["TALLY_LAYER_STATISTICS_FRAMES"] = env_value
+        run([app(build), "--mode", "many", "--frames", "5"], env=env)
+        counted = load(out)
+        got = [f["passes"][0]["compute_invocations_statistic"] for f in counted["frames"]]
+        if got != [total] * wanted + [-1] * (3 - wanted) or counted["layer"]["statistics_frames"] != wanted:
+            fail("statistics in the first %d frame(s): statistics %s, layer.statistics_frames %r" %
+                 (wanted, got, counted["layer"]["statistics_frames"]))
+        for f in counted["frames"]:
+            if {r["name"]: r["count"] for r in f["passes"][0]["resources"]} != \
+                    {"out %d" % i: 64 * (i % 5 + 1) for i in range(600)}:
+                fail("statistics in the first %d frame(s): frame %d's counts differ" % (wanted, f["index"]))
     out = os.path.join(tmp, "bad.json")
     env = layer_env(build, out, frames=1, skip=0, frame_submits=1)
     env["TALLY_LAYER_TIMING"] = "sometimes"

@@ -55,7 +55,8 @@ def run_scene(build, scene, seconds, display, out):
                 "MESA_LOADER_DRIVER_OVERRIDE": "zink", "XDG_RUNTIME_DIR": tempfile.gettempdir(),
                 "VK_ADD_LAYER_PATH": os.path.join(build, "layer"), "VK_INSTANCE_LAYERS": "VK_LAYER_TALLY_counters",
                 "VK_LOADER_LAYERS_ENABLE": "VK_LAYER_TALLY_counters", "TALLY_LAYER_OUTPUT": out,
-                "TALLY_LAYER_FRAMES": str(FRAMES), "TALLY_LAYER_SKIP_FRAMES": str(SKIP)})
+                "TALLY_LAYER_FRAMES": str(FRAMES), "TALLY_LAYER_SKIP_FRAMES": str(SKIP),
+                "TALLY_LAYER_STATISTICS_FRAMES": "all"})
     result = subprocess.run(["glmark2", "-b", "%s:duration=%d" % (scene, seconds), "-s", "320x240"], env=env,
                             timeout=180, capture_output=True, text=True)
     if not glmark2_exited_well(result):
