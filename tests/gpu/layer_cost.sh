@@ -24,7 +24,9 @@
 #   LAYER_MODES (default "plain counting idle") may add: counting-timestamps
 #   and counting-untimed (TALLY_LAYER_TIMING=timestamps, none: what the
 #   layer's queries cost), counting-off (passes timed, nothing counted: the
-#   second table compares each pass's GPU time with counting's), and counting-before (the layer in
+#   second table compares each pass's GPU time with counting's),
+#   counting-statistics (pipeline statistics in every frame, not only the
+#   window's first: TALLY_LAYER_STATISTICS_FRAMES=all), and counting-before (the layer in
 #   LAYER_DIR_BEFORE, another build, beside this one in the same run).
 #   OUT=dir (default ./gpu-out): layer-cost.txt, layer-cost.json, layer-cost-logs.tar.gz
 set -uo pipefail
@@ -51,6 +53,7 @@ mode_env() {
     counting-timestamps) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=timestamps" ;;
     counting-untimed) echo "${layer_env[*]} $counting TALLY_LAYER_TIMING=none" ;;
     counting-off) echo "${layer_env[*]} $counting TALLY_LAYER_COUNTING=off" ;;
+    counting-statistics) echo "${layer_env[*]} $counting TALLY_LAYER_STATISTICS_FRAMES=all" ;;
     counting-before) echo "${layer_env[*]/#VK_ADD_LAYER_PATH=*/VK_ADD_LAYER_PATH=$LAYER_DIR_BEFORE} $counting" ;;
     idle) echo "${layer_env[*]}" ;;
   esac
