@@ -16,7 +16,7 @@
 
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 inline constexpr int kHeatmapMaxRuns = 2000;  // runs of one capture considered
 
@@ -54,4 +54,4 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& query);
 HeatmapAnswer heatmapTopDown(store::Store& store, int64_t capture, const std::optional<std::string>& scene,
                              const std::vector<std::filesystem::path>& sceneFolders);
 
-}  // namespace tally::service
+}  // namespace tally::reports
