@@ -21,11 +21,15 @@ using nlohmann::json;
 
 namespace {
 
-HeatmapAnswer fail(int status, std::string field, std::string message) {
+HeatmapAnswer fail(HeatmapFailure::Kind kind, std::string field, std::string message) {
   HeatmapAnswer a;
-  a.failure = HeatmapFailure{status, std::move(field), std::move(message)};
+  a.failure = HeatmapFailure{kind, std::move(field), std::move(message)};
   return a;
 }
+
+constexpr auto kInvalid = HeatmapFailure::Kind::kInvalid;
+constexpr auto kMissing = HeatmapFailure::Kind::kMissing;
+constexpr auto kStore = HeatmapFailure::Kind::kStore;
 
 std::string variantOf(const store::RunRow& r) { return r.variant.empty() ? r.renderer : r.variant; }
 
@@ -92,7 +96,7 @@ std::optional<HeatmapAnswer> chooseRuns(store::Store& store, const HeatmapQuery&
   filter.width = q.width;
   filter.height = q.height;
   auto selected = selectRuns(store, filter, kHeatmapMaxRuns, runs.complete);
-  if (!selected) return fail(500, "", selected.error());
+  if (!selected) return fail(kStore, "", selected.error());
   runs.selected = std::move(selected).value();
   std::vector<const store::RunRow*> heatmapRuns;
   for (const auto& r : runs.selected) {
@@ -101,9 +105,9 @@ std::optional<HeatmapAnswer> chooseRuns(store::Store& store, const HeatmapQuery&
   if (heatmapRuns.empty()) {
     bool any = std::any_of(runs.selected.begin(), runs.selected.end(), isHeatmapRun);
     if (!any && !q.scene && !q.width && !q.height && !q.counting) {
-      return fail(400, "capture", "capture " + std::to_string(q.capture) + " is not a heatmap capture (its spec has no \"heatmap\")");
+      return fail(kInvalid, "capture", "capture " + std::to_string(q.capture) + " is not a heatmap capture (its spec has no \"heatmap\")");
     }
-    return fail(400, q.scene ? "scene" : q.counting ? "counting" : "width",
+    return fail(kInvalid, q.scene ? "scene" : q.counting ? "counting" : "width",
                 "no heatmap run of capture " + std::to_string(q.capture) + " matches scene, width, height and counting");
   }
   std::set<std::string> variants;
@@ -115,13 +119,13 @@ std::optional<HeatmapAnswer> chooseRuns(store::Store& store, const HeatmapQuery&
   for (const auto* r : heatmapRuns)
     if (variantOf(*r) == q.renderer) runsA.push_back(r);
   if (runsA.empty()) {
-    return fail(400, "renderer", "no heatmap run of '" + q.renderer + "' in capture " + std::to_string(q.capture) +
+    return fail(kInvalid, "renderer", "no heatmap run of '" + q.renderer + "' in capture " + std::to_string(q.capture) +
                                      " (its variants: " + known + ")");
   }
   if (runsA.size() > 1) {
     std::string which;
     for (const auto* r : runsA) which += (which.empty() ? "" : "; ") + configLabel(*r);
-    return fail(400, "renderer", "capture " + std::to_string(q.capture) + " has " + std::to_string(runsA.size()) +
+    return fail(kInvalid, "renderer", "capture " + std::to_string(q.capture) + " has " + std::to_string(runsA.size()) +
                                      " runs of '" + q.renderer + "' (" + which +
                                      "): choose one with scene, width, height or counting");
   }
@@ -131,7 +135,7 @@ std::optional<HeatmapAnswer> chooseRuns(store::Store& store, const HeatmapQuery&
       if (variantOf(*r) == *q.versus && configKey(*r) == configKey(*runs.a)) runs.b = r;
     }
     if (!runs.b) {
-      return fail(400, "versus", "no heatmap run of '" + *q.versus + "' with the same scene, resolution, counting and device as " +
+      return fail(kInvalid, "versus", "no heatmap run of '" + *q.versus + "' with the same scene, resolution, counting and device as " +
                                      configLabel(*runs.a) + " (the capture's variants: " + known + ")");
     }
   }
@@ -394,14 +398,14 @@ json summaryJson(const MapCells& map) {
 
 HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
   const bool bytes = q.metric == "bytes";
-  if (!bytes && q.metric != "frame_ms") return fail(400, "metric", "must be frame_ms or bytes");
+  if (!bytes && q.metric != "frame_ms") return fail(kInvalid, "metric", "must be frame_ms or bytes");
   std::optional<uint32_t> yawIndex;
   if (q.yaw != "mean" && q.yaw != "worst") {
     bool digits = !q.yaw.empty() && q.yaw.size() <= 3 && q.yaw.find_first_not_of("0123456789") == std::string::npos;
-    if (!digits) return fail(400, "yaw", "must be mean, worst or a yaw index (0, 1, ...), got '" + q.yaw + "'");
+    if (!digits) return fail(kInvalid, "yaw", "must be mean, worst or a yaw index (0, 1, ...), got '" + q.yaw + "'");
     yawIndex = uint32_t(std::stoul(q.yaw));
   }
-  if (q.versus && *q.versus == q.renderer) return fail(400, "versus", "must name another variant than renderer");
+  if (q.versus && *q.versus == q.renderer) return fail(kInvalid, "versus", "must name another variant than renderer");
 
   MapRuns runs;
   if (auto failed = chooseRuns(store, q, runs)) return std::move(*failed);
@@ -410,18 +414,18 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
   const json& layout = runA.notes["heatmap"];
   const size_t yaws = layout.contains("yaws_deg") && layout["yaws_deg"].is_array() ? layout["yaws_deg"].size() : 1;
   if (yawIndex && *yawIndex >= yaws) {
-    return fail(400, "yaw", "must be mean, worst or a yaw index below " + std::to_string(yaws) + ", got " + q.yaw);
+    return fail(kInvalid, "yaw", "must be mean, worst or a yaw index below " + std::to_string(yaws) + ", got " + q.yaw);
   }
 
   MapCells map{store, q, layout, bytes, runB != nullptr, yawIndex};
   map.columns = layout["columns"].get<uint32_t>();
   map.rows = layout["rows"].get<uint32_t>();
   auto samplesA = store.listSamples(runA.id);
-  if (!samplesA) return fail(500, "", samplesA.error());
+  if (!samplesA) return fail(kStore, "", samplesA.error());
   map.samplesA = std::move(samplesA).value();
   if (runB) {
     auto listed = store.listSamples(runB->id);
-    if (!listed) return fail(500, "", listed.error());
+    if (!listed) return fail(kStore, "", listed.error());
     map.samplesB = std::move(listed).value();
   }
   map.cells.resize(size_t(map.columns) * map.rows);
@@ -502,24 +506,24 @@ HeatmapAnswer heatmapTopDown(store::Store& store, int64_t capture, const std::op
   filter.scene = scene;
   bool complete = false;
   auto selected = selectRuns(store, filter, kHeatmapMaxRuns, complete);
-  if (!selected) return fail(500, "", selected.error());
+  if (!selected) return fail(kStore, "", selected.error());
   std::map<std::string, const store::RunRow*> byScene;
   for (const auto& r : *selected)
     if (isHeatmapRun(r)) byScene.emplace(r.scene, &r);
   if (byScene.empty()) {
-    if (scene) return fail(404, "scene", "capture " + std::to_string(capture) + " has no heatmap run on scene '" + *scene + "'");
-    return fail(404, "capture", "capture " + std::to_string(capture) + " is not a heatmap capture");
+    if (scene) return fail(kMissing, "scene", "capture " + std::to_string(capture) + " has no heatmap run on scene '" + *scene + "'");
+    return fail(kMissing, "capture", "capture " + std::to_string(capture) + " is not a heatmap capture");
   }
   if (byScene.size() > 1) {
     std::string names;
     for (const auto& [name, r] : byScene) names += (names.empty() ? "" : ", ") + name;
-    return fail(400, "scene", "capture " + std::to_string(capture) + " has heatmaps on several scenes (" + names +
+    return fail(kInvalid, "scene", "capture " + std::to_string(capture) + " has heatmaps on several scenes (" + names +
                                   "): choose one with scene");
   }
   const store::RunRow& run = *byScene.begin()->second;
   const json& layout = run.notes["heatmap"];
   if (layout.value("layout", "") != "floor") {
-    return fail(404, "capture", "the " + layout.value("layout", std::string("?")) +
+    return fail(kMissing, "capture", "the " + layout.value("layout", std::string("?")) +
                                     " layout has no top-down plan (it is drawn as a longitude/latitude map)");
   }
   const std::string key = std::to_string(capture) + "/" + run.scene;
@@ -533,17 +537,17 @@ HeatmapAnswer heatmapTopDown(store::Store& store, int64_t capture, const std::op
     }
   }
   const json sceneSpec = layout.contains("scene") ? layout["scene"] : json(nullptr);
-  if (sceneSpec.is_null()) return fail(404, "scene", "the heatmap's layout does not say which scene it was placed on");
+  if (sceneSpec.is_null()) return fail(kMissing, "scene", "the heatmap's layout does not say which scene it was placed on");
   if (sceneSpec.is_object() && sceneSpec.contains("gltf")) {
     if (!sceneSpec["gltf"].is_string() || !insideFolders(sceneSpec["gltf"].get<std::string>(), sceneFolders)) {
-      return fail(404, "scene", "the scene's glTF file is not inside this daemon's --scenes folders (or is gone)");
+      return fail(kMissing, "scene", "the scene's glTF file is not inside this daemon's --scenes folders (or is gone)");
     }
   }
   auto loaded = scenes::makeSceneGeometry(sceneSpec);
-  if (!loaded) return fail(404, "scene", "the scene cannot be loaded again: " + loaded.error());
+  if (!loaded) return fail(kMissing, "scene", "the scene cannot be loaded again: " + loaded.error());
   scenes::Bvh bvh = scenes::Bvh::build(*loaded);
   auto image = scenes::renderTopDown(*loaded, bvh, layout);
-  if (!image) return fail(404, "capture", "no top-down plan: " + image.error());
+  if (!image) return fail(kMissing, "capture", "no top-down plan: " + image.error());
   HeatmapAnswer a;
   a.png = analysis::encodePng(image->rgba, image->width, image->height);
   PlanCache& cache = planCache();

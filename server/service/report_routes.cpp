@@ -16,15 +16,17 @@ using nlohmann::json;
 
 namespace {
 
-// A heatmap's failure thrown as the service's errors: a store's (5xx) as a
-// store error, a 404 of the plan by its message alone (what is missing is
-// the plan, not a field), the rest naming their field.
+// A heatmap's failure thrown as the service's errors: the store's as a
+// store error, a missing plan by its message alone (what is missing is the
+// plan, not a field), the rest (400, or 404 for the map) naming their field.
 void throwFailure(const reports::HeatmapAnswer& answer, bool plan) {
   if (!answer.failure) return;
+  using Kind = reports::HeatmapFailure::Kind;
   const reports::HeatmapFailure& f = *answer.failure;
-  if (f.status >= 500) check(Result<bool>(makeError(f.message)));
-  if (f.status == 404 && plan) missing(f.message);
-  throw RequestError(f.status, f.status == 404 ? api::code::kNotFound : api::code::kInvalidField,
+  if (f.kind == Kind::kStore) check(Result<bool>(makeError(f.message)));
+  const bool absent = f.kind == Kind::kMissing;
+  if (absent && plan) missing(f.message);
+  throw RequestError(absent ? 404 : 400, absent ? api::code::kNotFound : api::code::kInvalidField,
                      f.field + ": " + f.message, f.field);
 }
 

@@ -119,6 +119,25 @@ TEST_F(RunSignificance, SlowerRunIsSlowerWithAnIntervalCoveringItsFactor) {
   EXPECT_EQ(back->frame->time.verdict, Verdict::Faster);
 }
 
+// /api/compare reads each run and its samples once and compares the loaded
+// runs: the same answer as by ids, and an absent run is no run, not an error.
+TEST_F(RunSignificance, LoadedRunsAnswerAsTheirIds) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {.scale = 1.15}));
+  auto loadedA = tally::reports::loadStoredRun(*store_, a);
+  auto loadedB = tally::reports::loadStoredRun(*store_, b);
+  ASSERT_TRUE(loadedA && *loadedA && loadedB && *loadedB);
+  EXPECT_EQ((*loadedA)->run.row.id, a);
+  EXPECT_EQ((*loadedA)->samples.size(), size_t(kCameras));
+  auto byIds = runSignificance(*store_, a, b, framesOnly());
+  auto byRuns = runSignificance(*store_, **loadedA, **loadedB, framesOnly());
+  ASSERT_TRUE(byIds && byRuns);
+  EXPECT_EQ(tally::reports::toJson(*byRuns), tally::reports::toJson(*byIds));
+  auto absent = tally::reports::loadStoredRun(*store_, b + 1000);
+  ASSERT_TRUE(absent) << absent.error();
+  EXPECT_FALSE(*absent);
+}
+
 // Cameras of 4, 5 and 6 ms and B 3% slower in each: aligned per camera the
 // difference shows; pooled raw, the cameras' spread hides it. The aligned
 // ratio is the ratio of the aligned medians, recomputed here.
