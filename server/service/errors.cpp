@@ -8,7 +8,6 @@
 #include "service/store_health.hpp"
 
 namespace tally::service::detail {
-using api::Request;
 using api::Response;
 
 int retryAfterSeconds(store::Fault fault) {

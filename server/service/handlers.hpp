@@ -8,35 +8,32 @@
 
 namespace tally::service::detail {
 
-using Req = api::Request;
-using Resp = api::Response;
-
 // Captures and hosts.
-Resp postCapture(ServiceContext& ctx, const Req& req);
-Resp listCaptures(ServiceContext& ctx, const Req& req);
-Resp getCapture(ServiceContext& ctx, const Req& req);
-Resp cancelCapture(ServiceContext& ctx, const Req& req);
-Resp listHosts(ServiceContext& ctx, const Req& req);
+api::Response postCapture(ServiceContext& ctx, const api::Request& req);
+api::Response listCaptures(ServiceContext& ctx, const api::Request& req);
+api::Response getCapture(ServiceContext& ctx, const api::Request& req);
+api::Response cancelCapture(ServiceContext& ctx, const api::Request& req);
+api::Response listHosts(ServiceContext& ctx, const api::Request& req);
 
 // Stored runs, samples, sweeps, devices, scenes, export.
-Resp listRuns(ServiceContext& ctx, const Req& req);
-Resp getRun(ServiceContext& ctx, const Req& req);
-Resp listSamples(ServiceContext& ctx, const Req& req);
-Resp listSweeps(ServiceContext& ctx, const Req& req);
-Resp getSweep(ServiceContext& ctx, const Req& req);
-Resp getSample(ServiceContext& ctx, const Req& req);
-Resp getScreenshot(ServiceContext& ctx, const Req& req);
-Resp getSampleTrace(ServiceContext& ctx, const Req& req);
-Resp exportRuns(ServiceContext& ctx, const Req& req);
-Resp listDevices(ServiceContext& ctx, const Req& req);
-Resp listScenes(ServiceContext& ctx, const Req& req);
+api::Response listRuns(ServiceContext& ctx, const api::Request& req);
+api::Response getRun(ServiceContext& ctx, const api::Request& req);
+api::Response listSamples(ServiceContext& ctx, const api::Request& req);
+api::Response listSweeps(ServiceContext& ctx, const api::Request& req);
+api::Response getSweep(ServiceContext& ctx, const api::Request& req);
+api::Response getSample(ServiceContext& ctx, const api::Request& req);
+api::Response getScreenshot(ServiceContext& ctx, const api::Request& req);
+api::Response getSampleTrace(ServiceContext& ctx, const api::Request& req);
+api::Response exportRuns(ServiceContext& ctx, const api::Request& req);
+api::Response listDevices(ServiceContext& ctx, const api::Request& req);
+api::Response listScenes(ServiceContext& ctx, const api::Request& req);
 
 // Reports over stored runs.
-Resp compare(ServiceContext& ctx, const Req& req);
-Resp crossover(ServiceContext& ctx, const Req& req);
-Resp heatmap(ServiceContext& ctx, const Req& req);
-Resp heatmapTopDownPng(ServiceContext& ctx, const Req& req);
-Resp accuracy(ServiceContext& ctx, const Req& req);
-Resp repeats(ServiceContext& ctx, const Req& req);
+api::Response compare(ServiceContext& ctx, const api::Request& req);
+api::Response crossover(ServiceContext& ctx, const api::Request& req);
+api::Response heatmap(ServiceContext& ctx, const api::Request& req);
+api::Response heatmapTopDownPng(ServiceContext& ctx, const api::Request& req);
+api::Response accuracy(ServiceContext& ctx, const api::Request& req);
+api::Response repeats(ServiceContext& ctx, const api::Request& req);
 
 }  // namespace tally::service::detail

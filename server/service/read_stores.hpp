@@ -30,5 +30,4 @@ class ReadStores {
   std::map<std::thread::id, std::unique_ptr<store::Store>> stores_;
 };
 
-
 }  // namespace tally::service

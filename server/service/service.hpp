@@ -61,7 +61,7 @@ struct ServiceContext {
   // refused while it says the store is damaged; may be null.
   StoreHealth* health = nullptr;
   // The request threads' read-only stores over dbPath; addServiceRoutes
-  // opens the set when it is empty.
+  // creates them when this is empty (each store opens at its thread's first read).
   std::shared_ptr<ReadStores> readers;
 };
 
