@@ -1,6 +1,6 @@
 // What a run measured, as the accuracy and repeatability figures compare
-// runs: read from a capture result here, and from stored runs by the service
-// (service/run_rows.hpp). Two runs measure the same frames only when all of
+// runs: read from a capture result here, and from stored runs by reports/
+// (reports/run_rows.hpp). Two runs measure the same frames only when all of
 // these agree (and their cameras and frames, which the callers compare).
 #pragma once
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <string_view>
 
-#include "api/service.hpp"
+#include "api/messages.hpp"
 #include "common/result.hpp"
 
 namespace tally::api {

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "api/service.hpp"
+#include "api/messages.hpp"
 
 namespace tally::api {
 

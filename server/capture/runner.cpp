@@ -15,7 +15,7 @@
 #include <map>
 #include <optional>
 
-#include "analysis/headroom.hpp"
+#include "sweeps/headroom.hpp"
 #include "analysis/image.hpp"
 #include "analysis/stats.hpp"
 #include "common/version.hpp"
@@ -34,7 +34,7 @@
 namespace tally::capture {
 
 using analysis::compareImages;
-using analysis::CounterHeadroom;
+using sweeps::CounterHeadroom;
 using analysis::encodePng;
 using analysis::ImageError;
 using analysis::Spread;

@@ -5,9 +5,13 @@
 #include <memory>
 
 #include "analysis/significance.hpp"
-#include "service/run_significance.hpp"
+#include "reports/run_significance.hpp"
 
 namespace tally::service {
+
+using reports::FigureSignificance;
+using reports::runSignificance;
+using reports::SignificanceOptions;
 
 using nlohmann::json;
 

@@ -25,7 +25,7 @@ inline constexpr int kEvaluationBatch = 8;
 // The alerts of `run` against `baseline`'s run, read through `reader` (not the
 // store that holds the evaluation's transaction):
 //   - time: the frame time and each pass's GPU time both runs have, over
-//     per-frame times (service/run_significance.hpp), with the baseline's
+//     per-frame times (reports/run_significance.hpp), with the baseline's
 //     threshold as the practical threshold: an alert when the verdict is
 //     slower or faster;
 //   - counts: one alert when the total bytes or any counter line differs

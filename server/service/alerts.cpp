@@ -68,7 +68,7 @@ Response postBaseline(ServiceContext& ctx, const Request& req) {
     nb.name = n.get<std::string>();
   }
   auto set = check(ctx.writer->setBaseline(nb));
-  if (!set) return api::notFound("no run " + std::to_string(nb.runId));
+  if (!set) missing("no run " + std::to_string(nb.runId));
   json out = baselineJson(set->baseline);
   out["replaced"] = opt(set->replaced);
   Response r = Response::ok(out, 201);
@@ -76,18 +76,10 @@ Response postBaseline(ServiceContext& ctx, const Request& req) {
   return r;
 }
 
-bool queryBool(const Request& req, const std::string& key) {
-  const std::string* v = req.queryValue(key);
-  if (!v) return false;
-  if (*v == "true" || *v == "1") return true;
-  if (*v == "false" || *v == "0") return false;
-  invalid(key, "must be true or false");
-}
-
 Response listBaselines(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"all"});
   json out = json::array();
-  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all"))))
+  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all").value_or(false))))
     out.push_back(baselineJson(b));
   return Response::ok({{"baselines", out}});
 }
@@ -96,7 +88,7 @@ Response getBaseline(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto b = check(reader(ctx).getBaseline(id));
-  if (!b) return api::notFound("no baseline " + std::to_string(id));
+  if (!b) missing("no baseline " + std::to_string(id));
   return Response::ok(baselineJson(*b));
 }
 
@@ -104,7 +96,7 @@ Response deleteBaseline(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto b = check(ctx.writer->removeBaseline(id));
-  if (!b) return api::notFound("no baseline " + std::to_string(id));
+  if (!b) missing("no baseline " + std::to_string(id));
   return Response::ok(baselineJson(*b));
 }
 
@@ -136,7 +128,7 @@ Response getAlert(ServiceContext& ctx, const Request& req) {
   int64_t id = pathId(req);
   auto& store = reader(ctx);
   auto a = check(store.getAlert(id));
-  if (!a) return api::notFound("no alert " + std::to_string(id));
+  if (!a) missing("no alert " + std::to_string(id));
   json out = alertJson(*a);
   auto run = check(store.getRun(a->runId));
   out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
@@ -155,7 +147,7 @@ Response updateAlert(ServiceContext& ctx, const Request& req) {
   auto status = s.is_string() ? store::parseAlertStatus(s.get<std::string>()) : std::nullopt;
   if (!status) invalid("status", "must be open, acknowledged, invalid or fixed");
   auto a = check(ctx.writer->setAlertStatus(id, *status));
-  if (!a) return api::notFound("no alert " + std::to_string(id));
+  if (!a) missing("no alert " + std::to_string(id));
   return Response::ok(alertJson(*a));
 }
 
@@ -200,7 +192,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
   int limit = static_cast<int>(queryInt(req, "limit", 1, kMaxTrendRuns).value_or(kDefaultTrendRuns));
   auto& store = reader(ctx);
   auto baseline = check(store.getBaseline(*id));
-  if (!baseline) return api::notFound("no baseline " + std::to_string(*id));
+  if (!baseline) missing("no baseline " + std::to_string(*id));
   auto alerts = check(store.configurationAlerts(*id, 1000));
   std::map<int64_t, json> alertsByRun;
   json alertList = json::array();
@@ -228,9 +220,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
 }  // namespace
 
 void addAlertRoutes(api::Router& router, ServiceContext& ctx) {
-  auto route = [&ctx](Response (*fn)(ServiceContext&, const Request&)) {
-    return [&ctx, fn](const Request& req) { return wrap(ctx, [&] { return fn(ctx, req); }); };
-  };
+  auto route = [&ctx](RouteHandler fn) { return routed(ctx, fn); };
   router.post("/api/baselines", route(postBaseline));
   router.get("/api/baselines", route(listBaselines));
   router.get("/api/baselines/{id}", route(getBaseline));

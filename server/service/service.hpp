@@ -1,12 +1,13 @@
 // Tally's service layer: capture jobs, runs, samples, comparison and export
 // as JSON routes. Handlers see api::Request/Response only (never HTTP) and
 // the SQLite store: writes (create/cancel a job) through the one writer,
-// reads through a read-only Store per thread, opened lazily.
+// reads through a read-only Store per request thread (readers).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 namespace tally::service {
 
 class StoreHealth;
+class ReadStores;
 
 struct ServiceOptions {
   uint64_t maxPixels = 3840ull * 2160ull;  // per resolution: 4K; larger belongs to `tallyd capture`
@@ -58,6 +60,9 @@ struct ServiceContext {
   // Store faults met by requests are reported to it, and write routes are
   // refused while it says the store is damaged; may be null.
   StoreHealth* health = nullptr;
+  // The request threads' read-only stores over dbPath; addServiceRoutes
+  // creates them when this is empty (each store opens at its thread's first read).
+  std::shared_ptr<ReadStores> readers;
 };
 
 // POST/GET /api/captures, GET/DELETE /api/captures/{id}, /api/runs...,

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <map>
 
-#include "analysis/headroom.hpp"
+#include "sweeps/headroom.hpp"
 #include "sweeps/fields.hpp"
 #include "gpu/context.hpp"
 #include "renderers/gpu_scene.hpp"
@@ -13,7 +13,6 @@
 
 namespace tally::sweeps {
 
-using analysis::CounterHeadroom;
 namespace {
 
 using nlohmann::json;

@@ -20,19 +20,21 @@ ALLOWED = {
     "gpu": {"spirv"},
     "scenes": set(),
     "renderers": {"gpu", "scenes", "spirv"},
-    "analysis": {"renderers", "spirv"},
+    "analysis": set(),
     "sweeps": {"analysis", "renderers", "gpu", "scenes", "spirv"},
     # jobs: child_process.hpp, to run an application under the Vulkan layer (capture/application.cpp).
     "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv", "jobs"},
     "store": set(),
     "api": set(),
     "jobs": {"store"},
-    "service": {"api", "store", "capture", "sweeps", "analysis", "renderers", "scenes", "spirv", "gpu"},
-    "commands": {"service", "api", "store", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
+    # reports: computed from stored runs, without Vulkan (scenes: a heatmap's plan from the scene's triangles).
+    "reports": {"store", "analysis", "scenes"},
+    "service": {"api", "store", "reports", "capture", "sweeps", "analysis", "renderers", "scenes", "spirv", "gpu"},
+    "commands": {"service", "api", "store", "reports", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
                  "spirv", "gpu"},
 }
 # Files directly in server/ (main.cpp, protocol.hpp): the executable's own.
-TOP = {"commands", "service", "api", "store", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
+TOP = {"commands", "service", "api", "store", "reports", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
        "spirv", "gpu"}
 
 # layer/ (the Vulkan layer, a shared library loaded into other processes)

@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "analytic.hpp"
-#include "analysis/headroom.hpp"
+#include "sweeps/headroom.hpp"
 #include "renderers/options.hpp"
 #include "render_fixture.hpp"
 
@@ -284,11 +284,11 @@ TEST(CounterHeadroom, LargestSlotIsThePredictedLargestCount) {
   EXPECT_EQ(largestName, "forward/lights");
   EXPECT_EQ(largest, uint64_t(g.layers) * g.covered * kTestLights);
 
-  tally::analysis::CounterHeadroom headroom;
+  tally::sweeps::CounterHeadroom headroom;
   headroom.note(r.frame);
   EXPECT_EQ(headroom.maxSlotCount, largest);
   EXPECT_EQ(headroom.maxSlot, largestName);
-  const auto json = tally::analysis::toJson(headroom, spirv::CounterWidth::Int64, 1);
+  const auto json = tally::sweeps::toJson(headroom, spirv::CounterWidth::Int64, 1);
   EXPECT_DOUBLE_EQ(json["wrap_factor_32bit"].get<double>(), 4294967296.0 / double(largest));
   EXPECT_EQ(json["max_slot_count_per_frame"].get<uint64_t>(), largest);
   std::printf("forward, 4 planes at 157x91, %u lights: largest slot %s = %" PRIu64

@@ -1,4 +1,4 @@
-// service::runSignificance over stored runs of known frame-time
+// reports::runSignificance over stored runs of known frame-time
 // distributions: a run built 15% slower is called slower with an interval
 // that covers 1.15, a run drawn from the same distribution is the same, one
 // changed counter is the one change reported, repeated captures with their
@@ -11,14 +11,14 @@
 #include <gtest/gtest.h>
 
 #include "../store/store_fixture.hpp"
-#include "service/run_significance.hpp"
+#include "reports/run_significance.hpp"
 
 namespace {
 namespace st = tally::store::testing;
 using nlohmann::json;
 using tally::analysis::Verdict;
-using tally::service::runSignificance;
-using tally::service::SignificanceOptions;
+using tally::reports::runSignificance;
+using tally::reports::SignificanceOptions;
 
 constexpr int kCameras = 3;
 constexpr int kFrames = 20;
@@ -119,6 +119,25 @@ TEST_F(RunSignificance, SlowerRunIsSlowerWithAnIntervalCoveringItsFactor) {
   EXPECT_EQ(back->frame->time.verdict, Verdict::Faster);
 }
 
+// /api/compare reads each run and its samples once and compares the loaded
+// runs: the same answer as by ids, and an absent run is no run, not an error.
+TEST_F(RunSignificance, LoadedRunsAnswerAsTheirIds) {
+  int64_t a = store(runOf(rng_, {}));
+  int64_t b = store(runOf(rng_, {.scale = 1.15}));
+  auto loadedA = tally::reports::loadStoredRun(*store_, a);
+  auto loadedB = tally::reports::loadStoredRun(*store_, b);
+  ASSERT_TRUE(loadedA && *loadedA && loadedB && *loadedB);
+  EXPECT_EQ((*loadedA)->run.row.id, a);
+  EXPECT_EQ((*loadedA)->samples.size(), size_t(kCameras));
+  auto byIds = runSignificance(*store_, a, b, framesOnly());
+  auto byRuns = runSignificance(*store_, **loadedA, **loadedB, framesOnly());
+  ASSERT_TRUE(byIds && byRuns);
+  EXPECT_EQ(tally::reports::toJson(*byRuns), tally::reports::toJson(*byIds));
+  auto absent = tally::reports::loadStoredRun(*store_, b + 1000);
+  ASSERT_TRUE(absent) << absent.error();
+  EXPECT_FALSE(*absent);
+}
+
 // Cameras of 4, 5 and 6 ms and B 3% slower in each: aligned per camera the
 // difference shows; pooled raw, the cameras' spread hides it. The aligned
 // ratio is the ratio of the aligned medians, recomputed here.
@@ -132,8 +151,8 @@ TEST_F(RunSignificance, CamerasAsStrataSeeWhatPoolingHides) {
   ASSERT_TRUE(aligned && aligned->frame && pooled && pooled->frame);
   EXPECT_EQ(aligned->frame->time.verdict, Verdict::Slower) << aligned->frame->time.reason;
   EXPECT_EQ(pooled->frame->time.verdict, Verdict::Same) << pooled->frame->time.reason;
-  EXPECT_EQ(tally::service::toJson(*aligned)["frame"]["strata"], "cameras");
-  EXPECT_EQ(tally::service::toJson(*pooled)["frame"]["strata"], "none");
+  EXPECT_EQ(tally::reports::toJson(*aligned)["frame"]["strata"], "cameras");
+  EXPECT_EQ(tally::reports::toJson(*pooled)["frame"]["strata"], "none");
 
   auto frames = [&](int64_t run) {
     std::vector<std::vector<double>> out;
@@ -186,7 +205,7 @@ TEST_F(RunSignificance, ChangedCounterIsTheOneChangeReported) {
   EXPECT_EQ(s->countChanges[1].line, "lights/gbuffer.normal read");
   EXPECT_DOUBLE_EQ(s->countChanges[1].a, kCameras * 1000.0);
   EXPECT_DOUBLE_EQ(s->countChanges[1].b, kCameras * 1200.0);
-  json j = tally::service::toJson(*s);
+  json j = tally::reports::toJson(*s);
   EXPECT_EQ(j["counts"]["verdict"], "changed");
   EXPECT_EQ(j["counts"]["changes"][1]["delta"], kCameras * 200.0);
 }
@@ -277,7 +296,7 @@ TEST_F(RunSignificance, RunsWithoutACommonCameraAreIncomparable) {
   ASSERT_TRUE(s) << s.error();
   EXPECT_TRUE(s->cameras.empty());
   EXPECT_NE(s->incomparable.find("no camera in common"), std::string::npos);
-  EXPECT_TRUE(tally::service::toJson(*s).contains("error"));
+  EXPECT_TRUE(tally::reports::toJson(*s).contains("error"));
   auto missing = runSignificance(*store_, a, 9999);
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error(), "no run 9999");

@@ -12,7 +12,7 @@
 #include "renderers/renderer.hpp"
 #include "spirv/instrument.hpp"
 
-namespace tally::analysis {
+namespace tally::sweeps {
 
 struct CounterHeadroom {
   uint64_t maxSlotCount = 0;  // per frame
@@ -30,4 +30,4 @@ struct CounterHeadroom {
 // uint32_pair).
 nlohmann::json toJson(const CounterHeadroom& headroom, spirv::CounterWidth width, uint32_t framesAccumulated);
 
-}  // namespace tally::analysis
+}  // namespace tally::sweeps

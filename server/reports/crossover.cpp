@@ -1,12 +1,12 @@
-#include "service/crossover.hpp"
+#include "reports/crossover.hpp"
 
 #include <map>
 #include <vector>
 
 #include "analysis/crossover.hpp"
-#include "service/run_rows.hpp"
+#include "reports/run_rows.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 using nlohmann::json;
 
@@ -111,4 +111,4 @@ Result<json> crossoverModels(store::Store& store, const store::RunFilter& filter
               {"truncated", !complete}};
 }
 
-}  // namespace tally::service
+}  // namespace tally::reports

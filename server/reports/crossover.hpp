@@ -12,7 +12,7 @@
 #include "common/result.hpp"
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 // The runs considered per capture (at most), and the metrics that can be fitted.
 inline constexpr int kCrossoverMaxRuns = 2000;
@@ -21,4 +21,4 @@ bool isCrossoverMetric(const std::string& metric);  // "bytes" or "frame_ms"
 // filter: the capture (jobId) and optionally scene and device.
 Result<nlohmann::json> crossoverModels(store::Store& store, const store::RunFilter& filter, const std::string& metric);
 
-}  // namespace tally::service
+}  // namespace tally::reports

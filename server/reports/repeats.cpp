@@ -1,13 +1,13 @@
-#include "service/repeats.hpp"
+#include "reports/repeats.hpp"
 
 #include <algorithm>
 #include <map>
 
 #include "analysis/repeats.hpp"
 #include "analysis/stats.hpp"
-#include "service/run_rows.hpp"
+#include "reports/run_rows.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 namespace {
 
 using nlohmann::json;
@@ -95,4 +95,4 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
   return json{{"groups", std::move(groups)}, {"band_iqrs", analysis::kRepeatBandIqrs}, {"truncated", !complete}};
 }
 
-}  // namespace tally::service
+}  // namespace tally::reports

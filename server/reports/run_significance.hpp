@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -18,7 +19,7 @@
 #include "common/result.hpp"
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 // Repeated captures of one configuration taken into account at most (the
 // newest first).
@@ -72,11 +73,26 @@ struct SignificanceOptions {
   bool camerasAsStrata = true;
 };
 
+// A run's samples by camera key; a second sample of an equal camera gets "#2".
+using Samples = std::map<std::string, store::Sample>;
+
+// A stored run with its samples, loaded once for every comparison it is in.
+struct StoredRun {
+  store::Run run;
+  Samples samples;
+};
+
+// Nullopt when there is no such run.
+Result<std::optional<StoredRun>> loadStoredRun(store::Store& store, int64_t id);
+
 // Errors: a run that does not exist, a store error. Runs without a camera in
 // common are answered with `incomparable` set.
 Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64_t runB,
                                         const SignificanceOptions& options = {});
+// The same over runs already loaded (the store is read for their repeats).
+Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& a, const StoredRun& b,
+                                        const SignificanceOptions& options = {});
 
 nlohmann::json toJson(const RunSignificance& s);
 
-}  // namespace tally::service
+}  // namespace tally::reports

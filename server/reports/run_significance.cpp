@@ -1,4 +1,4 @@
-#include "service/run_significance.hpp"
+#include "reports/run_significance.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,17 +6,14 @@
 
 #include "analysis/run_config.hpp"
 #include "analysis/stats.hpp"
-#include "service/run_rows.hpp"
+#include "reports/run_rows.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 namespace {
 
 using nlohmann::json;
 
 constexpr const char* kFrame = "frame";
-
-// A run's samples by camera key; a second sample of an equal camera gets "#2".
-using Samples = std::map<std::string, store::Sample>;
 
 Result<Samples> loadSamples(store::Store& store, int64_t runId) {
   auto rows = store.listSamples(runId);
@@ -141,19 +138,31 @@ json figureJson(const FigureSignificance& f) {
 
 }  // namespace
 
+Result<std::optional<StoredRun>> loadStoredRun(store::Store& store, int64_t id) {
+  auto run = store.getRun(id);
+  if (!run) return makeError(run.error());
+  if (!*run) return std::optional<StoredRun>();
+  auto samples = loadSamples(store, id);
+  if (!samples) return makeError(samples.error());
+  return std::optional<StoredRun>(StoredRun{std::move(**run), std::move(samples).value()});
+}
+
 Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64_t runB,
                                         const SignificanceOptions& options) {
-  auto rowA = store.getRun(runA);
-  if (!rowA) return makeError(rowA.error());
-  if (!*rowA) return makeError("no run " + std::to_string(runA));
-  auto rowB = store.getRun(runB);
-  if (!rowB) return makeError(rowB.error());
-  if (!*rowB) return makeError("no run " + std::to_string(runB));
-  auto samplesA = loadSamples(store, runA);
-  if (!samplesA) return makeError(samplesA.error());
-  auto samplesB = loadSamples(store, runB);
-  if (!samplesB) return makeError(samplesB.error());
+  auto a = loadStoredRun(store, runA);
+  if (!a) return makeError(a.error());
+  if (!*a) return makeError("no run " + std::to_string(runA));
+  auto b = loadStoredRun(store, runB);
+  if (!b) return makeError(b.error());
+  if (!*b) return makeError("no run " + std::to_string(runB));
+  return runSignificance(store, **a, **b, options);
+}
 
+Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& storedA, const StoredRun& storedB,
+                                        const SignificanceOptions& options) {
+  const int64_t runA = storedA.run.row.id, runB = storedB.run.row.id;
+  const Samples* samplesA = &storedA.samples;
+  const Samples* samplesB = &storedB.samples;
   RunSignificance out;
   out.runA = runA;
   out.runB = runB;
@@ -195,13 +204,13 @@ Result<RunSignificance> runSignificance(store::Store& store, int64_t runA, int64
   std::vector<std::pair<int64_t, Samples>> repeatsA, repeatsB;
   std::vector<const std::vector<std::pair<int64_t, Samples>>*> groups;
   if (options.acrossCapture) {
-    bool same = sameConfig(runConfigOf((*rowA)->row), runConfigOf((*rowB)->row));
-    auto a = repeatsOf(store, (*rowA)->row, runB);
+    bool same = sameConfig(runConfigOf(storedA.run.row), runConfigOf(storedB.run.row));
+    auto a = repeatsOf(store, storedA.run.row, runB);
     if (!a) return makeError(a.error());
     repeatsA = std::move(a).value();
     groups.push_back(&repeatsA);
     if (!same) {
-      auto b = repeatsOf(store, (*rowB)->row, runA);
+      auto b = repeatsOf(store, storedB.run.row, runA);
       if (!b) return makeError(b.error());
       repeatsB = std::move(b).value();
       groups.push_back(&repeatsB);
@@ -285,4 +294,4 @@ json toJson(const RunSignificance& s) {
             {"changes", std::move(changes)}}}};
 }
 
-}  // namespace tally::service
+}  // namespace tally::reports

@@ -1,8 +1,8 @@
-#include "analysis/headroom.hpp"
+#include "sweeps/headroom.hpp"
 
 #include <cmath>
 
-namespace tally::analysis {
+namespace tally::sweeps {
 
 void CounterHeadroom::note(const renderers::FrameResult& frame) {
   for (const auto& pass : frame.passes) {
@@ -28,4 +28,4 @@ nlohmann::json toJson(const CounterHeadroom& headroom, spirv::CounterWidth width
           {"wrap_factor", factor(64)}};
 }
 
-}  // namespace tally::analysis
+}  // namespace tally::sweeps

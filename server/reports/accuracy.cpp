@@ -1,13 +1,13 @@
-#include "service/accuracy.hpp"
+#include "reports/accuracy.hpp"
 
 #include <algorithm>
 #include <map>
 #include <set>
 
 #include "analysis/accuracy.hpp"
-#include "service/run_rows.hpp"
+#include "reports/run_rows.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 namespace {
 
 using nlohmann::json;
@@ -155,4 +155,4 @@ Result<json> accuracyRows(store::Store& store, const store::RunFilter& filter) {
   return json{{"rows", std::move(rows)}, {"truncated", !complete}};
 }
 
-}  // namespace tally::service
+}  // namespace tally::reports

@@ -16,7 +16,7 @@
 
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 inline constexpr int kHeatmapMaxRuns = 2000;  // runs of one capture considered
 
@@ -30,9 +30,11 @@ struct HeatmapQuery {
   std::optional<int> width, height;
 };
 
-// A failed request: the status (400, 404) and the field it names.
+// Why there is no map or plan: what was asked is not valid (naming the
+// field), what it names is not there, or the store failed.
 struct HeatmapFailure {
-  int status = 400;
+  enum class Kind { kInvalid, kMissing, kStore };
+  Kind kind = Kind::kInvalid;
   std::string field, message;
 };
 
@@ -42,16 +44,16 @@ struct HeatmapAnswer {
   std::vector<uint8_t> png;  // the plan (heatmapTopDown)
 };
 
-// The capture must exist (the route checks, 404). 400s name the field:
+// The capture must exist (the route checks). Invalid queries name the field:
 // renderer (no run of it, or several to choose between), versus, yaw,
 // capture (not a heatmap capture).
 HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& query);
 
 // The plan of the floor layout of the capture's heatmap runs on `scene`
 // (optional when it has one heatmap scene), as PNG; cached per capture and
-// scene. A glTF scene is read again only from inside `sceneFolders`. 404 for
-// a sphere layout, a scene file that is gone or outside the folders.
+// scene. A glTF scene is read again only from inside `sceneFolders`. Missing
+// for a sphere layout, a scene file that is gone or outside the folders.
 HeatmapAnswer heatmapTopDown(store::Store& store, int64_t capture, const std::optional<std::string>& scene,
                              const std::vector<std::filesystem::path>& sceneFolders);
 
-}  // namespace tally::service
+}  // namespace tally::reports

@@ -9,11 +9,11 @@
 #include "common/result.hpp"
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 // Groups among the runs `filter` selects (oldest first). At most
 // kRepeatsMaxRuns runs are considered; "truncated" says when there were more.
 inline constexpr int kRepeatsMaxRuns = 2000;
 Result<nlohmann::json> repeatGroups(store::Store& store, const store::RunFilter& filter);
 
-}  // namespace tally::service
+}  // namespace tally::reports

@@ -1,4 +1,4 @@
-#include "api/service.hpp"
+#include "api/messages.hpp"
 
 #include <stdexcept>
 

@@ -8,7 +8,7 @@
 #include "common/result.hpp"
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 // Rows for the non-exact runs `filter` selects (oldest first); references are
 // looked for among all runs, preferring the same capture. At most
@@ -17,4 +17,4 @@ namespace tally::service {
 inline constexpr int kAccuracyMaxRuns = 2000;
 Result<nlohmann::json> accuracyRows(store::Store& store, const store::RunFilter& filter);
 
-}  // namespace tally::service
+}  // namespace tally::reports

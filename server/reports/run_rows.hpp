@@ -9,7 +9,7 @@
 #include "common/result.hpp"
 #include "store/store.hpp"
 
-namespace tally::service {
+namespace tally::reports {
 
 // Every run the filter selects, oldest first, at most maxRuns (a multiple of
 // 1000, the page size); `complete` is false when more matched.
@@ -22,4 +22,4 @@ analysis::RunConfig runConfigOf(const store::RunRow& row);
 // One stored counter line: "pass/resource access", as analysis::lineKey names a result's.
 std::string lineKey(const std::string& pass, const store::Counter& counter);
 
-}  // namespace tally::service
+}  // namespace tally::reports

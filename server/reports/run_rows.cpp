@@ -1,8 +1,8 @@
-#include "service/run_rows.hpp"
+#include "reports/run_rows.hpp"
 
 #include <algorithm>
 
-namespace tally::service {
+namespace tally::reports {
 
 Result<std::vector<store::RunRow>> selectRuns(store::Store& store, const store::RunFilter& filter, int maxRuns,
                                               bool& complete) {
@@ -42,4 +42,4 @@ std::string lineKey(const std::string& pass, const store::Counter& counter) {
   return pass + "/" + counter.resource + " " + counter.access;
 }
 
-}  // namespace tally::service
+}  // namespace tally::reports

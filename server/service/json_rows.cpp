@@ -1,0 +1,261 @@
+// Stored rows as the routes answer them: jobs, hosts, runs, sweeps, samples,
+// passes and comparisons.
+#include "service/json_rows.hpp"
+
+namespace tally::service::detail {
+using nlohmann::json;
+
+// Reuse: requested bytes over the footprint of the same lines (how many
+// times each distinct byte was asked for); null without a footprint or at 0.
+json reuseJson(std::optional<double> requested, std::optional<double> footprint) {
+  if (!footprint || *footprint <= 0) return nullptr;
+  return requested.value_or(0) / *footprint;
+}
+
+json jobJson(const store::Job& j) {
+  return {{"id", j.id},
+          {"status", store::toString(j.status)},
+          {"spec", j.spec},
+          {"progress", {{"done", j.progressDone}, {"total", j.progressTotal}, {"current", opt(j.progressCurrent)}}},
+          {"error", opt(j.error)},
+          {"attempts", j.attempts},
+          {"max_attempts", j.maxAttempts},
+          {"attempt_errors", j.attemptErrors.is_array() ? j.attemptErrors : json::array()},
+          {"host", opt(j.host)},
+          {"lease_expires_at", j.leaseExpiresMs ? json(store::isoTimeFromMs(*j.leaseExpiresMs)) : json(nullptr)},
+          {"device", j.deviceRequirement},
+          {"waiting", nullptr},
+          {"created_at", j.createdAt},
+          {"started_at", opt(j.startedAt)},
+          {"finished_at", opt(j.finishedAt)}};
+}
+
+json hostJson(const store::Host& h) {
+  json device = nullptr;
+  if (h.info.device.is_object()) {
+    const json& d = h.info.device;
+    device = {{"name", d.value("name", "")},
+              {"vendor", store::vendorName(d.value("vendorID", ""))},
+              {"vendor_id", d.value("vendorID", "")},
+              {"driver", d.value("driverInfo", "")},
+              {"api_version", d.value("apiVersion", "")},
+              {"type", d.value("type", "")},
+              {"features", d.contains("features") ? d["features"] : json::object()}};
+  }
+  return {{"name", h.info.name},
+          {"role", h.info.role},
+          {"device", device},
+          {"device_override", opt(h.info.deviceOverride)},
+          {"tally_version", h.info.tallyVersion},
+          {"tally_commit", h.info.tallyCommit},
+          {"started_at", h.startedAt},
+          {"last_heartbeat", h.lastHeartbeat},
+          {"seconds_since_heartbeat", h.secondsSinceHeartbeat},
+          {"alive", h.alive},
+          {"jobs_done", h.jobsDone},
+          {"jobs_failed", h.jobsFailed},
+          {"current_job", opt(h.currentJob)}};
+}
+
+// Why nobody runs a queued job, from the hosts: none alive; none alive whose
+// device meets its requirement (each one's reason); or every one that could
+// is busy. Null when a free worker can take it (it will, at its next poll).
+json waitingReason(const store::Job& job, const std::vector<store::Host>& hosts, int64_t staleAfterMs) {
+  if (job.status != store::JobStatus::Queued) return nullptr;
+  std::vector<const store::Host*> alive;
+  for (const auto& h : hosts) {
+    if (h.alive) alive.push_back(&h);
+  }
+  if (alive.empty()) {
+    return "no live worker: " + std::to_string(hosts.size()) + " host(s) registered, none with a heartbeat in the last " +
+           std::to_string(staleAfterMs / 1000) + " s";
+  }
+  std::optional<store::DeviceRequirement> requirement;
+  if (!job.deviceRequirement.is_null()) {
+    auto parsed = store::deviceRequirementFromJson(job.deviceRequirement);
+    if (parsed) requirement = *parsed;
+  }
+  std::vector<const store::Host*> able;
+  std::string mismatches;
+  for (const auto* h : alive) {
+    std::string why = requirement ? store::deviceMismatch(*requirement, h->info.device) : "";
+    if (why.empty()) {
+      able.push_back(h);
+    } else {
+      mismatches += (mismatches.empty() ? "" : "; ") + h->info.name + ": " + why;
+    }
+  }
+  if (able.empty()) {
+    return "no live worker has a device matching " + job.deviceRequirement.dump() + " (" + mismatches + ")";
+  }
+  std::string busy;
+  for (const auto* h : able) {
+    if (!h->currentJob) return nullptr;
+    busy += (busy.empty() ? "" : ", ") + h->info.name + " (capture " + std::to_string(*h->currentJob) + ")";
+  }
+  return "waiting for a " + std::string(requirement ? "matching " : "") + "worker to finish: " + busy;
+}
+
+json runRowJson(const store::RunRow& r) {
+  return {{"id", r.id},
+          {"capture", r.jobId},
+          {"device_id", r.deviceId},
+          {"device", r.deviceName},
+          {"renderer", r.renderer},
+          {"options", r.options},
+          {"variant", r.variant},
+          {"scene", r.scene},
+          {"scene_params", r.sceneParams},
+          {"width", r.width},
+          {"height", r.height},
+          {"counting", r.counting},
+          {"footprint_block_bytes", opt(r.footprintBlockBytes)},
+          {"lights", r.lights},
+          {"render_target_bytes", opt(r.renderTargetBytes)},
+          {"notes", r.notes},
+          {"created_at", r.createdAt},
+          {"tally_version", opt(r.tallyVersion)},
+          {"tally_commit", opt(r.tallyCommit)},
+          {"host", opt(r.host)},
+          {"labels", r.labels},
+          {"sample_count", r.sampleCount},
+          {"mean_frame_ms", opt(r.meanFrameMs)},
+          {"mean_bytes", opt(r.meanBytes)},
+          {"mean_footprint_bytes", opt(r.meanFootprintBytes)},
+          {"mean_reuse", reuseJson(r.meanFootprintRequestedBytes, r.meanFootprintBytes)},
+          {"mean_frame_ms_instrumented", opt(r.meanFrameMsInstrumented)},
+          {"mean_overhead_ratio", opt(r.meanOverheadRatio)},
+          {"image_error", r.imageCompared == 0 ? json(nullptr)
+                                                : json{{"samples", r.imageCompared},
+                                                       {"identical", r.imageIdentical},
+                                                       {"mean_psnr", opt(r.meanPsnr)},
+                                                       {"min_psnr", opt(r.minPsnr)}}}};
+}
+
+json deviceJson(const store::Device& d) {
+  return {{"id", d.id},           {"name", d.name},         {"vendor", d.vendor}, {"driver", d.driver},
+          {"api_version", d.apiVersion}, {"features", d.features}, {"info", d.info}};
+}
+
+json sweepRowJson(const store::SweepRow& s) {
+  return {{"id", s.id},
+          {"job_id", s.jobId},
+          {"name", s.name},
+          {"created_at", s.createdAt},
+          {"device", deviceJson(s.device)},
+          {"parameters", s.parameters},
+          {"threshold", s.threshold},
+          {"fails_at", s.failsAt},
+          {"point_count", s.pointCount}};
+}
+
+json sampleRowJson(const store::SampleRow& s) {
+  json j = {{"id", s.id},
+            {"run", s.runId},
+            {"camera_index", s.cameraIndex},
+            {"camera", s.camera},
+            {"sky_fraction", opt(s.skyFraction)},
+            {"sky_fraction_estimate", opt(s.skyFractionEstimate)},
+            {"frames", opt(s.frames)},
+            {"frame_ms", s.frameMs},
+            {"frame_ms_spread", s.frameMsSpread},
+            {"frame_ms_instrumented", opt(s.frameMsInstrumented)},
+            {"overhead_ratio", opt(s.overheadRatio)},
+            {"bytes", s.bytes},
+            {"bytes_read", s.bytesRead},
+            {"bytes_written", s.bytesWritten},
+            {"footprint_bytes", opt(s.footprintBytes)},
+            {"reuse", reuseJson(s.footprintRequestedBytes, s.footprintBytes)},
+            {"image_error", nullptr},
+            {"variant_error", nullptr},
+            {"extras", s.extras},
+            {"screenshot", s.hasScreenshot ? json("/api/samples/" + std::to_string(s.id) + "/screenshot.png")
+                                           : json(nullptr)}};
+  if (s.imageError) {
+    j["image_error"] = {{"against", s.imageError->against},
+                        {"identical", s.imageError->identical},
+                        {"psnr", opt(s.imageError->psnr)},
+                        {"max_abs", s.imageError->maxAbs},
+                        {"mean_abs", s.imageError->meanAbs}};
+  }
+  if (s.variantError) {
+    j["variant_error"] = {{"against", s.variantError->against},
+                          {"identical", s.variantError->identical},
+                          {"psnr", opt(s.variantError->psnr)},
+                          {"max_abs", s.variantError->maxAbs},
+                          {"mean_abs", s.variantError->meanAbs}};
+  }
+  return j;
+}
+
+json passJson(const store::Pass& p) {
+  json resources = json::array();
+  double bytes = 0;
+  std::optional<double> footprint, footprintRequested;  // over the lines that have a footprint
+  for (const auto& c : p.counters) {
+    resources.push_back({{"name", c.resource},
+                         {"kind", opt(c.kind)},
+                         {"format", opt(c.format)},
+                         {"access", c.access},
+                         {"count", c.count},
+                         {"bytes", c.bytes},
+                         {"footprint_bytes", opt(c.footprintBytes)},
+                         {"reuse", reuseJson(c.bytes, c.footprintBytes)},
+                         {"count_spread", c.countSpread},
+                         {"source", c.source}});
+    bytes += c.bytes;
+    if (c.footprintBytes) {
+      footprint = footprint.value_or(0) + *c.footprintBytes;
+      footprintRequested = footprintRequested.value_or(0) + c.bytes;
+    }
+  }
+  return {{"name", p.name},
+          {"gpu_ms", p.gpuMs},
+          {"gpu_ms_spread", p.gpuMsSpread},
+          {"gpu_ms_instrumented", opt(p.gpuMsInstrumented)},
+          {"overhead_ratio", opt(p.overheadRatio)},
+          {"fragment_invocations", opt(p.fragmentInvocations)},
+          {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
+          {"compute_invocations", opt(p.computeInvocations)},
+          {"compute_invocations_statistic", opt(p.computeInvocationsStatistic)},
+          {"bytes", bytes},
+          {"footprint_bytes", opt(footprint)},
+          {"reuse", reuseJson(footprintRequested, footprint)},
+          {"resources", resources}};
+}
+
+json comparedJson(const std::vector<store::Compared>& values) {
+  json out = json::array();
+  for (const auto& c : values) out.push_back({{"value", opt(c.value)}, {"delta", opt(c.delta)}, {"ratio", opt(c.ratio)}});
+  return out;
+}
+
+json comparisonJson(const store::Comparison& c) {
+  json runs = json::array(), passes = json::array(), resources = json::array();
+  for (const auto& r : c.runs) runs.push_back(runRowJson(r));
+  for (const auto& p : c.passes) {
+    passes.push_back({{"pass", p.pass},
+                      {"gpu_ms", comparedJson(p.gpuMs)},
+                      {"bytes", comparedJson(p.bytes)},
+                      {"footprint_bytes", comparedJson(p.footprintBytes)},
+                      {"reuse", comparedJson(p.reuse)},
+                      {"fragment_invocations", comparedJson(p.fragmentInvocations)}});
+  }
+  for (const auto& r : c.resources) {
+    resources.push_back({{"resource", r.resource},
+                         {"access", r.access},
+                         {"count", comparedJson(r.count)},
+                         {"bytes", comparedJson(r.bytes)},
+                         {"footprint_bytes", comparedJson(r.footprintBytes)},
+                         {"reuse", comparedJson(r.reuse)}});
+  }
+  return {{"runs", runs},
+          {"frame_ms", comparedJson(c.frameMs)},
+          {"total_bytes", comparedJson(c.totalBytes)},
+          {"total_footprint_bytes", comparedJson(c.totalFootprintBytes)},
+          {"reuse", comparedJson(c.reuse)},
+          {"passes", passes},
+          {"resources", resources}};
+}
+
+}  // namespace tally::service::detail
