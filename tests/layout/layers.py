@@ -29,7 +29,7 @@ ALLOWED = {
     "jobs": {"store"},
     # reports: computed from stored runs, without Vulkan (scenes: a heatmap's plan from the scene's triangles).
     "reports": {"store", "analysis", "scenes"},
-    "service": {"api", "store", "reports", "capture", "sweeps", "analysis", "renderers", "scenes", "spirv", "gpu"},
+    "service": {"api", "store", "reports", "capture", "sweeps", "analysis"},
     "commands": {"service", "api", "store", "reports", "jobs", "capture", "sweeps", "analysis", "renderers", "scenes",
                  "spirv", "gpu"},
 }
@@ -83,9 +83,48 @@ def check(server):
     return errors
 
 
+def page_table(page):
+    """The "may use" column of docs/architecture.md's table of parts: part ->
+    set of parts. "all of the above" is every part in the rows above; "—"
+    is none; an item's first word is the part ("jobs (`child_process.hpp`
+    only)" is jobs)."""
+    table, order = {}, []
+    for line in open(page, encoding="utf-8"):
+        m = re.match(r"^\| `(\w+)/` \| [^|]+ \| .* \| ([^|]+) \|\s*$", line)
+        if not m:
+            continue
+        part, uses = m.group(1), m.group(2).strip()
+        if uses == "all of the above":
+            table[part] = {p for p in order if p != "common"}
+        elif uses in ("—", "-", ""):
+            table[part] = set()
+        else:
+            table[part] = {item.strip().split()[0] for item in uses.split(",")}
+        order.append(part)
+    return table
+
+
+def check_page(page):
+    """The page and this script's table say the same."""
+    errors = []
+    table = page_table(page)
+    for part in sorted(set(ALLOWED) | set(table)):
+        if part not in table:
+            errors.append(f"{page}: no row for part {part}/ (the layer table in tests/layout/layers.py has one)")
+        elif part not in ALLOWED:
+            errors.append(f"{page}: a row for {part}/, which tests/layout/layers.py does not have")
+        elif table[part] != ALLOWED[part]:
+            errors.append(f"{page}: {part}/ may use {', '.join(sorted(table[part])) or 'nothing'} there, "
+                          f"but {', '.join(sorted(ALLOWED[part])) or 'nothing'} in tests/layout/layers.py")
+    return errors
+
+
 def main():
     server = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..", "server")
     errors = check(os.path.normpath(server))
+    page = os.path.join(os.path.dirname(os.path.normpath(server)), "docs", "architecture.md")
+    if os.path.exists(page):
+        errors += check_page(page)
     for e in errors:
         print(e)
     if errors:
