@@ -17,6 +17,179 @@
 
 namespace tally::renderers {
 
+namespace {
+
+gpu::DescriptorWrite bufferWrite(uint32_t binding, VkDescriptorType type, const gpu::Buffer& b) {
+  gpu::DescriptorWrite w;
+  w.binding = binding;
+  w.type = type;
+  w.buffer = {b.buffer, 0, VK_WHOLE_SIZE};
+  return w;
+}
+
+}  // namespace
+
+// The descriptor pool and the set layouts every renderer shares.
+void RendererBase::createSetLayouts(const GpuScene& scene, const RendererOptions& options) {
+  const uint32_t materials = scene.materialCount();
+  VkDescriptorPoolSize sizes[] = {
+      {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 6 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 48},
+      {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16},
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 2}};
+  pool_ = gpu::createDescriptorPool(*ctx_, materials + 32, sizes);
+  using T = VkDescriptorType;
+  const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+          image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  frameLayout_ = options.shadows.filter == ShadowFilter::Off
+                     ? setLayout({ubo, ubo, ssbo})
+                     : setLayout({ubo, ubo, ssbo, ubo, image});  // + shadow_shared.h's kBindingShadow(Map)
+  // draws, materials, vertices, indices; vertex_attributes, material_extras (glTF features)
+  geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
+  emptyLayout_ = setLayout({});
+  // The counters; with footprint, the table (a bank per binding of the set) and the bitmaps.
+  // Uninstrumented: no counter set at all.
+  counterLayout_ = !options.instrumented                 ? VK_NULL_HANDLE
+                   : options.footprintBlockBytes != 0 ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
+                                                       : setLayout({ssbo});
+  // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
+  const bool emissiveMaps = scene.features().emissiveMaps;
+  materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
+                                 : setLayout({image, image, image, image, image});
+  mapArrayLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
+                                 : setLayout({image, image, image, image, image});
+}
+
+// The camera and lighting buffers, and the level-of-detail chains and packed
+// vertices where the options ask for them.
+Result<bool> RendererBase::createFrameData(gpu::Context& ctx, const GpuScene& scene) {
+  cameraBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Camera), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                    gpu::MemoryUse::Upload);
+  lightingBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Lighting), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                                      gpu::MemoryUse::Upload);
+  shaders::Lighting lighting = {};
+  lighting.lightCount = options_.lights;
+  lighting.ambient = 0.15f;
+  lighting.exposure = 1.0f;
+  gpu::uploadBuffer(ctx, lightingBuffer_, {reinterpret_cast<const uint8_t*>(&lighting), sizeof lighting});
+
+  if (options_.lodThresholdPx > 0) {  // levels of detail (renderers/techniques/lod.hpp): chains built on first use
+    lod_ = std::make_unique<LodSelection>();
+    if (auto ok = lod_->setup(ctx, scene, options_.lodThresholdPx); !ok) {
+      lod_.reset();
+      return makeError(ok.error());
+    }
+  }
+  if (options_.tangentFrame == TangentFrameEncoding::Quaternion) {  // renderers/techniques/tbn.hpp
+    auto packed = buildPackedVertices(ctx, scene);
+    if (!packed) return makeError(packed.error());
+    packedVertices_ = std::make_unique<PackedVertexBuffer>(std::move(*packed));
+  }
+  return true;
+}
+
+// The frame, geometry, material and map-array sets, written.
+void RendererBase::writeSceneSets(gpu::Context& ctx, const GpuScene& scene) {
+  using T = VkDescriptorType;
+  const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  const uint32_t materials = scene.materialCount();
+  const bool emissiveMaps = scene.features().emissiveMaps;
+  frameSet_ = allocateSet(frameLayout_);
+  geometrySet_ = allocateSet(geometryLayout_);
+  gpu::DescriptorWrite frameWrites[] = {bufferWrite(0, ubo, cameraBuffer_),
+                                        bufferWrite(1, ubo, lightingBuffer_),
+                                        bufferWrite(2, ssbo, scene.lightBuffer())};
+  gpu::updateDescriptorSet(ctx, frameSet_, frameWrites);
+  gpu::DescriptorWrite geometryWrites[] = {
+      bufferWrite(0, ssbo, drawsBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
+      bufferWrite(2, ssbo, vertexBuffer()), bufferWrite(3, ssbo, indexBuffer()),
+      bufferWrite(shaders::kBindingVertexAttributes, ssbo, scene.attributeBuffer()),
+      bufferWrite(shaders::kBindingMaterialExtras, ssbo, scene.materialExtraBuffer())};
+  gpu::updateDescriptorSet(ctx, geometrySet_, geometryWrites);
+  const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  for (uint32_t m = 0; m < materials; ++m) {  // each map with its texture's own sampler
+    VkDescriptorSet set = allocateSet(materialLayout_);
+    for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+      writeImage(set, k, scene.materialMap(m, k), scene.materialSampler(m, k), readOnly);
+    }
+    if (emissiveMaps) writeImage(set, shaders::kBindingEmissiveMap, scene.emissiveMap(m), scene.emissiveSampler(m), readOnly);
+    materialSets_.push_back(set);
+  }
+  // Map arrays: one repeating trilinear sampler per kind; a texture that
+  // wraps otherwise is wrapped in the shader (TALLY_WRAP_EMULATION).
+  mapArraySet_ = allocateSet(mapArrayLayout_);
+  for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
+    writeImage(mapArraySet_, k, scene.mapArray(k), scene.sampler(), readOnly);
+  }
+  if (emissiveMaps) writeImage(mapArraySet_, shaders::kBindingEmissiveMap, scene.emissiveArray(), scene.sampler(), readOnly);
+  targetSampler_ = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+}
+
+// The scene's buffers under the names their lines carry, the camera and
+// lighting buffers, and the targets every renderer has.
+void RendererBase::addSharedResources(const GpuScene& scene) {
+  for (auto& r : scene.bufferResources()) {
+    // With LOD on, "indices" is the buffer the renderer binds: the original
+    // indices and every coarser level.
+    if (lod_ && r.name == "indices") r.allocationBytes = lod_->indexAllocationBytes();
+    if (packedVertices_ && r.name == "vertices") r = packedVertices_->info;  // the buffer bound instead
+    // The buffers bound under these names (LOD's index and draws buffers where it is on).
+    if (r.name == "indices") r.objects = {gpu::objectOf(indexBuffer().buffer)};
+    if (r.name == "draws") r.objects = {gpu::objectOf(drawsBuffer().buffer)};
+    resources_.push_back(r);
+  }
+  ResourceInfo camera;
+  camera.name = "camera";
+  camera.kind = ResourceKind::Buffer;
+  camera.elementBytes = sizeof(shaders::Camera);
+  camera.allocationBytes = cameraBuffer_.size;
+  camera.usage = "uniform";
+  camera.objects = {gpu::objectOf(cameraBuffer_.buffer)};
+  resources_.push_back(camera);
+  camera.name = "lighting";
+  camera.elementBytes = sizeof(shaders::Lighting);
+  camera.allocationBytes = lightingBuffer_.size;
+  camera.objects = {gpu::objectOf(lightingBuffer_.buffer)};
+  resources_.push_back(camera);
+  resources_.push_back(scene.skyResource());
+  hdr_ = createTarget("hdr", kHdrFormat,
+                      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | hdrExtraUsage(),
+                      ResourceKind::Attachment);
+  final_ = createTarget("final", kFinalFormat,
+                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                        ResourceKind::Attachment);
+  depth_ = createTarget("depth", kDepthFormat,
+                        VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                            VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  // depthImage() reads it back
+                        ResourceKind::Depth);
+}
+
+// The counter buffer and its set, the queries, and every object's debug name.
+void RendererBase::createCountersAndQueries(gpu::Context& ctx) {
+  const VkDescriptorType ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  if (options_.instrumented) {
+    counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
+                                      VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                  gpu::MemoryUse::DeviceLocal);
+    counterDescriptorSet_ = allocateSet(counterLayout_);
+    gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
+    gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
+  }
+  if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
+  if (ctx.pipelineStatistics) {
+    statistics_ = gpu::createStatisticsQueries(ctx, uint32_t(passes_.size()),
+                                               VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT |
+                                                   VK_QUERY_PIPELINE_STATISTIC_COMPUTE_SHADER_INVOCATIONS_BIT);
+  }
+  // Every image and buffer under the name its lines carry, for tools
+  // that intercept the application (VK_EXT_debug_utils; a no-op without it).
+  for (const auto& r : resources_) {
+    for (const auto& object : r.objects) gpu::nameObject(ctx, object, r.name);
+  }
+}
+
 Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const RendererOptions& options) {
   destroy();
   setupTimes_ = {};
@@ -35,34 +208,7 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
   counterDescriptorSet_ = VK_NULL_HANDLE;  // plain renderers have none (makePipelineLayout)
   maxLayoutSets_ = 0;
   try {
-    const uint32_t materials = scene.materialCount();
-    VkDescriptorPoolSize sizes[] = {
-        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 6 * (materials + 4) + 32 + shaders::kMaxMaterialMaps},
-        {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 48},
-        {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 16},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 2}};
-    pool_ = gpu::createDescriptorPool(ctx, materials + 32, sizes);
-    using T = VkDescriptorType;
-    const T ubo = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-            image = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    frameLayout_ = options.shadows.filter == ShadowFilter::Off
-                       ? setLayout({ubo, ubo, ssbo})
-                       : setLayout({ubo, ubo, ssbo, ubo, image});  // + shadow_shared.h's kBindingShadow(Map)
-    // draws, materials, vertices, indices; vertex_attributes, material_extras (glTF features)
-    geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
-    emptyLayout_ = setLayout({});
-    // The counters; with footprint, the table (a bank per binding of the set) and the bitmaps.
-    // Uninstrumented: no counter set at all.
-    counterLayout_ = !options.instrumented                 ? VK_NULL_HANDLE
-                     : options.footprintBlockBytes != 0 ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
-                                                         : setLayout({ssbo});
-    // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
-    const bool emissiveMaps = scene.features().emissiveMaps;
-    materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
-                                   : setLayout({image, image, image, image, image});
-    mapArrayLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
-                                   : setLayout({image, image, image, image, image});
+    createSetLayouts(scene, options);
     dynamicCull_ = scene.features().singleSided;
     if (dynamicCull_ && std::min(ctx.apiVersion, ctx.properties.apiVersion) < VK_API_VERSION_1_3) {
       destroy();
@@ -71,101 +217,10 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
                        "Vulkan 1.3 (dynamic cull mode)");
     }
 
-    cameraBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Camera), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                                      gpu::MemoryUse::Upload);
-    lightingBuffer_ = gpu::createBuffer(ctx, sizeof(shaders::Lighting), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
-                                        gpu::MemoryUse::Upload);
-    shaders::Lighting lighting = {};
-    lighting.lightCount = options_.lights;
-    lighting.ambient = 0.15f;
-    lighting.exposure = 1.0f;
-    gpu::uploadBuffer(ctx, lightingBuffer_, {reinterpret_cast<const uint8_t*>(&lighting), sizeof lighting});
+    if (auto ok = createFrameData(ctx, scene); !ok) return makeError(ok.error());
+    writeSceneSets(ctx, scene);
 
-    if (options_.lodThresholdPx > 0) {  // levels of detail (renderers/techniques/lod.hpp): chains built on first use
-      lod_ = std::make_unique<LodSelection>();
-      if (auto ok = lod_->setup(ctx, scene, options_.lodThresholdPx); !ok) {
-        lod_.reset();
-        return makeError(ok.error());
-      }
-    }
-    if (options_.tangentFrame == TangentFrameEncoding::Quaternion) {  // renderers/techniques/tbn.hpp
-      auto packed = buildPackedVertices(ctx, scene);
-      if (!packed) return makeError(packed.error());
-      packedVertices_ = std::make_unique<PackedVertexBuffer>(std::move(*packed));
-    }
-    frameSet_ = allocateSet(frameLayout_);
-    geometrySet_ = allocateSet(geometryLayout_);
-    auto bufferWrite = [](uint32_t binding, VkDescriptorType type, const gpu::Buffer& b) {
-      gpu::DescriptorWrite w;
-      w.binding = binding;
-      w.type = type;
-      w.buffer = {b.buffer, 0, VK_WHOLE_SIZE};
-      return w;
-    };
-    gpu::DescriptorWrite frameWrites[] = {bufferWrite(0, ubo, cameraBuffer_),
-                                          bufferWrite(1, ubo, lightingBuffer_),
-                                          bufferWrite(2, ssbo, scene.lightBuffer())};
-    gpu::updateDescriptorSet(ctx, frameSet_, frameWrites);
-    gpu::DescriptorWrite geometryWrites[] = {
-        bufferWrite(0, ssbo, drawsBuffer()), bufferWrite(1, ssbo, scene.materialBuffer()),
-        bufferWrite(2, ssbo, vertexBuffer()), bufferWrite(3, ssbo, indexBuffer()),
-        bufferWrite(shaders::kBindingVertexAttributes, ssbo, scene.attributeBuffer()),
-        bufferWrite(shaders::kBindingMaterialExtras, ssbo, scene.materialExtraBuffer())};
-    gpu::updateDescriptorSet(ctx, geometrySet_, geometryWrites);
-    const VkImageLayout readOnly = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    for (uint32_t m = 0; m < materials; ++m) {  // each map with its texture's own sampler
-      VkDescriptorSet set = allocateSet(materialLayout_);
-      for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-        writeImage(set, k, scene.materialMap(m, k), scene.materialSampler(m, k), readOnly);
-      }
-      if (emissiveMaps) writeImage(set, shaders::kBindingEmissiveMap, scene.emissiveMap(m), scene.emissiveSampler(m), readOnly);
-      materialSets_.push_back(set);
-    }
-    // Map arrays: one repeating trilinear sampler per kind; a texture that
-    // wraps otherwise is wrapped in the shader (TALLY_WRAP_EMULATION).
-    mapArraySet_ = allocateSet(mapArrayLayout_);
-    for (uint32_t k = 0; k < scenes::kMapSlotCount; ++k) {
-      writeImage(mapArraySet_, k, scene.mapArray(k), scene.sampler(), readOnly);
-    }
-    if (emissiveMaps) writeImage(mapArraySet_, shaders::kBindingEmissiveMap, scene.emissiveArray(), scene.sampler(), readOnly);
-    targetSampler_ = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
-
-    // Shared targets and resources.
-    for (auto& r : scene.bufferResources()) {
-      // With LOD on, "indices" is the buffer the renderer binds: the original
-      // indices and every coarser level.
-      if (lod_ && r.name == "indices") r.allocationBytes = lod_->indexAllocationBytes();
-      if (packedVertices_ && r.name == "vertices") r = packedVertices_->info;  // the buffer bound instead
-      // The buffers bound under these names (LOD's index and draws buffers where it is on).
-      if (r.name == "indices") r.objects = {gpu::objectOf(indexBuffer().buffer)};
-      if (r.name == "draws") r.objects = {gpu::objectOf(drawsBuffer().buffer)};
-      resources_.push_back(r);
-    }
-    ResourceInfo camera;
-    camera.name = "camera";
-    camera.kind = ResourceKind::Buffer;
-    camera.elementBytes = sizeof(shaders::Camera);
-    camera.allocationBytes = cameraBuffer_.size;
-    camera.usage = "uniform";
-    camera.objects = {gpu::objectOf(cameraBuffer_.buffer)};
-    resources_.push_back(camera);
-    camera.name = "lighting";
-    camera.elementBytes = sizeof(shaders::Lighting);
-    camera.allocationBytes = lightingBuffer_.size;
-    camera.objects = {gpu::objectOf(lightingBuffer_.buffer)};
-    resources_.push_back(camera);
-    resources_.push_back(scene.skyResource());
-    hdr_ = createTarget("hdr", kHdrFormat,
-                        VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | hdrExtraUsage(),
-                        ResourceKind::Attachment);
-    final_ = createTarget("final", kFinalFormat,
-                          VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                          ResourceKind::Attachment);
-    depth_ = createTarget("depth", kDepthFormat,
-                          VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
-                              VK_IMAGE_USAGE_TRANSFER_SRC_BIT,  // depthImage() reads it back
-                          ResourceKind::Depth);
-
+    addSharedResources(scene);
     if (auto ok = setupShadows(); !ok) {  // the "shadow" pass first (shadows.cpp)
       std::string why = ok.error();
       destroy();
@@ -183,26 +238,7 @@ Result<bool> RendererBase::setup(gpu::Context& ctx, const GpuScene& scene, const
     setupBloom();
     setupTonemapAndSkybox();
 
-    if (options_.instrumented) {
-      counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
-                                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
-                                        VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                    gpu::MemoryUse::DeviceLocal);
-      counterDescriptorSet_ = allocateSet(counterLayout_);
-      gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
-      gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
-    }
-    if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
-    if (ctx.pipelineStatistics) {
-      statistics_ = gpu::createStatisticsQueries(ctx, uint32_t(passes_.size()),
-                                                 VK_QUERY_PIPELINE_STATISTIC_FRAGMENT_SHADER_INVOCATIONS_BIT |
-                                                     VK_QUERY_PIPELINE_STATISTIC_COMPUTE_SHADER_INVOCATIONS_BIT);
-    }
-    // Every image and buffer under the name its lines carry, for tools
-    // that intercept the application (VK_EXT_debug_utils; a no-op without it).
-    for (const auto& r : resources_) {
-      for (const auto& object : r.objects) gpu::nameObject(ctx, object, r.name);
-    }
+    createCountersAndQueries(ctx);
   } catch (const std::exception& e) {
     destroy();
     return makeError(std::string(name()) + ": " + e.what());

@@ -284,6 +284,12 @@ class RendererBase : public Renderer {
   std::vector<ResourceInfo> resources_;
 
  private:
+  // setup's steps (renderer_base.cpp).
+  void createSetLayouts(const GpuScene& scene, const RendererOptions& options);
+  Result<bool> createFrameData(gpu::Context& ctx, const GpuScene& scene);
+  void writeSceneSets(gpu::Context& ctx, const GpuScene& scene);
+  void addSharedResources(const GpuScene& scene);
+  void createCountersAndQueries(gpu::Context& ctx);
   void setupTonemapAndSkybox();
   // alphaMode BLEND (glTF scenes): the "transparent" pass after the skybox,
   // forward-shaded and tonemapped per fragment, blended into "final" back to
