@@ -253,32 +253,13 @@ Result<DeferredRenderer::Gbuffer> DeferredRenderer::gbufferPipeline(uint32_t p, 
   return g;
 }
 
-// gbuffer=subpass: one render pass. Attachments 0-2 the transient G-buffer
-// (cleared, storeOp DONT_CARE), 3 depth/stencil (stored: the skybox tests its
-// stencil; loaded after a pre-pass), 4 hdr (cleared, stored). Subpass 0 writes
-// 0-3; subpass 1 reads 0-2 as input attachments 0-2 and the depth aspect of
-// 3 through the sampled depth view (stored anyway; on the H200 its read as an
-// input attachment differed), tests stencil == 1 against 3 read-only and
-// writes 4.
-Result<bool> DeferredRenderer::setupSubpassPasses() {
-  const VkImageUsageFlags transient =
-      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT;
-  const std::string names[3] = {"gbuffer.normal", "gbuffer.diffuse", "gbuffer.specular"};
-  const VkFormat formats[3] = {kNormalFormat, kDiffuseFormat, kSpecularFormat};
-  const gpu::Image* targets[3];
-  for (int i = 0; i < 3; ++i) {
-    targets[i] = createTransientTarget(names[i], formats[i], transient);
-    gbufferMemory_[names[i]] = resources_.back().memory;
-  }
+// The one render pass of gbuffer=subpass (attachments and subpasses as
+// setupSubpassPasses describes them).
+VkRenderPass createSubpassRenderPass(VkDevice device, const VkFormat (&formats)[3], bool prepass) {
   const VkImageLayout colorAttachment = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
   const VkImageLayout depthAttachment = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
   const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
   const VkImageLayout shaderRead = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-  const bool prepass = options_.zprepass;
-  if (prepass) {
-    if (auto ok = addDepthPrepass(); !ok) return ok;
-  }
-
   std::vector<VkAttachmentDescription> attachments(5);
   for (uint32_t i = 0; i < 3; ++i) {
     VkAttachmentDescription& a = attachments[i];
@@ -362,8 +343,35 @@ Result<bool> DeferredRenderer::setupSubpassPasses() {
   info.dependencyCount = uint32_t(deps.size());
   info.pDependencies = deps.data();
   VkRenderPass created = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateRenderPass(ctx_->device, &info, nullptr, &created));
-  VkRenderPass rp = ownRenderPass(created);
+  VK_CHECK(vkCreateRenderPass(device, &info, nullptr, &created));
+  return created;
+}
+
+// gbuffer=subpass: one render pass. Attachments 0-2 the transient G-buffer
+// (cleared, storeOp DONT_CARE), 3 depth/stencil (stored: the skybox tests its
+// stencil; loaded after a pre-pass), 4 hdr (cleared, stored). Subpass 0 writes
+// 0-3; subpass 1 reads 0-2 as input attachments 0-2 and the depth aspect of
+// 3 through the sampled depth view (stored anyway; on the H200 its read as an
+// input attachment differed), tests stencil == 1 against 3 read-only and
+// writes 4.
+Result<bool> DeferredRenderer::setupSubpassPasses() {
+  const VkImageUsageFlags transient =
+      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT;
+  const std::string names[3] = {"gbuffer.normal", "gbuffer.diffuse", "gbuffer.specular"};
+  const VkFormat formats[3] = {kNormalFormat, kDiffuseFormat, kSpecularFormat};
+  const gpu::Image* targets[3];
+  for (int i = 0; i < 3; ++i) {
+    targets[i] = createTransientTarget(names[i], formats[i], transient);
+    gbufferMemory_[names[i]] = resources_.back().memory;
+  }
+  const VkImageLayout depthReadOnly = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+  const VkImageLayout shaderRead = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  const bool prepass = options_.zprepass;
+  if (prepass) {
+    if (auto ok = addDepthPrepass(); !ok) return ok;
+  }
+
+  VkRenderPass rp = ownRenderPass(createSubpassRenderPass(ctx_->device, formats, prepass));
   VkFramebuffer fb = framebuffer(rp, {targets[0]->view, targets[1]->view, targets[2]->view, depth_->view, hdr_->view});
 
   // Subpass 0: the G-buffer, as the sampled variant's pass.
