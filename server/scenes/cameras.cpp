@@ -260,31 +260,41 @@ float skyFraction(const Scene& scene, const Camera& camera, float aspect, int ra
   return skyFraction(Bvh::build(scene), camera, aspect, raysX, raysY);
 }
 
-std::vector<Camera> autoCameras(const Scene& scene) {
-  if (scene.triangleCount() == 0 || scene.bounds.empty()) return {};
-  const Bvh bvh = Bvh::build(scene);
-  const float diagonal = scene.bounds.diagonal();
-  std::vector<Candidate> cands = !scene.fixedCameras.empty() ? fixedCandidates(scene)
-                                 : isThin(scene.bounds)      ? outsideCandidates(scene)
-                                                             : gridCandidates(scene, bvh);
-  if (cands.empty()) cands = outsideCandidates(scene);
-  for (Candidate& c : cands)
-    c.screen = cast(bvh, c.camera, kSkyAspect, kScreenRaysX, kScreenRaysY, diagonal, true);
-  auto full = [&](Candidate& c) {
+namespace {
+
+// The choice of a scene's automatic cameras among candidates (autoCameras):
+// the scene's own cameras first, then one per sky category, then variety,
+// then every camera made to see some of the scene.
+class CameraChooser {
+ public:
+  CameraChooser(const Bvh& bvh, std::vector<Candidate> cands) : bvh_(bvh), cands_(std::move(cands)) {}
+
+  std::vector<Camera> choose() {
+    for (size_t i = 0; i < cands_.size() && chosen_.size() < size_t(kAutoCameraCount); ++i)
+      if (cands_[i].fixed) {
+        chosen_.push_back(i);
+        categories_.push_back("");
+      }
+    chooseCategories();
+    chooseVariety();
+    replaceSkyOnly();
+    return cameras();
+  }
+
+ private:
+  // The full measurement of a candidate's sky fraction, made once.
+  float full(size_t i) {
+    Candidate& c = cands_[i];
     if (!c.full)
-      c.full = c.fixed && c.camera.skyFraction >= 0.0f ? c.camera.skyFraction : skyFraction(bvh, c.camera);
+      c.full = c.fixed && c.camera.skyFraction >= 0.0f ? c.camera.skyFraction : skyFraction(bvh_, c.camera);
     return *c.full;
-  };
+  }
+  bool isChosen(size_t i) const { return std::find(chosen_.begin(), chosen_.end(), i) != chosen_.end(); }
 
-  std::vector<size_t> chosen;
-  std::vector<std::string> categories;  // parallel to chosen
-  auto isChosen = [&](size_t i) { return std::find(chosen.begin(), chosen.end(), i) != chosen.end(); };
-  for (size_t i = 0; i < cands.size() && chosen.size() < size_t(kAutoCameraCount); ++i)
-    if (cands[i].fixed) {
-      chosen.push_back(i);
-      categories.push_back("");
-    }
-
+  void chooseCategories() {
+    auto& cands = cands_;
+    auto& chosen = chosen_;
+    auto& categories = categories_;
   // One camera per category: candidates ordered by preference on the screening
   // grid; the first whose full measurement lies well inside the category
   // wins (so it stays there under small changes of grid or geometry), else
@@ -310,7 +320,7 @@ std::vector<Camera> autoCameras(const Scene& scene) {
   for (const Category& cat : kCategories) {
     bool satisfied = false;
     for (size_t k = 0; k < chosen.size(); ++k)
-      if (cat.loose(full(cands[chosen[k]]))) {
+      if (cat.loose(full(chosen[k]))) {
         if (categories[k].empty()) categories[k] = cat.name;
         satisfied = true;
       }
@@ -324,16 +334,21 @@ std::vector<Camera> autoCameras(const Scene& scene) {
       for (size_t k = 0, tries = 0; k < order.size() && tries < kTriesPerCategory && !pick; ++k) {
         if (isChosen(order[k])) continue;
         ++tries;
-        if (accepts(full(cands[order[k]]))) pick = order[k];
+        if (accepts(full(order[k]))) pick = order[k];
       }
     for (size_t k = 0; k < order.size() && !pick; ++k)
       if (!isChosen(order[k])) pick = order[k];
     if (pick) {
       chosen.push_back(*pick);
-      categories.push_back(cat.loose(full(cands[*pick])) ? cat.name : std::string("nearest to ") + cat.name);
+      categories.push_back(cat.loose(full(*pick)) ? cat.name : std::string("nearest to ") + cat.name);
     }
   }
+  }
 
+  void chooseVariety() {
+    auto& cands = cands_;
+    auto& chosen = chosen_;
+    auto& categories = categories_;
   // The rest for variety: round robin over sky-fraction bins (so the set
   // spreads across the sky fractions the scene offers, not only across its
   // floor plan), taking in each bin the candidate farthest from those chosen
@@ -387,39 +402,70 @@ std::vector<Camera> autoCameras(const Scene& scene) {
     perBin[size_t(bin(cands[best].screen.sky))]++;
     update(best);
   }
+  }
 
+  void replaceSkyOnly() {
+    auto& cands = cands_;
+    auto& chosen = chosen_;
+    auto& categories = categories_;
   // Every camera must see some of the scene: one whose full grid hits
   // nothing (a category's nearest miss, a variety pick) gives way to the
   // unchosen candidate that sees the most geometry on the screening grid.
   for (size_t k = 0; k < chosen.size(); ++k) {
-    if (full(cands[chosen[k]]) < 1.0f) continue;
+    if (full(chosen[k]) < 1.0f) continue;
     std::vector<size_t> order;
     for (size_t i = 0; i < cands.size(); ++i)
       if (!isChosen(i) && cands[i].screen.sky < 1.0f) order.push_back(i);
     std::stable_sort(order.begin(), order.end(),
                      [&](size_t a, size_t b) { return cands[a].screen.sky < cands[b].screen.sky; });
     for (size_t i : order) {
-      if (full(cands[i]) < 1.0f) {
+      if (full(i) < 1.0f) {
         chosen[k] = i;
         categories[k] = "sees geometry (in place of a view of sky only)";
         break;
       }
     }
   }
+  }
 
+  std::vector<Camera> cameras() {
+    auto& cands = cands_;
+    auto& chosen = chosen_;
+    auto& categories = categories_;
   // One that still sees only sky (no candidate left that sees any geometry)
   // is dropped: a view of sky alone measures nothing of the scene. A
   // scene's fixed cameras stay as they are.
   std::vector<Camera> out;
   for (size_t k = 0; k < chosen.size(); ++k) {
     Candidate& c = cands[chosen[k]];
-    if (!c.fixed && full(c) >= 1.0f) continue;
+    if (!c.fixed && full(chosen[k]) >= 1.0f) continue;
     Camera cam = c.camera;
-    cam.skyFraction = full(c);
+    cam.skyFraction = full(chosen[k]);
     cam.label = categories[k].empty() ? c.description : categories[k] + ": " + c.description;
     out.push_back(std::move(cam));
   }
-  return out;
+    return out;
+  }
+
+  const Bvh& bvh_;
+  std::vector<Candidate> cands_;
+  std::vector<size_t> chosen_;
+  std::vector<std::string> categories_;  // parallel to chosen_
+};
+
+}  // namespace
+
+std::vector<Camera> autoCameras(const Scene& scene) {
+  if (scene.triangleCount() == 0 || scene.bounds.empty()) return {};
+  const Bvh bvh = Bvh::build(scene);
+  const float diagonal = scene.bounds.diagonal();
+  std::vector<Candidate> cands = !scene.fixedCameras.empty() ? fixedCandidates(scene)
+                                 : isThin(scene.bounds)      ? outsideCandidates(scene)
+                                                             : gridCandidates(scene, bvh);
+  if (cands.empty()) cands = outsideCandidates(scene);
+  for (Candidate& c : cands)
+    c.screen = cast(bvh, c.camera, kSkyAspect, kScreenRaysX, kScreenRaysY, diagonal, true);
+  return CameraChooser(bvh, std::move(cands)).choose();
 }
 
 namespace {
