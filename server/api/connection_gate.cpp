@@ -167,6 +167,137 @@ std::size_t ConnectionGate::openConnections() const {
   return open_;
 }
 
+// One run of the gate's loop: the epoll set, the connections still being
+// read, and what happens to each (ConnectionGate::run).
+class GateLoop {
+ public:
+  GateLoop(ConnectionGate& gate, int ep) : gate_(gate), ep_(ep) {}
+
+  void drop(Pending& p) {
+    ::epoll_ctl(ep_, EPOLL_CTL_DEL, p.fd, nullptr);
+    ::close(p.fd);
+    gate_.release(p.peerIp);
+    pending_.erase(p.fd);
+  }
+  void refuse(Pending& p, Refusal why, int status, const char* reason, const char* code,
+              const char* message) {
+    if (gate_.onRefused_) gate_.onRefused_(why, p.peerIp);
+    refuseOnSocket(p.fd, status, reason, code, message);
+    drop(p);
+  }
+
+  // Every connection waiting on the listening socket.
+  void acceptAll() {
+    for (;;) {
+      sockaddr_storage peer{};
+      socklen_t len = sizeof peer;
+      int c = ::accept4(gate_.listenFd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (c < 0) break;  // EAGAIN: none left; EMFILE and the like: try at the next wake-up
+      auto p = std::make_unique<Pending>();
+      p->fd = c;
+      addressOf(peer, p->peerIp, p->peerPort);
+      sockaddr_storage local{};
+      len = sizeof local;
+      if (::getsockname(c, reinterpret_cast<sockaddr*>(&local), &len) == 0) addressOf(local, p->localIp, p->localPort);
+      if (!gate_.admit(p->peerIp)) {
+        refuseOnSocket(c, 503, "Service Unavailable", "unavailable", "too many open connections; try again shortly");
+        ::close(c);
+        continue;
+      }
+      p->deadline = Clock::now() + gate_.options_.requestTimeout;
+      epoll_event cev{};
+      cev.events = EPOLLIN | EPOLLRDHUP;
+      cev.data.fd = c;
+      if (::epoll_ctl(ep_, EPOLL_CTL_ADD, c, &cev) != 0) {
+        ::close(c);
+        gate_.release(p->peerIp);
+        continue;
+      }
+      pending_.emplace(c, std::move(p));
+    }
+  }
+
+  // What arrived on a connection: read on, refused, dropped, or handed on whole.
+  void readFrom(int fd) {
+    auto it = pending_.find(fd);
+    if (it == pending_.end()) return;
+    Pending& p = *it->second;
+    const auto& options = gate_.options_;
+    bool closed = false;
+    for (;;) {
+      ssize_t got = ::recv(fd, buffer_, sizeof buffer_, 0);
+      if (got > 0) {
+        p.bytes.append(buffer_, size_t(got));
+        if (p.bytes.size() > options.maxHeaderBytes + options.maxBodyBytes) break;
+        continue;
+      }
+      if (got == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) closed = true;
+      if (got < 0 && errno == EINTR) continue;
+      break;
+    }
+    RequestExtent extent = requestExtent(p.bytes, options.maxBodyBytes);
+    // The header limit holds however the bytes came: a whole oversized
+    // header in one read is as refused as one that is still arriving.
+    if (extent.headerComplete && extent.headerBytes > options.maxHeaderBytes) {
+      refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",
+             "the request header is too large");
+      return;
+    }
+    if (!extent.headerComplete) {
+      if (p.bytes.size() > options.maxHeaderBytes) {
+        refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",
+               "the request header is too large");
+      } else if (closed) {
+        drop(p);  // gone before finishing its header: nothing to answer
+      }
+      return;
+    }
+    bool whole = p.bytes.size() >= extent.headerBytes + extent.bodyBytes;
+    if (!whole && closed) {
+      drop(p);
+      return;
+    }
+    if (!whole) {
+      if (extent.expectContinue && !p.continueSent) {
+        static constexpr char kContinue[] = "HTTP/1.1 100 Continue\r\n\r\n";
+        (void)::send(fd, kContinue, sizeof kContinue - 1, MSG_NOSIGNAL | MSG_DONTWAIT);
+        p.continueSent = true;
+      }
+      return;
+    }
+    // Whole: hand it on. From here its handler owns the socket.
+    ::epoll_ctl(ep_, EPOLL_CTL_DEL, fd, nullptr);
+    ReadyRequest ready{fd, std::move(p.bytes), p.peerIp, p.peerPort, p.localIp, p.localPort};
+    pending_.erase(it);
+    gate_.onReady_(std::move(ready));
+  }
+
+  // Requests not read whole in time.
+  void refuseLate() {
+    auto now = Clock::now();
+    std::vector<int> late;
+    for (const auto& [fd, p] : pending_) {
+      if (now >= p->deadline) late.push_back(fd);
+    }
+    for (int fd : late) {
+      refuse(*pending_.at(fd), Refusal::kTimeout, 408, "Request Timeout", "request_timeout",
+             "the request was not received in time");
+    }
+  }
+
+  void dropAll() {
+    std::vector<int> left;
+    for (const auto& [fd, p] : pending_) left.push_back(fd);
+    for (int fd : left) drop(*pending_.at(fd));
+  }
+
+ private:
+  ConnectionGate& gate_;
+  int ep_;
+  std::unordered_map<int, std::unique_ptr<Pending>> pending_;
+  char buffer_[16384];
+};
+
 bool ConnectionGate::run() {
   if (wakeFd_ < 0) return false;
   int ep = ::epoll_create1(EPOLL_CLOEXEC);
@@ -183,22 +314,9 @@ bool ConnectionGate::run() {
   ev.data.fd = wakeFd_;
   if (::epoll_ctl(ep, EPOLL_CTL_ADD, wakeFd_, &ev) != 0) return false;
 
-  std::unordered_map<int, std::unique_ptr<Pending>> pending;
-  auto drop = [&](Pending& p) {
-    ::epoll_ctl(ep, EPOLL_CTL_DEL, p.fd, nullptr);
-    ::close(p.fd);
-    release(p.peerIp);
-    pending.erase(p.fd);
-  };
-  auto refuse = [&](Pending& p, Refusal why, int status, const char* reason, const char* code, const char* message) {
-    if (onRefused_) onRefused_(why, p.peerIp);
-    refuseOnSocket(p.fd, status, reason, code, message);
-    drop(p);
-  };
-
+  GateLoop loop(*this, ep);
   running_ = true;
   std::array<epoll_event, 64> events{};
-  char buffer[16384];
   while (!stopping_) {
     // Deadlines are checked at least every 100 ms.
     int n = ::epoll_wait(ep, events.data(), int(events.size()), 100);
@@ -207,103 +325,15 @@ bool ConnectionGate::run() {
       int fd = events[i].data.fd;
       if (fd == wakeFd_) continue;
       if (fd == listenFd_) {
-        for (;;) {
-          sockaddr_storage peer{};
-          socklen_t len = sizeof peer;
-          int c = ::accept4(listenFd_, reinterpret_cast<sockaddr*>(&peer), &len, SOCK_NONBLOCK | SOCK_CLOEXEC);
-          if (c < 0) break;  // EAGAIN: none left; EMFILE and the like: try at the next wake-up
-          auto p = std::make_unique<Pending>();
-          p->fd = c;
-          addressOf(peer, p->peerIp, p->peerPort);
-          sockaddr_storage local{};
-          len = sizeof local;
-          if (::getsockname(c, reinterpret_cast<sockaddr*>(&local), &len) == 0)
-            addressOf(local, p->localIp, p->localPort);
-          if (!admit(p->peerIp)) {
-            refuseOnSocket(c, 503, "Service Unavailable", "unavailable",
-                           "too many open connections; try again shortly");
-            ::close(c);
-            continue;
-          }
-          p->deadline = Clock::now() + options_.requestTimeout;
-          epoll_event cev{};
-          cev.events = EPOLLIN | EPOLLRDHUP;
-          cev.data.fd = c;
-          if (::epoll_ctl(ep, EPOLL_CTL_ADD, c, &cev) != 0) {
-            ::close(c);
-            release(p->peerIp);
-            continue;
-          }
-          pending.emplace(c, std::move(p));
-        }
-        continue;
+        loop.acceptAll();
+      } else {
+        loop.readFrom(fd);
       }
-      auto it = pending.find(fd);
-      if (it == pending.end()) continue;
-      Pending& p = *it->second;
-      bool closed = false;
-      for (;;) {
-        ssize_t got = ::recv(fd, buffer, sizeof buffer, 0);
-        if (got > 0) {
-          p.bytes.append(buffer, size_t(got));
-          if (p.bytes.size() > options_.maxHeaderBytes + options_.maxBodyBytes) break;
-          continue;
-        }
-        if (got == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) closed = true;
-        if (got < 0 && errno == EINTR) continue;
-        break;
-      }
-      RequestExtent extent = requestExtent(p.bytes, options_.maxBodyBytes);
-      // The header limit holds however the bytes came: a whole oversized
-      // header in one read is as refused as one that is still arriving.
-      if (extent.headerComplete && extent.headerBytes > options_.maxHeaderBytes) {
-        refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",
-               "the request header is too large");
-        continue;
-      }
-      if (!extent.headerComplete) {
-        if (p.bytes.size() > options_.maxHeaderBytes) {
-          refuse(p, Refusal::kHeaderTooLarge, 431, "Request Header Fields Too Large", "bad_header",
-                 "the request header is too large");
-        } else if (closed) {
-          drop(p);  // gone before finishing its header: nothing to answer
-        }
-        continue;
-      }
-      bool whole = p.bytes.size() >= extent.headerBytes + extent.bodyBytes;
-      if (!whole && closed) {
-        drop(p);
-        continue;
-      }
-      if (!whole) {
-        if (extent.expectContinue && !p.continueSent) {
-          static constexpr char kContinue[] = "HTTP/1.1 100 Continue\r\n\r\n";
-          (void)::send(fd, kContinue, sizeof kContinue - 1, MSG_NOSIGNAL | MSG_DONTWAIT);
-          p.continueSent = true;
-        }
-        continue;
-      }
-      // Whole: hand it on. From here its handler owns the socket.
-      ::epoll_ctl(ep, EPOLL_CTL_DEL, fd, nullptr);
-      ReadyRequest ready{fd, std::move(p.bytes), p.peerIp, p.peerPort, p.localIp, p.localPort};
-      pending.erase(it);
-      onReady_(std::move(ready));
     }
-    // Requests not read whole in time.
-    auto now = Clock::now();
-    std::vector<int> late;
-    for (const auto& [fd, p] : pending) {
-      if (now >= p->deadline) late.push_back(fd);
-    }
-    for (int fd : late) {
-      refuse(*pending.at(fd), Refusal::kTimeout, 408, "Request Timeout", "request_timeout",
-             "the request was not received in time");
-    }
+    loop.refuseLate();
   }
   running_ = false;
-  std::vector<int> left;
-  for (const auto& [fd, p] : pending) left.push_back(fd);
-  for (int fd : left) drop(*pending.at(fd));
+  loop.dropAll();
   return true;
 }
 

@@ -53,6 +53,8 @@ struct RequestExtent {
 };
 RequestExtent requestExtent(std::string_view bytes, std::size_t maxBodyBytes);
 
+class GateLoop;
+
 class ConnectionGate {
  public:
   using OnReady = std::function<void(ReadyRequest)>;
@@ -75,6 +77,7 @@ class ConnectionGate {
   std::size_t openConnections() const;
 
  private:
+  friend class GateLoop;  // run()'s loop (connection_gate.cpp)
   bool admit(const std::string& peerIp);  // counts it, or false at a limit
 
   int listenFd_;
