@@ -166,7 +166,10 @@ Injector::TexelCoords Injector::texelCoords(Body& b, uint32_t coord, uint32_t di
 // not cover the access.
 bool Injector::emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage stage, std::string& why) {
   const Site& site = s.site;
-  uint32_t u = tU32(), i = tI32(), fl = tF32();
+  // Made first and in this order whatever the access: the output's ids follow from it.
+  tU32();
+  tI32();
+  tF32();
   if (site.kind == SiteKind::OutputWrite) {
     auto [x, y] = fragmentPixel(b, stage);
     fnCall(b, fpTexelFn(), {entry, x, y, constantI32(0), constantU32(0)});
@@ -199,9 +202,16 @@ bool Injector::emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage 
     fnCall(b, fpBytesFn(site.elementBytes <= 2 * options_.footprintBlockBytes + 1), {entry, offset, constantU32(site.elementBytes)});
     return true;
   }
-  // Images: the OpTypeImage behind the accessed image.
+  return emitImageFootprint(b, s, inst, entry, stage, why);
+}
+
+// Images: the OpTypeImage behind the accessed image.
+bool Injector::emitImageFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                                  std::string& why) {
+  const Site& site = s.site;
+  const uint32_t i = tI32();
+  spv::Op o = inst.opcode();
   uint32_t imageValue = 0, coord = 0;
-  size_t operandsAt = 0;
   if (site.kind == SiteKind::ImageAtomic) {
     const Instruction* tp = defs_.def(inst.word(3));
     while (tp != nullptr && tp->opcode() == spv::Op::OpCopyObject) tp = defs_.def(tp->word(3));
@@ -248,8 +258,18 @@ bool Injector::emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage 
     fnCall(b, fpTexelFn(), {entry, c.x, c.y, c.layer, lod});
     return true;
   }
-  // Filtered reads.
-  const std::string& name = site.opcode;
+  return emitFilteredFootprint(b, s, inst, entry, stage, coord, imageType, why);
+}
+
+// Filtered reads: the level (given, from gradients or queried) and the
+// filter's texels are worked out by the tally_fp_sample helper.
+bool Injector::emitFilteredFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                                     uint32_t coord, const Instruction* imageType, std::string& why) {
+  const uint32_t u = tU32(), i = tI32(), fl = tF32();
+  const uint32_t dim = imageType->word(3);
+  const bool arrayed = imageType->word(5) != 0;
+  size_t operandsAt = 0;
+  const std::string& name = s.site.opcode;
   const bool dref = name.find("Dref") != std::string::npos;
   const bool proj = name.find("Proj") != std::string::npos;
   const bool gather = name.find("Gather") != std::string::npos;

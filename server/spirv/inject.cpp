@@ -12,7 +12,7 @@ TileShape sampledTileShape(uint32_t n) {
   return {n / height, height};
 }
 
-std::string Injector::run(const SiteScan& scan, const std::vector<uint32_t>& slots) {
+Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& slots) {
   // Which helper each stage uses decides the capabilities and version.
   const bool accumulate = options_.mode.kind == CountMode::Accumulate;
   bool subgroup = false;
@@ -119,12 +119,12 @@ std::string Injector::run(const SiteScan& scan, const std::vector<uint32_t>& slo
   });
   m_.debug.insert(processed, newNames_.begin(), newNames_.end());
   for (auto& f : newFunctions_) m_.functions.push_back(std::move(f));
-  return {};
+  return true;
 }
 
-std::string injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
-                           const std::vector<uint32_t>& slots, const InstrumentOptions& options,
-                           Instrumented& result) {
+Result<bool> injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
+                            const std::vector<uint32_t>& slots, const InstrumentOptions& options,
+                            Instrumented& result) {
   return Injector(module, defs, types, options, result).run(scan, slots);
 }
 

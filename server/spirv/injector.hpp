@@ -180,7 +180,7 @@ class Injector : public ModuleBuilder {
  public:
   using ModuleBuilder::ModuleBuilder;
 
-  std::string run(const SiteScan& scan, const std::vector<uint32_t>& slots);
+  Result<bool> run(const SiteScan& scan, const std::vector<uint32_t>& slots);
 
   Helper helperFor(Stage stage);
 
@@ -333,6 +333,10 @@ class Injector : public ModuleBuilder {
   // Emits the marking of one site; false (with `why`) where the model does
   // not cover the access.
   bool emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage stage, std::string& why);
+  bool emitImageFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                          std::string& why);
+  bool emitFilteredFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                             uint32_t coord, const Instruction* imageType, std::string& why);
 
   // 1D and 2D images (arrayed or not, any sample count); others are not modelled.
   bool texelImage(const Instruction* imageType, std::string& why);
