@@ -1,6 +1,16 @@
-#include "spirv/injector.hpp"
+// Accumulate: a register per slot, one flush per invocation.
+//
+// Each site adds 1 to a Private (per-invocation) u32 accumulator of its
+// slot; the invocation flushes every accumulator of its stage once, where
+// it ends: before each OpReturn of the entry function, and before OpKill,
+// OpTerminateInvocation, OpDemoteToHelperInvocation (then zeroed: the
+// helper it becomes is not counted) and OpEmitMeshTasksEXT wherever they
+// are. The flush reduces across the subgroup (lo and hi 16 bits apart, so
+// that the sum is exact for any per-invocation count below 2^32) and one
+// elected lane adds a non-zero total; without subgroup arithmetic in the
+// stage each lane adds its own non-zero accumulator.
 
-#include <algorithm>
+#include "spirv/injector.hpp"
 
 #include "spirv/cfg.hpp"
 

@@ -1,3 +1,5 @@
+// Executed arithmetic, counted beside accumulate's registers.
+
 #include "spirv/injector.hpp"
 
 #include <algorithm>

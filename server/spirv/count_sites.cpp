@@ -1,6 +1,7 @@
-#include "spirv/injector.hpp"
+// Per-site counting: the counter buffer and the tally_count_* helper each
+// site calls with its slot, in exact, subgroup and sampled modes.
 
-#include <algorithm>
+#include "spirv/injector.hpp"
 
 namespace tally::spirv {
 

@@ -1,6 +1,8 @@
-#include "spirv/injector.hpp"
+// Footprint: the tally_fp_* functions the code at each site calls
+// (footprint_sites.cpp), which find and set the bits of the blocks an access
+// covers from the slot's table entry (spirv/footprint.hpp).
 
-#include <algorithm>
+#include "spirv/injector.hpp"
 
 #include "spirv/footprint.hpp"
 

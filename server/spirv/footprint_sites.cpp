@@ -1,3 +1,13 @@
+// Footprint: mark the blocks each access covers.
+//
+// Straight-line code at the site computes what the access touches (a
+// buffer's byte offset, an image's coordinates and level of detail) and
+// calls one of the tally_fp_* functions, which read the slot's table entry
+// (spirv/footprint.hpp) and set the blocks' bits: a load first, and the
+// atomic OR only where the bit is still clear, so a block touched again
+// costs a read of a cached word. Branches live in those functions only:
+// the code at a site never splits the site's block.
+
 #include "spirv/injector.hpp"
 
 #include <algorithm>

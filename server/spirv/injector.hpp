@@ -47,24 +47,20 @@ const char* helperName(Helper h);
 class ModuleBuilder {
  public:
   ModuleBuilder(Module& m, const DefIndex& defs, const Types& types, const InstrumentOptions& options,
-           Instrumented& result);
+                Instrumented& result);
 
   void noteOnce(const std::string& note);
+
+  // ---- types, constants, declarations ----------------------------------
 
   uint32_t type(spv::Op op, std::vector<uint32_t> operands);
 
   uint32_t tVoid() { return type(spv::Op::OpTypeVoid, {}); }
-
   uint32_t tBool() { return type(spv::Op::OpTypeBool, {}); }
-
   uint32_t tU32() { return type(spv::Op::OpTypeInt, {32, 0}); }
-
   uint32_t tI32() { return type(spv::Op::OpTypeInt, {32, 1}); }
-
   uint32_t tU64() { return type(spv::Op::OpTypeInt, {64, 0}); }
-
   uint32_t tF32() { return type(spv::Op::OpTypeFloat, {32}); }
-
   uint32_t tVec(uint32_t component, uint32_t n) { return type(spv::Op::OpTypeVector, {component, n}); }
 
   uint32_t tPtr(spv::StorageClass sc, uint32_t pointee);
@@ -84,6 +80,8 @@ class ModuleBuilder {
   // An Input builtin variable of the given type, reusing the module's own.
   uint32_t builtin(Stage stage, spv::BuiltIn b, uint32_t valueType, bool anyInt32 = false);
 
+  // ---- instruction emission ---------------------------------------------
+
   struct Body {
     std::vector<Instruction>& insts;
   };
@@ -91,9 +89,7 @@ class ModuleBuilder {
   uint32_t op(Body& b, spv::Op o, uint32_t resultType, std::vector<uint32_t> operands);
 
   void opNoResult(Body& b, spv::Op o, std::vector<uint32_t> operands) { b.insts.emplace_back(o, std::move(operands)); }
-
   void label(Body& b, uint32_t id) { b.insts.emplace_back(spv::Op::OpLabel, std::vector<uint32_t>{id}); }
-
   void branch(Body& b, uint32_t target) { opNoResult(b, spv::Op::OpBranch, {target}); }
 
   void selection(Body& b, uint32_t cond, uint32_t yes, uint32_t no, uint32_t merge);
@@ -107,9 +103,7 @@ class ModuleBuilder {
   static size_t entryStart(const std::vector<Instruction>& insts);
 
   uint32_t tF32v(uint32_t n) { return tVec(tF32(), n); }
-
   uint32_t constantI32(int32_t v) { return constant(tI32(), {static_cast<uint32_t>(v)}); }
-
   uint32_t constantF32(float v) { return constant(tF32(), {std::bit_cast<uint32_t>(v)}); }
 
   uint32_t glslImport();

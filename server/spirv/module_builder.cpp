@@ -1,3 +1,6 @@
+// Types, constants, variables, instructions and functions added to the
+// module being rewritten, made once each and reused.
+
 #include "spirv/injector.hpp"
 
 #include <algorithm>
@@ -5,7 +8,7 @@
 namespace tally::spirv {
 
 ModuleBuilder::ModuleBuilder(Module& m, const DefIndex& defs, const Types& types, const InstrumentOptions& options,
-         Instrumented& result)
+                             Instrumented& result)
     : m_(m), defs_(defs), types_(types), options_(options), result_(result), notes_(result.notes) {
   for (const auto& inst : m_.globals) {
     spv::Op op = inst.opcode();
