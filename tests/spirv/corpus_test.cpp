@@ -396,8 +396,9 @@ INSTANTIATE_TEST_SUITE_P(Corpus, CorpusTest, ::testing::ValuesIn(corpus()), test
 // Output digests: the instrumented words of every corpus case (the variants
 // above, plus settings they leave at their defaults), hashed and compared
 // with instrumented_digests.txt, so that a restructuring of the injector is
-// seen to change no word. After an intended change of the output, rewrite the
-// file with TALLY_WRITE_DIGESTS=1 and review its diff.
+// seen to change no word. The input is glslang's output, so a new glslang
+// changes them too. After an intended change of the output (or of glslang),
+// rewrite the file with TALLY_WRITE_DIGESTS=1 and review its diff.
 uint64_t hashWords(const std::vector<uint32_t>& words) {
   uint64_t h = 14695981039346656037ull;  // FNV-1a, bytes little-endian
   for (uint32_t w : words) {
