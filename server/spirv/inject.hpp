@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "common/result.hpp"
 #include "spirv/find_sites.hpp"
 #include "spirv/instrument.hpp"
 #include "spirv/module.hpp"
@@ -38,11 +39,11 @@ TileShape sampledTileShape(uint32_t n);
 constexpr uint32_t kCopyAlignSlots = 16;
 
 // Rewrites `module` in place. `slots[i]` is the first slot of scan.sites[i];
-// result.slotCount is already set. Returns an error message, or "" on
-// success; appends fallbacks to result.notes and sets result.copies and
-// result.copyStride when compute counters are striped.
-std::string injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
-                           const std::vector<uint32_t>& slots, const InstrumentOptions& options,
-                           Instrumented& result);
+// result.slotCount is already set. Fails with a one-line reason; appends
+// fallbacks to result.notes and sets result.copies and result.copyStride
+// when compute counters are striped.
+Result<bool> injectCounters(Module& module, const DefIndex& defs, const Types& types, const SiteScan& scan,
+                            const std::vector<uint32_t>& slots, const InstrumentOptions& options,
+                            Instrumented& result);
 
 }  // namespace tally::spirv

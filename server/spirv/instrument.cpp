@@ -234,8 +234,8 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     result.versionOut = result.versionIn;
     return result;
   }
-  if (auto error = injectCounters(module, *defs, *types, *scan, slots, options, result); !error.empty()) {
-    return makeError(error);
+  if (auto injected = injectCounters(module, *defs, *types, *scan, slots, options, result); !injected.ok()) {
+    return makeError(injected.error());
   }
   result.versionOut = module.version;
   result.words = module.serialize();

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -390,6 +392,155 @@ std::string testName(const ::testing::TestParamInfo<CorpusShader>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Corpus, CorpusTest, ::testing::ValuesIn(corpus()), testName);
+
+// Output digests: the instrumented words of every corpus case (the variants
+// above, plus settings they leave at their defaults), hashed and compared
+// with instrumented_digests.txt, so that a restructuring of the injector is
+// seen to change no word. The input is glslang's output, so a new glslang
+// changes them too. After an intended change of the output (or of glslang),
+// rewrite the file with TALLY_WRITE_DIGESTS=1 and review its diff.
+uint64_t hashWords(const std::vector<uint32_t>& words) {
+  uint64_t h = 14695981039346656037ull;  // FNV-1a, bytes little-endian
+  for (uint32_t w : words) {
+    for (int b = 0; b < 4; ++b) {
+      h ^= (w >> (8 * b)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  }
+  return h;
+}
+
+struct DigestCase {
+  std::string name;
+  spirv::InstrumentOptions options;
+};
+
+// The corpus test's variants, each with and without early fragment tests,
+// and the settings the corpus test leaves at their defaults: no subgroup
+// stages, every flush per lane or none, unstriped compute copies, the
+// footprint at every block size and a moved counter binding.
+std::vector<DigestCase> digestCases() {
+  std::vector<DigestCase> out;
+  for (const auto& variant : variants()) {
+    for (bool early : {false, true}) {
+      spirv::InstrumentOptions options;
+      options.mode = variant.mode;
+      options.width = variant.width;
+      options.footprintBlockBytes = variant.footprint;
+      options.countArithmetic = variant.arithmetic;
+      options.earlyFragmentTests = early;
+      out.push_back({variant.name() + (early ? "+early" : ""), options});
+    }
+  }
+  auto accumulate = *spirv::parseMode("accumulate");
+  auto add = [&](const std::string& name, auto&& change) {
+    spirv::InstrumentOptions options;
+    options.mode = accumulate;
+    change(options);
+    out.push_back({name, options});
+  };
+  add("accumulate/no-subgroup-stages", [](auto& o) { o.subgroupStages = 0; });
+  add("accumulate/auto-lane-everywhere", [](auto& o) { o.autoLaneStages = spirv::kAllStages; });
+  add("accumulate/auto-lane-nowhere", [](auto& o) { o.autoLaneStages = 0; });
+  add("accumulate/copies:1", [](auto& o) { o.computeCopies = 1; });
+  add("accumulate/copies:256/uint32_pair", [](auto& o) {
+    o.computeCopies = 256;
+    o.width = CounterWidth::Uint32Pair;
+  });
+  add("accumulate:subgroup/arithmetic/uint32_pair", [](auto& o) {
+    o.mode = *spirv::parseMode("accumulate:subgroup");
+    o.countArithmetic = true;
+    o.width = CounterWidth::Uint32Pair;
+  });
+  add("accumulate:lane/arithmetic+footprint:128", [](auto& o) {
+    o.mode = *spirv::parseMode("accumulate:lane");
+    o.countArithmetic = true;
+    o.footprintBlockBytes = 128;
+  });
+  add("subgroup/no-subgroup-stages", [](auto& o) {
+    o.mode = *spirv::parseMode("subgroup");
+    o.subgroupStages = 0;
+  });
+  add("sampled:16/footprint:64+early", [](auto& o) {
+    o.mode = *spirv::parseMode("sampled:16");
+    o.footprintBlockBytes = 64;
+    o.earlyFragmentTests = true;
+  });
+  add("exact/set:6/binding:3/first:40", [](auto& o) {
+    o.mode = *spirv::parseMode("exact");
+    o.set = 6;
+    o.binding = 3;
+    o.firstSlot = 40;
+    o.footprintBlockBytes = 32;
+    o.footprintTableBinding = 6;
+    o.footprintBitmapBinding = 7;
+  });
+  return out;
+}
+
+// "case hash" per line, in corpus order; refused cases hash their error.
+std::vector<std::pair<std::string, std::string>> computeDigests() {
+  std::vector<std::pair<std::string, std::string>> out;
+  const auto cases = digestCases();
+  for (const auto& shader : corpus()) {
+    if (shader.stage == Stage::Other) continue;
+    for (auto target : {glsl::Target::Vulkan10, glsl::Target::Vulkan13}) {
+      if (target == glsl::Target::Vulkan10 && shader.vulkan13Only) continue;
+      std::string prefix = shader.file + " " + targetName(target) + " ";
+      auto words = compileCorpus(shader, target);
+      if (!words.ok()) {
+        out.emplace_back(prefix + "compile", "error: " + words.error());
+        continue;
+      }
+      for (const auto& c : cases) {
+        auto result = spirv::instrument(*words, c.options);
+        char hex[17];
+        std::snprintf(hex, sizeof hex, "%016llx",
+                      static_cast<unsigned long long>(result.ok() ? hashWords(result->words) : 0));
+        out.emplace_back(prefix + c.name, result.ok() ? std::string(hex) : "error: " + result.error());
+      }
+    }
+  }
+  return out;
+}
+
+TEST(CorpusDigests, InstrumentedWordsMatchTheRecordedDigests) {
+  const auto digests = computeDigests();
+  ASSERT_GT(digests.size(), 1000u);
+  if (const char* write = std::getenv("TALLY_WRITE_DIGESTS"); write != nullptr && std::string(write) == "1") {
+    std::ofstream out(TALLY_CORPUS_DIGESTS, std::ios::binary);
+    out << "# Digests of the instrumented corpus (tests/spirv/corpus_test.cpp, CorpusDigests):\n"
+           "# shader target case, then FNV-1a 64 of the output words or the error.\n";
+    for (const auto& [name, digest] : digests) out << name << " " << digest << "\n";
+    ASSERT_TRUE(out.good()) << "cannot write " << TALLY_CORPUS_DIGESTS;
+    GTEST_SKIP() << "wrote " << digests.size() << " digests to " << TALLY_CORPUS_DIGESTS;
+  }
+  std::map<std::string, std::string> recorded;
+  std::ifstream in(TALLY_CORPUS_DIGESTS);
+  ASSERT_TRUE(in) << "cannot open " << TALLY_CORPUS_DIGESTS;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    // The case name has spaces; the digest is the last field, or "error: ...".
+    auto error = line.find(" error: ");
+    auto split = error != std::string::npos ? error : line.rfind(' ');
+    ASSERT_NE(split, std::string::npos) << "malformed line in " << TALLY_CORPUS_DIGESTS << ": " << line;
+    recorded[line.substr(0, split)] = line.substr(split + 1);
+  }
+  size_t differ = 0;
+  for (const auto& [name, digest] : digests) {
+    auto it = recorded.find(name);
+    if (it == recorded.end()) {
+      ADD_FAILURE() << name << ": not in " << TALLY_CORPUS_DIGESTS;
+    } else if (it->second != digest) {
+      ++differ;
+      ADD_FAILURE() << name << ": output differs (recorded " << it->second << ", now " << digest << ")";
+    }
+    if (it != recorded.end()) recorded.erase(it);
+  }
+  for (const auto& [name, digest] : recorded) ADD_FAILURE() << name << ": recorded but no longer computed";
+  EXPECT_EQ(differ, 0u) << "of " << digests.size() << " cases";
+}
 
 // Every file in corpus/ has an expectation and vice versa; the corpus is big enough.
 TEST(CorpusFiles, ExpectationsCoverTheCorpusFolder) {

@@ -1,0 +1,368 @@
+// The injector's parts: ModuleBuilder makes types, constants, variables,
+// instructions and functions in the module being rewritten, and holds what
+// every transformation shares; Injector adds the transformations (per-site
+// counting, accumulate's registers and flushes, executed arithmetic,
+// footprint marks), each defined in a file of its own. Internal to
+// server/spirv: inject.hpp is the interface.
+#pragma once
+
+#include <bit>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "spirv/inject.hpp"
+
+namespace tally::spirv {
+
+// Scope and semantics words (SPIR-V spec 3.27, 3.25).
+constexpr uint32_t kScopeDevice = 1;
+constexpr uint32_t kScopeSubgroup = 3;
+constexpr uint32_t kScopeQueueFamily = 5;
+constexpr uint32_t kSemanticsRelaxed = 0;
+constexpr uint32_t kGroupReduce = 0;
+constexpr uint32_t kMemoryModelVulkan = 3;
+
+// The helper functions the injected calls go to.
+// Subgroup helpers come in two forms: for a slot that is the same in every
+// lane (a constant: most sites) one reduction suffices; a run-time slot
+// (dynamic descriptor index) needs the waterfall loop over distinct slots.
+enum class Helper {
+  Exact,
+  Subgroup,
+  SubgroupFragment,
+  SubgroupUniform,
+  SubgroupUniformFragment,
+  SampledFragment,
+  SampledCompute,
+  SampledVertex
+};
+
+const char* helperName(Helper h);
+
+class ModuleBuilder {
+ public:
+  ModuleBuilder(Module& m, const DefIndex& defs, const Types& types, const InstrumentOptions& options,
+                Instrumented& result);
+
+  void noteOnce(const std::string& note);
+
+  // ---- types, constants, declarations ----------------------------------
+
+  uint32_t type(spv::Op op, std::vector<uint32_t> operands);
+
+  uint32_t tVoid() { return type(spv::Op::OpTypeVoid, {}); }
+  uint32_t tBool() { return type(spv::Op::OpTypeBool, {}); }
+  uint32_t tU32() { return type(spv::Op::OpTypeInt, {32, 0}); }
+  uint32_t tI32() { return type(spv::Op::OpTypeInt, {32, 1}); }
+  uint32_t tU64() { return type(spv::Op::OpTypeInt, {64, 0}); }
+  uint32_t tF32() { return type(spv::Op::OpTypeFloat, {32}); }
+  uint32_t tVec(uint32_t component, uint32_t n) { return type(spv::Op::OpTypeVector, {component, n}); }
+
+  uint32_t tPtr(spv::StorageClass sc, uint32_t pointee);
+
+  uint32_t tElement() { return options_.width == CounterWidth::Int64 ? tU64() : tU32(); }
+
+  uint32_t constant(uint32_t typeId, std::vector<uint32_t> value);
+
+  uint32_t constantU32(uint32_t v) { return constant(tU32(), {v}); }
+
+  void addCapability(spv::Capability cap);
+
+  void decorate(uint32_t id, spv::Decoration d, std::vector<uint32_t> extra = {});
+
+  void name(uint32_t id, const std::string& text);
+
+  // An Input builtin variable of the given type, reusing the module's own.
+  uint32_t builtin(Stage stage, spv::BuiltIn b, uint32_t valueType, bool anyInt32 = false);
+
+  // ---- instruction emission ---------------------------------------------
+
+  struct Body {
+    std::vector<Instruction>& insts;
+  };
+
+  uint32_t op(Body& b, spv::Op o, uint32_t resultType, std::vector<uint32_t> operands);
+
+  void opNoResult(Body& b, spv::Op o, std::vector<uint32_t> operands) { b.insts.emplace_back(o, std::move(operands)); }
+  void label(Body& b, uint32_t id) { b.insts.emplace_back(spv::Op::OpLabel, std::vector<uint32_t>{id}); }
+  void branch(Body& b, uint32_t target) { opNoResult(b, spv::Op::OpBranch, {target}); }
+
+  void selection(Body& b, uint32_t cond, uint32_t yes, uint32_t no, uint32_t merge);
+
+  uint32_t atomicScope() { return constantU32(vulkanMemoryModel_ ? kScopeQueueFamily : kScopeDevice); }
+
+  uint32_t loadIntAsU32(Body& b, uint32_t var);
+
+  // Where code counted at entry goes: after the entry block's label and its
+  // OpVariables (and debug lines).
+  static size_t entryStart(const std::vector<Instruction>& insts);
+
+  uint32_t tF32v(uint32_t n) { return tVec(tF32(), n); }
+  uint32_t constantI32(int32_t v) { return constant(tI32(), {static_cast<uint32_t>(v)}); }
+  uint32_t constantF32(float v) { return constant(tF32(), {std::bit_cast<uint32_t>(v)}); }
+
+  uint32_t glslImport();
+
+  // GLSL.std.450 instruction numbers.
+  enum Glsl : uint32_t { RoundEven = 2, Floor = 8, Ceil = 9, Log2 = 30, UMin = 38, FMax = 40, UMax = 41,
+                         FClamp = 43, SClamp = 45, Length = 66 };
+  uint32_t ext(Body& b, uint32_t resultType, Glsl inst, std::vector<uint32_t> args);
+
+  struct FnBuild {
+    Function fn;
+    uint32_t id = 0;
+    std::vector<uint32_t> params;
+  };
+
+  // A void function of the given parameter types, its first block open.
+  std::unique_ptr<FnBuild> beginFunction(const std::vector<uint32_t>& paramTypes);
+
+  uint32_t endFunction(std::unique_ptr<FnBuild> f, const std::string& fnName);
+
+  // if (cond) return; the rest of the function continues in a new block.
+  void returnIf(Body& b, uint32_t cond);
+
+  // if (cond) { body(b) } and continue after it.
+  template <class F>
+  void when(Body& b, uint32_t cond, F&& body) {
+    uint32_t yes = m_.newId(), merge = m_.newId();
+    selection(b, cond, yes, merge, merge);
+    label(b, yes);
+    body(b);
+    branch(b, merge);
+    label(b, merge);
+  }
+
+  uint32_t fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args);
+
+  // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
+  uint32_t intAs(Body& b, uint32_t value, bool asSigned);
+
+  // Component k of a scalar or vector value (the scalar itself for k = 0).
+  uint32_t component(Body& b, uint32_t value, uint32_t k, uint32_t scalarType);
+
+  uint32_t componentCount(uint32_t value);
+
+  Instruction call(uint32_t helper, uint32_t slot);
+
+  Module& m_;
+  const DefIndex& defs_;
+  const Types& types_;
+  const InstrumentOptions& options_;
+  Instrumented& result_;
+  std::vector<std::string>& notes_;
+  bool vulkanMemoryModel_ = false;
+  bool demotes_ = false;  // the module uses OpDemoteToHelperInvocation
+  spv::StorageClass storageClass_ = spv::StorageClass::StorageBuffer;
+  std::map<std::vector<uint32_t>, uint32_t> types_by_key_;
+  std::map<std::vector<uint32_t>, uint32_t> constants_;
+  std::vector<uint32_t> variables_;
+  std::vector<std::pair<uint32_t, uint32_t>> createdBuiltins_;
+  std::map<Stage, std::set<uint32_t>> stageBuiltins_;
+  // What the transformations add, placed into the module at the end of Injector::run.
+  std::vector<Instruction> newGlobals_, newAnnotations_, newNames_;
+  std::vector<Function> newFunctions_;
+  uint32_t glsl_ = 0;  // the GLSL.std.450 import
+};
+
+class Injector : public ModuleBuilder {
+ public:
+  using ModuleBuilder::ModuleBuilder;
+
+  Result<bool> run(const SiteScan& scan, const std::vector<uint32_t>& slots);
+
+  Helper helperFor(Stage stage);
+
+  // The counter buffer: struct { uint64_t c[]; } (or uint32 pairs), 8 bytes a slot.
+  void declareCounters();
+
+  // counters[slot] += amount (a u32 value). Leaves the current block open.
+  void emitAdd(Body& b, uint32_t slot, uint32_t amount);
+
+  // A 32-bit integer hash (lowbias32), for choosing the counted invocation of a tile.
+  uint32_t hash(Body& b, uint32_t x, uint32_t y);
+
+  // True in the one invocation per tw x th tile that counts for the tile.
+  uint32_t tileSelect2D(Body& b, uint32_t x, uint32_t y, uint32_t z);
+
+  uint32_t sampledSelect(Body& b, Helper h, Stage stage);
+
+  // Opens a block that only non-helper lanes enter; returns the merge label
+  // the caller branches to (and opens) when the block ends.
+  uint32_t skipHelperLanes(Body& b, Stage stage);
+
+  uint32_t helperFunction(Helper h, Stage stage);
+
+  static bool accumulates(Stage stage) { return stage != Stage::Other; }
+
+  // Auto: per lane in options_.autoLaneStages, else reduced (docs/measurement.md,
+  // "Which flush", with the figures that chose it).
+  bool subgroupFlush(Stage stage) const;
+
+  // A Private u32 (or u32[n]) variable initialised to zero.
+  uint32_t privateVariable(uint32_t valueType, uint32_t zero, const std::string& varName);
+
+  uint32_t scalarAccumulator(uint32_t slot);
+
+  struct ArrayAccumulator {
+    uint32_t variable, length;
+  };
+
+  uint32_t arrayAccumulator(uint32_t base, uint32_t length);
+
+  // acc += 1 through a Private pointer.
+  void increment(Body& b, uint32_t pointer);
+
+  // min(index, length - 1) of a run-time descriptor index, as a u32.
+  uint32_t clampedIndex(Body& b, const FoundSite& s, uint32_t length);
+
+  // Whether the site runs at most once per invocation of its entry point:
+  // counted at entry or at the return, or outside every loop of a function
+  // that runs once.
+  bool runsOnce(const FoundSite& s, const EntryPoint& ep);
+
+  // Emits the site's increment; false when the site is counted per access instead.
+  bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
+                      std::vector<std::map<size_t, std::vector<Instruction>>>& after,
+                      std::vector<std::map<size_t, std::vector<Instruction>>>& before);
+
+  // counters[slot] += hi * 65536 + lo, both u32 below 2^32 / 65536 * subgroup size.
+  void emitAddWide(Body& b, uint32_t slot, uint32_t lo, uint32_t hi);
+
+  // Flushes one accumulator (a Private u32 pointer) into counter `slot` (of
+  // this invocation's copy), then zeroes it.
+  void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot, uint32_t copyOffset);
+
+  // Compute flushes stripe each slot over result_.copies copies: every
+  // workgroup (and subgroup) of a dispatch flushing into one address
+  // serialises on it, and a compute pass has no fixed-function work to hide
+  // that behind. The reader sums the copies (foldCopies).
+  bool stripes(Stage stage) const { return stage == Stage::Compute && result_.copies > 1; }
+
+  // copy * copyStride, the copy chosen by workgroup and by subgroup (or by
+  // lane, where the flush is per lane). Workgroups resident together are
+  // consecutive in x, so x + 3y + 5z spreads them over the copies.
+  uint32_t copyOffsetOf(Body& b, Stage stage);
+
+  // The stage's flush function: every accumulator its sites use.
+  uint32_t flushFunction(Stage stage);
+
+  // Executed arithmetic: at the top of every block of every function an
+  // accumulating entry point reaches, the block's operations (arith.hpp)
+  // added to one register, flushed by each stage into the arithmetic slot.
+  void countExecutedArithmetic(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before);
+
+  // Calls each stage's flush where its invocations end.
+  void insertFlushes(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before);
+
+  bool footprintOn() const { return options_.footprintBlockBytes != 0; }
+
+  // Two u32 runtime-array buffers: the table and the bitmaps.
+  void declareFootprint();
+
+  uint32_t tableWord(Body& b, uint32_t entry, uint32_t word);
+
+  uint32_t tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t dynamicOffset);
+
+  // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
+  // the scratch bit past the bitmap.
+  uint32_t fpMarkFn();
+
+  // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
+  // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
+  uint32_t fpBytesFn(bool shortRange);
+
+  // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
+  // Image entry; coordinates outside the level mark nothing.
+  uint32_t fpTexelLevelFn();
+
+  // tally_fp_texel(entry, x, y, layer, lod): a texel at level `lod` of the
+  // bound view (fetches, storage images, attachments).
+  uint32_t fpTexelFn();
+
+  // The texel coordinate after the sampler's address mode; -1 (nothing)
+  // outside a clamp-to-border image.
+  uint32_t wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode);
+
+  // tally_fp_sample_level(entry, imageLevel, u, v, layer, linear, offsetX, offsetY):
+  // the texels a nearest (1) or bilinear (2 x 2) filter reads at one level.
+  uint32_t fpSampleLevelFn();
+
+  // How a sampled read's level of detail is known.
+  enum class Lod : uint32_t {
+    Queried = 0,   // a = OpImageQueryLod's level, b = its lambda (implicit LOD in fragment shaders)
+    Explicit = 1,  // a = lambda (an explicit Lod, or computed from explicit gradients)
+    Gather = 2,    // the base level, bilinear
+  };
+
+  // tally_fp_sample(entry, u, v, layer, lodKind, a, b, offsetX, offsetY):
+  // a filtered read, Vulkan's level selection (magnification at lambda <= 0;
+  // nearest level ceil(d + 0.5) - 1, or both linear levels where the
+  // fraction is non-zero) and filters from the bound sampler.
+  uint32_t fpSampleFn();
+
+  // The byte offset of a buffer pointer from the start of its descriptor's
+  // buffer (the element of a descriptor array), as straight-line code; 0
+  // with `why` set where the chain cannot be followed.
+  uint32_t byteOffset(Body& b, uint32_t pointer, int function, std::string& why);
+
+  // The pixel of a fragment invocation: floor(FragCoord.xy) as i32.
+  std::pair<uint32_t, uint32_t> fragmentPixel(Body& b, Stage stage);
+
+  // The image operands of an image instruction from word `at`: operand ids by mask bit.
+  static std::map<uint32_t, std::vector<uint32_t>> imageOperands(const Instruction& inst, size_t at);
+
+  // Integer texel coordinates (x, y, layer) of a 1D or 2D image access.
+  struct TexelCoords {
+    uint32_t x, y, layer;
+  };
+
+  TexelCoords texelCoords(Body& b, uint32_t coord, uint32_t dim, bool arrayed);
+
+  // Emits the marking of one site; false (with `why`) where the model does
+  // not cover the access.
+  bool emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage stage, std::string& why);
+  bool emitImageFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                          std::string& why);
+  bool emitFilteredFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
+                             uint32_t coord, const Instruction* imageType, std::string& why);
+
+  // 1D and 2D images (arrayed or not, any sample count); others are not modelled.
+  bool texelImage(const Instruction* imageType, std::string& why);
+
+  // Emits the site's marking where its count goes; result_.sites[index].footprint says whether it did.
+  void footprintSite(size_t index, const FoundSite& s, const EntryPoint& ep, uint32_t slotBase,
+                     std::vector<std::map<size_t, std::vector<Instruction>>>& after,
+                     std::vector<std::map<size_t, std::vector<Instruction>>>& before);
+
+  // The slot argument: a constant, or base + min(index, length - 1) for a
+  // run-time descriptor index (emitted into `list`, before the call).
+  uint32_t slotValue(const FoundSite& s, uint32_t base, std::vector<Instruction>& list);
+
+  uint32_t counters_ = 0;
+  uint32_t elementPtr_ = 0;
+  std::map<std::pair<Helper, Stage>, uint32_t> helpers_;
+  // accumulate mode
+  struct FlushSlots {
+    std::set<uint32_t> scalars;
+    std::set<std::pair<uint32_t, uint32_t>> arrays;  // (first slot, length)
+  };
+  std::map<Stage, FlushSlots> flushSlots_;
+  std::map<uint32_t, uint32_t> scalarAcc_;  // slot -> Private u32
+  std::vector<std::pair<uint32_t, ArrayAccumulator>> arrayAcc_;
+  std::vector<uint32_t> accumulators_;      // every Private variable added
+  std::map<Stage, uint32_t> flushFunctions_;
+  std::map<uint32_t, std::vector<bool>> runsOnce_;  // entry index -> functions that run once
+  std::map<int, std::vector<bool>> cycles_;         // function -> instructions on a cycle
+  std::map<Stage, uint32_t> perAccessOnce_;         // sites counted per access because they run once
+  // footprint
+  uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
+  uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
+};
+
+}  // namespace tally::spirv
