@@ -44,6 +44,7 @@ struct Malformed : std::runtime_error {
 std::string at(const std::string& path, const char* key) { return path.empty() ? key : path + "." + key; }
 
 // Members of the layer's output: a fault throws Malformed naming the path.
+using json_fields::find;
 constexpr json_fields::Members kMembers{[](const Error& error) { throw Malformed(error.text()); }};
 
 std::string item(const std::string& path, const char* key, size_t i) {
@@ -119,6 +120,51 @@ json resourceOf(const json& resource, const std::string& path) {
   out["usage"] = kMembers.optText(resource, "usage", path).value_or("");
   out["memory"] = kMembers.optText(resource, "memory", path).value_or("");
   return out;
+}
+
+// One sample a frame: the camera's place holds the frame.
+json samplesOf(const json& frames, const ApplicationSpec& spec, bool& untimed) {
+  json samples = json::array();
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const std::string path = item("", "frames", f);
+    const json& frame = frames[f];
+    if (!frame.is_object()) malformed(path, "must be an object");
+    const int64_t index = kMembers.optInteger(frame, "index", path).value_or(static_cast<int64_t>(spec.skipFrames + f));
+    json passes = json::array();
+    double frameMs = 0, bytes = 0;
+    const json& passList = kMembers.array(frame, "passes", path);
+    for (size_t p = 0; p < passList.size(); ++p) {
+      passes.push_back(passOf(passList[p], item(path, "passes", p), untimed));
+      frameMs += passes.back()["gpu_ms"].get<double>();
+      bytes += passes.back()["bytes"].get<double>();
+    }
+    // The camera's place holds the frame: its label names it, the rest is what the layer saw.
+    json camera = {{"label", "frame " + std::to_string(index)}, {"index", static_cast<int64_t>(f)}, {"frame", index}};
+    if (auto submissions = kMembers.optInteger(frame, "submissions", path)) camera["submissions"] = *submissions;
+    json sample = {{"camera", std::move(camera)}, {"sky_fraction", -1}, {"frames", 1}, {"frame_ms", frameMs}};
+    if (auto host = kMembers.optNumber(frame, "frame_ms", path)) sample["frame_ms_layer"] = *host;
+    sample["passes"] = std::move(passes);
+    sample["bytes"] = bytes;
+    sample["extras"] = json::object();
+    samples.push_back(std::move(sample));
+  }
+  return samples;
+}
+
+// Shaders the layer could not instrument: their pipelines ran uncounted.
+json uninstrumentedOf(const json& output) {
+  json uninstrumented = json::array();
+  const json& shaders = kMembers.array(output, "shaders", "");
+  for (size_t i = 0; i < shaders.size(); ++i) {
+    const std::string path = item("", "shaders", i);
+    if (!shaders[i].is_object()) malformed(path, "must be an object");
+    const json* instrumented = find(shaders[i], "instrumented");
+    if (!instrumented || *instrumented != false) continue;
+    uninstrumented.push_back({{"name", kMembers.optText(shaders[i], "name", path).value_or("")},
+                              {"stage", kMembers.optText(shaders[i], "stage", path).value_or("")},
+                              {"reason", kMembers.optText(shaders[i], "reason", path).value_or("")}});
+  }
+  return uninstrumented;
 }
 
 std::string basename(const std::string& path) {
@@ -343,8 +389,8 @@ std::string applicationRunName(const ApplicationSpec& spec, const json& layerOut
   if (spec.kind == ApplicationSpec::Kind::Replay) return "replay:" + basename(spec.replayFile);
   if (!spec.name.empty()) return "app:" + spec.name;
   if (layerOutput.is_object()) {
-    const json* app = json_fields::find(layerOutput, "application");
-    const json* name = app && app->is_object() ? json_fields::find(*app, "name") : nullptr;
+    const json* app = find(layerOutput, "application");
+    const json* name = app && app->is_object() ? find(*app, "name") : nullptr;
     if (name && name->is_string() && !name->get<std::string>().empty()) return "app:" + name->get<std::string>();
   }
   return "app:" + basename(spec.command.empty() ? spec.program : spec.command[0]);
@@ -362,13 +408,13 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     // Nothing counted: the layer could not count on this device, or every
     // pipeline layout of the application uses every descriptor set (the
     // application ran unchanged, but there is nothing to store).
-    if (json_fields::find(layer, "counting_enabled") && layer["counting_enabled"] == false) {
+    if (find(layer, "counting_enabled") && layer["counting_enabled"] == false) {
       return makeError("the layer counted nothing: " +
-                       (json_fields::find(layer, "not_counting") && layer["not_counting"].is_string()
+                       (find(layer, "not_counting") && layer["not_counting"].is_string()
                             ? layer["not_counting"].get<std::string>()
                             : std::string("counting was off")));
     }
-    if (json_fields::find(layer, "pipelines_counted") && layer["pipelines_counted"] == 0 && json_fields::find(layer, "layouts_refused") &&
+    if (find(layer, "pipelines_counted") && layer["pipelines_counted"] == 0 && find(layer, "layouts_refused") &&
         layer["layouts_refused"].is_number_unsigned() && layer["layouts_refused"].get<uint64_t>() > 0) {
       return makeError("the layer counted nothing: every pipeline of the application has a layout that uses every "
                        "descriptor set the device allows (" +
@@ -378,7 +424,7 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     }
     const json& frames = kMembers.array(output, "frames", "");
     if (frames.empty()) malformed("frames", "missing or empty: no frame was read back");
-    const bool complete = json_fields::find(output, "complete") ? output["complete"] == true : true;
+    const bool complete = find(output, "complete") ? output["complete"] == true : true;
     if (frames.size() < spec.frames) {
       return makeError("only " + std::to_string(frames.size()) + " of the " + std::to_string(spec.frames) +
                        " frames asked for arrived" +
@@ -401,7 +447,7 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     // The frame's size: the layer's extent, else the largest image, else 1x1 (noted).
     json notes = json::object();
     int64_t width = 0, height = 0;
-    if (const json* extent = json_fields::find(output, "extent")) {
+    if (const json* extent = find(output, "extent")) {
       if (!extent->is_array() || extent->size() != 2 || !(*extent)[0].is_number_integer() || !(*extent)[1].is_number_integer()) {
         malformed("extent", "must be [width, height], got " + extent->dump());
       }
@@ -423,43 +469,9 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     }
 
     bool untimed = false;
-    json samples = json::array();
-    for (size_t f = 0; f < frames.size(); ++f) {
-      const std::string path = item("", "frames", f);
-      const json& frame = frames[f];
-      if (!frame.is_object()) malformed(path, "must be an object");
-      const int64_t index = kMembers.optInteger(frame, "index", path).value_or(static_cast<int64_t>(spec.skipFrames + f));
-      json passes = json::array();
-      double frameMs = 0, bytes = 0;
-      const json& passList = kMembers.array(frame, "passes", path);
-      for (size_t p = 0; p < passList.size(); ++p) {
-        passes.push_back(passOf(passList[p], item(path, "passes", p), untimed));
-        frameMs += passes.back()["gpu_ms"].get<double>();
-        bytes += passes.back()["bytes"].get<double>();
-      }
-      // The camera's place holds the frame: its label names it, the rest is what the layer saw.
-      json camera = {{"label", "frame " + std::to_string(index)}, {"index", static_cast<int64_t>(f)}, {"frame", index}};
-      if (auto submissions = kMembers.optInteger(frame, "submissions", path)) camera["submissions"] = *submissions;
-      json sample = {{"camera", std::move(camera)}, {"sky_fraction", -1}, {"frames", 1}, {"frame_ms", frameMs}};
-      if (auto host = kMembers.optNumber(frame, "frame_ms", path)) sample["frame_ms_layer"] = *host;
-      sample["passes"] = std::move(passes);
-      sample["bytes"] = bytes;
-      sample["extras"] = json::object();
-      samples.push_back(std::move(sample));
-    }
+    json samples = samplesOf(frames, spec, untimed);
 
-    // Shaders the layer could not instrument: their pipelines ran uncounted.
-    json uninstrumented = json::array();
-    const json& shaders = kMembers.array(output, "shaders", "");
-    for (size_t i = 0; i < shaders.size(); ++i) {
-      const std::string path = item("", "shaders", i);
-      if (!shaders[i].is_object()) malformed(path, "must be an object");
-      const json* instrumented = json_fields::find(shaders[i], "instrumented");
-      if (!instrumented || *instrumented != false) continue;
-      uninstrumented.push_back({{"name", kMembers.optText(shaders[i], "name", path).value_or("")},
-                                {"stage", kMembers.optText(shaders[i], "stage", path).value_or("")},
-                                {"reason", kMembers.optText(shaders[i], "reason", path).value_or("")}});
-    }
+    json uninstrumented = uninstrumentedOf(output);
     json layerNotes = json::array();
     const json& noteList = kMembers.array(output, "notes", "");
     for (size_t i = 0; i < noteList.size(); ++i) {

@@ -473,13 +473,14 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   CommonFields common{spec, spec.fieldPrefix()};
 
   if (replay) {
-    const std::string expected =
-        "unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting)";
+    if (auto e = json_fields::unknownKey(j, "", {"replay", "frames", "skip_frames", "frame_submits", "env", "display",
+                                                 "timeout_s", "counting"})) {
+      return *e;
+    }
     for (const auto& [key, value] : j.items()) {
       if (key == "replay" || key == "counting") continue;
       auto taken = common.take(key, value);
       if (!taken) return taken.failure();
-      if (!*taken) return fieldError(key, expected);
     }
     auto file = boundedText(j["replay"], "replay", kMaxApplicationText);
     if (!file) return fieldError("replay", "must be the path of a GFXReconstruct capture file, got " + show(j["replay"]));
@@ -495,8 +496,10 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (!app.is_object()) {
       return fieldError("application", "must be an object with \"command\", got " + show(app));
     }
-    const std::string expected =
-        "unknown field (expected command, frames, skip_frames, frame_submits, env, display, name, timeout_s)";
+    if (auto e = json_fields::unknownKey(app, "application", {"command", "frames", "skip_frames", "frame_submits", "env",
+                                                              "display", "name", "timeout_s"})) {
+      return *e;
+    }
     for (const auto& [key, value] : app.items()) {
       if (key == "command") continue;
       if (key == "name") {
@@ -507,7 +510,6 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
       }
       auto taken = common.take(key, value);
       if (!taken) return taken.failure();
-      if (!*taken) return fieldError("application." + key, expected);
     }
     if (!app.contains("command")) {
       return fieldError("application.command", "required: the program and its arguments, e.g. [\"vkcube\", \"--c\", \"100\"]");

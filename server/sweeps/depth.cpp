@@ -63,14 +63,7 @@ std::vector<DepthSweepSpec::Range> DepthSweepSpec::ranges() const {
 
 Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",     "renderer",   "near",    "far",      "far_over_near",
-                                                 "distances", "resolution", "fov_deg", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key, "unknown field (expected sweep, renderer, near, far or far_over_near, distances, "
-                             "resolution, fov_deg, threshold)");
-    }
-  }
+  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderer", "near", "far", "far_over_near", "distances", "resolution", "fov_deg", "threshold"})) return *e;
   DepthSweepSpec spec;
   spec.source = j;
 

@@ -86,15 +86,7 @@ uint32_t subgroupBlockSide(uint32_t subgroupSize) {
 
 Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",     "renderer",   "selections",   "cell_sizes",
-                                                 "materials", "resolution", "same_texture", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, renderer, selections, cell_sizes, materials, "
-                        "resolution, same_texture, threshold)");
-    }
-  }
+  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderer", "selections", "cell_sizes", "materials", "resolution", "same_texture", "threshold"})) return *e;
   EdgesSweepSpec spec;
   spec.source = j;
 

@@ -76,15 +76,7 @@ bool idFits(uint64_t draws, uint64_t trianglesPerDraw) {
 
 Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",      "renderers", "draws", "triangles_per_draw",
-                                                 "resolution", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, renderers, draws, triangles_per_draw, resolution, "
-                        "threshold)");
-    }
-  }
+  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"})) return *e;
   IdSweepSpec spec;
   spec.source = j;
 

@@ -297,16 +297,7 @@ uint32_t PrecisionSweepSpec::levels() const { return uint32_t(std::countr_zero(t
 
 Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",        "distances",        "triangle_sizes",
-                                                 "texture_size", "texels_per_metre", "uv_rotation_deg",
-                                                 "resolution",   "fov_deg",          "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, distances, triangle_sizes, texture_size, "
-                        "texels_per_metre, uv_rotation_deg, resolution, fov_deg, threshold)");
-    }
-  }
+  if (auto e = json_fields::unknownKey(j, "", {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre", "uv_rotation_deg", "resolution", "fov_deg", "threshold"})) return *e;
   PrecisionSweepSpec spec;
   spec.source = j;
 
@@ -356,11 +347,7 @@ Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
       return fieldError("threshold",
                         "must be {\"image_max_abs\": levels, \"mip_level\": levels}, got " + show(t));
     }
-    for (const auto& [key, value] : t.items()) {
-      if (key != "image_max_abs" && key != "mip_level") {
-        return fieldError("threshold." + key, "unknown field (expected image_max_abs, mip_level)");
-      }
-    }
+    if (auto e = json_fields::unknownKey(t, "threshold", {"image_max_abs", "mip_level"})) return *e;
     if (t.contains("image_max_abs")) {
       auto v = numberIn(t["image_max_abs"], "threshold.image_max_abs", 0.0, 255.0, true);
       if (!v) return v.failure();
