@@ -59,9 +59,13 @@ json lineOf(const json& line, const std::string& path) {
   double count = kMembers.number(line, "count", path), bytes = kMembers.number(line, "bytes", path);
   if (count < 0) malformed(at(path, "count"), "must not be negative");
   if (bytes < 0) malformed(at(path, "bytes"), "must not be negative");
-  json out = {{"name", kMembers.text(line, "name", path)}, {"kind", kMembers.optText(line, "kind", path).value_or("")},
-              {"format", kMembers.optText(line, "format", path).value_or("")}, {"access", access},
-              {"count", count}, {"bytes", bytes}, {"source", kMembers.optText(line, "source", path).value_or("counter")}};
+  json out = {{"name", kMembers.text(line, "name", path)},
+              {"kind", kMembers.optText(line, "kind", path).value_or("")},
+              {"format", kMembers.optText(line, "format", path).value_or("")},
+              {"access", access},
+              {"count", count},
+              {"bytes", bytes},
+              {"source", kMembers.optText(line, "source", path).value_or("counter")}};
   return out;
 }
 
@@ -76,13 +80,15 @@ json passOf(const json& pass, const std::string& path, bool& untimed) {
     gpuMs = 0;
   }
   json out = {{"name", kMembers.text(pass, "name", path)}, {"gpu_ms", gpuMs}};
-  const auto draws = kMembers.optInteger(pass, "draws", path), dispatches = kMembers.optInteger(pass, "dispatches", path);
+  const auto draws = kMembers.optInteger(pass, "draws", path),
+             dispatches = kMembers.optInteger(pass, "dispatches", path);
   if (draws) out["draws"] = *draws;
   if (dispatches) out["dispatches"] = *dispatches;
   for (const char* key : {"fragment_invocations", "vertex_invocations"}) {
     if (auto v = kMembers.optNumber(pass, key, path)) out[key] = *v;
   }
-  if (auto v = kMembers.optNumber(pass, "fragment_invocations_statistic", path); v && *v >= 0) out["fragment_invocations_statistic"] = *v;
+  if (auto v = kMembers.optNumber(pass, "fragment_invocations_statistic", path); v && *v >= 0)
+    out["fragment_invocations_statistic"] = *v;
   // Compute figures belong to passes that dispatch (docs/result-schema.md).
   auto compute = kMembers.optNumber(pass, "compute_invocations", path);
   if (compute && (dispatches.value_or(0) > 0 || *compute > 0)) {
@@ -106,7 +112,8 @@ json passOf(const json& pass, const std::string& path, bool& untimed) {
 // The layer's resource list entry, with format_bytes where the image's size is known.
 json resourceOf(const json& resource, const std::string& path) {
   if (!resource.is_object()) malformed(path, "must be an object");
-  json out = {{"name", kMembers.text(resource, "name", path)}, {"kind", kMembers.text(resource, "kind", path)},
+  json out = {{"name", kMembers.text(resource, "name", path)},
+              {"kind", kMembers.text(resource, "kind", path)},
               {"format", kMembers.optText(resource, "format", path).value_or("")}};
   for (const char* key : {"element_bytes", "width", "height", "samples", "allocation_bytes"}) {
     if (auto v = kMembers.optInteger(resource, key, path)) {
@@ -129,7 +136,8 @@ json samplesOf(const json& frames, const ApplicationSpec& spec, bool& untimed) {
     const std::string path = item("", "frames", f);
     const json& frame = frames[f];
     if (!frame.is_object()) malformed(path, "must be an object");
-    const int64_t index = kMembers.optInteger(frame, "index", path).value_or(static_cast<int64_t>(spec.skipFrames + f));
+    const int64_t index =
+        kMembers.optInteger(frame, "index", path).value_or(static_cast<int64_t>(spec.skipFrames + f));
     json passes = json::array();
     double frameMs = 0, bytes = 0;
     const json& passList = kMembers.array(frame, "passes", path);
@@ -139,8 +147,10 @@ json samplesOf(const json& frames, const ApplicationSpec& spec, bool& untimed) {
       bytes += passes.back()["bytes"].get<double>();
     }
     // The camera's place holds the frame: its label names it, the rest is what the layer saw.
-    json camera = {{"label", "frame " + std::to_string(index)}, {"index", static_cast<int64_t>(f)}, {"frame", index}};
-    if (auto submissions = kMembers.optInteger(frame, "submissions", path)) camera["submissions"] = *submissions;
+    json camera = {
+        {"label", "frame " + std::to_string(index)}, {"index", static_cast<int64_t>(f)}, {"frame", index}};
+    if (auto submissions = kMembers.optInteger(frame, "submissions", path))
+      camera["submissions"] = *submissions;
     json sample = {{"camera", std::move(camera)}, {"sky_fraction", -1}, {"frames", 1}, {"frame_ms", frameMs}};
     if (auto host = kMembers.optNumber(frame, "frame_ms", path)) sample["frame_ms_layer"] = *host;
     sample["passes"] = std::move(passes);
@@ -414,8 +424,9 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
                             ? layer["not_counting"].get<std::string>()
                             : std::string("counting was off")));
     }
-    if (find(layer, "pipelines_counted") && layer["pipelines_counted"] == 0 && find(layer, "layouts_refused") &&
-        layer["layouts_refused"].is_number_unsigned() && layer["layouts_refused"].get<uint64_t>() > 0) {
+    if (find(layer, "pipelines_counted") && layer["pipelines_counted"] == 0 &&
+        find(layer, "layouts_refused") && layer["layouts_refused"].is_number_unsigned() &&
+        layer["layouts_refused"].get<uint64_t>() > 0) {
       return makeError("the layer counted nothing: every pipeline of the application has a layout that uses every "
                        "descriptor set the device allows (" +
                        std::to_string(layer["layouts_refused"].get<uint64_t>()) +
@@ -489,20 +500,22 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
     if (!application.empty()) notes["application"] = application;
 
     const std::string name = applicationRunName(spec, output);
-    json run = {{"renderer", name},
-                {"variant", name},
-                {"options", json::object()},
-                {"scene", sceneOf(spec)},
-                {"scene_params", spec.kind == ApplicationSpec::Kind::Replay ? json{{"replay", spec.replayFile}}
-                                                                            : json{{"command", spec.command}}},
-                {"width", width},
-                {"height", height},
-                {"counting", kMembers.optText(layer, "counting", "layer").value_or(spec.counting)},
-                {"lights", 0},
-                {"notes", std::move(notes)},
-                {"resources", {{"render_target_bytes", renderTargets ? json(*renderTargets) : json(nullptr)},
-                               {"list", std::move(resources)}}},
-                {"samples", std::move(samples)}};
+    json run = {
+        {"renderer", name},
+        {"variant", name},
+        {"options", json::object()},
+        {"scene", sceneOf(spec)},
+        {"scene_params", spec.kind == ApplicationSpec::Kind::Replay ? json{{"replay", spec.replayFile}}
+                                                                    : json{{"command", spec.command}}},
+        {"width", width},
+        {"height", height},
+        {"counting", kMembers.optText(layer, "counting", "layer").value_or(spec.counting)},
+        {"lights", 0},
+        {"notes", std::move(notes)},
+        {"resources",
+         {{"render_target_bytes", renderTargets ? json(*renderTargets) : json(nullptr)},
+          {"list", std::move(resources)}}},
+        {"samples", std::move(samples)}};
     return json{{"device", device},
                 {"tally", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}},
                 {"spec", spec.source},

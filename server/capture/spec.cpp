@@ -173,7 +173,8 @@ std::optional<Error> parseScenes(const nlohmann::json& j, CaptureSpec& spec) {
     if (!s.is_string() && !s.is_object()) {
       return fieldError(field, "must be a scene name or an object, got " + show(s));
     }
-    if (s.is_object() && s.contains("gltf") && (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty())) {
+    if (s.is_object() && s.contains("gltf") &&
+        (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty())) {
       return fieldError(field + ".gltf", "must be a file path");
     }
     auto checked = scenes::checkSceneSpec(s);
@@ -200,7 +201,8 @@ std::optional<Error> parseResolutions(const nlohmann::json& j, CaptureSpec& spec
     auto resolution = json_fields::resolution(resolutions[i], field);
     if (!resolution) return resolution.failure();
     for (size_t k = 0; k < spec.resolutions.size(); ++k) {
-      if (spec.resolutions[k].width == resolution->width && spec.resolutions[k].height == resolution->height) {
+      if (spec.resolutions[k].width == resolution->width &&
+          spec.resolutions[k].height == resolution->height) {
         return duplicate(field, json_fields::index("resolutions", k));
       }
     }
@@ -255,8 +257,8 @@ std::optional<Error> parseCounting(const nlohmann::json& counting, CaptureSpec& 
     if (!mode) return fieldError(field, mode.error());
     for (size_t k = 0; k < spec.modes.size(); ++k) {
       if (spirv::toString(spec.modes[k]) == spirv::toString(*mode)) {
-        return fieldError(field, "mode '" + spirv::toString(*mode) + "' listed twice (a duplicate of counting[" +
-                                     std::to_string(k) + "])");
+        return fieldError(field, "mode '" + spirv::toString(*mode) +
+                                     "' listed twice (a duplicate of counting[" + std::to_string(k) + "])");
       }
     }
     spec.modes.push_back(*mode);
@@ -271,16 +273,19 @@ Result<uint32_t> parseFootprint(const nlohmann::json& footprint) {
       (footprint.get<int64_t>() == 32 || footprint.get<int64_t>() == 64 || footprint.get<int64_t>() == 128)) {
     return static_cast<uint32_t>(footprint.get<int64_t>());
   }
-  return fieldError("footprint", "must be true, false or a block size of 32, 64 or 128 bytes, got " + show(footprint));
+  return fieldError("footprint",
+                    "must be true, false or a block size of 32, 64 or 128 bytes, got " + show(footprint));
 }
 
 }  // namespace
 
-Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
+Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j,
+                                     const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"renderers", "workloads", "scenes", "resolutions", "cameras", "frames",
-                                               "counted_frames", "counting", "lights", "footprint", "ceilings",
-                                               "heatmap", "labels"})) {
+  if (auto e = json_fields::unknownKey(
+          j, "",
+          {"renderers", "workloads", "scenes", "resolutions", "cameras", "frames", "counted_frames",
+           "counting", "lights", "footprint", "ceilings", "heatmap", "labels"})) {
     return *e;
   }
   CaptureSpec spec;
@@ -473,8 +478,9 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   CommonFields common{spec, spec.fieldPrefix()};
 
   if (replay) {
-    if (auto e = json_fields::unknownKey(j, "", {"replay", "frames", "skip_frames", "frame_submits", "env", "display",
-                                                 "timeout_s", "counting"})) {
+    if (auto e = json_fields::unknownKey(j, "",
+                                         {"replay", "frames", "skip_frames", "frame_submits", "env",
+                                          "display", "timeout_s", "counting"})) {
       return *e;
     }
     for (const auto& [key, value] : j.items()) {
@@ -496,8 +502,9 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (!app.is_object()) {
       return fieldError("application", "must be an object with \"command\", got " + show(app));
     }
-    if (auto e = json_fields::unknownKey(app, "application", {"command", "frames", "skip_frames", "frame_submits", "env",
-                                                              "display", "name", "timeout_s"})) {
+    if (auto e = json_fields::unknownKey(
+            app, "application",
+            {"command", "frames", "skip_frames", "frame_submits", "env", "display", "name", "timeout_s"})) {
       return *e;
     }
     for (const auto& [key, value] : app.items()) {
@@ -523,7 +530,8 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
                                                    " arguments, got " + std::to_string(command.size()));
     }
     for (size_t i = 0; i < command.size(); ++i) {
-      auto arg = boundedText(command[i], json_fields::index("application.command", i), kMaxApplicationText, i > 0);
+      auto arg =
+          boundedText(command[i], json_fields::index("application.command", i), kMaxApplicationText, i > 0);
       if (!arg) return arg.failure();
       spec.command.push_back(*arg);
     }
@@ -549,7 +557,8 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   if (!finished) return finished.failure();
 
   if (j.contains("counting")) {
-    auto counting = json_fields::oneOf(j["counting"], "counting", {"accumulate", "exact"}, "(the layer's modes)");
+    auto counting =
+        json_fields::oneOf(j["counting"], "counting", {"accumulate", "exact"}, "(the layer's modes)");
     if (!counting) return counting.failure();
     spec.counting = *counting;
   }

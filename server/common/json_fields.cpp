@@ -22,7 +22,9 @@ std::string num(double v) {
 
 Error fieldError(const std::string& field, const std::string& message) { return Error(field, message); }
 
-std::string member(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+std::string member(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
 
 std::string index(const std::string& path, size_t i) { return path + "[" + std::to_string(i) + "]"; }
 
@@ -32,21 +34,21 @@ Error under(const std::string& path, const Error& inner) {
   return Error(member(path, inner.field()), inner.message());
 }
 
-std::optional<Error> unknownKey(const json& object, const std::string& path, const std::vector<std::string>& allowed,
-                                const std::string& heading) {
+std::optional<Error> unknownKey(const json& object, const std::string& path,
+                                const std::vector<std::string>& allowed, const std::string& heading) {
   for (const auto& [key, value] : object.items()) {
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
     std::string expected;
     for (const auto& name : allowed) expected += (expected.empty() ? "" : ", ") + name;
-    return fieldError(member(path, key),
-                      heading + " (expected " + expected + ")");
+    return fieldError(member(path, key), heading + " (expected " + expected + ")");
   }
   return std::nullopt;
 }
 
 std::optional<Error> tooMany(const json& list, const std::string& field, size_t most) {
   if (!list.is_array() || list.size() <= most) return std::nullopt;
-  return fieldError(field, "at most " + std::to_string(most) + " entries, got " + std::to_string(list.size()));
+  return fieldError(field,
+                    "at most " + std::to_string(most) + " entries, got " + std::to_string(list.size()));
 }
 
 Error duplicate(const std::string& field, const std::string& first) {
@@ -67,8 +69,8 @@ std::optional<int64_t> asInt64(const json& j) {
 Result<int64_t> integer(const json& j, const std::string& field, int64_t low, int64_t high) {
   auto v = asInt64(j);
   if (!v || *v < low || *v > high) {
-    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " + std::to_string(high) +
-                                 ", got " + show(j));
+    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " +
+                                 std::to_string(high) + ", got " + show(j));
   }
   return *v;
 }
@@ -147,8 +149,9 @@ Result<Resolution> resolution(const json& r, const std::string& field, Resolutio
     auto v = integer(r[i], index(field, i), lowest[i], kMaxDimension);
     if (!v && lowest[i] > 1) {
       // A tiled renderer's least size: say why it is not 1.
-      return fieldError(index(field, i), "must be an integer from " + std::to_string(lowest[i]) + " (one tile) to " +
-                                             std::to_string(kMaxDimension) + ", got " + show(r[i]));
+      return fieldError(index(field, i), "must be an integer from " + std::to_string(lowest[i]) +
+                                             " (one tile) to " + std::to_string(kMaxDimension) + ", got " +
+                                             show(r[i]));
     }
     if (!v) return v.failure();
     dims[i] = static_cast<uint32_t>(*v);

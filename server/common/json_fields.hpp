@@ -37,7 +37,8 @@ Error under(const std::string& path, const Error& inner);
 // `heading` replaces "unknown field" where a parser names its object
 // ("unknown field for the floor layout").
 std::optional<Error> unknownKey(const nlohmann::json& object, const std::string& path,
-                                const std::vector<std::string>& allowed, const std::string& heading = "unknown field");
+                                const std::vector<std::string>& allowed,
+                                const std::string& heading = "unknown field");
 // "field: at most 32 entries, got 40", before any entry is looked at.
 std::optional<Error> tooMany(const nlohmann::json& list, const std::string& field, size_t most);
 // "scenes[3]: a duplicate of scenes[0] (each entry must differ)".
@@ -61,8 +62,8 @@ Result<std::string> boundedText(const nlohmann::json& j, const std::string& fiel
                                 bool empty = false);
 // One of `values` (a string): "must be \"none\" or \"xvfb\", got 3"; `why`
 // follows the list when given ("(the layer's modes)").
-Result<std::string> oneOf(const nlohmann::json& j, const std::string& field, const std::vector<std::string>& values,
-                          const std::string& why = "");
+Result<std::string> oneOf(const nlohmann::json& j, const std::string& field,
+                          const std::vector<std::string>& values, const std::string& why = "");
 
 // [width, height]: integers from `least` (per axis; above 1 is one tile of
 // a tiled renderer) to kMaxDimension, at most kMaxPixels in all.
@@ -84,17 +85,20 @@ class Members {
   explicit constexpr Members(Fail thrower) : fail_(thrower) {}
 
   double number(const nlohmann::json& object, const char* key, const std::string& path) const;
-  std::optional<double> optNumber(const nlohmann::json& object, const char* key, const std::string& path) const {
+  std::optional<double> optNumber(const nlohmann::json& object, const char* key,
+                                  const std::string& path) const {
     if (!find(object, key)) return std::nullopt;
     return number(object, key, path);
   }
   int64_t integer(const nlohmann::json& object, const char* key, const std::string& path) const;
-  std::optional<int64_t> optInteger(const nlohmann::json& object, const char* key, const std::string& path) const {
+  std::optional<int64_t> optInteger(const nlohmann::json& object, const char* key,
+                                    const std::string& path) const {
     if (!find(object, key)) return std::nullopt;
     return integer(object, key, path);
   }
   std::string text(const nlohmann::json& object, const char* key, const std::string& path) const;
-  std::optional<std::string> optText(const nlohmann::json& object, const char* key, const std::string& path) const {
+  std::optional<std::string> optText(const nlohmann::json& object, const char* key,
+                                     const std::string& path) const {
     if (!find(object, key)) return std::nullopt;
     return text(object, key, path);
   }

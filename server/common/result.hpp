@@ -15,7 +15,8 @@ class Error {
  public:
   explicit Error(std::string message) : message_(std::move(message)), text_(message_) {}
   Error(std::string field, std::string message)
-      : field_(std::move(field)), message_(std::move(message)),
+      : field_(std::move(field)),
+        message_(std::move(message)),
         text_(field_.empty() ? message_ : field_ + ": " + message_) {}
 
   // Where the problem is, as a path into the input; empty when no field is to blame.

@@ -452,14 +452,12 @@ Result<std::vector<Camera>> camerasFromJson(const nlohmann::json& cameras) {
       return Error(at, "must be an object {\"eye\":[x,y,z], \"target\":[x,y,z]}, got " + c.dump());
     for (const auto& [key, value] : c.items())
       if (!kKeys.count(key))
-        return Error(at + "." + key,
-                         "unknown key (allowed: eye, target, fov_deg, label, sky_fraction)");
+        return Error(at + "." + key, "unknown key (allowed: eye, target, fov_deg, label, sky_fraction)");
     Camera cam;
     for (const char* key : {"eye", "target"}) {
       if (!c.contains(key)) return Error(at + "." + key, "missing");
       std::optional<glm::vec3> v = vec3From(c[key]);
-      if (!v)
-        return Error(at + "." + key, "must be an array of 3 finite numbers, got " + c[key].dump());
+      if (!v) return Error(at + "." + key, "must be an array of 3 finite numbers, got " + c[key].dump());
       (std::string(key) == "eye" ? cam.eye : cam.target) = *v;
     }
     if (glm::length(cam.target - cam.eye) < 1e-6f) return Error(at + ".target", "must differ from eye");
@@ -470,8 +468,7 @@ Result<std::vector<Camera>> camerasFromJson(const nlohmann::json& cameras) {
       cam.fovDeg = f.get<float>();
     }
     if (c.contains("label")) {
-      if (!c["label"].is_string())
-        return Error(at + ".label", "must be a string, got " + c["label"].dump());
+      if (!c["label"].is_string()) return Error(at + ".label", "must be a string, got " + c["label"].dump());
       cam.label = c["label"].get<std::string>();
     }
     if (c.contains("sky_fraction")) {

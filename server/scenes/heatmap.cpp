@@ -283,12 +283,13 @@ Result<HeatmapSpec> parseHeatmapSpec(const json& j) {
   spec.layout = *layout == "floor" ? HeatmapSpec::Layout::Floor : HeatmapSpec::Layout::Sphere;
   const bool floor = spec.layout == HeatmapSpec::Layout::Floor;
   // Listed in alphabetical order, as the message always did.
-  static const std::vector<std::string> kFloorKeys = {"cells",    "clearance", "eye_height", "fov_deg", "headroom",
-                                                      "layout",   "max_rise",  "max_slope_deg", "pitch_deg",
-                                                      "region",   "yaws"};
+  static const std::vector<std::string> kFloorKeys = {"cells",     "clearance", "eye_height", "fov_deg",
+                                                      "headroom",  "layout",    "max_rise",   "max_slope_deg",
+                                                      "pitch_deg", "region",    "yaws"};
   static const std::vector<std::string> kSphereKeys = {"distance", "fov_deg", "layout", "rings", "segments"};
-  if (auto e = json_fields::unknownKey(j, "heatmap", floor ? kFloorKeys : kSphereKeys,
-                                       std::string("unknown field for the ") + (floor ? "floor" : "sphere") + " layout")) {
+  if (auto e = json_fields::unknownKey(
+          j, "heatmap", floor ? kFloorKeys : kSphereKeys,
+          std::string("unknown field for the ") + (floor ? "floor" : "sphere") + " layout")) {
     return *e;
   }
   if (j.contains("fov_deg")) {

@@ -26,7 +26,8 @@ std::optional<Error> checkKeys(const nlohmann::json& spec, const std::vector<std
 }
 
 // Integer field in [lo, hi], or the default when absent.
-Result<int64_t> integerField(const nlohmann::json& spec, const char* key, int64_t lo, int64_t hi, int64_t dflt) {
+Result<int64_t> integerField(const nlohmann::json& spec, const char* key, int64_t lo, int64_t hi,
+                             int64_t dflt) {
   if (!spec.contains(key)) return dflt;
   return json_fields::integer(spec[key], key, lo, hi);
 }
@@ -62,7 +63,8 @@ Result<PlanesParams> planesParams(const nlohmann::json& spec) {
     else if (o == "front-to-back")
       p.order = DrawOrder::FrontToBack;
     else
-      return fieldError("order", "must be \"back-to-front\" or \"front-to-back\", got " + json_fields::show(o));
+      return fieldError("order",
+                        "must be \"back-to-front\" or \"front-to-back\", got " + json_fields::show(o));
   }
   Result<double> coverage = numberField(spec, "coverage", 0.0, true, 1.0, p.coverage);
   if (!coverage) return coverage.failure();

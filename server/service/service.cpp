@@ -516,7 +516,8 @@ json validateSpec(const ServiceContext& ctx, const json& body, api::Principal pr
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
   if (!body.contains("device")) return validateContent(ctx, body, principal);
   auto requirement = store::parseDeviceRequirement(body);
-  if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), requirement.failure().field());
+  if (!requirement)
+    throw RequestError(400, api::code::kInvalidField, requirement.error(), requirement.failure().field());
   json content = body;
   content.erase("device");
   json stored = validateContent(ctx, content, principal);

@@ -284,7 +284,8 @@ void insertSamples(Inserter& in, int64_t runId, const json& run, const std::stri
     if (!sample.is_object()) bad(at, "must be an object");
     const json* camera = find(sample, "camera");
     if (!camera || !camera->is_object()) bad(at + ".camera", "missing or not an object");
-    int64_t cameraIndex = kMembers.optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
+    int64_t cameraIndex =
+        kMembers.optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
     // -1: the renderer has no skybox pass.
     std::optional<double> sky;
     if (find(sample, "sky_fraction")) {
@@ -419,7 +420,8 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
       .bind(16, build.commit)
       .bind(17, footprintBlock);
   int64_t runId = returnedId(in.run);
-  insertResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
+  insertResources(in, runId, kMembers.array(resources, "list", path + ".resources"),
+                  path + ".resources.list");
   insertSamples(in, runId, run, path, screenshots);
   return runId;
 }
@@ -493,7 +495,8 @@ void checkSweep(const json& result) {
     flag(plot, "y_log", at);
     if (!plot.contains("threshold")) bad(at + ".threshold", "missing (a number, or null for none)");
     kMembers.optNumber(plot, "threshold", at);
-    plots.push_back(Plot{kMembers.text(plot, "x", at), kMembers.text(plot, "y", at), textList(plot, "series", at)});
+    plots.push_back(
+        Plot{kMembers.text(plot, "x", at), kMembers.text(plot, "y", at), textList(plot, "series", at)});
   }
   for (size_t i = 0; i < points->size(); ++i) {
     std::string at = "points[" + std::to_string(i) + "]";

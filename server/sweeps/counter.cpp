@@ -38,7 +38,8 @@ std::string resolution16x9(double pixels) {
 
 Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
+  if (auto e = json_fields::unknownKey(
+          j, "", {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
     return *e;
   }
   CounterSweepSpec spec;

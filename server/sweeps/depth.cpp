@@ -63,7 +63,10 @@ std::vector<DepthSweepSpec::Range> DepthSweepSpec::ranges() const {
 
 Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderer", "near", "far", "far_over_near", "distances", "resolution", "fov_deg", "threshold"})) return *e;
+  if (auto e = json_fields::unknownKey(j, "",
+                                       {"sweep", "renderer", "near", "far", "far_over_near", "distances",
+                                        "resolution", "fov_deg", "threshold"}))
+    return *e;
   DepthSweepSpec spec;
   spec.source = j;
 

@@ -86,7 +86,10 @@ uint32_t subgroupBlockSide(uint32_t subgroupSize) {
 
 Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderer", "selections", "cell_sizes", "materials", "resolution", "same_texture", "threshold"})) return *e;
+  if (auto e = json_fields::unknownKey(j, "",
+                                       {"sweep", "renderer", "selections", "cell_sizes", "materials",
+                                        "resolution", "same_texture", "threshold"}))
+    return *e;
   EdgesSweepSpec spec;
   spec.source = j;
 

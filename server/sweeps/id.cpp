@@ -76,7 +76,9 @@ bool idFits(uint64_t draws, uint64_t trianglesPerDraw) {
 
 Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"})) return *e;
+  if (auto e = json_fields::unknownKey(
+          j, "", {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
+    return *e;
   IdSweepSpec spec;
   spec.source = j;
 

@@ -297,7 +297,11 @@ uint32_t PrecisionSweepSpec::levels() const { return uint32_t(std::countr_zero(t
 
 Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
   if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "", {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre", "uv_rotation_deg", "resolution", "fov_deg", "threshold"})) return *e;
+  if (auto e =
+          json_fields::unknownKey(j, "",
+                                  {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre",
+                                   "uv_rotation_deg", "resolution", "fov_deg", "threshold"}))
+    return *e;
   PrecisionSweepSpec spec;
   spec.source = j;
 

@@ -67,11 +67,13 @@ TEST(JsonFields, IntegersAreBoundedAndCheckedForInt64Overflow) {
   expectError(integer(json(0), "frames", 1, 10), "frames", "must be an integer between 1 and 10, got 0");
   expectError(integer(json(11), "frames", 1, 10), "frames", "must be an integer between 1 and 10, got 11");
   expectError(integer(json(2.5), "frames", 1, 10), "frames", "must be an integer between 1 and 10, got 2.5");
-  expectError(integer(json("3"), "frames", 1, 10), "frames", "must be an integer between 1 and 10, got \"3\"");
+  expectError(integer(json("3"), "frames", 1, 10), "frames",
+              "must be an integer between 1 and 10, got \"3\"");
   // 2^63 is a valid JSON unsigned that int64 cannot hold: refused, not wrapped to INT64_MIN.
   json beyond = json(uint64_t{1} << 63);
-  expectError(integer(beyond, "n", INT64_MIN, INT64_MAX), "n",
-              "must be an integer between -9223372036854775808 and 9223372036854775807, got 9223372036854775808");
+  expectError(
+      integer(beyond, "n", INT64_MIN, INT64_MAX), "n",
+      "must be an integer between -9223372036854775808 and 9223372036854775807, got 9223372036854775808");
   EXPECT_EQ(*integer(json(INT64_MAX), "n", INT64_MIN, INT64_MAX), INT64_MAX);
   EXPECT_EQ(*integer(json(INT64_MIN), "n", INT64_MIN, INT64_MAX), INT64_MIN);
 
@@ -103,7 +105,8 @@ TEST(JsonFields, BooleansStringsAndChoices) {
   expectError(boundedText(json(std::string("a\0b", 3)), "env.X", 8, true), "env.X",
               "must be at most 8 characters without NUL");
   EXPECT_EQ(*oneOf(json("xvfb"), "display", {"none", "xvfb"}), "xvfb");
-  expectError(oneOf(json("x11"), "display", {"none", "xvfb"}), "display", "must be \"none\" or \"xvfb\", got \"x11\"");
+  expectError(oneOf(json("x11"), "display", {"none", "xvfb"}), "display",
+              "must be \"none\" or \"xvfb\", got \"x11\"");
   expectError(oneOf(json(2), "counting", {"accumulate", "exact"}, "(the layer's modes)"), "counting",
               "must be \"accumulate\" or \"exact\" (the layer's modes), got 2");
   expectError(oneOf(json("z"), "k", {"a", "b", "c"}), "k", "must be \"a\", \"b\" or \"c\", got \"z\"");
@@ -114,7 +117,8 @@ TEST(JsonFields, ResolutionsNameTheAxisAtFault) {
   ASSERT_TRUE(ok.ok()) << ok.error();
   EXPECT_EQ(ok->width, 1280u);
   EXPECT_EQ(ok->height, 720u);
-  expectError(resolution(json("64x36"), "resolutions[2]"), "resolutions[2]", "must be [width, height], got \"64x36\"");
+  expectError(resolution(json("64x36"), "resolutions[2]"), "resolutions[2]",
+              "must be [width, height], got \"64x36\"");
   expectError(resolution(json{64, 0}, "resolutions[2]"), "resolutions[2][1]",
               "must be an integer between 1 and 16384, got 0");
   expectError(resolution(json{16385, 8}, "resolution"), "resolution[0]",
@@ -131,7 +135,8 @@ TEST(JsonFields, ListsAndDuplicates) {
   ASSERT_TRUE(e.has_value());
   EXPECT_EQ(e->text(), "scenes: at most 2 entries, got 3");
   EXPECT_FALSE(tooMany(json::array({1, 2}), "scenes", 2).has_value());
-  EXPECT_EQ(duplicate("scenes[3]", "scenes[0]").text(), "scenes[3]: a duplicate of scenes[0] (each entry must differ)");
+  EXPECT_EQ(duplicate("scenes[3]", "scenes[0]").text(),
+            "scenes[3]: a duplicate of scenes[0] (each entry must differ)");
 }
 
 struct Refused : std::runtime_error {
@@ -154,7 +159,8 @@ TEST(JsonFields, MembersOfAWholeDocumentThrowWithTheirPath) {
     }
     return "(nothing thrown)";
   };
-  EXPECT_EQ(message([&] { m.number(pass, "time", "samples[0].passes[0]"); }), "samples[0].passes[0].time: missing");
+  EXPECT_EQ(message([&] { m.number(pass, "time", "samples[0].passes[0]"); }),
+            "samples[0].passes[0].time: missing");
   EXPECT_EQ(message([&] { m.integer(json{{"id", uint64_t{1} << 63}}, "id", "run"); }), "run.id: too large");
   EXPECT_EQ(message([&] { m.array(sample, "note", "x"); }), "(nothing thrown)");
   EXPECT_EQ(message([&] { m.object(pass, "name", "samples[0].passes[0]"); }),
