@@ -129,6 +129,32 @@ json resourceOf(const json& resource, const std::string& path) {
   return out;
 }
 
+// The frame's size: the layer's extent, else the largest image, else 1x1 (noted).
+std::pair<int64_t, int64_t> extentOf(const json& output, const json& resources, json& notes) {
+  int64_t width = 0, height = 0;
+  if (const json* extent = find(output, "extent")) {
+    if (!extent->is_array() || extent->size() != 2 || !(*extent)[0].is_number_integer() || !(*extent)[1].is_number_integer()) {
+      malformed("extent", "must be [width, height], got " + extent->dump());
+    }
+    width = (*extent)[0].get<int64_t>();
+    height = (*extent)[1].get<int64_t>();
+  }
+  if (width < 1 || height < 1 || width > kMaxDimension || height > kMaxDimension) {
+    width = height = 0;
+    for (const auto& r : resources) {
+      int64_t w = r.value("width", int64_t{0}), h = r.value("height", int64_t{0});
+      if (w >= 1 && h >= 1 && w <= kMaxDimension && h <= kMaxDimension && w * h > width * height) {
+        width = w;
+        height = h;
+      }
+    }
+    notes["extent"] = width > 0 ? "the layer reported none: the largest image's size stands in"
+                                : "the layer reported none and there is no image: 1x1 stands in";
+    if (width == 0) width = height = 1;
+  }
+  return {width, height};
+}
+
 // One sample a frame: the camera's place holds the frame.
 json samplesOf(const json& frames, const ApplicationSpec& spec, bool& untimed) {
   json samples = json::array();
@@ -455,29 +481,8 @@ Result<json> applicationResult(const ApplicationSpec& spec, const json& output) 
       resources.push_back(std::move(r));
     }
 
-    // The frame's size: the layer's extent, else the largest image, else 1x1 (noted).
     json notes = json::object();
-    int64_t width = 0, height = 0;
-    if (const json* extent = find(output, "extent")) {
-      if (!extent->is_array() || extent->size() != 2 || !(*extent)[0].is_number_integer() || !(*extent)[1].is_number_integer()) {
-        malformed("extent", "must be [width, height], got " + extent->dump());
-      }
-      width = (*extent)[0].get<int64_t>();
-      height = (*extent)[1].get<int64_t>();
-    }
-    if (width < 1 || height < 1 || width > kMaxDimension || height > kMaxDimension) {
-      width = height = 0;
-      for (const auto& r : resources) {
-        int64_t w = r.value("width", int64_t{0}), h = r.value("height", int64_t{0});
-        if (w >= 1 && h >= 1 && w <= kMaxDimension && h <= kMaxDimension && w * h > width * height) {
-          width = w;
-          height = h;
-        }
-      }
-      notes["extent"] = width > 0 ? "the layer reported none: the largest image's size stands in"
-                                  : "the layer reported none and there is no image: 1x1 stands in";
-      if (width == 0) width = height = 1;
-    }
+    const auto [width, height] = extentOf(output, resources, notes);
 
     bool untimed = false;
     json samples = samplesOf(frames, spec, untimed);
