@@ -2,15 +2,15 @@
 
 #include <cstdlib>
 
+#include "common/json_fields.hpp"
+
 namespace tally::capture {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-Error fieldError(const std::string& field, const std::string& message) {
-  return makeError(field + ": " + message);
-}
+using json_fields::fieldError;
 
 bool validName(std::string_view name) {
   if (name.empty() || name.size() > 256 || (name[0] >= '0' && name[0] <= '9')) return false;
@@ -131,7 +131,7 @@ Result<std::vector<fs::path>> checkApplicationRoots(const std::vector<std::strin
 }
 
 Result<ApplicationSpec> parseConfinedApplicationSpec(const json& spec, const ApplicationPolicy& policy) {
-  if (!spec.is_object()) return makeError("spec: must be a JSON object");
+  if (!spec.is_object()) return fieldError("spec", "must be a JSON object");
   const bool replay = !spec.contains("application");
   const std::string key = replay ? "replay" : "application";
   if (policy.roots.empty()) {
@@ -191,7 +191,7 @@ Result<ApplicationSpec> parseConfinedApplicationSpec(const json& spec, const App
     }
     if (name == "VK_ICD_FILENAMES" || name == "VK_DRIVER_FILES" || name == "VK_ADD_DRIVER_FILES") {
       auto drivers = checkDriverList(policy, prefix + name, value);
-      if (!drivers) return makeError(drivers.error());
+      if (!drivers) return drivers.failure();
     }
   }
   if (program) parsed->program = program->string();

@@ -9,61 +9,28 @@
 
 #include <unistd.h>
 
+#include "common/json_fields.hpp"
 #include "renderers/options.hpp"
 #include "scenes/cameras.hpp"
 #include "scenes/spec.hpp"
 
 namespace tally::capture {
-namespace {
 
-std::string show(const nlohmann::json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
-
-Error fieldError(const std::string& field, const std::string& message) { return makeError(field + ": " + message); }
-
-// "scenes: at most 32 entries, got 40", before any entry is looked at.
-std::optional<Error> tooMany(const nlohmann::json& list, const std::string& field, size_t most) {
-  if (!list.is_array() || list.size() <= most) return std::nullopt;
-  return fieldError(field,
-                    "at most " + std::to_string(most) + " entries, got " + std::to_string(list.size()));
-}
-
-// "scenes[3]: a duplicate of scenes[0]".
-Error duplicate(const std::string& field, const std::string& first) {
-  return fieldError(field, "a duplicate of " + first + " (each entry must differ)");
-}
-
-Result<uint32_t> boundedInt(const nlohmann::json& j, const std::string& field, uint32_t low, uint32_t high) {
-  if (!j.is_number_integer() || j.get<int64_t>() < low || j.get<int64_t>() > high) {
-    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " + std::to_string(high) +
-                                 ", got " + show(j));
-  }
-  return static_cast<uint32_t>(j.get<int64_t>());
-}
-
-}  // namespace
+using json_fields::duplicate;
+using json_fields::fieldError;
+using json_fields::show;
+using json_fields::tooMany;
 
 Result<RendererVariant> makeVariant(const std::string& name, const nlohmann::json& options) {
   if (!options.is_object()) return fieldError("options", "must be an object of option: value, got " + show(options));
-  // canonicalOptions' errors begin with the option's name ("output: ...").
+  // canonicalOptions' errors name the option ("output").
   auto canonical = renderers::canonicalOptions(name, options);
-  if (!canonical) return makeError("options." + canonical.error());
+  if (!canonical) return json_fields::under("options", canonical.failure());
   return RendererVariant{name, std::move(canonical).value()};
 }
 
 Result<Resolution> parseResolution(const nlohmann::json& r, const std::string& field) {
-  if (!r.is_array() || r.size() != 2) return fieldError(field, "must be [width, height], got " + show(r));
-  auto w = boundedInt(r[0], field + "[0]", 1, kMaxDimension);
-  if (!w) return makeError(w.error());
-  auto h = boundedInt(r[1], field + "[1]", 1, kMaxDimension);
-  if (!h) return makeError(h.error());
-  if (uint64_t{*w} * *h > kMaxPixels) {
-    return fieldError(field, std::to_string(*w) + "x" + std::to_string(*h) + " is more than the " +
-                                 std::to_string(kMaxPixels) + "-pixel limit (8K)");
-  }
-  return Resolution{*w, *h};
+  return json_fields::resolution(r, field);
 }
 
 std::string RendererVariant::label() const { return renderers::variantLabel(name, options); }
@@ -118,23 +85,12 @@ Result<std::map<std::string, std::string>> parseLabels(const nlohmann::json& lab
   return out;
 }
 
-Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"renderers", "workloads",      "scenes",   "resolutions", "cameras",
-                                                 "frames",    "counted_frames", "counting", "lights",
-                                                 "footprint", "ceilings",       "heatmap", "labels"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected renderers, workloads, scenes, resolutions, cameras, frames, "
-                        "counted_frames, counting, lights, footprint, ceilings, heatmap, labels)");
-    }
-  }
-  CaptureSpec spec;
-  spec.source = j;
+namespace {
 
-  // renderers, then workloads (renderers::workloadNames(): compute workloads,
-  // listed only under "workloads"): one variant list. At least one of the two.
+// renderers, then workloads (renderers::workloadNames(): compute workloads,
+// listed only under "workloads"): one variant list. At least one of the two.
+std::optional<Error> parseVariants(const nlohmann::json& j, const std::vector<std::string>& knownRenderers,
+                                   CaptureSpec& spec) {
   if (!j.contains("renderers") && !j.contains("workloads")) return fieldError("renderers", "required");
   std::vector<std::string> variantFields;  // where each of spec.renderers was given
   for (const char* list : {"renderers", "workloads"}) {
@@ -153,18 +109,15 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
     std::string known;
     for (const auto& k : knownNames) known += (known.empty() ? "" : ", ") + k;
     for (size_t i = 0; i < entries.size(); ++i) {
-      std::string field = std::string(list) + "[" + std::to_string(i) + "]";
+      const std::string entryField = json_fields::index(list, i);
+      std::string field = entryField;
       const auto& entry = entries[i];
       nlohmann::json options = nlohmann::json::object();
       std::string name;
       if (entry.is_object()) {
         // A workload entry may say "workload" or "renderer".
         const std::string nameKey = workloads && entry.contains("workload") ? "workload" : "renderer";
-        for (const auto& [key, value] : entry.items()) {
-          if (key != nameKey && key != "options") {
-            return fieldError(field + "." + key, "unknown field (expected " + nameKey + ", options)");
-          }
-        }
+        if (auto e = json_fields::unknownKey(entry, field, {nameKey, "options"})) return *e;
         if (!entry.contains(nameKey) || !entry[nameKey].is_string()) {
           return fieldError(field + "." + nameKey, "required: a " + noun + " name");
         }
@@ -185,53 +138,58 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
         }
         return fieldError(field, "unknown " + noun + " '" + name + "' (expected one of " + known + ")");
       }
-      field = std::string(list) + "[" + std::to_string(i) + "]";
       auto made = makeVariant(name, options);
-      if (!made) return makeError(field + "." + made.error());
+      if (!made) return json_fields::under(entryField, made.failure());
       RendererVariant variant = std::move(made).value();
       for (size_t k = 0; k < spec.renderers.size(); ++k) {
         const auto& seen = spec.renderers[k];
         if (seen.name == variant.name && seen.options == variant.options) {
-          return fieldError(field, noun + " '" + variant.label() + "' listed twice (a duplicate of " +
-                                       variantFields[k] + ")");
+          return fieldError(entryField, noun + " '" + variant.label() + "' listed twice (a duplicate of " +
+                                            variantFields[k] + ")");
         }
       }
       spec.renderers.push_back(std::move(variant));
-      variantFields.push_back(field);
+      variantFields.push_back(entryField);
     }
   }
+  return std::nullopt;
+}
 
-  // scenes: their names and parameters are checked here, nothing is built;
-  // the capture builds them (and loads glTF files, reporting what is wrong
-  // with one as the job's error).
+// scenes: their names and parameters are checked here, nothing is built;
+// the capture builds them (and loads glTF files, reporting what is wrong
+// with one as the job's error).
+std::optional<Error> parseScenes(const nlohmann::json& j, CaptureSpec& spec) {
   if (!j.contains("scenes")) {
     spec.scenes.push_back("atrium");  // the default scene
-  } else {
-    const auto& scenesJson = j["scenes"];
-    if (!scenesJson.is_array() || scenesJson.empty()) return fieldError("scenes", "must be a non-empty array");
-    if (auto e = tooMany(scenesJson, "scenes", kMaxScenes)) return *e;
-    std::vector<nlohmann::json> canonical;
-    for (size_t i = 0; i < scenesJson.size(); ++i) {
-      const auto& s = scenesJson[i];
-      std::string field = "scenes[" + std::to_string(i) + "]";
-      if (!s.is_string() && !s.is_object()) {
-        return fieldError(field, "must be a scene name or an object, got " + show(s));
-      }
-      if (s.is_object() && s.contains("gltf") &&
-          (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty())) {
-        return fieldError(field + ".gltf", "must be a file path");
-      }
-      auto checked = scenes::checkSceneSpec(s);
-      if (!checked) return fieldError(field, checked.error());
-      for (size_t k = 0; k < canonical.size(); ++k) {
-        if (canonical[k] == *checked) return duplicate(field, "scenes[" + std::to_string(k) + "]");
-      }
-      canonical.push_back(std::move(checked).value());
-      spec.scenes.push_back(s);
-    }
+    return std::nullopt;
   }
+  const auto& scenesJson = j["scenes"];
+  if (!scenesJson.is_array() || scenesJson.empty()) return fieldError("scenes", "must be a non-empty array");
+  if (auto e = tooMany(scenesJson, "scenes", kMaxScenes)) return *e;
+  std::vector<nlohmann::json> canonical;
+  for (size_t i = 0; i < scenesJson.size(); ++i) {
+    const auto& s = scenesJson[i];
+    std::string field = json_fields::index("scenes", i);
+    if (!s.is_string() && !s.is_object()) {
+      return fieldError(field, "must be a scene name or an object, got " + show(s));
+    }
+    if (s.is_object() && s.contains("gltf") &&
+        (!s["gltf"].is_string() || s["gltf"].get<std::string>().empty())) {
+      return fieldError(field + ".gltf", "must be a file path");
+    }
+    auto checked = scenes::checkSceneSpec(s);
+    // The scene's own message keeps its parameter's name ("scenes[0]: layers: ...").
+    if (!checked) return fieldError(field, checked.error());
+    for (size_t k = 0; k < canonical.size(); ++k) {
+      if (canonical[k] == *checked) return duplicate(field, json_fields::index("scenes", k));
+    }
+    canonical.push_back(std::move(checked).value());
+    spec.scenes.push_back(s);
+  }
+  return std::nullopt;
+}
 
-  // resolutions
+std::optional<Error> parseResolutions(const nlohmann::json& j, CaptureSpec& spec) {
   if (!j.contains("resolutions")) return fieldError("resolutions", "required, e.g. [[1280,720]]");
   const auto& resolutions = j["resolutions"];
   if (!resolutions.is_array() || resolutions.empty()) {
@@ -239,48 +197,104 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
   }
   if (auto e = tooMany(resolutions, "resolutions", kMaxResolutions)) return *e;
   for (size_t i = 0; i < resolutions.size(); ++i) {
-    std::string field = "resolutions[" + std::to_string(i) + "]";
-    auto resolution = parseResolution(resolutions[i], field);
-    if (!resolution) return makeError(resolution.error());
+    std::string field = json_fields::index("resolutions", i);
+    auto resolution = json_fields::resolution(resolutions[i], field);
+    if (!resolution) return resolution.failure();
     for (size_t k = 0; k < spec.resolutions.size(); ++k) {
       if (spec.resolutions[k].width == resolution->width &&
           spec.resolutions[k].height == resolution->height) {
-        return duplicate(field, "resolutions[" + std::to_string(k) + "]");
+        return duplicate(field, json_fields::index("resolutions", k));
       }
     }
     spec.resolutions.push_back(*resolution);
   }
+  return std::nullopt;
+}
 
-  // cameras
-  if (j.contains("cameras")) {
-    const auto& cameras = j["cameras"];
-    if (cameras.is_string()) {
-      if (cameras.get<std::string>() != "auto") {
-        return fieldError("cameras", "must be \"auto\" or a list of cameras, got " + show(cameras));
-      }
-    } else {
-      if (auto e = tooMany(cameras, "cameras", kMaxCameras)) return *e;
-      auto list = scenes::camerasFromJson(cameras);
-      if (!list) return makeError("cameras" + (list.error().starts_with("[") ? list.error() : ": " + list.error()));
-      if (list->empty()) return fieldError("cameras", "must not be empty");
-      // A camera is its pose and lens; the label only names it.
-      for (size_t i = 0; i < list->size(); ++i) {
-        const scenes::Camera& c = (*list)[i];
-        std::string field = "cameras[" + std::to_string(i) + "]";
-        if (c.label.size() > kMaxCameraLabel) {
-          return fieldError(field + ".label", "at most " + std::to_string(kMaxCameraLabel) + " characters");
-        }
-        for (size_t k = 0; k < i; ++k) {
-          const scenes::Camera& seen = (*list)[k];
-          if (seen.eye == c.eye && seen.target == c.target && seen.fovDeg == c.fovDeg &&
-              seen.skyFraction == c.skyFraction) {
-            return duplicate(field, "cameras[" + std::to_string(k) + "]");
-          }
-        }
-      }
-      spec.autoCameras = false;
-      spec.cameras = std::move(list).value();
+std::optional<Error> parseCameras(const nlohmann::json& cameras, CaptureSpec& spec) {
+  if (cameras.is_string()) {
+    if (cameras.get<std::string>() == "auto") return std::nullopt;
+    return fieldError("cameras", "must be \"auto\" or a list of cameras, got " + show(cameras));
+  }
+  if (auto e = tooMany(cameras, "cameras", kMaxCameras)) return *e;
+  auto list = scenes::camerasFromJson(cameras);
+  if (!list) return json_fields::under("cameras", list.failure());
+  if (list->empty()) return fieldError("cameras", "must not be empty");
+  // A camera is its pose and lens; the label only names it.
+  for (size_t i = 0; i < list->size(); ++i) {
+    const scenes::Camera& c = (*list)[i];
+    std::string field = json_fields::index("cameras", i);
+    if (c.label.size() > kMaxCameraLabel) {
+      return fieldError(field + ".label", "at most " + std::to_string(kMaxCameraLabel) + " characters");
     }
+    for (size_t k = 0; k < i; ++k) {
+      const scenes::Camera& seen = (*list)[k];
+      if (seen.eye == c.eye && seen.target == c.target && seen.fovDeg == c.fovDeg &&
+          seen.skyFraction == c.skyFraction) {
+        return duplicate(field, json_fields::index("cameras", k));
+      }
+    }
+  }
+  spec.autoCameras = false;
+  spec.cameras = std::move(list).value();
+  return std::nullopt;
+}
+
+// A string (one mode) or a non-empty array of distinct modes.
+std::optional<Error> parseCounting(const nlohmann::json& counting, CaptureSpec& spec) {
+  if (!counting.is_string() && !(counting.is_array() && !counting.empty())) {
+    return fieldError("counting", "must be a mode or a non-empty array of modes, got " + show(counting));
+  }
+  if (auto e = tooMany(counting, "counting", kMaxModes)) return *e;
+  bool single = counting.is_string();
+  spec.modes.clear();
+  for (size_t i = 0; i < (single ? 1 : counting.size()); ++i) {
+    const auto& entry = single ? counting : counting[i];
+    std::string field = single ? "counting" : json_fields::index("counting", i);
+    auto name = json_fields::text(entry, field);
+    if (!name) return name.failure();
+    auto mode = spirv::parseMode(*name);
+    if (!mode) return fieldError(field, mode.error());
+    for (size_t k = 0; k < spec.modes.size(); ++k) {
+      if (spirv::toString(spec.modes[k]) == spirv::toString(*mode)) {
+        return fieldError(field, "mode '" + spirv::toString(*mode) +
+                                     "' listed twice (a duplicate of counting[" + std::to_string(k) + "])");
+      }
+    }
+    spec.modes.push_back(*mode);
+  }
+  return std::nullopt;
+}
+
+// true: the default block size; false: off; else a block size in bytes.
+Result<uint32_t> parseFootprint(const nlohmann::json& footprint) {
+  if (footprint.is_boolean()) return footprint.get<bool>() ? kDefaultFootprintBlockBytes : 0u;
+  if (footprint.is_number_integer() &&
+      (footprint.get<int64_t>() == 32 || footprint.get<int64_t>() == 64 || footprint.get<int64_t>() == 128)) {
+    return static_cast<uint32_t>(footprint.get<int64_t>());
+  }
+  return fieldError("footprint",
+                    "must be true, false or a block size of 32, 64 or 128 bytes, got " + show(footprint));
+}
+
+}  // namespace
+
+Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j,
+                                     const std::vector<std::string>& knownRenderers) {
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e = json_fields::unknownKey(
+          j, "",
+          {"renderers", "workloads", "scenes", "resolutions", "cameras", "frames", "counted_frames",
+           "counting", "lights", "footprint", "ceilings", "heatmap", "labels"})) {
+    return *e;
+  }
+  CaptureSpec spec;
+  spec.source = j;
+  if (auto e = parseVariants(j, knownRenderers, spec)) return *e;
+  if (auto e = parseScenes(j, spec)) return *e;
+  if (auto e = parseResolutions(j, spec)) return *e;
+  if (j.contains("cameras")) {
+    if (auto e = parseCameras(j["cameras"], spec)) return *e;
   }
 
   // heatmap: poses placed per scene, instead of cameras.
@@ -289,72 +303,44 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j, const std::vector<
       return fieldError("heatmap", "cannot be combined with \"cameras\" (a heatmap places its own cameras)");
     }
     auto heatmap = scenes::parseHeatmapSpec(j["heatmap"]);
-    if (!heatmap) return makeError(heatmap.error());
+    if (!heatmap) return heatmap.failure();
     spec.heatmap = std::move(heatmap).value();
     spec.autoCameras = false;
   }
 
   if (j.contains("frames")) {
-    auto frames = boundedInt(j["frames"], "frames", 1, kMaxFrames);
-    if (!frames) return makeError(frames.error());
+    auto frames = json_fields::count(j["frames"], "frames", 1, kMaxFrames);
+    if (!frames) return frames.failure();
     spec.frames = *frames;
   }
   if (j.contains("counted_frames")) {
     // At most the timed frames: the overhead ratio compares the two.
-    auto counted = boundedInt(j["counted_frames"], "counted_frames", 1, spec.frames);
-    if (!counted) return makeError(counted.error());
+    auto counted = json_fields::count(j["counted_frames"], "counted_frames", 1, spec.frames);
+    if (!counted) return counted.failure();
     spec.countedFrames = *counted;
   }
   if (j.contains("counting")) {
-    // A string (one mode) or a non-empty array of distinct modes.
-    const auto& counting = j["counting"];
-    if (!counting.is_string() && !(counting.is_array() && !counting.empty())) {
-      return fieldError("counting", "must be a mode or a non-empty array of modes, got " + show(counting));
-    }
-    if (auto e = tooMany(counting, "counting", kMaxModes)) return *e;
-    bool single = counting.is_string();
-    spec.modes.clear();
-    for (size_t i = 0; i < (single ? 1 : counting.size()); ++i) {
-      const auto& entry = single ? counting : counting[i];
-      std::string field = single ? "counting" : "counting[" + std::to_string(i) + "]";
-      if (!entry.is_string()) return fieldError(field, "must be a string, got " + show(entry));
-      auto mode = spirv::parseMode(entry.get<std::string>());
-      if (!mode) return fieldError(field, mode.error());
-      for (size_t k = 0; k < spec.modes.size(); ++k) {
-        if (spirv::toString(spec.modes[k]) == spirv::toString(*mode)) {
-          return fieldError(field, "mode '" + spirv::toString(*mode) +
-                                       "' listed twice (a duplicate of counting[" + std::to_string(k) + "])");
-        }
-      }
-      spec.modes.push_back(*mode);
-    }
+    if (auto e = parseCounting(j["counting"], spec)) return *e;
   }
   if (j.contains("lights")) {
-    auto lights = boundedInt(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
-    if (!lights) return makeError(lights.error());
+    auto lights = json_fields::count(j["lights"], "lights", 0, 400);  // shaders/shared.h kMaxLights
+    if (!lights) return lights.failure();
     spec.lights = *lights;
   }
   if (j.contains("ceilings")) {
-    if (!j["ceilings"].is_boolean()) return fieldError("ceilings", "must be true or false, got " + show(j["ceilings"]));
-    spec.ceilings = j["ceilings"].get<bool>();
+    auto ceilings = json_fields::boolean(j["ceilings"], "ceilings");
+    if (!ceilings) return ceilings.failure();
+    spec.ceilings = *ceilings;
   }
   if (j.contains("labels")) {
     auto labels = parseLabels(j["labels"]);
-    if (!labels) return makeError(labels.error());
+    if (!labels) return labels.failure();
     spec.labels = std::move(labels).value();
   }
-
   if (j.contains("footprint")) {
-    // true: the default block size; false: off; else a block size in bytes.
-    const auto& footprint = j["footprint"];
-    if (footprint.is_boolean()) {
-      spec.footprintBlockBytes = footprint.get<bool>() ? kDefaultFootprintBlockBytes : 0;
-    } else if (footprint.is_number_integer() &&
-               (footprint.get<int64_t>() == 32 || footprint.get<int64_t>() == 64 || footprint.get<int64_t>() == 128)) {
-      spec.footprintBlockBytes = static_cast<uint32_t>(footprint.get<int64_t>());
-    } else {
-      return fieldError("footprint", "must be true, false or a block size of 32, 64 or 128 bytes, got " + show(footprint));
-    }
+    auto footprint = parseFootprint(j["footprint"]);
+    if (!footprint) return footprint.failure();
+    spec.footprintBlockBytes = *footprint;
   }
 
   size_t camerasPerScene = spec.camerasPerScene();
@@ -371,17 +357,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A string without NUL of 1..maxLength characters (0.. when `empty` is allowed).
-Result<std::string> boundedText(const nlohmann::json& j, const std::string& field, size_t maxLength,
-                                bool empty = false) {
-  if (!j.is_string()) return fieldError(field, "must be a string, got " + show(j));
-  std::string text = j.get<std::string>();
-  if ((!empty && text.empty()) || text.size() > maxLength || text.find('\0') != std::string::npos) {
-    return fieldError(field, "must be " + std::string(empty ? "" : "a non-empty string of ") + "at most " +
-                                 std::to_string(maxLength) + " characters without NUL");
-  }
-  return text;
-}
+using json_fields::boundedText;
 
 // Names the layer's configuration is made of: the spec cannot set them.
 bool reservedName(const std::string& name) {
@@ -411,29 +387,25 @@ struct CommonFields {
   Result<bool> take(const std::string& key, const nlohmann::json& value) {
     const std::string field = prefix + key;
     if (key == "frames") {
-      auto v = boundedInt(value, field, 1, kMaxFrames);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(value, field, 1, kMaxFrames);
+      if (!v) return v.failure();
       spec.frames = *v;
     } else if (key == "skip_frames") {
-      auto v = boundedInt(value, field, 0, kMaxSkipFrames);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(value, field, 0, kMaxSkipFrames);
+      if (!v) return v.failure();
       spec.skipFrames = *v;
     } else if (key == "frame_submits") {
-      auto v = boundedInt(value, field, 0, kMaxFrameSubmits);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(value, field, 0, kMaxFrameSubmits);
+      if (!v) return v.failure();
       spec.frameSubmits = *v;
     } else if (key == "timeout_s") {
-      auto v = boundedInt(value, field, 1, kMaxApplicationTimeoutSeconds);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(value, field, 1, kMaxApplicationTimeoutSeconds);
+      if (!v) return v.failure();
       spec.timeoutSeconds = *v;
     } else if (key == "display") {
-      if (value == "none") {
-        spec.display = ApplicationSpec::Display::None;
-      } else if (value == "xvfb") {
-        spec.display = ApplicationSpec::Display::Xvfb;
-      } else {
-        return fieldError(field, "must be \"none\" or \"xvfb\", got " + show(value));
-      }
+      auto display = json_fields::oneOf(value, field, {"none", "xvfb"});
+      if (!display) return display.failure();
+      spec.display = *display == "xvfb" ? ApplicationSpec::Display::Xvfb : ApplicationSpec::Display::None;
     } else if (key == "env") {
       if (!value.is_object()) return fieldError(field, "must be an object of NAME: \"value\", got " + show(value));
       if (value.size() > kMaxApplicationEnv) {
@@ -447,7 +419,7 @@ struct CommonFields {
           return fieldError(at, "is set by Tally to load and configure the layer; a spec cannot set it");
         }
         auto v = boundedText(text, at, kMaxApplicationText, true);
-        if (!v) return makeError(v.error());
+        if (!v) return v.failure();
         spec.env.emplace_back(name, *v);
       }
     } else {
@@ -489,7 +461,7 @@ std::string findOnPath(const std::string& name, const std::string& path) {
 }
 
 Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::path& baseDir) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
   ApplicationSpec spec;
   spec.source = j;
   const bool replay = !j.contains("application");
@@ -506,13 +478,15 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   CommonFields common{spec, spec.fieldPrefix()};
 
   if (replay) {
-    const std::string expected =
-        "unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting)";
+    if (auto e = json_fields::unknownKey(j, "",
+                                         {"replay", "frames", "skip_frames", "frame_submits", "env",
+                                          "display", "timeout_s", "counting"})) {
+      return *e;
+    }
     for (const auto& [key, value] : j.items()) {
       if (key == "replay" || key == "counting") continue;
       auto taken = common.take(key, value);
-      if (!taken) return makeError(taken.error());
-      if (!*taken) return fieldError(key, expected);
+      if (!taken) return taken.failure();
     }
     auto file = boundedText(j["replay"], "replay", kMaxApplicationText);
     if (!file) return fieldError("replay", "must be the path of a GFXReconstruct capture file, got " + show(j["replay"]));
@@ -523,28 +497,26 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (std::ifstream in(path, std::ios::binary); !in) return fieldError("replay", path.string() + ": cannot be read");
     spec.replayFile = path.string();
   } else {
-    for (const auto& [key, value] : j.items()) {
-      if (key != "application" && key != "counting") {
-        return fieldError(key, "unknown field (expected application, counting)");
-      }
-    }
+    if (auto e = json_fields::unknownKey(j, "", {"application", "counting"})) return *e;
     const auto& app = j["application"];
     if (!app.is_object()) {
       return fieldError("application", "must be an object with \"command\", got " + show(app));
     }
-    const std::string expected =
-        "unknown field (expected command, frames, skip_frames, frame_submits, env, display, name, timeout_s)";
+    if (auto e = json_fields::unknownKey(
+            app, "application",
+            {"command", "frames", "skip_frames", "frame_submits", "env", "display", "name", "timeout_s"})) {
+      return *e;
+    }
     for (const auto& [key, value] : app.items()) {
       if (key == "command") continue;
       if (key == "name") {
         auto name = boundedText(value, "application.name", kMaxApplicationName);
-        if (!name) return makeError(name.error());
+        if (!name) return name.failure();
         spec.name = *name;
         continue;
       }
       auto taken = common.take(key, value);
-      if (!taken) return makeError(taken.error());
-      if (!*taken) return fieldError("application." + key, expected);
+      if (!taken) return taken.failure();
     }
     if (!app.contains("command")) {
       return fieldError("application.command", "required: the program and its arguments, e.g. [\"vkcube\", \"--c\", \"100\"]");
@@ -558,8 +530,9 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
                                                    " arguments, got " + std::to_string(command.size()));
     }
     for (size_t i = 0; i < command.size(); ++i) {
-      auto arg = boundedText(command[i], "application.command[" + std::to_string(i) + "]", kMaxApplicationText, i > 0);
-      if (!arg) return makeError(arg.error());
+      auto arg =
+          boundedText(command[i], json_fields::index("application.command", i), kMaxApplicationText, i > 0);
+      if (!arg) return arg.failure();
       spec.command.push_back(*arg);
     }
     const std::string& program = spec.command[0];
@@ -581,14 +554,13 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   }
 
   auto finished = common.finish();
-  if (!finished) return makeError(finished.error());
+  if (!finished) return finished.failure();
 
   if (j.contains("counting")) {
-    const auto& counting = j["counting"];
-    if (counting != "accumulate" && counting != "exact") {
-      return fieldError("counting", "must be \"accumulate\" or \"exact\" (the layer's modes), got " + show(counting));
-    }
-    spec.counting = counting.get<std::string>();
+    auto counting =
+        json_fields::oneOf(j["counting"], "counting", {"accumulate", "exact"}, "(the layer's modes)");
+    if (!counting) return counting.failure();
+    spec.counting = *counting;
   }
   return spec;
 }

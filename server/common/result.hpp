@@ -1,5 +1,7 @@
-// Result<T>: a value or an error message, for setup and parsing paths that
-// must report a reason instead of aborting (vk-bootstrap style).
+// Result<T>: a value or an error, for setup and parsing paths that must
+// report a reason instead of aborting (vk-bootstrap style). An error of bad
+// input names where it is ("resolutions[2]", "passes.shading.width"), so that
+// an HTTP answer can report the field without reading it back out of text.
 #pragma once
 
 #include <stdexcept>
@@ -9,8 +11,25 @@
 
 namespace tally {
 
-struct Error {
-  std::string message;
+class Error {
+ public:
+  explicit Error(std::string message) : message_(std::move(message)), text_(message_) {}
+  Error(std::string field, std::string message)
+      : field_(std::move(field)),
+        message_(std::move(message)),
+        text_(field_.empty() ? message_ : field_ + ": " + message_) {}
+
+  // Where the problem is, as a path into the input; empty when no field is to blame.
+  const std::string& field() const { return field_; }
+  // What is wrong there, without the field.
+  const std::string& message() const { return message_; }
+  // "field: message" (or the message alone): what is printed and answered.
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string field_;
+  std::string message_;
+  std::string text_;
 };
 
 template <class T>
@@ -30,7 +49,10 @@ class [[nodiscard]] Result {
   const T* operator->() const { return &value(); }
   T* operator->() { return &value(); }
 
-  const std::string& error() const { return std::get<1>(data_).message; }
+  // The error's text, "field: message".
+  const std::string& error() const { return std::get<1>(data_).text(); }
+  // The error with its field and message apart.
+  const Error& failure() const { return std::get<1>(data_); }
 
  private:
   void check() const {
@@ -39,6 +61,6 @@ class [[nodiscard]] Result {
   std::variant<T, Error> data_;
 };
 
-inline Error makeError(std::string message) { return Error{std::move(message)}; }
+inline Error makeError(std::string message) { return Error(std::move(message)); }
 
 }  // namespace tally

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "common/json_fields.hpp"
 #include "renderers/techniques/shadows.hpp"
 #include "renderers/techniques/tbn.hpp"
 #include "renderers/workloads/workloads.hpp"
@@ -11,10 +12,8 @@ namespace {
 
 using nlohmann::json;
 
-std::string show(const json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+using json_fields::fieldError;
+using json_fields::show;
 
 std::string joined(const std::vector<json>& values) {
   std::string out;
@@ -242,16 +241,16 @@ Result<json> canonicalOptions(std::string_view renderer, const json& options) {
     const json& value = item.value();
     auto it = std::find_if(own.begin(), own.end(), [&](const OptionDef* d) { return d->name == key; });
     if (it == own.end()) {
-      return makeError(key + ": " + std::string(renderer) + " takes no option " + key +
-                       (takes.empty() ? " (it takes none)" : " (it takes: " + takes + ")"));
+      return fieldError(key, std::string(renderer) + " takes no option " + key +
+                                 (takes.empty() ? " (it takes none)" : " (it takes: " + takes + ")"));
     }
     const OptionDef& def = **it;
     if (!allowed(def, value)) {
       if (!def.range.empty()) {
-        return makeError(key + ": must be a number from " + json(def.range[0]).dump() + " to " +
-                         json(def.range[1]).dump() + ", got " + show(value));
+        return fieldError(key, "must be a number from " + json(def.range[0]).dump() + " to " +
+                                   json(def.range[1]).dump() + ", got " + show(value));
       }
-      return makeError(key + ": " + show(value) + " is not one of " + joined(def.values));
+      return fieldError(key, show(value) + " is not one of " + joined(def.values));
     }
     if (value != def.defaultValue()) out[key] = value;
   }

@@ -495,35 +495,32 @@ Result<std::vector<Camera>> camerasFromJson(const nlohmann::json& cameras) {
     at += std::to_string(i);
     at += "]";
     if (!c.is_object())
-      return makeError(at + ": must be an object {\"eye\":[x,y,z], \"target\":[x,y,z]}, got " + c.dump());
+      return Error(at, "must be an object {\"eye\":[x,y,z], \"target\":[x,y,z]}, got " + c.dump());
     for (const auto& [key, value] : c.items())
       if (!kKeys.count(key))
-        return makeError(at + "." + key +
-                         ": unknown key (allowed: eye, target, fov_deg, label, sky_fraction)");
+        return Error(at + "." + key, "unknown key (allowed: eye, target, fov_deg, label, sky_fraction)");
     Camera cam;
     for (const char* key : {"eye", "target"}) {
-      if (!c.contains(key)) return makeError(at + "." + key + ": missing");
+      if (!c.contains(key)) return Error(at + "." + key, "missing");
       std::optional<glm::vec3> v = vec3From(c[key]);
-      if (!v)
-        return makeError(at + "." + key + ": must be an array of 3 finite numbers, got " + c[key].dump());
+      if (!v) return Error(at + "." + key, "must be an array of 3 finite numbers, got " + c[key].dump());
       (std::string(key) == "eye" ? cam.eye : cam.target) = *v;
     }
-    if (glm::length(cam.target - cam.eye) < 1e-6f) return makeError(at + ".target: must differ from eye");
+    if (glm::length(cam.target - cam.eye) < 1e-6f) return Error(at + ".target", "must differ from eye");
     if (c.contains("fov_deg")) {
       const nlohmann::json& f = c["fov_deg"];
       if (!f.is_number() || !(f.get<double>() > 0.0 && f.get<double>() < 180.0))
-        return makeError(at + ".fov_deg: must be a number of degrees in (0, 180), got " + f.dump());
+        return Error(at + ".fov_deg", "must be a number of degrees in (0, 180), got " + f.dump());
       cam.fovDeg = f.get<float>();
     }
     if (c.contains("label")) {
-      if (!c["label"].is_string())
-        return makeError(at + ".label: must be a string, got " + c["label"].dump());
+      if (!c["label"].is_string()) return Error(at + ".label", "must be a string, got " + c["label"].dump());
       cam.label = c["label"].get<std::string>();
     }
     if (c.contains("sky_fraction")) {
       const nlohmann::json& s = c["sky_fraction"];
       if (!s.is_number() || !(s.get<double>() >= 0.0 && s.get<double>() <= 1.0))
-        return makeError(at + ".sky_fraction: must be a number in [0, 1], got " + s.dump());
+        return Error(at + ".sky_fraction", "must be a number in [0, 1], got " + s.dump());
       cam.skyFraction = s.get<float>();
     }
     out.push_back(std::move(cam));

@@ -6,6 +6,8 @@
 #include <limits>
 #include <set>
 
+#include "common/json_fields.hpp"
+
 namespace tally::scenes {
 namespace {
 
@@ -16,39 +18,17 @@ constexpr size_t kMaxColumnHits = 256;  // surfaces followed down one column
 // eyeClear).
 constexpr int kMaxBackFaces = 2;
 
-std::string show(const json& j) {
-  std::string s = j.dump();
-  return s.size() > 60 ? s.substr(0, 57) + "..." : s;
-}
+using json_fields::fieldError;
+using json_fields::num;
+using json_fields::show;
 
-Error fieldError(const std::string& field, const std::string& message) { return makeError(field + ": " + message); }
-
-Result<uint32_t> intField(const json& j, const std::string& field, uint32_t low, uint32_t high) {
-  if (!j.is_number_integer() || j.get<int64_t>() < low || j.get<int64_t>() > high) {
-    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " + std::to_string(high) +
-                                 ", got " + show(j));
-  }
-  return uint32_t(j.get<int64_t>());
-}
-
-std::string num(float v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", double(v));
-  return buf;
-}
-
-// A finite number in [low, high] (strict at an end where `open`).
+// A finite number in [low, high] (above low where `openLow`).
 Result<float> numberField(const json& j, const std::string& field, float low, float high, bool openLow = false) {
-  bool ok = j.is_number() && std::isfinite(j.get<double>());
-  double v = ok ? j.get<double>() : 0.0;
-  if (!ok || (openLow ? v <= low : v < low) || v > high) {
-    return fieldError(field, std::string("must be a number ") + (openLow ? "above " : "from ") + num(low) +
-                                 (openLow ? " up to " : " to ") + num(high) + ", got " + show(j));
-  }
-  return float(v);
+  auto v = json_fields::number(j, field, low, high, openLow);
+  if (!v) return v.failure();
+  return float(*v);
 }
 
-// The geometric normal (unit) of every triangle, in the scene's triangle order.
 std::vector<glm::vec3> faceNormals(const Scene& scene) {
   std::vector<glm::vec3> out;
   out.reserve(scene.triangleCount());
@@ -298,47 +278,40 @@ Result<HeatmapSpec> parseHeatmapSpec(const json& j) {
   if (!j.is_object()) return fieldError("heatmap", "must be an object with \"layout\": \"floor\" or \"sphere\", got " + show(j));
   HeatmapSpec spec;
   if (!j.contains("layout")) return fieldError("heatmap.layout", "required: \"floor\" or \"sphere\"");
-  if (j["layout"] == "floor") {
-    spec.layout = HeatmapSpec::Layout::Floor;
-  } else if (j["layout"] == "sphere") {
-    spec.layout = HeatmapSpec::Layout::Sphere;
-  } else {
-    return fieldError("heatmap.layout", "must be \"floor\" or \"sphere\", got " + show(j["layout"]));
-  }
+  auto layout = json_fields::oneOf(j["layout"], "heatmap.layout", {"floor", "sphere"});
+  if (!layout) return layout.failure();
+  spec.layout = *layout == "floor" ? HeatmapSpec::Layout::Floor : HeatmapSpec::Layout::Sphere;
   const bool floor = spec.layout == HeatmapSpec::Layout::Floor;
-  static const std::set<std::string> kFloorKeys = {"layout",   "cells",     "eye_height",    "yaws",     "pitch_deg",
-                                                   "fov_deg",  "headroom",  "clearance",     "max_slope_deg",
-                                                   "max_rise", "region"};
-  static const std::set<std::string> kSphereKeys = {"layout", "rings", "segments", "distance", "fov_deg"};
-  const auto& keys = floor ? kFloorKeys : kSphereKeys;
-  for (const auto& [key, value] : j.items()) {
-    if (!keys.count(key)) {
-      std::string known;
-      for (const auto& k : keys) known += (known.empty() ? "" : ", ") + k;
-      return fieldError("heatmap." + key, std::string("unknown field for the ") + (floor ? "floor" : "sphere") +
-                                              " layout (expected " + known + ")");
-    }
+  // Listed in alphabetical order, as the message always did.
+  static const std::vector<std::string> kFloorKeys = {"cells",     "clearance", "eye_height", "fov_deg",
+                                                      "headroom",  "layout",    "max_rise",   "max_slope_deg",
+                                                      "pitch_deg", "region",    "yaws"};
+  static const std::vector<std::string> kSphereKeys = {"distance", "fov_deg", "layout", "rings", "segments"};
+  if (auto e = json_fields::unknownKey(
+          j, "heatmap", floor ? kFloorKeys : kSphereKeys,
+          std::string("unknown field for the ") + (floor ? "floor" : "sphere") + " layout")) {
+    return *e;
   }
   if (j.contains("fov_deg")) {
     auto v = numberField(j["fov_deg"], "heatmap.fov_deg", 1.0f, 179.0f);
-    if (!v) return makeError(v.error());
+    if (!v) return v.failure();
     spec.fovDeg = *v;
   }
   if (!floor) {
     if (j.contains("rings")) {
-      auto v = intField(j["rings"], "heatmap.rings", 1, kMaxHeatmapRings);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(j["rings"], "heatmap.rings", 1, kMaxHeatmapRings);
+      if (!v) return v.failure();
       spec.rings = *v;
     }
     if (j.contains("segments")) {
-      auto v = intField(j["segments"], "heatmap.segments", 1, kMaxHeatmapSegments);
-      if (!v) return makeError(v.error());
+      auto v = json_fields::count(j["segments"], "heatmap.segments", 1, kMaxHeatmapSegments);
+      if (!v) return v.failure();
       spec.segments = *v;
     }
     if (j.contains("distance")) {
       // In bounding-sphere radii: above 1 the eyes are outside every triangle.
       auto v = numberField(j["distance"], "heatmap.distance", 0.0f, 100.0f, true);
-      if (!v) return makeError(v.error());
+      if (!v) return v.failure();
       spec.distance = *v;
     }
     return spec;
@@ -348,16 +321,16 @@ Result<HeatmapSpec> parseHeatmapSpec(const json& j) {
     if (!cells.is_array() || cells.size() != 2) {
       return fieldError("heatmap.cells", "must be [columns along x, rows along z], got " + show(cells));
     }
-    auto c = intField(cells[0], "heatmap.cells[0]", 1, kMaxHeatmapCells);
-    if (!c) return makeError(c.error());
-    auto r = intField(cells[1], "heatmap.cells[1]", 1, kMaxHeatmapCells);
-    if (!r) return makeError(r.error());
+    auto c = json_fields::count(cells[0], "heatmap.cells[0]", 1, kMaxHeatmapCells);
+    if (!c) return c.failure();
+    auto r = json_fields::count(cells[1], "heatmap.cells[1]", 1, kMaxHeatmapCells);
+    if (!r) return r.failure();
     spec.columns = *c;
     spec.rows = *r;
   }
   if (j.contains("yaws")) {
-    auto v = intField(j["yaws"], "heatmap.yaws", 1, kMaxHeatmapYaws);
-    if (!v) return makeError(v.error());
+    auto v = json_fields::count(j["yaws"], "heatmap.yaws", 1, kMaxHeatmapYaws);
+    if (!v) return v.failure();
     spec.yaws = *v;
   }
   struct Number {
@@ -374,7 +347,7 @@ Result<HeatmapSpec> parseHeatmapSpec(const json& j) {
                           Number{"max_rise", &spec.maxRise, 0.0f, 10000.0f, false}}) {
     if (!j.contains(n.key)) continue;
     auto v = numberField(j[n.key], std::string("heatmap.") + n.key, n.low, n.high, n.openLow);
-    if (!v) return makeError(v.error());
+    if (!v) return v.failure();
     *n.into = *v;
   }
   if (spec.headroom <= spec.eyeHeight) {
@@ -392,7 +365,7 @@ Result<HeatmapSpec> parseHeatmapSpec(const json& j) {
       if (!region[i].is_array() || region[i].size() != 2) return fieldError(at, "must be [x, z], got " + show(region[i]));
       for (size_t k = 0; k < 2; ++k) {
         auto v = numberField(region[i][k], at + "[" + std::to_string(k) + "]", -1e6f, 1e6f);
-        if (!v) return makeError(v.error());
+        if (!v) return v.failure();
         r[i * 2 + k] = *v;
       }
     }

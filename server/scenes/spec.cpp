@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/json_fields.hpp"
 #include "scenes/gltf.hpp"
 #include "scenes/procedural.hpp"
 
@@ -16,44 +17,19 @@ namespace {
 constexpr const char* kNames = "\"atrium\", \"planes\", \"sky\" or {\"gltf\": \"path\"}";
 constexpr int64_t kMaxTextureSizeLimit = 16384;  // the largest image dimension Vulkan devices commonly allow
 
-std::string join(const std::vector<std::string>& keys) {
-  std::string s;
-  for (const std::string& k : keys) s += (s.empty() ? "" : ", ") + k;
-  return s;
-}
+using json_fields::fieldError;
 
 // Every key of `spec` must be one of `allowed`.
 std::optional<Error> checkKeys(const nlohmann::json& spec, const std::vector<std::string>& allowed,
                                const std::string& kind) {
-  for (const auto& [key, value] : spec.items()) {
-    bool known = false;
-    for (const std::string& a : allowed) known = known || a == key;
-    if (!known) return makeError(key + ": unknown key for " + kind + " (allowed: " + join(allowed) + ")");
-  }
-  return std::nullopt;
+  return json_fields::unknownKey(spec, "", allowed, "unknown key for " + kind);
 }
 
 // Integer field in [lo, hi], or the default when absent.
 Result<int64_t> integerField(const nlohmann::json& spec, const char* key, int64_t lo, int64_t hi,
                              int64_t dflt) {
   if (!spec.contains(key)) return dflt;
-  const nlohmann::json& v = spec[key];
-  bool ok = v.is_number_integer();
-  int64_t x = 0;
-  if (ok) {
-    if (v.is_number_unsigned()) {
-      uint64_t u = v.get<uint64_t>();
-      ok = u <= uint64_t(hi);
-      x = int64_t(u);
-    } else {
-      x = v.get<int64_t>();
-    }
-    ok = ok && x >= lo && x <= hi;
-  }
-  if (!ok)
-    return makeError(std::string(key) + ": must be an integer between " + std::to_string(lo) + " and " +
-                     std::to_string(hi) + ", got " + v.dump());
-  return x;
+  return json_fields::integer(spec[key], key, lo, hi);
 }
 
 // Number field in (lo, hi] or [lo, hi], or the default when absent.
@@ -69,7 +45,7 @@ Result<double> numberField(const nlohmann::json& spec, const char* key, double l
   if (!ok) {
     char range[64];
     std::snprintf(range, sizeof range, "%s%g, %g]", loOpen ? "(" : "[", lo, hi);
-    return makeError(std::string(key) + ": must be a number in " + range + ", got " + v.dump());
+    return fieldError(key, std::string("must be a number in ") + range + ", got " + json_fields::show(v));
   }
   return v.get<double>();
 }
@@ -78,7 +54,7 @@ Result<PlanesParams> planesParams(const nlohmann::json& spec) {
   if (auto e = checkKeys(spec, {"name", "layers", "order", "coverage"}, "scene \"planes\"")) return *e;
   PlanesParams p;
   Result<int64_t> layers = integerField(spec, "layers", 1, kMaxPlaneLayers, p.layers);
-  if (!layers) return makeError(layers.error());
+  if (!layers) return layers.failure();
   p.layers = int(*layers);
   if (spec.contains("order")) {
     const nlohmann::json& o = spec["order"];
@@ -87,10 +63,11 @@ Result<PlanesParams> planesParams(const nlohmann::json& spec) {
     else if (o == "front-to-back")
       p.order = DrawOrder::FrontToBack;
     else
-      return makeError("order: must be \"back-to-front\" or \"front-to-back\", got " + o.dump());
+      return fieldError("order",
+                        "must be \"back-to-front\" or \"front-to-back\", got " + json_fields::show(o));
   }
   Result<double> coverage = numberField(spec, "coverage", 0.0, true, 1.0, p.coverage);
-  if (!coverage) return makeError(coverage.error());
+  if (!coverage) return coverage.failure();
   p.coverage = *coverage;
   return p;
 }
@@ -99,7 +76,7 @@ Result<SkyParams> skyParams(const nlohmann::json& spec) {
   if (auto e = checkKeys(spec, {"name", "coverage"}, "scene \"sky\"")) return *e;
   SkyParams p;
   Result<double> coverage = numberField(spec, "coverage", 0.0, false, 1.0, p.coverage);
-  if (!coverage) return makeError(coverage.error());
+  if (!coverage) return coverage.failure();
   p.coverage = *coverage;
   return p;
 }
@@ -109,10 +86,10 @@ Result<std::pair<std::string, GltfOptions>> gltfParams(const nlohmann::json& spe
   if (auto e = checkKeys(spec, {"gltf", "max_texture_size"}, "a glTF scene")) return *e;
   const nlohmann::json& path = spec["gltf"];
   if (!path.is_string() || path.get<std::string>().empty())
-    return makeError("gltf: must be a non-empty path string, got " + path.dump());
+    return fieldError("gltf", "must be a non-empty path string, got " + json_fields::show(path));
   GltfOptions options;
   Result<int64_t> maxSize = integerField(spec, "max_texture_size", 1, kMaxTextureSizeLimit, 0);
-  if (!maxSize) return makeError(maxSize.error());
+  if (!maxSize) return maxSize.failure();
   options.maxTextureSize = uint32_t(*maxSize);
   return std::pair{path.get<std::string>(), options};
 }
@@ -143,15 +120,15 @@ Result<Checked> check(const nlohmann::json& spec) {
   if (!spec.is_object()) return makeError("must be a scene name or an object, got " + spec.dump());
   if (spec.contains("gltf")) {
     if (spec.contains("name"))
-      return makeError("name: cannot be combined with gltf (a glTF scene is named after its file)");
+      return fieldError("name", "cannot be combined with gltf (a glTF scene is named after its file)");
     auto params = gltfParams(spec);
-    if (!params) return makeError(params.error());
+    if (!params) return params.failure();
     c.kind = Checked::Kind::Gltf;
     c.path = params->first;
     c.gltf = params->second;
     return c;
   }
-  if (!spec.contains("name")) return makeError("name: missing, expected " + std::string(kNames));
+  if (!spec.contains("name")) return fieldError("name", "missing, expected " + std::string(kNames));
   const nlohmann::json& name = spec["name"];
   if (name == "atrium") {
     if (auto e = checkKeys(spec, {"name"}, "scene \"atrium\"")) return *e;
@@ -159,24 +136,24 @@ Result<Checked> check(const nlohmann::json& spec) {
   }
   if (name == "planes") {
     auto p = planesParams(spec);
-    if (!p) return makeError(p.error());
+    if (!p) return p.failure();
     c.kind = Checked::Kind::Planes;
     c.planes = *p;
     return c;
   }
   if (name == "sky") {
     auto p = skyParams(spec);
-    if (!p) return makeError(p.error());
+    if (!p) return p.failure();
     c.kind = Checked::Kind::Sky;
     c.sky = *p;
     return c;
   }
-  return makeError("name: unknown scene " + name.dump() + ", expected " + kNames);
+  return fieldError("name", "unknown scene " + name.dump() + ", expected " + kNames);
 }
 
 Result<Scene> makeScene(const nlohmann::json& spec, bool geometryOnly) {
   auto c = check(spec);
-  if (!c) return makeError(c.error());
+  if (!c) return c.failure();
   switch (c->kind) {
     case Checked::Kind::Atrium: return makeAtrium();
     case Checked::Kind::Planes: return makePlanes(c->planes);
@@ -185,7 +162,7 @@ Result<Scene> makeScene(const nlohmann::json& spec, bool geometryOnly) {
       GltfOptions options = c->gltf;
       options.geometryOnly = geometryOnly;
       Result<Scene> scene = loadGltf(c->path, options);
-      if (!scene) return makeError("gltf: " + scene.error());
+      if (!scene) return json_fields::under("gltf", scene.failure());
       return scene;
     }
   }
@@ -198,7 +175,7 @@ Result<Scene> makeScene(const nlohmann::json& spec) { return makeScene(spec, fal
 
 Result<nlohmann::json> checkSceneSpec(const nlohmann::json& spec) {
   auto c = check(spec);
-  if (!c) return makeError(c.error());
+  if (!c) return c.failure();
   switch (c->kind) {
     case Checked::Kind::Atrium: return nlohmann::json{{"name", "atrium"}};
     case Checked::Kind::Planes:

@@ -14,12 +14,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 
-// "scenes[0]: layers: must be ..." -> "scenes[0]".
-std::string fieldOf(const std::string& message) {
-  size_t colon = message.find(": ");
-  return colon == std::string::npos ? std::string("spec") : message.substr(0, colon);
-}
-
 bool under(const fs::path& file, const fs::path& folder) {
   auto f = file.begin(), d = folder.begin();
   for (; d != folder.end(); ++d, ++f) {
@@ -76,7 +70,7 @@ json validateApplicationSpec(const ServiceContext& ctx, const json& body, api::P
         "Authorization");
   }
   auto parsed = capture::parseConfinedApplicationSpec(body, ctx.options.applicationPolicy);
-  if (!parsed) throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
+  if (!parsed) throw RequestError(400, api::code::kInvalidField, parsed.error(), parsed.failure().field());
   return body;
 }
 
@@ -88,7 +82,7 @@ json validateSpec(const ServiceContext& ctx, const json& body, api::Principal pr
   if (!body.is_object()) throw RequestError(400, api::code::kBadJson, "the body must be a capture spec (a JSON object)");
   if (!body.contains("device")) return validateContent(ctx, body, principal);
   auto requirement = store::parseDeviceRequirement(body);
-  if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), fieldOf(requirement.error()));
+  if (!requirement) throw RequestError(400, api::code::kInvalidField, requirement.error(), requirement.failure().field());
   json content = body;
   content.erase("device");
   json stored = validateContent(ctx, content, principal);
@@ -104,12 +98,12 @@ json validateContent(const ServiceContext& ctx, const json& body, api::Principal
   // limits on points and resolution are the sweep's (sweeps/sweep.hpp).
   if (sweeps::isSweepSpec(body)) {
     auto sweep = sweeps::parseSweepSpec(body, ctx.rendererNames);
-    if (!sweep) throw RequestError(400, api::code::kInvalidField, sweep.error(), fieldOf(sweep.error()));
+    if (!sweep) throw RequestError(400, api::code::kInvalidField, sweep.error(), sweep.failure().field());
     return body;
   }
   auto parsed = capture::parseCaptureSpec(body, ctx.rendererNames);
   if (!parsed) {
-    throw RequestError(400, api::code::kInvalidField, parsed.error(), fieldOf(parsed.error()));
+    throw RequestError(400, api::code::kInvalidField, parsed.error(), parsed.failure().field());
   }
   const auto& spec = *parsed;
   const auto& options = ctx.options;

@@ -57,31 +57,31 @@ json DeviceRequirement::toJson() const {
 Result<DeviceRequirement> deviceRequirementFromJson(const json& value) {
   DeviceRequirement r;
   if (value.is_string()) {
-    if (value.get<std::string>().empty()) return makeError("device: must not be empty");
+    if (value.get<std::string>().empty()) return Error("device", "must not be empty");
     r.name = value.get<std::string>();
     return r;
   }
   if (!value.is_object()) {
-    return makeError("device: must be a device name (substring) or an object with name, vendor or features");
+    return Error("device", "must be a device name (substring) or an object with name, vendor or features");
   }
   for (const auto& [key, field] : value.items()) {
     if (key == "name" || key == "vendor") {
       if (!field.is_string() || field.get<std::string>().empty())
-        return makeError("device." + key + ": must be a non-empty string");
+        return Error("device." + key, "must be a non-empty string");
       (key == "name" ? r.name : r.vendor) = field.get<std::string>();
     } else if (key == "features") {
-      if (!field.is_array()) return makeError("device.features: must be an array of feature names");
+      if (!field.is_array()) return Error("device.features", "must be an array of feature names");
       for (const auto& f : field) {
         if (!f.is_string() || f.get<std::string>().empty())
-          return makeError("device.features: each feature must be a non-empty string, got " + f.dump());
+          return Error("device.features", "each feature must be a non-empty string, got " + f.dump());
         r.features.push_back(f.get<std::string>());
       }
     } else {
-      return makeError("device." + key + ": unknown field (name, vendor, features)");
+      return Error("device." + key, "unknown field (name, vendor, features)");
     }
   }
   if (!r.name && !r.vendor && r.features.empty()) {
-    return makeError("device: give at least one of name, vendor, features");
+    return Error("device", "give at least one of name, vendor, features");
   }
   return r;
 }
@@ -91,7 +91,7 @@ Result<std::optional<DeviceRequirement>> parseDeviceRequirement(const json& spec
     return std::optional<DeviceRequirement>();
   }
   auto r = deviceRequirementFromJson(spec["device"]);
-  if (!r) return makeError(r.error());
+  if (!r) return r.failure();
   return std::optional<DeviceRequirement>(std::move(*r));
 }
 

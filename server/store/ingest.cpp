@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/json_fields.hpp"
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -22,65 +23,9 @@ struct IngestError : std::runtime_error {
   throw IngestError(path + ": " + what);
 }
 
-const json* find(const json& object, const char* key) {
-  auto it = object.find(key);
-  return it == object.end() || it->is_null() ? nullptr : &*it;
-}
-
-double number(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) bad(path + "." + key, "missing");
-  if (!value->is_number()) bad(path + "." + key, "must be a number, got " + value->dump());
-  double x = value->get<double>();
-  if (!std::isfinite(x)) bad(path + "." + key, "must be finite");
-  return x;
-}
-
-std::optional<double> optNumber(const json& object, const char* key, const std::string& path) {
-  if (!find(object, key)) return std::nullopt;
-  return number(object, key, path);
-}
-
-int64_t integer(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) bad(path + "." + key, "missing");
-  if (!value->is_number_integer()) bad(path + "." + key, "must be an integer, got " + value->dump());
-  if (value->is_number_unsigned() && value->get<uint64_t>() > uint64_t(INT64_MAX))
-    bad(path + "." + key, "too large");
-  return value->get<int64_t>();
-}
-
-std::optional<int64_t> optInteger(const json& object, const char* key, const std::string& path) {
-  if (!find(object, key)) return std::nullopt;
-  return integer(object, key, path);
-}
-
-std::string text(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) bad(path + "." + key, "missing");
-  if (!value->is_string()) bad(path + "." + key, "must be a string, got " + value->dump());
-  return value->get<std::string>();
-}
-
-std::optional<std::string> optText(const json& object, const char* key, const std::string& path) {
-  if (!find(object, key)) return std::nullopt;
-  return text(object, key, path);
-}
-
-const json& array(const json& object, const char* key, const std::string& path) {
-  static const json kEmpty = json::array();
-  const json* value = find(object, key);
-  if (!value) return kEmpty;
-  if (!value->is_array()) bad(path + "." + key, "must be an array");
-  return *value;
-}
-
-json optObject(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) return json::object();
-  if (!value->is_object()) bad(path + "." + key, "must be an object");
-  return *value;
-}
+// Members of the result: a fault throws IngestError naming the path.
+constexpr json_fields::Members kMembers{[](const Error& error) { throw IngestError(error.text()); }};
+using json_fields::find;
 
 // Width and height from a PNG's IHDR chunk (the signature and IHDR come first).
 std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::string& path) {
@@ -164,11 +109,11 @@ int64_t returnedId(Statement& statement) {
 int64_t insertDevice(Inserter& in, const json& result) {
   const json* device = find(result, "device");
   if (!device || !device->is_object()) bad("device", "missing or not an object");
-  std::string name = text(*device, "name", "device");
-  std::string vendor = optText(*device, "vendorID", "device").value_or("");
-  std::string deviceId = optText(*device, "deviceID", "device").value_or("");
-  std::string driver = optText(*device, "driverInfo", "device").value_or("");
-  std::string api = optText(*device, "apiVersion", "device").value_or("");
+  std::string name = kMembers.text(*device, "name", "device");
+  std::string vendor = kMembers.optText(*device, "vendorID", "device").value_or("");
+  std::string deviceId = kMembers.optText(*device, "deviceID", "device").value_or("");
+  std::string driver = kMembers.optText(*device, "driverInfo", "device").value_or("");
+  std::string api = kMembers.optText(*device, "apiVersion", "device").value_or("");
   // Unit separators keep the fields apart whatever they contain.
   std::string fingerprint = name + '\x1f' + vendor + '\x1f' + deviceId + '\x1f' + driver + '\x1f' + api;
   in.findDevice.reset();
@@ -184,7 +129,7 @@ int64_t insertDevice(Inserter& in, const json& result) {
       .bind(3, vendor)
       .bind(4, driver)
       .bind(5, api)
-      .bind(6, optObject(*device, "features", "device"))
+      .bind(6, kMembers.object(*device, "features", "device"))
       .bind(7, *device);
   return returnedId(in.device);
 }
@@ -213,31 +158,31 @@ std::optional<json> optFrameTimes(const json& object, const char* key, const std
 }
 
 void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::string& path) {
-  const json& counters = array(pass, "resources", path);
+  const json& counters = kMembers.array(pass, "resources", path);
   for (size_t c = 0; c < counters.size(); ++c) {
     std::string at = path + ".resources[" + std::to_string(c) + "]";
     const json& counter = counters[c];
     if (!counter.is_object()) bad(at, "must be an object");
-    std::string access = text(counter, "access", at);
+    std::string access = kMembers.text(counter, "access", at);
     if (access != "read" && access != "write")
       bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
     // Absent (or null) where the line's footprint was not measured.
-    std::optional<double> footprint = optNumber(counter, "footprint_bytes", at);
+    std::optional<double> footprint = kMembers.optNumber(counter, "footprint_bytes", at);
     if (footprint && *footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
     in.counter.reset();
     in.counter.bind(1, passId)
         .bind(2, static_cast<int64_t>(c))
-        .bind(3, text(counter, "name", at))
-        .bind(4, optText(counter, "kind", at))
-        .bind(5, optText(counter, "format", at))
+        .bind(3, kMembers.text(counter, "name", at))
+        .bind(4, kMembers.optText(counter, "kind", at))
+        .bind(5, kMembers.optText(counter, "format", at))
         .bind(6, access)
-        .bind(7, number(counter, "count", at))
-        .bind(8, number(counter, "bytes", at))
+        .bind(7, kMembers.number(counter, "count", at))
+        .bind(8, kMembers.number(counter, "bytes", at))
         .bind(9, optJson(counter, "count_spread"))
-        .bind(10, text(counter, "source", at))
+        .bind(10, kMembers.text(counter, "source", at))
         .bind(11, footprint);
     in.counter.run();
-    double bytes = number(counter, "bytes", at);
+    double bytes = kMembers.number(counter, "bytes", at);
     in.sums.bytes += bytes;
     if (footprint) {
       in.sums.footprint = in.sums.footprint.value_or(0) + *footprint;
@@ -247,7 +192,7 @@ void insertCounters(Inserter& in, int64_t passId, const json& pass, const std::s
 }
 
 void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std::string& path) {
-  const json& passes = array(sample, "passes", path);
+  const json& passes = kMembers.array(sample, "passes", path);
   for (size_t p = 0; p < passes.size(); ++p) {
     std::string at = path + ".passes[" + std::to_string(p) + "]";
     const json& pass = passes[p];
@@ -255,15 +200,15 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
     in.pass.reset();
     in.pass.bind(1, sampleId)
         .bind(2, static_cast<int64_t>(p))
-        .bind(3, text(pass, "name", at))
-        .bind(4, number(pass, "gpu_ms", at))
+        .bind(3, kMembers.text(pass, "name", at))
+        .bind(4, kMembers.number(pass, "gpu_ms", at))
         .bind(5, optJson(pass, "gpu_ms_spread"))
-        .bind(6, optNumber(pass, "gpu_ms_instrumented", at))
-        .bind(7, optNumber(pass, "overhead_ratio", at))
-        .bind(8, optNumber(pass, "fragment_invocations", at))
-        .bind(9, optNumber(pass, "fragment_invocations_statistic", at))
-        .bind(10, optNumber(pass, "compute_invocations", at))
-        .bind(11, optNumber(pass, "compute_invocations_statistic", at))
+        .bind(6, kMembers.optNumber(pass, "gpu_ms_instrumented", at))
+        .bind(7, kMembers.optNumber(pass, "overhead_ratio", at))
+        .bind(8, kMembers.optNumber(pass, "fragment_invocations", at))
+        .bind(9, kMembers.optNumber(pass, "fragment_invocations_statistic", at))
+        .bind(10, kMembers.optNumber(pass, "compute_invocations", at))
+        .bind(11, kMembers.optNumber(pass, "compute_invocations_statistic", at))
         .bind(12, optFrameTimes(pass, "gpu_ms_frames", at));
     insertCounters(in, returnedId(in.pass), pass, at);
   }
@@ -271,7 +216,7 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
 
 std::optional<int64_t> insertScreenshot(Inserter& in, const json& sample, const std::string& path,
                                         const std::map<std::string, std::vector<uint8_t>>& screenshots) {
-  auto name = optText(sample, "screenshot", path);
+  auto name = kMembers.optText(sample, "screenshot", path);
   if (!name) return std::nullopt;
   auto it = screenshots.find(*name);
   if (it == screenshots.end())
@@ -297,14 +242,14 @@ ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const s
   if (!error) return out;
   std::string errorPath = at + "." + key;
   if (!error->is_object()) bad(errorPath, "must be an object");
-  out.against = defaultAgainst ? optText(*error, "against", errorPath).value_or(*defaultAgainst)
-                               : text(*error, "against", errorPath);
+  out.against = defaultAgainst ? kMembers.optText(*error, "against", errorPath).value_or(*defaultAgainst)
+                               : kMembers.text(*error, "against", errorPath);
   const json* same = find(*error, "identical");
   if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
-  out.psnr = optNumber(*error, "psnr", errorPath);
+  out.psnr = kMembers.optNumber(*error, "psnr", errorPath);
   out.identical = same ? int64_t{same->get<bool>()} : int64_t{!out.psnr};
-  out.maxAbs = number(*error, "max_abs", errorPath);
-  out.meanAbs = number(*error, "mean_abs", errorPath);
+  out.maxAbs = kMembers.number(*error, "max_abs", errorPath);
+  out.meanAbs = kMembers.number(*error, "mean_abs", errorPath);
   return out;
 }
 
@@ -332,40 +277,44 @@ json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
 
 void insertSamples(Inserter& in, int64_t runId, const json& run, const std::string& path,
                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
-  const json& samples = array(run, "samples", path);
+  const json& samples = kMembers.array(run, "samples", path);
   for (size_t s = 0; s < samples.size(); ++s) {
     std::string at = path + ".samples[" + std::to_string(s) + "]";
     const json& sample = samples[s];
     if (!sample.is_object()) bad(at, "must be an object");
     const json* camera = find(sample, "camera");
     if (!camera || !camera->is_object()) bad(at + ".camera", "missing or not an object");
-    int64_t cameraIndex = optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
-    std::optional<double> sky = optNumber(sample, "sky_fraction", at);
-    if (sky && *sky < 0) sky.reset();  // -1: the renderer has no skybox pass
+    int64_t cameraIndex =
+        kMembers.optInteger(*camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
+    // -1: the renderer has no skybox pass.
+    std::optional<double> sky;
+    if (find(sample, "sky_fraction")) {
+      if (double given = kMembers.number(sample, "sky_fraction", at); given >= 0) sky = given;
+    }
     ImageErrorColumns image = imageErrorColumns(sample, "image_error", at, "forward");
     // A variant's error against its reference variant; "against" is required
     // there, as no renderer is its implied reference.
     ImageErrorColumns variant = imageErrorColumns(sample, "variant_error", at, std::nullopt);
     auto screenshotId = insertScreenshot(in, sample, at, screenshots);
-    auto frames = optInteger(sample, "frames", at);
+    auto frames = kMembers.optInteger(sample, "frames", at);
     in.sample.reset();
     in.sample.bind(1, runId)
         .bind(2, cameraIndex)
         .bind(3, *camera)
         .bind(4, sky)
-        .bind(5, optNumber(sample, "sky_fraction_estimate", at))
+        .bind(5, kMembers.optNumber(sample, "sky_fraction_estimate", at))
         .bind(6, frames)
-        .bind(7, number(sample, "frame_ms", at))
+        .bind(7, kMembers.number(sample, "frame_ms", at))
         .bind(8, optJson(sample, "frame_ms_spread"))
-        .bind(9, optNumber(sample, "frame_ms_instrumented", at))
-        .bind(10, optNumber(sample, "overhead_ratio", at))
+        .bind(9, kMembers.optNumber(sample, "frame_ms_instrumented", at))
+        .bind(10, kMembers.optNumber(sample, "overhead_ratio", at))
         .bind(11, image.against)
         .bind(12, image.identical)
         .bind(13, image.psnr)
         .bind(14, image.maxAbs)
         .bind(15, image.meanAbs)
         .bind(16, screenshotId)
-        .bind(17, extrasWithRoofline(optObject(sample, "extras", at), sample, in.ceilings))
+        .bind(17, extrasWithRoofline(kMembers.object(sample, "extras", at), sample, in.ceilings))
         .bind(18, variant.against)
         .bind(19, variant.identical)
         .bind(20, variant.psnr)
@@ -397,15 +346,15 @@ void insertResources(Inserter& in, int64_t runId, const json& list, const std::s
     in.resource.reset();
     in.resource.bind(1, runId)
         .bind(2, static_cast<int64_t>(r))
-        .bind(3, text(resource, "name", at))
-        .bind(4, text(resource, "kind", at))
-        .bind(5, optText(resource, "format", at))
-        .bind(6, optInteger(resource, "element_bytes", at))
-        .bind(7, optInteger(resource, "width", at))
-        .bind(8, optInteger(resource, "height", at))
-        .bind(9, optInteger(resource, "allocation_bytes", at))
-        .bind(10, optInteger(resource, "format_bytes", at))
-        .bind(11, optText(resource, "usage", at));
+        .bind(3, kMembers.text(resource, "name", at))
+        .bind(4, kMembers.text(resource, "kind", at))
+        .bind(5, kMembers.optText(resource, "format", at))
+        .bind(6, kMembers.optInteger(resource, "element_bytes", at))
+        .bind(7, kMembers.optInteger(resource, "width", at))
+        .bind(8, kMembers.optInteger(resource, "height", at))
+        .bind(9, kMembers.optInteger(resource, "allocation_bytes", at))
+        .bind(10, kMembers.optInteger(resource, "format_bytes", at))
+        .bind(11, kMembers.optText(resource, "usage", at));
     in.resource.run();
   }
 }
@@ -419,59 +368,60 @@ Build buildOf(const json& result) {
   const json* tally = find(result, "tally");
   if (!tally) return {};
   if (!tally->is_object()) bad("tally", "must be an object");
-  return {optText(*tally, "version", "tally"), optText(*tally, "commit", "tally")};
+  return {kMembers.optText(*tally, "version", "tally"), kMembers.optText(*tally, "commit", "tally")};
 }
 
 int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& shaders, const Build& build,
                   const json& run, const std::string& path, const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!run.is_object()) bad(path, "must be an object");
   in.findScene.reset();
-  in.findScene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
+  in.findScene.bind(1, kMembers.text(run, "scene", path)).bind(2, kMembers.object(run, "scene_params", path));
   int64_t sceneId = 0;
   if (in.findScene.step()) {
     sceneId = in.findScene.getInt(0);
     in.findScene.run();
   } else {
     in.scene.reset();
-    in.scene.bind(1, text(run, "scene", path)).bind(2, optObject(run, "scene_params", path));
+    in.scene.bind(1, kMembers.text(run, "scene", path)).bind(2, kMembers.object(run, "scene_params", path));
     sceneId = returnedId(in.scene);
   }
-  int64_t width = integer(run, "width", path);
-  int64_t height = integer(run, "height", path);
+  int64_t width = kMembers.integer(run, "width", path);
+  int64_t height = kMembers.integer(run, "height", path);
   if (width < 1 || width > 16384) bad(path + ".width", "must be between 1 and 16384");
   if (height < 1 || height > 16384) bad(path + ".height", "must be between 1 and 16384");
-  int64_t lights = optInteger(run, "lights", path).value_or(0);
+  int64_t lights = kMembers.optInteger(run, "lights", path).value_or(0);
   if (lights < 0) bad(path + ".lights", "must not be negative");
-  json resources = optObject(run, "resources", path);
+  json resources = kMembers.object(run, "resources", path);
   std::optional<json> headroom;  // absent in results from before it was measured
   if (const json* h = find(run, "counter_headroom")) {
     if (!h->is_object()) bad(path + ".counter_headroom", "must be an object");
     headroom = *h;
   }
   // The footprint's block size; absent or null when footprint was off.
-  std::optional<int64_t> footprintBlock = optInteger(run, "footprint_block_bytes", path);
+  std::optional<int64_t> footprintBlock = kMembers.optInteger(run, "footprint_block_bytes", path);
   if (footprintBlock && *footprintBlock != 32 && *footprintBlock != 64 && *footprintBlock != 128)
     bad(path + ".footprint_block_bytes", "must be 32, 64 or 128, got " + std::to_string(*footprintBlock));
   in.run.reset();
   in.run.bind(1, jobId)
       .bind(2, deviceId)
-      .bind(3, text(run, "renderer", path))
+      .bind(3, kMembers.text(run, "renderer", path))
       .bind(4, sceneId)
       .bind(5, width)
       .bind(6, height)
-      .bind(7, optText(run, "counting", path).value_or("exact"))
+      .bind(7, kMembers.optText(run, "counting", path).value_or("exact"))
       .bind(8, lights)
-      .bind(9, optInteger(resources, "render_target_bytes", path + ".resources"))
-      .bind(10, optObject(run, "notes", path))
+      .bind(9, kMembers.optInteger(resources, "render_target_bytes", path + ".resources"))
+      .bind(10, kMembers.object(run, "notes", path))
       .bind(11, shaders)
       .bind(12, headroom)
-      .bind(13, optObject(run, "options", path))
-      .bind(14, optText(run, "variant", path).value_or(text(run, "renderer", path)))
+      .bind(13, kMembers.object(run, "options", path))
+      .bind(14, kMembers.optText(run, "variant", path).value_or(kMembers.text(run, "renderer", path)))
       .bind(15, build.version)
       .bind(16, build.commit)
       .bind(17, footprintBlock);
   int64_t runId = returnedId(in.run);
-  insertResources(in, runId, array(resources, "list", path + ".resources"), path + ".resources.list");
+  insertResources(in, runId, kMembers.array(resources, "list", path + ".resources"),
+                  path + ".resources.list");
   insertSamples(in, runId, run, path, screenshots);
   return runId;
 }
@@ -539,13 +489,14 @@ void checkSweep(const json& result) {
     std::string at = "plots[" + std::to_string(i) + "]";
     const json& plot = (*plotList)[i];
     if (!plot.is_object()) bad(at, "must be an object");
-    text(plot, "title", at);
-    text(plot, "y_label", at);
+    kMembers.text(plot, "title", at);
+    kMembers.text(plot, "y_label", at);
     flag(plot, "x_log", at);
     flag(plot, "y_log", at);
     if (!plot.contains("threshold")) bad(at + ".threshold", "missing (a number, or null for none)");
-    optNumber(plot, "threshold", at);
-    plots.push_back(Plot{text(plot, "x", at), text(plot, "y", at), textList(plot, "series", at)});
+    kMembers.optNumber(plot, "threshold", at);
+    plots.push_back(
+        Plot{kMembers.text(plot, "x", at), kMembers.text(plot, "y", at), textList(plot, "series", at)});
   }
   for (size_t i = 0; i < points->size(); ++i) {
     std::string at = "points[" + std::to_string(i) + "]";
@@ -618,7 +569,7 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
   if (const json* device = find(result, "device"); device && device->is_object()) {
     if (const json* c = find(*device, "ceilings"); c && c->is_object()) in.ceilings = *c;
   }
-  json shaders = optObject(result, "shaders", "result");
+  json shaders = kMembers.object(result, "shaders", "result");
   Build build = buildOf(result);
   const json* runs = find(result, "runs");
   if (!runs || !runs->is_array()) bad("runs", "missing or not an array");

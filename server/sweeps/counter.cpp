@@ -27,14 +27,6 @@ std::string joined(const std::vector<std::string>& names) {
   return out;
 }
 
-Result<uint32_t> integerIn(const json& j, const std::string& field, int64_t lo, int64_t hi) {
-  if (!j.is_number_integer() || j.get<int64_t>() < lo || j.get<int64_t>() > hi) {
-    return fieldError(field, "must be an integer from " + std::to_string(lo) + " to " + std::to_string(hi) +
-                                 ", got " + show(j));
-  }
-  return uint32_t(j.get<int64_t>());
-}
-
 // A 16:9 resolution with `pixels` pixels, for reading a load as a screen size.
 std::string resolution16x9(double pixels) {
   double h = std::sqrt(pixels * 9.0 / 16.0);
@@ -44,12 +36,10 @@ std::string resolution16x9(double pixels) {
 }  // namespace
 
 Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key, "unknown field (expected sweep, renderers, layers, resolutions, lights, threshold)");
-    }
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e = json_fields::unknownKey(
+          j, "", {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
+    return *e;
   }
   CounterSweepSpec spec;
   spec.source = j;
@@ -77,8 +67,8 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     return fieldError("layers", "must be an array of 1 to " + std::to_string(kMaxAxis) + " layer counts");
   }
   for (size_t i = 0; i < l.size(); ++i) {
-    auto v = integerIn(l[i], "layers[" + std::to_string(i) + "]", 1, 64);
-    if (!v) return makeError(v.error());
+    auto v = json_fields::count(l[i], "layers[" + std::to_string(i) + "]", 1, 64);
+    if (!v) return v.failure();
     spec.layers.push_back(*v);
   }
   if (!j.contains("resolutions")) return fieldError("resolutions", "required, e.g. [[64, 36], [128, 72]]");
@@ -87,13 +77,13 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     return fieldError("resolutions", "must be an array of 1 to " + std::to_string(kMaxAxis) + " [width, height]");
   }
   for (size_t i = 0; i < rs.size(); ++i) {
-    auto r = fields::resolution(rs[i]);
-    if (!r) return makeError("resolutions[" + std::to_string(i) + "]" + r.error().substr(std::string("resolution").size()));
+    auto r = json_fields::resolution(rs[i], json_fields::index("resolutions", i));
+    if (!r) return r.failure();
     spec.resolutions.push_back(*r);
   }
   if (j.contains("lights")) {
-    auto v = integerIn(j["lights"], "lights", 1, 4096);
-    if (!v) return makeError(v.error());
+    auto v = json_fields::count(j["lights"], "lights", 1, 4096);
+    if (!v) return v.failure();
     spec.lights = *v;
   }
   if (j.contains("threshold")) {
@@ -101,8 +91,8 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     if (!t.is_object() || t.size() != 1 || !t.contains("bits")) {
       return fieldError("threshold", "must be {\"bits\": n}, the counter width whose wrap is the failure, got " + show(t));
     }
-    auto v = integerIn(t["bits"], "threshold.bits", 8, 64);
-    if (!v) return makeError(v.error());
+    auto v = json_fields::count(t["bits"], "threshold.bits", 8, 64);
+    if (!v) return v.failure();
     spec.bits = int(*v);
   }
   if (spec.renderers.size() * spec.layers.size() * spec.resolutions.size() > 512) {

@@ -62,15 +62,11 @@ std::vector<DepthSweepSpec::Range> DepthSweepSpec::ranges() const {
 }
 
 Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",     "renderer",   "near",    "far",      "far_over_near",
-                                                 "distances", "resolution", "fov_deg", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key, "unknown field (expected sweep, renderer, near, far or far_over_near, distances, "
-                             "resolution, fov_deg, threshold)");
-    }
-  }
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e = json_fields::unknownKey(j, "",
+                                       {"sweep", "renderer", "near", "far", "far_over_near", "distances",
+                                        "resolution", "fov_deg", "threshold"}))
+    return *e;
   DepthSweepSpec spec;
   spec.source = j;
 
@@ -93,29 +89,29 @@ Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std:
 
   if (!j.contains("near")) return fieldError("near", "required, e.g. [0.1]");
   auto near = positiveList(j["near"], "near", 0.0);
-  if (!near) return makeError(near.error());
+  if (!near) return near.failure();
   spec.near = *near;
 
   bool hasFar = j.contains("far"), hasRatio = j.contains("far_over_near");
   if (hasFar == hasRatio) return fieldError("far", "give exactly one of far and far_over_near");
   if (hasFar) {
     auto far = positiveList(j["far"], "far", 0.0);
-    if (!far) return makeError(far.error());
+    if (!far) return far.failure();
     spec.far = *far;
   } else {
     auto ratio = positiveList(j["far_over_near"], "far_over_near", 1.0);
-    if (!ratio) return makeError(ratio.error());
+    if (!ratio) return ratio.failure();
     spec.farOverNear = *ratio;
   }
 
   if (!j.contains("distances")) return fieldError("distances", "required, e.g. [1, 10, 100]");
   auto distances = positiveList(j["distances"], "distances", 0.0);
-  if (!distances) return makeError(distances.error());
+  if (!distances) return distances.failure();
   spec.distances = *distances;
 
   if (j.contains("resolution")) {
     auto r = fields::resolution(j["resolution"]);
-    if (!r) return makeError(r.error());
+    if (!r) return r.failure();
     spec.resolution = *r;
   }
 

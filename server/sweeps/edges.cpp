@@ -85,16 +85,11 @@ uint32_t subgroupBlockSide(uint32_t subgroupSize) {
 }
 
 Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",     "renderer",   "selections",   "cell_sizes",
-                                                 "materials", "resolution", "same_texture", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, renderer, selections, cell_sizes, materials, "
-                        "resolution, same_texture, threshold)");
-    }
-  }
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e = json_fields::unknownKey(j, "",
+                                       {"sweep", "renderer", "selections", "cell_sizes", "materials",
+                                        "resolution", "same_texture", "threshold"}))
+    return *e;
   EdgesSweepSpec spec;
   spec.source = j;
 
@@ -153,7 +148,7 @@ Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std:
 
   if (j.contains("resolution")) {
     auto r = fields::resolution(j["resolution"]);
-    if (!r) return makeError(r.error());
+    if (!r) return r.failure();
     spec.resolution = *r;
   }
 
@@ -288,13 +283,13 @@ struct Frame {
 Result<Frame> renderWith(gpu::Context& ctx, const renderers::GpuScene& scene, const std::string& rendererName,
                          MaterialSelection selection, VkExtent2D extent, const scenes::Camera& camera) {
   auto made = renderers::makeRenderer(rendererName);
-  if (!made) return makeError(made.error());
+  if (!made) return made.failure();
   // Uninstrumented, no point lights: the colour is ambient x diffuse map, so
   // a wrong map is a wrong colour and nothing else differs.
   renderers::RendererOptions ro{extent, false, spirv::Mode{}, 0, kDepthRange};
   ro.materialSelection = selection;
   auto ok = (*made)->setup(ctx, scene, ro);
-  if (!ok) return makeError(ok.error());
+  if (!ok) return ok.failure();
   (*made)->renderFrame(camera);
   Frame f{(*made)->finalImage(), (*made)->depthImage(), (*made)->notes()};
   (*made)->destroy();
@@ -372,7 +367,7 @@ Result<json> maskedError(const std::vector<uint8_t>& a, const std::vector<uint8_
     return json{{"max_abs", 0}, {"mean_abs", 0.0}, {"psnr", nullptr}, {"identical", true}, {"pixels", 0}};
   }
   auto e = compareImages(ga, gb, uint32_t(pixels), 1);
-  if (!e) return makeError(e.error());
+  if (!e) return e.failure();
   return errorJson(*e, pixels);
 }
 

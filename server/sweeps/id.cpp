@@ -75,16 +75,10 @@ bool idFits(uint64_t draws, uint64_t trianglesPerDraw) {
 }
 
 Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",      "renderers", "draws", "triangles_per_draw",
-                                                 "resolution", "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, renderers, draws, triangles_per_draw, resolution, "
-                        "threshold)");
-    }
-  }
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e = json_fields::unknownKey(
+          j, "", {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
+    return *e;
   IdSweepSpec spec;
   spec.source = j;
 
@@ -117,13 +111,13 @@ Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::strin
 
   if (!j.contains("draws")) return fieldError("draws", "required, e.g. [511, 512, 513]");
   auto draws = countList(j["draws"], "draws", kMaxIdSweepDraws);
-  if (!draws) return makeError(draws.error());
+  if (!draws) return draws.failure();
   spec.draws = *draws;
 
   if (!j.contains("triangles_per_draw"))
     return fieldError("triangles_per_draw", "required, e.g. [2, 8388607]");
   auto triangles = countList(j["triangles_per_draw"], "triangles_per_draw", kMaxIdSweepTriangles);
-  if (!triangles) return makeError(triangles.error());
+  if (!triangles) return triangles.failure();
   spec.trianglesPerDraw = *triangles;
 
   // Every point is built in full: the largest draws x the largest triangles must fit.
@@ -139,7 +133,7 @@ Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::strin
 
   if (j.contains("resolution")) {
     auto r = fields::resolution(j["resolution"], Resolution{kIdTileWidth, kIdTileHeight});
-    if (!r) return makeError(r.error());
+    if (!r) return r.failure();
     spec.resolution = *r;
   }
 
@@ -452,9 +446,9 @@ Result<json> runIdSweep(gpu::Context& ctx, const IdSweepSpec& spec, const SweepO
       auto forwardImage = [&]() -> Result<bool> {
         if (!reference.empty()) return true;
         auto made = renderers::makeRenderer("forward");
-        if (!made) return makeError(made.error());
+        if (!made) return made.failure();
         auto ok = (*made)->setup(ctx, gpuScene, ro);
-        if (!ok) return makeError(ok.error());
+        if (!ok) return ok.failure();
         (*made)->renderFrame(built.camera);
         reference = (*made)->finalImage();
         (*made)->destroy();

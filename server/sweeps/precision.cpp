@@ -170,7 +170,7 @@ struct Rendered {
 Result<Rendered> render(gpu::Context& ctx, const renderers::GpuScene& gpuScene, const scenes::Camera& camera,
                         const View& v, renderers::DepthRange range, const VisibilityEncoding& encoding) {
   auto made = renderers::makeRenderer("visbuffer");
-  if (!made) return makeError(made.error());
+  if (!made) return made.failure();
   renderers::Renderer& r = **made;
   renderers::RendererOptions ro;
   ro.extent = {v.width, v.height};
@@ -179,7 +179,7 @@ Result<Rendered> render(gpu::Context& ctx, const renderers::GpuScene& gpuScene, 
   ro.depthRange = range;
   ro.visibility = encoding;
   auto ok = r.setup(ctx, gpuScene, ro);
-  if (!ok) return makeError(ok.error());
+  if (!ok) return ok.failure();
   r.renderFrame(camera);
   Rendered out;
   out.image = r.finalImage();
@@ -296,27 +296,22 @@ json failsAt(const json& points, const std::string& param, const std::vector<std
 uint32_t PrecisionSweepSpec::levels() const { return uint32_t(std::countr_zero(textureSize)) + 1; }
 
 Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
-  if (!j.is_object()) return makeError("spec: must be a JSON object, got " + show(j));
-  static const std::vector<std::string> kKeys = {"sweep",        "distances",        "triangle_sizes",
-                                                 "texture_size", "texels_per_metre", "uv_rotation_deg",
-                                                 "resolution",   "fov_deg",          "threshold"};
-  for (const auto& [key, value] : j.items()) {
-    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end()) {
-      return fieldError(key,
-                        "unknown field (expected sweep, distances, triangle_sizes, texture_size, "
-                        "texels_per_metre, uv_rotation_deg, resolution, fov_deg, threshold)");
-    }
-  }
+  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
+  if (auto e =
+          json_fields::unknownKey(j, "",
+                                  {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre",
+                                   "uv_rotation_deg", "resolution", "fov_deg", "threshold"}))
+    return *e;
   PrecisionSweepSpec spec;
   spec.source = j;
 
   if (!j.contains("distances")) return fieldError("distances", "required, e.g. [2, 8, 32]");
   auto distances = positiveList(j["distances"], "distances");
-  if (!distances) return makeError(distances.error());
+  if (!distances) return distances.failure();
   spec.distances = *distances;
   if (!j.contains("triangle_sizes")) return fieldError("triangle_sizes", "required, e.g. [0.25, 1, 4]");
   auto sizes = positiveList(j["triangle_sizes"], "triangle_sizes");
-  if (!sizes) return makeError(sizes.error());
+  if (!sizes) return sizes.failure();
   spec.triangleSizes = *sizes;
 
   if (j.contains("texture_size")) {
@@ -332,22 +327,22 @@ Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
   }
   if (j.contains("texels_per_metre")) {
     auto v = numberIn(j["texels_per_metre"], "texels_per_metre", 0.0, 1e6, true);
-    if (!v) return makeError(v.error());
+    if (!v) return v.failure();
     spec.texelsPerMetre = *v;
   }
   if (j.contains("uv_rotation_deg")) {
     auto v = numberIn(j["uv_rotation_deg"], "uv_rotation_deg", -360.0, 360.0, false);
-    if (!v) return makeError(v.error());
+    if (!v) return v.failure();
     spec.uvRotationDeg = *v;
   }
   if (j.contains("resolution")) {
     auto r = fields::resolution(j["resolution"]);
-    if (!r) return makeError(r.error());
+    if (!r) return r.failure();
     spec.resolution = *r;
   }
   if (j.contains("fov_deg")) {
     auto v = numberIn(j["fov_deg"], "fov_deg", 1.0, 170.0, false);
-    if (!v) return makeError(v.error());
+    if (!v) return v.failure();
     spec.fovDeg = *v;
   }
   if (j.contains("threshold")) {
@@ -356,19 +351,15 @@ Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
       return fieldError("threshold",
                         "must be {\"image_max_abs\": levels, \"mip_level\": levels}, got " + show(t));
     }
-    for (const auto& [key, value] : t.items()) {
-      if (key != "image_max_abs" && key != "mip_level") {
-        return fieldError("threshold." + key, "unknown field (expected image_max_abs, mip_level)");
-      }
-    }
+    if (auto e = json_fields::unknownKey(t, "threshold", {"image_max_abs", "mip_level"})) return *e;
     if (t.contains("image_max_abs")) {
       auto v = numberIn(t["image_max_abs"], "threshold.image_max_abs", 0.0, 255.0, true);
-      if (!v) return makeError(v.error());
+      if (!v) return v.failure();
       spec.imageThreshold = *v;
     }
     if (t.contains("mip_level")) {
       auto v = numberIn(t["mip_level"], "threshold.mip_level", 0.0, 16.0, true);
-      if (!v) return makeError(v.error());
+      if (!v) return v.failure();
       spec.mipThreshold = *v;
     }
   }

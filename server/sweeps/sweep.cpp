@@ -7,7 +7,7 @@ namespace {
 template <class Spec, Result<Spec> (*Parse)(const nlohmann::json&, const std::vector<std::string>&)>
 Result<SweepSpec> parseAs(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers) {
   auto parsed = Parse(spec, knownRenderers);
-  if (!parsed) return makeError(parsed.error());
+  if (!parsed) return parsed.failure();
   return SweepSpec(std::move(parsed).value());
 }
 
@@ -54,15 +54,15 @@ std::vector<std::string> sweepNames() {
 bool isSweepSpec(const nlohmann::json& spec) { return spec.is_object() && spec.contains("sweep"); }
 
 Result<SweepSpec> parseSweepSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers) {
-  if (!isSweepSpec(spec)) return makeError("sweep: required");
+  if (!isSweepSpec(spec)) return Error("sweep", "required");
   const auto& name = spec["sweep"];
   std::string known;
   for (const auto& n : sweepNames()) known += (known.empty() ? "" : ", ") + n;
-  if (!name.is_string()) return makeError("sweep: must be a sweep name (one of " + known + ")");
+  if (!name.is_string()) return Error("sweep", "must be a sweep name (one of " + known + ")");
   for (const auto& kind : kSweeps) {
     if (name.get<std::string>() == kind.name) return kind.parse(spec, knownRenderers);
   }
-  return makeError("sweep: unknown sweep '" + name.get<std::string>() + "' (expected one of " + known + ")");
+  return Error("sweep", "unknown sweep '" + name.get<std::string>() + "' (expected one of " + known + ")");
 }
 
 Result<nlohmann::json> runSweep(gpu::Context& ctx, const SweepSpec& spec, const SweepOptions& options) {
