@@ -13,7 +13,6 @@ namespace tally::service::detail {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-
 bool under(const fs::path& file, const fs::path& folder) {
   auto f = file.begin(), d = folder.begin();
   for (; d != folder.end(); ++d, ++f) {
