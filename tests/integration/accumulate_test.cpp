@@ -80,7 +80,7 @@ TEST_P(EarlyEnd, CountsStopWhereTheInvocationEnds) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Shaders, EarlyEnd, ::testing::Values("discard_left.frag.glsl", "demote_left.frag.glsl"),
-                         [](const auto& info) { return std::string(info.param).substr(0, std::string(info.param).find('_')); });
+                         [](const auto& shader) { return std::string(shader.param).substr(0, std::string(shader.param).find('_')); });
 
 TEST(LongLoop, SeventyThousandLoadsPerInvocationCountExactly) {
   std::string why;

@@ -502,8 +502,8 @@ TEST(ExecutedArithmetic, LoopTripsTimesTheBody) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BlockBytes, Footprint, ::testing::Values(32u, 64u, 128u),
-                         [](const ::testing::TestParamInfo<uint32_t>& info) {
-                           return std::to_string(info.param) + "B";
+                         [](const ::testing::TestParamInfo<uint32_t>& block) {
+                           return std::to_string(block.param) + "B";
                          });
 
 }  // namespace

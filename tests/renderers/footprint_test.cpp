@@ -82,7 +82,9 @@ TEST_P(RendererFootprint, GBufferIsTheCoveredAreaWhateverTheOverdraw) {
         EXPECT_EQ(written->footprintBlocks, int64_t(blocks));
         EXPECT_EQ(written->footprintBytes, int64_t(std::min<uint64_t>(blocks * block, written->bytes)));
         // Back to front, every layer writes every covered pixel: 4x the requests, the same footprint.
-        if (std::string(order) == "back-to-front") EXPECT_EQ(written->bytes, 4 * g.covered * info->elementBytes);
+        if (std::string(order) == "back-to-front") {
+          EXPECT_EQ(written->bytes, 4 * g.covered * info->elementBytes);
+        }
         const Access* read = line(lighting, target, false);
         ASSERT_NE(read, nullptr);
         EXPECT_EQ(read->footprintBlocks, int64_t(blocks)) << "lighting reads each covered pixel once";
@@ -172,8 +174,8 @@ TEST(RendererFootprintClamp, APartialLastBlockIsReportedAsClamped) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BlockBytes, RendererFootprint, ::testing::Values(32u, 64u, 128u),
-                         [](const ::testing::TestParamInfo<uint32_t>& info) {
-                           return std::to_string(info.param) + "B";
+                         [](const ::testing::TestParamInfo<uint32_t>& block) {
+                           return std::to_string(block.param) + "B";
                          });
 
 }  // namespace
