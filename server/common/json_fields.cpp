@@ -66,17 +66,19 @@ std::optional<int64_t> asInt64(const json& j) {
 
 }  // namespace
 
-Result<int64_t> integer(const json& j, const std::string& field, int64_t low, int64_t high) {
+Result<int64_t> integer(const json& j, const std::string& field, int64_t low, int64_t high, RangeWords words) {
   auto v = asInt64(j);
   if (!v || *v < low || *v > high) {
-    return fieldError(field, "must be an integer between " + std::to_string(low) + " and " +
-                                 std::to_string(high) + ", got " + show(j));
+    const bool between = words == RangeWords::kBetween;
+    return fieldError(field, std::string("must be an integer ") + (between ? "between " : "from ") +
+                                 std::to_string(low) + (between ? " and " : " to ") + std::to_string(high) +
+                                 ", got " + show(j));
   }
   return *v;
 }
 
-Result<uint32_t> count(const json& j, const std::string& field, uint32_t low, uint32_t high) {
-  auto v = integer(j, field, low, high);
+Result<uint32_t> count(const json& j, const std::string& field, uint32_t low, uint32_t high, RangeWords words) {
+  auto v = integer(j, field, low, high, words);
   if (!v) return v.failure();
   return static_cast<uint32_t>(*v);
 }
@@ -141,12 +143,12 @@ Result<std::string> oneOf(const json& j, const std::string& field, const std::ve
   return fieldError(field, "must be " + list + (why.empty() ? "" : " " + why) + ", got " + show(j));
 }
 
-Result<Resolution> resolution(const json& r, const std::string& field, Resolution least) {
+Result<Resolution> resolution(const json& r, const std::string& field, Resolution least, RangeWords words) {
   if (!r.is_array() || r.size() != 2) return fieldError(field, "must be [width, height], got " + show(r));
   const uint32_t lowest[2] = {least.width, least.height};
   uint32_t dims[2] = {0, 0};
   for (size_t i = 0; i < 2; ++i) {
-    auto v = integer(r[i], index(field, i), lowest[i], kMaxDimension);
+    auto v = integer(r[i], index(field, i), lowest[i], kMaxDimension, words);
     if (!v && lowest[i] > 1) {
       // A tiled renderer's least size: say why it is not 1.
       return fieldError(index(field, i), "must be an integer from " + std::to_string(lowest[i]) +

@@ -46,8 +46,13 @@ Error duplicate(const std::string& field, const std::string& first);
 
 // An integer from `low` to `high`; the unsigned values JSON allows beyond
 // int64 are out of range, not wrapped.
-Result<int64_t> integer(const nlohmann::json& j, const std::string& field, int64_t low, int64_t high);
-Result<uint32_t> count(const nlohmann::json& j, const std::string& field, uint32_t low, uint32_t high);
+// The range reads "between 1 and 10" (capture and scene specs) or "from 1
+// to 10" (sweep specs), as each parser's messages always did.
+enum class RangeWords { kBetween, kFromTo };
+Result<int64_t> integer(const nlohmann::json& j, const std::string& field, int64_t low, int64_t high,
+                        RangeWords words = RangeWords::kBetween);
+Result<uint32_t> count(const nlohmann::json& j, const std::string& field, uint32_t low, uint32_t high,
+                       RangeWords words = RangeWords::kBetween);
 // Any integer that fits int64 ("must be an integer", "too large").
 Result<int64_t> anyInteger(const nlohmann::json& j, const std::string& field);
 // A finite number ("must be a number", "must be finite").
@@ -67,7 +72,8 @@ Result<std::string> oneOf(const nlohmann::json& j, const std::string& field,
 
 // [width, height]: integers from `least` (per axis; above 1 is one tile of
 // a tiled renderer) to kMaxDimension, at most kMaxPixels in all.
-Result<Resolution> resolution(const nlohmann::json& r, const std::string& field, Resolution least = {1, 1});
+Result<Resolution> resolution(const nlohmann::json& r, const std::string& field, Resolution least = {1, 1},
+                              RangeWords words = RangeWords::kBetween);
 
 // A field the caller must have: "field: required" with `hint` after it.
 Error missing(const std::string& field, const std::string& hint = "");

@@ -18,6 +18,7 @@ namespace {
 using nlohmann::json;
 using fields::fieldError;
 using fields::show;
+constexpr auto kFromTo = json_fields::RangeWords::kFromTo;
 
 constexpr size_t kMaxAxis = 16;
 
@@ -67,7 +68,7 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     return fieldError("layers", "must be an array of 1 to " + std::to_string(kMaxAxis) + " layer counts");
   }
   for (size_t i = 0; i < l.size(); ++i) {
-    auto v = json_fields::count(l[i], "layers[" + std::to_string(i) + "]", 1, 64);
+    auto v = json_fields::count(l[i], "layers[" + std::to_string(i) + "]", 1, 64, kFromTo);
     if (!v) return v.failure();
     spec.layers.push_back(*v);
   }
@@ -77,12 +78,12 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     return fieldError("resolutions", "must be an array of 1 to " + std::to_string(kMaxAxis) + " [width, height]");
   }
   for (size_t i = 0; i < rs.size(); ++i) {
-    auto r = json_fields::resolution(rs[i], json_fields::index("resolutions", i));
+    auto r = json_fields::resolution(rs[i], json_fields::index("resolutions", i), {1, 1}, kFromTo);
     if (!r) return r.failure();
     spec.resolutions.push_back(*r);
   }
   if (j.contains("lights")) {
-    auto v = json_fields::count(j["lights"], "lights", 1, 4096);
+    auto v = json_fields::count(j["lights"], "lights", 1, 4096, kFromTo);
     if (!v) return v.failure();
     spec.lights = *v;
   }
@@ -91,7 +92,7 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
     if (!t.is_object() || t.size() != 1 || !t.contains("bits")) {
       return fieldError("threshold", "must be {\"bits\": n}, the counter width whose wrap is the failure, got " + show(t));
     }
-    auto v = json_fields::count(t["bits"], "threshold.bits", 8, 64);
+    auto v = json_fields::count(t["bits"], "threshold.bits", 8, 64, kFromTo);
     if (!v) return v.failure();
     spec.bits = int(*v);
   }

@@ -81,6 +81,9 @@ TEST(JsonFields, IntegersAreBoundedAndCheckedForInt64Overflow) {
   expectError(anyInteger(beyond, "id"), "id", "too large");
   expectError(anyInteger(json("7"), "id"), "id", "must be an integer, got \"7\"");
 
+  // The sweeps' wording of the same range.
+  expectError(count(json(0), "layers[1]", 1, 64, RangeWords::kFromTo), "layers[1]",
+              "must be an integer from 1 to 64, got 0");
   EXPECT_EQ(*count(json(400), "lights", 0, 400), 400u);
   expectError(count(json(-1), "lights", 0, 400), "lights", "must be an integer between 0 and 400, got -1");
 }
@@ -125,6 +128,8 @@ TEST(JsonFields, ResolutionsNameTheAxisAtFault) {
               "must be an integer between 1 and 16384, got 16385");
   expectError(resolution(json{16384, 16384}, "resolutions[0]"), "resolutions[0]",
               "16384x16384 is more than the 33177600-pixel limit (8K)");
+  expectError(resolution(json{96, 0}, "resolution", {1, 1}, RangeWords::kFromTo), "resolution[1]",
+              "must be an integer from 1 to 16384, got 0");
   // A tiled renderer's least size says why.
   expectError(resolution(json{3, 64}, "resolution", Resolution{4, 4}), "resolution[0]",
               "must be an integer from 4 (one tile) to 16384, got 3");
