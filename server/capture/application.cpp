@@ -21,7 +21,7 @@
 
 #include "common/paths.hpp"
 #include "common/version.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 namespace tally::capture {
 namespace fs = std::filesystem;
