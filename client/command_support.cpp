@@ -16,7 +16,8 @@ void printJson(Io& io, const json& j) { io.out << j.dump(2) << '\n'; }
 
 // A listing (`tally runs`, `tally sweeps`): the response as JSON, or a table
 // of one row per item and a hint on stderr when a page was cut short.
-int printListing(Io& io, const Result<json>& res, bool all, const std::string& noun, std::vector<Table::Column> columns,
+int printListing(Io& io, const Result<json>& res, bool all, const std::string& noun,
+                 std::vector<Table::Column> columns,
                  const std::function<void(const json& page, Table& table)>& addRows) {
   if (!res) return fail(io, res.error());
   if (io.json) {

@@ -15,7 +15,8 @@ int fail(Io& io, const std::string& message);
 void printJson(Io& io, const json& j);
 // A listing (`tally runs`, `tally sweeps`): the response as JSON, or a table
 // of one row per item and a hint on stderr when a page was cut short.
-int printListing(Io& io, const Result<json>& res, bool all, const std::string& noun, std::vector<Table::Column> columns,
+int printListing(Io& io, const Result<json>& res, bool all, const std::string& noun,
+                 std::vector<Table::Column> columns,
                  const std::function<void(const json& page, Table& table)>& addRows);
 std::string size(const RunView& r);
 std::string orMissing(const std::string& s);
