@@ -272,7 +272,7 @@ void createDevice(Context& ctx, const Candidate& chosen) {
   Enabled enabled;
   enableFeatures(ctx, supported, enabled);
   recordCapabilities(ctx, supported, enabled);
-  VkPhysicalDeviceFeatures2& want = enabled.want;
+  VkPhysicalDeviceFeatures2& want = enabled.want.features;
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo queueInfo = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};

@@ -39,13 +39,7 @@ void querySupport(Context& ctx, Supported& s) {
   auto& props2 = s.props2;
   auto& subgroup = s.subgroup;
   auto& driver = s.driver;
-  auto& have = s.have;
-  auto& have11 = s.have11;
-  auto& have12 = s.have12;
-  auto& have13 = s.have13;
-  auto& haveAtomic = s.haveAtomic;
-  auto& haveBary = s.haveBary;
-  auto& haveExec = s.haveExec;
+  auto& [have, have11, have12, have13, haveAtomic, haveBary, haveExec] = s.have;
   uint32_t extCount = 0;
   VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, nullptr));
   std::vector<VkExtensionProperties> available(extCount);
@@ -90,21 +84,9 @@ void enableFeatures(Context& ctx, const Supported& s, Enabled& e) {
   const bool v12 = s.v12, v13 = s.v13;
   const bool hasBarycentric = s.hasBarycentric, hasExecutableProps = s.hasExecutableProps;
   const bool hasAtomicInt64Ext = s.hasAtomicInt64Ext, hasDriverPropsExt = s.hasDriverPropsExt;
-  const auto& have = s.have;
-  const auto& have11 = s.have11;
-  const auto& have12 = s.have12;
-  const auto& have13 = s.have13;
-  const auto& haveAtomic = s.haveAtomic;
-  const auto& haveBary = s.haveBary;
-  const auto& haveExec = s.haveExec;
+  const auto& [have, have11, have12, have13, haveAtomic, haveBary, haveExec] = s.have;
   const VkPhysicalDeviceFeatures& h = have.features;
-  auto& want = e.want;
-  auto& want11 = e.want11;
-  auto& want12 = e.want12;
-  auto& want13 = e.want13;
-  auto& wantAtomic = e.wantAtomic;
-  auto& wantBary = e.wantBary;
-  auto& wantExec = e.wantExec;
+  auto& [want, want11, want12, want13, wantAtomic, wantBary, wantExec] = e.want;
   bool& atomics64 = e.atomics64;
   bool& extendedTypes = e.extendedTypes;
   bool& hostReset = e.hostReset;
@@ -195,7 +177,7 @@ void enableFeatures(Context& ctx, const Supported& s, Enabled& e) {
 }
 
 void recordCapabilities(Context& ctx, const Supported& s, const Enabled& e) {
-  const VkPhysicalDeviceFeatures& h = s.have.features;
+  const VkPhysicalDeviceFeatures& h = s.have.features.features;
   const auto& subgroup = s.subgroup;
   const bool atomics64 = e.atomics64;
   const bool extendedTypes = e.extendedTypes;
