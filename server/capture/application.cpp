@@ -22,7 +22,7 @@
 #include "common/json_fields.hpp"
 #include "common/paths.hpp"
 #include "common/version.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 namespace tally::capture {
 namespace fs = std::filesystem;

@@ -19,7 +19,7 @@
 #include "capture/spec.hpp"
 #include "common/progress.hpp"
 #include "common/result.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 namespace tally::capture {
 

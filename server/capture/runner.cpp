@@ -1,6 +1,7 @@
 #include "capture/runner.hpp"
 
 #include "capture/sample.hpp"
+#include "capture/screenshot_writer.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -265,49 +266,33 @@ struct References {
   std::vector<std::vector<uint8_t>> variant;
 };
 
-// Screenshots are encoded and written on other threads while the GPU renders
-// the next samples: PNG encoding of a 1920x1080 image takes about 0.4 s, a
-// quarter of the founding protocol's 187 s when done in line (H200,
-// docs/accuracy.md). At most kInFlight at once; finish() waits for all and
-// names the first file that could not be written.
-class ScreenshotWriter {
- public:
-  void write(std::filesystem::path path, std::vector<uint8_t> rgba, uint32_t width, uint32_t height) {
-    while (pending_.size() >= kInFlight) collect();
-    pending_.push_back(std::async(std::launch::async, [path = std::move(path), rgba = std::move(rgba), width, height] {
-      auto png = encodePng(rgba, width, height);
-      std::ofstream out(path, std::ios::binary);
-      out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-      out.close();
-      return out ? std::string() : path.string();
-    }));
-  }
-  // "" when every screenshot was written.
-  std::string finish() {
-    while (!pending_.empty()) collect();
-    return failed_;
-  }
-  ~ScreenshotWriter() { finish(); }
+// What every run of one capture shares: the device, the spec and its options,
+// the progress, the phase timings, the screenshots and the device's ceilings.
+struct CaptureSession {
+  gpu::Context& ctx;
+  const CaptureSpec& spec;
+  const CaptureOptions& options;
+  CaptureProgress& progress;
+  Phases& phases;
+  ScreenshotWriter& screenshots;
+  const json& ceilings;
+};
 
- private:
-  static constexpr size_t kInFlight = 8;  // 8 images of 8 MiB at 1920x1080
-  void collect() {
-    std::string failed = pending_.front().get();
-    if (failed_.empty()) failed_ = failed;
-    pending_.pop_front();
-  }
-  std::deque<std::future<std::string>> pending_;
-  std::string failed_;
+// The scene being captured: on the device, its name, its cameras.
+struct SceneInCapture {
+  renderers::GpuScene& gpuScene;
+  const std::string& name;
+  const scenes::Scene& scene;
+  const SceneCameras& cameras;
 };
 
 // One run: a renderer instrumented in one counting mode, each sample's
 // instrumented frames timed against the same number of `plain` frames.
-Result<json> runOne(gpu::Context& ctx, renderers::GpuScene& gpuScene, renderers::Renderer& plain,
+Result<json> runOne(CaptureSession& session, const SceneInCapture& current, renderers::Renderer& plain,
                     const RendererVariant& variant, const spirv::Mode& mode, const std::string& where0,
-                    const std::string& name, const scenes::Scene& scene, const Resolution& res,
-                    const SceneCameras& sceneCams, const References& references,
-                    const CaptureSpec& spec, const CaptureOptions& options, CaptureProgress& progress,
-                    Phases& phases, ScreenshotWriter& screenshots, const json& ceilings) {
+                    const Resolution& res, const References& references) {
+  auto& [ctx, spec, options, progress, phases, screenshots, ceilings] = session;
+  const auto& [gpuScene, name, scene, sceneCams] = current;
   const std::vector<scenes::Camera>& cameras = sceneCams.cameras;
   const std::string& rendererName = variant.name;
   std::string where = where0 + (spec.modes.size() > 1 ? " " + spirv::toString(mode) : "");
@@ -456,6 +441,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
 
   ScreenshotWriter screenshots;
   CaptureProgress progress{0, total, ""};
+  CaptureSession session{ctx, spec, options, progress, phases, screenshots, ceilings};
   for (size_t s = 0; s < loaded.size(); ++s) {
     renderers::GpuScene gpuScene;
     auto uploading = Phases::Clock::now();
@@ -463,6 +449,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
     phases.add("scene_upload", std::chrono::duration<double>(Phases::Clock::now() - uploading).count());
     if (!uploaded) return makeError("scenes[" + std::to_string(s) + "]: " + uploaded.error());
     std::string name = sceneName(spec.scenes[s], loaded[s]);
+    const SceneInCapture current{gpuScene, name, loaded[s], cameras[s]};
 
     for (const auto& res : spec.resolutions) {
       // The reference image per camera: forward, uninstrumented.
@@ -492,8 +479,7 @@ Result<json> captureOn(gpu::Context& ctx, const CaptureSpec& spec, const Capture
         auto ok = timedSetup(phases, **plain, ctx, gpuScene, plainOptions);
         if (!ok) return makeError(where + ": " + ok.error());
         for (const auto& mode : spec.modes) {
-          auto done = runOne(ctx, gpuScene, **plain, variant, mode, where, name, loaded[s], res, cameras[s],
-                             references, spec, options, progress, phases, screenshots, ceilings);
+          auto done = runOne(session, current, **plain, variant, mode, where, res, references);
           if (!done) {
             (*plain)->destroy();
             return makeError(done.error());

@@ -24,7 +24,7 @@
 #include "common/metrics.hpp"
 #include "common/paths.hpp"
 #include "common/version.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 #include "jobs/worker.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "gpu/device_features.hpp"
 #include "gpu/vk_check.hpp"
 #include "spirv/instrument.hpp"
 
@@ -152,11 +153,6 @@ Result<Candidate> choose(const std::vector<Candidate>& candidates, const std::st
   return *best;
 }
 
-bool hasExtension(const std::vector<VkExtensionProperties>& extensions, const char* name) {
-  return std::any_of(extensions.begin(), extensions.end(),
-                     [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
-}
-
 VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                              VkDebugUtilsMessageTypeFlagsEXT,
                                              const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
@@ -164,21 +160,6 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBits
     std::fprintf(stderr, "vulkan: %s\n", data->pMessage);
   }
   return VK_FALSE;
-}
-
-uint32_t toStageMask(VkShaderStageFlags stages) {
-  using spirv::Stage;
-  using spirv::stageBit;
-  uint32_t mask = 0;
-  if (stages & VK_SHADER_STAGE_VERTEX_BIT) mask |= stageBit(Stage::Vertex);
-  if (stages & VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT) mask |= stageBit(Stage::TessControl);
-  if (stages & VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT) mask |= stageBit(Stage::TessEval);
-  if (stages & VK_SHADER_STAGE_GEOMETRY_BIT) mask |= stageBit(Stage::Geometry);
-  if (stages & VK_SHADER_STAGE_FRAGMENT_BIT) mask |= stageBit(Stage::Fragment);
-  if (stages & VK_SHADER_STAGE_COMPUTE_BIT) mask |= stageBit(Stage::Compute);
-  if (stages & VK_SHADER_STAGE_TASK_BIT_EXT) mask |= stageBit(Stage::Task);
-  if (stages & VK_SHADER_STAGE_MESH_BIT_EXT) mask |= stageBit(Stage::Mesh);
-  return mask;
 }
 
 void createInstance(Context& ctx, const ContextOptions& options) {
@@ -286,176 +267,12 @@ void createDevice(Context& ctx, const Candidate& chosen) {
   ctx.timestamps = chosen.timestampValidBits > 0;
   ctx.apiVersion = std::min(ctx.apiVersion, clampVersion(chosen.properties.apiVersion));
   vkGetPhysicalDeviceMemoryProperties(ctx.physicalDevice, &ctx.memoryProperties);
-  const bool v12 = ctx.apiVersion >= VK_API_VERSION_1_2;
-  const bool v13 = ctx.apiVersion >= VK_API_VERSION_1_3;
-
-  uint32_t extCount = 0;
-  VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, nullptr));
-  std::vector<VkExtensionProperties> available(extCount);
-  VK_CHECK(vkEnumerateDeviceExtensionProperties(ctx.physicalDevice, nullptr, &extCount, available.data()));
-  available.resize(extCount);
-  const bool hasBarycentric = hasExtension(available, VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
-  const bool hasExecutableProps = hasExtension(available, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
-  const bool hasAtomicInt64Ext = !v12 && hasExtension(available, VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
-  const bool hasDriverPropsExt = !v12 && hasExtension(available, VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
-
-  // Properties: subgroups (1.1), driver (1.2 or extension).
-  VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-  VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-  VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-  props2.pNext = &subgroup;
-  if (v12 || hasDriverPropsExt) subgroup.pNext = &driver;
-  vkGetPhysicalDeviceProperties2(ctx.physicalDevice, &props2);
-  if (v12 || hasDriverPropsExt) {
-    ctx.driverName = driver.driverName;
-    ctx.driverInfo = driver.driverInfo;
-    ctx.driverID = driver.driverID;
-  }
-
-  // Supported features.
-  VkPhysicalDeviceFeatures2 have = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features have11 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features have12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features have13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  VkPhysicalDeviceShaderAtomicInt64Features haveAtomic = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
-  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR haveBary = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
-  VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR haveExec = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR};
-  void** tail = &have.pNext;
-  auto append = [&tail](auto& s) {
-    *tail = &s;
-    tail = &s.pNext;
-  };
-  if (v12) {
-    append(have11);
-    append(have12);
-  }
-  if (v13) append(have13);
-  if (hasAtomicInt64Ext) append(haveAtomic);
-  if (hasBarycentric) append(haveBary);
-  if (hasExecutableProps) append(haveExec);
-  vkGetPhysicalDeviceFeatures2(ctx.physicalDevice, &have);
-  if (!v12)
-    haveAtomic.shaderBufferInt64Atomics = hasAtomicInt64Ext ? haveAtomic.shaderBufferInt64Atomics : VK_FALSE;
-  const VkPhysicalDeviceFeatures& h = have.features;
-
-  // Enabled features: a fresh chain, set only where supported.
-  VkPhysicalDeviceFeatures2 want = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features want11 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features want12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features want13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  VkPhysicalDeviceShaderAtomicInt64Features wantAtomic = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_INT64_FEATURES};
-  VkPhysicalDeviceFragmentShaderBarycentricFeaturesKHR wantBary = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FRAGMENT_SHADER_BARYCENTRIC_FEATURES_KHR};
-  VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR wantExec = {
-      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR};
-  tail = &want.pNext;
-  VkPhysicalDeviceFeatures& w = want.features;
-  // Counters: 64-bit integers and stores/atomics from every stage.
-  w.shaderInt64 = h.shaderInt64;
-  w.fragmentStoresAndAtomics = h.fragmentStoresAndAtomics;
-  w.vertexPipelineStoresAndAtomics = h.vertexPipelineStoresAndAtomics;
-  w.pipelineStatisticsQuery = h.pipelineStatisticsQuery;
-  w.shaderStorageImageWriteWithoutFormat = h.shaderStorageImageWriteWithoutFormat;
-  w.shaderStorageImageReadWithoutFormat = h.shaderStorageImageReadWithoutFormat;
-  w.samplerAnisotropy = h.samplerAnisotropy;
-  w.shaderInt16 = h.shaderInt16;
-  w.independentBlend = h.independentBlend;
-  w.depthClamp = h.depthClamp;
-  w.fillModeNonSolid = h.fillModeNonSolid;  // wireframe views
-  w.multiDrawIndirect = h.multiDrawIndirect;
-  w.drawIndirectFirstInstance = h.drawIndirectFirstInstance;
-  w.shaderSampledImageArrayDynamicIndexing = h.shaderSampledImageArrayDynamicIndexing;
-  w.shaderStorageBufferArrayDynamicIndexing = h.shaderStorageBufferArrayDynamicIndexing;
-  // robustBufferAccess stays off: it changes what is measured (and costs time).
-  bool atomics64 = false;
-  bool extendedTypes = false;
-  bool hostReset = false;
-  bool bda = false;
-  bool indexing = false;
-  if (v12) {
-    want11.shaderDrawParameters = have11.shaderDrawParameters;
-    want11.storageBuffer16BitAccess = have11.storageBuffer16BitAccess;
-    want12.shaderBufferInt64Atomics = have12.shaderBufferInt64Atomics;
-    want12.shaderSubgroupExtendedTypes = have12.shaderSubgroupExtendedTypes;
-    want12.hostQueryReset = have12.hostQueryReset;
-    want12.bufferDeviceAddress = have12.bufferDeviceAddress;
-    want12.scalarBlockLayout = have12.scalarBlockLayout;
-    want12.storageBuffer8BitAccess = have12.storageBuffer8BitAccess;
-    want12.shaderInt8 = have12.shaderInt8;
-    want12.shaderFloat16 = have12.shaderFloat16;
-    want12.timelineSemaphore = have12.timelineSemaphore;
-    want12.drawIndirectCount = have12.drawIndirectCount;
-    want12.vulkanMemoryModel = have12.vulkanMemoryModel;
-    want12.vulkanMemoryModelDeviceScope = have12.vulkanMemoryModelDeviceScope;
-    indexing = have12.runtimeDescriptorArray && have12.shaderSampledImageArrayNonUniformIndexing &&
-               have12.descriptorBindingPartiallyBound;
-    if (indexing) {
-      want12.descriptorIndexing = have12.descriptorIndexing;
-      want12.runtimeDescriptorArray = VK_TRUE;
-      want12.shaderSampledImageArrayNonUniformIndexing = VK_TRUE;
-      want12.descriptorBindingPartiallyBound = VK_TRUE;
-      want12.descriptorBindingVariableDescriptorCount = have12.descriptorBindingVariableDescriptorCount;
-      want12.descriptorBindingSampledImageUpdateAfterBind =
-          have12.descriptorBindingSampledImageUpdateAfterBind;
-    }
-    atomics64 = have12.shaderBufferInt64Atomics;
-    extendedTypes = have12.shaderSubgroupExtendedTypes;
-    hostReset = have12.hostQueryReset;
-    bda = have12.bufferDeviceAddress;
-    append(want11);
-    append(want12);
-  } else if (hasAtomicInt64Ext) {
-    wantAtomic.shaderBufferInt64Atomics = haveAtomic.shaderBufferInt64Atomics;
-    atomics64 = haveAtomic.shaderBufferInt64Atomics;
-    append(wantAtomic);
-    ctx.enabledExtensions.push_back(VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
-  }
-  if (v13) {
-    want13.synchronization2 = have13.synchronization2;
-    want13.dynamicRendering = have13.dynamicRendering;
-    want13.maintenance4 = have13.maintenance4;
-    // Alpha-tested and test shaders may demote instead of discarding.
-    want13.shaderDemoteToHelperInvocation = have13.shaderDemoteToHelperInvocation;
-    append(want13);
-  }
-  if (hasBarycentric && haveBary.fragmentShaderBarycentric) {
-    wantBary.fragmentShaderBarycentric = VK_TRUE;
-    append(wantBary);
-    ctx.enabledExtensions.push_back(VK_KHR_FRAGMENT_SHADER_BARYCENTRIC_EXTENSION_NAME);
-    ctx.fragmentBarycentric = true;
-  }
-  if (hasDriverPropsExt) ctx.enabledExtensions.push_back(VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
-  if (hasExecutableProps && haveExec.pipelineExecutableInfo) {
-    wantExec.pipelineExecutableInfo = VK_TRUE;
-    append(wantExec);
-    ctx.enabledExtensions.push_back(VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
-    ctx.pipelineExecutableInfo = true;
-  }
-
-  ctx.shaderInt64 = h.shaderInt64;
-  ctx.int64Atomics = h.shaderInt64 && atomics64;
-  ctx.fragmentStoresAndAtomics = h.fragmentStoresAndAtomics;
-  ctx.vertexPipelineStoresAndAtomics = h.vertexPipelineStoresAndAtomics;
-  ctx.pipelineStatistics = h.pipelineStatisticsQuery;
-  ctx.storageImageWriteWithoutFormat = h.shaderStorageImageWriteWithoutFormat;
-  ctx.storageImageReadWithoutFormat = h.shaderStorageImageReadWithoutFormat;
-  ctx.shaderSubgroupExtendedTypes = extendedTypes;
-  ctx.hostQueryReset = hostReset;
-  ctx.bufferDeviceAddress = bda;
-  ctx.descriptorIndexing = indexing;
-  ctx.subgroupSize = subgroup.subgroupSize;
-  // Subgroup counting elects a lane (basic), groups lanes by slot (ballot)
-  // and adds lane counts (arithmetic).
-  constexpr VkSubgroupFeatureFlags kNeeded =
-      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
-  ctx.subgroupArithmetic = (subgroup.supportedOperations & kNeeded) == kNeeded;
-  ctx.subgroupStages = ctx.subgroupArithmetic ? toStageMask(subgroup.supportedStages) : 0;
-  // Not known to be fixed in a later Mesa: applies to every llvmpipe until checked.
-  ctx.volatileHelperInvocationCrashes = ctx.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
+  Supported supported;
+  querySupport(ctx, supported);
+  Enabled enabled;
+  enableFeatures(ctx, supported, enabled);
+  recordCapabilities(ctx, supported, enabled);
+  VkPhysicalDeviceFeatures2& want = enabled.want.features;
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo queueInfo = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};

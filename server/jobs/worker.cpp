@@ -13,7 +13,7 @@
 #include <map>
 #include <system_error>
 
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 namespace tally::jobs {
 namespace fs = std::filesystem;

@@ -134,6 +134,19 @@ VkSampler GpuScene::samplerFor(const scenes::Sampler& s) {
 
 GpuScene::~GpuScene() { destroy(); }
 
+// What the materials' step leaves for the later ones: the materials (one
+// default where the scene has none), their shader records, the texture per
+// layer of each kind's array and of the emissive array (-1: the dummy), and
+// the default sampler's description (the sky's sampler starts from it).
+struct GpuScene::MaterialTables {
+  std::vector<scenes::Material> materials;
+  std::vector<shaders::Material> materialData;
+  std::vector<shaders::MaterialExtra> extras;
+  std::array<std::vector<int32_t>, kKinds> layersOf;  // texture index per layer (-1: dummy)
+  std::vector<int32_t> emissiveLayers = {-1};  // texture per layer of the emissive array (-1: the dummy)
+  VkSamplerCreateInfo defaults = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+};
+
 Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   if (scene.meshes.empty() || scene.triangleCount() == 0) return makeError("scene: no triangles");
   for (const auto& t : scene.textures) {
@@ -146,6 +159,17 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   bounds_ = scene.bounds;
   features_ = scene.features();
 
+  uploadGeometry(ctx, scene);
+  uploadTextures(ctx, scene);
+  MaterialTables tables;
+  uploadMaterials(ctx, scene, tables);
+  buildIndexedMaps(ctx, scene, tables);
+  uploadMapArrays(ctx, scene, tables);
+  uploadLightsAndSky(ctx, scene, tables.defaults);
+  return true;
+}
+
+void GpuScene::uploadGeometry(gpu::Context& ctx, const scenes::Scene& scene) {
   // Geometry: all meshes in one vertex and one index buffer.
   std::vector<scenes::Vertex> vertices;
   std::vector<uint32_t> indices;
@@ -196,7 +220,9 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     }
   }
   attributes_ = storageBuffer(ctx, attributes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+}
 
+void GpuScene::uploadTextures(gpu::Context& ctx, const scenes::Scene& scene) {
   // Per-texture images with mips, and a 1x1 dummy per kind.
   for (const auto& t : scene.textures) {
     VkFormat format = t.srgb ? VK_FORMAT_R8G8B8A8_SRGB : VK_FORMAT_R8G8B8A8_UNORM;
@@ -210,16 +236,19 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     uploadWithMips(ctx, dummies_[k], kDummyTexels[k]);
     mapBytesPerKind_[k] = dummies_[k].allocationBytes;
   }
+}
 
+void GpuScene::uploadMaterials(gpu::Context& ctx, const scenes::Scene& scene, MaterialTables& tables) {
   // Which textures each kind uses, and the layered image per kind (layer 0: the dummy).
-  std::vector<scenes::Material> materials = scene.materials;
+  std::vector<scenes::Material>& materials = tables.materials;
+  materials = scene.materials;
   if (materials.empty()) materials.emplace_back();
-  std::vector<shaders::Material> materialData;
-  std::array<std::vector<int32_t>, kKinds> layersOf;  // texture index per layer (-1: dummy)
+  std::vector<shaders::Material>& materialData = tables.materialData;
+  auto& layersOf = tables.layersOf;
   for (uint32_t k = 0; k < kKinds; ++k) layersOf[k].push_back(-1);
   std::vector<bool> counted(scene.textures.size(), false);
   textureKinds_.assign(scene.textures.size(), -1);
-  VkSamplerCreateInfo defaults = {VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  VkSamplerCreateInfo& defaults = tables.defaults;
   defaults.magFilter = VK_FILTER_LINEAR;
   defaults.minFilter = VK_FILTER_LINEAR;
   defaults.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
@@ -230,8 +259,8 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   ctx.log->sampler(sampler_, defaults);
   emissiveDummy_ = createMipImage(ctx, 1, 1, 1, 1, VK_FORMAT_R8G8B8A8_SRGB, VK_IMAGE_VIEW_TYPE_2D);
   uploadWithMips(ctx, emissiveDummy_, kDummyTexels[0]);  // white: the emissive factor alone
-  std::vector<shaders::MaterialExtra> extras;
-  std::vector<int32_t> emissiveLayers = {-1};  // texture per layer of the emissive array (-1: the dummy)
+  std::vector<shaders::MaterialExtra>& extras = tables.extras;
+  std::vector<int32_t>& emissiveLayers = tables.emissiveLayers;
   for (const auto& m : materials) {
     std::array<VkImageView, kKinds> views{};
     std::array<VkSampler, kKinds> samplers{};
@@ -294,7 +323,10 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   materialBuffer_ = storageBuffer(ctx, materialData, 0);
   materialExtras_ = storageBuffer(ctx, extras, 0);
   if (features_.emissiveMaps) emissiveBytes_ += emissiveDummy_.allocationBytes;
+}
 
+void GpuScene::buildIndexedMaps(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables) {
+  const auto& [materials, materialData, extras, layersOf, emissiveLayers, defaults] = tables;
   // The descriptor-indexing layout: dummies at 0..4, texture t at 5 + t.
   if (kKinds + scene.textures.size() <= shaders::kMaxMaterialMaps) {
     std::vector<std::string> textureKind(scene.textures.size(), "material_maps.unused");
@@ -338,7 +370,10 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     indexedMaterialBuffer_ = storageBuffer(ctx, indexedData, 0);
     indexedMaterialExtras_ = storageBuffer(ctx, indexedExtras, 0);
   }
+}
 
+void GpuScene::uploadMapArrays(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables) {
+  const auto& [materials, materialData, extras, layersOf, emissiveLayers, defaults] = tables;
   for (uint32_t k = 0; k < kKinds; ++k) {
     uint32_t w = 1, h = 1;
     for (int32_t t : layersOf[k]) {
@@ -394,7 +429,9 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
     }
     uploadWithMips(ctx, emissiveArray_, texels);
   }
+}
 
+void GpuScene::uploadLightsAndSky(gpu::Context& ctx, const scenes::Scene& scene, const VkSamplerCreateInfo& defaults) {
   // Lights: Halton points inside the bounds, radius a third of the diagonal.
   std::vector<shaders::PointLight> lights(kSceneLights);
   glm::vec3 lo = scene.bounds.min, size = scene.bounds.extent();
@@ -416,7 +453,6 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   info.addressModeU = info.addressModeV = info.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
   VK_CHECK(vkCreateSampler(ctx.device, &info, nullptr, &skySampler_));
   ctx.log->sampler(skySampler_, info);
-  return true;
 }
 
 void GpuScene::destroy() {

@@ -155,6 +155,15 @@ class GpuScene {
   std::vector<ResourceInfo> mapArrayResources() const;
 
  private:
+  // upload's steps, in this order.
+  struct MaterialTables;
+  void uploadGeometry(gpu::Context& ctx, const scenes::Scene& scene);
+  void uploadTextures(gpu::Context& ctx, const scenes::Scene& scene);
+  void uploadMaterials(gpu::Context& ctx, const scenes::Scene& scene, MaterialTables& tables);
+  void buildIndexedMaps(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables);
+  void uploadMapArrays(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables);
+  void uploadLightsAndSky(gpu::Context& ctx, const scenes::Scene& scene, const VkSamplerCreateInfo& defaults);
+
   gpu::Context* ctx_ = nullptr;
   scenes::Bounds bounds_;
   gpu::Buffer vertices_, indices_, drawBuffer_, materialBuffer_, lightBuffer_, indexedMaterialBuffer_;

@@ -23,7 +23,7 @@
 #include "api/router.hpp"
 #include "capture/spec.hpp"
 #include "common/paths.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 #include "service/service.hpp"
 #include "store/store.hpp"
 #include "read_file.hpp"

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 #include "proc_file.hpp"
 
 namespace tally::jobs {

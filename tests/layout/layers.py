@@ -22,8 +22,7 @@ ALLOWED = {
     "renderers": {"gpu", "scenes", "spirv"},
     "analysis": set(),
     "sweeps": {"analysis", "renderers", "gpu", "scenes", "spirv"},
-    # jobs: child_process.hpp, to run an application under the Vulkan layer (capture/application.cpp).
-    "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv", "jobs"},
+    "capture": {"sweeps", "analysis", "renderers", "gpu", "scenes", "spirv"},
     "store": set(),
     "api": set(),
     "jobs": {"store"},
@@ -86,8 +85,8 @@ def check(server):
 def page_table(page):
     """The "may use" column of docs/architecture.md's table of parts: part ->
     set of parts. "all of the above" is every part in the rows above; "—"
-    is none; an item's first word is the part ("jobs (`child_process.hpp`
-    only)" is jobs)."""
+    is none; an item's first word is the part ("spirv (`footprint.hpp`
+    only)" is spirv)."""
     table, order = {}, []
     for line in open(page, encoding="utf-8"):
         m = re.match(r"^\| `(\w+)/` \| [^|]+ \| .* \| ([^|]+) \|\s*$", line)

@@ -23,7 +23,7 @@
 #include <gtest/gtest.h>
 
 #include "daemon.hpp"
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 namespace {
 using namespace tally::service::test;

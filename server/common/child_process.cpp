@@ -1,4 +1,4 @@
-#include "jobs/child_process.hpp"
+#include "common/child_process.hpp"
 
 #include <cerrno>
 #include <csignal>
