@@ -30,7 +30,7 @@ fi
 # fails here as under CI, instead of skipping (tests/support/strict.hpp).
 export TALLY_TEST_STRICT=1
 
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${launcher[@]}" >/dev/null
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTALLY_WERROR=ON "${launcher[@]}" >/dev/null
 cmake --build build -j"$jobs"
 phase "build"
 

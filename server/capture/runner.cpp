@@ -104,7 +104,9 @@ void addRoofline(json& sample, const SampleMeasure& m, const json& ceilings) {
     const auto bandwidth = ratio(bytes, secondsOpt), bandwidthFootprint = ratio(footprint, secondsOpt);
     const auto opsPerS = ratio(ops, secondsOpt);
     std::optional<double> attainable;
-    if (intensity && peakBandwidth && peakOps) attainable = std::min(*peakOps, *intensity * *peakBandwidth);
+    if (intensity && peakBandwidth && peakOps) {
+      attainable = std::min(peakOps.value_or(0.0), *intensity * peakBandwidth.value_or(0.0));
+    }
     json bound = nullptr;
     if (intensity && peakBandwidth && peakOps && *peakBandwidth > 0) {
       bound = *intensity < *peakOps / *peakBandwidth ? "memory" : "compute";
