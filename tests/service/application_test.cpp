@@ -36,7 +36,9 @@ class ApplicationService : public ::testing::Test {
     daemon_->setToken(tokens_.application);
   }
   static void TearDownTestSuite() {
-    if (daemon_) EXPECT_EQ(daemon_->stop(SIGTERM), 0);
+    if (daemon_) {
+      EXPECT_EQ(daemon_->stop(SIGTERM), 0);
+    }
     delete daemon_;
     daemon_ = nullptr;
     unsetenv("TALLY_LAYER_PATH");

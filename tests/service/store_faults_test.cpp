@@ -255,7 +255,9 @@ TEST_F(FullDisk, WritesAnswer503AndTheRunningJobIsFailedOnceThereIsRoom) {
     EXPECT_TRUE(d.waitNoJobChildren(30s)) << "the capture child outlived its deadline";
     std::this_thread::sleep_for(1s);
     json job = d.request("GET", "/api/captures/" + std::to_string(id)).j();
-    if (cancel.status != 200) EXPECT_EQ(job["status"], "running") << job.dump();
+    if (cancel.status != 200) {
+      EXPECT_EQ(job["status"], "running") << job.dump();
+    }
 
     // Room again: the failure is recorded with its reason, health returns.
     fs::remove(dir_ / "disk" / "filler");

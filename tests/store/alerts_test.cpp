@@ -225,7 +225,9 @@ TEST_F(Alerts, ConcurrentEvaluatorsTestEachRunOnce) {
     });
   }
   for (auto& t : daemons) t.join();
-  if (db_.postgres()) EXPECT_EQ(tested.size(), expected.size());
+  if (db_.postgres()) {
+    EXPECT_EQ(tested.size(), expected.size());
+  }
   EXPECT_EQ(std::set<int64_t>(tested.begin(), tested.end()), expected);
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM alerts"), static_cast<int64_t>(expected.size()));
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(DISTINCT run_id) FROM alerts"),

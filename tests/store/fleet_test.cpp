@@ -226,7 +226,8 @@ TEST_F(Fleet, HostsRegisterOncePerLiveName) {
   EXPECT_EQ(hosts[1].info.device["name"], "NVIDIA H100 80GB HBM3");
   EXPECT_EQ(hosts[1].lastHeartbeat.size(), 24u) << hosts[1].lastHeartbeat;  // 2026-11-25T09:00:00.000Z
   // A stale limit of 0 ms: nobody is alive.
-  for (const auto& h : *store_->listHosts(0)) EXPECT_FALSE(h.alive) << h.info.name;
+  auto stale = store_->listHosts(0);  // kept: the loop's range lives in it
+  for (const auto& h : *stale) EXPECT_FALSE(h.alive) << h.info.name;
   HostInfo badRole = host("x", nullptr);
   badRole.role = "api";
   EXPECT_FALSE(store_->registerHost(badRole, 30000));
