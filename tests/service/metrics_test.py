@@ -120,7 +120,14 @@ try:
     check(code == 202, f"capture accepted ({code})")
     done = d.wait(job["id"])
     check(done["status"] == "done", "the capture is done")
-    after = d.scrape()
+    # The worker stores the job as done, then counts it: wait (bounded) for
+    # the counts rather than reading in between
+    # (the device's info is the callback's last step).
+    for _ in range(100):
+        after = d.scrape()
+        if any(name == "tally_device_info" and dict(labels).get("device") for name, labels in after):
+            break
+        time.sleep(0.05)
     check(value(after, "tally_jobs_finished_total", status="done") == 1, "jobs done +1")
     check(value(after, "tally_capture_duration_seconds_count", kind="capture", status="done") == 1,
           "one capture duration observed")
