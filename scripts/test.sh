@@ -61,10 +61,12 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEB
 cmake --build build-asan -j"$jobs" --target tally_unit_tests tally_corpus_tests tallyd \
   fuzz_spirv fuzz_gltf fuzz_spec fuzz_http fuzz_ingest fuzz_corpus
 phase "sanitizer build"
+# The corpus digests are the gcc build's output words (tests/spirv/corpus_test.cpp):
+# clang numbers some footprint ids in another order, so they are checked above only.
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 LSAN_OPTIONS=suppressions="$PWD/tests/lsan.supp":print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-asan -L spirv --output-on-failure -j"$jobs"
+  ctest --test-dir build-asan -L spirv -E '^CorpusDigests[.]' --output-on-failure -j"$jobs"
 phase "sanitizer tests"
 # Each harness for TALLY_FUZZ_SECONDS (60) over its seeds; a crash, leak or
 # UB fails it, the input left in build-asan/fuzz/runs/<harness>/.

@@ -504,6 +504,11 @@ std::vector<std::pair<std::string, std::string>> computeDigests() {
   return out;
 }
 
+// The digests are the gcc build's words. A clang build numbers some of the
+// footprint pass's new ids in another order (the order in which a call's
+// arguments that each make an id are evaluated is unspecified): the module
+// is as valid and counts the same, but its words differ, so the sanitizer
+// build (clang) leaves this test out (scripts/test.sh).
 TEST(CorpusDigests, InstrumentedWordsMatchTheRecordedDigests) {
   const auto digests = computeDigests();
   ASSERT_GT(digests.size(), 1000u);
