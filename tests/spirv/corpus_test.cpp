@@ -505,10 +505,10 @@ std::vector<std::pair<std::string, std::string>> computeDigests() {
 }
 
 // The digests are the gcc build's words. A clang build numbers some of the
-// footprint pass's new ids in another order (the order in which a call's
-// arguments that each make an id are evaluated is unspecified): the module
-// is as valid and counts the same, but its words differ, so the sanitizer
-// build (clang) leaves this test out (scripts/test.sh).
+// footprint pass's new ids in another order (seen in the footprint cases
+// only; most likely a call whose arguments each make an id, an order C++
+// leaves unspecified): its words differ, so the sanitizer build (clang)
+// leaves this test out (scripts/test.sh).
 TEST(CorpusDigests, InstrumentedWordsMatchTheRecordedDigests) {
   const auto digests = computeDigests();
   ASSERT_GT(digests.size(), 1000u);
