@@ -347,7 +347,16 @@ def main():
             check(time.time() < end, "the outage capture did not end after the database came back: %d %s" % (status, j))
             time.sleep(0.3)
         check(j["status"] == "done", "the outage capture ended %s: %s" % (j["status"], j))
-        stored = api.get("/api/runs?capture=%d" % outage)["runs"]
+        # Each HTTP thread has its own reader: one whose connection died in the
+        # outage answers 503 once, then reconnects (bounded wait for that).
+        end = time.time() + 30
+        while True:
+            status, reply = api.call("GET", "/api/runs?capture=%d" % outage)
+            if status != 503 or time.time() > end:
+                break
+            time.sleep(0.3)
+        check(status == 200, "GET /api/runs after the database came back: %d %s" % (status, reply))
+        stored = reply["runs"]
         check(len(stored) == 1 and stored[0]["host"] == j["host"],
               "the outage capture stored %d runs: %s" % (len(stored), stored))
         print("database outage: %s kept capture %d and retried its ingest; stored once, by %s (attempt %d)" %
