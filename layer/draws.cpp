@@ -64,6 +64,8 @@ VKAPI_ATTR void VKAPI_CALL CmdSetAlphaToCoverageEnableEXT(VkCommandBuffer cmd, V
   if (CommandBufferState* cb = cbState(*dev, cmd)) {
     cb->coverage.known = true;
     cb->coverage.alphaToCoverage = enable == VK_TRUE;
+    // At once, not at the next draw: a draw the layer does not intercept must not run the twin with it on.
+    bindForCoverage(*dev, *cb);
   }
 }
 
