@@ -5,9 +5,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <set>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -201,24 +203,26 @@ struct MeshCost {
   uint64_t primitives = 0, triangles = 0, vertices = 0;
 };
 
-}  // namespace
+using Sizes = std::vector<uint64_t>;
 
-bool isImplementedExtension(const std::string& name) { return kImplemented.count(name) > 0; }
+void add(MeshCost& into, const MeshCost& more) {
+  into.primitives = addSat(into.primitives, more.primitives);
+  into.triangles = addSat(into.triangles, more.triangles);
+  into.vertices = addSat(into.vertices, more.vertices);
+}
 
-Result<GltfPrecheck> precheckGltf(const std::string& path) {
-  Result<Source> read = readSource(path);
-  if (!read) return makeError("not a valid glTF file: " + read.error());
-  const Source& src = *read;
-  const json& doc = src.doc;
-  GltfPrecheck out;
-  auto array = [&](const char* key) -> const json& {
-    static const json kEmpty = json::array();
-    return doc.contains(key) && doc[key].is_array() ? doc[key] : kEmpty;
-  };
+// The document's array `key`, or an empty one.
+const json& arrayOf(const json& doc, const char* key) {
+  static const json kEmpty = json::array();
+  return doc.contains(key) && doc[key].is_array() ? doc[key] : kEmpty;
+}
 
-  // Extensions.
+// Extensions: the required ones must be implemented; the used ones that are
+// not become notes saying what is not drawn.
+Result<std::vector<std::string>> checkExtensions(const json& doc) {
+  std::vector<std::string> notes;
   std::set<std::string> required;
-  for (const json& e : array("extensionsRequired"))
+  for (const json& e : arrayOf(doc, "extensionsRequired"))
     if (e.is_string()) required.insert(e.get<std::string>());
   for (const std::string& e : required) {
     auto c = kCompressed.find(e);
@@ -226,24 +230,27 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
     if (!isImplementedExtension(e))
       return makeError("requires extension " + e + ", which Tally does not implement");
   }
-  for (const json& j : array("extensionsUsed")) {
+  for (const json& j : arrayOf(doc, "extensionsUsed")) {
     if (!j.is_string()) continue;
     const std::string e = j.get<std::string>();
     if (required.count(e) || isImplementedExtension(e)) continue;
     if (kCompressed.count(e)) {
-      out.notes.push_back(e + ": used but not implemented; the uncompressed fallback data is drawn");
+      notes.push_back(e + ": used but not implemented; the uncompressed fallback data is drawn");
       continue;
     }
     auto it = kIgnored.find(e);
-    out.notes.push_back(e + ": used but not implemented; " +
-                        (it != kIgnored.end() ? it->second : std::string("its data is ignored")));
+    notes.push_back(e + ": used but not implemented; " +
+                    (it != kIgnored.end() ? it->second : std::string("its data is ignored")));
   }
+  return notes;
+}
 
-  // Buffers and buffer views.
-  const fs::path folder = fs::path(path).parent_path();
-  std::vector<uint64_t> bufferBytes;
-  for (size_t i = 0; i < array("buffers").size(); ++i) {
-    const json& b = array("buffers")[i];
+// Buffers: each one's declared byteLength, within its data.
+Result<Sizes> checkBuffers(const Source& src, const fs::path& folder) {
+  Sizes bufferBytes;
+  const json& buffers = arrayOf(src.doc, "buffers");
+  for (size_t i = 0; i < buffers.size(); ++i) {
+    const json& b = buffers[i];
     auto declared = unsignedField(b, "byteLength", kSaturated);
     if (!declared || *declared == kSaturated)
       return makeError("buffer " + std::to_string(i) + ": byteLength missing or not a non-negative integer");
@@ -254,12 +261,18 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
                        " exceeds the " + std::to_string(*data) + " bytes of its data");
     bufferBytes.push_back(*declared);
   }
-  struct View {
-    uint64_t length = 0, stride = 0;
-  };
+  return bufferBytes;
+}
+
+struct View {
+  uint64_t length = 0, stride = 0;
+};
+
+// Buffer views: within their buffer, with a stride glTF allows.
+Result<std::vector<View>> checkBufferViews(const json& doc, const Sizes& bufferBytes) {
   std::vector<View> views;
-  for (size_t i = 0; i < array("bufferViews").size(); ++i) {
-    const json& v = array("bufferViews")[i];
+  for (size_t i = 0; i < arrayOf(doc, "bufferViews").size(); ++i) {
+    const json& v = arrayOf(doc, "bufferViews")[i];
     const std::string what = "bufferView " + std::to_string(i);
     auto buffer = unsignedField(v, "buffer", kSaturated);
     if (!buffer || *buffer >= bufferBytes.size()) return makeError(what + ": buffer missing or out of range");
@@ -275,11 +288,15 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
       return makeError(what + ": byteStride " + std::to_string(*stride) + " (glTF allows 4 to 252, a multiple of 4)");
     views.push_back({*length, *stride});
   }
+  return views;
+}
 
-  // Accessors: element size, stride and count within their view.
-  std::vector<uint64_t> accessorCounts;
-  for (size_t i = 0; i < array("accessors").size(); ++i) {
-    const json& a = array("accessors")[i];
+// Accessors: element size, stride and count within their view. The counts,
+// one per accessor.
+Result<Sizes> checkAccessors(const json& doc, const std::vector<View>& views) {
+  Sizes accessorCounts;
+  for (size_t i = 0; i < arrayOf(doc, "accessors").size(); ++i) {
+    const json& a = arrayOf(doc, "accessors")[i];
     const std::string what = "accessor " + std::to_string(i);
     auto count = unsignedField(a, "count", kSaturated);
     if (!count || *count == kSaturated) return makeError(what + ": count missing or not a non-negative integer");
@@ -309,29 +326,38 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
                        " bytes at stride " + std::to_string(stride) + (end == kSaturated ? " overflow 64 bits" : " need " + std::to_string(end) + " bytes") +
                        ", the view has " + std::to_string(views[*view].length));
   }
+  return accessorCounts;
+}
 
-  // Meshes: what one instance draws.
+// A primitive compressed with an extension whose data Tally cannot decode:
+// no POSITION, or a POSITION accessor without a bufferView.
+std::optional<Error> compressedPrimitive(const json& doc, const json& prim, const std::string& what) {
+  if (!prim.contains("extensions") || !prim["extensions"].is_object()) return std::nullopt;
+  for (const auto& [name, ext] : prim["extensions"].items()) {
+    auto c = kCompressed.find(name);
+    if (c != kCompressed.end() && !objectField(prim, "attributes").contains("POSITION"))
+      return makeError(what + ": " + c->second + ", which Tally cannot decode");
+    if (c != kCompressed.end()) {
+      const json& position = prim["attributes"]["POSITION"];
+      if (position.is_number_unsigned() && position.get<uint64_t>() < arrayOf(doc, "accessors").size() &&
+          !arrayOf(doc, "accessors")[position.get<size_t>()].contains("bufferView"))
+        return makeError(what + ": " + c->second + ", which Tally cannot decode");
+    }
+  }
+  return std::nullopt;
+}
+
+// Meshes: what one instance draws.
+Result<std::vector<MeshCost>> meshCostsOf(const json& doc, const Sizes& accessorCounts) {
   std::vector<MeshCost> meshCosts;
-  for (size_t m = 0; m < array("meshes").size(); ++m) {
-    const json& mesh = array("meshes")[m];
+  for (size_t m = 0; m < arrayOf(doc, "meshes").size(); ++m) {
+    const json& mesh = arrayOf(doc, "meshes")[m];
     MeshCost cost;
     const json prims = mesh.contains("primitives") && mesh["primitives"].is_array() ? mesh["primitives"] : json::array();
     for (size_t p = 0; p < prims.size(); ++p) {
       const json& prim = prims[p];
       const std::string what = "mesh " + std::to_string(m) + " primitive " + std::to_string(p);
-      if (prim.contains("extensions") && prim["extensions"].is_object()) {
-        for (const auto& [name, ext] : prim["extensions"].items()) {
-          auto c = kCompressed.find(name);
-          if (c != kCompressed.end() && !objectField(prim, "attributes").contains("POSITION"))
-            return makeError(what + ": " + c->second + ", which Tally cannot decode");
-          if (c != kCompressed.end()) {
-            const json& position = prim["attributes"]["POSITION"];
-            if (position.is_number_unsigned() && position.get<uint64_t>() < array("accessors").size() &&
-                !array("accessors")[position.get<size_t>()].contains("bufferView"))
-              return makeError(what + ": " + c->second + ", which Tally cannot decode");
-          }
-        }
-      }
+      if (auto e = compressedPrimitive(doc, prim, what)) return *e;
       const json attributes = objectField(prim, "attributes");
       uint64_t vertices = 0;
       if (attributes.contains("POSITION") && attributes["POSITION"].is_number_unsigned() &&
@@ -349,9 +375,13 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
     }
     meshCosts.push_back(cost);
   }
+  return meshCosts;
+}
 
-  // The node graph: cycles, and what each node instances (memoised, saturating).
-  const json& nodes = array("nodes");
+// The node graph: cycles, and what each node instances (memoised, saturating)
+// against Tally's limits; then what the default scene instances.
+std::optional<Error> checkNodeGraph(const json& doc, const std::vector<MeshCost>& meshCosts) {
+  const json& nodes = arrayOf(doc, "nodes");
   std::vector<MeshCost> nodeCost(nodes.size());
   std::vector<int> state(nodes.size(), 0);  // 0 unvisited, 1 on the stack, 2 done
   std::function<std::optional<Error>(size_t)> visit = [&](size_t n) -> std::optional<Error> {
@@ -372,9 +402,7 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
           return makeError("node " + std::to_string(n) + ": child " + child.dump() + " does not exist");
         const size_t k = child.get<size_t>();
         if (auto e = visit(k)) return e;
-        c.primitives = addSat(c.primitives, nodeCost[k].primitives);
-        c.triangles = addSat(c.triangles, nodeCost[k].triangles);
-        c.vertices = addSat(c.vertices, nodeCost[k].vertices);
+        add(c, nodeCost[k]);
       }
     }
     nodeCost[n] = c;
@@ -392,7 +420,7 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
     return std::nullopt;
   };
   std::vector<size_t> roots;
-  const json& scenes = array("scenes");
+  const json& scenes = arrayOf(doc, "scenes");
   if (!scenes.empty()) {
     size_t s = doc.contains("scene") && doc["scene"].is_number_unsigned() && doc["scene"].get<size_t>() < scenes.size()
                    ? doc["scene"].get<size_t>()
@@ -410,15 +438,38 @@ Result<GltfPrecheck> precheckGltf(const std::string& path) {
   MeshCost total;
   for (size_t r : roots) {
     if (auto e = visit(r)) return *e;
-    total.primitives = addSat(total.primitives, nodeCost[r].primitives);
-    total.triangles = addSat(total.triangles, nodeCost[r].triangles);
-    total.vertices = addSat(total.vertices, nodeCost[r].vertices);
+    add(total, nodeCost[r]);
   }
   if (total.primitives > kMaxMeshInstances || total.triangles > kMaxTriangles || total.vertices > kMaxVertices)
     return makeError("the default scene instances " + std::to_string(total.primitives) + " draws, " +
                      std::to_string(total.triangles) + " triangles and " + std::to_string(total.vertices) +
                      " vertices, over Tally's limits of " + std::to_string(kMaxMeshInstances) + ", " +
                      std::to_string(kMaxTriangles) + " and " + std::to_string(kMaxVertices));
+  return std::nullopt;
+}
+
+}  // namespace
+
+bool isImplementedExtension(const std::string& name) { return kImplemented.count(name) > 0; }
+
+Result<GltfPrecheck> precheckGltf(const std::string& path) {
+  Result<Source> read = readSource(path);
+  if (!read) return makeError("not a valid glTF file: " + read.error());
+  const Source& src = *read;
+  const json& doc = src.doc;
+  GltfPrecheck out;
+  Result<std::vector<std::string>> notes = checkExtensions(doc);
+  if (!notes) return makeError(notes.error());
+  out.notes = std::move(*notes);
+  Result<Sizes> bufferBytes = checkBuffers(src, fs::path(path).parent_path());
+  if (!bufferBytes) return makeError(bufferBytes.error());
+  Result<std::vector<View>> views = checkBufferViews(doc, *bufferBytes);
+  if (!views) return makeError(views.error());
+  Result<Sizes> accessorCounts = checkAccessors(doc, *views);
+  if (!accessorCounts) return makeError(accessorCounts.error());
+  Result<std::vector<MeshCost>> meshCosts = meshCostsOf(doc, *accessorCounts);
+  if (!meshCosts) return makeError(meshCosts.error());
+  if (auto e = checkNodeGraph(doc, *meshCosts)) return *e;
   return out;
 }
 
