@@ -19,7 +19,7 @@ VkShaderModule earlyTestsFragment(DeviceState& dev, const std::vector<uint32_t>&
   auto early = spirv::instrument(words, options);
   // The twin shares the pipeline's sites and slots: anything else would count into the wrong slots.
   if (!early || !early->earlyTestsAdded || early->sites.size() != late.sites.size() ||
-      early->layout().reserved() != late.layout().reserved()) {
+      early->layout().reserved() != late.layout().reserved() || early->derived != late.derived) {
     return VK_NULL_HANDLE;
   }
   VkShaderModuleCreateInfo moduleInfo = {VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};

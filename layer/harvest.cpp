@@ -31,7 +31,7 @@ void addLine(PassRecord& pass, const std::string& name, bool write, const std::s
 // count once.
 void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_t> counters, PassRecord& pass) {
   const PipelineInfo& pipeline = *region.pipeline;
-  for (const auto& layout : pipeline.foldLayouts) spirv::foldCopies(counters, layout);
+  for (const auto& layout : pipeline.foldLayouts) spirv::settleCounters(counters, layout);
   std::set<uint32_t> seen;
   for (const auto& site : pipeline.sites) {
     using spirv::SiteKind;

@@ -181,7 +181,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
           modules.push_back(module);
           stage.module = module;
           next += result->layout().reserved();
-          if (result->copies > 1) info.foldLayouts.push_back(result->layout());
+          if (result->layout().needsSettling()) info.foldLayouts.push_back(result->layout());
           for (auto& site : result->sites) info.sites.push_back(std::move(site));
           report["instrumented"] = true;
           report["sites"] = result->sites.size();

@@ -155,7 +155,7 @@ struct PipelineInfo {
   bool counted = false;
   uint32_t slots = 0;
   std::vector<spirv::Site> sites;
-  std::vector<spirv::CopyLayout> foldLayouts;  // striped compute counters, folded at readback
+  std::vector<spirv::CopyLayout> foldLayouts;  // settled at readback: striped compute counters folded, derived counts added
   FixedFunction fixed;  // what its draws write, where its vertex attributes come from
   bool hasFragment = false;
   // Graphics pipeline libraries: the parts this pipeline holds

@@ -74,7 +74,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     if (!compiled) return makeError(file + ": " + compiled.error());
     counterSet_ = instrumentOptions.set;
     slotCount_ += compiled->result.layout().reserved();
-    if (compiled->result.copies > 1) copyLayouts_.push_back(compiled->result.layout());
+    if (compiled->result.layout().needsSettling()) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
     if (compiled->result.arithmeticSlot >= 0) {  // the roofline's arithmetic, counted as executed

@@ -318,7 +318,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     auto bytes = gpu::readBuffer(*ctx_, counters_, 0, VkDeviceSize(slotCount_) * sizeof(uint64_t));
     counters.resize(slotCount_);
     std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
-    for (const auto& layout : copyLayouts_) spirv::foldCopies(counters, layout);
+    for (const auto& layout : copyLayouts_) spirv::settleCounters(counters, layout);
   }
   std::vector<uint32_t> bitmap;
   if (footprintReady_) bitmap = footprint_.read();

@@ -9,6 +9,12 @@
 // that the sum is exact for any per-invocation count below 2^32) and one
 // elected lane adds a non-zero total; without subgroup arithmetic in the
 // stage each lane adds its own non-zero accumulator.
+//
+// A site that runs exactly once in every invocation of its entry point
+// (on every path to a return, outside loops) costs the shader nothing: where
+// the entry point can end only by returning, the reader derives its count
+// from the entry point's invocation counter (Instrumented::derived). A
+// full-screen pass's texture reads and output writes then share one count.
 
 #include "spirv/injector.hpp"
 
@@ -77,6 +83,47 @@ bool Injector::runsOnce(const FoundSite& s, const EntryPoint& ep) {
   auto [cycles, first] = cycles_.try_emplace(s.function);
   if (first) cycles->second = instructionsInCycles(m_.functions[s.function], defs_);
   return s.instruction < cycles->second.size() && !cycles->second[s.instruction];
+}
+
+bool Injector::runsExactlyOnce(const FoundSite& s, const EntryPoint& ep) {
+  if (s.placement != Placement::AfterInstruction) return s.function == ep.functionIndex;
+  if (!runsOnce(s, ep)) return false;
+  auto [exactly, fresh] = runsExactly_.try_emplace(s.entryIndex);
+  if (fresh) exactly->second = functionsRunExactlyOnce(m_, defs_, ep.functionIndex);
+  if (s.function < 0 || size_t(s.function) >= exactly->second.size() || !exactly->second[s.function]) return false;
+  auto [paths, first] = everyPath_.try_emplace(s.function);
+  if (first) paths->second = instructionsOnEveryReturnPath(m_.functions[s.function], defs_);
+  return s.instruction < paths->second.size() && paths->second[s.instruction];
+}
+
+void Injector::findInvocationSlots(const SiteScan& scan, const std::vector<uint32_t>& slots) {
+  std::map<int, int> entriesOf;  // function -> entry points that start there
+  for (const auto& ep : scan.entryPoints) ++entriesOf[ep.functionIndex];
+  for (size_t i = 0; i < scan.sites.size(); ++i) {
+    const FoundSite& s = scan.sites[i];
+    if (s.site.kind != SiteKind::Invocation) continue;
+    const EntryPoint& ep = scan.entryPoints[s.entryIndex];
+    if (!accumulates(ep.stage) || entriesOf[ep.functionIndex] != 1) continue;
+    // An invocation that ends early (a discard, a demote) may have run a
+    // site without returning, or returned without running one after it.
+    if (endsOtherThanByReturn(m_, ep.functionIndex)) continue;
+    invocationSlot_.emplace(s.entryIndex, slots[i]);
+  }
+}
+
+bool Injector::deriveSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot) {
+  if (s.site.kind == SiteKind::Invocation || s.dynamicIndex != 0) return false;
+  auto invocations = invocationSlot_.find(s.entryIndex);
+  if (invocations == invocationSlot_.end() || !runsExactlyOnce(s, ep)) return false;
+  ++derivedSites_[ep.stage];
+  for (DerivedCount& d : result_.derived) {
+    if (d.from == invocations->second && d.to == slot) {
+      ++d.times;
+      return true;
+    }
+  }
+  result_.derived.push_back({invocations->second, slot, 1});
+  return true;
 }
 
 // Emits the site's increment; false when the site is counted per access instead.

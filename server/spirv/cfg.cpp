@@ -30,29 +30,48 @@ void successors(const Instruction& inst, const DefIndex& defs, std::vector<uint3
   }
 }
 
-}  // namespace
+// A function's blocks, numbered in order, with their successors.
+struct BlockGraph {
+  std::vector<int> blockAt;             // per instruction, its block (-1 before the first label)
+  std::vector<std::vector<int>> next;   // per block, its successors
+  std::vector<bool> returns;            // per block, whether it ends in OpReturn or OpReturnValue
+};
 
-std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs) {
+BlockGraph blockGraph(const Function& f, const DefIndex& defs) {
   const auto& insts = f.insts;
   std::map<uint32_t, int> blockOf;
-  std::vector<int> blockAt(insts.size(), -1);
   int blocks = 0;
   for (size_t i = 0; i < insts.size(); ++i) {
     if (insts[i].opcode() == spv::Op::OpLabel) blockOf[insts[i].resultId()] = blocks++;
   }
-  std::vector<std::vector<int>> next(blocks);
+  BlockGraph g;
+  g.blockAt.assign(insts.size(), -1);
+  g.next.resize(blocks);
+  g.returns.assign(blocks, false);
   int current = -1;
   std::vector<uint32_t> labels;
   for (size_t i = 0; i < insts.size(); ++i) {
     if (insts[i].opcode() == spv::Op::OpLabel) current = blockOf[insts[i].resultId()];
-    blockAt[i] = current;
+    g.blockAt[i] = current;
     if (current < 0) continue;
+    if (insts[i].opcode() == spv::Op::OpReturn || insts[i].opcode() == spv::Op::OpReturnValue) g.returns[current] = true;
     labels.clear();
     successors(insts[i], defs, labels);
     for (uint32_t l : labels) {
-      if (auto it = blockOf.find(l); it != blockOf.end()) next[current].push_back(it->second);
+      if (auto it = blockOf.find(l); it != blockOf.end()) g.next[current].push_back(it->second);
     }
   }
+  return g;
+}
+
+}  // namespace
+
+std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs) {
+  const auto& insts = f.insts;
+  BlockGraph g = blockGraph(f, defs);
+  const int blocks = static_cast<int>(g.next.size());
+  const auto& next = g.next;
+  const auto& blockAt = g.blockAt;
 
   // Tarjan's strongly connected components, iteratively: a block is on a
   // cycle when its component has more than one block or it branches to itself.
@@ -142,6 +161,147 @@ std::vector<bool> functionsRunOnce(const Module& m, const DefIndex& defs, int en
     }
   }
   return once;
+}
+
+std::vector<bool> instructionsOnEveryReturnPath(const Function& f, const DefIndex& defs) {
+  BlockGraph g = blockGraph(f, defs);
+  const int blocks = static_cast<int>(g.next.size());
+  std::vector<bool> out(f.insts.size(), false);
+  if (blocks == 0) return out;
+  // Dominators of a virtual exit that every return branches to (Cooper,
+  // Harvey and Kennedy's iterative algorithm over reverse postorder): the
+  // blocks on its dominator chain are the ones every return path crosses.
+  const int exit = blocks;
+  std::vector<std::vector<int>> next = g.next;
+  next.emplace_back();
+  for (int b = 0; b < blocks; ++b) {
+    if (g.returns[b]) next[b].push_back(exit);
+  }
+  std::vector<int> postorder, order(blocks + 1, -1);
+  std::vector<std::pair<int, size_t>> work = {{0, 0}};
+  std::vector<bool> seen(blocks + 1, false);
+  seen[0] = true;
+  while (!work.empty()) {
+    auto& [v, edge] = work.back();
+    if (edge < next[v].size()) {
+      int w = next[v][edge++];
+      if (!seen[w]) {
+        seen[w] = true;
+        work.push_back({w, 0});
+      }
+      continue;
+    }
+    order[v] = static_cast<int>(postorder.size());
+    postorder.push_back(v);
+    work.pop_back();
+  }
+  if (!seen[exit]) return out;
+  std::vector<std::vector<int>> preds(blocks + 1);
+  for (int b = 0; b <= blocks; ++b) {
+    if (!seen[b]) continue;
+    for (int w : next[b]) preds[w].push_back(b);
+  }
+  std::vector<int> idom(blocks + 1, -1);
+  idom[0] = 0;
+  auto intersect = [&](int a, int b) {
+    while (a != b) {
+      while (order[a] < order[b]) a = idom[a];
+      while (order[b] < order[a]) b = idom[b];
+    }
+    return a;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (auto it = postorder.rbegin(); it != postorder.rend(); ++it) {
+      int v = *it;
+      if (v == 0) continue;
+      int dom = -1;
+      for (int p : preds[v]) {
+        if (idom[p] < 0) continue;
+        dom = dom < 0 ? p : intersect(p, dom);
+      }
+      if (dom != idom[v]) {
+        idom[v] = dom;
+        changed = true;
+      }
+    }
+  }
+  std::vector<bool> onChain(blocks, false);
+  for (int v = idom[exit];; v = idom[v]) {
+    onChain[v] = true;
+    if (v == 0) break;
+  }
+  for (size_t i = 0; i < out.size(); ++i) out[i] = g.blockAt[i] >= 0 && onChain[g.blockAt[i]];
+  return out;
+}
+
+std::vector<bool> functionsRunExactlyOnce(const Module& m, const DefIndex& defs, int entryFunction) {
+  std::vector<bool> exactly = functionsRunOnce(m, defs, entryFunction);
+  const size_t n = m.functions.size();
+  if (entryFunction < 0 || size_t(entryFunction) >= n) return exactly;
+  std::map<uint32_t, size_t> byId;
+  for (size_t f = 0; f < n; ++f) byId[m.functions[f].id()] = f;
+  // Outward from the entry point, as functionsRunOnce: a callee keeps its
+  // mark only where its one call lies on every return path of a caller
+  // that kept its own.
+  std::vector<bool> settled(n, false);
+  settled[entryFunction] = true;
+  std::vector<size_t> work = {size_t(entryFunction)};
+  while (!work.empty()) {
+    size_t f = work.back();
+    work.pop_back();
+    const auto& insts = m.functions[f].insts;
+    std::vector<bool> everyPath;
+    for (size_t i = 0; i < insts.size(); ++i) {
+      if (insts[i].opcode() != spv::Op::OpFunctionCall) continue;
+      auto it = byId.find(insts[i].word(3));
+      if (it == byId.end() || !exactly[it->second] || settled[it->second]) continue;
+      if (everyPath.empty()) everyPath = instructionsOnEveryReturnPath(m.functions[f], defs);
+      settled[it->second] = true;
+      if (!exactly[f] || !everyPath[i]) {
+        exactly[it->second] = false;
+      }
+      work.push_back(it->second);
+    }
+  }
+  for (size_t f = 0; f < n; ++f) {
+    if (!settled[f]) exactly[f] = false;
+  }
+  return exactly;
+}
+
+bool endsOtherThanByReturn(const Module& m, int entryFunction) {
+  const size_t n = m.functions.size();
+  if (entryFunction < 0 || size_t(entryFunction) >= n) return true;
+  std::map<uint32_t, size_t> byId;
+  for (size_t f = 0; f < n; ++f) byId[m.functions[f].id()] = f;
+  std::vector<bool> reached(n, false);
+  std::vector<size_t> work = {size_t(entryFunction)};
+  reached[entryFunction] = true;
+  while (!work.empty()) {
+    size_t f = work.back();
+    work.pop_back();
+    for (const auto& inst : m.functions[f].insts) {
+      switch (inst.opcode()) {
+        case spv::Op::OpKill:
+        case spv::Op::OpTerminateInvocation:
+        case spv::Op::OpDemoteToHelperInvocation:
+        case spv::Op::OpEmitMeshTasksEXT:
+        case spv::Op::OpTerminateRayKHR:
+        case spv::Op::OpIgnoreIntersectionKHR:
+        case spv::Op::OpTerminateRayNV:
+        case spv::Op::OpIgnoreIntersectionNV: return true;
+        case spv::Op::OpFunctionCall:
+          if (auto it = byId.find(inst.word(3)); it != byId.end() && !reached[it->second]) {
+            reached[it->second] = true;
+            work.push_back(it->second);
+          }
+          break;
+        default: break;
+      }
+    }
+  }
+  return false;
 }
 
 }  // namespace tally::spirv

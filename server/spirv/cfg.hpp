@@ -1,5 +1,6 @@
 // Control flow facts the accumulate mode needs: which instructions can run
-// more than once per invocation.
+// more than once per invocation, and which run exactly once in every
+// invocation that returns.
 #pragma once
 
 #include <vector>
@@ -18,5 +19,24 @@ std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs);
 // outside any loop, by a function that runs at most once. Functions the entry
 // point does not reach are false.
 std::vector<bool> functionsRunOnce(const Module& m, const DefIndex& defs, int entryFunction);
+
+// For each instruction of `f`, whether every path from the function's first
+// block to one of its returns (OpReturn, OpReturnValue) passes through the
+// instruction's block: its block dominates every return. All false where no
+// return is reachable.
+std::vector<bool> instructionsOnEveryReturnPath(const Function& f, const DefIndex& defs);
+
+// For each function of `m`, whether it runs exactly once in every invocation
+// of the entry point `entryFunction` that returns: the entry point, and every
+// function that runs at most once (functionsRunOnce) and is called from a
+// block that every return of its caller passes through, its caller being
+// such a function too.
+std::vector<bool> functionsRunExactlyOnce(const Module& m, const DefIndex& defs, int entryFunction);
+
+// Whether an invocation of the entry point can end other than by returning:
+// OpKill, OpTerminateInvocation, OpDemoteToHelperInvocation (a helper is not
+// counted), OpEmitMeshTasksEXT, or the ray-tracing terminators, in any
+// function the entry point reaches.
+bool endsOtherThanByReturn(const Module& m, int entryFunction);
 
 }  // namespace tally::spirv

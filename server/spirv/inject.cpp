@@ -44,10 +44,12 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
   // Per-function insertions, keyed by instruction index.
   std::vector<std::map<size_t, std::vector<Instruction>>> after(m_.functions.size());
   std::vector<std::map<size_t, std::vector<Instruction>>> before(m_.functions.size());
+  if (accumulate) findInvocationSlots(scan, slots);
   for (size_t i = 0; i < scan.sites.size(); ++i) {
     const FoundSite& s = scan.sites[i];
     const EntryPoint& ep = scan.entryPoints[s.entryIndex];
     if (footprintOn()) footprintSite(i, s, ep, slots[i], after, before);
+    if (accumulate && deriveSite(s, ep, slots[i])) continue;
     if (accumulate && accumulateSite(s, ep, slots[i], after, before)) continue;
     Helper kind = helperFor(ep.stage);
     if (s.dynamicIndex == 0 && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
@@ -78,6 +80,11 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
     result_.copyStride = (result_.slotCount + kCopyAlignSlots - 1) / kCopyAlignSlots * kCopyAlignSlots;
   }
   if (accumulate) insertFlushes(scan, before);
+  for (const auto& [stage, sites] : derivedSites_) {
+    notes_.push_back("accumulate mode: " + std::to_string(sites) + " " + std::string(toString(stage)) + " site" +
+                     (sites == 1 ? "" : "s") +
+                     " that run exactly once in every invocation derived from the invocation count");
+  }
   for (const auto& [stage, sites] : perAccessOnce_) {
     notes_.push_back("accumulate mode: " + std::to_string(sites) + " " + std::string(toString(stage)) + " site" +
                      (sites == 1 ? "" : "s") +

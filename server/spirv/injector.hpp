@@ -226,6 +226,20 @@ class Injector : public ModuleBuilder {
   // that runs once.
   bool runsOnce(const FoundSite& s, const EntryPoint& ep);
 
+  // Whether the site runs exactly once in every invocation of its entry
+  // point that returns: at entry or at the returns of the entry function,
+  // or on every return path, outside loops, of a function that runs
+  // exactly once (cfg.hpp).
+  bool runsExactlyOnce(const FoundSite& s, const EntryPoint& ep);
+
+  // The entry points whose invocation counter can stand for such sites:
+  // their own function, and no way to end but returning.
+  void findInvocationSlots(const SiteScan& scan, const std::vector<uint32_t>& slots);
+
+  // Records the site as derived from its entry point's invocation counter
+  // (Instrumented::derived) where it runs exactly once; false otherwise.
+  bool deriveSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot);
+
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
                       std::vector<std::map<size_t, std::vector<Instruction>>>& after,
@@ -360,6 +374,10 @@ class Injector : public ModuleBuilder {
   std::map<uint32_t, std::vector<bool>> runsOnce_;  // entry index -> functions that run once
   std::map<int, std::vector<bool>> cycles_;         // function -> instructions on a cycle
   std::map<Stage, uint32_t> perAccessOnce_;         // sites counted per access because they run once
+  std::map<uint32_t, uint32_t> invocationSlot_;     // entry index -> its invocation counter's slot
+  std::map<uint32_t, std::vector<bool>> runsExactly_;  // entry index -> functions that run exactly once
+  std::map<int, std::vector<bool>> everyPath_;      // function -> instructions on every return path
+  std::map<Stage, uint32_t> derivedSites_;          // sites derived from the invocation count
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
   uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;

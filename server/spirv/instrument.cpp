@@ -295,6 +295,13 @@ void foldCopies(std::span<uint64_t> counters, const CopyLayout& l) {
   }
 }
 
+void settleCounters(std::span<uint64_t> counters, const CopyLayout& l) {
+  foldCopies(counters, l);
+  for (const DerivedCount& d : l.derived) {
+    if (d.from < counters.size() && d.to < counters.size()) counters[d.to] += uint64_t(d.times) * counters[d.from];
+  }
+}
+
 nlohmann::json toJson(const Site& s) {
   nlohmann::json j;
   j["slot"] = s.slot;
@@ -327,6 +334,8 @@ nlohmann::json toJson(const Site& s) {
 nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
   nlohmann::json sites = nlohmann::json::array();
   for (const auto& s : r.sites) sites.push_back(toJson(s));
+  nlohmann::json derived = nlohmann::json::array();
+  for (const auto& d : r.derived) derived.push_back({{"from_slot", d.from}, {"to_slot", d.to}, {"times", d.times}});
   return {
       {"sites", std::move(sites)},
       {"slot_count", r.slotCount},
@@ -334,6 +343,7 @@ nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
       {"copies", r.copies},
       {"copy_stride", r.copyStride},
       {"reserved_slots", r.layout().reserved()},
+      {"derived_counts", std::move(derived)},
       {"mode", toString(options.mode)},
       {"footprint",
        options.footprintBlockBytes == 0

@@ -96,21 +96,41 @@ struct InstrumentOptions {
   bool earlyFragmentTests = false;
 };
 
-// Where a module's counters lie in the counter buffer. Slot s (in
-// [firstSlot, firstSlot + slotCount)) has `copies` copies, copy k at
-// s + k * stride; the count is their sum (foldCopies). Unstriped modules
-// have one copy and reserve slotCount slots.
+// A count the reader derives rather than the shader: counters[to] +=
+// times * counters[from]. Accumulate mode counts a site that runs exactly
+// once in every invocation of its entry point (on every path to a return,
+// outside loops, in an entry point that cannot end other than by
+// returning) by the entry point's invocation counter, `from`: `times` such
+// sites share slot `to`.
+struct DerivedCount {
+  uint32_t from = 0;
+  uint32_t to = 0;
+  uint32_t times = 0;
+  bool operator==(const DerivedCount&) const = default;
+};
+
+// Where a module's counters lie in the counter buffer, and what the reader
+// does before using them (settleCounters). Slot s (in [firstSlot, firstSlot
+// + slotCount)) has `copies` copies, copy k at s + k * stride; the count is
+// their sum. Unstriped modules have one copy and reserve slotCount slots.
 struct CopyLayout {
   uint32_t firstSlot = 0;
   uint32_t slotCount = 0;
   uint32_t copies = 1;
   uint32_t stride = 0;
+  std::vector<DerivedCount> derived;  // slots absolute, like firstSlot
   // Slots the module needs in the buffer, from firstSlot.
   uint32_t reserved() const { return copies > 1 ? stride * copies : slotCount; }
+  // Whether the counters read back need settleCounters.
+  bool needsSettling() const { return copies > 1 || !derived.empty(); }
 };
 
 // Adds every copy into the first one (counters is the whole buffer, from slot 0).
 void foldCopies(std::span<uint64_t> counters, const CopyLayout& layout);
+
+// What a reader does to a module's counters as read back: folds the copies,
+// then adds the derived counts (counters is the whole buffer, from slot 0).
+void settleCounters(std::span<uint64_t> counters, const CopyLayout& layout);
 
 struct Instrumented {
   std::vector<uint32_t> words;   // the rewritten module
@@ -130,8 +150,10 @@ struct Instrumented {
   // countArithmetic: the slot holding the executed operations of every
   // invocation of the module (all entry points); -1 where not counted.
   int64_t arithmeticSlot = -1;
+  // accumulate mode: counts the reader derives from invocation counters (settleCounters).
+  std::vector<DerivedCount> derived;
 
-  CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride}; }
+  CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride, derived}; }
 };
 
 // Instruments a module. Fails with a one-line reason on invalid or

@@ -108,7 +108,12 @@ if [ "${LAYER_COST_ZINK:-1}" = 1 ]; then
   env LD_LIBRARY_PATH="$xlibs" LIBGL_DRIVERS_PATH="$x/usr/lib/x86_64-linux-gnu/dri" "$x/usr/bin/Xvfb" :78 -screen 0 1920x1080x24 -nolisten tcp > "$logs/xvfb.log" 2>&1 &
   xvfb=$!
   sleep 3
-  zink_env=(DISPLAY=:78 XDG_RUNTIME_DIR=/tmp LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  # What the dynamic linker cannot find for Mesa's GL on this machine: the
+  # first thing to read when glmark2 prints no FPS.
+  for lib in "$x/usr/lib/x86_64-linux-gnu/dri/zink_dri.so" "$x/usr/lib/x86_64-linux-gnu/libGLX_mesa.so.0" "$x/usr/bin/glmark2"; do
+    echo "== $lib"; LD_LIBRARY_PATH="$xlibs" ldd "$lib" | grep -E "not found|=> /(usr/)?lib" || true
+  done > "$logs/zink-libraries.txt" 2>&1
+  zink_env=(DISPLAY=:78 LIBGL_DEBUG=verbose XDG_RUNTIME_DIR=/tmp LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
             LIBGL_DRIVERS_PATH="$x/usr/lib/x86_64-linux-gnu/dri" __GLX_VENDOR_LIBRARY_NAME=mesa
             LIBGL_ALWAYS_SOFTWARE=1 GALLIUM_DRIVER=zink MESA_LOADER_DRIVER_OVERRIDE=zink)
   size="${ZINK_SIZE:-1920x1080}"

@@ -82,6 +82,32 @@ TEST_P(EarlyEnd, CountsStopWhereTheInvocationEnds) {
 INSTANTIATE_TEST_SUITE_P(Shaders, EarlyEnd, ::testing::Values("discard_left.frag.glsl", "demote_left.frag.glsl"),
                          [](const auto& shader) { return std::string(shader.param).substr(0, std::string(shader.param).find('_')); });
 
+// Sites that run exactly once in every invocation are derived from the
+// invocation count in accumulate mode; those after an early return, in a
+// loop or in a function called on one branch are counted in the shader.
+// Counts by hand in return_left.frag.glsl's header, the same in every mode.
+TEST(EarlyReturn, DerivedAndCountedSitesAgreeWithTheCountsByHand) {
+  std::string why;
+  const gpu::Context* ctx = deviceOrSkip(why);
+  ASSERT_NE(ctx, nullptr) << why;
+  for (auto [w, h] : {std::pair<uint32_t, uint32_t>{333, 197}, {157, 91}}) {
+    FragmentPass pass(*ctx, w, h, std::nullopt, "return_left.frag.glsl");
+    const uint64_t all = uint64_t(w) * h, kept = uint64_t(w - 100) * h, left = 100ull * h;
+    forEachExactMode(*ctx, pass, [&](const PassRun& run, const std::string& label) {
+      const std::string where = std::to_string(w) + "x" + std::to_string(h) + " " + label;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "albedo"), 2 * all) << where;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "detail"), kept) << where;
+      EXPECT_EQ(sumResource(run, SiteKind::TextureRead, "mask"), 3 * kept + left) << where;
+      EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::OutputWrite, Stage::Fragment), all) << where;
+      EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::Invocation, Stage::Fragment), all) << where;
+      // The derivation is live in accumulate mode: both albedo reads and the output.
+      bool derived = false;
+      for (const auto& n : run.notes) derived = derived || n.find("3 fragment sites that run exactly once") != std::string::npos;
+      EXPECT_EQ(derived, label.rfind("accumulate", 0) == 0) << where;
+    });
+  }
+}
+
 TEST(LongLoop, SeventyThousandLoadsPerInvocationCountExactly) {
   std::string why;
   const gpu::Context* ctx = deviceOrSkip(why);

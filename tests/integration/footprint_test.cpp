@@ -299,7 +299,7 @@ class FootprintPass {
     std::vector<uint64_t> counts(bytes.size() / 8);
     std::memcpy(counts.data(), bytes.data(), counts.size() * 8);
     for (const auto& l : layouts) {
-      if (l.copies > 1) spirv::foldCopies(counts, l);
+      if (l.needsSettling()) spirv::settleCounters(counts, l);
     }
     for (uint32_t slot : arithmeticSlots) out.arithmetic += counts[slot];
     std::vector<uint32_t> bitmap = table.read();

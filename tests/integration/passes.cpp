@@ -69,7 +69,7 @@ struct InstrumentedModules {
   std::vector<spirv::Site> sites;
   std::vector<std::string> notes;
   uint32_t slotCount = 0;                     // reserved, copies included
-  std::vector<spirv::CopyLayout> striped;     // folded after readback
+  std::vector<spirv::CopyLayout> striped;     // settled after readback (copies, derived counts)
 };
 
 // Instruments `modules` (stage, words) in order, each from the slot after the
@@ -96,12 +96,13 @@ Result<InstrumentedModules> instrumentAll(
     out.sites.insert(out.sites.end(), result->sites.begin(), result->sites.end());
     out.notes.insert(out.notes.end(), result->notes.begin(), result->notes.end());
     out.slotCount += result->layout().reserved();
-    if (result->copies > 1) out.striped.push_back(result->layout());
+    if (result->layout().needsSettling()) out.striped.push_back(result->layout());
   }
   return out;
 }
 
-// Counts the copies that received counts, then folds them into their slots.
+// Counts the copies that received counts, then folds them into their slots
+// and adds the derived counts (spirv::settleCounters).
 void foldStriped(const InstrumentedModules& modules, PassRun& run) {
   for (const auto& l : modules.striped) {
     uint32_t written = 0;
@@ -114,7 +115,7 @@ void foldStriped(const InstrumentedModules& modules, PassRun& run) {
       }
     }
     run.copiesWritten = std::max(run.copiesWritten, written);
-    spirv::foldCopies(run.counters, l);
+    spirv::settleCounters(run.counters, l);
   }
 }
 

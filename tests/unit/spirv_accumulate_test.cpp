@@ -17,14 +17,6 @@ using test::instrumentOk;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// The line after the first one containing `first`.
-std::string lineAfter(const std::string& text, const std::string& first) {
-  auto at = text.find(first);
-  if (at == std::string::npos) return {};
-  auto start = text.find('\n', at) + 1;
-  return text.substr(start, text.find('\n', start) - start);
-}
-
 InstrumentOptions accumulate(const char* mode) {
   InstrumentOptions o;
   auto m = parseMode(mode);
@@ -33,45 +25,88 @@ InstrumentOptions accumulate(const char* mode) {
   return o;
 }
 
-// One texture sample outside any loop, one buffer read in a loop.
+// A texture sample on every path (runs exactly once), one on a branch (at
+// most once), a buffer read in a loop, and the output written at the return.
 const char* kOnceAndLoop = R"(#version 450
 layout(set = 0, binding = 0) uniform sampler2D tex;
 layout(set = 0, binding = 1) readonly buffer Lights { vec4 light[]; };
+layout(set = 0, binding = 2) uniform sampler2D shadow;
 layout(push_constant) uniform Push { int count; };
 layout(location = 0) in vec2 uv;
 layout(location = 0) out vec4 color;
 void main() {
   vec4 c = texture(tex, uv);
+  if (uv.x > 0.5) c *= texture(shadow, uv);
   for (int i = 0; i < count; ++i) c += light[i];
   color = c;
 }
 )";
 
+size_t countOf(const std::string& text, const std::string& part) {
+  size_t n = 0;
+  for (size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) ++n;
+  return n;
+}
+
 TEST(Accumulate, PerLaneFlushCountsSitesThatRunOncePerAccess) {
   auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate:lane"));
   std::string dis = disassemble(r.words);
-  // The sample runs once: its flush would be one atomic per lane, as the access is.
-  EXPECT_TRUE(contains(lineAfter(dis, "OpImageSampleImplicitLod"), "%tally_count_exact")) << dis;
-  // Every site but the loop's read is counted per access; that one accumulates.
-  size_t calls = 0;
-  for (size_t at = dis.find("OpFunctionCall %void %tally_count_exact"); at != std::string::npos;
-       at = dis.find("OpFunctionCall %void %tally_count_exact", at + 1)) {
-    ++calls;
-  }
-  EXPECT_EQ(calls + 1, r.sites.size()) << dis;
+  // The branch's sample runs at most once: its flush would be one atomic per
+  // lane, as the access is. So is the invocation counter's.
+  EXPECT_EQ(countOf(dis, "OpFunctionCall %void %tally_count_exact"), 2u) << dis;
   EXPECT_EQ(test::sitesOf(r, SiteKind::BufferRead).size(), 1u);
   EXPECT_TRUE(contains(dis, "%tally_flush_fragment")) << dis;
   bool noted = false;
-  for (const auto& n : r.notes) noted = noted || contains(n, "run at most once per invocation counted per access");
+  for (const auto& n : r.notes) noted = noted || contains(n, "2 fragment sites that run at most once per invocation counted per access");
   EXPECT_TRUE(noted);
 }
 
-TEST(Accumulate, SubgroupFlushAccumulatesSitesThatRunOnce) {
-  // A reduction turns a subgroup's once-per-lane atomics into one: worth it.
-  auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate:subgroup"));
-  std::string dis = disassemble(r.words);
-  EXPECT_FALSE(contains(dis, "%tally_count_exact")) << dis;
-  EXPECT_TRUE(contains(dis, "OpGroupNonUniformIAdd")) << dis;
+TEST(Accumulate, SitesOnEveryPathAreDerivedFromTheInvocationCount) {
+  for (const char* mode : {"accumulate:lane", "accumulate:subgroup"}) {
+    auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate(mode));
+    auto invocation = test::sitesOf(r, SiteKind::Invocation);
+    auto reads = test::sitesOf(r, SiteKind::TextureRead);
+    auto outputs = test::sitesOf(r, SiteKind::OutputWrite);
+    ASSERT_EQ(invocation.size(), 1u);
+    ASSERT_EQ(reads.size(), 2u);
+    ASSERT_EQ(outputs.size(), 1u);
+    // tex (the first sample) and the output; not shadow, not the loop's read.
+    std::vector<DerivedCount> expected = {{invocation[0]->slot, reads[0]->slot, 1}, {invocation[0]->slot, outputs[0]->slot, 1}};
+    EXPECT_EQ(r.derived, expected) << mode;
+    EXPECT_EQ(r.layout().derived, expected) << mode;
+    EXPECT_TRUE(r.layout().needsSettling()) << mode;
+  }
+}
+
+TEST(Accumulate, NothingIsDerivedWhereAnInvocationCanEndEarly) {
+  const char* source = R"(#version 450
+layout(set = 0, binding = 0) uniform sampler2D tex;
+layout(location = 0) in vec2 uv;
+layout(location = 0) out vec4 color;
+void main() {
+  vec4 c = texture(tex, uv);
+  if (c.a < 0.5) discard;
+  color = c;
+}
+)";
+  auto r = instrumentOk(compileGlsl(source, Stage::Fragment), accumulate("accumulate"));
+  EXPECT_TRUE(r.derived.empty());
+  EXPECT_FALSE(r.layout().needsSettling());
+}
+
+TEST(Accumulate, SettlingFoldsCopiesThenAddsDerivedCounts) {
+  // Slots 10..12, two copies 16 apart; slot 10 counts invocations.
+  CopyLayout l{10, 3, 2, 16, {{10, 11, 2}, {10, 12, 1}}};
+  std::vector<uint64_t> counters(48, 0);
+  counters[10] = 5;       // invocations, copy 0
+  counters[26] = 2;       // invocations, copy 1
+  counters[11] = 1;       // counted in the shader as well
+  counters[28] = 4;       // slot 12, copy 1
+  settleCounters(counters, l);
+  EXPECT_EQ(counters[10], 7u);
+  EXPECT_EQ(counters[11], 1u + 2u * 7u);
+  EXPECT_EQ(counters[12], 4u + 7u);
+  EXPECT_EQ(counters[26] + counters[28], 0u);
 }
 
 TEST(Accumulate, FunctionsCalledTwiceOrInALoopDoNotRunOnce) {
@@ -106,6 +141,52 @@ void main() {
     bool expected = name == "main" || name.rfind("once(", 0) == 0;
     EXPECT_EQ(once[f], expected) << name;
   }
+}
+
+TEST(Accumulate, FunctionsRunExactlyOnceOnlyWhereEveryReturnPathCallsThem) {
+  const char* source = R"(#version 450
+layout(set = 0, binding = 0) readonly buffer A { float a[]; };
+layout(set = 0, binding = 1) writeonly buffer Out { float o[]; };
+layout(local_size_x = 64) in;
+float always(uint i) { return a[i]; }
+float onBranch(uint i) { return a[i + 1u]; }
+float afterReturn(uint i) { return a[i + 2u]; }
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  float s = always(i);
+  if (i % 2u == 0u) s += onBranch(i);
+  if (i > 1000u) return;
+  o[i] = s + afterReturn(i);
+}
+)";
+  auto words = compileGlsl(source, Stage::Compute);
+  auto module = Module::parse(words);
+  ASSERT_TRUE(module.ok()) << module.error();
+  DefIndex defs(*module);
+  int entry = -1;
+  for (size_t f = 0; f < module->functions.size(); ++f) {
+    if (defs.name(module->functions[f].id()) == "main") entry = int(f);
+  }
+  ASSERT_GE(entry, 0);
+  auto exactly = functionsRunExactlyOnce(*module, defs, entry);
+  auto once = functionsRunOnce(*module, defs, entry);
+  for (size_t f = 0; f < module->functions.size(); ++f) {
+    std::string name = defs.name(module->functions[f].id());
+    EXPECT_TRUE(once[f]) << name;
+    EXPECT_EQ(exactly[f], name == "main" || name.rfind("always(", 0) == 0) << name;
+  }
+  EXPECT_FALSE(endsOtherThanByReturn(*module, entry));
+  // In main, the call of always() lies on every return path; the store after the early return does not.
+  const auto& insts = module->functions[entry].insts;
+  auto onEvery = instructionsOnEveryReturnPath(module->functions[entry], defs);
+  int calls = 0;
+  for (size_t at = 0; at < insts.size(); ++at) {
+    if (insts[at].opcode() != spv::Op::OpFunctionCall) continue;
+    std::string callee = defs.name(insts[at].word(3));
+    EXPECT_EQ(onEvery[at], callee.rfind("always(", 0) == 0) << callee;
+    ++calls;
+  }
+  EXPECT_EQ(calls, 3);
 }
 
 const char* kComputeLoop = R"(#version 450
