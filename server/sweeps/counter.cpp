@@ -4,13 +4,13 @@
 #include <cmath>
 #include <map>
 
-#include "sweeps/headroom.hpp"
-#include "sweeps/fields.hpp"
-#include "sweeps/skeleton.hpp"
 #include "gpu/context.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/spec.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/headroom.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -34,7 +34,8 @@ std::string resolution16x9(double pixels) {
 }  // namespace
 
 Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (auto e = fields::specObject(j, {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
+  if (auto e =
+          fields::specObject(j, {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
     return *e;
   }
   CounterSweepSpec spec;
@@ -101,8 +102,8 @@ namespace {
 
 // The point of one renderer at one resolution: the largest slot, the load
 // of its pass and what they say about when a slot of `bits` wraps.
-json counterPoint(const renderers::FrameResult& frame, const std::string& name, uint32_t layers, const Resolution& res,
-                  double wrapAt) {
+json counterPoint(const renderers::FrameResult& frame, const std::string& name, uint32_t layers,
+                  const Resolution& res, double wrapAt) {
   CounterHeadroom headroom;
   headroom.note(frame);
   // The slot's own pass sets its load: forward's light loop runs per
@@ -129,8 +130,9 @@ json counterPoint(const renderers::FrameResult& frame, const std::string& name, 
           {"max_slot_count", headroom.maxSlotCount},
           {"max_slot", headroom.maxSlot},
           {"counts_per_fragment", perFragment},
-          {"error", {{"fraction_of_wrap", double(headroom.maxSlotCount) / wrapAt},
-                     {"wraps", double(headroom.maxSlotCount) >= wrapAt}}},
+          {"error",
+           {{"fraction_of_wrap", double(headroom.maxSlotCount) / wrapAt},
+            {"wraps", double(headroom.maxSlotCount) >= wrapAt}}},
           {"predicted", {{"wrap_load", perFragment > 0 ? json(wrapAt / perFragment) : json(nullptr)}}}};
 }
 
@@ -181,8 +183,8 @@ Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, co
     auto ran = run.withScene(*scene, scenePoint, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
       for (const auto& res : spec.resolutions) {
         for (const auto& name : spec.renderers) {
-          const std::string where = name + " " + scenePoint + " at " + std::to_string(res.width) + "x" +
-                                    std::to_string(res.height);
+          const std::string where =
+              name + " " + scenePoint + " at " + std::to_string(res.width) + "x" + std::to_string(res.height);
           run.next(where);
           renderers::RendererOptions ro;
           ro.extent = {res.width, res.height};
@@ -211,13 +213,13 @@ Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, co
          {"proof", "tests/integration/overflow_test.cpp: counters preloaded below 2^32 carry exactly"}}},
        {"threshold", {{"bits", spec.bits}}},
        {"fails_at", failsAt},
-       {"plots",
-        json::array({plot("Largest counter slot against load", "load", "max_slot_count", true,
-                          "counts in one slot per frame", {"renderer", "layers"}, wrapAt),
-                     plot("Counts per fragment (flat: the slot grows with the load)", "load", "counts_per_fragment",
-                          false, "slot counts / fragment", {"renderer", "layers"}, nullptr),
-                     plot("Largest slot against pixels", "pixels", "max_slot_count", true,
-                          "counts in one slot per frame", {"renderer", "layers"}, wrapAt)})}});
+       {"plots", json::array({plot("Largest counter slot against load", "load", "max_slot_count", true,
+                                   "counts in one slot per frame", {"renderer", "layers"}, wrapAt),
+                              plot("Counts per fragment (flat: the slot grows with the load)", "load",
+                                   "counts_per_fragment", false, "slot counts / fragment",
+                                   {"renderer", "layers"}, nullptr),
+                              plot("Largest slot against pixels", "pixels", "max_slot_count", true,
+                                   "counts in one slot per frame", {"renderer", "layers"}, wrapAt)})}});
 }
 
 }  // namespace tally::sweeps

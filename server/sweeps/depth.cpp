@@ -4,15 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
 
-#include "sweeps/fields.hpp"
-#include "sweeps/skeleton.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/projection.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/mesh_builder.hpp"
 #include "scenes/textures.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 namespace {
@@ -29,17 +28,16 @@ using fields::fieldError;
 using fields::num;
 using fields::show;
 
-
-
 // An axis of distinct positive finite numbers, each > `above`.
 Result<std::vector<double>> positiveList(const json& j, const std::string& field, double above) {
-  return fields::distinctList<double>(j, field, kMaxSweepAxis, "numbers", [&](const json& v, const std::string& f) -> Result<double> {
-    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= above ||
-        v.get<double>() > double(std::numeric_limits<float>::max())) {
-      return fieldError(f, "must be a finite number greater than " + num(above) + ", got " + show(v));
-    }
-    return v.get<double>();
-  });
+  return fields::distinctList<double>(
+      j, field, kMaxSweepAxis, "numbers", [&](const json& v, const std::string& f) -> Result<double> {
+        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= above ||
+            v.get<double>() > double(std::numeric_limits<float>::max())) {
+          return fieldError(f, "must be a finite number greater than " + num(above) + ", got " + show(v));
+        }
+        return v.get<double>();
+      });
 }
 
 }  // namespace
@@ -62,8 +60,8 @@ Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std:
   spec.source = j;
 
   if (j.contains("renderer")) {
-    auto name = fields::rendererName(j["renderer"], "renderer", depthReconstructingRenderers(), knownRenderers,
-                                     "does not reconstruct position from depth");
+    auto name = fields::rendererName(j["renderer"], "renderer", depthReconstructingRenderers(),
+                                     knownRenderers, "does not reconstruct position from depth");
     if (!name) return name.failure();
     spec.renderer = *name;
   }
@@ -241,7 +239,8 @@ struct DepthPoint {
 // Every pixel reconstructed from `depth` against the true plane point; the
 // measured error and the float32 depth step there. Errs where a pixel kept
 // the cleared depth.
-Result<std::pair<ErrorStats, ErrorStats>> reconstructionError(const DepthPoint& at, const std::vector<float>& depth) {
+Result<std::pair<ErrorStats, ErrorStats>> reconstructionError(const DepthPoint& at,
+                                                              const std::vector<float>& depth) {
   const uint32_t width = at.extent.width, height = at.extent.height;
   const glm::dmat4 worldFromView = glm::inverse(glm::dmat4(scenes::viewMatrix(at.camera)));
   const double tanHalf = std::tan(glm::radians(double(at.camera.fovDeg)) / 2.0);
@@ -260,8 +259,8 @@ Result<std::pair<ErrorStats, ErrorStats>> reconstructionError(const DepthPoint& 
         continue;
       }
       glm::vec2 fragCoord(float(x) + 0.5f, float(y) + 0.5f);
-      glm::vec4 h = c.invViewProj *
-                    glm::vec4(fragCoord * glm::vec2(c.viewport.z, c.viewport.w) * 2.0f - 1.0f, depthValue, 1.0f);
+      glm::vec4 h = c.invViewProj * glm::vec4(fragCoord * glm::vec2(c.viewport.z, c.viewport.w) * 2.0f - 1.0f,
+                                              depthValue, 1.0f);
       glm::dvec3 reconstructed = glm::dvec3(glm::vec3(h) / h.w);
       // The true point: the pixel centre's ray (view space; NDC y =
       // -y_view / (t tan), the projection flips y) meets the plane at
@@ -290,33 +289,38 @@ json depthReport(const DepthSweepSpec& spec, const json& points) {
   // The ratio axis varies far (far_over_near given, near fixed) or near (far given).
   const std::string fixedEnd = spec.byRatio() ? "near" : "far";
   auto along = [&](const std::string& metric) {
-    return failsAtByAxis({{"distance", failsAt(points, "distance", {"near", "far"}, metric, spec)},
-                          {"far_over_near", failsAt(points, "far_over_near", {"distance", fixedEnd}, metric, spec)}});
+    return failsAtByAxis(
+        {{"distance", failsAt(points, "distance", {"near", "far"}, metric, spec)},
+         {"far_over_near", failsAt(points, "far_over_near", {"distance", fixedEnd}, metric, spec)}});
   };
   // The charts of the dashboard: the measured error the threshold applies
   // to, against each swept axis, one line per group that fails_at states a
   // value for. Both axes span decades.
   const std::string errorPath = spec.relativeThreshold ? "error.max_relative" : "error.max_abs";
-  const std::string errorLabel = spec.relativeThreshold ? "max error / distance from the eye" : "max error (m)";
+  const std::string errorLabel =
+      spec.relativeThreshold ? "max error / distance from the eye" : "max error (m)";
   return {
       {"renderer", spec.renderer},
-      {"parameters", spec.byRatio() ? json{"near", "far_over_near", "distance"} : json{"near", "far", "distance"}},
+      {"parameters",
+       spec.byRatio() ? json{"near", "far_over_near", "distance"} : json{"near", "far", "distance"}},
       {"resolution", {spec.resolution.width, spec.resolution.height}},
       {"method",
        {{"depth_format", "D32_SFLOAT_S8_UINT"},
         {"projection", "perspective, depth [0, 1] with far = 1, finite far, not reversed"},
         {"reconstruction", "lighting.frag.glsl worldFromDepth (common.h): invViewProj * (ndc, depth, 1) / w"},
-        {"scene", "one plane at each distance (view depth at the screen centre), tilted so view depth spans "
-                  "distance / (1 +- tilt) over the screen"},
+        {"scene",
+         "one plane at each distance (view depth at the screen centre), tilted so view depth spans "
+         "distance / (1 +- tilt) over the screen"},
         {"tilt", kTilt},
         {"fov_deg", spec.fovDeg}}},
-      {"threshold", spec.relativeThreshold ? json{{"relative", spec.threshold}} : json{{"absolute", spec.threshold}}},
+      {"threshold",
+       spec.relativeThreshold ? json{{"relative", spec.threshold}} : json{{"absolute", spec.threshold}}},
       {"fails_at", along("error")},
       {"predicted_fails_at", along("predicted")},
       {"plots", json::array({plot("Position error against distance", "distance", errorPath, true, errorLabel,
                                   {"near", "far"}, spec.threshold),
-                             plot("Position error against far / near", "far_over_near", errorPath, true, errorLabel,
-                                  {"distance", fixedEnd}, spec.threshold)})},
+                             plot("Position error against far / near", "far_over_near", errorPath, true,
+                                  errorLabel, {"distance", fixedEnd}, spec.threshold)})},
   };
 }
 
@@ -333,37 +337,39 @@ Result<json> runDepthSweep(gpu::Context& ctx, const DepthSweepSpec& spec, const 
   for (double distance : spec.distances) {
     // a, b: the view depth changes by kTilt / 2 of d from the centre to each edge.
     const Plane plane{distance, 0.5 * kTilt / (tanHalf * aspect), 0.5 * kTilt / tanHalf};
-    auto ran = run.withScene(planeScene(plane, tanHalf, aspect), "distance " + num(distance),
-                             [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
-      for (const auto& range : ranges) {
-        std::string where = spec.renderer + " near " + num(range.near) + " far " + num(range.far) + " distance " +
-                            num(distance);
-        run.next(where);
-        const DepthPoint at{plane, camera, extent, {float(range.near), float(range.far)}};
-        auto renderer = setUpRenderer(ctx, spec.renderer, gpuScene,
-                                      renderers::RendererOptions{extent, false, spirv::Mode{}, 0, at.depthRange});
-        if (!renderer) return makeError(where + ": " + renderer.error());
-        (*renderer)->renderFrame(camera);
-        std::vector<float> depth = (*renderer)->depthImage();
-        (*renderer)->destroy();
-        if (depth.size() != size_t(extent.width) * extent.height) {
-          return makeError(where + ": the renderer has no depth to read");
-        }
-        auto error = reconstructionError(at, depth);
-        if (!error) return makeError(where + ": " + error.error());
-        const auto& [m, p] = *error;
-        const double n = double(at.depthRange.zNear), f = double(at.depthRange.zFar);
-        run.points.push_back({{"near", range.near},
-                              {"far", range.far},
-                              {"far_over_near", range.far / range.near},
-                              {"distance", distance},
-                              {"depth", depthOf(distance, n, f)},  // at the screen centre
-                              {"error", m.toJson()},
-                              {"predicted", p.toJson()},
-                              {"error_over_predicted", p.maxAbs > 0 ? m.maxAbs / p.maxAbs : 0.0}});
-      }
-      return true;
-    });
+    auto ran = run.withScene(
+        planeScene(plane, tanHalf, aspect), "distance " + num(distance),
+        [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+          for (const auto& range : ranges) {
+            std::string where = spec.renderer + " near " + num(range.near) + " far " + num(range.far) +
+                                " distance " + num(distance);
+            run.next(where);
+            const DepthPoint at{plane, camera, extent, {float(range.near), float(range.far)}};
+            auto renderer =
+                setUpRenderer(ctx, spec.renderer, gpuScene,
+                              renderers::RendererOptions{extent, false, spirv::Mode{}, 0, at.depthRange});
+            if (!renderer) return makeError(where + ": " + renderer.error());
+            (*renderer)->renderFrame(camera);
+            std::vector<float> depth = (*renderer)->depthImage();
+            (*renderer)->destroy();
+            if (depth.size() != size_t(extent.width) * extent.height) {
+              return makeError(where + ": the renderer has no depth to read");
+            }
+            auto error = reconstructionError(at, depth);
+            if (!error) return makeError(where + ": " + error.error());
+            const auto& [m, p] = *error;
+            const double n = double(at.depthRange.zNear), f = double(at.depthRange.zFar);
+            run.points.push_back({{"near", range.near},
+                                  {"far", range.far},
+                                  {"far_over_near", range.far / range.near},
+                                  {"distance", distance},
+                                  {"depth", depthOf(distance, n, f)},  // at the screen centre
+                                  {"error", m.toJson()},
+                                  {"predicted", p.toJson()},
+                                  {"error_over_predicted", p.maxAbs > 0 ? m.maxAbs / p.maxAbs : 0.0}});
+          }
+          return true;
+        });
     if (!ran) return ran.failure();
   }
   json report = depthReport(spec, run.points);

@@ -11,11 +11,11 @@
 #include <numeric>
 
 #include "analysis/image.hpp"
-#include "sweeps/fields.hpp"
-#include "sweeps/skeleton.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/visbuffer_base.hpp"
 #include "scenes/mesh_builder.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -284,7 +284,6 @@ json failsAt(const json& points, const std::vector<MaterialSelection>& selection
   return any ? out : json(nullptr);
 }
 
-
 // The selections to compare: those asked for (each must run here), or those
 // the device can run, with why it runs none of the others.
 struct Selections {
@@ -350,7 +349,8 @@ Layout layoutOf(const EdgesSweepSpec& spec, uint32_t cellSize, uint32_t subgroup
   // In the reference every pixel of a material has that material's colour
   // (the most common one among its pixels).
   auto colourOf = [&](size_t i) {
-    return uint32_t(reference[4 * i]) | uint32_t(reference[4 * i + 1]) << 8 | uint32_t(reference[4 * i + 2]) << 16;
+    return uint32_t(reference[4 * i]) | uint32_t(reference[4 * i + 1]) << 8 |
+           uint32_t(reference[4 * i + 2]) << 16;
   };
   std::vector<std::map<uint32_t, size_t>> histogram(spec.materials);
   for (size_t i = 0; i < pixelCount; ++i) ++histogram[labels[i]][colourOf(i)];
@@ -419,7 +419,8 @@ Result<json> selectionPoint(const Layout& at, const std::string& name, const std
       {"predicted",
        {{"quad_fraction", edgeBlockFraction(at.cellSize, 2)},
         {"subgroup_fraction", edgeBlockFraction(at.cellSize, subgroupSide)}}},
-      {"layout_check", {{"mismatched_pixels", at.mismatched}, {"materials_sharing_a_colour", at.sharedColours}}},
+      {"layout_check",
+       {{"mismatched_pixels", at.mismatched}, {"materials_sharing_a_colour", at.sharedColours}}},
   };
 }
 
@@ -430,34 +431,35 @@ json edgesMethod(const EdgesSweepSpec& spec, uint32_t subgroupSize, uint32_t sub
       "index d - 1 counts pixels whose nearest pixel of another material is d "
       "pixels away (Chebyshev), d = 1.." +
       std::to_string(kEdgeDistanceBins) + "; the last index: farther, or none in view";
-  return {{"scene",
-           "a plane facing the camera, covering the view, split into square cells of cell_size pixels "
-           "from the image's top-left corner; cell (i, j) has material (i + k j) mod materials, k = 1 for "
-           "2 materials, else 2; one draw per material"},
-          {"materials", spec.materials},
-          {"same_texture", spec.sameTexture},
-          {"diffuse_maps", std::to_string(kMapSize) + "x" + std::to_string(kMapSize) +
-                               " flat sRGB, one hue per material; other maps the renderer's 1x1 defaults"},
-          {"lighting", "ambient only (no point lights): colour = ambient x diffuse map"},
-          {"fov_deg", kFovDeg},
-          {"plane_distance", kPlaneDistance},
-          {"material_maps", materialMaps},
-          {"wrong_pixel", "any RGB channel of the final RGBA8 image differs from the reference by more than " +
-                              std::to_string(kWrongTolerance)},
-          {"quad_mask",
-           "pixels whose 2x2 quad (aligned to even pixels) holds more than one material, from the layout"},
-          {"subgroup_size", subgroupSize},
-          {"subgroup_mask",
-           "pixels whose aligned " + std::to_string(subgroupSide) + "x" + std::to_string(subgroupSide) +
-               " block holds more than one material, from the layout; assumes a subgroup's fragments lie in "
-               "one "
-               "aligned power-of-two rectangle of quads no wider or taller than that (the smallest such square "
-               "with room for subgroup_size lanes)"},
-          {"boundary_error", "compareImages over the subgroup mask's pixels"},
-          {"distance_bins", distanceBinsNote},
-          {"predicted",
-           "the mask fractions of an infinite plane of these cells, derived per axis over one period "
-           "(masks.*_fraction counts them on this image)"}};
+  return {
+      {"scene",
+       "a plane facing the camera, covering the view, split into square cells of cell_size pixels "
+       "from the image's top-left corner; cell (i, j) has material (i + k j) mod materials, k = 1 for "
+       "2 materials, else 2; one draw per material"},
+      {"materials", spec.materials},
+      {"same_texture", spec.sameTexture},
+      {"diffuse_maps", std::to_string(kMapSize) + "x" + std::to_string(kMapSize) +
+                           " flat sRGB, one hue per material; other maps the renderer's 1x1 defaults"},
+      {"lighting", "ambient only (no point lights): colour = ambient x diffuse map"},
+      {"fov_deg", kFovDeg},
+      {"plane_distance", kPlaneDistance},
+      {"material_maps", materialMaps},
+      {"wrong_pixel", "any RGB channel of the final RGBA8 image differs from the reference by more than " +
+                          std::to_string(kWrongTolerance)},
+      {"quad_mask",
+       "pixels whose 2x2 quad (aligned to even pixels) holds more than one material, from the layout"},
+      {"subgroup_size", subgroupSize},
+      {"subgroup_mask",
+       "pixels whose aligned " + std::to_string(subgroupSide) + "x" + std::to_string(subgroupSide) +
+           " block holds more than one material, from the layout; assumes a subgroup's fragments lie in "
+           "one "
+           "aligned power-of-two rectangle of quads no wider or taller than that (the smallest such square "
+           "with room for subgroup_size lanes)"},
+      {"boundary_error", "compareImages over the subgroup mask's pixels"},
+      {"distance_bins", distanceBinsNote},
+      {"predicted",
+       "the mask fractions of an infinite plane of these cells, derived per axis over one period "
+       "(masks.*_fraction counts them on this image)"}};
 }
 
 }  // namespace
@@ -482,40 +484,43 @@ Result<json> runEdgesSweep(gpu::Context& ctx, const EdgesSweepSpec& spec, const 
   std::string materialMaps;
   for (uint32_t cellSize : spec.cellSizes) {
     const std::string where = spec.renderer + " cell size " + std::to_string(cellSize);
-    auto ran = run.withScene(edgeScene(spec, cellSize), where, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
-      run.next(where + " nonuniform");
-      auto reference = renderWith(ctx, gpuScene, spec.renderer, MaterialSelection::NonUniform, extent, camera);
-      if (!reference) return makeError(where + " nonuniform: " + reference.error());
-      materialMaps = reference->notes.value("material_maps", "");
-      if (reference->image.size() != pixelCount * 4 || reference->depth.size() != pixelCount) {
-        return makeError(where + ": the renderer returned no image or depth to read");
-      }
-      const size_t covered = size_t(
-          std::count_if(reference->depth.begin(), reference->depth.end(), [](float d) { return d < 1.0f; }));
-      if (covered != pixelCount) {
-        return makeError(where + ": " + std::to_string(pixelCount - covered) +
-                         " pixels kept the cleared depth (the plane does not cover the view)");
-      }
-      const Layout layout = layoutOf(spec, cellSize, subgroupSide, reference->image);
-      screenshot("edges_" + std::to_string(cellSize) + "_nonuniform.png", reference->image);
+    auto ran = run.withScene(
+        edgeScene(spec, cellSize), where, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+          run.next(where + " nonuniform");
+          auto reference =
+              renderWith(ctx, gpuScene, spec.renderer, MaterialSelection::NonUniform, extent, camera);
+          if (!reference) return makeError(where + " nonuniform: " + reference.error());
+          materialMaps = reference->notes.value("material_maps", "");
+          if (reference->image.size() != pixelCount * 4 || reference->depth.size() != pixelCount) {
+            return makeError(where + ": the renderer returned no image or depth to read");
+          }
+          const size_t covered = size_t(std::count_if(reference->depth.begin(), reference->depth.end(),
+                                                      [](float d) { return d < 1.0f; }));
+          if (covered != pixelCount) {
+            return makeError(where + ": " + std::to_string(pixelCount - covered) +
+                             " pixels kept the cleared depth (the plane does not cover the view)");
+          }
+          const Layout layout = layoutOf(spec, cellSize, subgroupSide, reference->image);
+          screenshot("edges_" + std::to_string(cellSize) + "_nonuniform.png", reference->image);
 
-      for (auto selection : selections) {
-        const std::string name(renderers::toString(selection));
-        run.next(where + " " + name);
-        auto frame = renderWith(ctx, gpuScene, spec.renderer, selection, extent, camera);
-        if (!frame) return makeError(where + " " + name + ": " + frame.error());
-        const auto& a = reference->image;
-        const auto& b = frame->image;
-        if (b.size() != a.size()) return makeError(where + " " + name + ": the renderer returned no image");
-        auto point = selectionPoint(layout, name, a, b, subgroupSide);
-        if (!point) return makeError(where + " " + name + ": " + point.error());
-        const std::string stem = "edges_" + std::to_string(cellSize) + "_" + name;
-        screenshot(stem + ".png", b);
-        screenshot(stem + "_difference.png", differenceImage(a, b));
-        run.points.push_back(std::move(*point));
-      }
-      return true;
-    });
+          for (auto selection : selections) {
+            const std::string name(renderers::toString(selection));
+            run.next(where + " " + name);
+            auto frame = renderWith(ctx, gpuScene, spec.renderer, selection, extent, camera);
+            if (!frame) return makeError(where + " " + name + ": " + frame.error());
+            const auto& a = reference->image;
+            const auto& b = frame->image;
+            if (b.size() != a.size())
+              return makeError(where + " " + name + ": the renderer returned no image");
+            auto point = selectionPoint(layout, name, a, b, subgroupSide);
+            if (!point) return makeError(where + " " + name + ": " + point.error());
+            const std::string stem = "edges_" + std::to_string(cellSize) + "_" + name;
+            screenshot(stem + ".png", b);
+            screenshot(stem + "_difference.png", differenceImage(a, b));
+            run.points.push_back(std::move(*point));
+          }
+          return true;
+        });
     if (!ran) return ran.failure();
   }
 
@@ -532,12 +537,12 @@ Result<json> runEdgesSweep(gpu::Context& ctx, const EdgesSweepSpec& spec, const 
        "shrink as cell_size falls, so it is where the selection first fails walking from large "
        "cells to small"},
       {"fails_at", failsAt(run.points, selections, spec.threshold)},
-      {"plots",
-       json::array({plot("Wrong pixels against material cell size", "cell_size", "wrong.fraction", false,
-                         "wrong pixels / covered pixels", {"selection"}, spec.threshold),
-                    plot("Error on boundary pixels against material cell size", "cell_size",
-                         "boundary_error.mean_abs", false,
-                         "mean |difference| per channel over the subgroup mask (0..255)", {"selection"}, nullptr)})},
+      {"plots", json::array({plot("Wrong pixels against material cell size", "cell_size", "wrong.fraction",
+                                  false, "wrong pixels / covered pixels", {"selection"}, spec.threshold),
+                             plot("Error on boundary pixels against material cell size", "cell_size",
+                                  "boundary_error.mean_abs", false,
+                                  "mean |difference| per channel over the subgroup mask (0..255)",
+                                  {"selection"}, nullptr)})},
   };
   for (auto s : selections) report["selections"].push_back(renderers::toString(s));
   if (!chosen->skipped.empty()) report["selections_skipped"] = chosen->skipped;

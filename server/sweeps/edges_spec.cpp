@@ -8,15 +8,15 @@
 
 namespace tally::sweeps {
 
-using nlohmann::json;
 using fields::fieldError;
 using fields::show;
+using nlohmann::json;
 
 std::vector<std::string> edgeRenderers() { return {"visbuffer", "visbuffer-lean"}; }
 
 Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (auto e = fields::specObject(j, {"sweep", "renderer", "selections", "cell_sizes", "materials", "resolution",
-                                      "same_texture", "threshold"}))
+  if (auto e = fields::specObject(j, {"sweep", "renderer", "selections", "cell_sizes", "materials",
+                                      "resolution", "same_texture", "threshold"}))
     return *e;
   EdgesSweepSpec spec;
   spec.source = j;
@@ -76,8 +76,8 @@ Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std:
       j["cell_sizes"], "cell_sizes", kMaxSweepAxis, "whole pixel counts",
       [&](const json& c, const std::string& f) -> Result<uint32_t> {
         if (!c.is_number_integer() || c.get<int64_t>() < 1 || c.get<int64_t>() > kMaxEdgeCellSize) {
-          return fieldError(f, "must be a whole number of pixels from 1 to " + std::to_string(kMaxEdgeCellSize) +
-                                   ", got " + show(c));
+          return fieldError(f, "must be a whole number of pixels from 1 to " +
+                                   std::to_string(kMaxEdgeCellSize) + ", got " + show(c));
         }
         const uint32_t s = uint32_t(c.get<int64_t>());
         const uint64_t cells = (uint64_t{spec.resolution.width + s - 1} / s + 2) *

@@ -45,7 +45,8 @@ template <class T, class Item>
 Result<std::vector<T>> distinctList(const nlohmann::json& j, const std::string& field, size_t most,
                                     const std::string& what, Item item) {
   if (!j.is_array() || j.empty() || j.size() > most) {
-    return fieldError(field, "must be an array of 1 to " + std::to_string(most) + " " + what + ", got " + show(j));
+    return fieldError(field,
+                      "must be an array of 1 to " + std::to_string(most) + " " + what + ", got " + show(j));
   }
   std::vector<T> out;
   for (size_t i = 0; i < j.size(); ++i) {

@@ -4,15 +4,14 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
-#include <map>
 
 #include "analysis/image.hpp"
-#include "sweeps/fields.hpp"
-#include "sweeps/skeleton.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/textures.hpp"
 #include "shared.h"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -38,18 +37,17 @@ constexpr size_t kExamples = 3;       // wrong pixels listed per point
 using fields::fieldError;
 using fields::show;
 
-
 using fields::joined;
 
 // An axis of distinct integers in [1, max].
 Result<std::vector<uint64_t>> countList(const json& j, const std::string& field, uint64_t max) {
-  return fields::distinctList<uint64_t>(j, field, kMaxIdSweepAxis, "integers",
-                                        [&](const json& v, const std::string& f) -> Result<uint64_t> {
-    if (!v.is_number_integer() || v.get<int64_t>() < 1 || uint64_t(v.get<int64_t>()) > max) {
-      return fieldError(f, "must be an integer from 1 to " + std::to_string(max) + ", got " + show(v));
-    }
-    return uint64_t(v.get<int64_t>());
-  });
+  return fields::distinctList<uint64_t>(
+      j, field, kMaxIdSweepAxis, "integers", [&](const json& v, const std::string& f) -> Result<uint64_t> {
+        if (!v.is_number_integer() || v.get<int64_t>() < 1 || uint64_t(v.get<int64_t>()) > max) {
+          return fieldError(f, "must be an integer from 1 to " + std::to_string(max) + ", got " + show(v));
+        }
+        return uint64_t(v.get<int64_t>());
+      });
 }
 
 }  // namespace
@@ -63,7 +61,8 @@ bool idFits(uint64_t draws, uint64_t trianglesPerDraw) {
 }
 
 Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (auto e = fields::specObject(j, {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
+  if (auto e = fields::specObject(
+          j, {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
     return *e;
   IdSweepSpec spec;
   spec.source = j;
@@ -502,13 +501,19 @@ Result<json> runIdSweep(gpu::Context& ctx, const IdSweepSpec& spec, const SweepO
   SweepRun run(ctx, options, spec.renderers.size() * spec.draws.size() * spec.trianglesPerDraw.size());
   for (uint64_t triangles : spec.trianglesPerDraw) {
     for (uint64_t draws : spec.draws) {
-      const std::string name = "draws " + std::to_string(draws) + " triangles_per_draw " + std::to_string(triangles);
+      const std::string name =
+          "draws " + std::to_string(draws) + " triangles_per_draw " + std::to_string(triangles);
       IdScene built = buildIdScene(draws, triangles, extent);
       const IdCoverage truth = idCoverage(built.scene, built.camera, extent);
       auto ran = run.withScene(built.scene, name, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
         built.scene.meshes.clear();  // the index data lives on in gpuScene: free the CPU copy
         built.scene.meshes.shrink_to_fit();
-        IdScenePoint at{draws, triangles, name, built, truth, gpuScene,
+        IdScenePoint at{draws,
+                        triangles,
+                        name,
+                        built,
+                        truth,
+                        gpuScene,
                         renderers::RendererOptions{extent, false, spirv::Mode{}, 0, kDepthRange}};
         for (const auto& renderer : spec.renderers) {
           run.next(renderer + " " + name);

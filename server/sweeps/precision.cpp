@@ -8,11 +8,11 @@
 #include <limits>
 
 #include "analysis/image.hpp"
+#include "renderers/gpu_scene.hpp"
+#include "shared.h"
 #include "sweeps/fields.hpp"
 #include "sweeps/precision_plane.hpp"
 #include "sweeps/skeleton.hpp"
-#include "renderers/gpu_scene.hpp"
-#include "shared.h"
 
 namespace tally::sweeps {
 
@@ -249,8 +249,9 @@ struct VariantErrors {
   size_t mismatched = 0, clamped = 0, outOfRange = 0;
 };
 
-Result<VariantErrors> variantErrors(const Reference& ref, const Rendered& got, const VisibilityEncoding& encoding,
-                                    const scenes::Mesh& mesh, uint32_t textureSize, uint32_t levels) {
+Result<VariantErrors> variantErrors(const Reference& ref, const Rendered& got,
+                                    const VisibilityEncoding& encoding, const scenes::Mesh& mesh,
+                                    uint32_t textureSize, uint32_t levels) {
   VariantErrors e;
   e.mip.cut = 0.5;  // half a level: the nearest level changes
   for (size_t i = 0; i < ref.level.size(); ++i) {
@@ -289,7 +290,8 @@ Result<VariantErrors> variantErrors(const Reference& ref, const Rendered& got, c
 
 // The mip-level error a packing of the derivatives should make: none, the
 // half-float bound, or the model's for the study's clamped unorm16.
-json predictedMip(UvDerivativeEncoding encoding, const DistanceModel& model, uint32_t textureSize, size_t pixels) {
+json predictedMip(UvDerivativeEncoding encoding, const DistanceModel& model, uint32_t textureSize,
+                  size_t pixels) {
   switch (encoding) {
     case UvDerivativeEncoding::Float32: break;
     case UvDerivativeEncoding::Half:
@@ -409,14 +411,16 @@ json precisionReport(const PrecisionSweepSpec& spec, const json& points, const j
       {"fails_at",
        failsAtByAxis(
            {{"distance", smallestFailing(points, "distance", {"variant", "triangle_size"}, fails, "fails")},
-            {"triangle_size", smallestFailing(points, "triangle_size", {"variant", "distance"}, fails, "fails")}})},
+            {"triangle_size",
+             smallestFailing(points, "triangle_size", {"variant", "distance"}, fails, "fails")}})},
       {"plots",
-       json::array({plot("Image error against distance", "distance", "error.image.max_abs", false,
-                         "max |difference| (8-bit levels)", {"variant", "triangle_size"}, spec.imageThreshold),
-                    plot("Mip-level error against distance", "distance", "error.mip_level.max_abs", false,
-                         "max |level - reference level| (levels)", {"variant", "triangle_size"}, spec.mipThreshold),
-                    plot("uv error from the barycentrics against triangle size", "triangle_size",
-                         "error.uv_texels.max", true, "max uv error (texels)", {"variant", "distance"}, nullptr)})},
+       json::array(
+           {plot("Image error against distance", "distance", "error.image.max_abs", false,
+                 "max |difference| (8-bit levels)", {"variant", "triangle_size"}, spec.imageThreshold),
+            plot("Mip-level error against distance", "distance", "error.mip_level.max_abs", false,
+                 "max |level - reference level| (levels)", {"variant", "triangle_size"}, spec.mipThreshold),
+            plot("uv error from the barycentrics against triangle size", "triangle_size",
+                 "error.uv_texels.max", true, "max uv error (texels)", {"variant", "distance"}, nullptr)})},
   };
 }
 

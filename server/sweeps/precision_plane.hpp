@@ -59,9 +59,10 @@ inline Grid gridOf(const View& v, double distance, double size) {
 }
 
 inline Error tooManyTriangles(const std::string& field, double size, double distance, double triangles) {
-  return fields::fieldError(field, "legs of " + fields::num(size) + " m tile the plane at distance " + fields::num(distance) +
-                               " with " + fields::num(triangles) + " triangles, more than the limit of " +
-                               std::to_string(kMaxPrecisionTriangles));
+  return fields::fieldError(field, "legs of " + fields::num(size) + " m tile the plane at distance " +
+                                       fields::num(distance) + " with " + fields::num(triangles) +
+                                       " triangles, more than the limit of " +
+                                       std::to_string(kMaxPrecisionTriangles));
 }
 
 // uv of world (x, y): scale R(rotation) (x, -y).

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "sweeps/precision_plane.hpp"
 #include "scenes/mesh_builder.hpp"
+#include "sweeps/precision_plane.hpp"
 
 namespace tally::sweeps {
 namespace {

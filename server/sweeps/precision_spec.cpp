@@ -10,27 +10,27 @@
 namespace tally::sweeps {
 namespace {
 
-using nlohmann::json;
-using renderers::BarycentricEncoding;
-using renderers::UvDerivativeEncoding;
 using fields::fieldError;
 using fields::num;
 using fields::show;
+using nlohmann::json;
 using precision_plane::gridOf;
 using precision_plane::tooManyTriangles;
 using precision_plane::View;
 using precision_plane::viewOf;
-
+using renderers::BarycentricEncoding;
+using renderers::UvDerivativeEncoding;
 
 // An axis of distinct positive finite numbers (metres).
 Result<std::vector<double>> positiveList(const json& j, const std::string& field) {
-  return fields::distinctList<double>(j, field, kMaxPrecisionAxis, "numbers",
-                                      [](const json& v, const std::string& f) -> Result<double> {
-    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0 || v.get<double>() > 1e6) {
-      return fieldError(f, "must be a number in (0, 1e6] metres, got " + show(v));
-    }
-    return v.get<double>();
-  });
+  return fields::distinctList<double>(
+      j, field, kMaxPrecisionAxis, "numbers", [](const json& v, const std::string& f) -> Result<double> {
+        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0 ||
+            v.get<double>() > 1e6) {
+          return fieldError(f, "must be a number in (0, 1e6] metres, got " + show(v));
+        }
+        return v.get<double>();
+      });
 }
 
 // A finite number in [lo, hi] (or (lo, hi] when `openLow`).
@@ -48,8 +48,9 @@ Result<double> numberIn(const json& j, const std::string& field, double lo, doub
 uint32_t PrecisionSweepSpec::levels() const { return uint32_t(std::countr_zero(textureSize)) + 1; }
 
 Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
-  if (auto e = fields::specObject(j, {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre",
-                                      "uv_rotation_deg", "resolution", "fov_deg", "threshold"}))
+  if (auto e =
+          fields::specObject(j, {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre",
+                                 "uv_rotation_deg", "resolution", "fov_deg", "threshold"}))
     return *e;
   PrecisionSweepSpec spec;
   spec.source = j;

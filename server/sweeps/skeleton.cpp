@@ -40,8 +40,14 @@ Result<std::unique_ptr<renderers::Renderer>> setUpRenderer(gpu::Context& ctx, co
 
 json plot(const std::string& title, const std::string& x, const std::string& y, bool yLog,
           const std::string& yLabel, json series, json threshold) {
-  return {{"title", title},   {"x", x},           {"x_log", true},           {"y", y},
-          {"y_log", yLog},    {"y_label", yLabel}, {"series", std::move(series)}, {"threshold", std::move(threshold)}};
+  return {{"title", title},
+          {"x", x},
+          {"x_log", true},
+          {"y", y},
+          {"y_log", yLog},
+          {"y_label", yLabel},
+          {"series", std::move(series)},
+          {"threshold", std::move(threshold)}};
 }
 
 json smallestFailing(const json& points, const std::string& param, const std::vector<std::string>& groupBy,

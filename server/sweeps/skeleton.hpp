@@ -15,13 +15,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include "sweeps/options.hpp"
 #include "common/progress.hpp"
 #include "common/result.hpp"
 #include "gpu/context.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/scene.hpp"
+#include "sweeps/options.hpp"
 
 namespace tally::sweeps {
 
