@@ -38,9 +38,10 @@ Result<std::string> rendererName(const nlohmann::json& r, const std::string& fie
                                  const std::vector<std::string>& allowed,
                                  const std::vector<std::string>& knownRenderers, const std::string& whyNot);
 
-// A swept axis: an array of 1 to `most` distinct values, each read by
-// `item(j[i], "field[i]")` (a Result<T>). `what` names the values in the
-// array's message: "must be an array of 1 to 64 <what>, got ...".
+// A swept axis: an array of 1 to `most` distinct values (one listed twice
+// would only measure its points twice), each read by `item(j[i], "field[i]")`
+// (a Result<T>). `what` names the values in the array's message: "must be an
+// array of 1 to 64 <what>, got ...".
 template <class T, class Item>
 Result<std::vector<T>> distinctList(const nlohmann::json& j, const std::string& field, size_t most,
                                     const std::string& what, Item item) {

@@ -1,7 +1,8 @@
-// The plane the precision sweep draws, as its spec parser, its scene and
-// its measurement all see it: the view, the tilted plane in it, the grid of
-// triangles covering it and the uv mapping on it (sweeps/precision.hpp has
-// the geometry). Internal to the sweep's files.
+// The plane the precision sweep draws (sweeps/precision.hpp describes it) as
+// its spec parser, its scene and its measurement all see it: the view, the
+// tilted plane in it, the grid of triangles covering it and the uv mapping
+// on it. One definition, so that the parser's triangle limit checks the very
+// grid the scene builds. Only the sweep's own files include this.
 #pragma once
 
 #include <cmath>

@@ -25,6 +25,8 @@
 
 namespace tally::sweeps {
 
+// One run of a sweep: the device, where progress goes and the points
+// measured so far.
 class SweepRun {
  public:
   // `renders`: how many the sweep runs in all, for the progress.
@@ -34,23 +36,25 @@ class SweepRun {
   const SweepOptions& options;
   nlohmann::json points = nlohmann::json::array();
 
-  // Reports `where` as the render starting now; the one before it is done.
+  // Reports `where` as the render starting now. A render counts as done
+  // when the next one starts (or the sweep finishes), so a render that
+  // failed is never counted.
   void next(const std::string& where);
 
-  // Uploads `scene`, calls `renders(gpuScene)` (a Result) and frees the
-  // upload; a failed upload is an error prefixed with `where`.
+  // Uploads `scene` once for the renders that share it and calls
+  // `renders(gpuScene)` (a Result<bool>); a failed upload is an error
+  // prefixed with `where`. The upload is freed when the renders end,
+  // failed or not.
   template <class Renders>
   Result<bool> withScene(const scenes::Scene& scene, const std::string& where, Renders&& renders) {
     renderers::GpuScene gpuScene;
     auto uploaded = gpuScene.upload(ctx, scene);
     if (!uploaded) return makeError(where + ": " + uploaded.error());
-    auto ran = renders(static_cast<const renderers::GpuScene&>(gpuScene));
-    if (!ran) return ran.failure();
-    gpuScene.destroy();
-    return true;
+    return renders(std::as_const(gpuScene));
   }
 
-  // Reports "done" and gives `result` the fields every sweep result has.
+  // Reports "done" and returns `result`, the sweep's own fields, with those
+  // every sweep result has: "sweep", "device", "spec" and the points.
   nlohmann::json finish(std::string_view sweep, const nlohmann::json& spec, nlohmann::json result);
 
  private:
