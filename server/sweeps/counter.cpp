@@ -4,12 +4,13 @@
 #include <cmath>
 #include <map>
 
-#include "sweeps/headroom.hpp"
-#include "sweeps/fields.hpp"
 #include "gpu/context.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/spec.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/headroom.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -22,11 +23,7 @@ constexpr auto kFromTo = json_fields::RangeWords::kFromTo;
 
 constexpr size_t kMaxAxis = 16;
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
+using fields::joined;
 
 // A 16:9 resolution with `pixels` pixels, for reading a load as a screen size.
 std::string resolution16x9(double pixels) {
@@ -37,9 +34,8 @@ std::string resolution16x9(double pixels) {
 }  // namespace
 
 Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(
-          j, "", {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
+  if (auto e =
+          fields::specObject(j, {"sweep", "renderers", "layers", "resolutions", "lights", "threshold"})) {
     return *e;
   }
   CounterSweepSpec spec;
@@ -102,70 +98,48 @@ Result<CounterSweepSpec> parseCounterSweepSpec(const json& j, const std::vector<
   return spec;
 }
 
-Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, const SweepOptions& options) {
-  const double wrapAt = std::ldexp(1.0, spec.bits);
-  Progress progress{0, spec.renderers.size() * spec.layers.size() * spec.resolutions.size(), ""};
-  json points = json::array();
-  for (uint32_t layers : spec.layers) {
-    auto scene = scenes::makeScene({{"name", "planes"}, {"layers", layers}, {"order", "back-to-front"}});
-    if (!scene) return makeError("layers " + std::to_string(layers) + ": " + scene.error());
-    renderers::GpuScene gpuScene;
-    if (auto up = gpuScene.upload(ctx, *scene); !up) return makeError("layers " + std::to_string(layers) + ": " + up.error());
-    const scenes::Camera camera = scene->fixedCameras.front();
-    for (const auto& res : spec.resolutions) {
-      for (const auto& name : spec.renderers) {
-        const std::string where = name + " layers " + std::to_string(layers) + " at " + std::to_string(res.width) +
-                                  "x" + std::to_string(res.height);
-        progress.current = where;
-        if (options.progress) options.progress(progress);
-        auto made = renderers::makeRenderer(name);
-        if (!made) return makeError(where + ": " + made.error());
-        renderers::RendererOptions ro;
-        ro.extent = {res.width, res.height};
-        ro.lights = spec.lights;
-        if (auto ok = (*made)->setup(ctx, gpuScene, ro); !ok) return makeError(where + ": " + ok.error());
-        const renderers::FrameResult frame = (*made)->renderFrame(camera);
-        (*made)->destroy();
-        CounterHeadroom headroom;
-        headroom.note(frame);
-        // The slot's own pass sets its load: forward's light loop runs per
-        // shaded fragment (grows with overshading), a deferred or visibility
-        // shading pass's once per covered pixel (does not).
-        const renderers::PassResult* slotPass = nullptr;
-        uint64_t heaviest = 0;
-        for (const auto& pass : frame.passes) {
-          heaviest = std::max(heaviest, pass.fragmentInvocations);
-          if (!slotPass || pass.maxSlotCount > slotPass->maxSlotCount) slotPass = &pass;
-        }
-        const double pixels = double(res.width) * res.height;
-        const double load = slotPass ? double(slotPass->fragmentInvocations) : 0.0;
-        const double perFragment = load > 0 ? double(headroom.maxSlotCount) / load : 0.0;
-        points.push_back({{"renderer", name},
-                          {"layers", layers},
-                          {"width", res.width},
-                          {"height", res.height},
-                          {"pixels", pixels},
-                          {"overshading", double(heaviest) / pixels},
-                          {"slot_pass", slotPass ? slotPass->name : ""},
-                          {"load", load},
-                          {"load_per_pixel", load / pixels},
-                          {"max_slot_count", headroom.maxSlotCount},
-                          {"max_slot", headroom.maxSlot},
-                          {"counts_per_fragment", perFragment},
-                          {"error", {{"fraction_of_wrap", double(headroom.maxSlotCount) / wrapAt},
-                                     {"wraps", double(headroom.maxSlotCount) >= wrapAt}}},
-                          {"predicted", {{"wrap_load", perFragment > 0 ? json(wrapAt / perFragment) : json(nullptr)}}}});
-        ++progress.done;
-      }
-    }
-    gpuScene.destroy();
-  }
-  progress.current = "done";
-  if (options.progress) options.progress(progress);
+namespace {
 
-  // Per renderer and overshading (layers): the load at which the worst
-  // counts per fragment reach 2^bits, the pixels and 16:9 resolution that
-  // load means at that overshading, and the smallest measured load that did.
+// The point of one renderer at one resolution: the largest slot, the load
+// of its pass and what they say about when a slot of `bits` wraps.
+json counterPoint(const renderers::FrameResult& frame, const std::string& name, uint32_t layers,
+                  const Resolution& res, double wrapAt) {
+  CounterHeadroom headroom;
+  headroom.note(frame);
+  // The slot's own pass sets its load: forward's light loop runs per
+  // shaded fragment (grows with overshading), a deferred or visibility
+  // shading pass's once per covered pixel (does not).
+  const renderers::PassResult* slotPass = nullptr;
+  uint64_t heaviest = 0;
+  for (const auto& pass : frame.passes) {
+    heaviest = std::max(heaviest, pass.fragmentInvocations);
+    if (!slotPass || pass.maxSlotCount > slotPass->maxSlotCount) slotPass = &pass;
+  }
+  const double pixels = double(res.width) * res.height;
+  const double load = slotPass ? double(slotPass->fragmentInvocations) : 0.0;
+  const double perFragment = load > 0 ? double(headroom.maxSlotCount) / load : 0.0;
+  return {{"renderer", name},
+          {"layers", layers},
+          {"width", res.width},
+          {"height", res.height},
+          {"pixels", pixels},
+          {"overshading", double(heaviest) / pixels},
+          {"slot_pass", slotPass ? slotPass->name : ""},
+          {"load", load},
+          {"load_per_pixel", load / pixels},
+          {"max_slot_count", headroom.maxSlotCount},
+          {"max_slot", headroom.maxSlot},
+          {"counts_per_fragment", perFragment},
+          {"error",
+           {{"fraction_of_wrap", double(headroom.maxSlotCount) / wrapAt},
+            {"wraps", double(headroom.maxSlotCount) >= wrapAt}}},
+          {"predicted", {{"wrap_load", perFragment > 0 ? json(wrapAt / perFragment) : json(nullptr)}}}};
+}
+
+// Per renderer and overshading (layers): the load at which the worst
+// counts per fragment reach 2^bits, the pixels and 16:9 resolution that
+// load means at that overshading, and the smallest measured load that did.
+json counterFailsAt(const CounterSweepSpec& spec, const json& points, double wrapAt) {
   json failing = json::array();
   bool any = false;
   for (const auto& name : spec.renderers) {
@@ -193,33 +167,59 @@ Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, co
       failing.push_back(std::move(entry));
     }
   }
-  return json{{"sweep", std::string(kCounterSweepName)},
-              {"device", gpu::describe(ctx)},
-              {"spec", spec.source},
-              {"parameters", {"renderer", "layers", "pixels"}},
-              {"lights", spec.lights},
-              {"method",
-               {{"scene", "planes, layers back to front (every layer shaded: overshading = layers)"},
-                {"load", "fragment invocations of the pass holding the largest slot"},
-                {"overshading", "fragment invocations of the heaviest pass / pixels"},
-                {"slot", "the largest count one counter slot reached in one frame (counters are zeroed per frame)"},
-                {"proof", "tests/integration/overflow_test.cpp: counters preloaded below 2^32 carry exactly"}}},
-              {"threshold", {{"bits", spec.bits}}},
-              {"points", points},
-              {"fails_at", any ? json{{"load", failing}} : json(nullptr)},
-              {"plots",
-               json::array({{{"title", "Largest counter slot against load"},
-                             {"x", "load"}, {"x_log", true}, {"y", "max_slot_count"}, {"y_log", true},
-                             {"y_label", "counts in one slot per frame"}, {"series", {"renderer", "layers"}},
-                             {"threshold", wrapAt}},
-                            {{"title", "Counts per fragment (flat: the slot grows with the load)"},
-                             {"x", "load"}, {"x_log", true}, {"y", "counts_per_fragment"}, {"y_log", false},
-                             {"y_label", "slot counts / fragment"}, {"series", {"renderer", "layers"}},
-                             {"threshold", nullptr}},
-                            {{"title", "Largest slot against pixels"},
-                             {"x", "pixels"}, {"x_log", true}, {"y", "max_slot_count"}, {"y_log", true},
-                             {"y_label", "counts in one slot per frame"}, {"series", {"renderer", "layers"}},
-                             {"threshold", wrapAt}}})}};
+  return any ? json{{"load", failing}} : json(nullptr);
+}
+
+}  // namespace
+
+Result<json> runCounterSweep(gpu::Context& ctx, const CounterSweepSpec& spec, const SweepOptions& options) {
+  const double wrapAt = std::ldexp(1.0, spec.bits);
+  SweepRun run(ctx, options, spec.renderers.size() * spec.layers.size() * spec.resolutions.size());
+  for (uint32_t layers : spec.layers) {
+    const std::string scenePoint = "layers " + std::to_string(layers);
+    auto scene = scenes::makeScene({{"name", "planes"}, {"layers", layers}, {"order", "back-to-front"}});
+    if (!scene) return makeError(scenePoint + ": " + scene.error());
+    const scenes::Camera camera = scene->fixedCameras.front();
+    auto ran = run.withScene(*scene, scenePoint, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+      for (const auto& res : spec.resolutions) {
+        for (const auto& name : spec.renderers) {
+          const std::string where =
+              name + " " + scenePoint + " at " + std::to_string(res.width) + "x" + std::to_string(res.height);
+          run.next(where);
+          renderers::RendererOptions ro;
+          ro.extent = {res.width, res.height};
+          ro.lights = spec.lights;
+          auto renderer = setUpRenderer(ctx, name, gpuScene, ro);
+          if (!renderer) return makeError(where + ": " + renderer.error());
+          const renderers::FrameResult frame = (*renderer)->renderFrame(camera);
+          (*renderer)->destroy();
+          run.points.push_back(counterPoint(frame, name, layers, res, wrapAt));
+        }
+      }
+      return true;
+    });
+    if (!ran) return ran.failure();
+  }
+  const json failsAt = counterFailsAt(spec, run.points, wrapAt);
+  return run.finish(
+      kCounterSweepName, spec.source,
+      {{"parameters", {"renderer", "layers", "pixels"}},
+       {"lights", spec.lights},
+       {"method",
+        {{"scene", "planes, layers back to front (every layer shaded: overshading = layers)"},
+         {"load", "fragment invocations of the pass holding the largest slot"},
+         {"overshading", "fragment invocations of the heaviest pass / pixels"},
+         {"slot", "the largest count one counter slot reached in one frame (counters are zeroed per frame)"},
+         {"proof", "tests/integration/overflow_test.cpp: counters preloaded below 2^32 carry exactly"}}},
+       {"threshold", {{"bits", spec.bits}}},
+       {"fails_at", failsAt},
+       {"plots", json::array({plot("Largest counter slot against load", "load", "max_slot_count", true,
+                                   "counts in one slot per frame", {"renderer", "layers"}, wrapAt),
+                              plot("Counts per fragment (flat: the slot grows with the load)", "load",
+                                   "counts_per_fragment", false, "slot counts / fragment",
+                                   {"renderer", "layers"}, nullptr),
+                              plot("Largest slot against pixels", "pixels", "max_slot_count", true,
+                                   "counts in one slot per frame", {"renderer", "layers"}, wrapAt)})}});
 }
 
 }  // namespace tally::sweeps

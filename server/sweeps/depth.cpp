@@ -4,14 +4,14 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
 
-#include "sweeps/fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/projection.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/mesh_builder.hpp"
 #include "scenes/textures.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 namespace {
@@ -28,25 +28,16 @@ using fields::fieldError;
 using fields::num;
 using fields::show;
 
-
-
-// A non-empty array of distinct positive finite numbers, each > `above`.
+// An axis of distinct positive finite numbers, each > `above`.
 Result<std::vector<double>> positiveList(const json& j, const std::string& field, double above) {
-  if (!j.is_array() || j.empty() || j.size() > kMaxSweepAxis) {
-    return fieldError(field, "must be an array of 1 to " + std::to_string(kMaxSweepAxis) + " numbers, got " + show(j));
-  }
-  std::vector<double> out;
-  for (size_t i = 0; i < j.size(); ++i) {
-    std::string f = field + "[" + std::to_string(i) + "]";
-    if (!j[i].is_number() || !std::isfinite(j[i].get<double>()) || j[i].get<double>() <= above ||
-        j[i].get<double>() > double(std::numeric_limits<float>::max())) {
-      return fieldError(f, "must be a finite number greater than " + num(above) + ", got " + show(j[i]));
-    }
-    double v = j[i].get<double>();
-    if (std::find(out.begin(), out.end(), v) != out.end()) return fieldError(f, num(v) + " listed twice");
-    out.push_back(v);
-  }
-  return out;
+  return fields::distinctList<double>(
+      j, field, kMaxSweepAxis, "numbers", [&](const json& v, const std::string& f) -> Result<double> {
+        if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= above ||
+            v.get<double>() > double(std::numeric_limits<float>::max())) {
+          return fieldError(f, "must be a finite number greater than " + num(above) + ", got " + show(v));
+        }
+        return v.get<double>();
+      });
 }
 
 }  // namespace
@@ -62,29 +53,17 @@ std::vector<DepthSweepSpec::Range> DepthSweepSpec::ranges() const {
 }
 
 Result<DepthSweepSpec> parseDepthSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "",
-                                       {"sweep", "renderer", "near", "far", "far_over_near", "distances",
-                                        "resolution", "fov_deg", "threshold"}))
+  if (auto e = fields::specObject(j, {"sweep", "renderer", "near", "far", "far_over_near", "distances",
+                                      "resolution", "fov_deg", "threshold"}))
     return *e;
   DepthSweepSpec spec;
   spec.source = j;
 
   if (j.contains("renderer")) {
-    const auto& r = j["renderer"];
-    std::string allowed;
-    for (const auto& n : depthReconstructingRenderers()) allowed += (allowed.empty() ? "" : ", ") + n;
-    if (!r.is_string()) return fieldError("renderer", "must be a renderer name (one of " + allowed + ")");
-    std::string name = r.get<std::string>();
-    if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
-      return fieldError("renderer", "unknown renderer '" + name + "' (expected one of " + allowed + ")");
-    }
-    auto ok = depthReconstructingRenderers();
-    if (std::find(ok.begin(), ok.end(), name) == ok.end()) {
-      return fieldError("renderer", "'" + name + "' does not reconstruct position from depth (expected one of " +
-                                        allowed + ")");
-    }
-    spec.renderer = name;
+    auto name = fields::rendererName(j["renderer"], "renderer", depthReconstructingRenderers(),
+                                     knownRenderers, "does not reconstruct position from depth");
+    if (!name) return name.failure();
+    spec.renderer = *name;
   }
 
   if (!j.contains("near")) return fieldError("near", "required, e.g. [0.1]");
@@ -234,176 +213,167 @@ struct Accumulator {
 // does. Null overall when no point fails.
 json failsAt(const json& points, const std::string& param, const std::vector<std::string>& groupBy,
              const std::string& metric, const DepthSweepSpec& spec) {
-  std::map<std::vector<double>, json> groups;
-  std::vector<std::vector<double>> order;
   const std::string key = spec.relativeThreshold ? "max_relative" : "max_abs";
-  bool any = false;
-  for (const auto& p : points) {
-    std::vector<double> k;
-    for (const auto& g : groupBy) k.push_back(p[g].get<double>());
-    auto [it, inserted] = groups.try_emplace(k);
-    if (inserted) {
-      order.push_back(k);
-      for (const auto& g : groupBy) it->second[g] = p[g];
-      it->second[param] = nullptr;
-    }
-    if (p[metric][key].get<double>() >= spec.threshold) {
-      any = true;
-      double v = p[param].get<double>();
-      if (it->second[param].is_null() || v < it->second[param].get<double>()) it->second[param] = v;
+  return smallestFailing(points, param, groupBy,
+                         [&](const json& p) { return p[metric][key].get<double>() >= spec.threshold; });
+}
+
+// The camera of every point: at the origin, looking down -Z, +Y up (view = identity).
+scenes::Camera headOn(double fovDeg) {
+  scenes::Camera camera;
+  camera.eye = glm::vec3(0.0f);
+  camera.target = glm::vec3(0.0f, 0.0f, -1.0f);
+  camera.fovDeg = float(fovDeg);
+  camera.label = "head-on";
+  return camera;
+}
+
+// What one point compares: the plane, the camera and the depth range it was drawn with.
+struct DepthPoint {
+  const Plane& plane;
+  const scenes::Camera& camera;
+  VkExtent2D extent;
+  renderers::DepthRange depthRange;
+};
+
+// Every pixel reconstructed from `depth` against the true plane point; the
+// measured error and the float32 depth step there. Errs where a pixel kept
+// the cleared depth.
+Result<std::pair<ErrorStats, ErrorStats>> reconstructionError(const DepthPoint& at,
+                                                              const std::vector<float>& depth) {
+  const uint32_t width = at.extent.width, height = at.extent.height;
+  const glm::dmat4 worldFromView = glm::inverse(glm::dmat4(scenes::viewMatrix(at.camera)));
+  const double tanHalf = std::tan(glm::radians(double(at.camera.fovDeg)) / 2.0);
+  const double aspect = double(float(width) / float(height));
+  // The uniform the renderer uploaded, and lighting.frag's worldFromDepth
+  // (common.h) in float, as the shader computes it.
+  const shaders::Camera c = renderers::cameraUniform(at.camera, at.extent, at.depthRange);
+  const double n = double(at.depthRange.zNear), f = double(at.depthRange.zFar);
+  Accumulator measured, predicted;
+  size_t sky = 0;
+  for (uint32_t y = 0; y < height; ++y) {
+    for (uint32_t x = 0; x < width; ++x) {
+      float depthValue = depth[size_t(y) * width + x];
+      if (depthValue >= 1.0f) {
+        ++sky;
+        continue;
+      }
+      glm::vec2 fragCoord(float(x) + 0.5f, float(y) + 0.5f);
+      glm::vec4 h = c.invViewProj * glm::vec4(fragCoord * glm::vec2(c.viewport.z, c.viewport.w) * 2.0f - 1.0f,
+                                              depthValue, 1.0f);
+      glm::dvec3 reconstructed = glm::dvec3(glm::vec3(h) / h.w);
+      // The true point: the pixel centre's ray (view space; NDC y =
+      // -y_view / (t tan), the projection flips y) meets the plane at
+      // view depth t = d / (1 + a dx + b dy).
+      double ndcX = (double(x) + 0.5) / width * 2.0 - 1.0, ndcY = (double(y) + 0.5) / height * 2.0 - 1.0;
+      glm::dvec3 dir(ndcX * tanHalf * aspect, -ndcY * tanHalf, -1.0);
+      double t = at.plane.d / (1.0 + at.plane.a * dir.x + at.plane.b * dir.y);
+      glm::dvec3 view = dir * t;
+      glm::dvec3 truth = glm::dvec3(worldFromView * glm::dvec4(view, 1.0));
+      double rayLength = glm::length(view);
+      double error = glm::length(reconstructed - truth);
+      measured.add(error, error / rayLength);
+      double step = depthStepDistance(t, rayLength, n, f);
+      predicted.add(step, step / rayLength);
     }
   }
-  if (!any) return nullptr;
-  json out = json::array();
-  for (const auto& k : order) out.push_back(groups[k]);
-  return out;
+  if (sky > 0) {
+    return makeError(std::to_string(sky) + " pixels kept the cleared depth (the plane was not drawn)");
+  }
+  return std::pair{measured.done(), predicted.done()};
+}
+
+// The result around the points: the method, where the measured and the
+// predicted error reach the threshold, and the charts.
+json depthReport(const DepthSweepSpec& spec, const json& points) {
+  // The ratio axis varies far (far_over_near given, near fixed) or near (far given).
+  const std::string fixedEnd = spec.byRatio() ? "near" : "far";
+  auto along = [&](const std::string& metric) {
+    return failsAtByAxis(
+        {{"distance", failsAt(points, "distance", {"near", "far"}, metric, spec)},
+         {"far_over_near", failsAt(points, "far_over_near", {"distance", fixedEnd}, metric, spec)}});
+  };
+  // The charts of the dashboard: the measured error the threshold applies
+  // to, against each swept axis, one line per group that fails_at states a
+  // value for. Both axes span decades.
+  const std::string errorPath = spec.relativeThreshold ? "error.max_relative" : "error.max_abs";
+  const std::string errorLabel =
+      spec.relativeThreshold ? "max error / distance from the eye" : "max error (m)";
+  return {
+      {"renderer", spec.renderer},
+      {"parameters",
+       spec.byRatio() ? json{"near", "far_over_near", "distance"} : json{"near", "far", "distance"}},
+      {"resolution", {spec.resolution.width, spec.resolution.height}},
+      {"method",
+       {{"depth_format", "D32_SFLOAT_S8_UINT"},
+        {"projection", "perspective, depth [0, 1] with far = 1, finite far, not reversed"},
+        {"reconstruction", "lighting.frag.glsl worldFromDepth (common.h): invViewProj * (ndc, depth, 1) / w"},
+        {"scene",
+         "one plane at each distance (view depth at the screen centre), tilted so view depth spans "
+         "distance / (1 +- tilt) over the screen"},
+        {"tilt", kTilt},
+        {"fov_deg", spec.fovDeg}}},
+      {"threshold",
+       spec.relativeThreshold ? json{{"relative", spec.threshold}} : json{{"absolute", spec.threshold}}},
+      {"fails_at", along("error")},
+      {"predicted_fails_at", along("predicted")},
+      {"plots", json::array({plot("Position error against distance", "distance", errorPath, true, errorLabel,
+                                  {"near", "far"}, spec.threshold),
+                             plot("Position error against far / near", "far_over_near", errorPath, true,
+                                  errorLabel, {"distance", fixedEnd}, spec.threshold)})},
+  };
 }
 
 }  // namespace
 
 Result<json> runDepthSweep(gpu::Context& ctx, const DepthSweepSpec& spec, const SweepOptions& options) {
-  const uint32_t width = spec.resolution.width, height = spec.resolution.height;
-  const VkExtent2D extent = {width, height};
+  const VkExtent2D extent = {spec.resolution.width, spec.resolution.height};
   const auto ranges = spec.ranges();
-  Progress progress{0, ranges.size() * spec.distances.size(), ""};
-  scenes::Camera camera;  // at the origin, looking down -Z, +Y up: view = identity
-  camera.eye = glm::vec3(0.0f);
-  camera.target = glm::vec3(0.0f, 0.0f, -1.0f);
-  camera.fovDeg = float(spec.fovDeg);
-  camera.label = "head-on";
-  const glm::dmat4 worldFromView = glm::inverse(glm::dmat4(scenes::viewMatrix(camera)));
+  SweepRun run(ctx, options, ranges.size() * spec.distances.size());
+  const scenes::Camera camera = headOn(spec.fovDeg);
   const double tanHalf = std::tan(glm::radians(double(camera.fovDeg)) / 2.0);
-  const double aspect = double(float(width) / float(height));
+  const double aspect = double(float(extent.width) / float(extent.height));
 
-  json points = json::array();
   for (double distance : spec.distances) {
     // a, b: the view depth changes by kTilt / 2 of d from the centre to each edge.
     const Plane plane{distance, 0.5 * kTilt / (tanHalf * aspect), 0.5 * kTilt / tanHalf};
-    scenes::Scene scene = planeScene(plane, tanHalf, aspect);
-    renderers::GpuScene gpuScene;
-    auto uploaded = gpuScene.upload(ctx, scene);
-    if (!uploaded) return makeError("distance " + num(distance) + ": " + uploaded.error());
-    for (const auto& range : ranges) {
-      std::string where = spec.renderer + " near " + num(range.near) + " far " + num(range.far) + " distance " +
-                          num(distance);
-      progress.current = where;
-      if (options.progress) options.progress(progress);
-      renderers::DepthRange depthRange{float(range.near), float(range.far)};
-      auto made = renderers::makeRenderer(spec.renderer);
-      if (!made) return makeError(where + ": " + made.error());
-      renderers::RendererOptions ro{extent, false, spirv::Mode{}, 0, depthRange};
-      auto ok = (*made)->setup(ctx, gpuScene, ro);
-      if (!ok) return makeError(where + ": " + ok.error());
-      (*made)->renderFrame(camera);
-      std::vector<float> depth = (*made)->depthImage();
-      (*made)->destroy();
-      if (depth.size() != size_t(width) * height) return makeError(where + ": the renderer has no depth to read");
-
-      // The uniform the renderer uploaded, and lighting.frag's worldFromDepth
-      // (common.h) in float, as the shader computes it.
-      const shaders::Camera c = renderers::cameraUniform(camera, extent, depthRange);
-      const double n = double(depthRange.zNear), f = double(depthRange.zFar);
-      Accumulator measured, predicted;
-      size_t sky = 0;
-      for (uint32_t y = 0; y < height; ++y) {
-        for (uint32_t x = 0; x < width; ++x) {
-          float depthValue = depth[size_t(y) * width + x];
-          if (depthValue >= 1.0f) {
-            ++sky;
-            continue;
+    auto ran = run.withScene(
+        planeScene(plane, tanHalf, aspect), "distance " + num(distance),
+        [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+          for (const auto& range : ranges) {
+            std::string where = spec.renderer + " near " + num(range.near) + " far " + num(range.far) +
+                                " distance " + num(distance);
+            run.next(where);
+            const DepthPoint at{plane, camera, extent, {float(range.near), float(range.far)}};
+            auto renderer =
+                setUpRenderer(ctx, spec.renderer, gpuScene,
+                              renderers::RendererOptions{extent, false, spirv::Mode{}, 0, at.depthRange});
+            if (!renderer) return makeError(where + ": " + renderer.error());
+            (*renderer)->renderFrame(camera);
+            std::vector<float> depth = (*renderer)->depthImage();
+            (*renderer)->destroy();
+            if (depth.size() != size_t(extent.width) * extent.height) {
+              return makeError(where + ": the renderer has no depth to read");
+            }
+            auto error = reconstructionError(at, depth);
+            if (!error) return makeError(where + ": " + error.error());
+            const auto& [m, p] = *error;
+            const double n = double(at.depthRange.zNear), f = double(at.depthRange.zFar);
+            run.points.push_back({{"near", range.near},
+                                  {"far", range.far},
+                                  {"far_over_near", range.far / range.near},
+                                  {"distance", distance},
+                                  {"depth", depthOf(distance, n, f)},  // at the screen centre
+                                  {"error", m.toJson()},
+                                  {"predicted", p.toJson()},
+                                  {"error_over_predicted", p.maxAbs > 0 ? m.maxAbs / p.maxAbs : 0.0}});
           }
-          glm::vec2 fragCoord(float(x) + 0.5f, float(y) + 0.5f);
-          glm::vec4 h = c.invViewProj *
-                        glm::vec4(fragCoord * glm::vec2(c.viewport.z, c.viewport.w) * 2.0f - 1.0f, depthValue, 1.0f);
-          glm::dvec3 reconstructed = glm::dvec3(glm::vec3(h) / h.w);
-          // The true point: the pixel centre's ray (view space; NDC y =
-          // -y_view / (t tan), the projection flips y) meets the plane at
-          // view depth t = d / (1 + a dx + b dy).
-          double ndcX = (double(x) + 0.5) / width * 2.0 - 1.0, ndcY = (double(y) + 0.5) / height * 2.0 - 1.0;
-          glm::dvec3 dir(ndcX * tanHalf * aspect, -ndcY * tanHalf, -1.0);
-          double t = plane.d / (1.0 + plane.a * dir.x + plane.b * dir.y);
-          glm::dvec3 view = dir * t;
-          glm::dvec3 truth = glm::dvec3(worldFromView * glm::dvec4(view, 1.0));
-          double rayLength = glm::length(view);
-          double error = glm::length(reconstructed - truth);
-          measured.add(error, error / rayLength);
-          double step = depthStepDistance(t, rayLength, n, f);
-          predicted.add(step, step / rayLength);
-        }
-      }
-      if (sky > 0) {
-        return makeError(where + ": " + std::to_string(sky) + " pixels kept the cleared depth (the plane was not drawn)");
-      }
-      ErrorStats m = measured.done(), p = predicted.done();
-      points.push_back({{"near", range.near},
-                        {"far", range.far},
-                        {"far_over_near", range.far / range.near},
-                        {"distance", distance},
-                        {"depth", depthOf(distance, n, f)},  // at the screen centre
-                        {"error", m.toJson()},
-                        {"predicted", p.toJson()},
-                        {"error_over_predicted", p.maxAbs > 0 ? m.maxAbs / p.maxAbs : 0.0}});
-      ++progress.done;
-    }
-    gpuScene.destroy();
+          return true;
+        });
+    if (!ran) return ran.failure();
   }
-  progress.current = "done";
-  if (options.progress) options.progress(progress);
-
-  // The ratio axis varies far (far_over_near given, near fixed) or near (far given).
-  const std::string fixedEnd = spec.byRatio() ? "near" : "far";
-  json byDistance = failsAt(points, "distance", {"near", "far"}, "error", spec);
-  json byRatio = failsAt(points, "far_over_near", {"distance", fixedEnd}, "error", spec);
-  json result = {
-      {"sweep", std::string(kDepthSweepName)},
-      {"device", gpu::describe(ctx)},
-      {"spec", spec.source},
-      {"renderer", spec.renderer},
-      {"parameters", spec.byRatio() ? json{"near", "far_over_near", "distance"} : json{"near", "far", "distance"}},
-      {"resolution", {width, height}},
-      {"method",
-       {{"depth_format", "D32_SFLOAT_S8_UINT"},
-        {"projection", "perspective, depth [0, 1] with far = 1, finite far, not reversed"},
-        {"reconstruction", "lighting.frag.glsl worldFromDepth (common.h): invViewProj * (ndc, depth, 1) / w"},
-        {"scene", "one plane at each distance (view depth at the screen centre), tilted so view depth spans "
-                  "distance / (1 +- tilt) over the screen"},
-        {"tilt", kTilt},
-        {"fov_deg", spec.fovDeg}}},
-      {"threshold", spec.relativeThreshold ? json{{"relative", spec.threshold}} : json{{"absolute", spec.threshold}}},
-      {"points", points},
-  };
-  result["fails_at"] = byDistance.is_null() && byRatio.is_null()
-                           ? json(nullptr)
-                           : json{{"distance", byDistance}, {"far_over_near", byRatio}};
-  json pDistance = failsAt(points, "distance", {"near", "far"}, "predicted", spec);
-  json pRatio = failsAt(points, "far_over_near", {"distance", fixedEnd}, "predicted", spec);
-  result["predicted_fails_at"] = pDistance.is_null() && pRatio.is_null()
-                                     ? json(nullptr)
-                                     : json{{"distance", pDistance}, {"far_over_near", pRatio}};
-  // The charts of the dashboard (docs/result-schema.md, "Sweep results"): the
-  // measured error the threshold applies to, against each swept axis, one line
-  // per group that fails_at states a value for. Both axes span decades.
-  const std::string errorPath = spec.relativeThreshold ? "error.max_relative" : "error.max_abs";
-  const std::string errorLabel = spec.relativeThreshold ? "max error / distance from the eye" : "max error (m)";
-  result["plots"] = json::array({
-      {{"title", "Position error against distance"},
-       {"x", "distance"},
-       {"x_log", true},
-       {"y", errorPath},
-       {"y_log", true},
-       {"y_label", errorLabel},
-       {"series", {"near", "far"}},
-       {"threshold", spec.threshold}},
-      {{"title", "Position error against far / near"},
-       {"x", "far_over_near"},
-       {"x_log", true},
-       {"y", errorPath},
-       {"y_log", true},
-       {"y_label", errorLabel},
-       {"series", {"distance", fixedEnd}},
-       {"threshold", spec.threshold}},
-  });
-  return result;
+  json report = depthReport(spec, run.points);
+  return run.finish(kDepthSweepName, spec.source, std::move(report));
 }
 
 }  // namespace tally::sweeps

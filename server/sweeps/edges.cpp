@@ -10,12 +10,12 @@
 #include <numbers>
 #include <numeric>
 
-#include "sweeps/depth.hpp"  // kMaxSweepAxis
 #include "analysis/image.hpp"
-#include "sweeps/fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/visbuffer_base.hpp"
 #include "scenes/mesh_builder.hpp"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -45,8 +45,6 @@ constexpr int kWrongTolerance = 0;
 constexpr size_t kListedOutside = 16;
 
 using fields::fieldError;
-using fields::show;
-
 
 // (i + k j) mod n for cell (i, j), cells of `cellSize` from the image's top-left corner.
 uint32_t cellMaterial(int64_t i, int64_t j, uint32_t materials) {
@@ -58,8 +56,6 @@ uint32_t cellMaterial(int64_t i, int64_t j, uint32_t materials) {
 int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 }  // namespace
-
-std::vector<std::string> edgeRenderers() { return {"visbuffer", "visbuffer-lean"}; }
 
 uint32_t edgeMaterialAt(int64_t x, int64_t y, uint32_t cellSize, uint32_t materials) {
   return cellMaterial(floorDiv(x, cellSize), floorDiv(y, cellSize), materials);
@@ -82,119 +78,6 @@ uint32_t subgroupBlockSide(uint32_t subgroupSize) {
   uint32_t n = 2;
   while (uint64_t{n} * n < subgroupSize) n *= 2;
   return n;
-}
-
-Result<EdgesSweepSpec> parseEdgesSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(j, "",
-                                       {"sweep", "renderer", "selections", "cell_sizes", "materials",
-                                        "resolution", "same_texture", "threshold"}))
-    return *e;
-  EdgesSweepSpec spec;
-  spec.source = j;
-
-  if (j.contains("renderer")) {
-    const auto& r = j["renderer"];
-    std::string allowed;
-    for (const auto& n : edgeRenderers()) allowed += (allowed.empty() ? "" : ", ") + n;
-    if (!r.is_string()) return fieldError("renderer", "must be a renderer name (one of " + allowed + ")");
-    std::string name = r.get<std::string>();
-    if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
-      return fieldError("renderer", "unknown renderer '" + name + "' (expected one of " + allowed + ")");
-    }
-    auto ok = edgeRenderers();
-    if (std::find(ok.begin(), ok.end(), name) == ok.end()) {
-      return fieldError(
-          "renderer",
-          "'" + name + "' binds material maps per draw, not per pixel (expected one of " + allowed + ")");
-    }
-    spec.renderer = name;
-  }
-
-  if (j.contains("selections")) {
-    const auto& s = j["selections"];
-    const std::string expected =
-        "\"first-lane\", \"uniform\" or \"nonuniform\" (the reference itself, a control)";
-    if (!s.is_array() || s.empty() || s.size() > 3) {
-      return fieldError("selections", "must be a non-empty array of " + expected + ", got " + show(s));
-    }
-    for (size_t i = 0; i < s.size(); ++i) {
-      std::string f = "selections[" + std::to_string(i) + "]";
-      auto parsed =
-          s[i].is_string() ? renderers::parseMaterialSelection(s[i].get<std::string>()) : std::nullopt;
-      if (!parsed) return fieldError(f, "must be " + expected + ", got " + show(s[i]));
-      if (std::find(spec.selections.begin(), spec.selections.end(), *parsed) != spec.selections.end()) {
-        return fieldError(f, show(s[i]) + " listed twice");
-      }
-      spec.selections.push_back(*parsed);
-    }
-  }
-
-  if (j.contains("materials")) {
-    const auto& m = j["materials"];
-    if (!m.is_number_integer() || m.get<int64_t>() < 2 || m.get<int64_t>() > kMaxEdgeMaterials) {
-      return fieldError("materials", "must be an integer from 2 to " + std::to_string(kMaxEdgeMaterials) +
-                                         ", got " + show(m));
-    }
-    spec.materials = uint32_t(m.get<int64_t>());
-  }
-
-  if (j.contains("same_texture")) {
-    if (!j["same_texture"].is_boolean()) {
-      return fieldError("same_texture", "must be true or false, got " + show(j["same_texture"]));
-    }
-    spec.sameTexture = j["same_texture"].get<bool>();
-  }
-
-  if (j.contains("resolution")) {
-    auto r = fields::resolution(j["resolution"]);
-    if (!r) return r.failure();
-    spec.resolution = *r;
-  }
-
-  // Whole pixels: cell edges then fall on pixel edges, half a pixel from every
-  // sample point, so the CPU layout and the rasteriser cannot disagree.
-  if (!j.contains("cell_sizes")) return fieldError("cell_sizes", "required, e.g. [64, 16, 4, 2, 1]");
-  const auto& c = j["cell_sizes"];
-  if (!c.is_array() || c.empty() || c.size() > kMaxSweepAxis) {
-    return fieldError("cell_sizes", "must be an array of 1 to " + std::to_string(kMaxSweepAxis) +
-                                        " whole pixel counts, got " + show(c));
-  }
-  for (size_t i = 0; i < c.size(); ++i) {
-    std::string f = "cell_sizes[" + std::to_string(i) + "]";
-    if (!c[i].is_number_integer() || c[i].get<int64_t>() < 1 || c[i].get<int64_t>() > kMaxEdgeCellSize) {
-      return fieldError(f, "must be a whole number of pixels from 1 to " + std::to_string(kMaxEdgeCellSize) +
-                               ", got " + show(c[i]));
-    }
-    uint32_t s = uint32_t(c[i].get<int64_t>());
-    if (std::find(spec.cellSizes.begin(), spec.cellSizes.end(), s) != spec.cellSizes.end()) {
-      return fieldError(f, std::to_string(s) + " listed twice");
-    }
-    const uint64_t cells = (uint64_t{spec.resolution.width + s - 1} / s + 2) *
-                           (uint64_t{spec.resolution.height + s - 1} / s + 2);
-    if (cells > kMaxEdgeCells) {
-      return fieldError(f, "cells of " + std::to_string(s) + " pixels at " +
-                               std::to_string(spec.resolution.width) + "x" +
-                               std::to_string(spec.resolution.height) + " are " + std::to_string(cells) +
-                               " cells, more than the limit of " + std::to_string(kMaxEdgeCells));
-    }
-    spec.cellSizes.push_back(s);
-  }
-
-  if (!j.contains("threshold"))
-    return fieldError("threshold", "required, e.g. {\"boundary_error_fraction\": 0.01}");
-  const auto& t = j["threshold"];
-  if (!t.is_object() || t.size() != 1 || !t.contains("boundary_error_fraction")) {
-    return fieldError(
-        "threshold",
-        "must be {\"boundary_error_fraction\": x} (wrong pixels / covered pixels), got " + show(t));
-  }
-  const auto& tv = t["boundary_error_fraction"];
-  if (!tv.is_number() || !std::isfinite(tv.get<double>()) || tv.get<double>() <= 0 || tv.get<double>() > 1) {
-    return fieldError("threshold.boundary_error_fraction", "must be a number in (0, 1], got " + show(tv));
-  }
-  spec.threshold = tv.get<double>();
-  return spec;
 }
 
 namespace {
@@ -401,249 +284,269 @@ json failsAt(const json& points, const std::vector<MaterialSelection>& selection
   return any ? out : json(nullptr);
 }
 
+// The selections to compare: those asked for (each must run here), or those
+// the device can run, with why it runs none of the others.
+struct Selections {
+  std::vector<MaterialSelection> run;
+  std::vector<std::string> skipped;
+};
+
+Result<Selections> selectionsToRun(gpu::Context& ctx, const EdgesSweepSpec& spec) {
+  Selections out{spec.selections, {}};
+  if (!out.run.empty()) {
+    for (size_t i = 0; i < out.run.size(); ++i) {
+      std::string why = renderers::materialSelectionUnsupported(ctx, out.run[i]);
+      if (!why.empty()) return fieldError("selections[" + std::to_string(i) + "]", why);
+    }
+    return out;
+  }
+  for (auto s : {MaterialSelection::FirstLane, MaterialSelection::Uniform}) {
+    std::string why = renderers::materialSelectionUnsupported(ctx, s);
+    if (why.empty()) {
+      out.run.push_back(s);
+    } else {
+      out.skipped.push_back(why);
+    }
+  }
+  if (out.run.empty()) {
+    std::string all;
+    for (const auto& w : out.skipped) all += (all.empty() ? "" : "; ") + w;
+    return makeError("selections: this device runs none of first-lane, uniform (" + all + ")");
+  }
+  return out;
+}
+
+// One cell size: the masks its layout gives on the CPU alone, and a second
+// look at the layout in the reference image.
+struct Layout {
+  uint32_t cellSize = 0, width = 0, height = 0;
+  size_t covered = 0;  // pixels the plane covers: all of them
+  std::vector<uint8_t> quad, group, bins;
+  size_t quadPixels = 0, groupPixels = 0;
+  std::vector<size_t> pixelsByDistance;
+  size_t mismatched = 0;     // reference pixels not of their material's colour
+  size_t sharedColours = 0;  // materials in view whose colour another one in view has too
+};
+
+Layout layoutOf(const EdgesSweepSpec& spec, uint32_t cellSize, uint32_t subgroupSide,
+                const std::vector<uint8_t>& reference) {
+  const uint32_t width = spec.resolution.width, height = spec.resolution.height;
+  const size_t pixelCount = size_t(width) * height;
+  Layout out{cellSize, width, height, pixelCount};
+  std::vector<uint32_t> labels(pixelCount);
+  for (uint32_t y = 0; y < height; ++y) {
+    for (uint32_t x = 0; x < width; ++x)
+      labels[size_t(y) * width + x] = edgeMaterialAt(x, y, cellSize, spec.materials);
+  }
+  out.quad = blockMask(labels, width, height, 2);
+  out.group = blockMask(labels, width, height, subgroupSide);
+  out.bins = distanceBins(labels, width, height);
+  out.quadPixels = size_t(std::count(out.quad.begin(), out.quad.end(), 1));
+  out.groupPixels = size_t(std::count(out.group.begin(), out.group.end(), 1));
+  out.pixelsByDistance.assign(kEdgeDistanceBins + 1, 0);
+  for (uint8_t b : out.bins) ++out.pixelsByDistance[b];
+
+  // In the reference every pixel of a material has that material's colour
+  // (the most common one among its pixels).
+  auto colourOf = [&](size_t i) {
+    return uint32_t(reference[4 * i]) | uint32_t(reference[4 * i + 1]) << 8 |
+           uint32_t(reference[4 * i + 2]) << 16;
+  };
+  std::vector<std::map<uint32_t, size_t>> histogram(spec.materials);
+  for (size_t i = 0; i < pixelCount; ++i) ++histogram[labels[i]][colourOf(i)];
+  std::vector<int64_t> colour(spec.materials, -1);
+  for (uint32_t m = 0; m < spec.materials; ++m) {
+    size_t best = 0;
+    for (const auto& [c, n] : histogram[m]) {
+      if (n > best) best = n, colour[m] = c;
+    }
+  }
+  for (size_t i = 0; i < pixelCount; ++i) out.mismatched += colourOf(i) != colour[labels[i]];
+  for (uint32_t m = 0; m < spec.materials; ++m) {
+    for (uint32_t o = 0; o < spec.materials; ++o) {
+      if (o != m && colour[m] >= 0 && colour[m] == colour[o]) {
+        ++out.sharedColours;
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+// The point of one selection: its wrong pixels against the reference, by
+// mask and by distance from the nearest boundary, and its image error.
+Result<json> selectionPoint(const Layout& at, const std::string& name, const std::vector<uint8_t>& a,
+                            const std::vector<uint8_t>& b, uint32_t subgroupSide) {
+  const size_t pixelCount = size_t(at.width) * at.height;
+  size_t wrong = 0, inQuad = 0, inGroup = 0;
+  std::vector<size_t> wrongByDistance(kEdgeDistanceBins + 1, 0);
+  json outsideAt = json::array();
+  for (size_t i = 0; i < pixelCount; ++i) {
+    int diff = 0;
+    for (size_t c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(a[4 * i + c]) - int(b[4 * i + c])));
+    if (diff <= kWrongTolerance) continue;
+    ++wrong;
+    inQuad += at.quad[i];
+    inGroup += at.group[i];
+    ++wrongByDistance[at.bins[i]];
+    if (!at.group[i] && outsideAt.size() < kListedOutside) outsideAt.push_back({i % at.width, i / at.width});
+  }
+  auto whole = compareImages(a, b, at.width, at.height);
+  if (!whole) return whole.failure();
+  auto boundary = maskedError(a, b, at.group);
+  if (!boundary) return boundary.failure();
+  return json{
+      {"selection", name},
+      {"cell_size", at.cellSize},
+      {"pixels", at.covered},
+      {"wrong",
+       {{"pixels", wrong},
+        {"fraction", double(wrong) / double(at.covered)},
+        {"in_quad_mask", inQuad},
+        {"outside_quad_mask", wrong - inQuad},
+        {"in_subgroup_mask", inGroup},
+        {"outside_subgroup_mask", wrong - inGroup},
+        {"outside_subgroup_mask_at", outsideAt},
+        {"by_distance", wrongByDistance}}},
+      {"error", errorJson(*whole, pixelCount)},
+      {"boundary_error", *boundary},
+      {"masks",
+       {{"quad_pixels", at.quadPixels},
+        {"quad_fraction", double(at.quadPixels) / double(pixelCount)},
+        {"subgroup_pixels", at.groupPixels},
+        {"subgroup_fraction", double(at.groupPixels) / double(pixelCount)},
+        {"pixels_by_distance", at.pixelsByDistance}}},
+      {"predicted",
+       {{"quad_fraction", edgeBlockFraction(at.cellSize, 2)},
+        {"subgroup_fraction", edgeBlockFraction(at.cellSize, subgroupSide)}}},
+      {"layout_check",
+       {{"mismatched_pixels", at.mismatched}, {"materials_sharing_a_colour", at.sharedColours}}},
+  };
+}
+
+// The method: how the scene is laid out, what counts as wrong and what the masks assume.
+json edgesMethod(const EdgesSweepSpec& spec, uint32_t subgroupSize, uint32_t subgroupSide,
+                 const std::string& materialMaps) {
+  const std::string distanceBinsNote =
+      "index d - 1 counts pixels whose nearest pixel of another material is d "
+      "pixels away (Chebyshev), d = 1.." +
+      std::to_string(kEdgeDistanceBins) + "; the last index: farther, or none in view";
+  return {
+      {"scene",
+       "a plane facing the camera, covering the view, split into square cells of cell_size pixels "
+       "from the image's top-left corner; cell (i, j) has material (i + k j) mod materials, k = 1 for "
+       "2 materials, else 2; one draw per material"},
+      {"materials", spec.materials},
+      {"same_texture", spec.sameTexture},
+      {"diffuse_maps", std::to_string(kMapSize) + "x" + std::to_string(kMapSize) +
+                           " flat sRGB, one hue per material; other maps the renderer's 1x1 defaults"},
+      {"lighting", "ambient only (no point lights): colour = ambient x diffuse map"},
+      {"fov_deg", kFovDeg},
+      {"plane_distance", kPlaneDistance},
+      {"material_maps", materialMaps},
+      {"wrong_pixel", "any RGB channel of the final RGBA8 image differs from the reference by more than " +
+                          std::to_string(kWrongTolerance)},
+      {"quad_mask",
+       "pixels whose 2x2 quad (aligned to even pixels) holds more than one material, from the layout"},
+      {"subgroup_size", subgroupSize},
+      {"subgroup_mask",
+       "pixels whose aligned " + std::to_string(subgroupSide) + "x" + std::to_string(subgroupSide) +
+           " block holds more than one material, from the layout; assumes a subgroup's fragments lie in "
+           "one "
+           "aligned power-of-two rectangle of quads no wider or taller than that (the smallest such square "
+           "with room for subgroup_size lanes)"},
+      {"boundary_error", "compareImages over the subgroup mask's pixels"},
+      {"distance_bins", distanceBinsNote},
+      {"predicted",
+       "the mask fractions of an infinite plane of these cells, derived per axis over one period "
+       "(masks.*_fraction counts them on this image)"}};
+}
+
 }  // namespace
 
 Result<json> runEdgesSweep(gpu::Context& ctx, const EdgesSweepSpec& spec, const SweepOptions& options) {
   const uint32_t width = spec.resolution.width, height = spec.resolution.height;
   const VkExtent2D extent = {width, height};
   const size_t pixelCount = size_t(width) * height;
-
-  // Which selections: those asked for (each must run here), or those the device can run.
-  std::vector<MaterialSelection> selections = spec.selections;
-  std::vector<std::string> skipped;
-  if (selections.empty()) {
-    for (auto s : {MaterialSelection::FirstLane, MaterialSelection::Uniform}) {
-      std::string why = renderers::materialSelectionUnsupported(ctx, s);
-      if (why.empty()) {
-        selections.push_back(s);
-      } else {
-        skipped.push_back(why);
-      }
-    }
-    if (selections.empty()) {
-      std::string all;
-      for (const auto& w : skipped) all += (all.empty() ? "" : "; ") + w;
-      return makeError("selections: this device runs none of first-lane, uniform (" + all + ")");
-    }
-  } else {
-    for (size_t i = 0; i < selections.size(); ++i) {
-      std::string why = renderers::materialSelectionUnsupported(ctx, selections[i]);
-      if (!why.empty()) return fieldError("selections[" + std::to_string(i) + "]", why);
-    }
-  }
+  auto chosen = selectionsToRun(ctx, spec);
+  if (!chosen) return chosen.failure();
+  const std::vector<MaterialSelection>& selections = chosen->run;
 
   const uint32_t subgroupSize = ctx.subgroupSize;
   const uint32_t subgroupSide = subgroupBlockSide(subgroupSize);
   const scenes::Camera camera = edgeCamera();
   if (!options.screenshotDir.empty()) std::filesystem::create_directories(options.screenshotDir);
+  auto screenshot = [&](const std::string& file, const std::vector<uint8_t>& rgba) {
+    if (!options.screenshotDir.empty()) writePng(options.screenshotDir, file, rgba, width, height);
+  };
 
-  Progress progress{0, spec.cellSizes.size() * (selections.size() + 1), ""};
-  json points = json::array();
+  SweepRun run(ctx, options, spec.cellSizes.size() * (selections.size() + 1));
   std::string materialMaps;
   for (uint32_t cellSize : spec.cellSizes) {
     const std::string where = spec.renderer + " cell size " + std::to_string(cellSize);
-    scenes::Scene scene = edgeScene(spec, cellSize);
-    renderers::GpuScene gpuScene;
-    auto uploaded = gpuScene.upload(ctx, scene);
-    if (!uploaded) return makeError(where + ": " + uploaded.error());
+    auto ran = run.withScene(
+        edgeScene(spec, cellSize), where, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+          run.next(where + " nonuniform");
+          auto reference =
+              renderWith(ctx, gpuScene, spec.renderer, MaterialSelection::NonUniform, extent, camera);
+          if (!reference) return makeError(where + " nonuniform: " + reference.error());
+          materialMaps = reference->notes.value("material_maps", "");
+          if (reference->image.size() != pixelCount * 4 || reference->depth.size() != pixelCount) {
+            return makeError(where + ": the renderer returned no image or depth to read");
+          }
+          const size_t covered = size_t(std::count_if(reference->depth.begin(), reference->depth.end(),
+                                                      [](float d) { return d < 1.0f; }));
+          if (covered != pixelCount) {
+            return makeError(where + ": " + std::to_string(pixelCount - covered) +
+                             " pixels kept the cleared depth (the plane does not cover the view)");
+          }
+          const Layout layout = layoutOf(spec, cellSize, subgroupSide, reference->image);
+          screenshot("edges_" + std::to_string(cellSize) + "_nonuniform.png", reference->image);
 
-    progress.current = where + " nonuniform";
-    if (options.progress) options.progress(progress);
-    auto reference = renderWith(ctx, gpuScene, spec.renderer, MaterialSelection::NonUniform, extent, camera);
-    if (!reference) return makeError(where + " nonuniform: " + reference.error());
-    ++progress.done;
-    materialMaps = reference->notes.value("material_maps", "");
-    if (reference->image.size() != pixelCount * 4 || reference->depth.size() != pixelCount) {
-      return makeError(where + ": the renderer returned no image or depth to read");
-    }
-    const size_t covered = size_t(
-        std::count_if(reference->depth.begin(), reference->depth.end(), [](float d) { return d < 1.0f; }));
-    if (covered != pixelCount) {
-      return makeError(where + ": " + std::to_string(pixelCount - covered) +
-                       " pixels kept the cleared depth (the plane does not cover the view)");
-    }
-
-    // The layout on the CPU, and the masks from it alone.
-    std::vector<uint32_t> labels(pixelCount);
-    for (uint32_t y = 0; y < height; ++y) {
-      for (uint32_t x = 0; x < width; ++x)
-        labels[size_t(y) * width + x] = edgeMaterialAt(x, y, cellSize, spec.materials);
-    }
-    const std::vector<uint8_t> quad = blockMask(labels, width, height, 2);
-    const std::vector<uint8_t> group = blockMask(labels, width, height, subgroupSide);
-    const std::vector<uint8_t> bins = distanceBins(labels, width, height);
-    const size_t quadPixels = size_t(std::count(quad.begin(), quad.end(), 1));
-    const size_t groupPixels = size_t(std::count(group.begin(), group.end(), 1));
-    std::vector<size_t> pixelsByDistance(kEdgeDistanceBins + 1, 0);
-    for (uint8_t b : bins) ++pixelsByDistance[b];
-
-    // A second look at the layout: in the reference every pixel of a material
-    // has that material's colour (the most common one among its pixels).
-    auto colourOf = [&](const std::vector<uint8_t>& image, size_t i) {
-      return uint32_t(image[4 * i]) | uint32_t(image[4 * i + 1]) << 8 | uint32_t(image[4 * i + 2]) << 16;
-    };
-    std::vector<std::map<uint32_t, size_t>> histogram(spec.materials);
-    for (size_t i = 0; i < pixelCount; ++i) ++histogram[labels[i]][colourOf(reference->image, i)];
-    std::vector<int64_t> colour(spec.materials, -1);
-    for (uint32_t m = 0; m < spec.materials; ++m) {
-      size_t best = 0;
-      for (const auto& [c, n] : histogram[m]) {
-        if (n > best) best = n, colour[m] = c;
-      }
-    }
-    size_t mismatched = 0;
-    for (size_t i = 0; i < pixelCount; ++i) mismatched += colourOf(reference->image, i) != colour[labels[i]];
-    size_t sharedColours = 0;  // materials in view whose colour another one in view has too
-    for (uint32_t m = 0; m < spec.materials; ++m) {
-      for (uint32_t o = 0; o < spec.materials; ++o) {
-        if (o != m && colour[m] >= 0 && colour[m] == colour[o]) {
-          ++sharedColours;
-          break;
-        }
-      }
-    }
-    if (!options.screenshotDir.empty()) {
-      writePng(options.screenshotDir, "edges_" + std::to_string(cellSize) + "_nonuniform.png",
-               reference->image, width, height);
-    }
-
-    for (auto selection : selections) {
-      const std::string name(renderers::toString(selection));
-      progress.current = where + " " + name;
-      if (options.progress) options.progress(progress);
-      auto frame = renderWith(ctx, gpuScene, spec.renderer, selection, extent, camera);
-      if (!frame) return makeError(where + " " + name + ": " + frame.error());
-      ++progress.done;
-      const auto& a = reference->image;
-      const auto& b = frame->image;
-      if (b.size() != a.size()) return makeError(where + " " + name + ": the renderer returned no image");
-
-      size_t wrong = 0, inQuad = 0, inGroup = 0;
-      std::vector<size_t> wrongByDistance(kEdgeDistanceBins + 1, 0);
-      json outsideAt = json::array();
-      for (size_t i = 0; i < pixelCount; ++i) {
-        int diff = 0;
-        for (size_t c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(a[4 * i + c]) - int(b[4 * i + c])));
-        if (diff <= kWrongTolerance) continue;
-        ++wrong;
-        inQuad += quad[i];
-        inGroup += group[i];
-        ++wrongByDistance[bins[i]];
-        if (!group[i] && outsideAt.size() < kListedOutside) outsideAt.push_back({i % width, i / width});
-      }
-      auto whole = compareImages(a, b, width, height);
-      if (!whole) return makeError(where + " " + name + ": " + whole.error());
-      auto boundary = maskedError(a, b, group);
-      if (!boundary) return makeError(where + " " + name + ": " + boundary.error());
-      if (!options.screenshotDir.empty()) {
-        std::string stem = "edges_" + std::to_string(cellSize) + "_" + name;
-        writePng(options.screenshotDir, stem + ".png", b, width, height);
-        writePng(options.screenshotDir, stem + "_difference.png", differenceImage(a, b), width, height);
-      }
-
-      points.push_back({
-          {"selection", name},
-          {"cell_size", cellSize},
-          {"pixels", covered},
-          {"wrong",
-           {{"pixels", wrong},
-            {"fraction", double(wrong) / double(covered)},
-            {"in_quad_mask", inQuad},
-            {"outside_quad_mask", wrong - inQuad},
-            {"in_subgroup_mask", inGroup},
-            {"outside_subgroup_mask", wrong - inGroup},
-            {"outside_subgroup_mask_at", outsideAt},
-            {"by_distance", wrongByDistance}}},
-          {"error", errorJson(*whole, pixelCount)},
-          {"boundary_error", *boundary},
-          {"masks",
-           {{"quad_pixels", quadPixels},
-            {"quad_fraction", double(quadPixels) / double(pixelCount)},
-            {"subgroup_pixels", groupPixels},
-            {"subgroup_fraction", double(groupPixels) / double(pixelCount)},
-            {"pixels_by_distance", pixelsByDistance}}},
-          {"predicted",
-           {{"quad_fraction", edgeBlockFraction(cellSize, 2)},
-            {"subgroup_fraction", edgeBlockFraction(cellSize, subgroupSide)}}},
-          {"layout_check",
-           {{"mismatched_pixels", mismatched}, {"materials_sharing_a_colour", sharedColours}}},
-      });
-    }
-    gpuScene.destroy();
+          for (auto selection : selections) {
+            const std::string name(renderers::toString(selection));
+            run.next(where + " " + name);
+            auto frame = renderWith(ctx, gpuScene, spec.renderer, selection, extent, camera);
+            if (!frame) return makeError(where + " " + name + ": " + frame.error());
+            const auto& a = reference->image;
+            const auto& b = frame->image;
+            if (b.size() != a.size())
+              return makeError(where + " " + name + ": the renderer returned no image");
+            auto point = selectionPoint(layout, name, a, b, subgroupSide);
+            if (!point) return makeError(where + " " + name + ": " + point.error());
+            const std::string stem = "edges_" + std::to_string(cellSize) + "_" + name;
+            screenshot(stem + ".png", b);
+            screenshot(stem + "_difference.png", differenceImage(a, b));
+            run.points.push_back(std::move(*point));
+          }
+          return true;
+        });
+    if (!ran) return ran.failure();
   }
-  progress.current = "done";
-  if (options.progress) options.progress(progress);
 
-  const std::string distanceBinsNote =
-      "index d - 1 counts pixels whose nearest pixel of another material is d "
-      "pixels away (Chebyshev), d = 1.." +
-      std::to_string(kEdgeDistanceBins) + "; the last index: farther, or none in view";
-  json result = {
-      {"sweep", std::string(kEdgesSweepName)},
-      {"device", gpu::describe(ctx)},
-      {"spec", spec.source},
+  json report = {
       {"renderer", spec.renderer},
       {"parameters", {"selection", "cell_size"}},
       {"resolution", {width, height}},
       {"reference", "nonuniform"},
       {"selections", json::array()},
-      {"method",
-       {{"scene",
-         "a plane facing the camera, covering the view, split into square cells of cell_size pixels "
-         "from the image's top-left corner; cell (i, j) has material (i + k j) mod materials, k = 1 for "
-         "2 materials, else 2; one draw per material"},
-        {"materials", spec.materials},
-        {"same_texture", spec.sameTexture},
-        {"diffuse_maps", std::to_string(kMapSize) + "x" + std::to_string(kMapSize) +
-                             " flat sRGB, one hue per material; other maps the renderer's 1x1 defaults"},
-        {"lighting", "ambient only (no point lights): colour = ambient x diffuse map"},
-        {"fov_deg", kFovDeg},
-        {"plane_distance", kPlaneDistance},
-        {"material_maps", materialMaps},
-        {"wrong_pixel", "any RGB channel of the final RGBA8 image differs from the reference by more than " +
-                            std::to_string(kWrongTolerance)},
-        {"quad_mask",
-         "pixels whose 2x2 quad (aligned to even pixels) holds more than one material, from the layout"},
-        {"subgroup_size", subgroupSize},
-        {"subgroup_mask",
-         "pixels whose aligned " + std::to_string(subgroupSide) + "x" + std::to_string(subgroupSide) +
-             " block holds more than one material, from the layout; assumes a subgroup's fragments lie in "
-             "one "
-             "aligned power-of-two rectangle of quads no wider or taller than that (the smallest such square "
-             "with room for subgroup_size lanes)"},
-        {"boundary_error", "compareImages over the subgroup mask's pixels"},
-        {"distance_bins", distanceBinsNote},
-        {"predicted",
-         "the mask fractions of an infinite plane of these cells, derived per axis over one period "
-         "(masks.*_fraction counts them on this image)"}}},
+      {"method", edgesMethod(spec, subgroupSize, subgroupSide, materialMaps)},
       {"threshold", {{"boundary_error_fraction", spec.threshold}}},
       {"fails_at_rule",
        "per selection, the largest cell_size whose wrong.fraction reaches the threshold: cells "
        "shrink as cell_size falls, so it is where the selection first fails walking from large "
        "cells to small"},
-      {"points", points},
+      {"fails_at", failsAt(run.points, selections, spec.threshold)},
+      {"plots", json::array({plot("Wrong pixels against material cell size", "cell_size", "wrong.fraction",
+                                  false, "wrong pixels / covered pixels", {"selection"}, spec.threshold),
+                             plot("Error on boundary pixels against material cell size", "cell_size",
+                                  "boundary_error.mean_abs", false,
+                                  "mean |difference| per channel over the subgroup mask (0..255)",
+                                  {"selection"}, nullptr)})},
   };
-  for (auto s : selections) result["selections"].push_back(renderers::toString(s));
-  if (!skipped.empty()) result["selections_skipped"] = skipped;
-  result["fails_at"] = failsAt(points, selections, spec.threshold);
-  result["plots"] =
-      json::array({{{"title", "Wrong pixels against material cell size"},
-                    {"x", "cell_size"},
-                    {"x_log", true},
-                    {"y", "wrong.fraction"},
-                    {"y_log", false},
-                    {"y_label", "wrong pixels / covered pixels"},
-                    {"series", {"selection"}},
-                    {"threshold", spec.threshold}},
-                   {{"title", "Error on boundary pixels against material cell size"},
-                    {"x", "cell_size"},
-                    {"x_log", true},
-                    {"y", "boundary_error.mean_abs"},
-                    {"y_log", false},
-                    {"y_label", "mean |difference| per channel over the subgroup mask (0..255)"},
-                    {"series", {"selection"}},
-                    {"threshold", nullptr}}});
-  return result;
+  for (auto s : selections) report["selections"].push_back(renderers::toString(s));
+  if (!chosen->skipped.empty()) report["selections_skipped"] = chosen->skipped;
+  return run.finish(kEdgesSweepName, spec.source, std::move(report));
 }
 
 }  // namespace tally::sweeps

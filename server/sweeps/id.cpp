@@ -4,14 +4,14 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
-#include <map>
 
 #include "analysis/image.hpp"
-#include "sweeps/fields.hpp"
 #include "renderers/gpu_scene.hpp"
 #include "renderers/renderer.hpp"
 #include "scenes/textures.hpp"
 #include "shared.h"
+#include "sweeps/fields.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -37,31 +37,17 @@ constexpr size_t kExamples = 3;       // wrong pixels listed per point
 using fields::fieldError;
 using fields::show;
 
+using fields::joined;
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-// A non-empty array of distinct integers in [1, max].
+// An axis of distinct integers in [1, max].
 Result<std::vector<uint64_t>> countList(const json& j, const std::string& field, uint64_t max) {
-  if (!j.is_array() || j.empty() || j.size() > kMaxIdSweepAxis) {
-    return fieldError(
-        field, "must be an array of 1 to " + std::to_string(kMaxIdSweepAxis) + " integers, got " + show(j));
-  }
-  std::vector<uint64_t> out;
-  for (size_t i = 0; i < j.size(); ++i) {
-    std::string f = field + "[" + std::to_string(i) + "]";
-    if (!j[i].is_number_integer() || j[i].get<int64_t>() < 1 || uint64_t(j[i].get<int64_t>()) > max) {
-      return fieldError(f, "must be an integer from 1 to " + std::to_string(max) + ", got " + show(j[i]));
-    }
-    uint64_t v = uint64_t(j[i].get<int64_t>());
-    if (std::find(out.begin(), out.end(), v) != out.end())
-      return fieldError(f, std::to_string(v) + " listed twice");
-    out.push_back(v);
-  }
-  return out;
+  return fields::distinctList<uint64_t>(
+      j, field, kMaxIdSweepAxis, "integers", [&](const json& v, const std::string& f) -> Result<uint64_t> {
+        if (!v.is_number_integer() || v.get<int64_t>() < 1 || uint64_t(v.get<int64_t>()) > max) {
+          return fieldError(f, "must be an integer from 1 to " + std::to_string(max) + ", got " + show(v));
+        }
+        return uint64_t(v.get<int64_t>());
+      });
 }
 
 }  // namespace
@@ -75,9 +61,8 @@ bool idFits(uint64_t draws, uint64_t trianglesPerDraw) {
 }
 
 Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::string>& knownRenderers) {
-  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e = json_fields::unknownKey(
-          j, "", {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
+  if (auto e = fields::specObject(
+          j, {"sweep", "renderers", "draws", "triangles_per_draw", "resolution", "threshold"}))
     return *e;
   IdSweepSpec spec;
   spec.source = j;
@@ -92,20 +77,13 @@ Result<IdSweepSpec> parseIdSweepSpec(const json& j, const std::vector<std::strin
     spec.renderers.clear();
     for (size_t i = 0; i < r.size(); ++i) {
       std::string f = "renderers[" + std::to_string(i) + "]";
-      if (!r[i].is_string()) return fieldError(f, "must be a renderer name (one of " + joined(allowed) + ")");
-      std::string name = r[i].get<std::string>();
-      if (std::find(knownRenderers.begin(), knownRenderers.end(), name) == knownRenderers.end()) {
-        return fieldError(f, "unknown renderer '" + name + "' (expected one of " + joined(allowed) + ")");
+      auto name = fields::rendererName(r[i], f, allowed, knownRenderers,
+                                       "writes no visibility id, so it has no id capacity");
+      if (!name) return name.failure();
+      if (std::find(spec.renderers.begin(), spec.renderers.end(), *name) != spec.renderers.end()) {
+        return fieldError(f, "'" + *name + "' listed twice");
       }
-      if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
-        return fieldError(f, "'" + name +
-                                 "' writes no visibility id, so it has no id capacity (expected one of " +
-                                 joined(allowed) + ")");
-      }
-      if (std::find(spec.renderers.begin(), spec.renderers.end(), name) != spec.renderers.end()) {
-        return fieldError(f, "'" + name + "' listed twice");
-      }
-      spec.renderers.push_back(name);
+      spec.renderers.push_back(*name);
     }
   }
 
@@ -373,35 +351,6 @@ json wouldAlias(uint64_t draws, uint64_t trianglesPerDraw) {
 
 namespace {
 
-// Per group of points that differ only in `param`, the smallest value of it
-// at which the point fails; null where none does. Null overall when no point
-// fails.
-json failsAt(const json& points, const std::string& param, const std::vector<std::string>& groupBy) {
-  std::map<std::string, json> groups;
-  std::vector<std::string> order;
-  bool any = false;
-  for (const auto& p : points) {
-    json k = json::array();
-    for (const auto& g : groupBy) k.push_back(p[g]);
-    auto [it, inserted] = groups.try_emplace(k.dump());
-    if (inserted) {
-      order.push_back(k.dump());
-      for (const auto& g : groupBy) it->second[g] = p[g];
-      it->second[param] = nullptr;
-    }
-    if (p["fails"].get<bool>()) {
-      any = true;
-      const auto& v = p[param];
-      if (it->second[param].is_null() || v.get<uint64_t>() < it->second[param].get<uint64_t>())
-        it->second[param] = v;
-    }
-  }
-  if (!any) return nullptr;
-  json out = json::array();
-  for (const auto& k : order) out.push_back(groups[k]);
-  return out;
-}
-
 bool mentions(const std::string& text, uint64_t number) {
   // As a whole number: "5120" does not mention 512.
   const std::string n = std::to_string(number);
@@ -421,121 +370,97 @@ json imageErrorJson(const ImageError& e) {
           {"mean_abs", e.meanAbs}};
 }
 
-}  // namespace
+// One scene of the sweep, which every renderer's point draws.
+struct IdScenePoint {
+  uint64_t draws = 0, triangles = 0;
+  std::string name;  // "draws 512 triangles_per_draw 4"
+  const IdScene& built;
+  const IdCoverage& truth;
+  const renderers::GpuScene& gpuScene;
+  renderers::RendererOptions options;
+  std::vector<uint8_t> reference = {};  // the forward image, made once, when a renderer draws
+};
 
-Result<json> runIdSweep(gpu::Context& ctx, const IdSweepSpec& spec, const SweepOptions& options) {
-  const VkExtent2D extent = {spec.resolution.width, spec.resolution.height};
-  const uint64_t pixels = uint64_t{extent.width} * extent.height;
-  Progress progress{0, spec.renderers.size() * spec.draws.size() * spec.trianglesPerDraw.size(), ""};
-  json points = json::array();
-  for (uint64_t triangles : spec.trianglesPerDraw) {
-    for (uint64_t draws : spec.draws) {
-      const std::string scenePoint =
-          "draws " + std::to_string(draws) + " triangles_per_draw " + std::to_string(triangles);
-      IdScene built = buildIdScene(draws, triangles, extent);
-      const IdCoverage truth = idCoverage(built.scene, built.camera, extent);
-      renderers::GpuScene gpuScene;
-      auto uploaded = gpuScene.upload(ctx, built.scene);
-      if (!uploaded) return makeError(scenePoint + ": " + uploaded.error());
-      built.scene.meshes.clear();  // the index data lives on in gpuScene: free the CPU copy
-      built.scene.meshes.shrink_to_fit();
-      const renderers::RendererOptions ro{extent, false, spirv::Mode{}, 0, kDepthRange};
+Result<bool> forwardImage(gpu::Context& ctx, IdScenePoint& at) {
+  if (!at.reference.empty()) return true;
+  auto made = renderers::makeRenderer("forward");
+  if (!made) return made.failure();
+  auto ok = (*made)->setup(ctx, at.gpuScene, at.options);
+  if (!ok) return ok.failure();
+  (*made)->renderFrame(at.built.camera);
+  at.reference = (*made)->finalImage();
+  (*made)->destroy();
+  return true;
+}
 
-      // The forward image of the same scene, once per scene, when a renderer draws.
-      std::vector<uint8_t> reference;
-      auto forwardImage = [&]() -> Result<bool> {
-        if (!reference.empty()) return true;
-        auto made = renderers::makeRenderer("forward");
-        if (!made) return made.failure();
-        auto ok = (*made)->setup(ctx, gpuScene, ro);
-        if (!ok) return ok.failure();
-        (*made)->renderFrame(built.camera);
-        reference = (*made)->finalImage();
-        (*made)->destroy();
-        return true;
-      };
-
-      for (const auto& name : spec.renderers) {
-        const std::string where = name + " " + scenePoint;
-        progress.current = where;
-        if (options.progress) options.progress(progress);
-        const bool fits = idFits(draws, triangles);
-        json point = {{"renderer", name},
-                      {"draws", draws},
-                      {"triangles_per_draw", triangles},
-                      {"total_triangles", draws * triangles},
-                      {"expected", fits ? "rendered" : "refused"},
-                      {"tiled_draws", built.tiledDraws},
-                      {"visible_triangles_per_draw", built.visiblePerDraw}};
-        auto made = renderers::makeRenderer(name);
-        if (!made) return makeError(where + ": " + made.error());
-        auto ok = (*made)->setup(ctx, gpuScene, ro);
-        if (!ok) {
-          // The reason must name the limit crossed and the scene's count.
-          const bool drawsOver = draws > shaders::kMaxDraws;
-          const uint64_t limit = drawsOver ? shaders::kMaxDraws : shaders::kTriangleIdMask;
-          const uint64_t count = drawsOver ? draws : triangles;
-          point["status"] = "refused";
-          point["refused"] = 1;
-          point["error"] = IdCheck{}.toJson();
-          point["refusal"] = {{"message", ok.error()},
-                              {"names_limit", mentions(ok.error(), limit)},
-                              {"names_count", mentions(ok.error(), count)}};
-          point["would_alias"] = wouldAlias(draws, triangles);
-        } else {
-          (*made)->renderFrame(built.camera);
-          std::vector<uint8_t> bytes = (*made)->targetBytes("visibility.id");
-          std::vector<uint8_t> image = (*made)->finalImage();
-          json notes = (*made)->notes();
-          (*made)->destroy();
-          std::vector<uint32_t> ids = idsOf(bytes, pixels);
-          if (ids.empty()) {
-            return makeError(where + ": the visibility.id target could not be read back (" +
-                             std::to_string(bytes.size()) + " bytes for " + std::to_string(pixels) +
-                             " pixels)");
-          }
-          IdCheck check = checkIds(ids, truth, extent);
-          point["status"] = "rendered";
-          point["refused"] = 0;
-          point["error"] = check.toJson();
-          point["notes"] = notes;
-          if (auto ref = forwardImage(); !ref) return makeError(scenePoint + " forward: " + ref.error());
-          auto imageError = compareImages(image, reference, extent.width, extent.height);
-          if (!imageError) return makeError(where + ": " + imageError.error());
-          point["image_error"] = imageErrorJson(*imageError);
-        }
-        point["fails"] =
-            point["status"] == "refused" || point["error"]["wrong_pixels"].get<uint64_t>() > spec.wrongPixels;
-        points.push_back(point);
-        ++progress.done;
-      }
-      gpuScene.destroy();
+// The point of the renderer `name` on the scene: refused, with what the
+// refusal names and what packing anyway would alias, or rendered, with its
+// ids checked against the truth and its image against forward's.
+Result<json> idPoint(gpu::Context& ctx, IdScenePoint& at, const std::string& name, const IdSweepSpec& spec) {
+  const std::string where = name + " " + at.name;
+  const uint64_t draws = at.draws, triangles = at.triangles;
+  const bool fits = idFits(draws, triangles);
+  json point = {{"renderer", name},
+                {"draws", draws},
+                {"triangles_per_draw", triangles},
+                {"total_triangles", draws * triangles},
+                {"expected", fits ? "rendered" : "refused"},
+                {"tiled_draws", at.built.tiledDraws},
+                {"visible_triangles_per_draw", at.built.visiblePerDraw}};
+  auto made = renderers::makeRenderer(name);
+  if (!made) return makeError(where + ": " + made.error());
+  auto ok = (*made)->setup(ctx, at.gpuScene, at.options);
+  if (!ok) {
+    // The reason must name the limit crossed and the scene's count.
+    const bool drawsOver = draws > shaders::kMaxDraws;
+    const uint64_t limit = drawsOver ? shaders::kMaxDraws : shaders::kTriangleIdMask;
+    const uint64_t count = drawsOver ? draws : triangles;
+    point["status"] = "refused";
+    point["refused"] = 1;
+    point["error"] = IdCheck{}.toJson();
+    point["refusal"] = {{"message", ok.error()},
+                        {"names_limit", mentions(ok.error(), limit)},
+                        {"names_count", mentions(ok.error(), count)}};
+    point["would_alias"] = wouldAlias(draws, triangles);
+  } else {
+    const VkExtent2D extent = at.options.extent;
+    const uint64_t pixels = uint64_t{extent.width} * extent.height;
+    (*made)->renderFrame(at.built.camera);
+    std::vector<uint8_t> bytes = (*made)->targetBytes("visibility.id");
+    std::vector<uint8_t> image = (*made)->finalImage();
+    json notes = (*made)->notes();
+    (*made)->destroy();
+    std::vector<uint32_t> ids = idsOf(bytes, pixels);
+    if (ids.empty()) {
+      return makeError(where + ": the visibility.id target could not be read back (" +
+                       std::to_string(bytes.size()) + " bytes for " + std::to_string(pixels) + " pixels)");
     }
+    IdCheck check = checkIds(ids, at.truth, extent);
+    point["status"] = "rendered";
+    point["refused"] = 0;
+    point["error"] = check.toJson();
+    point["notes"] = notes;
+    if (auto ref = forwardImage(ctx, at); !ref) return makeError(at.name + " forward: " + ref.error());
+    auto imageError = compareImages(image, at.reference, extent.width, extent.height);
+    if (!imageError) return makeError(where + ": " + imageError.error());
+    point["image_error"] = imageErrorJson(*imageError);
   }
-  progress.current = "done";
-  if (options.progress) options.progress(progress);
+  point["fails"] =
+      point["status"] == "refused" || point["error"]["wrong_pixels"].get<uint64_t>() > spec.wrongPixels;
+  return point;
+}
 
-  json byDraws = failsAt(points, "draws", {"renderer", "triangles_per_draw"});
-  json byTriangles = failsAt(points, "triangles_per_draw", {"renderer", "draws"});
+// The result around the points: the id's capacity, the method, where the
+// points start to fail along each axis, and the charts.
+json idReport(const IdSweepSpec& spec, const json& points) {
+  // Per group of points that differ only in one axis, the smallest value of
+  // it at which a point fails.
+  auto fails = [](const json& p) { return p["fails"].get<bool>(); };
   const json threshold = spec.wrongPixels;
-  auto plot = [&](const std::string& title, const std::string& x, const std::string& y,
-                  const std::string& yLabel, const std::string& other, json line) {
-    return json{{"title", title},
-                {"x", x},
-                {"x_log", true},
-                {"y", y},
-                {"y_log", false},
-                {"y_label", yLabel},
-                {"series", {"renderer", other}},
-                {"threshold", line}};
-  };
-  json result = {
-      {"sweep", std::string(kIdSweepName)},
-      {"device", gpu::describe(ctx)},
-      {"spec", spec.source},
+  return {
       {"renderers", spec.renderers},
       {"parameters", {"draws", "triangles_per_draw"}},
-      {"resolution", {extent.width, extent.height}},
+      {"resolution", {spec.resolution.width, spec.resolution.height}},
       {"capacity",
        {{"draws", shaders::kMaxDraws},
         {"triangles_per_draw", shaders::kTriangleIdMask},
@@ -553,21 +478,56 @@ Result<json> runIdSweep(gpu::Context& ctx, const IdSweepSpec& spec, const SweepO
         {"plane_distance", kPlaneDistance},
         {"fov_deg", kFovDeg}}},
       {"threshold", {{"wrong_pixels", spec.wrongPixels}}},
-      {"points", points},
       {"plots",
-       {plot("Wrong pixels against draws", "draws", "error.wrong_pixels", "wrong pixels",
-             "triangles_per_draw", threshold),
-        plot("Refused against draws", "draws", "refused", "refused (1) or rendered (0)", "triangles_per_draw",
-             nullptr),
-        plot("Wrong pixels against triangles per draw", "triangles_per_draw", "error.wrong_pixels",
-             "wrong pixels", "draws", threshold),
-        plot("Refused against triangles per draw", "triangles_per_draw", "refused",
-             "refused (1) or rendered (0)", "draws", nullptr)}},
+       {plot("Wrong pixels against draws", "draws", "error.wrong_pixels", false, "wrong pixels",
+             {"renderer", "triangles_per_draw"}, threshold),
+        plot("Refused against draws", "draws", "refused", false, "refused (1) or rendered (0)",
+             {"renderer", "triangles_per_draw"}, nullptr),
+        plot("Wrong pixels against triangles per draw", "triangles_per_draw", "error.wrong_pixels", false,
+             "wrong pixels", {"renderer", "draws"}, threshold),
+        plot("Refused against triangles per draw", "triangles_per_draw", "refused", false,
+             "refused (1) or rendered (0)", {"renderer", "draws"}, nullptr)}},
+      {"fails_at",
+       failsAtByAxis({{"draws", smallestFailing(points, "draws", {"renderer", "triangles_per_draw"}, fails)},
+                      {"triangles_per_draw",
+                       smallestFailing(points, "triangles_per_draw", {"renderer", "draws"}, fails)}})},
   };
-  result["fails_at"] = byDraws.is_null() && byTriangles.is_null()
-                           ? json(nullptr)
-                           : json{{"draws", byDraws}, {"triangles_per_draw", byTriangles}};
-  return result;
+}
+
+}  // namespace
+
+Result<json> runIdSweep(gpu::Context& ctx, const IdSweepSpec& spec, const SweepOptions& options) {
+  const VkExtent2D extent = {spec.resolution.width, spec.resolution.height};
+  SweepRun run(ctx, options, spec.renderers.size() * spec.draws.size() * spec.trianglesPerDraw.size());
+  for (uint64_t triangles : spec.trianglesPerDraw) {
+    for (uint64_t draws : spec.draws) {
+      const std::string name =
+          "draws " + std::to_string(draws) + " triangles_per_draw " + std::to_string(triangles);
+      IdScene built = buildIdScene(draws, triangles, extent);
+      const IdCoverage truth = idCoverage(built.scene, built.camera, extent);
+      auto ran = run.withScene(built.scene, name, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+        built.scene.meshes.clear();  // the index data lives on in gpuScene: free the CPU copy
+        built.scene.meshes.shrink_to_fit();
+        IdScenePoint at{draws,
+                        triangles,
+                        name,
+                        built,
+                        truth,
+                        gpuScene,
+                        renderers::RendererOptions{extent, false, spirv::Mode{}, 0, kDepthRange}};
+        for (const auto& renderer : spec.renderers) {
+          run.next(renderer + " " + name);
+          auto point = idPoint(ctx, at, renderer, spec);
+          if (!point) return point.failure();
+          run.points.push_back(std::move(*point));
+        }
+        return true;
+      });
+      if (!ran) return ran.failure();
+    }
+  }
+  json report = idReport(spec, run.points);
+  return run.finish(kIdSweepName, spec.source, std::move(report));
 }
 
 }  // namespace tally::sweeps

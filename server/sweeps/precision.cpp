@@ -6,13 +6,13 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <map>
 
 #include "analysis/image.hpp"
-#include "sweeps/fields.hpp"
 #include "renderers/gpu_scene.hpp"
-#include "scenes/mesh_builder.hpp"
 #include "shared.h"
+#include "sweeps/fields.hpp"
+#include "sweeps/precision_plane.hpp"
+#include "sweeps/skeleton.hpp"
 
 namespace tally::sweeps {
 
@@ -26,115 +26,13 @@ using renderers::VisibilityEncoding;
 
 constexpr double kUnorm16Steps = 65535.0;
 
-using fields::fieldError;
 using fields::num;
-using fields::show;
-
-
-
-// A non-empty array of distinct positive finite numbers.
-Result<std::vector<double>> positiveList(const json& j, const std::string& field) {
-  if (!j.is_array() || j.empty() || j.size() > kMaxPrecisionAxis) {
-    return fieldError(
-        field, "must be an array of 1 to " + std::to_string(kMaxPrecisionAxis) + " numbers, got " + show(j));
-  }
-  std::vector<double> out;
-  for (size_t i = 0; i < j.size(); ++i) {
-    std::string f = field + "[" + std::to_string(i) + "]";
-    if (!j[i].is_number() || !std::isfinite(j[i].get<double>()) || j[i].get<double>() <= 0 ||
-        j[i].get<double>() > 1e6) {
-      return fieldError(f, "must be a number in (0, 1e6] metres, got " + show(j[i]));
-    }
-    double v = j[i].get<double>();
-    if (std::find(out.begin(), out.end(), v) != out.end()) return fieldError(f, num(v) + " listed twice");
-    out.push_back(v);
-  }
-  return out;
-}
-
-// A finite number in [lo, hi] (or (lo, hi] when `openLow`).
-Result<double> numberIn(const json& j, const std::string& field, double lo, double hi, bool openLow) {
-  if (!j.is_number() || !std::isfinite(j.get<double>()) || j.get<double>() > hi ||
-      (openLow ? j.get<double>() <= lo : j.get<double>() < lo)) {
-    return fieldError(field, "must be a number in " + std::string(openLow ? "(" : "[") + num(lo) + ", " +
-                                 num(hi) + "], got " + show(j));
-  }
-  return j.get<double>();
-}
-
-uint32_t hashTexel(uint32_t x, uint32_t y, uint32_t seed) {
-  uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ seed * 0xcb1ab31fu;
-  h ^= h >> 16;
-  h *= 0x7feb352du;
-  h ^= h >> 15;
-  h *= 0x846ca68bu;
-  h ^= h >> 16;
-  return h;
-}
-
-// The view: camera at the origin looking down -Z, square pixels.
-struct View {
-  uint32_t width = 0, height = 0;
-  double tanHalf = 0, aspect = 0;
-};
-
-View viewOf(const PrecisionSweepSpec& spec) {
-  View v;
-  v.width = spec.resolution.width;
-  v.height = spec.resolution.height;
-  v.tanHalf = std::tan(glm::radians(spec.fovDeg) / 2.0);
-  v.aspect = double(float(v.width) / float(v.height));  // as the projection gets it
-  return v;
-}
-
-// The plane z = -d + a x + b y: view depth changes by kPrecisionTilt / 2 of d
-// from the centre to each edge (as the depth sweep's).
-struct Plane {
-  double d = 0, a = 0, b = 0;
-};
-
-Plane planeAt(const View& v, double distance) {
-  return {distance, 0.5 * kPrecisionTilt / (v.tanHalf * v.aspect), 0.5 * kPrecisionTilt / v.tanHalf};
-}
-
-// Half-extents of the plane: at the margin it lies nearer than d / (1 - 2
-// tilt), and 1.5x the view there covers every pixel.
-glm::dvec2 planeHalfExtent(const View& v, double distance) {
-  const double halfY = distance / (1.0 - 2 * kPrecisionTilt) * v.tanHalf * 1.5;
-  return {halfY * v.aspect, halfY};
-}
-
-// The grid of `size` cells covering the plane: cell columns [i0, i1), rows [j0, j1).
-struct Grid {
-  double i0 = 0, i1 = 0, j0 = 0, j1 = 0;
-  double triangles() const { return 2.0 * (i1 - i0) * (j1 - j0); }
-};
-
-Grid gridOf(const View& v, double distance, double size) {
-  const glm::dvec2 half = planeHalfExtent(v, distance);
-  return {std::floor(-half.x / size), std::ceil(half.x / size), std::floor(-half.y / size),
-          std::ceil(half.y / size)};
-}
-
-Error tooManyTriangles(const std::string& field, double size, double distance, double triangles) {
-  return fieldError(field, "legs of " + num(size) + " m tile the plane at distance " + num(distance) +
-                               " with " + num(triangles) + " triangles, more than the limit of " +
-                               std::to_string(kMaxPrecisionTriangles));
-}
-
-// uv of world (x, y): scale R(rotation) (x, -y).
-struct UvMap {
-  double scale = 0, c = 1, s = 0;
-  glm::dvec2 operator()(glm::dvec2 p) const {
-    const double x = p.x, y = -p.y;
-    return scale * glm::dvec2(c * x - s * y, s * x + c * y);
-  }
-};
-
-UvMap uvMapOf(const PrecisionSweepSpec& spec) {
-  const double r = glm::radians(spec.uvRotationDeg);
-  return {spec.texelsPerMetre / double(spec.textureSize), std::cos(r), std::sin(r)};
-}
+using precision_plane::Plane;
+using precision_plane::planeAt;
+using precision_plane::UvMap;
+using precision_plane::uvMapOf;
+using precision_plane::View;
+using precision_plane::viewOf;
 
 // The uv derivatives across one pixel at pixel (x, y), from the ray-plane
 // intersection in double: the ray through the pixel centre has view-space
@@ -260,224 +158,7 @@ json failedMetrics(const json& point, const PrecisionSweepSpec& spec) {
   return out;
 }
 
-// Per group of points that differ only in `param`, the smallest value of it
-// whose image or mip-level error reaches the threshold, and which metrics
-// did there; null where none does. Null overall when no point fails.
-json failsAt(const json& points, const std::string& param, const std::vector<std::string>& groupBy) {
-  std::map<std::string, json> groups;
-  std::vector<std::string> order;
-  bool any = false;
-  for (const auto& p : points) {
-    json key = json::array();
-    for (const auto& g : groupBy) key.push_back(p[g]);
-    auto [it, inserted] = groups.try_emplace(key.dump());
-    if (inserted) {
-      order.push_back(key.dump());
-      for (const auto& g : groupBy) it->second[g] = p[g];
-      it->second[param] = nullptr;
-      it->second["metrics"] = nullptr;
-    }
-    if (p["fails"].empty()) continue;
-    any = true;
-    double v = p[param].get<double>();
-    if (it->second[param].is_null() || v < it->second[param].get<double>()) {
-      it->second[param] = v;
-      it->second["metrics"] = p["fails"];
-    }
-  }
-  if (!any) return nullptr;
-  json out = json::array();
-  for (const auto& k : order) out.push_back(groups[k]);
-  return out;
-}
-
 }  // namespace
-
-uint32_t PrecisionSweepSpec::levels() const { return uint32_t(std::countr_zero(textureSize)) + 1; }
-
-Result<PrecisionSweepSpec> parsePrecisionSweepSpec(const json& j) {
-  if (!j.is_object()) return fieldError("spec", "must be a JSON object, got " + show(j));
-  if (auto e =
-          json_fields::unknownKey(j, "",
-                                  {"sweep", "distances", "triangle_sizes", "texture_size", "texels_per_metre",
-                                   "uv_rotation_deg", "resolution", "fov_deg", "threshold"}))
-    return *e;
-  PrecisionSweepSpec spec;
-  spec.source = j;
-
-  if (!j.contains("distances")) return fieldError("distances", "required, e.g. [2, 8, 32]");
-  auto distances = positiveList(j["distances"], "distances");
-  if (!distances) return distances.failure();
-  spec.distances = *distances;
-  if (!j.contains("triangle_sizes")) return fieldError("triangle_sizes", "required, e.g. [0.25, 1, 4]");
-  auto sizes = positiveList(j["triangle_sizes"], "triangle_sizes");
-  if (!sizes) return sizes.failure();
-  spec.triangleSizes = *sizes;
-
-  if (j.contains("texture_size")) {
-    const auto& t = j["texture_size"];
-    const bool integer = t.is_number_integer() && t.get<int64_t>() >= kMinPrecisionTexture &&
-                         t.get<int64_t>() <= kMaxPrecisionTexture;
-    if (!integer || !std::has_single_bit(uint64_t(t.get<int64_t>()))) {
-      return fieldError("texture_size", "must be a power of two from " +
-                                            std::to_string(kMinPrecisionTexture) + " to " +
-                                            std::to_string(kMaxPrecisionTexture) + ", got " + show(t));
-    }
-    spec.textureSize = uint32_t(t.get<int64_t>());
-  }
-  if (j.contains("texels_per_metre")) {
-    auto v = numberIn(j["texels_per_metre"], "texels_per_metre", 0.0, 1e6, true);
-    if (!v) return v.failure();
-    spec.texelsPerMetre = *v;
-  }
-  if (j.contains("uv_rotation_deg")) {
-    auto v = numberIn(j["uv_rotation_deg"], "uv_rotation_deg", -360.0, 360.0, false);
-    if (!v) return v.failure();
-    spec.uvRotationDeg = *v;
-  }
-  if (j.contains("resolution")) {
-    auto r = fields::resolution(j["resolution"]);
-    if (!r) return r.failure();
-    spec.resolution = *r;
-  }
-  if (j.contains("fov_deg")) {
-    auto v = numberIn(j["fov_deg"], "fov_deg", 1.0, 170.0, false);
-    if (!v) return v.failure();
-    spec.fovDeg = *v;
-  }
-  if (j.contains("threshold")) {
-    const auto& t = j["threshold"];
-    if (!t.is_object()) {
-      return fieldError("threshold",
-                        "must be {\"image_max_abs\": levels, \"mip_level\": levels}, got " + show(t));
-    }
-    if (auto e = json_fields::unknownKey(t, "threshold", {"image_max_abs", "mip_level"})) return *e;
-    if (t.contains("image_max_abs")) {
-      auto v = numberIn(t["image_max_abs"], "threshold.image_max_abs", 0.0, 255.0, true);
-      if (!v) return v.failure();
-      spec.imageThreshold = *v;
-    }
-    if (t.contains("mip_level")) {
-      auto v = numberIn(t["mip_level"], "threshold.mip_level", 0.0, 16.0, true);
-      if (!v) return v.failure();
-      spec.mipThreshold = *v;
-    }
-  }
-
-  const size_t renders = spec.distances.size() * spec.triangleSizes.size() * (precisionVariants().size() + 1);
-  if (renders > kMaxPrecisionRenders) {
-    return fieldError("spec", "distances x triangle_sizes x " +
-                                  std::to_string(precisionVariants().size() + 1) + " encodings is " +
-                                  std::to_string(renders) + " renders, more than the limit of " +
-                                  std::to_string(kMaxPrecisionRenders));
-  }
-  // Every (distance, size) must tessellate within the triangle limit; the
-  // grid's size does not depend on the texture, so checking costs nothing.
-  const View view = viewOf(spec);
-  for (double distance : spec.distances) {
-    for (size_t k = 0; k < spec.triangleSizes.size(); ++k) {
-      const double triangles = gridOf(view, distance, spec.triangleSizes[k]).triangles();
-      if (triangles > double(kMaxPrecisionTriangles)) {
-        return tooManyTriangles("triangle_sizes[" + std::to_string(k) + "]", spec.triangleSizes[k], distance,
-                                triangles);
-      }
-    }
-  }
-  return spec;
-}
-
-PrecisionVariant precisionReference() {
-  return {"reference", {BarycentricEncoding::Float32, UvDerivativeEncoding::Float32}};
-}
-
-std::vector<PrecisionVariant> precisionVariants() {
-  return {precisionReference(),
-          {"unorm16-barycentrics", {BarycentricEncoding::Unorm16, UvDerivativeEncoding::Float32}},
-          {"half-derivatives", {BarycentricEncoding::Float32, UvDerivativeEncoding::Half}},
-          {"study-derivatives", {BarycentricEncoding::Float32, UvDerivativeEncoding::Unorm16Clamped}},
-          {"tally", {BarycentricEncoding::Unorm16, UvDerivativeEncoding::Half}},
-          {"study", {BarycentricEncoding::Unorm16, UvDerivativeEncoding::Unorm16Clamped}}};
-}
-
-scenes::Texture precisionTexture(uint32_t size) {
-  // Saturated colours, each far from its neighbours in the cycle.
-  static const glm::vec3 kLevelColours[] = {{1.0f, 0.16f, 0.16f}, {0.16f, 1.0f, 0.16f}, {0.25f, 0.25f, 1.0f},
-                                            {1.0f, 1.0f, 0.16f},  {1.0f, 0.16f, 1.0f},  {0.16f, 1.0f, 1.0f},
-                                            {1.0f, 0.6f, 0.16f}};
-  constexpr uint32_t kColours = sizeof kLevelColours / sizeof kLevelColours[0];
-  auto level = [&](uint32_t l) {
-    const uint32_t n = std::max(size >> l, 1u);
-    std::vector<uint8_t> texels(size_t(n) * n * 4);
-    for (uint32_t y = 0; y < n; ++y) {
-      for (uint32_t x = 0; x < n; ++x) {
-        const float checker = ((x + y) & 1u) ? 1.0f : 0.35f;
-        const float jitter = 0.9f + 0.2f * float(hashTexel(x, y, l) >> 8) * (1.0f / 16777216.0f);
-        const glm::vec3 c = glm::clamp(kLevelColours[l % kColours] * checker * jitter, 0.0f, 1.0f);
-        uint8_t* t = &texels[(size_t(y) * n + x) * 4];
-        for (int i = 0; i < 3; ++i) t[i] = uint8_t(std::lround(c[i] * 255.0f));
-        t[3] = 255;
-      }
-    }
-    return texels;
-  };
-  scenes::Texture t;
-  t.name = "precision/diffuse";
-  t.width = t.height = size;
-  t.srgb = true;
-  t.rgba8 = level(0);
-  for (uint32_t l = 1; (size >> l) > 0; ++l) t.mips.push_back(level(l));
-  return t;
-}
-
-Result<scenes::Scene> precisionScene(const PrecisionSweepSpec& spec, double distance, double triangleSize,
-                                     const std::string& field) {
-  const View v = viewOf(spec);
-  const Plane plane = planeAt(v, distance);
-  const UvMap uv = uvMapOf(spec);
-  const Grid grid = gridOf(v, distance, triangleSize);
-  if (grid.triangles() > double(kMaxPrecisionTriangles)) {
-    return tooManyTriangles(field, triangleSize, distance, grid.triangles());
-  }
-  scenes::Scene scene;
-  scene.name = "precision-plane";
-  scene.textures.push_back(precisionTexture(spec.textureSize));
-  scenes::Material material;
-  material.name = "precision";
-  material.maps[size_t(scenes::MapSlot::Diffuse)] = 0;
-  scene.materials.push_back(material);
-
-  const glm::vec3 facing(-float(plane.a), -float(plane.b), 1.0f);
-  const glm::vec3 normal = glm::normalize(facing);
-  scenes::MeshBuilder b;
-  const int64_t nx = int64_t(grid.i1 - grid.i0), ny = int64_t(grid.j1 - grid.j0);
-  for (int64_t j = 0; j <= ny; ++j) {
-    for (int64_t i = 0; i <= nx; ++i) {
-      const double x = (grid.i0 + double(i)) * triangleSize, y = (grid.j0 + double(j)) * triangleSize;
-      const glm::vec3 p(float(x), float(y), float(-plane.d + plane.a * x + plane.b * y));
-      b.vertex(p, normal, glm::vec2(uv(glm::dvec2(x, y))));
-    }
-  }
-  auto at = [&](int64_t i, int64_t j) { return uint32_t(j * (nx + 1) + i); };
-  for (int64_t j = 0; j < ny; ++j) {
-    for (int64_t i = 0; i < nx; ++i) {
-      // Right angles at (i + 1, j) and (i, j + 1); legs along x and y.
-      b.triangle(at(i, j), at(i + 1, j), at(i + 1, j + 1), facing);
-      b.triangle(at(i, j), at(i + 1, j + 1), at(i, j + 1), facing);
-    }
-  }
-  scene.meshes.push_back(b.finish("plane", 0));
-  scenes::updateBounds(scene);
-  return scene;
-}
-
-scenes::Camera precisionCamera(const PrecisionSweepSpec& spec) {
-  scenes::Camera camera;
-  camera.eye = glm::vec3(0.0f);
-  camera.target = glm::vec3(0.0f, 0.0f, -1.0f);
-  camera.fovDeg = float(spec.fovDeg);
-  camera.label = "head-on";
-  return camera;
-}
 
 double mipLevelOf(glm::dvec2 dx, glm::dvec2 dy, uint32_t textureSize, uint32_t levels) {
   const double rho = std::max(glm::length(dx), glm::length(dy)) * double(textureSize);
@@ -496,215 +177,224 @@ double halfMipLevelBound(uint32_t textureSize) {
   return -std::log2(1.0 - std::ldexp(1.0, -11) * widen);
 }
 
-Result<json> runPrecisionSweep(gpu::Context& ctx, const PrecisionSweepSpec& spec,
-                               const SweepOptions& options) {
-  const View v = viewOf(spec);
+namespace {
+
+// What the model says at one distance before any render: the texels per
+// pixel at the screen centre, and what the study's packing makes of the
+// model's derivatives.
+struct DistanceModel {
+  double rhoCentre = 0;
+  Stats studyModel;
+  size_t modelNegative = 0;
+  renderers::DepthRange range;
+};
+
+DistanceModel modelAt(const PrecisionSweepSpec& spec, const View& v, double distance) {
+  const Plane plane = planeAt(v, distance);
   const UvMap uvMap = uvMapOf(spec);
   const uint32_t levels = spec.levels();
-  const size_t pixels = size_t(v.width) * v.height;
-  const auto variants = precisionVariants();
-  const PrecisionVariant reference = precisionReference();
-  const scenes::Camera camera = precisionCamera(spec);
-  Progress progress{0, spec.distances.size() * spec.triangleSizes.size() * (variants.size() + 1), ""};
-  json formats = json::object();
-  std::string barycentricSource;
-
-  json points = json::array();
-  for (double distance : spec.distances) {
-    const Plane plane = planeAt(v, distance);
-    // Texels per pixel and level at the screen centre, where the plane faces
-    // the camera at distance d: a pixel spans 2 d tan / H metres.
-    const double rhoCentre = 2.0 * distance * v.tanHalf / v.height * spec.texelsPerMetre;
-    // The model's derivatives per pixel, and what each packing makes of them.
-    std::vector<Derivatives> model(pixels);
-    for (uint32_t y = 0; y < v.height; ++y) {
-      for (uint32_t x = 0; x < v.width; ++x)
-        model[size_t(y) * v.width + x] = modelDerivatives(v, plane, uvMap, x, y);
-    }
-    Stats studyModel;
-    size_t modelNegative = 0;
-    for (const auto& m : model) {
+  DistanceModel out;
+  // Texels per pixel and level at the screen centre, where the plane faces
+  // the camera at distance d: a pixel spans 2 d tan / H metres.
+  out.rhoCentre = 2.0 * distance * v.tanHalf / v.height * spec.texelsPerMetre;
+  // The model's derivatives per pixel, and what each packing makes of them.
+  for (uint32_t y = 0; y < v.height; ++y) {
+    for (uint32_t x = 0; x < v.width; ++x) {
+      const Derivatives m = modelDerivatives(v, plane, uvMap, x, y);
       const Derivatives q = {{unorm16(m.dx.x), unorm16(m.dx.y)}, {unorm16(m.dy.x), unorm16(m.dy.y)}};
-      studyModel.add(std::abs(mipLevelOf(q.dx, q.dy, spec.textureSize, levels) -
-                              mipLevelOf(m.dx, m.dy, spec.textureSize, levels)));
-      if (hasNegative(m)) ++modelNegative;
-    }
-    const renderers::DepthRange range{float(distance / 2),
-                                      float(distance * 2)};  // the plane spans d / 1.1 .. d / 0.9
-
-    for (double size : spec.triangleSizes) {
-      const std::string where = "distance " + num(distance) + " triangle size " + num(size);
-      auto scene = precisionScene(spec, distance, size);
-      if (!scene) return makeError(where + ": " + scene.error());
-      const scenes::Mesh& mesh = scene->meshes.front();
-      renderers::GpuScene gpuScene;
-      auto uploaded = gpuScene.upload(ctx, *scene);
-      if (!uploaded) return makeError(where + ": " + uploaded.error());
-
-      progress.current = where + " reference";
-      if (options.progress) options.progress(progress);
-      auto ref = render(ctx, gpuScene, camera, v, range, reference.encoding);
-      if (!ref) return makeError(where + " reference: " + ref.error());
-      ++progress.done;
-      barycentricSource = ref->barycentricSource;
-      formats[reference.name] = {{"visibility.id", ref->idFormat},
-                                 {"visibility.uv_derivatives", ref->derivativeFormat}};
-
-      // The reference's level per pixel and triangle per pixel.
-      std::vector<double> refLevel(pixels);
-      size_t covered = 0;
-      for (size_t i = 0; i < pixels; ++i) {
-        if (wordAt(ref->ids, i, ref->idStride, 0) == shaders::kVisibilityClear) continue;
-        ++covered;
-        const Derivatives d = derivativesAt(*ref, UvDerivativeEncoding::Float32, i);
-        refLevel[i] = mipLevelOf(d.dx, d.dy, spec.textureSize, levels);
-      }
-      if (covered != pixels) {
-        return makeError(where + ": " + std::to_string(pixels - covered) +
-                         " pixels kept the cleared id (the plane was not drawn)");
-      }
-      // The largest uv edge sum of any triangle, for the barycentric bound.
-      double edgeBound = 0;
-      for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-        const glm::dvec2 u0(mesh.vertices[mesh.indices[t]].uv), u1(mesh.vertices[mesh.indices[t + 1]].uv),
-            u2(mesh.vertices[mesh.indices[t + 2]].uv);
-        edgeBound = std::max(edgeBound, barycentricUvBound(u1 - u0, u2 - u0, spec.textureSize));
-      }
-
-      for (const auto& variant : variants) {
-        progress.current = where + " " + variant.name;
-        if (options.progress) options.progress(progress);
-        auto got = render(ctx, gpuScene, camera, v, range, variant.encoding);
-        if (!got) return makeError(where + " " + variant.name + ": " + got.error());
-        ++progress.done;
-        formats[variant.name] = {{"visibility.id", got->idFormat},
-                                 {"visibility.uv_derivatives", got->derivativeFormat}};
-
-        auto image = compareImages(ref->image, got->image, v.width, v.height);
-        if (!image) return makeError(where + " " + variant.name + ": " + image.error());
-        size_t differing = 0;
-        for (size_t i = 0; i < pixels; ++i) {
-          const uint8_t* a = &ref->image[i * 4];
-          const uint8_t* b = &got->image[i * 4];
-          if (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) ++differing;
-        }
-
-        Stats mip, uvTexels, uvInRange;
-        mip.cut = 0.5;  // half a level: the nearest level changes
-        size_t mismatched = 0, clamped = 0, outOfRange = 0;
-        for (size_t i = 0; i < pixels; ++i) {
-          const uint32_t id = wordAt(got->ids, i, got->idStride, 0);
-          if (id != wordAt(ref->ids, i, ref->idStride, 0)) {
-            ++mismatched;  // another triangle: barycentrics are not comparable
-            continue;
-          }
-          const Derivatives d = derivativesAt(*got, variant.encoding.uvDerivatives, i);
-          mip.add(std::abs(mipLevelOf(d.dx, d.dy, spec.textureSize, levels) - refLevel[i]));
-          if (variant.encoding.uvDerivatives == UvDerivativeEncoding::Unorm16Clamped &&
-              hasNegative(derivativesAt(*ref, UvDerivativeEncoding::Float32, i))) {
-            ++clamped;
-          }
-          // uv = u0 + b1 (u1 - u0) + b2 (u2 - u0): the error is the barycentric
-          // error along the triangle's uv edges.
-          const uint32_t t = shaders::visibilityTriangleId(id);
-          if (size_t(t) * 3 + 2 >= mesh.indices.size()) return makeError(where + ": id names no triangle");
-          const glm::dvec2 u0(mesh.vertices[mesh.indices[t * 3]].uv),
-              u1(mesh.vertices[mesh.indices[t * 3 + 1]].uv), u2(mesh.vertices[mesh.indices[t * 3 + 2]].uv);
-          const glm::dvec2 refB = barycentricsAt(*ref, BarycentricEncoding::Float32, i);
-          const glm::dvec2 db = barycentricsAt(*got, variant.encoding.barycentrics, i) - refB;
-          const double uvError = glm::length(db.x * (u1 - u0) + db.y * (u2 - u0)) * double(spec.textureSize);
-          uvTexels.add(uvError);
-          // Barycentrics of a pixel the rasteriser gives a triangle can fall
-          // just outside [0, 1] (computed ones come from the unsnapped
-          // vertices): unorm16 clamps them, an error beside the rounding.
-          if (refB.x < 0 || refB.y < 0 || refB.x > 1 || refB.y > 1) {
-            ++outOfRange;
-          } else {
-            uvInRange.add(uvError);
-          }
-        }
-        const size_t compared = pixels - mismatched;
-
-        // Predictions: the bounds, and the model's levels for the study's packing.
-        const bool unormBary = variant.encoding.barycentrics == BarycentricEncoding::Unorm16;
-        json predictedMip;
-        switch (variant.encoding.uvDerivatives) {
-          case UvDerivativeEncoding::Float32:
-            predictedMip = {{"max_abs", 0.0}, {"mean_abs", 0.0}, {"clamped_fraction", 0.0}};
-            break;
-          case UvDerivativeEncoding::Half:
-            predictedMip = {{"max_abs", halfMipLevelBound(spec.textureSize)},
-                            {"mean_abs", nullptr},
-                            {"clamped_fraction", 0.0}};
-            break;
-          case UvDerivativeEncoding::Unorm16Clamped:
-            predictedMip = {{"max_abs", studyModel.max},
-                            {"mean_abs", studyModel.mean()},
-                            {"clamped_fraction", double(modelNegative) / double(pixels)}};
-            break;
-        }
-        json point = {
-            {"distance", distance},
-            {"triangle_size", size},
-            {"variant", variant.name},
-            {"barycentrics", toString(variant.encoding.barycentrics)},
-            {"uv_derivatives", toString(variant.encoding.uvDerivatives)},
-            {"triangles", mesh.triangleCount()},
-            {"texels_per_pixel", rhoCentre},
-            {"level", std::clamp(std::log2(rhoCentre), 0.0, double(levels - 1))},
-            {"pixels", pixels},
-            {"id_mismatches", mismatched},
-            {"error",
-             {{"image",
-               {{"max_abs", image->maxAbs},
-                {"mean_abs", image->meanAbs},
-                {"psnr", std::isfinite(image->psnr) ? json(image->psnr) : json(nullptr)},
-                {"differing_fraction", double(differing) / double(pixels)}}},
-              {"mip_level",
-               {{"max_abs", mip.max},
-                {"mean_abs", mip.mean()},
-                {"fraction_over_half", mip.overFraction()},
-                {"clamped_fraction", compared ? double(clamped) / double(compared) : 0.0}}},
-              {"uv_texels",
-               {{"max", uvTexels.max},
-                {"mean", uvTexels.mean()},
-                {"max_in_range", uvInRange.max},
-                {"mean_in_range", uvInRange.mean()},
-                {"out_of_range_fraction", compared ? double(outOfRange) / double(compared) : 0.0}}}}},
-            {"predicted",
-             {{"mip_level", predictedMip}, {"uv_texels", {{"max", unormBary ? edgeBound : 0.0}}}}},
-        };
-        point["fails"] = failedMetrics(point, spec);
-        points.push_back(std::move(point));
-      }
-      gpuScene.destroy();
+      out.studyModel.add(std::abs(mipLevelOf(q.dx, q.dy, spec.textureSize, levels) -
+                                  mipLevelOf(m.dx, m.dy, spec.textureSize, levels)));
+      if (hasNegative(m)) ++out.modelNegative;
     }
   }
-  progress.current = "done";
-  if (options.progress) options.progress(progress);
+  out.range = {float(distance / 2), float(distance * 2)};  // the plane spans d / 1.1 .. d / 0.9
+  return out;
+}
 
-  json byDistance = failsAt(points, "distance", {"variant", "triangle_size"});
-  json bySize = failsAt(points, "triangle_size", {"variant", "distance"});
+// The reference render of one point, its mip level per pixel and the
+// barycentric bound of its largest triangle.
+struct Reference {
+  Rendered frame;
+  std::vector<double> level;
+  double edgeBound = 0;
+};
+
+Result<Reference> referenceOf(Rendered frame, const scenes::Mesh& mesh, const PrecisionSweepSpec& spec,
+                              const std::string& where) {
+  const size_t pixels = size_t(spec.resolution.width) * spec.resolution.height;
+  Reference out{std::move(frame), std::vector<double>(pixels), 0.0};
+  size_t covered = 0;
+  for (size_t i = 0; i < pixels; ++i) {
+    if (wordAt(out.frame.ids, i, out.frame.idStride, 0) == shaders::kVisibilityClear) continue;
+    ++covered;
+    const Derivatives d = derivativesAt(out.frame, UvDerivativeEncoding::Float32, i);
+    out.level[i] = mipLevelOf(d.dx, d.dy, spec.textureSize, spec.levels());
+  }
+  if (covered != pixels) {
+    return makeError(where + ": " + std::to_string(pixels - covered) +
+                     " pixels kept the cleared id (the plane was not drawn)");
+  }
+  // The largest uv edge sum of any triangle, for the barycentric bound.
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const glm::dvec2 u0(mesh.vertices[mesh.indices[t]].uv), u1(mesh.vertices[mesh.indices[t + 1]].uv),
+        u2(mesh.vertices[mesh.indices[t + 2]].uv);
+    out.edgeBound = std::max(out.edgeBound, barycentricUvBound(u1 - u0, u2 - u0, spec.textureSize));
+  }
+  return out;
+}
+
+// A variant's errors against the reference, pixel by pixel.
+struct VariantErrors {
+  Stats mip, uvTexels, uvInRange;
+  size_t mismatched = 0, clamped = 0, outOfRange = 0;
+};
+
+Result<VariantErrors> variantErrors(const Reference& ref, const Rendered& got,
+                                    const VisibilityEncoding& encoding, const scenes::Mesh& mesh,
+                                    uint32_t textureSize, uint32_t levels) {
+  VariantErrors e;
+  e.mip.cut = 0.5;  // half a level: the nearest level changes
+  for (size_t i = 0; i < ref.level.size(); ++i) {
+    const uint32_t id = wordAt(got.ids, i, got.idStride, 0);
+    if (id != wordAt(ref.frame.ids, i, ref.frame.idStride, 0)) {
+      ++e.mismatched;  // another triangle: barycentrics are not comparable
+      continue;
+    }
+    const Derivatives d = derivativesAt(got, encoding.uvDerivatives, i);
+    e.mip.add(std::abs(mipLevelOf(d.dx, d.dy, textureSize, levels) - ref.level[i]));
+    if (encoding.uvDerivatives == UvDerivativeEncoding::Unorm16Clamped &&
+        hasNegative(derivativesAt(ref.frame, UvDerivativeEncoding::Float32, i))) {
+      ++e.clamped;
+    }
+    // uv = u0 + b1 (u1 - u0) + b2 (u2 - u0): the error is the barycentric
+    // error along the triangle's uv edges.
+    const uint32_t t = shaders::visibilityTriangleId(id);
+    if (size_t(t) * 3 + 2 >= mesh.indices.size()) return makeError("id names no triangle");
+    const glm::dvec2 u0(mesh.vertices[mesh.indices[t * 3]].uv), u1(mesh.vertices[mesh.indices[t * 3 + 1]].uv),
+        u2(mesh.vertices[mesh.indices[t * 3 + 2]].uv);
+    const glm::dvec2 refB = barycentricsAt(ref.frame, BarycentricEncoding::Float32, i);
+    const glm::dvec2 db = barycentricsAt(got, encoding.barycentrics, i) - refB;
+    const double uvError = glm::length(db.x * (u1 - u0) + db.y * (u2 - u0)) * double(textureSize);
+    e.uvTexels.add(uvError);
+    // Barycentrics of a pixel the rasteriser gives a triangle can fall
+    // just outside [0, 1] (computed ones come from the unsnapped
+    // vertices): unorm16 clamps them, an error beside the rounding.
+    if (refB.x < 0 || refB.y < 0 || refB.x > 1 || refB.y > 1) {
+      ++e.outOfRange;
+    } else {
+      e.uvInRange.add(uvError);
+    }
+  }
+  return e;
+}
+
+// The mip-level error a packing of the derivatives should make: none, the
+// half-float bound, or the model's for the study's clamped unorm16.
+json predictedMip(UvDerivativeEncoding encoding, const DistanceModel& model, uint32_t textureSize,
+                  size_t pixels) {
+  switch (encoding) {
+    case UvDerivativeEncoding::Float32: break;
+    case UvDerivativeEncoding::Half:
+      return {{"max_abs", halfMipLevelBound(textureSize)}, {"mean_abs", nullptr}, {"clamped_fraction", 0.0}};
+    case UvDerivativeEncoding::Unorm16Clamped:
+      return {{"max_abs", model.studyModel.max},
+              {"mean_abs", model.studyModel.mean()},
+              {"clamped_fraction", double(model.modelNegative) / double(pixels)}};
+  }
+  return {{"max_abs", 0.0}, {"mean_abs", 0.0}, {"clamped_fraction", 0.0}};
+}
+
+// One point: a variant at one distance and triangle size, measured against
+// the reference beside what the bounds and the model predict.
+struct PointAt {
+  double distance = 0, triangleSize = 0;
+  std::string where;  // "distance 4 triangle size 1", for errors
+  const DistanceModel& model;
+  const scenes::Mesh& mesh;
+  const Reference& ref;
+};
+
+Result<json> variantPoint(const PrecisionSweepSpec& spec, const PointAt& at, const PrecisionVariant& variant,
+                          const Rendered& got) {
+  const auto& [distance, size, where, model, mesh, ref] = at;
+  const View v = viewOf(spec);
+  const uint32_t levels = spec.levels();
+  const size_t pixels = ref.level.size();
+  auto image = compareImages(ref.frame.image, got.image, v.width, v.height);
+  if (!image) return makeError(where + " " + variant.name + ": " + image.error());
+  size_t differing = 0;
+  for (size_t i = 0; i < pixels; ++i) {
+    const uint8_t* a = &ref.frame.image[i * 4];
+    const uint8_t* b = &got.image[i * 4];
+    if (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) ++differing;
+  }
+  auto errors = variantErrors(ref, got, variant.encoding, mesh, spec.textureSize, levels);
+  if (!errors) return makeError(where + ": " + errors.error());
+  const VariantErrors& e = *errors;
+  const size_t compared = pixels - e.mismatched;
+  const bool unormBary = variant.encoding.barycentrics == BarycentricEncoding::Unorm16;
+  json point = {
+      {"distance", distance},
+      {"triangle_size", size},
+      {"variant", variant.name},
+      {"barycentrics", toString(variant.encoding.barycentrics)},
+      {"uv_derivatives", toString(variant.encoding.uvDerivatives)},
+      {"triangles", mesh.triangleCount()},
+      {"texels_per_pixel", model.rhoCentre},
+      {"level", std::clamp(std::log2(model.rhoCentre), 0.0, double(levels - 1))},
+      {"pixels", pixels},
+      {"id_mismatches", e.mismatched},
+      {"error",
+       {{"image",
+         {{"max_abs", image->maxAbs},
+          {"mean_abs", image->meanAbs},
+          {"psnr", std::isfinite(image->psnr) ? json(image->psnr) : json(nullptr)},
+          {"differing_fraction", double(differing) / double(pixels)}}},
+        {"mip_level",
+         {{"max_abs", e.mip.max},
+          {"mean_abs", e.mip.mean()},
+          {"fraction_over_half", e.mip.overFraction()},
+          {"clamped_fraction", compared ? double(e.clamped) / double(compared) : 0.0}}},
+        {"uv_texels",
+         {{"max", e.uvTexels.max},
+          {"mean", e.uvTexels.mean()},
+          {"max_in_range", e.uvInRange.max},
+          {"mean_in_range", e.uvInRange.mean()},
+          {"out_of_range_fraction", compared ? double(e.outOfRange) / double(compared) : 0.0}}}}},
+      {"predicted",
+       {{"mip_level", predictedMip(variant.encoding.uvDerivatives, model, spec.textureSize, pixels)},
+        {"uv_texels", {{"max", unormBary ? ref.edgeBound : 0.0}}}}},
+  };
+  point["fails"] = failedMetrics(point, spec);
+  return point;
+}
+
+// The result around the points: the method (encodings, the formats the
+// renderer chose, the texture and the scene), where the points start to
+// fail along each axis, and the charts.
+json precisionReport(const PrecisionSweepSpec& spec, const json& points, const json& formats,
+                     const std::string& barycentricSource) {
   json variantList = json::array();
-  for (const auto& variant : variants) {
+  for (const auto& variant : precisionVariants()) {
     json e = encodingJson(variant.encoding);
     e["variant"] = variant.name;
     variantList.push_back(e);
   }
-  json result = {
-      {"sweep", std::string(kPrecisionSweepName)},
-      {"device", gpu::describe(ctx)},
-      {"spec", spec.source},
+  // Per group of points that differ only in one axis, the smallest value of
+  // it whose image or mip-level error reaches the threshold, and which
+  // metrics did there.
+  auto fails = [](const json& p) { return !p["fails"].empty(); };
+  return {
       {"renderer", "visbuffer"},
       {"parameters", {"distance", "triangle_size", "variant"}},
-      {"resolution", {v.width, v.height}},
+      {"resolution", {spec.resolution.width, spec.resolution.height}},
       {"method",
-       {{"reference", encodingJson(reference.encoding)},
+       {{"reference", encodingJson(precisionReference().encoding)},
         {"variants", variantList},
         {"formats", formats},
         {"barycentrics", barycentricSource},
         {"texture_size", spec.textureSize},
-        {"levels", levels},
+        {"levels", spec.levels()},
         {"texels_per_metre", spec.texelsPerMetre},
         {"uv_rotation_deg", spec.uvRotationDeg},
         {"uv",
@@ -718,38 +408,69 @@ Result<json> runPrecisionSweep(gpu::Context& ctx, const PrecisionSweepSpec& spec
         {"tilt", kPrecisionTilt},
         {"fov_deg", spec.fovDeg}}},
       {"threshold", {{"image_max_abs", spec.imageThreshold}, {"mip_level", spec.mipThreshold}}},
-      {"points", points},
+      {"fails_at",
+       failsAtByAxis(
+           {{"distance", smallestFailing(points, "distance", {"variant", "triangle_size"}, fails, "fails")},
+            {"triangle_size",
+             smallestFailing(points, "triangle_size", {"variant", "distance"}, fails, "fails")}})},
+      {"plots",
+       json::array(
+           {plot("Image error against distance", "distance", "error.image.max_abs", false,
+                 "max |difference| (8-bit levels)", {"variant", "triangle_size"}, spec.imageThreshold),
+            plot("Mip-level error against distance", "distance", "error.mip_level.max_abs", false,
+                 "max |level - reference level| (levels)", {"variant", "triangle_size"}, spec.mipThreshold),
+            plot("uv error from the barycentrics against triangle size", "triangle_size",
+                 "error.uv_texels.max", true, "max uv error (texels)", {"variant", "distance"}, nullptr)})},
   };
-  result["fails_at"] = byDistance.is_null() && bySize.is_null()
-                           ? json(nullptr)
-                           : json{{"distance", byDistance}, {"triangle_size", bySize}};
-  result["plots"] = json::array({
-      {{"title", "Image error against distance"},
-       {"x", "distance"},
-       {"x_log", true},
-       {"y", "error.image.max_abs"},
-       {"y_log", false},
-       {"y_label", "max |difference| (8-bit levels)"},
-       {"series", {"variant", "triangle_size"}},
-       {"threshold", spec.imageThreshold}},
-      {{"title", "Mip-level error against distance"},
-       {"x", "distance"},
-       {"x_log", true},
-       {"y", "error.mip_level.max_abs"},
-       {"y_log", false},
-       {"y_label", "max |level - reference level| (levels)"},
-       {"series", {"variant", "triangle_size"}},
-       {"threshold", spec.mipThreshold}},
-      {{"title", "uv error from the barycentrics against triangle size"},
-       {"x", "triangle_size"},
-       {"x_log", true},
-       {"y", "error.uv_texels.max"},
-       {"y_log", true},
-       {"y_label", "max uv error (texels)"},
-       {"series", {"variant", "distance"}},
-       {"threshold", nullptr}},
-  });
-  return result;
+}
+
+}  // namespace
+
+Result<json> runPrecisionSweep(gpu::Context& ctx, const PrecisionSweepSpec& spec,
+                               const SweepOptions& options) {
+  const View v = viewOf(spec);
+  const auto variants = precisionVariants();
+  const PrecisionVariant reference = precisionReference();
+  const scenes::Camera camera = precisionCamera(spec);
+  SweepRun run(ctx, options, spec.distances.size() * spec.triangleSizes.size() * (variants.size() + 1));
+  json formats = json::object();
+  std::string barycentricSource;
+  auto noteFormats = [&](const std::string& name, const Rendered& r) {
+    formats[name] = {{"visibility.id", r.idFormat}, {"visibility.uv_derivatives", r.derivativeFormat}};
+  };
+
+  for (double distance : spec.distances) {
+    const DistanceModel model = modelAt(spec, v, distance);
+    for (double size : spec.triangleSizes) {
+      const std::string where = "distance " + num(distance) + " triangle size " + num(size);
+      auto scene = precisionScene(spec, distance, size);
+      if (!scene) return makeError(where + ": " + scene.error());
+      const scenes::Mesh& mesh = scene->meshes.front();
+      auto ran = run.withScene(*scene, where, [&](const renderers::GpuScene& gpuScene) -> Result<bool> {
+        run.next(where + " reference");
+        auto rendered = render(ctx, gpuScene, camera, v, model.range, reference.encoding);
+        if (!rendered) return makeError(where + " reference: " + rendered.error());
+        barycentricSource = rendered->barycentricSource;
+        noteFormats(reference.name, *rendered);
+        auto ref = referenceOf(std::move(*rendered), mesh, spec, where);
+        if (!ref) return ref.failure();
+        const PointAt at{distance, size, where, model, mesh, *ref};
+        for (const auto& variant : variants) {
+          run.next(where + " " + variant.name);
+          auto got = render(ctx, gpuScene, camera, v, model.range, variant.encoding);
+          if (!got) return makeError(where + " " + variant.name + ": " + got.error());
+          noteFormats(variant.name, *got);
+          auto point = variantPoint(spec, at, variant, *got);
+          if (!point) return point.failure();
+          run.points.push_back(std::move(*point));
+        }
+        return true;
+      });
+      if (!ran) return ran.failure();
+    }
+  }
+  json report = precisionReport(spec, run.points, formats, barycentricSource);
+  return run.finish(kPrecisionSweepName, spec.source, std::move(report));
 }
 
 }  // namespace tally::sweeps

@@ -1,5 +1,7 @@
 #include "sweeps/sweep.hpp"
 
+#include "sweeps/fields.hpp"
+
 namespace tally::sweeps {
 namespace {
 
@@ -56,8 +58,7 @@ bool isSweepSpec(const nlohmann::json& spec) { return spec.is_object() && spec.c
 Result<SweepSpec> parseSweepSpec(const nlohmann::json& spec, const std::vector<std::string>& knownRenderers) {
   if (!isSweepSpec(spec)) return Error("sweep", "required");
   const auto& name = spec["sweep"];
-  std::string known;
-  for (const auto& n : sweepNames()) known += (known.empty() ? "" : ", ") + n;
+  const std::string known = fields::joined(sweepNames());
   if (!name.is_string()) return Error("sweep", "must be a sweep name (one of " + known + ")");
   for (const auto& kind : kSweeps) {
     if (name.get<std::string>() == kind.name) return kind.parse(spec, knownRenderers);
