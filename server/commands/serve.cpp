@@ -6,25 +6,21 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include <cstdio>
-#include <fstream>
-#include <filesystem>
+#include <algorithm>
 #include <condition_variable>
+#include <cstdio>
+#include <filesystem>
 #include <mutex>
 #include <thread>
 #include <utility>
 
-#include "api/auth.hpp"
 #include "api/builtin_routes.hpp"
-#include "api/http_post.hpp"
 #include "api/http_server.hpp"
-#include "capture/application_policy.hpp"
 #include "commands/commands.hpp"
+#include "commands/serve_setup.hpp"
 #include "common/log.hpp"
 #include "common/metrics.hpp"
-#include "common/paths.hpp"
 #include "common/version.hpp"
-#include "common/child_process.hpp"
 #include "jobs/worker.hpp"
 #include "renderers/options.hpp"
 #include "renderers/renderer.hpp"
@@ -36,36 +32,6 @@
 
 namespace tally::cli {
 namespace {
-
-// The device this worker captures on, probed in a child process (a broken
-// driver ends the probe, not the daemon): `tallyd device --json`. Null, with
-// a warning, when there is none: the worker then takes only jobs that name
-// no device.
-nlohmann::json probeDevice(const std::string& self, const std::string& selector) {
-  char path[] = "/tmp/tally-device-XXXXXX";
-  int fd = mkstemp(path);
-  if (fd < 0) return nullptr;
-  close(fd);
-  jobs::ChildOptions child;
-  child.argv = {self, "device", "--json"};
-  if (!selector.empty()) child.argv.insert(child.argv.end(), {"--device", selector});
-  child.deadline = std::chrono::seconds(60);
-  child.stdoutPath = path;
-  auto ran = jobs::runChild(child);
-  nlohmann::json device;
-  if (ran && ran->ok()) {
-    std::ifstream in(path);
-    device = nlohmann::json::parse(in, nullptr, false);
-    if (device.is_discarded() || !device.is_object()) device = nullptr;
-  }
-  if (device.is_null()) {
-    log::warning(std::string("no capture device found (") + (ran ? ran->reason() : ran.error()) +
-                 "); this worker takes only jobs that name no device");
-  }
-  std::filesystem::remove(path);
-  return device;
-}
-
 
 // The daemon's own families (the HTTP server declares its own).
 void declareMetrics(metrics::Registry& m) {
@@ -96,261 +62,97 @@ void declareMetrics(metrics::Registry& m) {
             "the device the last capture ran on (\"\" until one has); always 1");
 }
 
-// The rules for running applications (docs/operating.md, "Security model"),
-// checked before anything starts: --allow-applications needs an application
-// token (to serve the API), roots, and a user to run them as when tallyd is
-// root (to run them). Returns the policy, and the arguments every capture
-// child gets so that it checks each spec again where it runs.
-struct ApplicationSetup {
-  capture::ApplicationPolicy policy;
-  std::vector<std::string> captureArgs;
-};
-
-Result<ApplicationSetup> applicationSetup(const ServeArgs& args, bool serveHttp, bool runWorker) {
-  ApplicationSetup setup;
-  setup.captureArgs = {"--confine-applications"};
-  if (!args.allowApplications) {
-    if (!args.applicationRoots.empty() || !args.applicationEnv.empty() || !args.runAs.empty()) {
-      return makeError("--application-root, --application-env and --run-as go with --allow-applications");
-    }
-    return setup;  // the capture child refuses every application spec: no roots
-  }
-  if (serveHttp) {
-    const std::string how =
-        "a token file with an application=<token> line beside read= and capture= (e.g. from "
-        "`openssl rand -hex 32`): only its holders may run applications";
-    if (args.tokenFile.empty()) return makeError("--allow-applications needs --token-file: " + how);
-    auto tokens = api::loadTokenFile(args.tokenFile);
-    if (!tokens) return makeError(tokens.error());
-    if (tokens->application.empty()) {
-      return makeError("--allow-applications: " + args.tokenFile +
-                       " has no application=<token> line; it needs " + how);
-    }
-  }
-  if (args.applicationRoots.empty()) {
-    return makeError(
-        "--allow-applications needs at least one --application-root DIR: the folders an application's "
-        "program or a replay file must lie in (links followed), e.g. /opt/tally-apps");
-  }
-  auto roots = capture::checkApplicationRoots(args.applicationRoots);
-  if (!roots) return makeError(roots.error());
-  setup.policy.roots = *roots;
-  for (const auto& pattern : args.applicationEnv) {
-    if (auto checked = capture::checkApplicationEnvPattern(pattern); !checked)
-      return makeError(checked.error());
-    setup.policy.env.push_back(pattern);
-  }
-  if (!args.runAs.empty()) {
-    if (geteuid() != 0) {
-      return makeError("--run-as " + args.runAs +
-                       ": tallyd runs as a user of its own already (not root), and applications run as that "
-                       "user; drop --run-as");
-    }
-    auto user = jobs::lookupUser(args.runAs);
-    if (!user) return makeError("--run-as: " + user.error());
-  } else if (runWorker && geteuid() == 0) {
-    return makeError(
-        "refusing to run applications as root: give --run-as USER, an unprivileged user they run as "
-        "(useradd --system --no-create-home tally-apps), or start tallyd as a user of its own (the "
-        "systemd unit's DynamicUser=yes does: docs/operating.md, \"Security model\")");
-  }
-  for (const auto& root : setup.policy.roots) {
-    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-root", root.string()});
-  }
-  for (const auto& pattern : setup.policy.env) {
-    setup.captureArgs.insert(setup.captureArgs.end(), {"--application-env", pattern});
-  }
-  if (!args.runAs.empty()) setup.captureArgs.insert(setup.captureArgs.end(), {"--run-as", args.runAs});
-  return setup;
-}
-
-}  // namespace
-
-int runServe(const ServeArgs& args) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) {
-    std::fprintf(stderr, "tallyd serve: cannot find this executable: %s\n", ec.message().c_str());
-    return 1;
-  }
-  for (const auto& folder : args.scenes) {
-    if (!fs::is_directory(folder, ec)) {
-      std::fprintf(stderr, "tallyd serve: --scenes %s: not a folder\n", folder.c_str());
-      return 1;
-    }
-  }
-
-  // Block the stop signals in every thread; one thread takes them with sigwait.
+// Blocks the stop signals in every thread (the calling one, and every thread
+// started after); one thread takes them with sigwait.
+sigset_t blockStopSignals() {
   sigset_t stopSignals;
   sigemptyset(&stopSignals);
   sigaddset(&stopSignals, SIGINT);
   sigaddset(&stopSignals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
   signal(SIGPIPE, SIG_IGN);
+  return stopSignals;
+}
 
-  const bool serveHttp = args.role != "worker";
-  const bool runWorker = args.role != "api";
-  auto applications = applicationSetup(args, serveHttp, runWorker);
-  if (!applications) {
-    std::fprintf(stderr, "tallyd serve: %s\n", applications.error().c_str());
-    return 1;
-  }
-  if (!args.alertWebhook.empty()) {
-    auto target = api::parseHttpUrl(args.alertWebhook);
-    if (!target) {
-      std::fprintf(stderr, "tallyd serve: --alert-webhook %s: %s\n", args.alertWebhook.c_str(), target.error().c_str());
-      return 1;
-    }
-    if (!serveHttp) {
-      std::fprintf(stderr, "tallyd serve: --alert-webhook is for daemons that serve the API (role api or all)\n");
-      return 1;
-    }
-  }
-  const bool postgres = store::isPostgresUrl(args.db);
-
-  // The defaults: the user's data folder for the database, the installed
-  // dashboard (the unit passes --db /var/lib/tally/tally.db).
-  std::string dbPath = args.db;
-  if (dbPath.empty()) {
-    auto state = userDataDirectory();
-    if (!state) {
-      std::fprintf(stderr, "tallyd serve: %s\n", state.error().c_str());
-      return 1;
-    }
-    fs::create_directories(*state, ec);
-    if (ec) {
-      std::fprintf(stderr, "tallyd serve: cannot create %s: %s\n", state->c_str(), ec.message().c_str());
-      return 1;
-    }
-    dbPath = (*state / "tally.db").string();
-  }
-  const std::string dbName = postgres ? store::redactUrl(dbPath) : dbPath;
-  std::string webRoot = args.web;
-  if (webRoot.empty() && serveHttp) {
-    auto data = dataDirectory();
-    if (!data || !fs::is_directory(*data / "web", ec)) {
-      std::fprintf(stderr, "tallyd serve: no dashboard to serve (%s); give --web\n",
-                   data ? ((*data / "web").string() + " is not a folder").c_str() : data.error().c_str());
-      return 1;
-    }
-    webRoot = (*data / "web").string();
-  }
-  std::string hostName = args.hostName;
-  if (hostName.empty()) {
-    char name[256] = {};
-    gethostname(name, sizeof name - 1);
-    hostName = name;
-  }
-
-  auto writer = store::Store::open(dbPath);
-  if (!writer) {
-    std::fprintf(stderr, "tallyd serve: %s: %s\n", dbName.c_str(), writer.error().c_str());
-    return 1;
-  }
-
-  // The store's health: checked now, before any job runs, then on a
-  // schedule on a thread and connection of its own. A damaged store still
-  // serves what it can read and says what is wrong (/api/health 503), but
-  // takes no job: the worker does not start.
-  service::StoreHealthOptions healthOptions;
-  healthOptions.location = dbPath;
-  healthOptions.checkInterval = std::chrono::seconds(args.storeCheckSeconds);
-  healthOptions.log = [](std::string_view line) { log::warning(std::string(line)); };
-  service::StoreHealth storeHealth(healthOptions);
+// The store's health: checked now, before any job runs, then on a schedule
+// on a thread and connection of its own. A damaged store still serves what
+// it can read and says what is wrong (/api/health 503), but takes no job:
+// the worker does not start. True when it is damaged now.
+bool checkStoreAtStart(service::StoreHealth& storeHealth) {
   storeHealth.checkNow();
-  const bool damagedAtStart = storeHealth.state().fault == store::Fault::kDamaged;
-  if (damagedAtStart) {
+  const bool damaged = storeHealth.state().fault == store::Fault::kDamaged;
+  if (damaged) {
     log::error("the store is damaged (" + storeHealth.state().reason +
                "); serving what can be read, taking no jobs until it is repaired");
   }
+  return damaged;
+}
 
-  metrics::Registry metrics;
+service::StoreHealthOptions storeHealthOptions(const ServeArgs& args, const ServeSetup& setup) {
+  service::StoreHealthOptions options;
+  options.location = setup.dbPath;
+  options.checkInterval = std::chrono::seconds(args.storeCheckSeconds);
+  options.log = [](std::string_view line) { log::warning(std::string(line)); };
+  return options;
+}
+
+void startMetrics(metrics::Registry& metrics, const ServeSetup& setup) {
   declareMetrics(metrics);
   metrics.set("tally_build_info", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}, 1);
-  const std::string selector = args.device.empty() ? "auto" : args.device;
-  metrics.set("tally_device_info", {{"selector", selector}, {"device", ""}}, 1);
+  metrics.set("tally_device_info", {{"selector", setup.selector}, {"device", ""}}, 1);
   for (const char* status : {"done", "failed", "cancelled"}) metrics.add("tally_jobs_finished_total", {{"status", status}}, 0);
-  std::mutex deviceMutex;
+}
 
-  const auto lease = std::chrono::milliseconds(int64_t(args.leaseSeconds * 1000));
-  const auto staleAfter = std::chrono::milliseconds(int64_t(args.staleSeconds * 1000));
-  jobs::WorkerOptions workerOptions;
-  workerOptions.tallydPath = self.string();
-  workerOptions.device = args.device;
-  workerOptions.captureArgs = applications->captureArgs;
-  workerOptions.deadline = std::chrono::seconds(args.jobDeadlineSeconds);
-  workerOptions.maxAttempts = args.maxAttempts;
-  workerOptions.lease = lease;
-  workerOptions.staleAfter = staleAfter;
-  workerOptions.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
-  workerOptions.onStoreFault = [&storeHealth](store::Fault fault, const std::string& detail) {
-    storeHealth.noteFault(fault, detail);
-  };
-  // Alerts (role api or all): new runs against their baselines, and the
-  // webhook's outbox, each on its own thread and connection; workers never
-  // wait on them.
-  service::AlertEvaluator::Options evaluatorOptions;
-  evaluatorOptions.location = dbPath;
-  evaluatorOptions.deliver = !args.alertWebhook.empty();
-  evaluatorOptions.log = [](std::string_view line) { log::info(std::string(line)); };
+// The worker's options but for its callbacks and its host.
+jobs::WorkerOptions makeWorkerOptions(const ServeArgs& args, const ServeSetup& setup) {
+  jobs::WorkerOptions options;
+  options.tallydPath = setup.self;
+  options.device = args.device;
+  options.captureArgs = setup.applications.captureArgs;
+  options.deadline = std::chrono::seconds(args.jobDeadlineSeconds);
+  options.maxAttempts = args.maxAttempts;
+  options.lease = setup.lease;
+  options.staleAfter = setup.staleAfter;
+  const std::string dbPath = setup.dbPath;
+  options.openHeartbeatStore = [dbPath] { return store::Store::open(dbPath); };
+  return options;
+}
+
+// Alerts (role api or all): new runs against their baselines, and the
+// webhook's outbox, each on its own thread and connection; workers never
+// wait on them.
+service::AlertEvaluator::Options alertEvaluatorOptions(const ServeArgs& args, const ServeSetup& setup,
+                                                       metrics::Registry& metrics) {
+  service::AlertEvaluator::Options options;
+  options.location = setup.dbPath;
+  options.deliver = !args.alertWebhook.empty();
+  options.log = [](std::string_view line) { log::info(std::string(line)); };
   metrics.add("tally_alerts_raised_total", {}, 0);
-  evaluatorOptions.onEvaluated = [&metrics](const store::Evaluated& done) {
+  options.onEvaluated = [&metrics](const store::Evaluated& done) {
     metrics.add("tally_alerts_raised_total", {}, double(done.alertIds.size()));
   };
-  service::AlertEvaluator evaluator(evaluatorOptions);
-  service::WebhookOptions webhookOptions;
-  webhookOptions.url = args.alertWebhook;
-  webhookOptions.dashboardUrl = args.dashboardUrl;
-  webhookOptions.maxAttempts = args.alertWebhookAttempts;
-  service::WebhookSender webhook(dbPath, webhookOptions, [](std::string_view line) { log::warning(std::string(line)); });
-  workerOptions.onFinished = [&](const jobs::JobOutcome& outcome) {
-    if (serveHttp) evaluator.wake();
-    metrics.add("tally_jobs_finished_total", {{"status", outcome.status}});
-    metrics.observe("tally_capture_duration_seconds", {{"kind", outcome.kind}, {"status", outcome.status}},
-                    outcome.seconds);
-    if (!outcome.device.empty()) {
-      std::lock_guard lock(deviceMutex);
-      metrics.clear("tally_device_info");
-      metrics.set("tally_device_info", {{"selector", selector}, {"device", outcome.device}}, 1);
-    }
-  };
-  if (runWorker) {
-    workerOptions.host.name = hostName;
-    workerOptions.host.instance = jobs::Worker::newInstance();
-    workerOptions.host.role = args.role;
-    workerOptions.host.tallyVersion = std::string(version());
-    workerOptions.host.tallyCommit = std::string(gitCommit());
-    workerOptions.host.device = probeDevice(self.string(), args.device);
-    if (!args.deviceNameOverride.empty()) {
-      workerOptions.deviceNameOverride = args.deviceNameOverride;
-      workerOptions.host.deviceOverride = args.deviceNameOverride;
-      if (workerOptions.host.device.is_object()) {
-        workerOptions.host.device["name_reported"] = workerOptions.host.device.value("name", "");
-        workerOptions.host.device["name"] = args.deviceNameOverride;
-      }
-    }
-  }
-  jobs::Worker worker(**writer, workerOptions);
-  const bool startWorker = runWorker && !damagedAtStart;
-  if (startWorker) {
-    if (auto recovered = worker.recover(); !recovered) {
-      std::fprintf(stderr, "tallyd serve: %s\n", recovered.error().c_str());
-      return 1;
-    }
-  }
+  return options;
+}
 
-  // Without a worker here, something must still notice workers that died:
-  // the API daemon reaps expired leases on the worker's schedule.
-  std::mutex reaperMutex;
-  std::condition_variable reaperWake;
-  bool reaperStop = false;
-  std::thread reaper;
-  if (!runWorker) {
-    reaper = std::thread([&] {
+service::WebhookOptions webhookOptions(const ServeArgs& args) {
+  service::WebhookOptions options;
+  options.url = args.alertWebhook;
+  options.dashboardUrl = args.dashboardUrl;
+  options.maxAttempts = args.alertWebhookAttempts;
+  return options;
+}
+
+// Without a worker here, something must still notice workers that died:
+// the API daemon reaps expired leases on the worker's schedule.
+class LeaseReaper {
+ public:
+  ~LeaseReaper() { stop(); }
+
+  void start(const std::string& dbPath, std::chrono::milliseconds lease) {
+    thread_ = std::thread([this, dbPath, lease] {
       auto store = store::Store::open(dbPath);
-      std::unique_lock lock(reaperMutex);
-      while (!reaperStop) {
+      std::unique_lock lock(mutex_);
+      while (!stop_) {
         if (store) {
           lock.unlock();
           auto reaped = (*store)->requeueExpired();
@@ -360,42 +162,54 @@ int runServe(const ServeArgs& args) {
           }
           lock.lock();
         }
-        reaperWake.wait_for(lock, std::max(lease / 3, std::chrono::milliseconds(100)), [&] { return reaperStop; });
+        wake_.wait_for(lock, std::max(lease / 3, std::chrono::milliseconds(100)), [&] { return stop_; });
       }
     });
   }
-  auto stopReaper = [&] {
-    {
-      std::lock_guard lock(reaperMutex);
-      reaperStop = true;
-    }
-    reaperWake.notify_all();
-    if (reaper.joinable()) reaper.join();
-  };
 
-  storeHealth.start();
-  if (!serveHttp) {
-    if (startWorker) worker.start();
-    std::printf("tallyd: worker %s on %s, database %s\n", hostName.c_str(),
-                workerOptions.host.device.is_object() ? workerOptions.host.device.value("name", "").c_str() : "no device",
-                dbName.c_str());
-    std::fflush(stdout);
-    log::info(versionLine("tallyd") + " worker " + hostName + " database " + dbName + " device " + selector);
-    int received = 0;
-    sigwait(&stopSignals, &received);
-    worker.stop();
-    log::info("stopped");
-    return 0;
+  void stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
   }
 
+ private:
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+// Role worker: runs jobs until a stop signal.
+int runWorkerOnly(jobs::Worker& worker, bool startWorker, const store::HostInfo& host, const ServeSetup& setup,
+                  const sigset_t& stopSignals) {
+  if (startWorker) worker.start();
+  std::printf("tallyd: worker %s on %s, database %s\n", setup.hostName.c_str(),
+              host.device.is_object() ? host.device.value("name", "").c_str() : "no device", setup.dbName.c_str());
+  std::fflush(stdout);
+  log::info(versionLine("tallyd") + " worker " + setup.hostName + " database " + setup.dbName + " device " +
+            setup.selector);
+  int received = 0;
+  sigwait(&stopSignals, &received);
+  worker.stop();
+  log::info("stopped");
+  return 0;
+}
+
+service::ServiceContext serviceContext(const ServeArgs& args, const ServeSetup& setup, store::Store* writer,
+                                       service::StoreHealth& storeHealth, jobs::Worker& worker,
+                                       metrics::Registry& metrics) {
   service::ServiceContext context;
-  context.writer = writer->get();
-  context.dbPath = dbPath;
+  context.writer = writer;
+  context.dbPath = setup.dbPath;
   context.rendererNames = renderers::rendererNames();
   for (const auto& folder : args.scenes) context.options.sceneFolders.emplace_back(folder);
   context.options.allowApplications = args.allowApplications;
-  context.options.applicationPolicy = applications->policy;
-  context.options.staleAfterMs = staleAfter.count();
+  context.options.applicationPolicy = setup.applications.policy;
+  context.options.staleAfterMs = setup.staleAfter.count();
   context.options.maxAttempts = args.maxAttempts;
   context.options.maxQueued = args.maxQueued;
   context.options.maxQueuedPerClient = args.maxQueuedPerClient;
@@ -412,31 +226,41 @@ int runServe(const ServeArgs& args) {
   context.onQueuedJobCancelled = [&metrics](int64_t) {
     metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
   };
+  return context;
+}
 
-  // Read at each scrape: the queue by state and the store's size on disk.
-  metrics.onScrape([&](metrics::Registry& m) {
+// Read at each scrape: the store's health, the queue by state, the alerts by
+// status and the store's size on disk.
+void scrapeStore(metrics::Registry& metrics, service::StoreHealth& storeHealth, store::Store* writer,
+                 const ServeSetup& setup) {
+  metrics.onScrape([&storeHealth, writer, postgres = setup.postgres, dbPath = setup.dbPath](metrics::Registry& m) {
     const service::StoreHealth::State health = storeHealth.state();
     m.set("tally_store_up", {}, health.fault == store::Fault::kNone ? 1 : 0);
     m.clear("tally_store_fault");
     if (health.fault != store::Fault::kNone)
       m.set("tally_store_fault", {{"fault", store::toString(health.fault)}}, 1);
     m.set("tally_store_check_seconds", {}, health.checkSeconds);
-    auto counts = writer->get()->jobCounts();
+    auto counts = writer->jobCounts();
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
     }
-    auto alerts = writer->get()->alertCounts();
+    auto alerts = writer->alertCounts();
     if (alerts) {
       for (const auto& [status, n] : *alerts) m.set("tally_alerts", {{"status", status}}, double(n));
     }
     if (postgres) return;  // the server's files are not this host's
     for (const auto& [file, suffix] : {std::pair{"db", ""}, std::pair{"wal", "-wal"}, std::pair{"shm", "-shm"}}) {
       std::error_code sizeError;
-      auto bytes = fs::file_size(dbPath + suffix, sizeError);
+      auto bytes = std::filesystem::file_size(dbPath + suffix, sizeError);
       m.set("tally_store_bytes", {{"file", file}}, sizeError ? 0.0 : double(bytes));
     }
   });
+}
 
+Result<std::unique_ptr<api::HttpServer>> createHttpServer(const ServeArgs& args, const ServeSetup& setup,
+                                                          service::ServiceContext& context,
+                                                          service::StoreHealth& storeHealth,
+                                                          metrics::Registry& metrics) {
   api::Router router;
   api::addBuiltinRoutes(router, renderers::rendererNames(), renderers::optionDefsJson(),
                         renderers::workloadNames(), [&storeHealth] { return storeHealth.toJson(); });
@@ -449,43 +273,125 @@ int runServe(const ServeArgs& args) {
   options.bindAddress = args.bind;
   options.port = args.port;
   options.tokenFile = args.tokenFile;
-  options.webRoot = webRoot;
+  options.webRoot = setup.webRoot;
   options.requestTimeout = std::chrono::milliseconds(int64_t(args.requestTimeoutSeconds * 1000));
   options.maxConnectionsPerPeer = size_t(args.maxConnectionsPerPeer);
   options.metrics = &metrics;
-  auto server = api::HttpServer::create(options, std::move(router));
+  return api::HttpServer::create(options, std::move(router));
+}
+
+// Serves until a stop signal, or until the server ends on its own.
+void serveUntilStopped(api::HttpServer& server, jobs::Worker& worker, const sigset_t& stopSignals,
+                       const ServeArgs& args, const ServeSetup& setup) {
+  std::thread signals([&] {
+    int received = 0;
+    sigwait(&stopSignals, &received);
+    server.stop();
+    // At once, beside the requests still being answered: the capture is
+    // killed and its job queued again (docs/operating.md, "Stopping").
+    worker.stop();
+  });
+  std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), server.port());
+  std::printf("tallyd: database %s, dashboard %s\n", setup.dbName.c_str(), setup.webRoot.c_str());
+  std::fflush(stdout);
+  log::info(versionLine("tallyd") + " serving http://" + args.bind + ":" + std::to_string(server.port()) +
+            "/ database " + setup.dbName + " dashboard " + setup.webRoot + " role " + args.role +
+            (setup.runWorker ? " host " + setup.hostName + " device " + setup.selector : std::string()));
+  server.run();
+  // Stopped by a signal, or the server ended on its own: wake the signal thread either way.
+  pthread_kill(signals.native_handle(), SIGTERM);
+  signals.join();
+}
+
+}  // namespace
+
+int runServe(const ServeArgs& args) {
+  std::error_code ec;
+  std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (ec) {
+    std::fprintf(stderr, "tallyd serve: cannot find this executable: %s\n", ec.message().c_str());
+    return 1;
+  }
+  for (const auto& folder : args.scenes) {
+    if (!std::filesystem::is_directory(folder, ec)) {
+      std::fprintf(stderr, "tallyd serve: --scenes %s: not a folder\n", folder.c_str());
+      return 1;
+    }
+  }
+  const sigset_t stopSignals = blockStopSignals();
+  auto setup = resolveServeSetup(args, self.string());
+  if (!setup) {
+    std::fprintf(stderr, "tallyd serve: %s\n", setup.error().c_str());
+    return 1;
+  }
+
+  auto writer = store::Store::open(setup->dbPath);
+  if (!writer) {
+    std::fprintf(stderr, "tallyd serve: %s: %s\n", setup->dbName.c_str(), writer.error().c_str());
+    return 1;
+  }
+  service::StoreHealth storeHealth(storeHealthOptions(args, *setup));
+  const bool damagedAtStart = checkStoreAtStart(storeHealth);
+
+  metrics::Registry metrics;
+  startMetrics(metrics, *setup);
+  std::mutex deviceMutex;
+
+  jobs::WorkerOptions workerOptions = makeWorkerOptions(args, *setup);
+  workerOptions.onStoreFault = [&storeHealth](store::Fault fault, const std::string& detail) {
+    storeHealth.noteFault(fault, detail);
+  };
+  service::AlertEvaluator evaluator(alertEvaluatorOptions(args, *setup, metrics));
+  service::WebhookSender webhook(setup->dbPath, webhookOptions(args),
+                                 [](std::string_view line) { log::warning(std::string(line)); });
+  workerOptions.onFinished = [&](const jobs::JobOutcome& outcome) {
+    if (setup->serveHttp) evaluator.wake();
+    metrics.add("tally_jobs_finished_total", {{"status", outcome.status}});
+    metrics.observe("tally_capture_duration_seconds", {{"kind", outcome.kind}, {"status", outcome.status}},
+                    outcome.seconds);
+    if (!outcome.device.empty()) {
+      std::lock_guard lock(deviceMutex);
+      metrics.clear("tally_device_info");
+      metrics.set("tally_device_info", {{"selector", setup->selector}, {"device", outcome.device}}, 1);
+    }
+  };
+  if (setup->runWorker) {
+    workerOptions.host = workerHost(args, *setup);
+    if (!args.deviceNameOverride.empty()) workerOptions.deviceNameOverride = args.deviceNameOverride;
+  }
+  jobs::Worker worker(**writer, workerOptions);
+  const bool startWorker = setup->runWorker && !damagedAtStart;
+  if (startWorker) {
+    if (auto recovered = worker.recover(); !recovered) {
+      std::fprintf(stderr, "tallyd serve: %s\n", recovered.error().c_str());
+      return 1;
+    }
+  }
+
+  LeaseReaper reaper;
+  if (!setup->runWorker) reaper.start(setup->dbPath, setup->lease);
+
+  storeHealth.start();
+  if (!setup->serveHttp) return runWorkerOnly(worker, startWorker, workerOptions.host, *setup, stopSignals);
+
+  service::ServiceContext context = serviceContext(args, *setup, writer->get(), storeHealth, worker, metrics);
+  scrapeStore(metrics, storeHealth, writer->get(), *setup);
+  auto server = createHttpServer(args, *setup, context, storeHealth, metrics);
   if (!server) {
     std::fprintf(stderr, "tallyd serve: %s\n", server.error().c_str());
-    stopReaper();
+    reaper.stop();
     return 1;
   }
 
   if (startWorker) worker.start();
   evaluator.start();
   if (!args.alertWebhook.empty()) webhook.start();
-  std::thread signals([&] {
-    int received = 0;
-    sigwait(&stopSignals, &received);
-    (*server)->stop();
-    // At once, beside the requests still being answered: the capture is
-    // killed and its job queued again (docs/operating.md, "Stopping").
-    worker.stop();
-  });
-  std::printf("tallyd: serving http://%s:%d/\n", args.bind.c_str(), (*server)->port());
-  std::printf("tallyd: database %s, dashboard %s\n", dbName.c_str(), webRoot.c_str());
-  std::fflush(stdout);
-  log::info(versionLine("tallyd") + " serving http://" + args.bind + ":" + std::to_string((*server)->port()) +
-            "/ database " + dbName + " dashboard " + webRoot + " role " + args.role +
-            (runWorker ? " host " + hostName + " device " + selector : std::string()));
-  (*server)->run();
-  // Stopped by a signal, or the server ended on its own: wake the signal thread either way.
-  pthread_kill(signals.native_handle(), SIGTERM);
-  signals.join();
+  serveUntilStopped(**server, worker, stopSignals, args, *setup);
   worker.stop();
   webhook.stop();
   evaluator.stop();
   storeHealth.stop();
-  stopReaper();
+  reaper.stop();
   log::info("stopped");
   return 0;
 }

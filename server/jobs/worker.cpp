@@ -201,13 +201,170 @@ void Worker::loop() {
 
 namespace {
 
+using Screenshots = std::map<std::string, std::vector<uint8_t>>;
+
 Result<std::vector<uint8_t>> readFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return makeError("cannot read " + path.string());
   return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+// A fresh folder for one attempt of a job. Unique per daemon and attempt: an
+// orphaned child of a crashed daemon may still write to an old one.
+Result<fs::path> makeJobFolder(const fs::path& tempRoot, const store::Job& job) {
+  std::error_code ec;
+  fs::path root = tempRoot.empty() ? fs::temp_directory_path(ec) : tempRoot;
+  fs::path dir = root / ("tally-job-" + std::to_string(job.id) + "-" + std::to_string(getpid()) + "-" +
+                         std::to_string(job.attempts));
+  fs::remove_all(dir, ec);
+  if (!fs::create_directories(dir, ec) || ec) return makeError("cannot create " + dir.string() + ": " + ec.message());
+  return dir;
+}
+
+// Removes the job's folder however the job ends.
+struct Cleanup {
+  fs::path dir;
+  ~Cleanup() {
+    std::error_code e;
+    fs::remove_all(dir, e);
+  }
+};
+
+Result<bool> writeCaptureSpec(const nlohmann::json& jobSpec, const fs::path& path) {
+  // "device" chose the host; the capture itself does not take it.
+  nlohmann::json content = jobSpec;
+  if (content.is_object()) content.erase("device");
+  std::ofstream spec(path);
+  spec << content.dump();
+  if (!spec) return makeError("cannot write " + path.string());
+  return true;
+}
+
+// The capture's result JSON, and the name of the device it ran on ("" when it
+// names none).
+struct CaptureResult {
+  nlohmann::json json;
+  std::string device;
+};
+
+Result<CaptureResult> readResult(const fs::path& path, const std::optional<std::string>& deviceNameOverride) {
+  auto text = readFile(path);
+  if (!text) return text.failure();
+  CaptureResult out;
+  nlohmann::json& result = out.json;
+  result = nlohmann::json::parse(text->begin(), text->end(), nullptr, false);
+  if (result.is_discarded() || !result.is_object()) return makeError("the capture's result is not valid JSON");
+  if (result.contains("device") && result["device"].is_object() && result["device"].contains("name") &&
+      result["device"]["name"].is_string()) {
+    if (deviceNameOverride) {
+      // The host reports another name (tests pretending to be other GPUs, sites naming theirs).
+      result["device"]["name_reported"] = result["device"]["name"];
+      result["device"]["name"] = *deviceNameOverride;
+    }
+    out.device = result["device"]["name"].get<std::string>();
+  }
+  return out;
+}
+
+// The screenshot files the result's samples name, read from the folder the
+// capture wrote them to.
+Result<Screenshots> readScreenshots(const nlohmann::json& result, const fs::path& shotDir) {
+  Screenshots screenshots;
+  try {
+    for (const auto& run : result.value("runs", nlohmann::json::array())) {
+      for (const auto& sample : run.value("samples", nlohmann::json::array())) {
+        if (!sample.contains("screenshot") || !sample["screenshot"].is_string()) continue;
+        std::string file = sample["screenshot"].get<std::string>();
+        if (file.empty() || file.find('/') != std::string::npos || file == "." || file == "..") {
+          return makeError("the capture named a bad screenshot file '" + file + "'");
+        }
+        auto bytes = readFile(shotDir / file);
+        if (!bytes) return bytes.failure();
+        screenshots[file] = std::move(*bytes);
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    return makeError(std::string("the capture's result is malformed: ") + e.what());
+  }
+  return screenshots;
+}
+
 }  // namespace
+
+void Worker::requeueStopped(const store::Lease& lease, const std::string& why) {
+  auto r = store_.requeueJob(lease, "stopped: " + why + "; queued again");
+  if (!r) {
+    log(log::Level::kError, lease.jobId, "cannot queue it again (" + r.error() + "); its lease will expire");
+  } else if (*r) {
+    log(log::Level::kWarning, lease.jobId, "stopped: " + why + "; queued again");
+  }
+}
+
+bool Worker::recordFailure(const store::Lease& lease, const std::string& reason) {
+  const int64_t job = lease.jobId;
+  log(log::Level::kError, job, "failed: " + reason);
+  // A store that refuses the write (a full disk, a lost server, a lock)
+  // gets it again every ingestRetry until it takes it: the job is failed
+  // with its reason as soon as the store accepts writes again, never left
+  // running. Stopping meanwhile leaves it running for the next start's
+  // recovery (queued again, or failed after max_attempts interruptions).
+  for (int attempt = 1;; ++attempt) {
+    auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
+    if (r) {
+      if (!*r)
+        log(log::Level::kWarning, job, "no longer held by this host; the failure is not recorded");
+      if (attempt > 1) log(log::Level::kInfo, job, "the failure is recorded");
+      return true;
+    }
+    const store::Fault fault = store::lastFault();
+    if (fault == store::Fault::kNone || fault == store::Fault::kDamaged) {
+      if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+      log(log::Level::kError, job, "cannot record the failure: " + r.error());
+      return true;
+    }
+    if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
+    if (attempt == 1 || attempt % 30 == 0) {
+      log(log::Level::kWarning, job,
+          "cannot record the failure yet (" + store::describe(fault) + "); retrying every " +
+              std::to_string(options_.ingestRetry.count()) + " ms: " + r.error());
+    }
+    std::unique_lock lock(mutex_);
+    if (cv_.wait_for(lock, options_.ingestRetry, [this] { return stopping_.load(); })) return false;
+  }
+}
+
+ChildOptions Worker::captureChild(const store::Job& job, const fs::path& specPath, const fs::path& outPath,
+                                  bool& cancelled) {
+  ChildOptions child;
+  child.argv = {options_.tallydPath, "capture", "--spec", specPath.string(), "--out", outPath.string()};
+  if (!options_.device.empty()) {
+    child.argv.push_back("--device");
+    child.argv.push_back(options_.device);
+  }
+  child.argv.insert(child.argv.end(), options_.captureArgs.begin(), options_.captureArgs.end());
+  child.deadline = options_.deadline;
+  const int64_t id = job.id;
+  child.onStderrLine = [this, id, &cancelled](const std::string& line) {
+    auto p = parseProgressLine(line);
+    if (!p) return;
+    auto still = store_.updateProgress(id, p->done, p->total,
+                                       p->current.empty() ? std::nullopt : std::optional(p->current));
+    if (still && !*still) cancelled = true;
+  };
+  child.shouldStop = [this, id, &cancelled, lastCheck = std::chrono::steady_clock::now()]() mutable {
+    if (leaseLost_) cancelled = true;
+    if (stopping_ || cancelled) return true;
+    // A cancel between progress lines: look at the job once a second.
+    auto now = std::chrono::steady_clock::now();
+    if (now - lastCheck >= std::chrono::seconds(1)) {
+      lastCheck = now;
+      auto current = store_.getJob(id);
+      if (current && current->has_value() && (*current)->status != store::JobStatus::Running) cancelled = true;
+    }
+    return cancelled;
+  };
+  return child;
+}
 
 void Worker::runJob(const store::Job& job) {
   const auto started = std::chrono::steady_clock::now();
@@ -231,107 +388,21 @@ void Worker::runJob(const store::Job& job) {
     std::atomic<int64_t>& job;
     ~Release() { job = 0; }
   } release{currentJob_};
-  // This daemon is stopping: the job goes back to the queue with the reason
-  // (never left running), for this host's next start or another host.
-  auto giveBack = [&](const std::string& why) {
-    auto r = store_.requeueJob(lease, "stopped: " + why + "; queued again");
-    if (!r) {
-      log(log::Level::kError, job.id, "cannot queue it again (" + r.error() + "); its lease will expire");
-    } else if (*r) {
-      log(log::Level::kWarning, job.id, "stopped: " + why + "; queued again");
-    }
-  };
   auto fail = [&](const std::string& reason) {
-    log(log::Level::kError, job.id, "failed: " + reason);
-    // A store that refuses the write (a full disk, a lost server, a lock)
-    // gets it again every ingestRetry until it takes it: the job is failed
-    // with its reason as soon as the store accepts writes again, never left
-    // running. Stopping meanwhile leaves it running for the next start's
-    // recovery (queued again, or failed after max_attempts interruptions).
-    for (int attempt = 1;; ++attempt) {
-      auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
-      if (r) {
-        if (!*r)
-          log(log::Level::kWarning, job.id, "no longer held by this host; the failure is not recorded");
-        if (attempt > 1) log(log::Level::kInfo, job.id, "the failure is recorded");
-        break;
-      }
-      const store::Fault fault = store::lastFault();
-      if (fault == store::Fault::kNone || fault == store::Fault::kDamaged) {
-        if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
-        log(log::Level::kError, job.id, "cannot record the failure: " + r.error());
-        break;
-      }
-      if (options_.onStoreFault) options_.onStoreFault(fault, r.error());
-      if (attempt == 1 || attempt % 30 == 0) {
-        log(log::Level::kWarning, job.id,
-            "cannot record the failure yet (" + store::describe(fault) + "); retrying every " +
-                std::to_string(options_.ingestRetry.count()) + " ms: " + r.error());
-      }
-      std::unique_lock lock(mutex_);
-      if (cv_.wait_for(lock, options_.ingestRetry, [this] { return stopping_.load(); })) return;
-    }
-    finished("failed");
+    if (recordFailure(lease, reason)) finished("failed");
   };
 
-  std::error_code ec;
-  fs::path root = options_.tempRoot.empty() ? fs::temp_directory_path(ec) : options_.tempRoot;
-  // Unique per daemon and attempt: an orphaned child of a crashed daemon may still write to an old one.
-  fs::path dir = root / ("tally-job-" + std::to_string(job.id) + "-" + std::to_string(getpid()) + "-" +
-                         std::to_string(job.attempts));
-  fs::remove_all(dir, ec);
-  if (!fs::create_directories(dir, ec) || ec) return fail("cannot create " + dir.string() + ": " + ec.message());
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() {
-      std::error_code e;
-      fs::remove_all(dir, e);
-    }
-  } cleanup{dir};
+  auto dir = makeJobFolder(options_.tempRoot, job);
+  if (!dir) return fail(dir.error());
+  Cleanup cleanup{*dir};
+  fs::path specPath = *dir / "spec.json", outPath = *dir / "result.json";
+  if (auto written = writeCaptureSpec(job.spec, specPath); !written) return fail(written.error());
 
-  fs::path specPath = dir / "spec.json", outPath = dir / "result.json";
-  {
-    // "device" chose the host; the capture itself does not take it.
-    nlohmann::json content = job.spec;
-    if (content.is_object()) content.erase("device");
-    std::ofstream spec(specPath);
-    spec << content.dump();
-    if (!spec) return fail("cannot write " + specPath.string());
-  }
-
-  ChildOptions child;
-  child.argv = {options_.tallydPath, "capture", "--spec", specPath.string(), "--out", outPath.string()};
-  if (!options_.device.empty()) {
-    child.argv.push_back("--device");
-    child.argv.push_back(options_.device);
-  }
-  child.argv.insert(child.argv.end(), options_.captureArgs.begin(), options_.captureArgs.end());
-  child.deadline = options_.deadline;
   bool cancelled = false;
-  auto lastCheck = std::chrono::steady_clock::now();
-  child.onStderrLine = [&](const std::string& line) {
-    auto p = parseProgressLine(line);
-    if (!p) return;
-    auto still = store_.updateProgress(job.id, p->done, p->total,
-                                       p->current.empty() ? std::nullopt : std::optional(p->current));
-    if (still && !*still) cancelled = true;
-  };
-  child.shouldStop = [&] {
-    if (leaseLost_) cancelled = true;
-    if (stopping_ || cancelled) return true;
-    // A cancel between progress lines: look at the job once a second.
-    auto now = std::chrono::steady_clock::now();
-    if (now - lastCheck >= std::chrono::seconds(1)) {
-      lastCheck = now;
-      auto current = store_.getJob(job.id);
-      if (current && current->has_value() && (*current)->status != store::JobStatus::Running) cancelled = true;
-    }
-    return cancelled;
-  };
-
+  ChildOptions child = captureChild(job, specPath, outPath, cancelled);
   log(log::Level::kInfo, job.id, "running");
   auto ran = runChild(child);
-  if (stopping_) return giveBack("the daemon is shutting down (the capture was killed)");
+  if (stopping_) return requeueStopped(lease, "the daemon is shutting down (the capture was killed)");
   if (cancelled) {
     auto now = store_.getJob(job.id);
     bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
@@ -343,64 +414,32 @@ void Worker::runJob(const store::Job& job) {
   if (!ran) return fail(ran.error());
   if (!ran->ok()) return fail("capture " + ran->reason());
 
-  auto text = readFile(outPath);
-  if (!text) return fail(text.error());
-  auto result = nlohmann::json::parse(text->begin(), text->end(), nullptr, false);
-  if (result.is_discarded() || !result.is_object()) return fail("the capture's result is not valid JSON");
-  if (result.contains("device") && result["device"].is_object() && result["device"].contains("name") &&
-      result["device"]["name"].is_string()) {
-    if (options_.deviceNameOverride) {
-      // The host reports another name (tests pretending to be other GPUs, sites naming theirs).
-      result["device"]["name_reported"] = result["device"]["name"];
-      result["device"]["name"] = *options_.deviceNameOverride;
-    }
-    device = result["device"]["name"].get<std::string>();
-  }
+  auto result = readResult(outPath, options_.deviceNameOverride);
+  if (!result) return fail(result.error());
+  device = result->device;
 
   // A spec with "sweep" ran a stability sweep (sweeps::isSweepSpec): its
   // result is one sweeps row, not runs.
+  Screenshots screenshots;
   if (isSweep) {
-    if (!result.contains("sweep") || result["sweep"] != job.spec["sweep"]) {
-      return fail("the sweep's result names sweep " + result.value("sweep", nlohmann::json()).dump() +
+    if (!result->json.contains("sweep") || result->json["sweep"] != job.spec["sweep"]) {
+      return fail("the sweep's result names sweep " + result->json.value("sweep", nlohmann::json()).dump() +
                   ", the spec " + job.spec["sweep"].dump());
     }
-    int64_t sweep = 0;
-    std::string error = ingest(lease, result, {}, /*sweep=*/true, &sweep);
-    if (error == kLost && stopping_)
-      return giveBack("the daemon shut down before the database stored the result");
-    if (error == kLost) return;
-    if (!error.empty()) return fail("cannot store the sweep: " + error);
-    log(log::Level::kInfo, job.id, "done, sweep " + std::to_string(sweep));
-    finished("done");
-    return;
+  } else {
+    auto read = readScreenshots(result->json, *dir / (outPath.stem().string() + "-screenshots"));
+    if (!read) return fail(read.error());
+    screenshots = std::move(*read);
   }
 
-  std::map<std::string, std::vector<uint8_t>> screenshots;
-  fs::path shotDir = dir / (outPath.stem().string() + "-screenshots");
-  try {
-    for (const auto& run : result.value("runs", nlohmann::json::array())) {
-      for (const auto& sample : run.value("samples", nlohmann::json::array())) {
-        if (!sample.contains("screenshot") || !sample["screenshot"].is_string()) continue;
-        std::string file = sample["screenshot"].get<std::string>();
-        if (file.empty() || file.find('/') != std::string::npos || file == "." || file == "..") {
-          return fail("the capture named a bad screenshot file '" + file + "'");
-        }
-        auto bytes = readFile(shotDir / file);
-        if (!bytes) return fail(bytes.error());
-        screenshots[file] = std::move(*bytes);
-      }
-    }
-  } catch (const nlohmann::json::exception& e) {
-    return fail(std::string("the capture's result is malformed: ") + e.what());
-  }
-
-  int64_t runs = 0;
-  std::string error = ingest(lease, result, screenshots, /*sweep=*/false, &runs);
+  int64_t stored = 0;
+  std::string error = ingest(lease, result->json, screenshots, isSweep, &stored);
   if (error == kLost && stopping_)
-    return giveBack("the daemon shut down before the database stored the result");
+    return requeueStopped(lease, "the daemon shut down before the database stored the result");
   if (error == kLost) return;
-  if (!error.empty()) return fail("cannot store the result: " + error);
-  log(log::Level::kInfo, job.id, "done, " + std::to_string(runs) + " runs");
+  if (!error.empty()) return fail((isSweep ? "cannot store the sweep: " : "cannot store the result: ") + error);
+  log(log::Level::kInfo, job.id,
+      isSweep ? "done, sweep " + std::to_string(stored) : "done, " + std::to_string(stored) + " runs");
   finished("done");
 }
 

@@ -26,6 +26,8 @@
 
 namespace tally::jobs {
 
+struct ChildOptions;  // common/child_process.hpp
+
 struct WorkerOptions {
   std::string tallydPath;  // the executable run as `tallyd capture ...`
   std::string device;      // passed as --device when not empty
@@ -100,6 +102,16 @@ class Worker {
   void loop();
   void heartbeatLoop();
   void runJob(const store::Job& job);
+  // The daemon is stopping: the job goes back to the queue with the reason
+  // (never left running), for this host's next start or another host.
+  void requeueStopped(const store::Lease& lease, const std::string& why);
+  // Records the job failed with its reason, retrying while the store refuses
+  // writes; false when the daemon stopped first (the job is left running).
+  bool recordFailure(const store::Lease& lease, const std::string& reason);
+  // The `tallyd capture` child of a job: it reports progress, and stops when
+  // the job is cancelled or its lease lost (cancelled is set) or the daemon stops.
+  ChildOptions captureChild(const store::Job& job, const std::filesystem::path& specPath,
+                            const std::filesystem::path& outPath, bool& cancelled);
   // Stores a result under the job's lease, retrying while the database is
   // unreachable; the error when it cannot (empty: stored and finished).
   std::string ingest(const store::Lease& lease, const nlohmann::json& result,

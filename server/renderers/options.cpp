@@ -21,8 +21,14 @@ std::string joined(const std::vector<json>& values) {
   return out;
 }
 
-std::vector<OptionDef> makeDefs() {
-  std::vector<OptionDef> defs;
+// Every renderer, for the options they all take (a function, not a global:
+// optionDefs() may run during another file's static initialisation).
+std::vector<std::string> everyRenderer() {
+  return {"forward", "forward-zprepass", "deferred", "visbuffer", "visbuffer-lean"};
+}
+
+// How the visibility buffers pick materials and store what the shading pass reads.
+void addVisibilityBufferOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"material_selection",
                   {"visbuffer", "visbuffer-lean"},
                   {"nonuniform", "uniform", "first-lane"},
@@ -57,6 +63,10 @@ std::vector<OptionDef> makeDefs() {
                   [](RendererOptions& o, const json& v) {
                     o.visibility.uvDerivatives = *parseUvDerivativeEncoding(v.get<std::string>());
                   }});
+}
+
+// The pass structure of the forward and deferred renderers.
+void addForwardAndDeferredOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"output",
                   {"forward", "forward-zprepass"},
                   {"shaded", "overdraw", "overshading", "density"},
@@ -89,11 +99,12 @@ std::vector<OptionDef> makeDefs() {
                   "with storeOp DONT_CARE read by subpassLoad, so a tile-based GPU keeps them on chip)",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.gbufferSubpass = v.get<std::string>() == "subpass"; }});
-  // Bloom is a post chain of RendererBase before tonemap: every renderer takes it.
-  const std::vector<std::string> everyRenderer = {"forward", "forward-zprepass", "deferred", "visbuffer",
-                                                  "visbuffer-lean"};
+}
+
+// Bloom is a post chain of RendererBase before tonemap: every renderer takes it.
+void addBloomOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"bloom",
-                  everyRenderer,
+                  everyRenderer(),
                   {"off", "naive", "separable", "bilinear"},
                   {},
                   nullptr,
@@ -103,7 +114,7 @@ std::vector<OptionDef> makeDefs() {
                   "naive",
                   [](RendererOptions& o, const json& v) { o.bloom.blur = *parseBloomBlur(v.get<std::string>()); }});
   defs.push_back({"bloom_taps",
-                  everyRenderer,
+                  everyRenderer(),
                   {9, 5, 13, 17, 25},
                   {},
                   nullptr,
@@ -113,7 +124,7 @@ std::vector<OptionDef> makeDefs() {
                   [](RendererOptions& o, const json& v) { o.bloom.taps = v.get<uint32_t>(); }});
   defs.back().parameter = true;
   defs.push_back({"bloom_threshold",
-                  everyRenderer,
+                  everyRenderer(),
                   {},
                   {0.0, 64.0},
                   1.0,
@@ -121,8 +132,12 @@ std::vector<OptionDef> makeDefs() {
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.bloom.threshold = v.get<float>(); }});
   defs.back().parameter = true;
+}
+
+// Levels of detail of the geometry, and how the full-screen shading pass samples and runs.
+void addDetailAndShadingOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"lod",
-                  everyRenderer,
+                  everyRenderer(),
                   {"off", 0.5, 1, 2, 4, 8},
                   {},
                   nullptr,
@@ -153,11 +168,12 @@ std::vector<OptionDef> makeDefs() {
                   "included (the cleared value). Not with msaa > 1 or gbuffer=subpass",
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.computeShading = v.get<std::string>() == "compute"; }});
-  // Shadow mapping (renderers/techniques/shadows.hpp): every renderer shades with it.
-  const std::vector<std::string> shadowRenderers = {"forward", "forward-zprepass", "deferred", "visbuffer",
-                                                    "visbuffer-lean"};
+}
+
+// Shadow mapping (renderers/techniques/shadows.hpp): every renderer shades with it.
+void addShadowOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"shadows",
-                  shadowRenderers,
+                  everyRenderer(),
                   {"off", "hard", "pcf2x2", "pcf4x4"},
                   {},
                   nullptr,
@@ -169,7 +185,7 @@ std::vector<OptionDef> makeDefs() {
   // A parameter: map-size variants are compared with the same filter at 4096.
   defs.back().parameter = true;
   defs.push_back({"shadow_map_size",
-                  shadowRenderers,
+                  everyRenderer(),
                   {2048, 512, 1024, 4096},
                   {},
                   nullptr,
@@ -178,7 +194,7 @@ std::vector<OptionDef> makeDefs() {
                   [](RendererOptions& o, const json& v) { o.shadows.mapSize = v.get<uint32_t>(); }});
   defs.back().referenceWith = "shadows";
   defs.push_back({"shadow_bias",
-                  shadowRenderers,
+                  everyRenderer(),
                   {},
                   {0.0, 8.0},
                   1.5,
@@ -187,8 +203,12 @@ std::vector<OptionDef> makeDefs() {
                   nullptr,
                   [](RendererOptions& o, const json& v) { o.shadows.bias = v.get<float>(); }});
   defs.back().parameter = true;
+}
+
+// How vertices are laid out in their buffers.
+void addVertexOptions(std::vector<OptionDef>& defs) {
   defs.push_back({"tangent_frame",
-                  everyRenderer,
+                  everyRenderer(),
                   {"float", "quaternion"},
                   {},
                   nullptr,
@@ -199,6 +219,17 @@ std::vector<OptionDef> makeDefs() {
                   [](RendererOptions& o, const json& v) {
                     o.tangentFrame = *parseTangentFrameEncoding(v.get<std::string>());
                   }});
+}
+
+// Every option, in the order /api/options lists them and applyOptions applies them.
+std::vector<OptionDef> makeDefs() {
+  std::vector<OptionDef> defs;
+  addVisibilityBufferOptions(defs);
+  addForwardAndDeferredOptions(defs);
+  addBloomOptions(defs);
+  addDetailAndShadingOptions(defs);
+  addShadowOptions(defs);
+  addVertexOptions(defs);
   addWorkloadOptions(defs);  // volume-fog, raytrace (workloads.cpp)
   return defs;
 }

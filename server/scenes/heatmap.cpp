@@ -93,28 +93,48 @@ glm::vec3 yawDirection(float yawDeg, float pitchDeg) {
 
 float round3(float v) { return std::round(v * 1000.0f) / 1000.0f; }  // metres to the millimetre in labels and JSON
 
-HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpec& spec) {
+// The floor grid over the region (the scene's x-z bounds by default): its
+// corners and cell size.
+struct FloorGrid {
+  float x0, z0, x1, z1;
+  float dx, dz;
+  uint32_t columns, rows;
+
+  size_t cells() const { return size_t(columns) * rows; }
+  glm::vec2 centre(size_t k) const {
+    return glm::vec2(x0 + (float(k % columns) + 0.5f) * dx, z0 + (float(k / columns) + 0.5f) * dz);
+  }
+};
+
+FloorGrid gridOver(const Scene& scene, const HeatmapSpec& spec) {
   const Bounds& b = scene.bounds;
   std::array<float, 4> region = spec.region.value_or(std::array<float, 4>{b.min.x, b.min.z, b.max.x, b.max.z});
   const float x0 = region[0], z0 = region[1], x1 = region[2], z1 = region[3];
-  const float dx = (x1 - x0) / float(spec.columns), dz = (z1 - z0) / float(spec.rows);
+  return {x0, z0, x1, z1, (x1 - x0) / float(spec.columns), (z1 - z0) / float(spec.rows), spec.columns, spec.rows};
+}
+
+// Per cell: its floor, the floors it could have (lowest first) and why it has none.
+struct CellFloors {
+  std::vector<std::optional<float>> floor;
+  std::vector<std::vector<float>> candidates;
+  std::vector<std::string> reason;
+};
+
+// The lowest valid floor of each cell, or why there is none; and every
+// level surface with headroom (the candidates), lowest first.
+CellFloors lowestFloors(const Scene& scene, const Bvh& bvh, const HeatmapSpec& spec, const FloorGrid& grid) {
+  const Bounds& b = scene.bounds;
   const float diagonal = std::max(b.diagonal(), 1e-3f);
   const float top = b.max.y + 0.01f * diagonal + 1.0f, bottom = b.min.y - 0.01f * diagonal - 1.0f;
   const float step = 1e-5f * diagonal;
   const float minUp = std::cos(glm::radians(spec.maxSlopeDeg));
   const std::vector<glm::vec3> normals = faceNormals(scene);
 
-  // The lowest valid floor of each cell, or why there is none; and every
-  // level surface with headroom (the candidates), lowest first.
-  const size_t cells = size_t(spec.columns) * spec.rows;
-  std::vector<std::optional<float>> floor(cells);
-  std::vector<std::vector<float>> candidates(cells);
-  std::vector<std::string> reason(cells, kNoSurface);
-  auto centre = [&](size_t k) {
-    return glm::vec2(x0 + (float(k % spec.columns) + 0.5f) * dx, z0 + (float(k / spec.columns) + 0.5f) * dz);
-  };
+  const size_t cells = grid.cells();
+  CellFloors out{std::vector<std::optional<float>>(cells), std::vector<std::vector<float>>(cells),
+                 std::vector<std::string>(cells, kNoSurface)};
   for (size_t k = 0; k < cells && !b.empty(); ++k) {
-    const glm::vec2 at = centre(k);
+    const glm::vec2 at = grid.centre(k);
     std::vector<ColumnHit> hits = columnHits(bvh, normals, at.x, at.y, top, bottom, step);
     bool seenLevel = false;
     for (size_t i = hits.size(); i-- > 0;) {  // lowest first
@@ -122,65 +142,79 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
       if (h.up < minUp) continue;
       seenLevel = true;
       const float above = i == 0 ? std::numeric_limits<float>::infinity() : hits[i - 1].y - h.y;
-      if (above >= spec.headroom) candidates[k].push_back(h.y);
+      if (above >= spec.headroom) out.candidates[k].push_back(h.y);
     }
-    for (float y : candidates[k]) {
+    for (float y : out.candidates[k]) {
       if (eyeClear(bvh, {at.x, y + spec.eyeHeight, at.y}, spec.clearance)) {
-        floor[k] = y;
+        out.floor[k] = y;
         break;
       }
     }
-    if (!floor[k]) reason[k] = !seenLevel ? kNoSurface : candidates[k].empty() ? kNoHeadroom : kEyeBlocked;
+    if (!out.floor[k])
+      out.reason[k] = !seenLevel ? kNoSurface : out.candidates[k].empty() ? kNoHeadroom : kEyeBlocked;
   }
-  // The ground level: the median of the cells' lowest floors (the lower
-  // middle one for an even count). A cell keeps the lowest valid floor within
-  // max_rise of it; one without is on another level only (an upper storey
-  // seen through a wall cell, the top of a pillar) and is empty. A basement
-  // under a ground-level floor does not hide it.
+  return out;
+}
+
+// The ground level: the median of the cells' lowest floors (the lower
+// middle one for an even count). A cell keeps the lowest valid floor within
+// max_rise of it; one without is on another level only (an upper storey
+// seen through a wall cell, the top of a pillar) and is empty. A basement
+// under a ground-level floor does not hide it.
+std::optional<float> keepGroundLevel(CellFloors& cells, const Bvh& bvh, const HeatmapSpec& spec,
+                                     const FloorGrid& grid) {
   std::vector<float> heights;
-  for (const auto& f : floor)
+  for (const auto& f : cells.floor)
     if (f) heights.push_back(*f);
-  std::optional<float> ground;
-  if (!heights.empty()) {
-    std::sort(heights.begin(), heights.end());
-    ground = heights[(heights.size() - 1) / 2];
-    for (size_t k = 0; k < cells; ++k) {
-      if (!floor[k] || std::abs(*floor[k] - *ground) <= spec.maxRise) continue;
-      floor[k].reset();
-      reason[k] = kOffLevel;
-      const glm::vec2 at = centre(k);
-      for (float y : candidates[k]) {
-        if (std::abs(y - *ground) <= spec.maxRise && eyeClear(bvh, {at.x, y + spec.eyeHeight, at.y}, spec.clearance)) {
-          floor[k] = y;
-          break;
-        }
+  if (heights.empty()) return std::nullopt;
+  std::sort(heights.begin(), heights.end());
+  const float ground = heights[(heights.size() - 1) / 2];
+  for (size_t k = 0; k < grid.cells(); ++k) {
+    if (!cells.floor[k] || std::abs(*cells.floor[k] - ground) <= spec.maxRise) continue;
+    cells.floor[k].reset();
+    cells.reason[k] = kOffLevel;
+    const glm::vec2 at = grid.centre(k);
+    for (float y : cells.candidates[k]) {
+      if (std::abs(y - ground) <= spec.maxRise && eyeClear(bvh, {at.x, y + spec.eyeHeight, at.y}, spec.clearance)) {
+        cells.floor[k] = y;
+        break;
       }
     }
   }
+  return ground;
+}
 
-  HeatmapPlacement out;
+// The poses of the cells with a floor (row-major, yaws innermost), and the
+// layout's grids of floor heights and of why a cell is empty.
+struct FloorPoses {
+  std::vector<HeatmapPose> poses;
   json floorGrid = json::array(), emptyGrid = json::array(), yawsDeg = json::array();
+  json emptyCounts = {{kNoSurface, 0}, {kNoHeadroom, 0}, {kEyeBlocked, 0}, {kOffLevel, 0}};
+  size_t withFloor = 0;
+};
+
+FloorPoses floorPoses(const CellFloors& cells, const HeatmapSpec& spec, const FloorGrid& grid) {
+  FloorPoses out;
   std::vector<float> yawAngles;
   for (uint32_t y = 0; y < spec.yaws; ++y) {
     yawAngles.push_back(360.0f * float(y) / float(spec.yaws));
-    yawsDeg.push_back(yawAngles.back());
+    out.yawsDeg.push_back(yawAngles.back());
   }
-  size_t withFloor = 0;
-  json emptyCounts = {{kNoSurface, 0}, {kNoHeadroom, 0}, {kEyeBlocked, 0}, {kOffLevel, 0}};
   for (uint32_t r = 0; r < spec.rows; ++r) {
     json floorRow = json::array(), emptyRow = json::array();
     for (uint32_t c = 0; c < spec.columns; ++c) {
       const size_t k = size_t(r) * spec.columns + c;
-      if (!floor[k]) {
+      if (!cells.floor[k]) {
         floorRow.push_back(nullptr);
-        emptyRow.push_back(reason[k]);
-        emptyCounts[reason[k]] = emptyCounts[reason[k]].get<int>() + 1;
+        emptyRow.push_back(cells.reason[k]);
+        out.emptyCounts[cells.reason[k]] = out.emptyCounts[cells.reason[k]].get<int>() + 1;
         continue;
       }
-      ++withFloor;
-      floorRow.push_back(round3(*floor[k]));
+      ++out.withFloor;
+      floorRow.push_back(round3(*cells.floor[k]));
       emptyRow.push_back(nullptr);
-      const glm::vec3 eye(x0 + (float(c) + 0.5f) * dx, *floor[k] + spec.eyeHeight, z0 + (float(r) + 0.5f) * dz);
+      const glm::vec3 eye(grid.x0 + (float(c) + 0.5f) * grid.dx, *cells.floor[k] + spec.eyeHeight,
+                          grid.z0 + (float(r) + 0.5f) * grid.dz);
       for (uint32_t y = 0; y < spec.yaws; ++y) {
         HeatmapPose p;
         p.column = c;
@@ -195,9 +229,21 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
         out.poses.push_back(std::move(p));
       }
     }
-    floorGrid.push_back(std::move(floorRow));
-    emptyGrid.push_back(std::move(emptyRow));
+    out.floorGrid.push_back(std::move(floorRow));
+    out.emptyGrid.push_back(std::move(emptyRow));
   }
+  return out;
+}
+
+HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpec& spec) {
+  const FloorGrid grid = gridOver(scene, spec);
+  const float x0 = grid.x0, z0 = grid.z0, x1 = grid.x1, z1 = grid.z1;
+  CellFloors cells = lowestFloors(scene, bvh, spec, grid);
+  const std::optional<float> ground = keepGroundLevel(cells, bvh, spec, grid);
+  FloorPoses placed = floorPoses(cells, spec, grid);
+
+  HeatmapPlacement out;
+  out.poses = std::move(placed.poses);
   // The top-down image spans the grid; pixels are square.
   const float extent = std::max(x1 - x0, z1 - z0);
   const float pixel = extent / float(kTopDownMaxSide);
@@ -208,10 +254,10 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
                 {"rows", spec.rows},
                 {"axes", {"x", "z"}},
                 {"origin", {x0, z0}},
-                {"cell_size", {dx, dz}},
+                {"cell_size", {grid.dx, grid.dz}},
                 {"up", "y"},
                 {"eye_height", spec.eyeHeight},
-                {"yaws_deg", yawsDeg},
+                {"yaws_deg", placed.yawsDeg},
                 {"pitch_deg", spec.pitchDeg},
                 {"fov_deg", spec.fovDeg},
                 {"headroom", spec.headroom},
@@ -220,10 +266,10 @@ HeatmapPlacement placeFloor(const Scene& scene, const Bvh& bvh, const HeatmapSpe
                 {"max_rise", spec.maxRise},
                 {"ground", ground ? json(round3(*ground)) : json(nullptr)},
                 {"cut_height", ground ? json(round3(*ground + spec.eyeHeight)) : json(nullptr)},
-                {"floor", std::move(floorGrid)},
-                {"empty", std::move(emptyGrid)},
-                {"cells_with_floor", withFloor},
-                {"empty_counts", emptyCounts},
+                {"floor", std::move(placed.floorGrid)},
+                {"empty", std::move(placed.emptyGrid)},
+                {"cells_with_floor", placed.withFloor},
+                {"empty_counts", placed.emptyCounts},
                 {"poses", out.poses.size()},
                 {"image", {{"x0", x0}, {"z0", z0}, {"x1", x1}, {"z1", z1}, {"width", width}, {"height", height}}}};
   return out;
