@@ -13,6 +13,7 @@
 #   COUNTING_RESOLUTION=WxH  replaces 1920x1080 (e.g. 160x90 on lavapipe)
 #   COUNTING_FRAMES=N        replaces the 10 frames per sample
 #   COUNTING_SPECS="sponza compute"
+#   COUNTING_MODES=a,b       replaces the specs' counting modes (e.g. exact,accumulate)
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -27,7 +28,8 @@ results=()
 for name in ${COUNTING_SPECS:-sponza compute}; do
   spec="$out/counting-$name-spec.json"
   python3 tests/gpu/spec_edit.py "tests/gpu/counting/$name.json" --sponza "$sponza" \
-    --resolution "${width}x${height}" --frames "$frames" > "$spec" || { status=2; continue; }
+    --resolution "${width}x${height}" --frames "$frames" ${COUNTING_MODES:+--counting "$COUNTING_MODES"} \
+    > "$spec" || { status=2; continue; }
   tally_timed_capture "counting $name ${width}x${height}" "$spec" "$out/counting-$name.json" \
     "$out/counting-$name.log" "$out/counting.log" || { status=$?; continue; }
   "$tallyd" accuracy --result "$out/counting-$name.json" > "$out/counting-$name.txt" || status=1

@@ -5,7 +5,7 @@ The GPU scripts (accuracy.sh, repeats.sh, protocol.sh, sweeps.sh,
 techniques.sh) all shrink or redirect their checked-in specs the same way:
 
   spec_edit.py SPEC [--resolution WxH] [--frames N] [--sponza PATH]
-               [--scene NAME [--cameras N]]
+               [--scene NAME [--cameras N]] [--counting MODE,MODE...]
 
   --resolution  a sweep's "resolution", or a capture's "resolutions" (one entry)
   --frames      a capture's "frames"
@@ -14,6 +14,7 @@ techniques.sh) all shrink or redirect their checked-in specs the same way:
   --scene       the capture's one scene (SPONZA for Sponza); where the spec has
                 no "cameras", the first N (--cameras, default 2) of
                 tests/gpu/accuracy-<scene>.json, which frame that scene
+  --counting    a capture's "counting" modes, comma-separated
 """
 import argparse
 import json
@@ -36,6 +37,7 @@ def main():
     ap.add_argument("--sponza")
     ap.add_argument("--scene")
     ap.add_argument("--cameras", type=int, default=2)
+    ap.add_argument("--counting", help="comma-separated counting modes")
     args = ap.parse_args()
 
     with open(args.spec) as f:
@@ -55,6 +57,8 @@ def main():
             spec["resolution"] = args.resolution
         else:
             spec["resolutions"] = [args.resolution]
+    if args.counting:
+        spec["counting"] = [m for m in args.counting.split(",") if m]
     if args.frames:
         # A spec that counts every frame keeps doing so; one that counts
         # fewer keeps its count, within the new frames.
