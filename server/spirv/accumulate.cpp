@@ -97,6 +97,7 @@ bool Injector::runsExactlyOnce(const FoundSite& s, const EntryPoint& ep) {
 }
 
 void Injector::findInvocationSlots(const SiteScan& scan, const std::vector<uint32_t>& slots) {
+  if (!options_.deriveOnceSites) return;
   std::map<int, int> entriesOf;  // function -> entry points that start there
   for (const auto& ep : scan.entryPoints) ++entriesOf[ep.functionIndex];
   for (size_t i = 0; i < scan.sites.size(); ++i) {

@@ -78,6 +78,11 @@ struct InstrumentOptions {
   uint32_t footprintBlockBytes = 0;
   uint32_t footprintTableBinding = 1;
   uint32_t footprintBitmapBinding = 2;
+  // accumulate mode: sites that run exactly once in every invocation are
+  // derived from the entry point's invocation counter (Instrumented::derived)
+  // instead of counted in the shader. Off, every site adds in the shader:
+  // for tests of the shader's own adds (counter overflow).
+  bool deriveOnceSites = true;
   // accumulate mode: also count the arithmetic the invocations execute
   // (each block adds its operations, as spirv/arith.hpp counts them, to a
   // register flushed with the others into Instrumented::arithmeticSlot).

@@ -86,15 +86,18 @@ void checkWrap(Pass& pass, const OverflowCase& c, Stage countedStage) {
 
   // The same pass from zero: what each slot receives.
   // One copy of each compute counter, so that every slot's flush carries
-  // across the wrap (striped copies would each receive a sixteenth).
-  auto fromZero = pass.run({*mode, c.width, 1, {}, 1});
+  // across the wrap (striped copies would each receive a sixteenth). Every
+  // site adds in the shader: a site derived from the invocation count
+  // (accumulate) adds nothing there, and its count is host arithmetic on
+  // 64-bit values, which starts from zero.
+  auto fromZero = pass.run({*mode, c.width, 1, {}, 1, false});
   ASSERT_TRUE(fromZero.ok()) << fromZero.error();
   const size_t slots = fromZero->counters.size();
   ASSERT_GT(slots, 0u);
 
   std::vector<uint64_t> start(slots);
   for (size_t i = 0; i < slots; ++i) start[i] = startValue(i);
-  auto wrapped = pass.run({*mode, c.width, 1, start, 1});
+  auto wrapped = pass.run({*mode, c.width, 1, start, 1, false});
   ASSERT_TRUE(wrapped.ok()) << wrapped.error();
   ASSERT_EQ(wrapped->counters.size(), slots);
 

@@ -87,6 +87,7 @@ Result<InstrumentedModules> instrumentAll(
         gpu::instrumentOptionsFor(ctx, *options.mode, out.slotCount, *words);
     instrumentOptions.width = options.width;
     if (options.computeCopies != 0) instrumentOptions.computeCopies = options.computeCopies;
+    instrumentOptions.deriveOnceSites = options.deriveOnceSites;
     if (auto why = gpu::unsupportedReason(ctx, stage, instrumentOptions); !why.empty()) {
       return makeError(std::string(spirv::toString(stage)) + ": " + why);
     }

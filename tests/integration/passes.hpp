@@ -35,6 +35,8 @@ struct RunOptions {
   std::vector<uint64_t> initialCounters;
   // accumulate: copies of each compute counter (0: the device default).
   uint32_t computeCopies = 0;
+  // accumulate: derive the sites that run once in every invocation (InstrumentOptions::deriveOnceSites).
+  bool deriveOnceSites = true;
 };
 
 struct PassRun {

@@ -75,6 +75,12 @@ TEST(Accumulate, SitesOnEveryPathAreDerivedFromTheInvocationCount) {
     EXPECT_EQ(r.derived, expected) << mode;
     EXPECT_EQ(r.layout().derived, expected) << mode;
     EXPECT_TRUE(r.layout().needsSettling()) << mode;
+    // Off, every site adds in the shader.
+    auto options = accumulate(mode);
+    options.deriveOnceSites = false;
+    auto counted = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), options);
+    EXPECT_TRUE(counted.derived.empty()) << mode;
+    EXPECT_EQ(counted.sites.size(), r.sites.size()) << mode;
   }
 }
 
