@@ -593,7 +593,7 @@ bool jobExists(Connection* db, int64_t jobId) {
 
 }  // namespace
 
-Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
+Result<int64_t> Runs::ingestSweep(int64_t jobId, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -607,7 +607,7 @@ Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
   });
 }
 
-Result<int64_t> Store::ingestSweep(const Lease& lease, const json& result) {
+Result<int64_t> Runs::ingestSweep(const Lease& lease, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -622,8 +622,8 @@ Result<int64_t> Store::ingestSweep(const Lease& lease, const json& result) {
   });
 }
 
-Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
-                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+Result<int64_t> Runs::ingestCapture(int64_t jobId, const json& result,
+                                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -636,8 +636,8 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
   });
 }
 
-Result<int64_t> Store::ingestCapture(const Lease& lease, const json& result,
-                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+Result<int64_t> Runs::ingestCapture(const Lease& lease, const json& result,
+                                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);

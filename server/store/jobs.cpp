@@ -10,26 +10,28 @@ using nlohmann::json;
 
 namespace detail {
 
-Job readJob(const Statement& row) {
+Job readJob(const Statement& statement) {
+  RowReader row(statement);
   Job job;
-  job.id = row.getInt(0);
-  job.status = parseJobStatus(row.getText(1)).value_or(JobStatus::Failed);
-  job.spec = row.getJson(2);
-  job.progressDone = row.getInt(3);
-  job.progressTotal = row.getInt(4);
-  job.progressCurrent = row.getOptText(5);
-  job.error = row.getOptText(6);
-  job.attempts = static_cast<int>(row.getInt(7));
-  job.idempotencyKey = row.getOptText(8);
-  job.createdAt = row.getText(9);
-  job.startedAt = row.getOptText(10);
-  job.finishedAt = row.getOptText(11);
-  job.workerPid = row.getOptInt(12);
-  job.host = row.getOptText(13);
-  job.leaseExpiresMs = row.getOptInt(14);
-  job.maxAttempts = static_cast<int>(row.getInt(15));
-  job.attemptErrors = row.getJson(16);
-  job.deviceRequirement = row.getJson(17);
+  job.id = row.getInt();
+  job.status = parseJobStatus(row.getText()).value_or(JobStatus::Failed);
+  job.spec = row.getJson();
+  job.progressDone = row.getInt();
+  job.progressTotal = row.getInt();
+  job.progressCurrent = row.getOptText();
+  job.error = row.getOptText();
+  job.attempts = static_cast<int>(row.getInt());
+  job.idempotencyKey = row.getOptText();
+  job.createdAt = row.getText();
+  job.startedAt = row.getOptText();
+  job.finishedAt = row.getOptText();
+  job.workerPid = row.getOptInt();
+  job.host = row.getOptText();
+  job.leaseExpiresMs = row.getOptInt();
+  job.maxAttempts = static_cast<int>(row.getInt());
+  job.attemptErrors = row.getJson();
+  job.deviceRequirement = row.getJson();
+  row.end();
   return job;
 }
 
@@ -54,12 +56,12 @@ std::optional<Job> returnedJob(Statement& statement) {
 
 }  // namespace
 
-Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string> idempotencyKey,
                                     int maxAttempts) {
-  return createJob(spec, std::move(idempotencyKey), maxAttempts, QueueLimits{});
+  return create(spec, std::move(idempotencyKey), maxAttempts, QueueLimits{});
 }
 
-Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string> idempotencyKey,
                                     int maxAttempts, const QueueLimits& limits) {
   if (idempotencyKey && (idempotencyKey->empty() || idempotencyKey->size() > 255)) {
     return makeError("idempotency_key: must be 1 to 255 characters");
@@ -145,13 +147,13 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
   });
 }
 
-Result<std::optional<Job>> Store::claimNextJob(int64_t workerPid) {
+Result<std::optional<Job>> JobQueue::claim(int64_t workerPid) {
   Claimer claimer;
   claimer.workerPid = workerPid;
-  return claimNextJob(claimer);
+  return claim(claimer);
 }
 
-Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
+Result<std::optional<Job>> JobQueue::claim(const Claimer& claimer) {
   if (claimer.leaseMs < 1) return makeError("lease: must be at least 1 ms");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -171,7 +173,12 @@ Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
       page.reset();
       page.bind(1, after);
       std::vector<std::pair<int64_t, json>> candidates;
-      while (page.step()) candidates.emplace_back(page.getInt(0), page.getJson(1));
+      while (page.step()) {
+        RowReader row(page);
+        int64_t id = row.getInt();
+        candidates.emplace_back(id, row.getJson());
+        row.end();
+      }
       if (candidates.empty()) break;
       after = candidates.back().first;
       for (const auto& [id, requirement] : candidates) {
@@ -240,7 +247,7 @@ bool holdsLease(Connection* db, const Lease& lease) { return holds(db, lease); }
 
 }  // namespace detail
 
-Result<bool> Store::renewLease(const Lease& lease, int64_t leaseMs) {
+Result<bool> JobQueue::renewLease(const Lease& lease, int64_t leaseMs) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("renewLease", [&]() -> Result<bool> {
@@ -251,7 +258,7 @@ Result<bool> Store::renewLease(const Lease& lease, int64_t leaseMs) {
   });
 }
 
-Result<Recovery> Store::requeueExpired() {
+Result<Recovery> JobQueue::requeueExpired() {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueExpired", [&]() -> Result<Recovery> {
@@ -267,8 +274,10 @@ Result<Recovery> Store::requeueExpired() {
     };
     std::vector<Expired> found;
     while (expired.step()) {
-      found.push_back({expired.getInt(0), expired.getInt(1), expired.getInt(2),
-                       expired.getOptText(3).value_or("an unnamed host"), expired.getJson(4), expired.getInt(5)});
+      RowReader row(expired);  // a braced list reads its columns in order
+      found.push_back({row.getInt(), row.getInt(), row.getInt(), row.getOptText().value_or("an unnamed host"),
+                       row.getJson(), row.getInt()});
+      row.end();
     }
     Statement requeue(db_,
                       "UPDATE jobs SET status = 'queued', worker_pid = NULL, lease_expires_ms = NULL, "
@@ -305,8 +314,8 @@ Result<Recovery> Store::requeueExpired() {
   });
 }
 
-Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
-                                   std::optional<std::string> current) {
+Result<bool> JobQueue::updateProgress(int64_t jobId, int64_t done, int64_t total,
+                                      std::optional<std::string> current) {
   if (done < 0 || total < 0) return makeError("progress: done and total must not be negative");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -336,7 +345,7 @@ std::optional<std::string> finishableStatus(JobStatus status, std::optional<std:
 
 }  // namespace
 
-Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error) {
+Result<bool> JobQueue::finish(int64_t jobId, JobStatus status, std::optional<std::string> error) {
   if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -352,7 +361,7 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
   });
 }
 
-Result<bool> Store::finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error) {
+Result<bool> JobQueue::finish(const Lease& lease, JobStatus status, std::optional<std::string> error) {
   if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -380,7 +389,7 @@ void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std:
 
 }  // namespace detail
 
-Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
+Result<bool> JobQueue::requeue(const Lease& lease, const std::string& reason) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("requeueJob", [&]() -> Result<bool> {
@@ -402,7 +411,7 @@ Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
   });
 }
 
-Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
+Result<std::optional<Job>> JobQueue::cancel(int64_t jobId) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("cancelJob", [&]() -> Result<std::optional<Job>> {
@@ -417,13 +426,13 @@ Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
   });
 }
 
-Result<std::optional<Job>> Store::getJob(int64_t jobId) {
+Result<std::optional<Job>> JobQueue::get(int64_t jobId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Job>>("getJob",
                                      [&]() -> Result<std::optional<Job>> { return findJob(db_, jobId); });
 }
 
-Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& page) {
+Result<JobPage> JobQueue::list(std::optional<JobStatus> status, const Page& page) {
   auto after = detail::checkPage(page);
   if (!after) return makeError(after.error());
   std::lock_guard lock(mutex_);
@@ -446,7 +455,7 @@ Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& pag
   });
 }
 
-Result<std::map<std::string, int64_t>> Store::jobCounts() {
+Result<std::map<std::string, int64_t>> JobQueue::counts() {
   std::lock_guard lock(mutex_);
   return guarded<std::map<std::string, int64_t>>("jobCounts", [&]() -> Result<std::map<std::string, int64_t>> {
     std::map<std::string, int64_t> out;
@@ -458,7 +467,7 @@ Result<std::map<std::string, int64_t>> Store::jobCounts() {
   });
 }
 
-Result<Recovery> Store::requeueInterrupted(int maxAttempts, std::optional<std::string> host) {
+Result<Recovery> JobQueue::requeueInterrupted(int maxAttempts, std::optional<std::string> host) {
   if (maxAttempts < 1) return makeError("maxAttempts: must be at least 1");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -474,7 +483,12 @@ Result<Recovery> Store::requeueInterrupted(int maxAttempts, std::optional<std::s
         db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, error = ?2, finished_at = ") +
                  nowSql(*db_) + " WHERE id = ?1");
     std::vector<std::pair<int64_t, int64_t>> interrupted;
-    while (running.step()) interrupted.emplace_back(running.getInt(0), running.getInt(1));
+    while (running.step()) {
+      RowReader row(running);
+      int64_t id = row.getInt();
+      interrupted.emplace_back(id, row.getInt());
+      row.end();
+    }
     Recovery recovery;
     for (auto [id, attempts] : interrupted) {
       if (attempts < maxAttempts) {
