@@ -74,13 +74,13 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
   int64_t id = pathId(req);
   auto before = check(ctx.writer->jobs().get(id));
   if (!before) missing("no capture " + std::to_string(id));
-  auto finished = [](store::JobStatus s) { return s != store::JobStatus::Queued && s != store::JobStatus::Running; };
-  if (!finished(before->status)) requireWritable(ctx);
-  auto job = finished(before->status) ? before : check(ctx.writer->jobs().cancel(id));
-  if (!finished(before->status) && ctx.health) ctx.health->noteWriteOk();
+  const bool finished = store::isFinal(before->status);
+  if (!finished) requireWritable(ctx);
+  auto job = finished ? before : check(ctx.writer->jobs().cancel(id));
+  if (!finished && ctx.health) ctx.health->noteWriteOk();
   if (!job) missing("no capture " + std::to_string(id));
   // Finished before (a second cancel included) or meanwhile: nothing to cancel.
-  if (finished(before->status) || job->status != store::JobStatus::Cancelled) {
+  if (finished || job->status != store::JobStatus::Cancelled) {
     throw RequestError(409, api::code::kConflict,
                        "capture " + std::to_string(id) + " has already finished (" + store::toString(job->status) + ")");
   }

@@ -17,9 +17,19 @@ namespace tally::store {
 
 // ---- jobs -------------------------------------------------------------------
 
+// A job's states, named once: toString gives the wire's names
+// (protocol.hpp: GET /api/captures/{id}'s "status"), which are also the
+// jobs table's status column; the store's SQL and the service name states
+// only through these.
 enum class JobStatus { Queued, Running, Done, Failed, Cancelled };
+inline constexpr JobStatus kJobStatuses[] = {JobStatus::Queued, JobStatus::Running, JobStatus::Done,
+                                             JobStatus::Failed, JobStatus::Cancelled};
 const char* toString(JobStatus status);  // "queued", "running", ...
 std::optional<JobStatus> parseJobStatus(std::string_view name);
+// Done, failed and cancelled are final: no transition leaves them.
+constexpr bool isFinal(JobStatus status) {
+  return status != JobStatus::Queued && status != JobStatus::Running;
+}
 
 struct Job {
   int64_t id = 0;

@@ -39,6 +39,11 @@ Job readJob(const Statement& statement) {
 
 namespace {
 
+// Statuses as SQL literals ('queued'): the SQL names them only through toString.
+std::string quoted(JobStatus status) { return std::string("'") + toString(status) + "'"; }
+const std::string kQueued = quoted(JobStatus::Queued), kRunning = quoted(JobStatus::Running),
+                  kFailed = quoted(JobStatus::Failed), kCancelled = quoted(JobStatus::Cancelled);
+
 std::optional<Job> findJob(Connection* db, int64_t id) {
   Statement query(db, std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id = ?1");
   query.bind(1, id);
@@ -92,7 +97,7 @@ Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string>
         serialise.run();
       }
       if (limits.maxQueued > 0) {
-        Statement count(db_, "SELECT count(*) FROM jobs WHERE status = 'queued'");
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE status = " + kQueued);
         count.step();
         out.queued = count.getInt(0);
         count.run();
@@ -102,7 +107,7 @@ Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string>
         }
       }
       if (limits.maxQueuedPerClient > 0 && !limits.client.empty()) {
-        Statement count(db_, "SELECT count(*) FROM jobs WHERE client = ?1 AND status = 'queued'");
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE client = ?1 AND status = " + kQueued);
         count.bind(1, limits.client);
         count.step();
         out.queued = count.getInt(0);
@@ -162,11 +167,11 @@ Result<std::optional<Job>> JobQueue::claim(const Claimer& claimer) {
     // Candidates in queue order, a page at a time, filtered here by device;
     // only the one taken is locked, so other claimers pass over it and take
     // the next (SKIP LOCKED) instead of waiting.
-    Statement page(db_,
-                   "SELECT id, device_requirement FROM jobs WHERE status = 'queued' AND id > ?1 "
-                   "ORDER BY id LIMIT 64");
-    Statement lockOne(db_, std::string("SELECT id FROM jobs WHERE id = ?1 AND status = 'queued'") +
-                               skipLockedSql(*db_));
+    Statement page(db_, "SELECT id, device_requirement FROM jobs WHERE status = " + kQueued +
+                            " AND id > ?1 "
+                            "ORDER BY id LIMIT 64");
+    Statement lockOne(
+        db_, std::string("SELECT id FROM jobs WHERE id = ?1 AND status = " + kQueued) + skipLockedSql(*db_));
     std::optional<int64_t> chosen;
     int64_t after = 0;
     while (!chosen) {
@@ -198,11 +203,12 @@ Result<std::optional<Job>> JobQueue::claim(const Claimer& claimer) {
     }
     if (!chosen) return std::optional<Job>();
     Statement claim(
-        db_, std::string("UPDATE jobs SET status = 'running', attempts = attempts + 1, started_at = ") +
-                 nowSql(*db_) +
-                 ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
-                 "worker_pid = ?1, host = ?2, lease_expires_ms = " +
-                 nowMsSql(*db_) + " + ?3 WHERE id = ?4 RETURNING " + kJobColumns);
+        db_,
+        std::string("UPDATE jobs SET status = " + kRunning + ", attempts = attempts + 1, started_at = ") +
+            nowSql(*db_) +
+            ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
+            "worker_pid = ?1, host = ?2, lease_expires_ms = " +
+            nowMsSql(*db_) + " + ?3 WHERE id = ?4 RETURNING " + kJobColumns);
     claim.bind(1, claimer.workerPid > 0 ? std::optional<int64_t>(claimer.workerPid) : std::nullopt)
         .bind(2, claimer.host.empty() ? std::optional<std::string>() : std::optional(claimer.host))
         .bind(3, claimer.leaseMs)
@@ -221,8 +227,9 @@ namespace {
 
 // The job row, locked until the transaction ends, if `lease` still holds it.
 bool holds(Connection* db, const Lease& lease) {
-  Statement query(db, std::string("SELECT 1 FROM jobs WHERE id = ?1 AND status = 'running' AND attempts = ?2 "
-                                   "AND host = ?3") +
+  Statement query(db, std::string("SELECT 1 FROM jobs WHERE id = ?1 AND status = " + kRunning +
+                                  " AND attempts = ?2 "
+                                  "AND host = ?3") +
                           (db->engine() == Engine::Postgres ? " FOR UPDATE" : ""));
   query.bind(1, lease.jobId).bind(2, lease.attempt).bind(3, lease.host);
   bool held = query.step();
@@ -252,7 +259,8 @@ Result<bool> JobQueue::renewLease(const Lease& lease, int64_t leaseMs) {
   detail::WriteLock writer(*db_);
   return guarded<bool>("renewLease", [&]() -> Result<bool> {
     Statement renew(db_, std::string("UPDATE jobs SET lease_expires_ms = ") + nowMsSql(*db_) +
-                             " + ?1 WHERE id = ?2 AND status = 'running' AND attempts = ?3 AND host = ?4");
+                             " + ?1 WHERE id = ?2 AND status = " + kRunning +
+                             " AND attempts = ?3 AND host = ?4");
     renew.bind(1, leaseMs).bind(2, lease.jobId).bind(3, lease.attempt).bind(4, lease.host).run();
     return db_->changes() > 0;
   });
@@ -264,8 +272,10 @@ Result<Recovery> JobQueue::requeueExpired() {
   return guarded<Recovery>("requeueExpired", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement expired(db_, std::string("SELECT id, attempts, max_attempts, host, attempt_errors, ") +
-                               nowMsSql(*db_) + " - lease_expires_ms FROM jobs WHERE status = 'running' AND "
-                               "lease_expires_ms < " + nowMsSql(*db_) + " ORDER BY id" + skipLockedSql(*db_));
+                               nowMsSql(*db_) + " - lease_expires_ms FROM jobs WHERE status = " + kRunning +
+                               " AND "
+                               "lease_expires_ms < " +
+                               nowMsSql(*db_) + " ORDER BY id" + skipLockedSql(*db_));
     struct Expired {
       int64_t id, attempts, maxAttempts;
       std::string host;
@@ -280,9 +290,11 @@ Result<Recovery> JobQueue::requeueExpired() {
       row.end();
     }
     Statement requeue(db_,
-                      "UPDATE jobs SET status = 'queued', worker_pid = NULL, lease_expires_ms = NULL, "
-                      "progress_done = 0, progress_current = NULL, attempt_errors = ?2 WHERE id = ?1");
-    Statement fail(db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, lease_expires_ms = "
+                      "UPDATE jobs SET status = " + kQueued +
+                          ", worker_pid = NULL, lease_expires_ms = NULL, "
+                          "progress_done = 0, progress_current = NULL, attempt_errors = ?2 WHERE id = ?1");
+    Statement fail(db_, std::string("UPDATE jobs SET status = " + kFailed +
+                                    ", worker_pid = NULL, lease_expires_ms = "
                                     "NULL, attempt_errors = ?2, error = ?3, finished_at = ") +
                             nowSql(*db_) + " WHERE id = ?1");
     Statement freeHost(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
@@ -323,7 +335,8 @@ Result<bool> JobQueue::updateProgress(int64_t jobId, int64_t done, int64_t total
     Transaction tx(db_, Transaction::Kind::Write);
     Statement update(db_,
                      "UPDATE jobs SET progress_done = ?1, progress_total = ?2, progress_current = ?3 "
-                     "WHERE id = ?4 AND status = 'running'");
+                     "WHERE id = ?4 AND status = " +
+                         kRunning);
     update.bind(1, done).bind(2, total).bind(3, current).bind(4, jobId);
     update.run();
     bool running = db_->changes() > 0;
@@ -351,8 +364,8 @@ Result<bool> JobQueue::finish(int64_t jobId, JobStatus status, std::optional<std
   detail::WriteLock writer(*db_);
   return guarded<bool>("finishJob", [&]() -> Result<bool> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") + nowSql(*db_) +
-                              " WHERE id = ?3 AND status = 'running'");
+    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") +
+                              nowSql(*db_) + " WHERE id = ?3 AND status = " + kRunning);
     update.bind(1, toString(status)).bind(2, error).bind(3, jobId);
     update.run();
     bool changed = db_->changes() > 0;
@@ -399,10 +412,10 @@ Result<bool> JobQueue::requeue(const Lease& lease, const std::string& reason) {
     json errors = job && job->attemptErrors.is_array() ? job->attemptErrors : json::array();
     errors.push_back("attempt " + std::to_string(lease.attempt) + " on " + lease.host + ": " + reason);
     Statement requeue(
-        db_,
-        "UPDATE jobs SET status = 'queued', attempts = attempts - 1, worker_pid = NULL, "
-        "lease_expires_ms = NULL, progress_done = 0, progress_current = NULL, attempt_errors = ?2 "
-        "WHERE id = ?1");
+        db_, "UPDATE jobs SET status = " + kQueued +
+                 ", attempts = attempts - 1, worker_pid = NULL, "
+                 "lease_expires_ms = NULL, progress_done = 0, progress_current = NULL, attempt_errors = ?2 "
+                 "WHERE id = ?1");
     requeue.bind(1, lease.jobId).bind(2, errors).run();
     Statement host(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
     host.bind(1, lease.host).bind(2, lease.jobId).run();
@@ -416,8 +429,9 @@ Result<std::optional<Job>> JobQueue::cancel(int64_t jobId) {
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("cancelJob", [&]() -> Result<std::optional<Job>> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = 'cancelled', finished_at = ") + nowSql(*db_) +
-                              " WHERE id = ?1 AND status IN ('queued', 'running')");
+    Statement update(db_, std::string("UPDATE jobs SET status = " + kCancelled + ", finished_at = ") +
+                              nowSql(*db_) + " WHERE id = ?1 AND status IN (" + kQueued + ", " + kRunning +
+                              ")");
     update.bind(1, jobId);
     update.run();
     auto job = findJob(db_, jobId);
@@ -459,8 +473,7 @@ Result<std::map<std::string, int64_t>> JobQueue::counts() {
   std::lock_guard lock(mutex_);
   return guarded<std::map<std::string, int64_t>>("jobCounts", [&]() -> Result<std::map<std::string, int64_t>> {
     std::map<std::string, int64_t> out;
-    for (auto s : {JobStatus::Queued, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Cancelled})
-      out[toString(s)] = 0;
+    for (JobStatus s : kJobStatuses) out[toString(s)] = 0;
     Statement query(db_, "SELECT status, count(*) FROM jobs GROUP BY status");
     while (query.step()) out[query.getText(0)] = query.getInt(1);
     return out;
@@ -473,15 +486,16 @@ Result<Recovery> JobQueue::requeueInterrupted(int maxAttempts, std::optional<std
   detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueInterrupted", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' AND "
-                           "(CAST(?1 AS TEXT) IS NULL OR host = ?1 OR host IS NULL) ORDER BY id");
+    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = " + kRunning +
+                               " AND "
+                               "(CAST(?1 AS TEXT) IS NULL OR host = ?1 OR host IS NULL) ORDER BY id");
     running.bind(1, host);
-    Statement requeue(db_,
-                      "UPDATE jobs SET status = 'queued', worker_pid = NULL, progress_done = 0, "
-                      "progress_current = NULL, lease_expires_ms = NULL WHERE id = ?1");
-    Statement fail(
-        db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, error = ?2, finished_at = ") +
-                 nowSql(*db_) + " WHERE id = ?1");
+    Statement requeue(db_, "UPDATE jobs SET status = " + kQueued +
+                               ", worker_pid = NULL, progress_done = 0, "
+                               "progress_current = NULL, lease_expires_ms = NULL WHERE id = ?1");
+    Statement fail(db_, std::string("UPDATE jobs SET status = " + kFailed +
+                                    ", worker_pid = NULL, error = ?2, finished_at = ") +
+                            nowSql(*db_) + " WHERE id = ?1");
     std::vector<std::pair<int64_t, int64_t>> interrupted;
     while (running.step()) {
       RowReader row(running);

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cstdio>
 
+#include "protocol.hpp"
 #include "store/internal.hpp"
 #include "store/migrations.hpp"
 
@@ -27,18 +28,17 @@ Result<std::optional<int64_t>> checkPage(const Page& page) {
 
 const char* toString(JobStatus status) {
   switch (status) {
-    case JobStatus::Queued: return "queued";
-    case JobStatus::Running: return "running";
-    case JobStatus::Done: return "done";
-    case JobStatus::Failed: return "failed";
-    case JobStatus::Cancelled: return "cancelled";
+    case JobStatus::Queued: return protocol::kJobQueued;
+    case JobStatus::Running: return protocol::kJobRunning;
+    case JobStatus::Done: return protocol::kJobDone;
+    case JobStatus::Failed: return protocol::kJobFailed;
+    case JobStatus::Cancelled: return protocol::kJobCancelled;
   }
   return "unknown";
 }
 
 std::optional<JobStatus> parseJobStatus(std::string_view name) {
-  for (JobStatus s :
-       {JobStatus::Queued, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Cancelled}) {
+  for (JobStatus s : kJobStatuses) {
     if (name == toString(s)) return s;
   }
   return std::nullopt;
