@@ -29,7 +29,7 @@ class Alerts : public Facet {
   // (the newest ones when there are more).
   Result<std::vector<RunRow>> configurationRuns(int64_t baselineId, int limit);
 
-  // Alerts. Takes up to `limit` runs not yet evaluated, tests each run that
+  // Takes up to `limit` runs not yet evaluated, tests each run that
   // has an active baseline older than it with `evaluate`, inserts the alerts
   // (delivery pending when `deliver`, else none) and marks the runs
   // evaluated. On PostgreSQL the runs are claimed FOR UPDATE SKIP LOCKED and

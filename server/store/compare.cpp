@@ -1,4 +1,4 @@
-// compareRuns, runPasses and exportRuns: per-frame totals averaged over a run's samples.
+// Runs::compare, passes and exportRows: per-frame totals averaged over a run's samples.
 #include <algorithm>
 #include <set>
 

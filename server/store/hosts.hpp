@@ -16,7 +16,7 @@ namespace tally::store {
 
 class Hosts : public Facet {
  public:
-  // Hosts. Registers (or re-registers) a worker under its name; refused
+  // Registers (or re-registers) a worker under its name; refused
   // while another live instance (heartbeat within staleAfterMs) holds the name.
   // instanceIsGone: says whether a live-looking holder is in fact gone (the
   // same machine, its process dead: a restart after a crash need not wait).

@@ -125,7 +125,7 @@ struct CreatedJob {
   int64_t queued = 0;  // when refused: the queued jobs counted against that limit
 };
 
-// Limits on queued jobs that createJob checks in the transaction that
+// Limits on queued jobs that JobQueue::create checks in the transaction that
 // inserts, so concurrent requests (on PostgreSQL, of several API daemons)
 // cannot overshoot them. 0: no limit.
 struct QueueLimits {

@@ -347,7 +347,7 @@ Result<bool> JobQueue::updateProgress(int64_t jobId, int64_t done, int64_t total
 
 namespace {
 
-// finishJob's status must end a job: done (its error dropped) or failed.
+// finish()'s status must end a job: done (its error dropped) or failed.
 std::optional<std::string> finishableStatus(JobStatus status, std::optional<std::string>& error) {
   if (status != JobStatus::Done && status != JobStatus::Failed) {
     return std::string("finishJob: status must be done or failed, got ") + toString(status);

@@ -19,7 +19,7 @@ namespace tally::store {
 
 class JobQueue : public Facet {
  public:
-  // Jobs (the persistent queue; the worker drives the transitions).
+  // The worker drives the transitions.
   // A repeated idempotency key returns the existing job (created = false).
   // The spec's "device" is stored as its requirement (an error names a bad one).
   Result<CreatedJob> create(const nlohmann::json& spec, std::optional<std::string> idempotencyKey = {},
@@ -60,7 +60,7 @@ class JobQueue : public Facet {
   // Jobs by status ("queued", "running", "done", "failed", "cancelled"), each present.
   Result<std::map<std::string, int64_t>> counts();
   Result<std::optional<Job>> get(int64_t jobId);
-  // Newest first, cursor-paginated like listRuns; status empty: every status.
+  // Newest first, cursor-paginated like Runs::list; status empty: every status.
   Result<JobPage> list(std::optional<JobStatus> status, const Page& page);
   // Start-up recovery: every running job (of `host`, when given: other
   // hosts' jobs are theirs) goes back to queued when attempts < maxAttempts,

@@ -144,7 +144,7 @@ struct SampleRow {
   // requested bytes, per frame; absent when no line has a footprint.
   std::optional<double> footprintBytes, footprintRequestedBytes;
   // Every uninstrumented frame's time (ms), in frame order (0008): filled by
-  // getSample only; empty when not stored (older rows, results without it).
+  // sample() only; empty when not stored (older rows, results without it).
   std::vector<double> frameMsFrames;
 };
 
@@ -172,7 +172,7 @@ struct Pass {
   std::optional<double> computeInvocations;
   std::optional<double> computeInvocationsStatistic;
   // The pass's time (ms) in each of the sample's uninstrumented frames, in
-  // frame order (0008): filled by getSample only; empty when not stored.
+  // frame order (0008): filled by sample() only; empty when not stored.
   std::vector<double> gpuMsFrames;
 };
 

@@ -53,7 +53,7 @@ class Runs : public Facet {
   Result<std::vector<SampleRow>> samples(int64_t runId);
   Result<std::optional<Sample>> sample(int64_t sampleId);
   // A run's passes and per-resource counters, per frame, averaged over its
-  // samples as compareRuns does (a sample without a pass or counter counts as
+  // samples as compare() does (a sample without a pass or counter counts as
   // 0; overhead ratios are the mean of the samples that have one); spreads
   // are null. Empty for an unknown run or one without samples.
   Result<std::vector<Pass>> passes(int64_t runId);
@@ -61,7 +61,7 @@ class Runs : public Facet {
   Result<std::optional<std::vector<uint8_t>>> screenshot(int64_t sampleId);
   // 2..4 distinct existing run ids; deltas and ratios against the first.
   Result<Comparison> compare(const std::vector<int64_t>& runIds);
-  // Sweeps, newest first, cursor-paginated like listRuns.
+  // Sweeps, newest first, cursor-paginated like list().
   Result<SweepPage> sweeps(const SweepFilter& filter, const Page& page);
   Result<std::optional<Sweep>> sweep(int64_t sweepId);
   // The sweeps a job stored (one for a finished sweep job, none otherwise), by id.

@@ -1,5 +1,5 @@
 // Read queries of stored sweeps: the list (filtered, cursor-paginated as
-// listRuns), one sweep with its whole result, and a job's sweeps.
+// Runs::list), one sweep with its whole result, and a job's sweeps.
 #include "store/internal.hpp"
 
 namespace tally::store {
