@@ -413,6 +413,26 @@ TEST(Engines, ConcurrentOpensMigrateOnce) {
   EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
 }
 
+// Rows are read in the SELECT's order, and a row with more or fewer columns
+// than were read is refused: a column added to a SELECT cannot shift the others.
+TEST(Engines, RowReaderTakesColumnsInOrderAndChecksTheirCount) {
+  TempDb db;  // either engine
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  Statement select(store->connection(), "SELECT 7 AS seven, 'text' AS word, NULL AS absent");
+  ASSERT_TRUE(select.step());
+  RowReader row(select);
+  EXPECT_EQ(row.getInt(), 7);
+  EXPECT_EQ(row.getText(), "text");
+  EXPECT_TRUE(row.isNull());
+  EXPECT_THROW(row.end(), DbError);  // one column left unread
+  EXPECT_FALSE(row.getOptText());
+  EXPECT_NO_THROW(row.end());
+  EXPECT_THROW(row.getInt(), DbError);  // past the last column
+  EXPECT_EQ(select.column("word"), 1);
+  EXPECT_THROW(select.column("missing"), DbError);
+}
+
 TEST(Engines, ParametersAreRewrittenOutsideLiterals) {
   std::vector<std::string> names;
   EXPECT_EQ(toPostgresParameters("SELECT ?2, ?, :a, ':b', \"?\", :a, x::jsonb -- ?9\n, ?", &names),
