@@ -415,7 +415,12 @@ Result<std::map<std::string, int64_t>> Alerts::counts(std::optional<int64_t> bas
         "SELECT status, COUNT(*) FROM alerts WHERE (CAST(?1 AS BIGINT) IS NULL OR baseline_id = ?1) "
         "GROUP BY status");
     query.bind(1, baselineId);
-    while (query.step()) out[query.getText(0)] = query.getInt(1);
+    while (query.step()) {
+      RowReader row(query);
+      std::string status = row.getText();
+      out[status] = row.getInt();
+      row.end();
+    }
     return out;
   });
 }

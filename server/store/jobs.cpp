@@ -475,7 +475,12 @@ Result<std::map<std::string, int64_t>> JobQueue::counts() {
     std::map<std::string, int64_t> out;
     for (JobStatus s : kJobStatuses) out[toString(s)] = 0;
     Statement query(db_, "SELECT status, count(*) FROM jobs GROUP BY status");
-    while (query.step()) out[query.getText(0)] = query.getInt(1);
+    while (query.step()) {
+      RowReader row(query);
+      std::string status = row.getText();
+      out[status] = row.getInt();
+      row.end();
+    }
     return out;
   });
 }
