@@ -216,7 +216,7 @@ int64_t scalar(store::Store& s, const std::string& sql, int64_t a = 0, int64_t b
 
 int64_t hostsJobsDone(store::Store& s, int workers) {
   int64_t total = 0;
-  auto hosts = s.listHosts(kStaleAfterMs);
+  auto hosts = s.hosts().list(kStaleAfterMs);
   if (!hosts) return -1;
   for (const auto& h : *hosts) {
     for (int w = 0; w < workers; ++w) {
@@ -325,7 +325,7 @@ void workerLoop(const std::string& location, int worker, bool ingest, const std:
     info.tallyCommit = "bench";
     // Stale after 0 ms: the benchmark takes its host names over from an
     // earlier run of itself instead of waiting for their heartbeats to age.
-    auto registered = db->registerHost(info, 0);
+    auto registered = db->hosts().join(info, 0);
     if (!registered) {
       out.error = "registering " + info.name + ": " + registered.error();
       return;
@@ -341,7 +341,7 @@ void workerLoop(const std::string& location, int worker, bool ingest, const std:
 
   for (;;) {
     auto t0 = Clock::now();
-    auto claimed = db->claimNextJob(claimer);
+    auto claimed = db->jobs().claim(claimer);
     auto t1 = Clock::now();
     if (!claimed) {
       out.error = "claimNextJob: " + claimed.error();
@@ -359,7 +359,7 @@ void workerLoop(const std::string& location, int worker, bool ingest, const std:
       // The mock capture: its result is built before the clock starts again.
       MockCapture capture = mockCapture(job.spec, claimer.device, job.id);
       auto t2 = Clock::now();
-      auto stored = db->ingestCapture(lease, capture.result, capture.screenshots);
+      auto stored = db->runs().ingestCapture(lease, capture.result, capture.screenshots);
       out.workMs.push_back(ms(t2, Clock::now()));
       if (!stored) {
         out.error = "ingestCapture(job " + std::to_string(job.id) + "): " + stored.error();
@@ -367,7 +367,7 @@ void workerLoop(const std::string& location, int worker, bool ingest, const std:
       }
     } else {
       auto t2 = Clock::now();
-      auto finished = db->finishJob(lease, store::JobStatus::Done);
+      auto finished = db->jobs().finish(lease, store::JobStatus::Done);
       out.workMs.push_back(ms(t2, Clock::now()));
       if (!finished || !*finished) {
         out.error = "finishJob(job " + std::to_string(job.id) +
@@ -383,7 +383,7 @@ Result<Round> runRound(const Options& options, const std::string& location, stor
   Round round;
   round.workers = workers;
   round.jobs = options.jobs;
-  auto counts = admin.jobCounts();
+  auto counts = admin.jobs().counts();
   if (!counts) return makeError(counts.error());
   if ((*counts)["queued"] > 0 || (*counts)["running"] > 0) {
     return makeError("the store already has queued or running jobs; use a fresh database");
@@ -404,7 +404,7 @@ Result<Round> runRound(const Options& options, const std::string& location, stor
       spec["device"] = kRequiredDevice;
       ++withDevice;
     }
-    auto created = admin.createJob(spec);
+    auto created = admin.jobs().create(spec);
     if (!created) return makeError("createJob: " + created.error());
     if (i == 0) first = created->job.id;
     last = created->job.id;

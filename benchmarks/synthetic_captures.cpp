@@ -263,18 +263,18 @@ Result<FillStats> fillDatabase(store::Store& writer, const CaptureTemplate& sour
   while (stats.samples < samples) {
     SyntheticCapture capture = makeCapture(source, renderers, stats.captures, samples - stats.samples);
     // The worker's path: a queued job, claimed (running), its result ingested, done.
-    auto created = writer.createJob(capture.spec);
+    auto created = writer.jobs().create(capture.spec);
     if (!created) return makeError("creating a job: " + created.error());
-    auto claimed = writer.claimNextJob(getpid());
+    auto claimed = writer.jobs().claim(getpid());
     if (!claimed) return makeError("claiming a job: " + claimed.error());
     if (!*claimed || (*claimed)->id != created->job.id)
       return makeError("the database has other queued jobs; fill a fresh one");
     auto ingestStart = Clock::now();
-    auto ingested = writer.ingestCapture(created->job.id, capture.result, capture.screenshots);
+    auto ingested = writer.runs().ingestCapture(created->job.id, capture.result, capture.screenshots);
     stats.ingestSeconds += seconds(Clock::now() - ingestStart);
     if (!ingested)
       return makeError("ingesting capture " + std::to_string(stats.captures) + ": " + ingested.error());
-    auto finished = writer.finishJob(created->job.id, store::JobStatus::Done);
+    auto finished = writer.jobs().finish(created->job.id, store::JobStatus::Done);
     if (!finished) return makeError("finishing a job: " + finished.error());
     stats.captures += 1;
     stats.samples += capture.samples;

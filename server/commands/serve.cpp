@@ -155,7 +155,7 @@ class LeaseReaper {
       while (!stop_) {
         if (store) {
           lock.unlock();
-          auto reaped = (*store)->requeueExpired();
+          auto reaped = (*store)->jobs().requeueExpired();
           if (reaped) {
             for (int64_t id : reaped->requeued) log::warning("lease expired; queued again", id);
             for (int64_t id : reaped->failed) log::error("lease expired on its last attempt; failed", id);
@@ -240,11 +240,11 @@ void scrapeStore(metrics::Registry& metrics, service::StoreHealth& storeHealth, 
     if (health.fault != store::Fault::kNone)
       m.set("tally_store_fault", {{"fault", store::toString(health.fault)}}, 1);
     m.set("tally_store_check_seconds", {}, health.checkSeconds);
-    auto counts = writer->jobCounts();
+    auto counts = writer->jobs().counts();
     if (counts) {
       for (const auto& [state, n] : *counts) m.set("tally_jobs", {{"state", state}}, double(n));
     }
-    auto alerts = writer->alertCounts();
+    auto alerts = writer->alerts().counts();
     if (alerts) {
       for (const auto& [status, n] : *alerts) m.set("tally_alerts", {{"status", status}}, double(n));
     }

@@ -99,9 +99,9 @@ void Worker::log(log::Level level, std::optional<int64_t> job, const std::string
 
 Result<store::Recovery> Worker::recover() {
   if (options_.host.name.empty()) return makeError("worker: no host name");
-  auto registered = store_.registerHost(options_.host, options_.staleAfter.count(), instanceIsGone);
+  auto registered = store_.hosts().join(options_.host, options_.staleAfter.count(), instanceIsGone);
   if (!registered) return makeError(registered.error());
-  auto recovery = store_.requeueInterrupted(options_.maxAttempts, options_.host.name);
+  auto recovery = store_.jobs().requeueInterrupted(options_.maxAttempts, options_.host.name);
   if (!recovery) return recovery;
   for (int64_t id : recovery->requeued) log(log::Level::kWarning, id, "interrupted, queued again");
   for (int64_t id : recovery->failed) log(log::Level::kError, id, "interrupted too often, failed");
@@ -145,18 +145,18 @@ void Worker::heartbeatLoop() {
     }
     if (store) {
       int64_t job = currentJob_.load();
-      auto beat = store->heartbeat(options_.host.name, options_.host.instance,
-                                   job ? std::optional<int64_t>(job) : std::nullopt);
+      auto beat = store->hosts().heartbeat(options_.host.name, options_.host.instance,
+                                           job ? std::optional<int64_t>(job) : std::nullopt);
       if (!beat) {
         report(beat.error());
       } else {
         if (!*beat) report("host name '" + options_.host.name + "' was taken over by another daemon");
         if (job) {
           store::Lease lease{job, currentAttempt_.load(), options_.host.name};
-          auto renewed = store->renewLease(lease, options_.lease.count());
+          auto renewed = store->jobs().renewLease(lease, options_.lease.count());
           if (renewed && !*renewed && currentJob_.load() == job) leaseLost_ = true;
         }
-        auto reaped = store->requeueExpired();
+        auto reaped = store->jobs().requeueExpired();
         if (reaped) {
           for (int64_t id : reaped->requeued) log(log::Level::kWarning, id, "lease expired; queued again");
           for (int64_t id : reaped->failed) log(log::Level::kError, id, "lease expired on its last attempt; failed");
@@ -186,7 +186,7 @@ void Worker::loop() {
   claimer.device = options_.host.device;
   claimer.leaseMs = options_.lease.count();
   while (!stopping_) {
-    auto claimed = store_.claimNextJob(claimer);
+    auto claimed = store_.jobs().claim(claimer);
     if (!claimed) {
       log(log::Level::kError, std::nullopt, "worker: cannot claim a job: " + claimed.error());
     } else if (claimed->has_value()) {
@@ -292,7 +292,7 @@ Result<Screenshots> readScreenshots(const nlohmann::json& result, const fs::path
 }  // namespace
 
 void Worker::requeueStopped(const store::Lease& lease, const std::string& why) {
-  auto r = store_.requeueJob(lease, "stopped: " + why + "; queued again");
+  auto r = store_.jobs().requeue(lease, "stopped: " + why + "; queued again");
   if (!r) {
     log(log::Level::kError, lease.jobId, "cannot queue it again (" + r.error() + "); its lease will expire");
   } else if (*r) {
@@ -309,7 +309,7 @@ bool Worker::recordFailure(const store::Lease& lease, const std::string& reason)
   // running. Stopping meanwhile leaves it running for the next start's
   // recovery (queued again, or failed after max_attempts interruptions).
   for (int attempt = 1;; ++attempt) {
-    auto r = store_.finishJob(lease, store::JobStatus::Failed, reason);
+    auto r = store_.jobs().finish(lease, store::JobStatus::Failed, reason);
     if (r) {
       if (!*r)
         log(log::Level::kWarning, job, "no longer held by this host; the failure is not recorded");
@@ -347,8 +347,8 @@ ChildOptions Worker::captureChild(const store::Job& job, const fs::path& specPat
   child.onStderrLine = [this, id, &cancelled](const std::string& line) {
     auto p = parseProgressLine(line);
     if (!p) return;
-    auto still = store_.updateProgress(id, p->done, p->total,
-                                       p->current.empty() ? std::nullopt : std::optional(p->current));
+    auto still = store_.jobs().updateProgress(id, p->done, p->total,
+                                              p->current.empty() ? std::nullopt : std::optional(p->current));
     if (still && !*still) cancelled = true;
   };
   child.shouldStop = [this, id, &cancelled, lastCheck = std::chrono::steady_clock::now()]() mutable {
@@ -358,7 +358,7 @@ ChildOptions Worker::captureChild(const store::Job& job, const fs::path& specPat
     auto now = std::chrono::steady_clock::now();
     if (now - lastCheck >= std::chrono::seconds(1)) {
       lastCheck = now;
-      auto current = store_.getJob(id);
+      auto current = store_.jobs().get(id);
       if (current && current->has_value() && (*current)->status != store::JobStatus::Running) cancelled = true;
     }
     return cancelled;
@@ -404,7 +404,7 @@ void Worker::runJob(const store::Job& job) {
   auto ran = runChild(child);
   if (stopping_) return requeueStopped(lease, "the daemon is shutting down (the capture was killed)");
   if (cancelled) {
-    auto now = store_.getJob(job.id);
+    auto now = store_.jobs().get(job.id);
     bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
     log(log::Level::kInfo, job.id,
         wasCancelled ? "cancelled" : "stopped: its lease expired and it was queued again");
@@ -447,7 +447,8 @@ std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& resu
                            const std::map<std::string, std::vector<uint8_t>>& screenshots, bool sweep,
                            int64_t* stored) {
   for (int attempt = 1;; ++attempt) {
-    auto ingested = sweep ? store_.ingestSweep(lease, result) : store_.ingestCapture(lease, result, screenshots);
+    auto ingested = sweep ? store_.runs().ingestSweep(lease, result)
+                          : store_.runs().ingestCapture(lease, result, screenshots);
     if (ingested) {
       *stored = *ingested;
       return "";

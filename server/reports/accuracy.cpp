@@ -21,10 +21,10 @@ analysis::RunCounts metadata(const store::RunRow& r) {
 
 // The run's samples with their per-line bytes, as runCountsFromResult reads them.
 Result<bool> loadSamples(store::Store& store, int64_t runId, analysis::RunCounts& run) {
-  auto samples = store.listSamples(runId);
+  auto samples = store.runs().samples(runId);
   if (!samples) return makeError(samples.error());
   for (const auto& row : *samples) {
-    auto sample = store.getSample(row.id);
+    auto sample = store.runs().sample(row.id);
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
     analysis::SampleCounts counts;

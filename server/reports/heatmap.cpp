@@ -181,7 +181,7 @@ struct MapCells {
     auto it = frames.find(s->id);
     if (it == frames.end()) {
       std::vector<double> ms;
-      if (auto full = store.getSample(s->id); full && *full) ms = (*full)->row.frameMsFrames;
+      if (auto full = store.runs().sample(s->id); full && *full) ms = (*full)->row.frameMsFrames;
       it = frames.emplace(s->id, std::move(ms)).first;
     }
     return it->second;
@@ -420,11 +420,11 @@ HeatmapAnswer heatmapMap(store::Store& store, const HeatmapQuery& q) {
   MapCells map{store, q, layout, bytes, runB != nullptr, yawIndex};
   map.columns = layout["columns"].get<uint32_t>();
   map.rows = layout["rows"].get<uint32_t>();
-  auto samplesA = store.listSamples(runA.id);
+  auto samplesA = store.runs().samples(runA.id);
   if (!samplesA) return fail(kStore, "", samplesA.error());
   map.samplesA = std::move(samplesA).value();
   if (runB) {
-    auto listed = store.listSamples(runB->id);
+    auto listed = store.runs().samples(runB->id);
     if (!listed) return fail(kStore, "", listed.error());
     map.samplesB = std::move(listed).value();
   }

@@ -16,10 +16,10 @@ using nlohmann::json;
 Result<analysis::RepeatRun> load(store::Store& store, const store::RunRow& r) {
   analysis::RepeatRun run;
   static_cast<analysis::RunConfig&>(run) = runConfigOf(r);
-  auto samples = store.listSamples(r.id);
+  auto samples = store.runs().samples(r.id);
   if (!samples) return makeError(samples.error());
   for (const auto& row : *samples) {
-    auto sample = store.getSample(row.id);
+    auto sample = store.runs().sample(row.id);
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
     analysis::RepeatSample s;

@@ -10,7 +10,7 @@ Result<std::vector<store::RunRow>> selectRuns(store::Store& store, const store::
   store::Page page{1000, ""};
   complete = false;
   for (int pages = 0; pages < maxRuns / 1000; ++pages) {
-    auto got = store.listRuns(filter, page);
+    auto got = store.runs().list(filter, page);
     if (!got) return makeError(got.error());
     rows.insert(rows.end(), got->runs.begin(), got->runs.end());
     if (got->nextCursor.empty()) {

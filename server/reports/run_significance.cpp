@@ -16,11 +16,11 @@ using nlohmann::json;
 constexpr const char* kFrame = "frame";
 
 Result<Samples> loadSamples(store::Store& store, int64_t runId) {
-  auto rows = store.listSamples(runId);
+  auto rows = store.runs().samples(runId);
   if (!rows) return makeError(rows.error());
   Samples out;
   for (const auto& row : *rows) {
-    auto sample = store.getSample(row.id);
+    auto sample = store.runs().sample(row.id);
     if (!sample) return makeError(sample.error());
     if (!*sample) continue;
     std::string key = analysis::cameraKey(row.camera);
@@ -139,7 +139,7 @@ json figureJson(const FigureSignificance& f) {
 }  // namespace
 
 Result<std::optional<StoredRun>> loadStoredRun(store::Store& store, int64_t id) {
-  auto run = store.getRun(id);
+  auto run = store.runs().get(id);
   if (!run) return makeError(run.error());
   if (!*run) return std::optional<StoredRun>();
   auto samples = loadSamples(store, id);

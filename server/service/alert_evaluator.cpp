@@ -81,7 +81,7 @@ Result<std::vector<store::NewAlert>> evaluateRun(store::Store& reader, const sto
 
 Result<store::Evaluated> evaluatePending(store::Store& writer, store::Store& reader, bool deliver,
                                          int batch) {
-  return writer.evaluatePendingRuns(
+  return writer.alerts().evaluatePending(
       [&reader](const store::RunRow& run, const store::Baseline& baseline) {
         return evaluateRun(reader, run, baseline);
       },

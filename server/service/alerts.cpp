@@ -67,7 +67,7 @@ Response postBaseline(ServiceContext& ctx, const Request& req) {
     }
     nb.name = n.get<std::string>();
   }
-  auto set = check(ctx.writer->setBaseline(nb));
+  auto set = check(ctx.writer->alerts().setBaseline(nb));
   if (!set) missing("no run " + std::to_string(nb.runId));
   json out = baselineJson(set->baseline);
   out["replaced"] = opt(set->replaced);
@@ -79,7 +79,7 @@ Response postBaseline(ServiceContext& ctx, const Request& req) {
 Response listBaselines(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"all"});
   json out = json::array();
-  for (const auto& b : check(reader(ctx).listBaselines(queryBool(req, "all").value_or(false))))
+  for (const auto& b : check(reader(ctx).alerts().listBaselines(queryBool(req, "all").value_or(false))))
     out.push_back(baselineJson(b));
   return Response::ok({{"baselines", out}});
 }
@@ -87,7 +87,7 @@ Response listBaselines(ServiceContext& ctx, const Request& req) {
 Response getBaseline(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto b = check(reader(ctx).getBaseline(id));
+  auto b = check(reader(ctx).alerts().getBaseline(id));
   if (!b) missing("no baseline " + std::to_string(id));
   return Response::ok(baselineJson(*b));
 }
@@ -95,7 +95,7 @@ Response getBaseline(ServiceContext& ctx, const Request& req) {
 Response deleteBaseline(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto b = check(ctx.writer->removeBaseline(id));
+  auto b = check(ctx.writer->alerts().removeBaseline(id));
   if (!b) missing("no baseline " + std::to_string(id));
   return Response::ok(baselineJson(*b));
 }
@@ -115,24 +115,24 @@ Response listAlerts(ServiceContext& ctx, const Request& req) {
   filter.baselineId = queryInt(req, "baseline", 1, INT64_MAX);
   filter.runId = queryInt(req, "run", 1, INT64_MAX);
   auto& store = reader(ctx);
-  auto page = check(store.listAlerts(filter, queryPage(req)));
+  auto page = check(store.alerts().list(filter, queryPage(req)));
   json alerts = json::array();
   for (const auto& a : page.alerts) alerts.push_back(alertJson(a));
   return Response::ok({{"alerts", alerts},
                        {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)},
-                       {"counts", check(store.alertCounts(filter.baselineId))}});
+                       {"counts", check(store.alerts().counts(filter.baselineId))}});
 }
 
 Response getAlert(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto& store = reader(ctx);
-  auto a = check(store.getAlert(id));
+  auto a = check(store.alerts().get(id));
   if (!a) missing("no alert " + std::to_string(id));
   json out = alertJson(*a);
-  auto run = check(store.getRun(a->runId));
+  auto run = check(store.runs().get(a->runId));
   out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
-  auto baseline = check(store.getBaseline(a->baselineId));
+  auto baseline = check(store.alerts().getBaseline(a->baselineId));
   out["baseline_row"] = baseline ? baselineJson(*baseline) : json(nullptr);
   return Response::ok(out);
 }
@@ -146,7 +146,7 @@ Response updateAlert(ServiceContext& ctx, const Request& req) {
   const json& s = req.body["status"];
   auto status = s.is_string() ? store::parseAlertStatus(s.get<std::string>()) : std::nullopt;
   if (!status) invalid("status", "must be open, acknowledged, invalid or fixed");
-  auto a = check(ctx.writer->setAlertStatus(id, *status));
+  auto a = check(ctx.writer->alerts().setStatus(id, *status));
   if (!a) missing("no alert " + std::to_string(id));
   return Response::ok(alertJson(*a));
 }
@@ -158,8 +158,8 @@ Response updateAlert(ServiceContext& ctx, const Request& req) {
 json frameFigure(store::Store& store, const store::RunRow& run) {
   std::vector<double> times;
   bool complete = true;
-  for (const auto& row : check(store.listSamples(run.id))) {
-    auto sample = check(store.getSample(row.id));
+  for (const auto& row : check(store.runs().samples(run.id))) {
+    auto sample = check(store.runs().sample(row.id));
     if (!sample || sample->row.frameMsFrames.empty()) {
       complete = false;
       break;
@@ -191,9 +191,9 @@ Response trend(ServiceContext& ctx, const Request& req) {
   if (!id) invalid("baseline", "required: a baseline id (GET /api/baselines)");
   int limit = static_cast<int>(queryInt(req, "limit", 1, kMaxTrendRuns).value_or(kDefaultTrendRuns));
   auto& store = reader(ctx);
-  auto baseline = check(store.getBaseline(*id));
+  auto baseline = check(store.alerts().getBaseline(*id));
   if (!baseline) missing("no baseline " + std::to_string(*id));
-  auto alerts = check(store.configurationAlerts(*id, 1000));
+  auto alerts = check(store.alerts().configurationAlerts(*id, 1000));
   std::map<int64_t, json> alertsByRun;
   json alertList = json::array();
   for (const auto& a : alerts) {
@@ -201,7 +201,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
     alertList.push_back(alertJson(a));
   }
   json runs = json::array();
-  for (const auto& r : check(store.configurationRuns(*id, limit))) {
+  for (const auto& r : check(store.alerts().configurationRuns(*id, limit))) {
     runs.push_back({{"id", r.id},
                     {"capture", r.jobId},
                     {"created_at", r.createdAt},

@@ -17,7 +17,7 @@ Response postCapture(ServiceContext& ctx, const Request& req) {
   std::optional<std::string> key;
   if (!req.idempotencyKey.empty()) key = req.idempotencyKey;
   requireWritable(ctx);
-  auto created = check(ctx.writer->createJob(spec, key, ctx.options.maxAttempts, queueLimits(ctx, req)));
+  auto created = check(ctx.writer->jobs().create(spec, key, ctx.options.maxAttempts, queueLimits(ctx, req)));
   if (ctx.health) ctx.health->noteWriteOk();
   if (!created.refused.empty()) refuseQueued(ctx, created);
   if (created.conflict) {
@@ -40,13 +40,13 @@ Response listCaptures(ServiceContext& ctx, const Request& req) {
     if (!status) invalid("status", "must be queued, running, done, failed or cancelled");
   }
   auto& store = reader(ctx);
-  auto page = check(store.listJobs(status, queryPage(req)));
+  auto page = check(store.jobs().list(status, queryPage(req)));
   std::optional<std::vector<store::Host>> hosts;
   json jobs = json::array();
   for (const auto& j : page.jobs) {
     json out = jobJson(j);
     if (j.status == store::JobStatus::Queued) {
-      if (!hosts) hosts = check(store.listHosts(ctx.options.staleAfterMs));
+      if (!hosts) hosts = check(store.hosts().list(ctx.options.staleAfterMs));
       out["waiting"] = waitingReason(j, *hosts, ctx.options.staleAfterMs);
     }
     jobs.push_back(std::move(out));
@@ -58,12 +58,13 @@ Response getCapture(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto& store = reader(ctx);
-  auto job = check(store.getJob(id));
+  auto job = check(store.jobs().get(id));
   if (!job) missing("no capture " + std::to_string(id));
   json j = jobJson(*job);
-  j["sweeps"] = check(store.jobSweepIds(id));  // a finished sweep job's sweep
+  j["sweeps"] = check(store.runs().jobSweepIds(id));  // a finished sweep job's sweep
   if (job->status == store::JobStatus::Queued) {
-    j["waiting"] = waitingReason(*job, check(store.listHosts(ctx.options.staleAfterMs)), ctx.options.staleAfterMs);
+    j["waiting"] =
+        waitingReason(*job, check(store.hosts().list(ctx.options.staleAfterMs)), ctx.options.staleAfterMs);
   }
   return Response::ok(j);
 }
@@ -71,15 +72,15 @@ Response getCapture(ServiceContext& ctx, const Request& req) {
 Response cancelCapture(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto before = check(ctx.writer->getJob(id));
+  auto before = check(ctx.writer->jobs().get(id));
   if (!before) missing("no capture " + std::to_string(id));
-  auto finished = [](store::JobStatus s) { return s != store::JobStatus::Queued && s != store::JobStatus::Running; };
-  if (!finished(before->status)) requireWritable(ctx);
-  auto job = finished(before->status) ? before : check(ctx.writer->cancelJob(id));
-  if (!finished(before->status) && ctx.health) ctx.health->noteWriteOk();
+  const bool finished = store::isFinal(before->status);
+  if (!finished) requireWritable(ctx);
+  auto job = finished ? before : check(ctx.writer->jobs().cancel(id));
+  if (!finished && ctx.health) ctx.health->noteWriteOk();
   if (!job) missing("no capture " + std::to_string(id));
   // Finished before (a second cancel included) or meanwhile: nothing to cancel.
-  if (finished(before->status) || job->status != store::JobStatus::Cancelled) {
+  if (finished || job->status != store::JobStatus::Cancelled) {
     throw RequestError(409, api::code::kConflict,
                        "capture " + std::to_string(id) + " has already finished (" + store::toString(job->status) + ")");
   }
@@ -91,7 +92,8 @@ Response cancelCapture(ServiceContext& ctx, const Request& req) {
 Response listHosts(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   json hosts = json::array();
-  for (const auto& h : check(reader(ctx).listHosts(ctx.options.staleAfterMs))) hosts.push_back(hostJson(h));
+  for (const auto& h : check(reader(ctx).hosts().list(ctx.options.staleAfterMs)))
+    hosts.push_back(hostJson(h));
   return Response::ok({{"hosts", hosts}, {"stale_after_s", static_cast<double>(ctx.options.staleAfterMs) / 1000.0}});
 }
 

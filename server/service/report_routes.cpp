@@ -62,7 +62,7 @@ Response compare(ServiceContext& ctx, const Request& req) {
     if (!run) missing("no run " + std::to_string(id));
     runs.push_back(std::move(*run));
   }
-  json out = comparisonJson(check(store.compareRuns(ids)));
+  json out = comparisonJson(check(store.runs().compare(ids)));
   // Each later run against the first: times tested, counts exact.
   json significance = json::array();
   for (size_t i = 1; i < runs.size(); ++i) {
@@ -83,7 +83,7 @@ Response crossover(ServiceContext& ctx, const Request& req) {
   if (!reports::isCrossoverMetric(metric)) invalid("metric", "must be bytes or frame_ms");
   store::RunFilter filter = queryFilter(req);
   auto& store = reader(ctx);
-  if (!check(store.getJob(*filter.jobId))) missing("no capture " + std::to_string(*filter.jobId));
+  if (!check(store.jobs().get(*filter.jobId))) missing("no capture " + std::to_string(*filter.jobId));
   return Response::ok(check(reports::crossoverModels(store, filter, metric)));
 }
 
@@ -106,7 +106,7 @@ Response heatmap(ServiceContext& ctx, const Request& req) {
   if (auto w = queryInt(req, "width", 1, kMaxDimension)) q.width = static_cast<int>(*w);
   if (auto h = queryInt(req, "height", 1, kMaxDimension)) q.height = static_cast<int>(*h);
   auto& store = reader(ctx);
-  if (!check(store.getJob(q.capture))) missing("no capture " + std::to_string(q.capture));
+  if (!check(store.jobs().get(q.capture))) missing("no capture " + std::to_string(q.capture));
   reports::HeatmapAnswer answer = reports::heatmapMap(store, q);
   throwFailure(answer, false);
   return Response::ok(std::move(answer.body));
@@ -118,7 +118,7 @@ Response heatmapTopDownPng(ServiceContext& ctx, const Request& req) {
   int64_t id = pathId(req);
   auto scene = queryString(req, "scene");
   auto& store = reader(ctx);
-  if (!check(store.getJob(id))) missing("no capture " + std::to_string(id));
+  if (!check(store.jobs().get(id))) missing("no capture " + std::to_string(id));
   reports::HeatmapAnswer answer = reports::heatmapTopDown(store, id, scene, ctx.options.sceneFolders);
   throwFailure(answer, true);
   return Response::raw(std::string(answer.png.begin(), answer.png.end()), "image/png");

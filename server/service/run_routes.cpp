@@ -18,7 +18,7 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "host", "label", "since", "until", "limit",
                   "cursor"});
   auto filter = queryFilter(req);
-  auto page = check(reader(ctx).listRuns(filter, queryPage(req)));
+  auto page = check(reader(ctx).runs().list(filter, queryPage(req)));
   json runs = json::array();
   for (const auto& r : page.runs) runs.push_back(runRowJson(r));
   return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
@@ -27,7 +27,7 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
 Response getRun(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto run = check(reader(ctx).getRun(id));
+  auto run = check(reader(ctx).runs().get(id));
   if (!run) missing("no run " + std::to_string(id));
   json j = runRowJson(run->row);
   j["device_info"] = deviceJson(run->device);
@@ -48,7 +48,7 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   j["counter_headroom"] = run->counterHeadroom;
   j["ceilings"] = run->ceilings;  // the roofline's device ceilings (docs/measurement.md)
   json passes = json::array();
-  for (const auto& p : check(reader(ctx).runPasses(id))) passes.push_back(passJson(p));
+  for (const auto& p : check(reader(ctx).runs().passes(id))) passes.push_back(passJson(p));
   j["passes"] = passes;
   return Response::ok(j);
 }
@@ -64,7 +64,7 @@ Response listSweeps(ServiceContext& ctx, const Request& req) {
   filter.jobId = common.jobId;
   filter.createdSince = common.createdSince;
   filter.createdUntil = common.createdUntil;
-  auto page = check(reader(ctx).listSweeps(filter, queryPage(req)));
+  auto page = check(reader(ctx).runs().sweeps(filter, queryPage(req)));
   json sweeps = json::array();
   for (const auto& s : page.sweeps) sweeps.push_back(sweepRowJson(s));
   return Response::ok(
@@ -74,7 +74,7 @@ Response listSweeps(ServiceContext& ctx, const Request& req) {
 Response getSweep(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto sweep = check(reader(ctx).getSweep(id));
+  auto sweep = check(reader(ctx).runs().sweep(id));
   if (!sweep) missing("no sweep " + std::to_string(id));
   json j = sweepRowJson(sweep->row);
   j["result"] = sweep->result;
@@ -85,16 +85,16 @@ Response listSamples(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto& store = reader(ctx);
-  if (!check(store.getRun(id))) missing("no run " + std::to_string(id));
+  if (!check(store.runs().get(id))) missing("no run " + std::to_string(id));
   json samples = json::array();
-  for (const auto& s : check(store.listSamples(id))) samples.push_back(sampleRowJson(s));
+  for (const auto& s : check(store.runs().samples(id))) samples.push_back(sampleRowJson(s));
   return Response::ok({{"samples", samples}});
 }
 
 Response getSample(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto sample = check(reader(ctx).getSample(id));
+  auto sample = check(reader(ctx).runs().sample(id));
   if (!sample) missing("no sample " + std::to_string(id));
   json j = sampleRowJson(sample->row);
   // Per-frame times (0008): null where not stored.
@@ -115,9 +115,9 @@ Response getSampleTrace(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
   auto& store = reader(ctx);
-  auto sample = check(store.getSample(id));
+  auto sample = check(store.runs().sample(id));
   if (!sample) missing("no sample " + std::to_string(id));
-  auto run = check(store.getRun(sample->row.runId));
+  auto run = check(store.runs().get(sample->row.runId));
   if (!run) missing("no run for sample " + std::to_string(id));
   return Response::ok(sampleTrace(run->row, *sample));
 }
@@ -125,7 +125,7 @@ Response getSampleTrace(ServiceContext& ctx, const Request& req) {
 Response getScreenshot(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto png = check(reader(ctx).getScreenshot(id));
+  auto png = check(reader(ctx).runs().screenshot(id));
   if (!png) missing("no screenshot for sample " + std::to_string(id));
   return Response::raw(std::string(png->begin(), png->end()), "image/png");
 }
@@ -136,7 +136,7 @@ Response exportRuns(ServiceContext& ctx, const Request& req) {
   if (format != "csv" && format != "json") invalid("format", "must be csv or json");
   store::RunFilter filter = queryFilter(req);
   if (req.queryValue("runs")) filter.runIds = runIdList(req, 1, 1000);  // the store's limit
-  auto rows = check(reader(ctx).exportRuns(filter));
+  auto rows = check(reader(ctx).runs().exportRows(filter));
   if (format == "json") {
     json out = json::array();
     for (const auto& r : rows) {
@@ -185,7 +185,7 @@ Response exportRuns(ServiceContext& ctx, const Request& req) {
 Response listDevices(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   json devices = json::array();
-  for (const auto& d : check(reader(ctx).listDevices())) devices.push_back(deviceJson(d));
+  for (const auto& d : check(reader(ctx).runs().devices())) devices.push_back(deviceJson(d));
   return Response::ok({{"devices", devices}});
 }
 

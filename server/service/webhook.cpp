@@ -128,11 +128,11 @@ Result<int> deliverDue(store::Store& store, const api::HttpTarget& target, const
   // Claimed for longer than one post can take, so no other daemon posts the
   // same alert meanwhile.
   const int64_t claimMs = 3 * int64_t{options.timeoutSeconds} * 1000 + 5000;
-  auto claimed = store.claimDeliveries(8, claimMs);
+  auto claimed = store.alerts().claimDeliveries(8, claimMs);
   if (!claimed) return makeError(claimed.error());
   for (const auto& alert : *claimed) {
-    auto baseline = store.getBaseline(alert.baselineId);
-    auto run = store.getRun(alert.runId);
+    auto baseline = store.alerts().getBaseline(alert.baselineId);
+    auto run = store.runs().get(alert.runId);
     if (!baseline || !run) return makeError(!baseline ? baseline.error() : run.error());
     std::optional<store::RunRow> row;
     if (*run) row = (*run)->row;
@@ -153,7 +153,7 @@ Result<int> deliverDue(store::Store& store, const api::HttpTarget& target, const
     if (!error.empty() && alert.deliveryAttempts < options.maxAttempts) {
       retry = retryDelayMs(options, alert.deliveryAttempts);
     }
-    auto recorded = store.finishDelivery(alert.id, error.empty(), error, retry);
+    auto recorded = store.alerts().finishDelivery(alert.id, error.empty(), error, retry);
     if (!recorded) return makeError(recorded.error());
     if (!error.empty() && log) {
       log("alerts: webhook for alert " + std::to_string(alert.id) + " attempt " +

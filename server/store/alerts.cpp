@@ -23,28 +23,31 @@ const char* const kBaselineSelect =
     "FROM baselines b JOIN runs r ON r.id = b.run_id JOIN scenes sc ON sc.id = b.scene_id "
     "JOIN devices d ON d.id = b.device_id";
 
-Baseline readBaseline(const Statement& row) {
+Baseline readBaseline(const Statement& statement) {
+  RowReader row(statement);
   Baseline b;
-  b.id = row.getInt(0);
-  b.name = row.getOptText(1);
-  b.runId = row.getInt(2);
-  b.renderer = row.getText(3);
-  b.variant = row.getText(4);
-  b.options = row.getJson(5);
-  b.scene = row.getText(6);
-  b.sceneParams = row.getJson(7);
-  b.width = static_cast<int>(row.getInt(8));
-  b.height = static_cast<int>(row.getInt(9));
-  b.deviceId = row.getInt(10);
-  b.deviceName = row.getText(11);
-  b.counting = row.getText(12);
-  b.threshold = row.getDouble(13);
-  b.status = row.getText(14);
-  b.createdAt = row.getText(15);
-  b.endedAt = row.getOptText(16);
-  b.replacedBy = row.getOptInt(17);
-  b.labels = row.isNull(18) ? json::object() : row.getJson(18);
-  b.openAlerts = row.getInt(19);
+  b.id = row.getInt();
+  b.name = row.getOptText();
+  b.runId = row.getInt();
+  b.renderer = row.getText();
+  b.variant = row.getText();
+  b.options = row.getJson();
+  b.scene = row.getText();
+  b.sceneParams = row.getJson();
+  b.width = static_cast<int>(row.getInt());
+  b.height = static_cast<int>(row.getInt());
+  b.deviceId = row.getInt();
+  b.deviceName = row.getText();
+  b.counting = row.getText();
+  b.threshold = row.getDouble();
+  b.status = row.getText();
+  b.createdAt = row.getText();
+  b.endedAt = row.getOptText();
+  b.replacedBy = row.getOptInt();
+  json labels = row.getJson();
+  b.labels = labels.is_null() ? json::object() : std::move(labels);
+  b.openAlerts = row.getInt();
+  row.end();
   return b;
 }
 
@@ -60,31 +63,33 @@ const char* const kAlertColumns =
     "a.ratio_upper, a.p_value, a.cliffs_delta, a.value_a, a.value_b, a.details, a.status, a.created_at, "
     "a.updated_at, a.delivery, a.delivery_attempts, a.next_attempt_ms, a.delivery_error, a.delivered_at";
 
-Alert readAlert(const Statement& row) {
+Alert readAlert(const Statement& statement) {
+  RowReader row(statement);
   Alert a;
-  a.id = row.getInt(0);
-  a.baselineId = row.getInt(1);
-  a.runId = row.getInt(2);
-  a.baselineRunId = row.getInt(3);
-  a.figures.kind = row.getText(4);
-  a.figures.metric = row.getText(5);
-  a.figures.verdict = row.getText(6);
-  a.figures.ratio = row.getOptDouble(7);
-  a.figures.ratioLower = row.getOptDouble(8);
-  a.figures.ratioUpper = row.getOptDouble(9);
-  a.figures.pValue = row.getOptDouble(10);
-  a.figures.cliffsDelta = row.getOptDouble(11);
-  a.figures.valueA = row.getOptDouble(12);
-  a.figures.valueB = row.getOptDouble(13);
-  a.figures.details = row.getJson(14);
-  a.status = row.getText(15);
-  a.createdAt = row.getText(16);
-  a.updatedAt = row.getOptText(17);
-  a.delivery = row.getText(18);
-  a.deliveryAttempts = static_cast<int>(row.getInt(19));
-  a.nextAttemptMs = row.getOptInt(20);
-  a.deliveryError = row.getOptText(21);
-  a.deliveredAt = row.getOptText(22);
+  a.id = row.getInt();
+  a.baselineId = row.getInt();
+  a.runId = row.getInt();
+  a.baselineRunId = row.getInt();
+  a.figures.kind = row.getText();
+  a.figures.metric = row.getText();
+  a.figures.verdict = row.getText();
+  a.figures.ratio = row.getOptDouble();
+  a.figures.ratioLower = row.getOptDouble();
+  a.figures.ratioUpper = row.getOptDouble();
+  a.figures.pValue = row.getOptDouble();
+  a.figures.cliffsDelta = row.getOptDouble();
+  a.figures.valueA = row.getOptDouble();
+  a.figures.valueB = row.getOptDouble();
+  a.figures.details = row.getJson();
+  a.status = row.getText();
+  a.createdAt = row.getText();
+  a.updatedAt = row.getOptText();
+  a.delivery = row.getText();
+  a.deliveryAttempts = static_cast<int>(row.getInt());
+  a.nextAttemptMs = row.getOptInt();
+  a.deliveryError = row.getOptText();
+  a.deliveredAt = row.getOptText();
+  row.end();
   return a;
 }
 
@@ -129,7 +134,7 @@ std::optional<AlertStatus> parseAlertStatus(std::string_view name) {
 
 // ---- baselines -----------------------------------------------------------------------
 
-Result<std::optional<SetBaseline>> Store::setBaseline(const NewBaseline& nb) {
+Result<std::optional<SetBaseline>> Alerts::setBaseline(const NewBaseline& nb) {
   if (!(nb.threshold >= 0) || !std::isfinite(nb.threshold))
     return makeError("threshold: must be a number >= 0");
   std::lock_guard lock(mutex_);
@@ -173,7 +178,7 @@ Result<std::optional<SetBaseline>> Store::setBaseline(const NewBaseline& nb) {
   });
 }
 
-Result<std::vector<Baseline>> Store::listBaselines(bool all) {
+Result<std::vector<Baseline>> Alerts::listBaselines(bool all) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<Baseline>>("listBaselines", [&]() -> Result<std::vector<Baseline>> {
     Statement query(db_, std::string(kBaselineSelect) + (all ? "" : " WHERE b.status = 'active'") +
@@ -184,12 +189,12 @@ Result<std::vector<Baseline>> Store::listBaselines(bool all) {
   });
 }
 
-Result<std::optional<Baseline>> Store::getBaseline(int64_t id) {
+Result<std::optional<Baseline>> Alerts::getBaseline(int64_t id) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Baseline>>("getBaseline", [&] { return Result(findBaseline(db_, id)); });
 }
 
-Result<std::optional<Baseline>> Store::removeBaseline(int64_t id) {
+Result<std::optional<Baseline>> Alerts::removeBaseline(int64_t id) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Baseline>>("removeBaseline", [&]() -> Result<std::optional<Baseline>> {
@@ -203,7 +208,7 @@ Result<std::optional<Baseline>> Store::removeBaseline(int64_t id) {
   });
 }
 
-Result<std::vector<RunRow>> Store::configurationRuns(int64_t baselineId, int limit) {
+Result<std::vector<RunRow>> Alerts::configurationRuns(int64_t baselineId, int limit) {
   if (limit < 1) return makeError("limit: must be at least 1");
   std::lock_guard lock(mutex_);
   return guarded<std::vector<RunRow>>("configurationRuns", [&]() -> Result<std::vector<RunRow>> {
@@ -293,7 +298,7 @@ void insertAlerts(Connection* db, const Candidate& c, const std::vector<NewAlert
 
 }  // namespace
 
-Result<Evaluated> Store::evaluatePendingRuns(const RunEvaluator& evaluate, int limit, bool deliver) {
+Result<Evaluated> Alerts::evaluatePending(const RunEvaluator& evaluate, int limit, bool deliver) {
   if (limit < 1) return makeError("limit: must be at least 1");
   std::unique_lock lock(mutex_);
   if (db_->engine() == Engine::Postgres) {
@@ -366,7 +371,7 @@ Result<Evaluated> Store::evaluatePendingRuns(const RunEvaluator& evaluate, int l
   });
 }
 
-Result<AlertPage> Store::listAlerts(const AlertFilter& filter, const Page& page) {
+Result<AlertPage> Alerts::list(const AlertFilter& filter, const Page& page) {
   auto after = detail::checkPage(page);
   if (!after) return makeError(after.error());
   std::lock_guard lock(mutex_);
@@ -393,12 +398,12 @@ Result<AlertPage> Store::listAlerts(const AlertFilter& filter, const Page& page)
   });
 }
 
-Result<std::optional<Alert>> Store::getAlert(int64_t id) {
+Result<std::optional<Alert>> Alerts::get(int64_t id) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Alert>>("getAlert", [&] { return Result(findAlert(db_, id)); });
 }
 
-Result<std::map<std::string, int64_t>> Store::alertCounts(std::optional<int64_t> baselineId) {
+Result<std::map<std::string, int64_t>> Alerts::counts(std::optional<int64_t> baselineId) {
   std::lock_guard lock(mutex_);
   return guarded<
       std::map<std::string, int64_t>>("alertCounts", [&]() -> Result<std::map<std::string, int64_t>> {
@@ -410,12 +415,17 @@ Result<std::map<std::string, int64_t>> Store::alertCounts(std::optional<int64_t>
         "SELECT status, COUNT(*) FROM alerts WHERE (CAST(?1 AS BIGINT) IS NULL OR baseline_id = ?1) "
         "GROUP BY status");
     query.bind(1, baselineId);
-    while (query.step()) out[query.getText(0)] = query.getInt(1);
+    while (query.step()) {
+      RowReader row(query);
+      std::string status = row.getText();
+      out[status] = row.getInt();
+      row.end();
+    }
     return out;
   });
 }
 
-Result<std::optional<Alert>> Store::setAlertStatus(int64_t id, AlertStatus status) {
+Result<std::optional<Alert>> Alerts::setStatus(int64_t id, AlertStatus status) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Alert>>("setAlertStatus", [&]() -> Result<std::optional<Alert>> {
@@ -429,7 +439,7 @@ Result<std::optional<Alert>> Store::setAlertStatus(int64_t id, AlertStatus statu
   });
 }
 
-Result<std::vector<Alert>> Store::configurationAlerts(int64_t baselineId, int limit) {
+Result<std::vector<Alert>> Alerts::configurationAlerts(int64_t baselineId, int limit) {
   if (limit < 1) return makeError("limit: must be at least 1");
   std::lock_guard lock(mutex_);
   return guarded<std::vector<Alert>>("configurationAlerts", [&]() -> Result<std::vector<Alert>> {
@@ -451,7 +461,7 @@ Result<std::vector<Alert>> Store::configurationAlerts(int64_t baselineId, int li
 
 // ---- the webhook's outbox --------------------------------------------------------------
 
-Result<std::vector<Alert>> Store::claimDeliveries(int limit, int64_t claimMs) {
+Result<std::vector<Alert>> Alerts::claimDeliveries(int limit, int64_t claimMs) {
   if (limit < 1 || claimMs < 1) return makeError("claimDeliveries: limit and claim must be positive");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -477,8 +487,8 @@ Result<std::vector<Alert>> Store::claimDeliveries(int limit, int64_t claimMs) {
   });
 }
 
-Result<bool> Store::finishDelivery(int64_t id, bool delivered, const std::string& error,
-                                   std::optional<int64_t> retryInMs) {
+Result<bool> Alerts::finishDelivery(int64_t id, bool delivered, const std::string& error,
+                                    std::optional<int64_t> retryInMs) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("finishDelivery", [&]() -> Result<bool> {

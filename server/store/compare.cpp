@@ -1,4 +1,4 @@
-// compareRuns, runPasses and exportRuns: per-frame totals averaged over a run's samples.
+// Runs::compare, passes and exportRows: per-frame totals averaged over a run's samples.
 #include <algorithm>
 #include <set>
 
@@ -46,8 +46,10 @@ RunTotals totalsOf(Connection* db, int64_t runId) {
   Statement frame(db, "SELECT COUNT(*), AVG(frame_ms) FROM samples WHERE run_id = ?1");
   frame.bind(1, runId);
   frame.step();
-  t.samples = static_cast<int>(frame.getInt(0));
-  t.frameMs = frame.getOptDouble(1);
+  RowReader totals(frame);
+  t.samples = static_cast<int>(totals.getInt());
+  t.frameMs = totals.getOptDouble();
+  totals.end();
   Statement passes(db,
                    "SELECT p.name, SUM(p.gpu_ms), SUM(p.fragment_invocations), "
                    "SUM((SELECT COALESCE(SUM(c.bytes), 0) FROM counters c WHERE c.pass_id = p.id)), "
@@ -57,10 +59,16 @@ RunTotals totalsOf(Connection* db, int64_t runId) {
                    "GROUP BY p.name ORDER BY MIN(p.position), p.name");
   passes.bind(1, runId);
   while (passes.step()) {
-    std::string name = passes.getText(0);
+    RowReader row(passes);
+    std::string name = row.getText();
+    RunTotals::PassSums sums;
+    sums.gpuMs = row.getDouble();
+    sums.fragments = row.getOptDouble();
+    sums.bytes = row.getDouble();
+    sums.footprint = FootprintSums{row.getOptDouble(), row.getOptDouble()};
+    row.end();
     t.passOrder.push_back(name);
-    t.passes[name] = {passes.getDouble(1), passes.getDouble(3), passes.getOptDouble(2),
-                      FootprintSums{passes.getOptDouble(4), passes.getOptDouble(5)}};
+    t.passes[name] = sums;
   }
   Statement resources(db,
                       "SELECT c.resource, c.access, SUM(c.count), SUM(c.bytes), SUM(c.footprint_bytes), "
@@ -69,11 +77,14 @@ RunTotals totalsOf(Connection* db, int64_t runId) {
                       "WHERE s.run_id = ?1 GROUP BY c.resource, c.access");
   resources.bind(1, runId);
   while (resources.step()) {
-    RunTotals::ResourceSums sums{resources.getDouble(2), resources.getDouble(3),
-                                 FootprintSums{resources.getOptDouble(4), resources.getOptDouble(5)}};
+    RowReader row(resources);
+    std::pair<std::string, std::string> key{row.getText(), row.getText()};  // (name, access)
+    RunTotals::ResourceSums sums{row.getDouble(), row.getDouble(),
+                                 FootprintSums{row.getOptDouble(), row.getOptDouble()}};
+    row.end();
     t.totalBytes += sums.bytes;
     t.totalFootprint.add(sums.footprint);
-    t.resources[{resources.getText(0), resources.getText(1)}] = sums;
+    t.resources[key] = sums;
   }
   return t;
 }
@@ -110,7 +121,7 @@ std::optional<double> reuseOf(const FootprintSums& f) {
 
 }  // namespace
 
-Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
+Result<Comparison> Runs::compare(const std::vector<int64_t>& runIds) {
   if (runIds.size() < 2 || runIds.size() > 4) {
     return makeError("runs: compare 2 to 4 runs, got " + std::to_string(runIds.size()));
   }
@@ -193,7 +204,7 @@ Result<Comparison> Store::compareRuns(const std::vector<int64_t>& runIds) {
   });
 }
 
-Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
+Result<std::vector<Pass>> Runs::passes(int64_t runId) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<Pass>>("runPasses", [&]() -> Result<std::vector<Pass>> {
     Transaction tx(db_, Transaction::Kind::Read);
@@ -213,10 +224,18 @@ Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
     passes.bind(1, runId);
     std::map<std::string, size_t> byName;
     while (passes.step()) {
-      byName[passes.getText(0)] = out.size();
-      out.push_back(Pass{passes.getText(0), passes.getDouble(1) / samples, nullptr,
-                         mean(passes.getOptDouble(2)), passes.getOptDouble(3), mean(passes.getOptDouble(4)),
-                         mean(passes.getOptDouble(5)), {}});
+      RowReader pass(passes);
+      std::string name = pass.getText();
+      byName[name] = out.size();
+      out.push_back(Pass{name,
+                         pass.getDouble() / samples,
+                         nullptr,
+                         mean(pass.getOptDouble()),
+                         pass.getOptDouble(),
+                         mean(pass.getOptDouble()),
+                         mean(pass.getOptDouble()),
+                         {}});
+      pass.end();
     }
     Statement counters(db_,
                        "SELECT p.name, c.resource, MIN(c.kind), MIN(c.format), c.access, SUM(c.count), SUM(c.bytes), "
@@ -225,17 +244,20 @@ Result<std::vector<Pass>> Store::runPasses(int64_t runId) {
                        "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
     counters.bind(1, runId);
     while (counters.step()) {
-      out[byName.at(counters.getText(0))].counters.push_back(
-          Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
-                  counters.getDouble(5) / samples, counters.getDouble(6) / samples, nullptr,
-                  counters.getText(7), mean(counters.getOptDouble(8))});
+      RowReader counter(counters);
+      size_t pass = byName.at(counter.getText());
+      out[pass].counters.push_back(Counter{counter.getText(), counter.getOptText(), counter.getOptText(),
+                                           counter.getText(), counter.getDouble() / samples,
+                                           counter.getDouble() / samples, nullptr, counter.getText(),
+                                           mean(counter.getOptDouble())});
+      counter.end();
     }
     tx.commit();
     return out;
   });
 }
 
-Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
+Result<std::vector<ExportRow>> Runs::exportRows(const RunFilter& filter) {
   if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
   std::lock_guard lock(mutex_);
   return guarded<std::vector<ExportRow>>("exportRuns", [&]() -> Result<std::vector<ExportRow>> {
@@ -256,11 +278,12 @@ Result<std::vector<ExportRow>> Store::exportRuns(const RunFilter& filter) {
     detail::bindRunFilter(query, filter, 1);
     std::vector<ExportRow> rows;
     while (query.step()) {
-      rows.push_back(ExportRow{query.getInt(0), query.getText(1), query.getText(2),
-                               static_cast<int>(query.getInt(3)), static_cast<int>(query.getInt(4)),
-                               query.getText(5), query.getText(6), query.getText(7), query.getText(8),
-                               query.getDouble(9), query.getDouble(10), query.getOptDouble(11),
-                               query.getOptDouble(12)});
+      RowReader row(query);
+      rows.push_back(ExportRow{row.getInt(), row.getText(), row.getText(), static_cast<int>(row.getInt()),
+                               static_cast<int>(row.getInt()), row.getText(), row.getText(), row.getText(),
+                               row.getText(), row.getDouble(), row.getDouble(), row.getOptDouble(),
+                               row.getOptDouble()});
+      row.end();
     }
     return rows;
   });

@@ -205,6 +205,28 @@ std::optional<std::string> Statement::getOptText(int column) const {
   return isNull(column) ? std::nullopt : std::optional<std::string>(getText(column));
 }
 
+int Statement::column(std::string_view name) const {
+  for (int c = 0; c < columnCount(); ++c) {
+    if (impl_->columnName(c) == name) return c;
+  }
+  throw DbError(0, "", "no column " + std::string(name) + " in " + impl_->sql());
+}
+
+int RowReader::peek() const {
+  if (at_ >= row_.columnCount()) {
+    throw DbError(0, "", "read past the " + std::to_string(row_.columnCount()) + " columns of " + row_.sql());
+  }
+  return at_;
+}
+
+void RowReader::end() const {
+  if (at_ != row_.columnCount()) {
+    throw DbError(0, "",
+                  "read " + std::to_string(at_) + " of the " + std::to_string(row_.columnCount()) +
+                      " columns of " + row_.sql());
+  }
+}
+
 Transaction::Transaction(Connection& db, Kind kind) : db_(db) {
   if (db_.engine() == Engine::Sqlite) {
     db_.exec(kind == Kind::Write ? "BEGIN IMMEDIATE" : "BEGIN");

@@ -64,6 +64,8 @@ class StatementImpl {
   virtual double getDouble(int column) const = 0;
   virtual std::string getText(int column) const = 0;
   virtual std::vector<uint8_t> getBlob(int column) const = 0;
+  virtual int columnCount() const = 0;  // of the current row
+  virtual std::string columnName(int column) const = 0;
   virtual const std::string& sql() const = 0;
 };
 
@@ -139,10 +141,42 @@ class Statement {
   std::optional<int64_t> getOptInt(int column) const;
   std::optional<double> getOptDouble(int column) const;
   std::optional<std::string> getOptText(int column) const;
+  int columnCount() const { return impl_->columnCount(); }
+  // The column called `name` (as the engine names it: a column's name
+  // without its table, or the name given by AS). Throws DbError when the row
+  // has no such column.
+  int column(std::string_view name) const;
+  const std::string& sql() const { return impl_->sql(); }
 
  private:
   int parameterIndex(const char* name) const;
   std::unique_ptr<StatementImpl> impl_;
+};
+
+// Reads a row's columns in the order its SELECT lists them: each get takes
+// the next column, so a reader names no column numbers and follows the
+// SELECT's order. end() checks that the row had exactly the columns read:
+// a column added to a SELECT without its read (or the other way round) then
+// fails loudly instead of shifting every column after it.
+class RowReader {
+ public:
+  explicit RowReader(const Statement& row) : row_(row) {}
+  bool isNull() const { return row_.isNull(peek()); }  // the next column's, without taking it
+  int64_t getInt() { return row_.getInt(next()); }
+  double getDouble() { return row_.getDouble(next()); }
+  std::string getText() { return row_.getText(next()); }
+  nlohmann::json getJson() { return row_.getJson(next()); }
+  std::optional<int64_t> getOptInt() { return row_.getOptInt(next()); }
+  std::optional<double> getOptDouble() { return row_.getOptDouble(next()); }
+  std::optional<std::string> getOptText() { return row_.getOptText(next()); }
+  // Throws DbError unless every column of the row was read.
+  void end() const;
+
+ private:
+  int peek() const;  // the next column; throws DbError past the last one
+  int next() { return (void)peek(), at_++; }
+  const Statement& row_;
+  int at_ = 0;
 };
 
 // Read: a consistent snapshot for multi-statement reads (SQLite BEGIN;

@@ -117,8 +117,8 @@ std::string deviceMismatch(const DeviceRequirement& requirement, const json& dev
   return "";
 }
 
-Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs,
-                                 const std::function<bool(const std::string&)>& instanceIsGone) {
+Result<bool> Hosts::join(const HostInfo& info, int64_t staleAfterMs,
+                         const std::function<bool(const std::string&)>& instanceIsGone) {
   if (info.name.empty() || info.name.size() > 255) return makeError("host name: must be 1 to 255 characters");
   if (info.role != "worker" && info.role != "all") return makeError("host role: must be worker or all");
   std::lock_guard lock(mutex_);
@@ -130,8 +130,10 @@ Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs,
                                 (db_->engine() == Engine::Postgres ? " FOR UPDATE" : ""));
     existing.bind(1, info.name);
     if (existing.step()) {
-      std::string instance = existing.getText(0);
-      int64_t ago = existing.getInt(1);
+      RowReader row(existing);
+      std::string instance = row.getText();
+      int64_t ago = row.getInt();
+      row.end();
       existing.run();
       if (instance != info.instance && ago < staleAfterMs && !(instanceIsGone && instanceIsGone(instance))) {
         return makeError("host name '" + info.name + "' is in use by a live daemon (heartbeat " +
@@ -159,7 +161,7 @@ Result<bool> Store::registerHost(const HostInfo& info, int64_t staleAfterMs,
   });
 }
 
-Result<bool> Store::heartbeat(const std::string& name, const std::string& instance,
+Result<bool> Hosts::heartbeat(const std::string& name, const std::string& instance,
                               std::optional<int64_t> currentJob) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -171,7 +173,7 @@ Result<bool> Store::heartbeat(const std::string& name, const std::string& instan
   });
 }
 
-Result<std::vector<Host>> Store::listHosts(int64_t staleAfterMs) {
+Result<std::vector<Host>> Hosts::list(int64_t staleAfterMs) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<Host>>("listHosts", [&]() -> Result<std::vector<Host>> {
     Statement query(db_, std::string("SELECT name, instance, role, device, device_override, tally_version, "
@@ -180,22 +182,24 @@ Result<std::vector<Host>> Store::listHosts(int64_t staleAfterMs) {
                              " - heartbeat_ms, jobs_done, jobs_failed, current_job FROM hosts ORDER BY name");
     std::vector<Host> out;
     while (query.step()) {
+      RowReader row(query);
       Host h;
-      h.info.name = query.getText(0);
-      h.info.instance = query.getText(1);
-      h.info.role = query.getText(2);
-      h.info.device = query.getJson(3);
-      h.info.deviceOverride = query.getOptText(4);
-      h.info.tallyVersion = query.getText(5);
-      h.info.tallyCommit = query.getText(6);
-      h.startedAt = query.getText(7);
-      int64_t beatMs = query.getInt(8);
-      int64_t agoMs = query.getInt(9);
+      h.info.name = row.getText();
+      h.info.instance = row.getText();
+      h.info.role = row.getText();
+      h.info.device = row.getJson();
+      h.info.deviceOverride = row.getOptText();
+      h.info.tallyVersion = row.getText();
+      h.info.tallyCommit = row.getText();
+      h.startedAt = row.getText();
+      int64_t beatMs = row.getInt();
+      int64_t agoMs = row.getInt();
       h.secondsSinceHeartbeat = static_cast<double>(agoMs) / 1000.0;
       h.alive = agoMs < staleAfterMs;
-      h.jobsDone = query.getInt(10);
-      h.jobsFailed = query.getInt(11);
-      h.currentJob = query.getOptInt(12);
+      h.jobsDone = row.getInt();
+      h.jobsFailed = row.getInt();
+      h.currentJob = row.getOptInt();
+      row.end();
       h.lastHeartbeat = isoTimeFromMs(beatMs);  // UTC ISO-8601, as every other time the API gives
       out.push_back(std::move(h));
     }

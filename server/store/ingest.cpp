@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/json_fields.hpp"
+#include "store/ingest_input.hpp"
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -15,16 +16,9 @@ using nlohmann::json;
 
 namespace {
 
-struct IngestError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-[[noreturn]] void bad(const std::string& path, const std::string& what) {
-  throw IngestError(path + ": " + what);
-}
-
-// Members of the result: a fault throws IngestError naming the path.
-constexpr json_fields::Members kMembers{[](const Error& error) { throw IngestError(error.text()); }};
+using detail::bad;
+using detail::IngestError;
+using detail::kMembers;
 using json_fields::find;
 
 // Width and height from a PNG's IHDR chunk (the signature and IHDR come first).
@@ -426,108 +420,6 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
   return runId;
 }
 
-// ---- sweeps ---------------------------------------------------------------------
-
-// The value at a dotted path into a point ("error.max_relative"), or null.
-const json* atPath(const json& point, const std::string& dotted) {
-  const json* at = &point;
-  size_t start = 0;
-  while (true) {
-    size_t dot = dotted.find('.', start);
-    std::string key = dotted.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
-    if (!at->is_object()) return nullptr;
-    at = find(*at, key.c_str());
-    if (!at) return nullptr;
-    if (dot == std::string::npos) return at;
-    start = dot + 1;
-  }
-}
-
-std::vector<std::string> textList(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value || !value->is_array()) bad(path.empty() ? key : path + "." + key, "missing or not an array");
-  std::vector<std::string> out;
-  for (size_t i = 0; i < value->size(); ++i) {
-    std::string at = (path.empty() ? std::string(key) : path + "." + key) + "[" + std::to_string(i) + "]";
-    if (!(*value)[i].is_string() || (*value)[i].get<std::string>().empty()) bad(at, "must be a non-empty string");
-    out.push_back((*value)[i].get<std::string>());
-  }
-  return out;
-}
-
-bool flag(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) bad(path + "." + key, "missing");
-  if (!value->is_boolean()) bad(path + "." + key, "must be true or false");
-  return value->get<bool>();
-}
-
-// A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
-// sweeps list and the dashboard's charts rely on, whatever the sweep.
-void checkSweep(const json& result) {
-  const json* name = find(result, "sweep");
-  if (!name || !name->is_string() || name->get<std::string>().empty()) bad("sweep", "missing or not a sweep name");
-  std::vector<std::string> parameters = textList(result, "parameters", "");
-  if (parameters.empty()) bad("parameters", "must name at least one parameter");
-  const json* threshold = find(result, "threshold");
-  if (!threshold || !threshold->is_object()) bad("threshold", "missing or not an object");
-  if (!result.contains("fails_at")) bad("fails_at", "missing (null when no point reaches the threshold)");
-  const json& failsAt = result["fails_at"];
-  if (!failsAt.is_null() && !failsAt.is_object() && !failsAt.is_array()) bad("fails_at", "must be an object, an array or null");
-  const json* points = find(result, "points");
-  if (!points || !points->is_array() || points->empty()) bad("points", "missing, empty or not an array");
-
-  // Every plot names fields of the points; every point must have them.
-  struct Plot {
-    std::string x, y;
-    std::vector<std::string> series;
-  };
-  std::vector<Plot> plots;
-  const json* plotList = find(result, "plots");
-  if (!plotList || !plotList->is_array()) bad("plots", "missing or not an array");
-  for (size_t i = 0; i < plotList->size(); ++i) {
-    std::string at = "plots[" + std::to_string(i) + "]";
-    const json& plot = (*plotList)[i];
-    if (!plot.is_object()) bad(at, "must be an object");
-    kMembers.text(plot, "title", at);
-    kMembers.text(plot, "y_label", at);
-    flag(plot, "x_log", at);
-    flag(plot, "y_log", at);
-    if (!plot.contains("threshold")) bad(at + ".threshold", "missing (a number, or null for none)");
-    kMembers.optNumber(plot, "threshold", at);
-    plots.push_back(
-        Plot{kMembers.text(plot, "x", at), kMembers.text(plot, "y", at), textList(plot, "series", at)});
-  }
-  for (size_t i = 0; i < points->size(); ++i) {
-    std::string at = "points[" + std::to_string(i) + "]";
-    const json& point = (*points)[i];
-    if (!point.is_object()) bad(at, "must be an object");
-    // A parameter is a number (distance) or a name (a renderer, a variant).
-    for (const auto& parameter : parameters) {
-      const json* value = find(point, parameter.c_str());
-      if (!value) bad(at + "." + parameter, "missing (every point carries every parameter)");
-      if (!value->is_number() && !value->is_string() && !value->is_boolean()) {
-        bad(at + "." + parameter, "must be a number or a name, got " + value->dump());
-      }
-    }
-    for (size_t k = 0; k < plots.size(); ++k) {
-      std::string named = " (named by plots[" + std::to_string(k) + "])";
-      for (const std::string* field : {&plots[k].x, &plots[k].y}) {
-        const json* value = atPath(point, *field);
-        if (!value) bad(at + "." + *field, "missing" + named);
-        if (!value->is_number()) bad(at + "." + *field, "must be a number" + named + ", got " + value->dump());
-      }
-      for (const auto& field : plots[k].series) {
-        if (!atPath(point, field)) bad(at + "." + field, "missing" + named);
-      }
-    }
-  }
-}
-
-}  // namespace
-
-namespace {
-
 // The sweep's row for a job, replacing an earlier one; inside the caller's transaction.
 int64_t storeSweep(Connection* db, int64_t jobId, const json& result) {
   // Idempotency, as for captures: the job's result replaces its earlier one.
@@ -593,12 +485,12 @@ bool jobExists(Connection* db, int64_t jobId) {
 
 }  // namespace
 
-Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
+Result<int64_t> Runs::ingestSweep(int64_t jobId, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
-    checkSweep(result);
+    detail::checkSweep(result);
     Transaction tx(db_, Transaction::Kind::Write);
     if (!jobExists(db_, jobId)) return makeError("job " + std::to_string(jobId) + " not found");
     int64_t id = storeSweep(db_, jobId, result);
@@ -607,12 +499,12 @@ Result<int64_t> Store::ingestSweep(int64_t jobId, const json& result) {
   });
 }
 
-Result<int64_t> Store::ingestSweep(const Lease& lease, const json& result) {
+Result<int64_t> Runs::ingestSweep(const Lease& lease, const json& result) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return detail::guarded<int64_t>("ingesting the sweep result", [&]() -> Result<int64_t> {
-    checkSweep(result);
+    detail::checkSweep(result);
     Transaction tx(db_, Transaction::Kind::Write);
     if (!detail::holdsLease(db_, lease)) return makeError(detail::lostLease(db_, lease));
     int64_t id = storeSweep(db_, lease.jobId, result);
@@ -622,8 +514,8 @@ Result<int64_t> Store::ingestSweep(const Lease& lease, const json& result) {
   });
 }
 
-Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
-                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+Result<int64_t> Runs::ingestCapture(int64_t jobId, const json& result,
+                                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -636,8 +528,8 @@ Result<int64_t> Store::ingestCapture(int64_t jobId, const json& result,
   });
 }
 
-Result<int64_t> Store::ingestCapture(const Lease& lease, const json& result,
-                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+Result<int64_t> Runs::ingestCapture(const Lease& lease, const json& result,
+                                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   if (!result.is_object()) return makeError("result: must be a JSON object");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);

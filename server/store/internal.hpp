@@ -57,6 +57,10 @@ bool holdsLease(Connection* db, const Lease& lease);
 void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std::optional<std::string>& error);
 std::string lostLease(Connection* db, const Lease& lease);
 
+// A device's id, name, vendor, driver, api_version, features and info, in
+// this order (a braced list reads them in order).
+Device readDevice(RowReader& row);
+
 // Run rows: kRunSelect (+ WHERE ...) read by readRunRow.
 extern const char* const kRunSelect;
 RunRow readRunRow(const Statement& row);

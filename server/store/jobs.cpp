@@ -10,32 +10,39 @@ using nlohmann::json;
 
 namespace detail {
 
-Job readJob(const Statement& row) {
+Job readJob(const Statement& statement) {
+  RowReader row(statement);
   Job job;
-  job.id = row.getInt(0);
-  job.status = parseJobStatus(row.getText(1)).value_or(JobStatus::Failed);
-  job.spec = row.getJson(2);
-  job.progressDone = row.getInt(3);
-  job.progressTotal = row.getInt(4);
-  job.progressCurrent = row.getOptText(5);
-  job.error = row.getOptText(6);
-  job.attempts = static_cast<int>(row.getInt(7));
-  job.idempotencyKey = row.getOptText(8);
-  job.createdAt = row.getText(9);
-  job.startedAt = row.getOptText(10);
-  job.finishedAt = row.getOptText(11);
-  job.workerPid = row.getOptInt(12);
-  job.host = row.getOptText(13);
-  job.leaseExpiresMs = row.getOptInt(14);
-  job.maxAttempts = static_cast<int>(row.getInt(15));
-  job.attemptErrors = row.getJson(16);
-  job.deviceRequirement = row.getJson(17);
+  job.id = row.getInt();
+  job.status = parseJobStatus(row.getText()).value_or(JobStatus::Failed);
+  job.spec = row.getJson();
+  job.progressDone = row.getInt();
+  job.progressTotal = row.getInt();
+  job.progressCurrent = row.getOptText();
+  job.error = row.getOptText();
+  job.attempts = static_cast<int>(row.getInt());
+  job.idempotencyKey = row.getOptText();
+  job.createdAt = row.getText();
+  job.startedAt = row.getOptText();
+  job.finishedAt = row.getOptText();
+  job.workerPid = row.getOptInt();
+  job.host = row.getOptText();
+  job.leaseExpiresMs = row.getOptInt();
+  job.maxAttempts = static_cast<int>(row.getInt());
+  job.attemptErrors = row.getJson();
+  job.deviceRequirement = row.getJson();
+  row.end();
   return job;
 }
 
 }  // namespace detail
 
 namespace {
+
+// Statuses as SQL literals ('queued'): the SQL names them only through toString.
+std::string quoted(JobStatus status) { return std::string("'") + toString(status) + "'"; }
+const std::string kQueued = quoted(JobStatus::Queued), kRunning = quoted(JobStatus::Running),
+                  kFailed = quoted(JobStatus::Failed), kCancelled = quoted(JobStatus::Cancelled);
 
 std::optional<Job> findJob(Connection* db, int64_t id) {
   Statement query(db, std::string("SELECT ") + kJobColumns + " FROM jobs WHERE id = ?1");
@@ -54,12 +61,12 @@ std::optional<Job> returnedJob(Statement& statement) {
 
 }  // namespace
 
-Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string> idempotencyKey,
                                     int maxAttempts) {
-  return createJob(spec, std::move(idempotencyKey), maxAttempts, QueueLimits{});
+  return create(spec, std::move(idempotencyKey), maxAttempts, QueueLimits{});
 }
 
-Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string> idempotencyKey,
+Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string> idempotencyKey,
                                     int maxAttempts, const QueueLimits& limits) {
   if (idempotencyKey && (idempotencyKey->empty() || idempotencyKey->size() > 255)) {
     return makeError("idempotency_key: must be 1 to 255 characters");
@@ -90,7 +97,7 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
         serialise.run();
       }
       if (limits.maxQueued > 0) {
-        Statement count(db_, "SELECT count(*) FROM jobs WHERE status = 'queued'");
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE status = " + kQueued);
         count.step();
         out.queued = count.getInt(0);
         count.run();
@@ -100,7 +107,7 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
         }
       }
       if (limits.maxQueuedPerClient > 0 && !limits.client.empty()) {
-        Statement count(db_, "SELECT count(*) FROM jobs WHERE client = ?1 AND status = 'queued'");
+        Statement count(db_, "SELECT count(*) FROM jobs WHERE client = ?1 AND status = " + kQueued);
         count.bind(1, limits.client);
         count.step();
         out.queued = count.getInt(0);
@@ -145,13 +152,13 @@ Result<CreatedJob> Store::createJob(const json& spec, std::optional<std::string>
   });
 }
 
-Result<std::optional<Job>> Store::claimNextJob(int64_t workerPid) {
+Result<std::optional<Job>> JobQueue::claim(int64_t workerPid) {
   Claimer claimer;
   claimer.workerPid = workerPid;
-  return claimNextJob(claimer);
+  return claim(claimer);
 }
 
-Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
+Result<std::optional<Job>> JobQueue::claim(const Claimer& claimer) {
   if (claimer.leaseMs < 1) return makeError("lease: must be at least 1 ms");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -160,18 +167,23 @@ Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
     // Candidates in queue order, a page at a time, filtered here by device;
     // only the one taken is locked, so other claimers pass over it and take
     // the next (SKIP LOCKED) instead of waiting.
-    Statement page(db_,
-                   "SELECT id, device_requirement FROM jobs WHERE status = 'queued' AND id > ?1 "
-                   "ORDER BY id LIMIT 64");
-    Statement lockOne(db_, std::string("SELECT id FROM jobs WHERE id = ?1 AND status = 'queued'") +
-                               skipLockedSql(*db_));
+    Statement page(db_, "SELECT id, device_requirement FROM jobs WHERE status = " + kQueued +
+                            " AND id > ?1 "
+                            "ORDER BY id LIMIT 64");
+    Statement lockOne(
+        db_, std::string("SELECT id FROM jobs WHERE id = ?1 AND status = " + kQueued) + skipLockedSql(*db_));
     std::optional<int64_t> chosen;
     int64_t after = 0;
     while (!chosen) {
       page.reset();
       page.bind(1, after);
       std::vector<std::pair<int64_t, json>> candidates;
-      while (page.step()) candidates.emplace_back(page.getInt(0), page.getJson(1));
+      while (page.step()) {
+        RowReader row(page);
+        int64_t id = row.getInt();
+        candidates.emplace_back(id, row.getJson());
+        row.end();
+      }
       if (candidates.empty()) break;
       after = candidates.back().first;
       for (const auto& [id, requirement] : candidates) {
@@ -191,11 +203,12 @@ Result<std::optional<Job>> Store::claimNextJob(const Claimer& claimer) {
     }
     if (!chosen) return std::optional<Job>();
     Statement claim(
-        db_, std::string("UPDATE jobs SET status = 'running', attempts = attempts + 1, started_at = ") +
-                 nowSql(*db_) +
-                 ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
-                 "worker_pid = ?1, host = ?2, lease_expires_ms = " +
-                 nowMsSql(*db_) + " + ?3 WHERE id = ?4 RETURNING " + kJobColumns);
+        db_,
+        std::string("UPDATE jobs SET status = " + kRunning + ", attempts = attempts + 1, started_at = ") +
+            nowSql(*db_) +
+            ", finished_at = NULL, error = NULL, progress_done = 0, progress_current = NULL, "
+            "worker_pid = ?1, host = ?2, lease_expires_ms = " +
+            nowMsSql(*db_) + " + ?3 WHERE id = ?4 RETURNING " + kJobColumns);
     claim.bind(1, claimer.workerPid > 0 ? std::optional<int64_t>(claimer.workerPid) : std::nullopt)
         .bind(2, claimer.host.empty() ? std::optional<std::string>() : std::optional(claimer.host))
         .bind(3, claimer.leaseMs)
@@ -214,8 +227,9 @@ namespace {
 
 // The job row, locked until the transaction ends, if `lease` still holds it.
 bool holds(Connection* db, const Lease& lease) {
-  Statement query(db, std::string("SELECT 1 FROM jobs WHERE id = ?1 AND status = 'running' AND attempts = ?2 "
-                                   "AND host = ?3") +
+  Statement query(db, std::string("SELECT 1 FROM jobs WHERE id = ?1 AND status = " + kRunning +
+                                  " AND attempts = ?2 "
+                                  "AND host = ?3") +
                           (db->engine() == Engine::Postgres ? " FOR UPDATE" : ""));
   query.bind(1, lease.jobId).bind(2, lease.attempt).bind(3, lease.host);
   bool held = query.step();
@@ -240,25 +254,28 @@ bool holdsLease(Connection* db, const Lease& lease) { return holds(db, lease); }
 
 }  // namespace detail
 
-Result<bool> Store::renewLease(const Lease& lease, int64_t leaseMs) {
+Result<bool> JobQueue::renewLease(const Lease& lease, int64_t leaseMs) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("renewLease", [&]() -> Result<bool> {
     Statement renew(db_, std::string("UPDATE jobs SET lease_expires_ms = ") + nowMsSql(*db_) +
-                             " + ?1 WHERE id = ?2 AND status = 'running' AND attempts = ?3 AND host = ?4");
+                             " + ?1 WHERE id = ?2 AND status = " + kRunning +
+                             " AND attempts = ?3 AND host = ?4");
     renew.bind(1, leaseMs).bind(2, lease.jobId).bind(3, lease.attempt).bind(4, lease.host).run();
     return db_->changes() > 0;
   });
 }
 
-Result<Recovery> Store::requeueExpired() {
+Result<Recovery> JobQueue::requeueExpired() {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueExpired", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
     Statement expired(db_, std::string("SELECT id, attempts, max_attempts, host, attempt_errors, ") +
-                               nowMsSql(*db_) + " - lease_expires_ms FROM jobs WHERE status = 'running' AND "
-                               "lease_expires_ms < " + nowMsSql(*db_) + " ORDER BY id" + skipLockedSql(*db_));
+                               nowMsSql(*db_) + " - lease_expires_ms FROM jobs WHERE status = " + kRunning +
+                               " AND "
+                               "lease_expires_ms < " +
+                               nowMsSql(*db_) + " ORDER BY id" + skipLockedSql(*db_));
     struct Expired {
       int64_t id, attempts, maxAttempts;
       std::string host;
@@ -267,13 +284,17 @@ Result<Recovery> Store::requeueExpired() {
     };
     std::vector<Expired> found;
     while (expired.step()) {
-      found.push_back({expired.getInt(0), expired.getInt(1), expired.getInt(2),
-                       expired.getOptText(3).value_or("an unnamed host"), expired.getJson(4), expired.getInt(5)});
+      RowReader row(expired);  // a braced list reads its columns in order
+      found.push_back({row.getInt(), row.getInt(), row.getInt(), row.getOptText().value_or("an unnamed host"),
+                       row.getJson(), row.getInt()});
+      row.end();
     }
     Statement requeue(db_,
-                      "UPDATE jobs SET status = 'queued', worker_pid = NULL, lease_expires_ms = NULL, "
-                      "progress_done = 0, progress_current = NULL, attempt_errors = ?2 WHERE id = ?1");
-    Statement fail(db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, lease_expires_ms = "
+                      "UPDATE jobs SET status = " + kQueued +
+                          ", worker_pid = NULL, lease_expires_ms = NULL, "
+                          "progress_done = 0, progress_current = NULL, attempt_errors = ?2 WHERE id = ?1");
+    Statement fail(db_, std::string("UPDATE jobs SET status = " + kFailed +
+                                    ", worker_pid = NULL, lease_expires_ms = "
                                     "NULL, attempt_errors = ?2, error = ?3, finished_at = ") +
                             nowSql(*db_) + " WHERE id = ?1");
     Statement freeHost(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
@@ -305,8 +326,8 @@ Result<Recovery> Store::requeueExpired() {
   });
 }
 
-Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
-                                   std::optional<std::string> current) {
+Result<bool> JobQueue::updateProgress(int64_t jobId, int64_t done, int64_t total,
+                                      std::optional<std::string> current) {
   if (done < 0 || total < 0) return makeError("progress: done and total must not be negative");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -314,7 +335,8 @@ Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
     Transaction tx(db_, Transaction::Kind::Write);
     Statement update(db_,
                      "UPDATE jobs SET progress_done = ?1, progress_total = ?2, progress_current = ?3 "
-                     "WHERE id = ?4 AND status = 'running'");
+                     "WHERE id = ?4 AND status = " +
+                         kRunning);
     update.bind(1, done).bind(2, total).bind(3, current).bind(4, jobId);
     update.run();
     bool running = db_->changes() > 0;
@@ -325,7 +347,7 @@ Result<bool> Store::updateProgress(int64_t jobId, int64_t done, int64_t total,
 
 namespace {
 
-// finishJob's status must end a job: done (its error dropped) or failed.
+// finish()'s status must end a job: done (its error dropped) or failed.
 std::optional<std::string> finishableStatus(JobStatus status, std::optional<std::string>& error) {
   if (status != JobStatus::Done && status != JobStatus::Failed) {
     return std::string("finishJob: status must be done or failed, got ") + toString(status);
@@ -336,14 +358,14 @@ std::optional<std::string> finishableStatus(JobStatus status, std::optional<std:
 
 }  // namespace
 
-Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std::string> error) {
+Result<bool> JobQueue::finish(int64_t jobId, JobStatus status, std::optional<std::string> error) {
   if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("finishJob", [&]() -> Result<bool> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") + nowSql(*db_) +
-                              " WHERE id = ?3 AND status = 'running'");
+    Statement update(db_, std::string("UPDATE jobs SET status = ?1, error = ?2, finished_at = ") +
+                              nowSql(*db_) + " WHERE id = ?3 AND status = " + kRunning);
     update.bind(1, toString(status)).bind(2, error).bind(3, jobId);
     update.run();
     bool changed = db_->changes() > 0;
@@ -352,7 +374,7 @@ Result<bool> Store::finishJob(int64_t jobId, JobStatus status, std::optional<std
   });
 }
 
-Result<bool> Store::finishJob(const Lease& lease, JobStatus status, std::optional<std::string> error) {
+Result<bool> JobQueue::finish(const Lease& lease, JobStatus status, std::optional<std::string> error) {
   if (auto bad = finishableStatus(status, error)) return makeError(*bad);
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
@@ -380,7 +402,7 @@ void finishHeld(Connection* db, const Lease& lease, JobStatus status, const std:
 
 }  // namespace detail
 
-Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
+Result<bool> JobQueue::requeue(const Lease& lease, const std::string& reason) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<bool>("requeueJob", [&]() -> Result<bool> {
@@ -390,10 +412,10 @@ Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
     json errors = job && job->attemptErrors.is_array() ? job->attemptErrors : json::array();
     errors.push_back("attempt " + std::to_string(lease.attempt) + " on " + lease.host + ": " + reason);
     Statement requeue(
-        db_,
-        "UPDATE jobs SET status = 'queued', attempts = attempts - 1, worker_pid = NULL, "
-        "lease_expires_ms = NULL, progress_done = 0, progress_current = NULL, attempt_errors = ?2 "
-        "WHERE id = ?1");
+        db_, "UPDATE jobs SET status = " + kQueued +
+                 ", attempts = attempts - 1, worker_pid = NULL, "
+                 "lease_expires_ms = NULL, progress_done = 0, progress_current = NULL, attempt_errors = ?2 "
+                 "WHERE id = ?1");
     requeue.bind(1, lease.jobId).bind(2, errors).run();
     Statement host(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
     host.bind(1, lease.host).bind(2, lease.jobId).run();
@@ -402,13 +424,14 @@ Result<bool> Store::requeueJob(const Lease& lease, const std::string& reason) {
   });
 }
 
-Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
+Result<std::optional<Job>> JobQueue::cancel(int64_t jobId) {
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<std::optional<Job>>("cancelJob", [&]() -> Result<std::optional<Job>> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement update(db_, std::string("UPDATE jobs SET status = 'cancelled', finished_at = ") + nowSql(*db_) +
-                              " WHERE id = ?1 AND status IN ('queued', 'running')");
+    Statement update(db_, std::string("UPDATE jobs SET status = " + kCancelled + ", finished_at = ") +
+                              nowSql(*db_) + " WHERE id = ?1 AND status IN (" + kQueued + ", " + kRunning +
+                              ")");
     update.bind(1, jobId);
     update.run();
     auto job = findJob(db_, jobId);
@@ -417,13 +440,13 @@ Result<std::optional<Job>> Store::cancelJob(int64_t jobId) {
   });
 }
 
-Result<std::optional<Job>> Store::getJob(int64_t jobId) {
+Result<std::optional<Job>> JobQueue::get(int64_t jobId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Job>>("getJob",
                                      [&]() -> Result<std::optional<Job>> { return findJob(db_, jobId); });
 }
 
-Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& page) {
+Result<JobPage> JobQueue::list(std::optional<JobStatus> status, const Page& page) {
   auto after = detail::checkPage(page);
   if (!after) return makeError(after.error());
   std::lock_guard lock(mutex_);
@@ -446,35 +469,45 @@ Result<JobPage> Store::listJobs(std::optional<JobStatus> status, const Page& pag
   });
 }
 
-Result<std::map<std::string, int64_t>> Store::jobCounts() {
+Result<std::map<std::string, int64_t>> JobQueue::counts() {
   std::lock_guard lock(mutex_);
   return guarded<std::map<std::string, int64_t>>("jobCounts", [&]() -> Result<std::map<std::string, int64_t>> {
     std::map<std::string, int64_t> out;
-    for (auto s : {JobStatus::Queued, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Cancelled})
-      out[toString(s)] = 0;
+    for (JobStatus s : kJobStatuses) out[toString(s)] = 0;
     Statement query(db_, "SELECT status, count(*) FROM jobs GROUP BY status");
-    while (query.step()) out[query.getText(0)] = query.getInt(1);
+    while (query.step()) {
+      RowReader row(query);
+      std::string status = row.getText();
+      out[status] = row.getInt();
+      row.end();
+    }
     return out;
   });
 }
 
-Result<Recovery> Store::requeueInterrupted(int maxAttempts, std::optional<std::string> host) {
+Result<Recovery> JobQueue::requeueInterrupted(int maxAttempts, std::optional<std::string> host) {
   if (maxAttempts < 1) return makeError("maxAttempts: must be at least 1");
   std::lock_guard lock(mutex_);
   detail::WriteLock writer(*db_);
   return guarded<Recovery>("requeueInterrupted", [&]() -> Result<Recovery> {
     Transaction tx(db_, Transaction::Kind::Write);
-    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = 'running' AND "
-                           "(CAST(?1 AS TEXT) IS NULL OR host = ?1 OR host IS NULL) ORDER BY id");
+    Statement running(db_, "SELECT id, attempts FROM jobs WHERE status = " + kRunning +
+                               " AND "
+                               "(CAST(?1 AS TEXT) IS NULL OR host = ?1 OR host IS NULL) ORDER BY id");
     running.bind(1, host);
-    Statement requeue(db_,
-                      "UPDATE jobs SET status = 'queued', worker_pid = NULL, progress_done = 0, "
-                      "progress_current = NULL, lease_expires_ms = NULL WHERE id = ?1");
-    Statement fail(
-        db_, std::string("UPDATE jobs SET status = 'failed', worker_pid = NULL, error = ?2, finished_at = ") +
-                 nowSql(*db_) + " WHERE id = ?1");
+    Statement requeue(db_, "UPDATE jobs SET status = " + kQueued +
+                               ", worker_pid = NULL, progress_done = 0, "
+                               "progress_current = NULL, lease_expires_ms = NULL WHERE id = ?1");
+    Statement fail(db_, std::string("UPDATE jobs SET status = " + kFailed +
+                                    ", worker_pid = NULL, error = ?2, finished_at = ") +
+                            nowSql(*db_) + " WHERE id = ?1");
     std::vector<std::pair<int64_t, int64_t>> interrupted;
-    while (running.step()) interrupted.emplace_back(running.getInt(0), running.getInt(1));
+    while (running.step()) {
+      RowReader row(running);
+      int64_t id = row.getInt();
+      interrupted.emplace_back(id, row.getInt());
+      row.end();
+    }
     Recovery recovery;
     for (auto [id, attempts] : interrupted) {
       if (attempts < maxAttempts) {

@@ -88,6 +88,11 @@ class PgStatement final : public StatementImpl {
     PQfreemem(bytes);
     return out;
   }
+  int columnCount() const override { return result_ ? PQnfields(result_) : 0; }
+  std::string columnName(int column) const override {
+    const char* name = result_ ? PQfname(result_, column) : nullptr;
+    return name ? name : "";
+  }
   const std::string& sql() const override { return sql_; }
 
  private:

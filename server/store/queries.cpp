@@ -29,41 +29,49 @@ const char* const kRunSelect =
     "(SELECT j.labels FROM jobs j WHERE j.id = r.job_id) "
     "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
 
-RunRow readRunRow(const Statement& row) {
+RunRow readRunRow(const Statement& statement) {
+  RowReader row(statement);
   RunRow run;
-  run.id = row.getInt(0);
-  run.jobId = row.getInt(1);
-  run.deviceId = row.getInt(2);
-  run.deviceName = row.getText(3);
-  run.renderer = row.getText(4);
-  run.scene = row.getText(5);
-  run.sceneParams = row.getJson(6);
-  run.width = static_cast<int>(row.getInt(7));
-  run.height = static_cast<int>(row.getInt(8));
-  run.counting = row.getText(9);
-  run.lights = static_cast<int>(row.getInt(10));
-  run.renderTargetBytes = row.getOptInt(11);
-  run.notes = row.getJson(12);
-  run.createdAt = row.getText(13);
-  run.sampleCount = static_cast<int>(row.getInt(14));
-  run.meanFrameMs = row.getOptDouble(15);
-  run.meanBytes = row.getOptDouble(16);
-  run.meanFrameMsInstrumented = row.getOptDouble(17);
-  run.meanOverheadRatio = row.getOptDouble(18);
-  run.imageCompared = static_cast<int>(row.getInt(19));
-  run.imageIdentical = static_cast<int>(row.getInt(20));
-  run.meanPsnr = row.getOptDouble(21);
-  run.minPsnr = row.getOptDouble(22);
-  run.options = row.getJson(23);
-  run.variant = row.getText(24);
-  run.tallyVersion = row.getOptText(25);
-  run.tallyCommit = row.getOptText(26);
-  run.footprintBlockBytes = row.getOptInt(27);
-  run.meanFootprintBytes = row.getOptDouble(28);
-  run.meanFootprintRequestedBytes = row.getOptDouble(29);
-  run.host = row.getOptText(30);
-  run.labels = row.isNull(31) ? json::object() : row.getJson(31);
+  run.id = row.getInt();
+  run.jobId = row.getInt();
+  run.deviceId = row.getInt();
+  run.deviceName = row.getText();
+  run.renderer = row.getText();
+  run.scene = row.getText();
+  run.sceneParams = row.getJson();
+  run.width = static_cast<int>(row.getInt());
+  run.height = static_cast<int>(row.getInt());
+  run.counting = row.getText();
+  run.lights = static_cast<int>(row.getInt());
+  run.renderTargetBytes = row.getOptInt();
+  run.notes = row.getJson();
+  run.createdAt = row.getText();
+  run.sampleCount = static_cast<int>(row.getInt());
+  run.meanFrameMs = row.getOptDouble();
+  run.meanBytes = row.getOptDouble();
+  run.meanFrameMsInstrumented = row.getOptDouble();
+  run.meanOverheadRatio = row.getOptDouble();
+  run.imageCompared = static_cast<int>(row.getInt());
+  run.imageIdentical = static_cast<int>(row.getInt());
+  run.meanPsnr = row.getOptDouble();
+  run.minPsnr = row.getOptDouble();
+  run.options = row.getJson();
+  run.variant = row.getText();
+  run.tallyVersion = row.getOptText();
+  run.tallyCommit = row.getOptText();
+  run.footprintBlockBytes = row.getOptInt();
+  run.meanFootprintBytes = row.getOptDouble();
+  run.meanFootprintRequestedBytes = row.getOptDouble();
+  run.host = row.getOptText();
+  json labels = row.getJson();
+  run.labels = labels.is_null() ? json::object() : std::move(labels);
+  row.end();
   return run;
+}
+
+Device readDevice(RowReader& row) {
+  return Device{row.getInt(),  row.getText(), row.getText(), row.getText(),
+                row.getText(), row.getJson(), row.getJson()};
 }
 
 // Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
@@ -131,51 +139,50 @@ const char* const kSampleColumns =
     "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs, "
     "footprint_bytes, footprint_requested_bytes";
 
-SampleRow readSampleRow(const Statement& row) {
+// An image error's five columns (against, identical, psnr, max_abs,
+// mean_abs), all read; empty when there is no error (against is NULL).
+std::optional<ImageError> readImageError(RowReader& row) {
+  auto against = row.getOptText();
+  ImageError e;
+  e.identical = row.getInt() != 0;
+  e.psnr = row.getOptDouble();
+  e.maxAbs = row.getDouble();
+  e.meanAbs = row.getDouble();
+  if (!against) return std::nullopt;
+  e.against = *against;
+  return e;
+}
+
+// Reads kSampleColumns; the caller reads whatever its query adds after them.
+SampleRow readSampleRow(RowReader& row) {
   SampleRow s;
-  s.id = row.getInt(0);
-  s.runId = row.getInt(1);
-  s.cameraIndex = static_cast<int>(row.getInt(2));
-  s.camera = row.getJson(3);
-  s.skyFraction = row.getOptDouble(4);
-  s.skyFractionEstimate = row.getOptDouble(5);
-  if (auto frames = row.getOptInt(6)) s.frames = static_cast<int>(*frames);
-  s.frameMs = row.getDouble(7);
-  s.frameMsSpread = row.getJson(8);
-  s.frameMsInstrumented = row.getOptDouble(9);
-  s.overheadRatio = row.getOptDouble(10);
-  s.bytes = row.getDouble(11);
-  if (auto against = row.getOptText(12)) {
-    ImageError e;
-    e.against = *against;
-    e.identical = row.getInt(13) != 0;
-    e.psnr = row.getOptDouble(14);
-    e.maxAbs = row.getDouble(15);
-    e.meanAbs = row.getDouble(16);
-    s.imageError = e;
-  }
-  s.hasScreenshot = row.getInt(17) != 0;
-  s.bytesRead = row.getDouble(18);
-  s.bytesWritten = row.getDouble(19);
-  s.extras = row.getJson(20);
-  if (auto against = row.getOptText(21)) {
-    ImageError e;
-    e.against = *against;
-    e.identical = row.getInt(22) != 0;
-    e.psnr = row.getOptDouble(23);
-    e.maxAbs = row.getDouble(24);
-    e.meanAbs = row.getDouble(25);
-    s.variantError = e;
-  }
-  s.footprintBytes = row.getOptDouble(26);
-  s.footprintRequestedBytes = row.getOptDouble(27);
+  s.id = row.getInt();
+  s.runId = row.getInt();
+  s.cameraIndex = static_cast<int>(row.getInt());
+  s.camera = row.getJson();
+  s.skyFraction = row.getOptDouble();
+  s.skyFractionEstimate = row.getOptDouble();
+  if (auto frames = row.getOptInt()) s.frames = static_cast<int>(*frames);
+  s.frameMs = row.getDouble();
+  s.frameMsSpread = row.getJson();
+  s.frameMsInstrumented = row.getOptDouble();
+  s.overheadRatio = row.getOptDouble();
+  s.bytes = row.getDouble();
+  s.imageError = readImageError(row);
+  s.hasScreenshot = row.getInt() != 0;
+  s.bytesRead = row.getDouble();
+  s.bytesWritten = row.getDouble();
+  s.extras = row.getJson();
+  s.variantError = readImageError(row);
+  s.footprintBytes = row.getOptDouble();
+  s.footprintRequestedBytes = row.getOptDouble();
   return s;
 }
 
 // A stored per-frame array (0008; JSON, NULL before): empty when absent.
-std::vector<double> frameTimes(const Statement& row, int column) {
+std::vector<double> frameTimes(RowReader& row) {
   std::vector<double> out;
-  nlohmann::json value = row.getJson(column);
+  nlohmann::json value = row.getJson();
   if (!value.is_array()) return out;
   out.reserve(value.size());
   for (const auto& ms : value)
@@ -192,7 +199,7 @@ std::optional<RunRow> findRunRow(Connection* db, int64_t runId) {
 
 }  // namespace
 
-Result<RunPage> Store::listRuns(const RunFilter& filter, const Page& page) {
+Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
   auto checked = detail::checkPage(page);
   if (!checked) return makeError(checked.error());
   std::optional<int64_t> after = *checked;
@@ -223,21 +230,22 @@ Result<RunPage> Store::listRuns(const RunFilter& filter, const Page& page) {
   });
 }
 
-Result<std::vector<Device>> Store::listDevices() {
+Result<std::vector<Device>> Runs::devices() {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<Device>>("listDevices", [&]() -> Result<std::vector<Device>> {
     Statement query(db_,
                     "SELECT id, name, vendor, driver, api_version, features, info FROM devices ORDER BY id");
     std::vector<Device> devices;
     while (query.step()) {
-      devices.push_back(Device{query.getInt(0), query.getText(1), query.getText(2), query.getText(3),
-                               query.getText(4), query.getJson(5), query.getJson(6)});
+      RowReader row(query);
+      devices.push_back(detail::readDevice(row));
+      row.end();
     }
     return devices;
   });
 }
 
-Result<std::optional<Run>> Store::getRun(int64_t runId) {
+Result<std::optional<Run>> Runs::get(int64_t runId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Run>>("getRun", [&]() -> Result<std::optional<Run>> {
     Transaction tx(db_, Transaction::Kind::Read);
@@ -250,10 +258,11 @@ Result<std::optional<Run>> Store::getRun(int64_t runId) {
                      "r.counter_headroom FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
     device.bind(1, runId);
     if (device.step()) {
-      run.device = Device{device.getInt(0),  device.getText(1), device.getText(2), device.getText(3),
-                          device.getText(4), device.getJson(5), device.getJson(6)};
-      run.shaders = device.getJson(7);
-      run.counterHeadroom = device.getJson(8);
+      RowReader columns(device);
+      run.device = detail::readDevice(columns);
+      run.shaders = columns.getJson();
+      run.counterHeadroom = columns.getJson();
+      columns.end();
     }
     Statement ceilings(
         db_, db_->engine() == Engine::Sqlite
@@ -270,39 +279,46 @@ Result<std::optional<Run>> Store::getRun(int64_t runId) {
         "usage FROM run_resources WHERE run_id = ?1 ORDER BY position");
     resources.bind(1, runId);
     while (resources.step()) {
-      run.resources.push_back(RunResource{resources.getText(0), resources.getText(1), resources.getOptText(2),
-                                          resources.getOptInt(3), resources.getOptInt(4),
-                                          resources.getOptInt(5), resources.getOptInt(6),
-                                          resources.getOptInt(7), resources.getOptText(8)});
+      RowReader resource(resources);  // a braced list reads its columns in order
+      run.resources.push_back(RunResource{resource.getText(), resource.getText(), resource.getOptText(),
+                                          resource.getOptInt(), resource.getOptInt(), resource.getOptInt(),
+                                          resource.getOptInt(), resource.getOptInt(), resource.getOptText()});
+      resource.end();
     }
     tx.commit();
     return std::optional<Run>(std::move(run));
   });
 }
 
-Result<std::vector<SampleRow>> Store::listSamples(int64_t runId) {
+Result<std::vector<SampleRow>> Runs::samples(int64_t runId) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<SampleRow>>("listSamples", [&]() -> Result<std::vector<SampleRow>> {
     Statement query(db_, std::string("SELECT ") + kSampleColumns +
                              " FROM samples WHERE run_id = ?1 ORDER BY camera_index");
     query.bind(1, runId);
     std::vector<SampleRow> rows;
-    while (query.step()) rows.push_back(readSampleRow(query));
+    while (query.step()) {
+      RowReader row(query);
+      rows.push_back(readSampleRow(row));
+      row.end();
+    }
     return rows;
   });
 }
 
-Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
+Result<std::optional<Sample>> Runs::sample(int64_t sampleId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Sample>>("getSample", [&]() -> Result<std::optional<Sample>> {
     Transaction tx(db_, Transaction::Kind::Read);
-    // frame_ms_frames comes after kSampleColumns' 28 columns: only this query reads it.
+    // frame_ms_frames comes after kSampleColumns: only this query reads it.
     Statement query(db_, std::string("SELECT ") + kSampleColumns + ", frame_ms_frames FROM samples WHERE id = ?1");
     query.bind(1, sampleId);
     if (!query.step()) return std::optional<Sample>();
     Sample sample;
-    sample.row = readSampleRow(query);
-    sample.row.frameMsFrames = frameTimes(query, 28);
+    RowReader row(query);
+    sample.row = readSampleRow(row);
+    sample.row.frameMsFrames = frameTimes(row);
+    row.end();
     Statement passes(db_,
                      "SELECT id, name, gpu_ms, gpu_ms_spread, gpu_ms_instrumented, overhead_ratio, "
                      "fragment_invocations, fragment_invocations_statistic, compute_invocations, "
@@ -311,18 +327,20 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
     passes.bind(1, sampleId);
     std::map<int64_t, size_t> byId;
     while (passes.step()) {
-      byId[passes.getInt(0)] = sample.passes.size();
-      sample.passes.push_back(Pass{passes.getText(1),
-                                   passes.getDouble(2),
-                                   passes.getJson(3),
-                                   passes.getOptDouble(4),
-                                   passes.getOptDouble(5),
-                                   passes.getOptDouble(6),
-                                   passes.getOptDouble(7),
+      RowReader pass(passes);
+      byId[pass.getInt()] = sample.passes.size();
+      sample.passes.push_back(Pass{pass.getText(),
+                                   pass.getDouble(),
+                                   pass.getJson(),
+                                   pass.getOptDouble(),
+                                   pass.getOptDouble(),
+                                   pass.getOptDouble(),
+                                   pass.getOptDouble(),
                                    {},
-                                   passes.getOptDouble(8),
-                                   passes.getOptDouble(9),
-                                   frameTimes(passes, 10)});
+                                   pass.getOptDouble(),
+                                   pass.getOptDouble(),
+                                   frameTimes(pass)});
+      pass.end();
     }
     Statement counters(
         db_,
@@ -331,17 +349,20 @@ Result<std::optional<Sample>> Store::getSample(int64_t sampleId) {
         "ORDER BY p.position, c.position");
     counters.bind(1, sampleId);
     while (counters.step()) {
-      sample.passes[byId.at(counters.getInt(0))].counters.push_back(
-          Counter{counters.getText(1), counters.getOptText(2), counters.getOptText(3), counters.getText(4),
-                  counters.getDouble(5), counters.getDouble(6), counters.getJson(7), counters.getText(8),
-                  counters.getOptDouble(9)});
+      RowReader counter(counters);
+      size_t pass = byId.at(counter.getInt());
+      sample.passes[pass].counters.push_back(
+          Counter{counter.getText(), counter.getOptText(), counter.getOptText(), counter.getText(),
+                  counter.getDouble(), counter.getDouble(), counter.getJson(), counter.getText(),
+                  counter.getOptDouble()});
+      counter.end();
     }
     tx.commit();
     return std::optional<Sample>(std::move(sample));
   });
 }
 
-Result<std::optional<std::vector<uint8_t>>> Store::getScreenshot(int64_t sampleId) {
+Result<std::optional<std::vector<uint8_t>>> Runs::screenshot(int64_t sampleId) {
   std::lock_guard lock(mutex_);
   using Png = std::optional<std::vector<uint8_t>>;
   return guarded<Png>("getScreenshot", [&]() -> Result<Png> {

@@ -54,6 +54,11 @@ class SqliteStatement final : public StatementImpl {
     int size = sqlite3_column_bytes(stmt_, column);
     return data ? std::vector<uint8_t>(data, data + size) : std::vector<uint8_t>();
   }
+  int columnCount() const override { return sqlite3_column_count(stmt_); }
+  std::string columnName(int column) const override {
+    const char* name = sqlite3_column_name(stmt_, column);
+    return name ? name : "";
+  }
   const std::string& sql() const override { return sql_; }
 
  private:

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cstdio>
 
+#include "protocol.hpp"
 #include "store/internal.hpp"
 #include "store/migrations.hpp"
 
@@ -27,18 +28,17 @@ Result<std::optional<int64_t>> checkPage(const Page& page) {
 
 const char* toString(JobStatus status) {
   switch (status) {
-    case JobStatus::Queued: return "queued";
-    case JobStatus::Running: return "running";
-    case JobStatus::Done: return "done";
-    case JobStatus::Failed: return "failed";
-    case JobStatus::Cancelled: return "cancelled";
+    case JobStatus::Queued: return protocol::kJobQueued;
+    case JobStatus::Running: return protocol::kJobRunning;
+    case JobStatus::Done: return protocol::kJobDone;
+    case JobStatus::Failed: return protocol::kJobFailed;
+    case JobStatus::Cancelled: return protocol::kJobCancelled;
   }
   return "unknown";
 }
 
 std::optional<JobStatus> parseJobStatus(std::string_view name) {
-  for (JobStatus s :
-       {JobStatus::Queued, JobStatus::Running, JobStatus::Done, JobStatus::Failed, JobStatus::Cancelled}) {
+  for (JobStatus s : kJobStatuses) {
     if (name == toString(s)) return s;
   }
   return std::nullopt;
@@ -128,19 +128,28 @@ Result<std::unique_ptr<Store>> Store::open(const std::string& location, Options 
   return std::unique_ptr<Store>(new Store(std::move(*db), *migrated));
 }
 
+Store::Store(std::unique_ptr<Connection> db, int version)
+    : owner_(std::move(db)),
+      shared_(owner_.get()),
+      schemaVersion_(version),
+      jobs_(shared_),
+      hosts_(shared_),
+      runs_(shared_),
+      alerts_(shared_) {}
+
 Store::~Store() = default;
 
 Result<std::string> Store::integrityCheck() {
-  std::lock_guard lock(mutex_);
+  std::lock_guard lock(shared_.mutex);
   return detail::guarded<std::string>("integrity_check", [&]() -> Result<std::string> {
-    if (db_->engine() == Engine::Postgres) {
-      Statement ping(db_, "SELECT 1");
+    if (shared_.db->engine() == Engine::Postgres) {
+      Statement ping(shared_.db, "SELECT 1");
       return ping.step() ? std::string("ok") : std::string("no answer");
     }
-    Statement check(db_, "PRAGMA integrity_check");
+    Statement check(shared_.db, "PRAGMA integrity_check");
     std::string first = check.step() ? check.getText(0) : std::string("no answer");
     if (first != "ok") return first;
-    Statement keys(db_, "SELECT COUNT(*) FROM pragma_foreign_key_check");
+    Statement keys(shared_.db, "SELECT COUNT(*) FROM pragma_foreign_key_check");
     keys.step();
     if (int64_t n = keys.getInt(0)) return std::to_string(n) + " foreign key violations";
     return first;
@@ -148,14 +157,14 @@ Result<std::string> Store::integrityCheck() {
 }
 
 Result<std::string> Store::quickCheck() {
-  std::lock_guard lock(mutex_);
+  std::lock_guard lock(shared_.mutex);
   return detail::guarded<std::string>("health check", [&]() -> Result<std::string> {
-    if (db_->engine() == Engine::Postgres) {
-      Statement ping(db_, "SELECT 1");
+    if (shared_.db->engine() == Engine::Postgres) {
+      Statement ping(shared_.db, "SELECT 1");
       return ping.step() ? std::string("ok") : std::string("no answer");
     }
     // Its first lines name the damage; "ok" alone when there is none.
-    Statement check(db_, "PRAGMA quick_check(3)");
+    Statement check(shared_.db, "PRAGMA quick_check(3)");
     std::string lines;
     while (check.step()) lines += (lines.empty() ? "" : "\n") + check.getText(0);
     // One line ("*** in database main ***; Page 118: ..."), for logs and messages.
@@ -167,16 +176,16 @@ Result<std::string> Store::quickCheck() {
 }
 
 Result<bool> Store::probeWrite() {
-  std::lock_guard lock(mutex_);
+  std::lock_guard lock(shared_.mutex);
   return detail::guarded<bool>("write probe", [&]() -> Result<bool> {
-    if (db_->engine() == Engine::Postgres) {
-      Statement ping(db_, "SELECT 1");
+    if (shared_.db->engine() == Engine::Postgres) {
+      Statement ping(shared_.db, "SELECT 1");
       return ping.step();
     }
     // Rewrites the header's user_version with the value it holds: one page
     // written and committed, nothing changed.
-    detail::WriteLock writing(*db_);
-    db_->exec("PRAGMA user_version = " + std::to_string(schemaVersion_));
+    detail::WriteLock writing(*shared_.db);
+    shared_.db->exec("PRAGMA user_version = " + std::to_string(schemaVersion_));
     return true;
   });
 }

@@ -1,5 +1,5 @@
 // Read queries of stored sweeps: the list (filtered, cursor-paginated as
-// listRuns), one sweep with its whole result, and a job's sweeps.
+// Runs::list), one sweep with its whole result, and a job's sweeps.
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -9,24 +9,24 @@ using nlohmann::json;
 
 namespace {
 
-// Columns read by readSweepRow, then the FROM clause; getSweep adds s.result after them.
+// Columns read by readSweepRow, then the FROM clause; sweep() adds s.result after them.
 const char* const kSweepColumns =
     "SELECT s.id, s.job_id, s.name, s.parameters, s.threshold, s.fails_at, s.point_count, s.created_at, "
     "d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info";
 const char* const kSweepFrom = " FROM sweeps s JOIN devices d ON d.id = s.device_id";
 
-SweepRow readSweepRow(const Statement& row) {
+// Reads kSweepColumns; sweep() reads s.result after them.
+SweepRow readSweepRow(RowReader& row) {
   SweepRow s;
-  s.id = row.getInt(0);
-  s.jobId = row.getInt(1);
-  s.name = row.getText(2);
-  s.parameters = row.getJson(3);
-  s.threshold = row.getJson(4);
-  s.failsAt = row.getJson(5);
-  s.pointCount = row.getInt(6);
-  s.createdAt = row.getText(7);
-  s.device = Device{row.getInt(8),  row.getText(9),  row.getText(10), row.getText(11),
-                    row.getText(12), row.getJson(13), row.getJson(14)};
+  s.id = row.getInt();
+  s.jobId = row.getInt();
+  s.name = row.getText();
+  s.parameters = row.getJson();
+  s.threshold = row.getJson();
+  s.failsAt = row.getJson();
+  s.pointCount = row.getInt();
+  s.createdAt = row.getText();
+  s.device = detail::readDevice(row);
   return s;
 }
 
@@ -58,7 +58,7 @@ int bindSweepFilter(Statement& statement, const SweepFilter& f, int first) {
 
 }  // namespace
 
-Result<SweepPage> Store::listSweeps(const SweepFilter& filter, const Page& page) {
+Result<SweepPage> Runs::sweeps(const SweepFilter& filter, const Page& page) {
   auto checked = detail::checkPage(page);
   if (!checked) return makeError(checked.error());
   std::optional<int64_t> after = *checked;
@@ -77,23 +77,28 @@ Result<SweepPage> Store::listSweeps(const SweepFilter& filter, const Page& page)
         out.nextCursor = encodeCursor(out.sweeps.back().id);
         break;
       }
-      out.sweeps.push_back(readSweepRow(query));
+      RowReader row(query);
+      out.sweeps.push_back(readSweepRow(row));
+      row.end();
     }
     return out;
   });
 }
 
-Result<std::optional<Sweep>> Store::getSweep(int64_t sweepId) {
+Result<std::optional<Sweep>> Runs::sweep(int64_t sweepId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Sweep>>("getSweep", [&]() -> Result<std::optional<Sweep>> {
     Statement query(db_, std::string(kSweepColumns) + ", s.result" + kSweepFrom + " WHERE s.id = ?1");
     query.bind(1, sweepId);
     if (!query.step()) return std::optional<Sweep>();
-    return std::optional<Sweep>(Sweep{readSweepRow(query), query.getJson(15)});
+    RowReader row(query);
+    Sweep sweep{readSweepRow(row), row.getJson()};
+    row.end();
+    return std::optional<Sweep>(std::move(sweep));
   });
 }
 
-Result<std::vector<int64_t>> Store::jobSweepIds(int64_t jobId) {
+Result<std::vector<int64_t>> Runs::jobSweepIds(int64_t jobId) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<int64_t>>("jobSweepIds", [&]() -> Result<std::vector<int64_t>> {
     Statement query(db_, "SELECT id FROM sweeps WHERE job_id = ?1 ORDER BY id");

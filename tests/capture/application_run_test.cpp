@@ -164,9 +164,9 @@ TEST_F(ApplicationCapture, ResultStoredAndServed) {
   auto opened = tally::store::Store::open(db.string());
   ASSERT_TRUE(opened.ok()) << opened.error();
   auto& store = **opened;
-  auto job = store.createJob(spec);
+  auto job = store.jobs().create(spec);
   ASSERT_TRUE(job.ok()) << job.error();
-  auto ingested = store.ingestCapture(job->job.id, r, {});
+  auto ingested = store.runs().ingestCapture(job->job.id, r, {});
   ASSERT_TRUE(ingested.ok()) << ingested.error();
   EXPECT_EQ(*ingested, 1);
 

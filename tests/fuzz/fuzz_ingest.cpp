@@ -28,7 +28,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     std::abort();
   }
   db = std::move(*opened);
-  auto job = db->createJob({{"renderers", {"forward"}}});
+  auto job = db->jobs().create({{"renderers", {"forward"}}});
   if (!job.ok()) {
     std::fprintf(stderr, "fuzz_ingest: %s\n", job.error().c_str());
     std::abort();
@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // A one-pixel PNG's signature stands for any screenshot the result names.
   static const std::map<std::string, std::vector<uint8_t>> screenshots = {
       {"0.png", {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}}};
-  auto stored = db->ingestCapture(jobId, result, screenshots);
+  auto stored = db->runs().ingestCapture(jobId, result, screenshots);
   (void)stored;
   return 0;
 }

@@ -40,7 +40,7 @@ class WorkerSweeps : public StoreTest {
       out << "#!/bin/sh\ncp '" << (dir_ / "result.json").string() << "' \"$5\"\n";
     }
     ::chmod(script.c_str(), 0755);
-    auto created = store_->createJob({{"sweep", "depth-reconstruction"}, {"near", {0.01}}});
+    auto created = store_->jobs().create({{"sweep", "depth-reconstruction"}, {"near", {0.01}}});
     EXPECT_TRUE(created) << created.error();
     jobs::WorkerOptions options;
     options.tallydPath = script.string();
@@ -52,7 +52,7 @@ class WorkerSweeps : public StoreTest {
     Job job;
     auto deadline = std::chrono::steady_clock::now() + 20s;
     while (std::chrono::steady_clock::now() < deadline) {
-      auto got = store_->getJob(created->job.id);
+      auto got = store_->jobs().get(created->job.id);
       if (got && got->has_value() && ((*got)->status == JobStatus::Done || (*got)->status == JobStatus::Failed)) {
         job = **got;
         break;
@@ -69,10 +69,10 @@ class WorkerSweeps : public StoreTest {
 TEST_F(WorkerSweeps, StoresTheSweepAndFinishes) {
   Job job = run(sweepResult());
   ASSERT_EQ(job.status, JobStatus::Done) << job.error.value_or("");
-  auto ids = store_->jobSweepIds(job.id);
+  auto ids = store_->runs().jobSweepIds(job.id);
   ASSERT_TRUE(ids);
   ASSERT_EQ(ids->size(), 1u);
-  EXPECT_EQ((*store_->getSweep(ids->front()))->result, sweepResult());
+  EXPECT_EQ((*store_->runs().sweep(ids->front()))->result, sweepResult());
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs"), 0);  // a sweep stores no runs
 }
 

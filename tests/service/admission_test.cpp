@@ -229,7 +229,7 @@ TEST_F(InProcess, ListsAreCappedAndRepeatsNamed) {
     EXPECT_EQ(r.json["error"].value("field", ""), c.field) << r.json.dump();
     EXPECT_NE(r.json["error"].value("message", "").find(c.message), std::string::npos) << r.json.dump();
   }
-  auto jobs = store_->jobCounts();
+  auto jobs = store_->jobs().counts();
   ASSERT_TRUE(jobs);
   EXPECT_EQ(jobs->at("queued"), 0) << "a refused spec was queued";
 }
@@ -272,12 +272,12 @@ TEST_F(InProcess, QueueLimitsPerDaemonAndPerClient) {
   EXPECT_NE(full.json["error"].value("message", "").find("max_queued 3"), std::string::npos);
   EXPECT_FALSE(retryAfter(full).empty());
   EXPECT_EQ(limited_, (std::vector<std::string>{"client", "queue"}));
-  auto jobs = store_->jobCounts();
+  auto jobs = store_->jobs().counts();
   ASSERT_TRUE(jobs);
   EXPECT_EQ(jobs->at("queued"), 3);
 
   // A job that leaves the queue frees its place.
-  auto claimed = store_->claimNextJob();
+  auto claimed = store_->jobs().claim();
   ASSERT_TRUE(claimed && claimed->has_value());
   EXPECT_EQ(post(spec.dump(), "peer:10.0.0.3").status, 202);
 }
@@ -351,7 +351,7 @@ TEST(Daemon, SigtermMidCaptureEndsWithin5sAndRequeuesTheJob) {
   }
   auto opened = store::Store::open((dir / "tally.db").string(), {.readOnly = true});
   ASSERT_TRUE(opened) << opened.error();
-  auto job = (*opened)->getJob(id);
+  auto job = (*opened)->jobs().get(id);
   ASSERT_TRUE(job && job->has_value());
   const store::Job& j = **job;
   ASSERT_NE(j.status, store::JobStatus::Running) << "the job was left running";

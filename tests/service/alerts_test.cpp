@@ -82,14 +82,14 @@ class AlertRoutes : public ::testing::Test {
   static int64_t store(const json& labels, const json& result) {
     auto s = st::openStore(db_.string());
     EXPECT_NE(s, nullptr);
-    auto job = s->createJob({{"renderers", {"forward"}}, {"labels", labels}});
+    auto job = s->jobs().create({{"renderers", {"forward"}}, {"labels", labels}});
     EXPECT_TRUE(job) << job.error();
-    auto stored = s->ingestCapture(job->job.id, result, {});
+    auto stored = s->runs().ingestCapture(job->job.id, result, {});
     EXPECT_TRUE(stored) << stored.error();
-    EXPECT_TRUE(s->finishJob(job->job.id, tally::store::JobStatus::Done));
+    EXPECT_TRUE(s->jobs().finish(job->job.id, tally::store::JobStatus::Done));
     tally::store::RunFilter f;
     f.jobId = job->job.id;
-    return s->listRuns(f, {})->runs.at(0).id;
+    return s->runs().list(f, {})->runs.at(0).id;
   }
   static json call(const std::string& method, const std::string& path, const std::string& body, int status) {
     Reply r = daemon_->request(method, path, body);
@@ -339,16 +339,16 @@ class Webhook : public ::testing::Test {
     fs::remove_all(dir_);
   }
   int64_t storeCapture(const json& labels, const json& result) {
-    auto job = store_->createJob({{"renderers", {"forward"}}, {"labels", labels}});
-    EXPECT_TRUE(store_->ingestCapture(job->job.id, result, {}));
+    auto job = store_->jobs().create({{"renderers", {"forward"}}, {"labels", labels}});
+    EXPECT_TRUE(store_->runs().ingestCapture(job->job.id, result, {}));
     tally::store::RunFilter f;
     f.jobId = job->job.id;
-    return store_->listRuns(f, {})->runs.at(0).id;
+    return store_->runs().list(f, {})->runs.at(0).id;
   }
   // A baseline and a regression evaluated with delivery on: the alerts' ids.
   std::vector<int64_t> pendingAlerts() {
     int64_t base = storeCapture({{"commit", "a"}}, captureOf(1.0, 4096, 4, 0));
-    EXPECT_TRUE(*store_->setBaseline({base, 0.05, std::nullopt}));
+    EXPECT_TRUE(*store_->alerts().setBaseline({base, 0.05, std::nullopt}));
     storeCapture({{"commit", "b"}}, captureOf(1.5, 8192, 8, 0));
     auto reader = st::openStore(db_.string(), {.readOnly = true});
     auto done = tally::service::evaluatePending(*store_, *reader, true, 100);
@@ -474,15 +474,15 @@ TEST(AlertFleet, TwoApiDaemonsOnOnePostgresRaiseAndPostEachAlertOnce) {
   auto store = st::openStore(url);
   ASSERT_NE(store, nullptr);
   auto storeCapture = [&](const json& labels, const json& result) {
-    auto job = store->createJob({{"renderers", {"forward"}}, {"labels", labels}});
+    auto job = store->jobs().create({{"renderers", {"forward"}}, {"labels", labels}});
     EXPECT_TRUE(job) << job.error();
-    EXPECT_TRUE(store->ingestCapture(job->job.id, result, {}));
+    EXPECT_TRUE(store->runs().ingestCapture(job->job.id, result, {}));
     tally::store::RunFilter f;
     f.jobId = job->job.id;
-    return store->listRuns(f, {})->runs.at(0).id;
+    return store->runs().list(f, {})->runs.at(0).id;
   };
   int64_t base = storeCapture({{"commit", "a"}}, captureOf(1.0, 4096, 4, 0));
-  ASSERT_TRUE(*store->setBaseline({base, 0.05, std::nullopt}));
+  ASSERT_TRUE(*store->alerts().setBaseline({base, 0.05, std::nullopt}));
   Receiver receiver(2);
   std::vector<std::unique_ptr<Daemon>> daemons;
   for (const char* name : {"api-1", "api-2"}) {

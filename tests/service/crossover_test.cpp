@@ -61,11 +61,11 @@ class CrossoverRoute : public ::testing::Test {
       auto store = st::openStore(db.string());
       ASSERT_NE(store, nullptr);
       auto ingest = [&](const json& result) {
-        auto job = store->createJob({{"renderers", {"forward"}}});
+        auto job = store->jobs().create({{"renderers", {"forward"}}});
         EXPECT_TRUE(job) << job.error();
-        auto stored = store->ingestCapture(job->job.id, result, {});
+        auto stored = store->runs().ingestCapture(job->job.id, result, {});
         EXPECT_TRUE(stored) << stored.error();
-        EXPECT_TRUE(store->finishJob(job->job.id, tally::store::JobStatus::Done));
+        EXPECT_TRUE(store->jobs().finish(job->job.id, tally::store::JobStatus::Done));
         return job->job.id;
       };
       // deferred 1 MB + 40 B/px, visbuffer 9 MB + 30 B/px: cross at 800,000 pixels.

@@ -72,14 +72,14 @@ class RunSignificance : public ::testing::Test {
   }
   // Stores one capture of one run; returns the run's id.
   int64_t store(const json& run) {
-    auto job = store_->createJob({{"renderers", {"deferred"}}});
+    auto job = store_->jobs().create({{"renderers", {"deferred"}}});
     EXPECT_TRUE(job) << job.error();
-    auto stored = store_->ingestCapture(job->job.id, st::makeCapture({run}), {});
+    auto stored = store_->runs().ingestCapture(job->job.id, st::makeCapture({run}), {});
     EXPECT_TRUE(stored) << stored.error();
-    EXPECT_TRUE(store_->finishJob(job->job.id, tally::store::JobStatus::Done));
+    EXPECT_TRUE(store_->jobs().finish(job->job.id, tally::store::JobStatus::Done));
     tally::store::RunFilter filter;
     filter.jobId = job->job.id;
-    auto runs = store_->listRuns(filter, {});
+    auto runs = store_->runs().list(filter, {});
     EXPECT_TRUE(runs && runs->runs.size() == 1);
     return runs->runs.front().id;
   }
@@ -156,8 +156,8 @@ TEST_F(RunSignificance, CamerasAsStrataSeeWhatPoolingHides) {
 
   auto frames = [&](int64_t run) {
     std::vector<std::vector<double>> out;
-    auto rows = store_->listSamples(run);
-    for (const auto& row : *rows) out.push_back((**store_->getSample(row.id)).row.frameMsFrames);
+    auto rows = store_->runs().samples(run);
+    for (const auto& row : *rows) out.push_back((**store_->runs().sample(row.id)).row.frameMsFrames);
     return out;
   };
   auto median = [](std::vector<double> v) {
@@ -243,10 +243,10 @@ TEST_F(RunSignificance, RepeatedCapturesWidenByTheSpreadOfTheirMedians) {
   std::vector<double> logs;
   for (int i = 0; i < 4; ++i) {
     std::vector<double> pooledFrames;
-    auto rows = store_->listSamples(ids[i]);
+    auto rows = store_->runs().samples(ids[i]);
     ASSERT_TRUE(rows);
     for (const auto& row : *rows) {
-      auto sample = store_->getSample(row.id);
+      auto sample = store_->runs().sample(row.id);
       ASSERT_TRUE(sample && *sample);
       pooledFrames.insert(pooledFrames.end(), (**sample).row.frameMsFrames.begin(), (**sample).row.frameMsFrames.end());
     }

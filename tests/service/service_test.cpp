@@ -506,7 +506,7 @@ TEST(ServiceRecovery, KillDuringAJobThenRestart) {
     // No daemon: the job is still marked running, nothing was lost.
     auto store = tally::store::Store::open(db.string(), {.readOnly = true});
     ASSERT_TRUE(store) << store.error();
-    auto job = (*store)->getJob(id);
+    auto job = (*store)->jobs().get(id);
     ASSERT_TRUE(job && job->has_value());
     EXPECT_TRUE((*job)->status == tally::store::JobStatus::Running || (*job)->status == tally::store::JobStatus::Done);
   }
@@ -527,7 +527,7 @@ TEST(ServiceRecovery, KillDuringAJobThenRestart) {
   ASSERT_TRUE(integrity);
   EXPECT_EQ(*integrity, "ok");
   // No half-written runs: every run belongs to a finished-done job and has its samples.
-  auto runs = (*store)->listRuns({}, {});
+  auto runs = (*store)->runs().list({}, {});
   ASSERT_TRUE(runs);
   for (const auto& r : runs->runs) {
     EXPECT_EQ(r.jobId, id);

@@ -86,14 +86,14 @@ TEST(StoreFaults, AFileDamagedInTheMiddleIsNamed) {
     ASSERT_TRUE(opened) << opened.error();
     auto& s = **opened;
     for (int i = 0; i < 40; ++i) {
-      auto job = s.createJob({{"renderers", {"forward"}}});
+      auto job = s.jobs().create({{"renderers", {"forward"}}});
       ASSERT_TRUE(job) << job.error();
-      auto claimed = s.claimNextJob();
+      auto claimed = s.jobs().claim();
       ASSERT_TRUE(claimed && claimed->has_value());
       auto capture = store::testing::realisticCapture(i);
-      auto stored = s.ingestCapture(job->job.id, capture.result, capture.screenshots);
+      auto stored = s.runs().ingestCapture(job->job.id, capture.result, capture.screenshots);
       ASSERT_TRUE(stored) << stored.error();
-      ASSERT_TRUE(s.finishJob(job->job.id, store::JobStatus::Done));
+      ASSERT_TRUE(s.jobs().finish(job->job.id, store::JobStatus::Done));
     }
   }  // closed: the WAL is checkpointed into the file and removed
   ASSERT_FALSE(fs::exists(fs::path(db.string() + "-wal")));

@@ -13,10 +13,10 @@ TEST(Concurrency, ReadersNeverFailWhileOneWriterIngests) {
   auto writer = openStore(db.path());
   ASSERT_NE(writer, nullptr);
   // Something to read from the start.
-  auto seed = writer->createJob({{"renderers", {"forward"}}});
+  auto seed = writer->jobs().create({{"renderers", {"forward"}}});
   ASSERT_TRUE(seed);
   Capture first = realisticCapture();
-  ASSERT_TRUE(writer->ingestCapture(seed->job.id, first.result, first.screenshots));
+  ASSERT_TRUE(writer->runs().ingestCapture(seed->job.id, first.result, first.screenshots));
 
   constexpr int kReaders = 8;
   constexpr int kCaptures = 50;
@@ -40,19 +40,19 @@ TEST(Concurrency, ReadersNeverFailWhileOneWriterIngests) {
       };
       // Keep reading until the writer is done, and at least a few rounds.
       for (int round = 0; writing.load() || round < 5; ++round) {
-        auto page = store.listRuns(r % 2 ? RunFilter{.renderer = "deferred"} : RunFilter{}, {.limit = 5});
+        auto page = store.runs().list(r % 2 ? RunFilter{.renderer = "deferred"} : RunFilter{}, {.limit = 5});
         if (!page) {
           fail(page.error());
           continue;
         }
         for (const auto& run : page->runs) {
-          auto samples = store.listSamples(run.id);
+          auto samples = store.runs().samples(run.id);
           if (!samples) {
             fail(samples.error());
             continue;
           }
           for (const auto& s : *samples) {
-            auto sample = store.getSample(s.id);
+            auto sample = store.runs().sample(s.id);
             if (!sample) fail(sample.error());
             // A sample may vanish between the calls only through a re-ingest; this writer never re-ingests.
             else if (!sample->has_value() || (*sample)->passes.size() != 4)
@@ -62,7 +62,7 @@ TEST(Concurrency, ReadersNeverFailWhileOneWriterIngests) {
           }
         }
         if (r == 0 && page->runs.size() >= 2) {
-          auto cmp = store.compareRuns({page->runs[0].id, page->runs[1].id});
+          auto cmp = store.runs().compare({page->runs[0].id, page->runs[1].id});
           if (!cmp) fail(cmp.error());
         }
       }
@@ -70,14 +70,14 @@ TEST(Concurrency, ReadersNeverFailWhileOneWriterIngests) {
   }
 
   for (int i = 0; i < kCaptures; ++i) {
-    auto job = writer->createJob({{"renderers", {"forward", "deferred"}}, {"n", i}});
+    auto job = writer->jobs().create({{"renderers", {"forward", "deferred"}}, {"n", i}});
     ASSERT_TRUE(job) << job.error();
-    auto claimed = writer->claimNextJob(1);
+    auto claimed = writer->jobs().claim(1);
     ASSERT_TRUE(claimed) << claimed.error();
     Capture c = realisticCapture(i + 1);
-    auto stored = writer->ingestCapture(job->job.id, c.result, c.screenshots);
+    auto stored = writer->runs().ingestCapture(job->job.id, c.result, c.screenshots);
     ASSERT_TRUE(stored) << stored.error();
-    ASSERT_TRUE(writer->finishJob(job->job.id, JobStatus::Done));
+    ASSERT_TRUE(writer->jobs().finish(job->job.id, JobStatus::Done));
   }
   writing = false;
   for (auto& t : readers) t.join();
@@ -87,7 +87,7 @@ TEST(Concurrency, ReadersNeverFailWhileOneWriterIngests) {
   EXPECT_EQ(errors.load(), 0);
   EXPECT_GT(reads.load(), 0);
   EXPECT_GT(readsWhileWriting.load(), 0) << "the readers never overlapped the writer";
-  auto all = writer->listRuns({}, {.limit = 1000});
+  auto all = writer->runs().list({}, {.limit = 1000});
   ASSERT_TRUE(all);
   EXPECT_EQ(all->runs.size(), 2u * (kCaptures + 1));
   auto integrity = writer->integrityCheck();

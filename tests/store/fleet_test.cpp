@@ -73,7 +73,7 @@ class Fleet : public StoreTest {
   int64_t job(const json& device = nullptr) {
     json spec = {{"renderers", {"forward"}}};
     if (!device.is_null()) spec["device"] = device;
-    auto created = store_->createJob(spec, std::nullopt, 2);
+    auto created = store_->jobs().create(spec, std::nullopt, 2);
     EXPECT_TRUE(created) << created.error();
     return created ? created->job.id : 0;
   }
@@ -84,63 +84,63 @@ TEST_F(Fleet, ClaimsOnlyWhatTheDeviceMeets) {
   int64_t forAnyone = job();
   int64_t forBarycentrics = job({{"features", {"fragmentBarycentric"}}});
   // The CPU device skips the NVIDIA job and takes the next one it can run.
-  auto cpu = store_->claimNextJob(claimer("cpu-box", device()));
+  auto cpu = store_->jobs().claim(claimer("cpu-box", device()));
   ASSERT_TRUE(cpu && *cpu) << (cpu ? "none" : cpu.error());
   EXPECT_EQ((*cpu)->id, forAnyone);
   EXPECT_EQ((*cpu)->host, "cpu-box");
   EXPECT_EQ((*cpu)->attempts, 1);
   EXPECT_TRUE((*cpu)->leaseExpiresMs);
-  auto nothing = store_->claimNextJob(claimer("cpu-box", device()));
+  auto nothing = store_->jobs().claim(claimer("cpu-box", device()));
   ASSERT_TRUE(nothing);
   EXPECT_FALSE(*nothing) << "took job " << (*nothing)->id;
   // A worker with no device known takes only jobs without a requirement.
-  auto blind = store_->claimNextJob(claimer("blind", nullptr));
+  auto blind = store_->jobs().claim(claimer("blind", nullptr));
   ASSERT_TRUE(blind);
   EXPECT_FALSE(*blind);
-  auto gpu = store_->claimNextJob(claimer("gpu-box", nvidia()));
+  auto gpu = store_->jobs().claim(claimer("gpu-box", nvidia()));
   ASSERT_TRUE(gpu && *gpu);
   EXPECT_EQ((*gpu)->id, forNvidia);
   EXPECT_EQ((*gpu)->deviceRequirement, (json{{"name", "H100"}}));
-  auto second = store_->claimNextJob(claimer("gpu-box", nvidia()));
+  auto second = store_->jobs().claim(claimer("gpu-box", nvidia()));
   ASSERT_TRUE(second && *second);
   EXPECT_EQ((*second)->id, forBarycentrics);
   // A bad requirement is refused at creation, naming the field.
-  auto bad = store_->createJob({{"renderers", {"forward"}}, {"device", {{"vendor", 7}}}});
+  auto bad = store_->jobs().create({{"renderers", {"forward"}}, {"device", {{"vendor", 7}}}});
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().find("device.vendor"), std::string::npos) << bad.error();
 }
 
 TEST_F(Fleet, ExpiredLeasesAreRequeuedThenFailedWithTheirReasons) {
   int64_t id = job();  // max_attempts 2
-  auto first = store_->claimNextJob(claimer("a", device(), /*leaseMs=*/1));
+  auto first = store_->jobs().claim(claimer("a", device(), /*leaseMs=*/1));
   ASSERT_TRUE(first && *first);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  auto reaped = store_->requeueExpired();
+  auto reaped = store_->jobs().requeueExpired();
   ASSERT_TRUE(reaped) << reaped.error();
   EXPECT_EQ(reaped->requeued, std::vector<int64_t>{id});
-  auto queued = **store_->getJob(id);
+  auto queued = **store_->jobs().get(id);
   EXPECT_EQ(queued.status, JobStatus::Queued);
   ASSERT_EQ(queued.attemptErrors.size(), 1u);
   EXPECT_NE(queued.attemptErrors[0].get<std::string>().find("attempt 1 on a: lease expired"), std::string::npos)
       << queued.attemptErrors.dump();
   // The first holder's lease no longer holds: it can neither renew, nor store, nor finish.
   Lease stale{id, 1, "a"};
-  EXPECT_FALSE(*store_->renewLease(stale, 60000));
+  EXPECT_FALSE(*store_->jobs().renewLease(stale, 60000));
   Capture c = realisticCapture();
-  auto late = store_->ingestCapture(stale, c.result, c.screenshots);
+  auto late = store_->runs().ingestCapture(stale, c.result, c.screenshots);
   ASSERT_FALSE(late);
   EXPECT_NE(late.error().find("is no longer held by a"), std::string::npos) << late.error();
-  EXPECT_FALSE(*store_->finishJob(stale, JobStatus::Done));
+  EXPECT_FALSE(*store_->jobs().finish(stale, JobStatus::Done));
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs"), 0);
 
-  auto second = store_->claimNextJob(claimer("b", device(), 1));
+  auto second = store_->jobs().claim(claimer("b", device(), 1));
   ASSERT_TRUE(second && *second);
   EXPECT_EQ((*second)->attempts, 2);
   std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  reaped = store_->requeueExpired();
+  reaped = store_->jobs().requeueExpired();
   ASSERT_TRUE(reaped);
   EXPECT_EQ(reaped->failed, std::vector<int64_t>{id});
-  auto failed = **store_->getJob(id);
+  auto failed = **store_->jobs().get(id);
   EXPECT_EQ(failed.status, JobStatus::Failed);
   ASSERT_TRUE(failed.error);
   EXPECT_NE(failed.error->find("failed after 2 attempts"), std::string::npos) << *failed.error;
@@ -149,75 +149,77 @@ TEST_F(Fleet, ExpiredLeasesAreRequeuedThenFailedWithTheirReasons) {
 }
 
 TEST_F(Fleet, RenewedLeasesHoldAndIngestFinishesOnce) {
-  ASSERT_TRUE(store_->registerHost(host("a", device()), 30000));
+  ASSERT_TRUE(store_->hosts().join(host("a", device()), 30000));
   int64_t id = job();
-  auto claimed = store_->claimNextJob(claimer("a", device(), 200));
+  auto claimed = store_->jobs().claim(claimer("a", device(), 200));
   ASSERT_TRUE(claimed && *claimed);
   Lease lease{id, 1, "a"};
   // Renewed past the first lease's end (200 ms), each renewal for 10 s from
   // the database's now: a busy machine may stretch the sleeps, which only
   // takes the renewals further past the first end, while a renewal is never
   // seconds from the reaping that follows it.
-  int64_t expires = *(**store_->getJob(id)).leaseExpiresMs;
+  int64_t expires = *(**store_->jobs().get(id)).leaseExpiresMs;
   for (int i = 0; i < 4; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    ASSERT_TRUE(*store_->renewLease(lease, 10000));
-    auto reaped = store_->requeueExpired();
+    ASSERT_TRUE(*store_->jobs().renewLease(lease, 10000));
+    auto reaped = store_->jobs().requeueExpired();
     ASSERT_TRUE(reaped);
     EXPECT_TRUE(reaped->requeued.empty() && reaped->failed.empty());
-    int64_t renewed = *(**store_->getJob(id)).leaseExpiresMs;
+    int64_t renewed = *(**store_->jobs().get(id)).leaseExpiresMs;
     EXPECT_GT(renewed, expires) << "renewal " << i << " did not move the lease's end";
     expires = renewed;
   }
-  auto hosts = *store_->listHosts(30000);
+  auto hosts = *store_->hosts().list(30000);
   ASSERT_EQ(hosts.size(), 1u);
   EXPECT_EQ(hosts[0].currentJob, id);
   Capture c = realisticCapture();
-  auto stored = store_->ingestCapture(lease, c.result, c.screenshots);
+  auto stored = store_->runs().ingestCapture(lease, c.result, c.screenshots);
   ASSERT_TRUE(stored) << stored.error();
   EXPECT_EQ(*stored, 2);
-  auto done = **store_->getJob(id);
+  auto done = **store_->jobs().get(id);
   EXPECT_EQ(done.status, JobStatus::Done);
   EXPECT_FALSE(done.leaseExpiresMs);
   // Once done, the same lease stores nothing more.
-  EXPECT_FALSE(store_->ingestCapture(lease, c.result, c.screenshots));
+  EXPECT_FALSE(store_->runs().ingestCapture(lease, c.result, c.screenshots));
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs"), 2);
   RunFilter byHost;
   byHost.host = "a";
-  EXPECT_EQ(store_->listRuns(byHost, {})->runs.size(), 2u);
-  EXPECT_EQ(store_->listRuns(byHost, {})->runs[0].host, "a");
+  EXPECT_EQ(store_->runs().list(byHost, {})->runs.size(), 2u);
+  EXPECT_EQ(store_->runs().list(byHost, {})->runs[0].host, "a");
   byHost.host = "b";
-  EXPECT_TRUE(store_->listRuns(byHost, {})->runs.empty());
-  hosts = *store_->listHosts(30000);
+  EXPECT_TRUE(store_->runs().list(byHost, {})->runs.empty());
+  hosts = *store_->hosts().list(30000);
   EXPECT_EQ(hosts[0].jobsDone, 1);
   EXPECT_FALSE(hosts[0].currentJob);
 }
 
 TEST_F(Fleet, CancellingEndsTheLease) {
   int64_t id = job();
-  ASSERT_TRUE(*store_->claimNextJob(claimer("a", device())));
-  ASSERT_TRUE(store_->cancelJob(id));
+  ASSERT_TRUE(*store_->jobs().claim(claimer("a", device())));
+  ASSERT_TRUE(store_->jobs().cancel(id));
   Lease lease{id, 1, "a"};
-  EXPECT_FALSE(*store_->renewLease(lease, 60000));  // the worker's next heartbeat stops the capture
-  EXPECT_FALSE(*store_->finishJob(lease, JobStatus::Failed, "killed"));
-  EXPECT_EQ((*store_->getJob(id))->status, JobStatus::Cancelled);
+  EXPECT_FALSE(*store_->jobs().renewLease(lease, 60000));  // the worker's next heartbeat stops the capture
+  EXPECT_FALSE(*store_->jobs().finish(lease, JobStatus::Failed, "killed"));
+  EXPECT_EQ((*store_->jobs().get(id))->status, JobStatus::Cancelled);
 }
 
 TEST_F(Fleet, HostsRegisterOncePerLiveName) {
   HostInfo a = host("gpu-a", nvidia());
-  ASSERT_TRUE(store_->registerHost(a, 30000));
+  ASSERT_TRUE(store_->hosts().join(a, 30000));
   HostInfo intruder = a;
   intruder.instance = "other";
-  auto refused = store_->registerHost(intruder, 30000);
+  auto refused = store_->hosts().join(intruder, 30000);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().find("in use by a live daemon"), std::string::npos) << refused.error();
   // Unless the holder is known to be gone (a restart after a crash).
-  auto takeOver = store_->registerHost(intruder, 30000, [&](const std::string& i) { return i == a.instance; });
+  auto takeOver =
+      store_->hosts().join(intruder, 30000, [&](const std::string& i) { return i == a.instance; });
   ASSERT_TRUE(takeOver) << takeOver.error();
-  EXPECT_FALSE(*store_->heartbeat("gpu-a", a.instance, std::nullopt));  // the old instance lost its name
-  EXPECT_TRUE(*store_->heartbeat("gpu-a", "other", 7));
-  ASSERT_TRUE(store_->registerHost(host("cpu-b", device()), 30000));
-  auto hosts = *store_->listHosts(30000);
+  EXPECT_FALSE(
+      *store_->hosts().heartbeat("gpu-a", a.instance, std::nullopt));  // the old instance lost its name
+  EXPECT_TRUE(*store_->hosts().heartbeat("gpu-a", "other", 7));
+  ASSERT_TRUE(store_->hosts().join(host("cpu-b", device()), 30000));
+  auto hosts = *store_->hosts().list(30000);
   ASSERT_EQ(hosts.size(), 2u);
   EXPECT_EQ(hosts[0].info.name, "cpu-b");
   EXPECT_EQ(hosts[1].info.name, "gpu-a");
@@ -226,11 +228,11 @@ TEST_F(Fleet, HostsRegisterOncePerLiveName) {
   EXPECT_EQ(hosts[1].info.device["name"], "NVIDIA H100 80GB HBM3");
   EXPECT_EQ(hosts[1].lastHeartbeat.size(), 24u) << hosts[1].lastHeartbeat;  // 2026-11-25T09:00:00.000Z
   // A stale limit of 0 ms: nobody is alive.
-  auto stale = store_->listHosts(0);  // kept: the loop's range lives in it
+  auto stale = store_->hosts().list(0);  // kept: the loop's range lives in it
   for (const auto& h : *stale) EXPECT_FALSE(h.alive) << h.info.name;
   HostInfo badRole = host("x", nullptr);
   badRole.role = "api";
-  EXPECT_FALSE(store_->registerHost(badRole, 30000));
+  EXPECT_FALSE(store_->hosts().join(badRole, 30000));
 }
 
 TEST_F(Fleet, ManyClaimersOnManyConnectionsTakeEachJobOnce) {
@@ -245,12 +247,12 @@ TEST_F(Fleet, ManyClaimersOnManyConnectionsTakeEachJobOnce) {
       json dev = w % 2 ? nvidia() : device();
       std::string name = "w" + std::to_string(w);
       while (true) {
-        auto got = (*store)->claimNextJob(claimer(name, dev));
+        auto got = (*store)->jobs().claim(claimer(name, dev));
         ASSERT_TRUE(got) << got.error();
         if (!*got) break;
         claimed[w].push_back((*got)->id);
         Capture c = realisticCapture(static_cast<int>((*got)->id));
-        auto stored = (*store)->ingestCapture(Lease{(*got)->id, 1, name}, c.result, c.screenshots);
+        auto stored = (*store)->runs().ingestCapture(Lease{(*got)->id, 1, name}, c.result, c.screenshots);
         ASSERT_TRUE(stored) << stored.error();
       }
     });
@@ -409,6 +411,26 @@ TEST(Engines, ConcurrentOpensMigrateOnce) {
   auto store = openStore(db.path());
   ASSERT_NE(store, nullptr);
   EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
+}
+
+// Rows are read in the SELECT's order, and a row with more or fewer columns
+// than were read is refused: a column added to a SELECT cannot shift the others.
+TEST(Engines, RowReaderTakesColumnsInOrderAndChecksTheirCount) {
+  TempDb db;  // either engine
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  Statement select(store->connection(), "SELECT 7 AS seven, 'text' AS word, NULL AS absent");
+  ASSERT_TRUE(select.step());
+  RowReader row(select);
+  EXPECT_EQ(row.getInt(), 7);
+  EXPECT_EQ(row.getText(), "text");
+  EXPECT_TRUE(row.isNull());
+  EXPECT_THROW(row.end(), DbError);  // one column left unread
+  EXPECT_FALSE(row.getOptText());
+  EXPECT_NO_THROW(row.end());
+  EXPECT_THROW(row.getInt(), DbError);  // past the last column
+  EXPECT_EQ(select.column("word"), 1);
+  EXPECT_THROW(select.column("missing"), DbError);
 }
 
 TEST(Engines, ParametersAreRewrittenOutsideLiterals) {

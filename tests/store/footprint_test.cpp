@@ -43,7 +43,7 @@ class Footprint : public StoreTest {
                            footprintRun("visbuffer", 32, {500, 500}, {256, 256})}),
               {}};
     ASSERT_EQ(ingest(jobId_, c), 3);
-    auto page = store_->listRuns({.jobId = jobId_}, {});
+    auto page = store_->runs().list({.jobId = jobId_}, {});
     ASSERT_TRUE(page) << page.error();
     ASSERT_EQ(page->runs.size(), 3u);
     for (const auto& r : page->runs) ids_[r.renderer] = r.id;
@@ -53,7 +53,7 @@ class Footprint : public StoreTest {
 };
 
 TEST_F(Footprint, RunsAndSamplesCarryItBesideTheRequestedBytes) {
-  auto run = store_->getRun(ids_["deferred"]);
+  auto run = store_->runs().get(ids_["deferred"]);
   ASSERT_TRUE(run && run->has_value());
   const RunRow& row = (*run)->row;
   EXPECT_EQ(row.footprintBlockBytes, 64);
@@ -66,7 +66,7 @@ TEST_F(Footprint, RunsAndSamplesCarryItBesideTheRequestedBytes) {
   ASSERT_TRUE(row.meanFootprintRequestedBytes);
   EXPECT_DOUBLE_EQ(*row.meanFootprintRequestedBytes, 4512);
 
-  auto samples = store_->listSamples(ids_["deferred"]);
+  auto samples = store_->runs().samples(ids_["deferred"]);
   ASSERT_TRUE(samples) << samples.error();
   ASSERT_EQ(samples->size(), 2u);
   EXPECT_EQ((*samples)[0].footprintBytes, 1256);
@@ -74,7 +74,7 @@ TEST_F(Footprint, RunsAndSamplesCarryItBesideTheRequestedBytes) {
   EXPECT_EQ((*samples)[1].footprintRequestedBytes, 4512);
   EXPECT_EQ((*samples)[1].bytes, 4712);
 
-  auto sample = store_->getSample((*samples)[1].id);
+  auto sample = store_->runs().sample((*samples)[1].id);
   ASSERT_TRUE(sample && sample->has_value());
   const auto& gbuffer = (*sample)->passes[0].counters;
   ASSERT_EQ(gbuffer.size(), 2u);
@@ -83,20 +83,20 @@ TEST_F(Footprint, RunsAndSamplesCarryItBesideTheRequestedBytes) {
   EXPECT_FALSE(gbuffer[1].footprintBytes);  // derived: not measured
 
   // A run without footprint: NULL everywhere, its bytes as ever.
-  auto plain = store_->getRun(ids_["forward"]);
+  auto plain = store_->runs().get(ids_["forward"]);
   ASSERT_TRUE(plain && plain->has_value());
   EXPECT_FALSE((*plain)->row.footprintBlockBytes);
   EXPECT_FALSE((*plain)->row.meanFootprintBytes);
   EXPECT_FALSE((*plain)->row.meanFootprintRequestedBytes);
   EXPECT_DOUBLE_EQ(*(*plain)->row.meanBytes, 4712);
-  auto plainSamples = store_->listSamples(ids_["forward"]);
+  auto plainSamples = store_->runs().samples(ids_["forward"]);
   ASSERT_TRUE(plainSamples);
   EXPECT_FALSE((*plainSamples)[0].footprintBytes);
   EXPECT_FALSE((*plainSamples)[0].footprintRequestedBytes);
 }
 
 TEST_F(Footprint, RunPassesAverageItOverTheSamples) {
-  auto passes = store_->runPasses(ids_["deferred"]);
+  auto passes = store_->runs().passes(ids_["deferred"]);
   ASSERT_TRUE(passes) << passes.error();
   ASSERT_EQ(passes->size(), 2u);
   ASSERT_EQ((*passes)[0].counters.size(), 2u);
@@ -104,13 +104,13 @@ TEST_F(Footprint, RunPassesAverageItOverTheSamples) {
   EXPECT_EQ((*passes)[0].counters[0].footprintBytes, 2000);  // (1000 + 3000) / 2
   EXPECT_FALSE((*passes)[0].counters[1].footprintBytes);
   EXPECT_EQ((*passes)[1].counters[0].footprintBytes, 256);
-  auto plain = store_->runPasses(ids_["forward"]);
+  auto plain = store_->runs().passes(ids_["forward"]);
   ASSERT_TRUE(plain);
   EXPECT_FALSE((*plain)[0].counters[0].footprintBytes);
 }
 
 TEST_F(Footprint, CompareGivesFootprintAndReuseWithDeltasAndRatios) {
-  auto c = store_->compareRuns({ids_["deferred"], ids_["forward"], ids_["visbuffer"]});
+  auto c = store_->runs().compare({ids_["deferred"], ids_["forward"], ids_["visbuffer"]});
   ASSERT_TRUE(c) << c.error();
   // Totals: 2256 and (500 + 256) = 756; reuse 4512 / 2256 = 2 and 4512 / 756.
   ASSERT_EQ(c->totalFootprintBytes.size(), 3u);
@@ -151,7 +151,7 @@ TEST_F(Footprint, CompareGivesFootprintAndReuseWithDeltasAndRatios) {
 }
 
 TEST_F(Footprint, ExportRowsCarryIt) {
-  auto rows = store_->exportRuns({.jobId = jobId_});
+  auto rows = store_->runs().exportRows({.jobId = jobId_});
   ASSERT_TRUE(rows) << rows.error();
   int checked = 0;
   for (const auto& r : *rows) {
@@ -176,13 +176,13 @@ TEST_F(Footprint, ExportRowsCarryIt) {
 
 TEST_F(Footprint, BadValuesAreRefusedNamingThePath) {
   Capture negative{makeCapture({footprintRun("deferred", 64, {-1, 10}, {})}), {}};
-  auto stored = store_->ingestCapture(newJob(), negative.result, negative.screenshots);
+  auto stored = store_->runs().ingestCapture(newJob(), negative.result, negative.screenshots);
   ASSERT_FALSE(stored);
   EXPECT_NE(stored.error().find("runs[0].samples[0].passes[0].resources[0].footprint_bytes: must not be negative"),
             std::string::npos)
       << stored.error();
   Capture block{makeCapture({footprintRun("deferred", 48, {10, 10}, {})}), {}};
-  stored = store_->ingestCapture(newJob(), block.result, block.screenshots);
+  stored = store_->runs().ingestCapture(newJob(), block.result, block.screenshots);
   ASSERT_FALSE(stored);
   EXPECT_NE(stored.error().find("runs[0].footprint_block_bytes: must be 32, 64 or 128, got 48"), std::string::npos)
       << stored.error();

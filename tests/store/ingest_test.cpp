@@ -30,7 +30,7 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
   c.result["runs"][0]["notes"]["scene"] = {"KHR_lights_punctual: used but not implemented; the file's lights are ignored"};
   EXPECT_EQ(ingest(jobId, c), 2);
 
-  auto page = store_->listRuns({.jobId = jobId}, {});
+  auto page = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(page) << page.error();
   ASSERT_EQ(page->runs.size(), 2u);
   EXPECT_TRUE(page->nextCursor.empty());
@@ -60,7 +60,7 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
     EXPECT_DOUBLE_EQ(*row.meanFrameMs, meanFrame);
     EXPECT_FALSE(row.createdAt.empty());
 
-    auto full = store_->getRun(row.id);
+    auto full = store_->runs().get(row.id);
     ASSERT_TRUE(full && full->has_value()) << (full ? "" : full.error());
     const tally::store::Run& run = **full;
     EXPECT_EQ(run.device.name, c.result["device"]["name"]);
@@ -79,12 +79,12 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
     EXPECT_EQ(run.resources[0].usage, "color_attachment|sampled");
     EXPECT_EQ(run.resources[1].kind, "depth");
 
-    auto samples = store_->listSamples(row.id);
+    auto samples = store_->runs().samples(row.id);
     ASSERT_TRUE(samples);
     ASSERT_EQ(samples->size(), 2u);
     for (size_t s = 0; s < 2; ++s) {
       const json& inSample = in["samples"][s];
-      auto got = store_->getSample((*samples)[s].id);
+      auto got = store_->runs().sample((*samples)[s].id);
       ASSERT_TRUE(got && got->has_value());
       const Sample& sample = **got;
       EXPECT_EQ(sample.row.runId, row.id);
@@ -145,7 +145,7 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
           EXPECT_EQ(counter.source, inCounter["source"]);
         }
       }
-      auto png = store_->getScreenshot(sample.row.id);
+      auto png = store_->runs().screenshot(sample.row.id);
       ASSERT_TRUE(png && png->has_value());
       EXPECT_EQ(**png, c.screenshots.at(inSample["screenshot"].get<std::string>()));
     }
@@ -154,16 +154,16 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
 }
 
 TEST_F(Ingest, MissingThingsAreEmptyNotErrors) {
-  auto run = store_->getRun(424242);
+  auto run = store_->runs().get(424242);
   ASSERT_TRUE(run);
   EXPECT_FALSE(run->has_value());
-  auto sample = store_->getSample(424242);
+  auto sample = store_->runs().sample(424242);
   ASSERT_TRUE(sample);
   EXPECT_FALSE(sample->has_value());
-  auto png = store_->getScreenshot(424242);
+  auto png = store_->runs().screenshot(424242);
   ASSERT_TRUE(png);
   EXPECT_FALSE(png->has_value());
-  auto samples = store_->listSamples(424242);
+  auto samples = store_->runs().samples(424242);
   ASSERT_TRUE(samples);
   EXPECT_TRUE(samples->empty());
 }
@@ -185,13 +185,13 @@ TEST_F(Ingest, RooflineIsKeptPerRun) {
   int64_t second = newJob();
   EXPECT_EQ(ingest(second, realisticCapture()), 2);
 
-  auto firstRuns = store_->listRuns({.jobId = first}, {});
+  auto firstRuns = store_->runs().list({.jobId = first}, {});
   ASSERT_TRUE(firstRuns) << firstRuns.error();
   const RunRow& withRoofline = firstRuns->runs[1];  // newest first: runs[0] of the result is last
-  auto run = store_->getRun(withRoofline.id);
+  auto run = store_->runs().get(withRoofline.id);
   ASSERT_TRUE(run && run->has_value());
   EXPECT_EQ((*run)->ceilings, ceilings);
-  auto samples = store_->listSamples(withRoofline.id);
+  auto samples = store_->runs().samples(withRoofline.id);
   ASSERT_TRUE(samples) << samples.error();
   const json& roofline = (*samples)[0].extras["roofline"];
   EXPECT_EQ(roofline["ceilings"], ceilings);
@@ -203,9 +203,9 @@ TEST_F(Ingest, RooflineIsKeptPerRun) {
   // The sample without a roofline pass keeps its extras as they were.
   EXPECT_FALSE((*samples)[1].extras.contains("roofline"));
 
-  auto secondRuns = store_->listRuns({.jobId = second}, {});
+  auto secondRuns = store_->runs().list({.jobId = second}, {});
   ASSERT_TRUE(secondRuns);
-  auto plain = store_->getRun(secondRuns->runs[1].id);
+  auto plain = store_->runs().get(secondRuns->runs[1].id);
   ASSERT_TRUE(plain && plain->has_value());
   EXPECT_TRUE((*plain)->ceilings.is_null());
 }
@@ -216,13 +216,13 @@ TEST_F(Ingest, SampleWithoutScreenshotOrImageError) {
   c.result["runs"][1]["samples"][1]["screenshot"] = nullptr;
   c.result["runs"][1]["samples"][1].erase("image_error");
   ingest(jobId, c);
-  auto page = store_->listRuns({.renderer = "deferred", .jobId = jobId}, {});
+  auto page = store_->runs().list({.renderer = "deferred", .jobId = jobId}, {});
   ASSERT_TRUE(page && page->runs.size() == 1);
-  auto samples = store_->listSamples(page->runs[0].id);
+  auto samples = store_->runs().samples(page->runs[0].id);
   ASSERT_TRUE(samples && samples->size() == 2);
   EXPECT_FALSE((*samples)[1].hasScreenshot);
   EXPECT_FALSE((*samples)[1].imageError);
-  auto png = store_->getScreenshot((*samples)[1].id);
+  auto png = store_->runs().screenshot((*samples)[1].id);
   ASSERT_TRUE(png);
   EXPECT_FALSE(png->has_value());
 }
@@ -245,12 +245,12 @@ TEST_F(Ingest, VariantRunRoundTrips) {
   run["samples"][0]["variant_error"] = variantError;
   ingest(jobId, c);
 
-  auto page = store_->listRuns({.renderer = renderer, .variant = label, .jobId = jobId}, {});
+  auto page = store_->runs().list({.renderer = renderer, .variant = label, .jobId = jobId}, {});
   ASSERT_TRUE(page) << page.error();
   ASSERT_EQ(page->runs.size(), 1u);
   EXPECT_EQ(page->runs[0].options, options);
   EXPECT_EQ(page->runs[0].variant, label);
-  auto samples = store_->listSamples(page->runs[0].id);
+  auto samples = store_->runs().samples(page->runs[0].id);
   ASSERT_TRUE(samples && samples->size() >= 2);
   EXPECT_EQ((*samples)[0].extras, extras);
   ASSERT_TRUE((*samples)[0].variantError);
@@ -265,7 +265,7 @@ TEST_F(Ingest, VariantRunRoundTrips) {
 
   // The run without options is its renderer.
   const std::string plain = c.result["runs"][0]["renderer"].get<std::string>();
-  auto plainPage = store_->listRuns({.variant = plain, .jobId = jobId}, {});
+  auto plainPage = store_->runs().list({.variant = plain, .jobId = jobId}, {});
   ASSERT_TRUE(plainPage) << plainPage.error();
   ASSERT_EQ(plainPage->runs.size(), 1u);
   EXPECT_EQ(plainPage->runs[0].options, json::object());
@@ -274,7 +274,7 @@ TEST_F(Ingest, VariantRunRoundTrips) {
   // variant_error names its reference: no implied one.
   Capture bad = realisticCapture();
   bad.result["runs"][0]["samples"][0]["variant_error"] = {{"psnr", 30}, {"max_abs", 1}, {"mean_abs", 0.1}};
-  auto refused = store_->ingestCapture(newJob(), bad.result, bad.screenshots);
+  auto refused = store_->runs().ingestCapture(newJob(), bad.result, bad.screenshots);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().find("runs[0].samples[0].variant_error.against"), std::string::npos) << refused.error();
 }
@@ -307,7 +307,7 @@ TEST_F(Ingest, FailureMidwayLeavesNothing) {
   Capture c = realisticCapture();
   // The last sample is malformed: everything before it must be rolled back.
   c.result["runs"][1]["samples"][1]["passes"][3]["resources"][2].erase("bytes");
-  auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+  auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
   ASSERT_FALSE(stored);
   EXPECT_NE(stored.error().find("runs[1].samples[1].passes[3].resources[2].bytes: missing"),
             std::string::npos)
@@ -326,7 +326,7 @@ TEST_F(Ingest, FailedReingestKeepsThePreviousResult) {
   Capture bad = realisticCapture(7);
   // A constraint SQLite enforces, not the parser: a camera index twice in a run.
   bad.result["runs"][1]["samples"][1]["camera"]["index"] = 0;
-  auto stored = store_->ingestCapture(jobId, bad.result, bad.screenshots);
+  auto stored = store_->runs().ingestCapture(jobId, bad.result, bad.screenshots);
   ASSERT_FALSE(stored);
   EXPECT_NE(stored.error().find("runs[1].samples[1]"), std::string::npos) << stored.error();
   EXPECT_EQ(rowsOfJob(jobId), before);
@@ -370,12 +370,13 @@ TEST_F(Ingest, BadInputNamesTheField) {
   for (const auto& test : cases) {
     Capture c = realisticCapture();
     test.spoil(c);
-    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
     ASSERT_FALSE(stored) << test.name;
     EXPECT_NE(stored.error().find(test.error), std::string::npos) << test.name << ": " << stored.error();
     EXPECT_EQ(rowsOfJob(jobId), 0) << test.name;
   }
-  auto unknownJob = store_->ingestCapture(9999, realisticCapture().result, realisticCapture().screenshots);
+  auto unknownJob =
+      store_->runs().ingestCapture(9999, realisticCapture().result, realisticCapture().screenshots);
   ASSERT_FALSE(unknownJob);
   EXPECT_NE(unknownJob.error().find("job 9999 not found"), std::string::npos);
 }
@@ -394,21 +395,21 @@ TEST_F(Ingest, PerFrameTimesRoundTrip) {
   }
   c.result["runs"][0]["samples"][1]["frame_ms_frames"] = nullptr;  // null: as absent
   ASSERT_EQ(ingest(jobId, c), 2);
-  auto page = store_->listRuns({.jobId = jobId}, {});
+  auto page = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(page) << page.error();
   ASSERT_EQ(page->runs.size(), 2u);
-  auto samples = store_->listSamples(page->runs[1].id);  // forward: stored first
+  auto samples = store_->runs().samples(page->runs[1].id);  // forward: stored first
   ASSERT_TRUE(samples) << samples.error();
   ASSERT_EQ(samples->size(), 2u);
 
-  auto first = store_->getSample((*samples)[0].id);
+  auto first = store_->runs().sample((*samples)[0].id);
   ASSERT_TRUE(first && first->has_value()) << (first ? "" : first.error());
   EXPECT_EQ((*first)->row.frameMsFrames, (std::vector<double>{1.5, 1.25, 2.0, 0.0}));
   ASSERT_EQ((*first)->passes.size(), timed["passes"].size());
   for (size_t p = 0; p < (*first)->passes.size(); ++p) {
     EXPECT_EQ((*first)->passes[p].gpuMsFrames, timed["passes"][p]["gpu_ms_frames"].get<std::vector<double>>()) << p;
   }
-  auto second = store_->getSample((*samples)[1].id);
+  auto second = store_->runs().sample((*samples)[1].id);
   ASSERT_TRUE(second && second->has_value());
   EXPECT_TRUE((*second)->row.frameMsFrames.empty());
   for (const auto& pass : (*second)->passes) EXPECT_TRUE(pass.gpuMsFrames.empty()) << pass.name;
@@ -446,7 +447,7 @@ TEST_F(Ingest, BadPerFrameTimesNameTheEntry) {
   for (const auto& test : cases) {
     Capture c = realisticCapture();
     test.spoil(c);
-    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
     ASSERT_FALSE(stored) << test.name;
     EXPECT_NE(stored.error().find(test.error), std::string::npos) << test.name << ": " << stored.error();
     EXPECT_EQ(rowsOfJob(jobId), 0) << test.name;

@@ -81,7 +81,7 @@ TEST(Migrations, ReopenIsANoOp) {
   {
     auto store = openStore(db.path());
     ASSERT_NE(store, nullptr);
-    auto job = store->createJob({{"renderers", {"forward"}}}, "key-1");
+    auto job = store->jobs().create({{"renderers", {"forward"}}}, "key-1");
     ASSERT_TRUE(job);
     jobId = job->job.id;
   }
@@ -105,7 +105,7 @@ TEST(Migrations, ReopenIsANoOp) {
   schemaAfter = schemaText(*store);
   EXPECT_EQ(schemaBefore, schemaAfter);
   EXPECT_EQ(store->schemaVersion(), latestSchemaVersion());
-  auto job = store->getJob(jobId);
+  auto job = store->jobs().get(jobId);
   ASSERT_TRUE(job && job->has_value());
   EXPECT_EQ((*job)->idempotencyKey, "key-1");
 }
@@ -171,18 +171,18 @@ TEST(Migrations, VersionOneWithDataUpgradesKeepingEverything) {
   for (const char* table : {"devices", "scenes", "jobs", "runs", "samples", "passes", "counters"}) {
     EXPECT_EQ(scalar(*store, std::string("SELECT COUNT(*) FROM ") + table), 1) << table;
   }
-  auto job = store->getJob(1);
+  auto job = store->jobs().get(1);
   ASSERT_TRUE(job && job->has_value());
   EXPECT_EQ((*job)->status, JobStatus::Done);
   EXPECT_EQ((*job)->idempotencyKey, "k");
-  auto run = store->getRun(1);
+  auto run = store->runs().get(1);
   ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
   EXPECT_EQ((*run)->row.renderer, "forward");
   EXPECT_EQ((*run)->row.sampleCount, 1);
   ASSERT_TRUE((*run)->row.meanBytes);
   EXPECT_EQ(*(*run)->row.meanBytes, 96);
   EXPECT_TRUE((*run)->counterHeadroom.is_null());  // not measured back then
-  auto passes = store->runPasses(1);
+  auto passes = store->runs().passes(1);
   ASSERT_TRUE(passes);
   ASSERT_EQ(passes->size(), 1u);
   EXPECT_EQ((*passes)[0].counters.size(), 1u);
@@ -234,14 +234,14 @@ TEST(Migrations, VersionTwoWithDataUpgradesToVariantsKeepingEverything) {
   for (const char* table : {"devices", "scenes", "jobs", "runs", "samples", "passes", "counters", "sweeps"}) {
     EXPECT_EQ(scalar(*store, std::string("SELECT COUNT(*) FROM ") + table), 1) << table;
   }
-  auto run = store->getRun(1);
+  auto run = store->runs().get(1);
   ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
   EXPECT_EQ((*run)->row.renderer, "deferred");
   EXPECT_EQ((*run)->row.variant, "deferred");
   EXPECT_EQ((*run)->row.options, nlohmann::json::object());
   EXPECT_EQ((*run)->counterHeadroom, nlohmann::json({{"max", 7}}));
   EXPECT_EQ((*run)->row.imageCompared, 1);
-  auto samples = store->listSamples(1);
+  auto samples = store->runs().samples(1);
   ASSERT_TRUE(samples) << samples.error();
   ASSERT_EQ(samples->size(), 1u);
   const SampleRow& sample = (*samples)[0];
@@ -255,7 +255,7 @@ TEST(Migrations, VersionTwoWithDataUpgradesToVariantsKeepingEverything) {
   EXPECT_FALSE(sample.variantError);
   RunFilter byVariant;
   byVariant.variant = "deferred";
-  auto page = store->listRuns(byVariant, Page{});
+  auto page = store->runs().list(byVariant, Page{});
   ASSERT_TRUE(page) << page.error();
   EXPECT_EQ(page->runs.size(), 1u);
   for (const char* bad : {"UPDATE runs SET options = 'not json' WHERE id = 1",
@@ -311,7 +311,7 @@ TEST(Migrations, VersionFiveWithDataUpgradesToFootprintKeepingEverything) {
         << column;
     EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM " + table + " WHERE " + col + " IS NULL"), 1) << column;
   }
-  auto run = store->getRun(1);
+  auto run = store->runs().get(1);
   ASSERT_TRUE(run && run->has_value()) << (run ? "" : run.error());
   EXPECT_EQ((*run)->row.tallyVersion, "0.1.0");  // 0005's columns kept
   EXPECT_EQ((*run)->row.counting, "accumulate");
@@ -319,12 +319,12 @@ TEST(Migrations, VersionFiveWithDataUpgradesToFootprintKeepingEverything) {
   EXPECT_FALSE((*run)->row.meanFootprintBytes);
   ASSERT_TRUE((*run)->row.meanBytes);
   EXPECT_EQ(*(*run)->row.meanBytes, 96);
-  auto samples = store->listSamples(1);
+  auto samples = store->runs().samples(1);
   ASSERT_TRUE(samples) << samples.error();
   ASSERT_EQ(samples->size(), 1u);
   EXPECT_EQ((*samples)[0].bytes, 96);
   EXPECT_FALSE((*samples)[0].footprintBytes);
-  auto sample = store->getSample(1);
+  auto sample = store->runs().sample(1);
   ASSERT_TRUE(sample && sample->has_value());
   ASSERT_EQ((*sample)->passes.size(), 1u);
   ASSERT_EQ((*sample)->passes[0].counters.size(), 1u);
@@ -351,7 +351,7 @@ TEST(Migrations, ReaderNeedsAMigratedDatabase) {
   { ASSERT_NE(openStore(db.path()), nullptr); }
   auto reader = openStore(db.path(), {.readOnly = true});
   ASSERT_NE(reader, nullptr);
-  auto job = reader->createJob({{"renderers", {"forward"}}});
+  auto job = reader->jobs().create({{"renderers", {"forward"}}});
   EXPECT_FALSE(job);  // query_only
 }
 

@@ -32,7 +32,7 @@ TEST_F(Queries, PaginationWalksEveryRunOnce) {
     Page page{.limit = limit};
     int pages = 0;
     while (true) {
-      auto got = store_->listRuns({}, page);
+      auto got = store_->runs().list({}, page);
       ASSERT_TRUE(got) << got.error();
       ASSERT_LE(got->runs.size(), static_cast<size_t>(limit));
       for (const auto& run : got->runs) seen.push_back(run.id);
@@ -48,9 +48,9 @@ TEST_F(Queries, PaginationWalksEveryRunOnce) {
   }
   // Filtered pagination: 4 H200 runs, 2 a page.
   RunFilter h200{.deviceName = "NVIDIA H200"};
-  auto first = store_->listRuns(h200, {.limit = 2});
+  auto first = store_->runs().list(h200, {.limit = 2});
   ASSERT_TRUE(first && first->runs.size() == 2 && !first->nextCursor.empty());
-  auto second = store_->listRuns(h200, {.limit = 2, .cursor = first->nextCursor});
+  auto second = store_->runs().list(h200, {.limit = 2, .cursor = first->nextCursor});
   ASSERT_TRUE(second && second->runs.size() == 2);
   EXPECT_TRUE(second->nextCursor.empty());
 }
@@ -69,7 +69,7 @@ TEST_F(Queries, NameOfSeveralIdsPagesNewestFirst) {
     std::vector<int64_t> seen;
     Page page{.limit = limit};
     for (int pages = 0; pages < 100; ++pages) {
-      auto got = store_->listRuns({.scene = "atrium"}, page);
+      auto got = store_->runs().list({.scene = "atrium"}, page);
       ASSERT_TRUE(got) << got.error();
       for (const auto& run : got->runs) {
         seen.push_back(run.id);
@@ -85,10 +85,10 @@ TEST_F(Queries, NameOfSeveralIdsPagesNewestFirst) {
 }
 
 TEST_F(Queries, BadPagesAreRefused) {
-  EXPECT_FALSE(store_->listRuns({}, {.limit = 0}));
-  EXPECT_FALSE(store_->listRuns({}, {.limit = 1001}));
+  EXPECT_FALSE(store_->runs().list({}, {.limit = 0}));
+  EXPECT_FALSE(store_->runs().list({}, {.limit = 1001}));
   for (const char* cursor : {"x", "r", "r-1", "r0", "12", "rzz", "r1 OR 1=1"}) {
-    auto got = store_->listRuns({}, {.limit = 10, .cursor = cursor});
+    auto got = store_->runs().list({}, {.limit = 10, .cursor = cursor});
     ASSERT_FALSE(got) << cursor;
     EXPECT_NE(got.error().find("cursor"), std::string::npos);
   }
@@ -124,7 +124,7 @@ TEST_F(Queries, Filters) {
       {"unknown run ids", {.runIds = {999, 1000}}, 0},
   };
   for (const auto& test : cases) {
-    auto got = store_->listRuns(test.filter, {.limit = 1000});
+    auto got = store_->runs().list(test.filter, {.limit = 1000});
     ASSERT_TRUE(got) << test.name << ": " << got.error();
     EXPECT_EQ(got->runs.size(), test.runs) << test.name;
     for (const auto& run : got->runs) {
@@ -145,7 +145,7 @@ TEST_F(Queries, Filters) {
       }
     }
     // Export honours the same filters: 4 passes x 3 counters per run.
-    auto rows = store_->exportRuns(test.filter);
+    auto rows = store_->runs().exportRows(test.filter);
     ASSERT_TRUE(rows) << test.name << ": " << rows.error();
     EXPECT_EQ(rows->size(), test.runs * 12) << test.name;
   }
@@ -179,19 +179,19 @@ Capture compareFixture() {
 TEST_F(Queries, CompareAgainstTheFirstRun) {
   int64_t jobId = newJob();
   ingest(jobId, compareFixture());
-  auto runs = store_->listRuns({.jobId = jobId}, {});
+  auto runs = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(runs && runs->runs.size() == 2);
   int64_t forward = runs->runs[1].id, deferred = runs->runs[0].id;
 
   // Per-sample and per-run byte totals: forward 640 and 1920 (mean 1280), deferred 3840.
-  auto samples = store_->listSamples(forward);
+  auto samples = store_->runs().samples(forward);
   ASSERT_TRUE(samples && samples->size() == 2);
   EXPECT_CLOSE((*samples)[0].bytes, 640);
   EXPECT_CLOSE((*samples)[1].bytes, 1920);
   EXPECT_CLOSE(*runs->runs[1].meanBytes, 1280);
   EXPECT_CLOSE(*runs->runs[0].meanBytes, 3840);
 
-  auto cmp = store_->compareRuns({forward, deferred});
+  auto cmp = store_->runs().compare({forward, deferred});
   ASSERT_TRUE(cmp) << cmp.error();
   ASSERT_EQ(cmp->runs.size(), 2u);
   EXPECT_EQ(cmp->runs[0].renderer, "forward");
@@ -258,13 +258,13 @@ TEST_F(Queries, CompareAgainstTheFirstRun) {
   EXPECT_CLOSE(*texr.count[1].ratio, 0.5);
 
   // The other way round: ratios invert.
-  auto back = store_->compareRuns({deferred, forward});
+  auto back = store_->runs().compare({deferred, forward});
   ASSERT_TRUE(back);
   EXPECT_CLOSE(*back->totalBytes[1].ratio, 1.0 / 3.0);
   EXPECT_EQ(back->passes[0].pass, "gbuffer");
 
   // Export: one row per run x pass x resource x access, averaged over samples.
-  auto rows = store_->exportRuns({.jobId = jobId});
+  auto rows = store_->runs().exportRows({.jobId = jobId});
   ASSERT_TRUE(rows) << rows.error();
   ASSERT_EQ(rows->size(), 3u + 5u);
   const ExportRow& first = (*rows)[0];
@@ -296,7 +296,7 @@ TEST_F(Queries, RunSummaries) {
   forwardSamples[1]["image_error"]["psnr"] = 30.0;
   int64_t jobId = newJob();
   ingest(jobId, c);
-  auto runs = store_->listRuns({.jobId = jobId}, {});
+  auto runs = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(runs && runs->runs.size() == 2);
   const RunRow& forward = runs->runs[1];
   const RunRow& deferred = runs->runs[0];
@@ -312,18 +312,18 @@ TEST_F(Queries, RunSummaries) {
   EXPECT_CLOSE(*deferred.meanPsnr, 41.5);
 
   // Samples: read tex + sky, written fb.
-  auto samples = store_->listSamples(forward.id);
+  auto samples = store_->runs().samples(forward.id);
   ASSERT_TRUE(samples && samples->size() == 2);
   EXPECT_CLOSE((*samples)[0].bytesRead, 400 + 40);
   EXPECT_CLOSE((*samples)[0].bytesWritten, 200);
   EXPECT_CLOSE((*samples)[1].bytesRead, 1200 + 120);
   EXPECT_CLOSE((*samples)[1].bytesWritten, 600);
-  auto sample = store_->getSample((*samples)[1].id);
+  auto sample = store_->runs().sample((*samples)[1].id);
   ASSERT_TRUE(sample && *sample);
   EXPECT_CLOSE((*sample)->row.bytesRead + (*sample)->row.bytesWritten, (*sample)->row.bytes);
 
   // Passes in frame order, averaged over the two samples.
-  auto passes = store_->runPasses(forward.id);
+  auto passes = store_->runs().passes(forward.id);
   ASSERT_TRUE(passes) << passes.error();
   ASSERT_EQ(passes->size(), 2u);
   const Pass& opaque = (*passes)[0];
@@ -345,7 +345,7 @@ TEST_F(Queries, RunSummaries) {
   EXPECT_EQ((*passes)[1].name, "skybox");
   EXPECT_CLOSE((*passes)[1].gpuMs, 0.3);
   EXPECT_CLOSE((*passes)[1].counters[0].bytes, 80);
-  auto none = store_->runPasses(forward.id + 1000);
+  auto none = store_->runs().passes(forward.id + 1000);
   ASSERT_TRUE(none);
   EXPECT_TRUE(none->empty());
 }
@@ -353,7 +353,7 @@ TEST_F(Queries, RunSummaries) {
 TEST_F(Queries, CreatedBetween) {
   int64_t jobId = newJob();
   ingest(jobId, realisticCapture());
-  auto all = store_->listRuns({.jobId = jobId}, {});
+  auto all = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(all && all->runs.size() == 2);
   const std::string created = all->runs[0].createdAt;  // 2026-11-21T06:30:00.123Z
   ASSERT_EQ(created.size(), 24u);
@@ -361,9 +361,9 @@ TEST_F(Queries, CreatedBetween) {
     RunFilter f{.jobId = jobId};
     f.createdSince = since;
     f.createdUntil = until;
-    auto page = store_->listRuns(f, {});
+    auto page = store_->runs().list(f, {});
     EXPECT_TRUE(page) << page.error();
-    auto rows = store_->exportRuns(f);  // the same filter
+    auto rows = store_->runs().exportRows(f);  // the same filter
     EXPECT_TRUE(rows) << rows.error();
     return page ? page->runs.size() : 0u;
   };
@@ -382,7 +382,7 @@ TEST_F(Queries, CreatedBetween) {
 
 TEST_F(Queries, Devices) {
   ingestMany();
-  auto devices = store_->listDevices();
+  auto devices = store_->runs().devices();
   ASSERT_TRUE(devices) << devices.error();
   ASSERT_EQ(devices->size(), 2u);
   EXPECT_EQ((*devices)[0].name, "llvmpipe (LLVM 15.0.6, 256 bits)");
@@ -394,17 +394,17 @@ TEST_F(Queries, Devices) {
 
 TEST_F(Queries, CompareRefusesBadRequests) {
   ingestMany();
-  auto runs = store_->listRuns({}, {.limit = 5});
+  auto runs = store_->runs().list({}, {.limit = 5});
   ASSERT_TRUE(runs && runs->runs.size() == 5);
   std::vector<int64_t> ids;
   for (const auto& r : runs->runs) ids.push_back(r.id);
-  EXPECT_FALSE(store_->compareRuns({ids[0]}));
-  EXPECT_FALSE(store_->compareRuns(ids));  // 5
-  EXPECT_FALSE(store_->compareRuns({ids[0], ids[0]}));
-  auto unknown = store_->compareRuns({ids[0], 99999});
+  EXPECT_FALSE(store_->runs().compare({ids[0]}));
+  EXPECT_FALSE(store_->runs().compare(ids));  // 5
+  EXPECT_FALSE(store_->runs().compare({ids[0], ids[0]}));
+  auto unknown = store_->runs().compare({ids[0], 99999});
   ASSERT_FALSE(unknown);
   EXPECT_NE(unknown.error().find("runs[1]: run 99999 not found"), std::string::npos) << unknown.error();
-  auto four = store_->compareRuns({ids[0], ids[1], ids[2], ids[3]});
+  auto four = store_->runs().compare({ids[0], ids[1], ids[2], ids[3]});
   ASSERT_TRUE(four) << four.error();
   EXPECT_EQ(four->runs.size(), 4u);
   EXPECT_EQ(four->frameMs.size(), 4u);

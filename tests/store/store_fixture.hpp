@@ -329,12 +329,12 @@ class StoreTest : public ::testing::Test {
   }
   int64_t newJob(const std::string& key = "") {
     auto job =
-        store_->createJob({{"renderers", {"forward"}}}, key.empty() ? std::nullopt : std::optional(key));
+        store_->jobs().create({{"renderers", {"forward"}}}, key.empty() ? std::nullopt : std::optional(key));
     EXPECT_TRUE(job) << job.error();
     return job ? job->job.id : 0;
   }
   int64_t ingest(int64_t jobId, const Capture& c) {
-    auto stored = store_->ingestCapture(jobId, c.result, c.screenshots);
+    auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
     EXPECT_TRUE(stored) << stored.error();
     return stored ? *stored : -1;
   }

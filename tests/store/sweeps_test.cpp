@@ -10,7 +10,7 @@ namespace {
 class Sweeps : public StoreTest {
  protected:
   int64_t newSweepJob() {
-    auto job = store_->createJob({{"sweep", "depth-reconstruction"}});
+    auto job = store_->jobs().create({{"sweep", "depth-reconstruction"}});
     EXPECT_TRUE(job) << job.error();
     return job ? job->job.id : 0;
   }
@@ -20,10 +20,10 @@ class Sweeps : public StoreTest {
 TEST_F(Sweeps, ReadsBackWhatWentIn) {
   int64_t jobId = newSweepJob();
   json result = sweepResult();
-  auto id = store_->ingestSweep(jobId, result);
+  auto id = store_->runs().ingestSweep(jobId, result);
   ASSERT_TRUE(id) << id.error();
 
-  auto sweep = store_->getSweep(*id);
+  auto sweep = store_->runs().sweep(*id);
   ASSERT_TRUE(sweep && sweep->has_value()) << (sweep ? "" : sweep.error());
   const SweepRow& row = (*sweep)->row;
   EXPECT_EQ((*sweep)->result, result);  // the whole result, as it came
@@ -39,13 +39,13 @@ TEST_F(Sweeps, ReadsBackWhatWentIn) {
   EXPECT_EQ(row.device.driver, "Mesa 22.3.6");
   EXPECT_EQ(row.device.info, result["device"]);
 
-  auto ids = store_->jobSweepIds(jobId);
+  auto ids = store_->runs().jobSweepIds(jobId);
   ASSERT_TRUE(ids) << ids.error();
   EXPECT_EQ(*ids, std::vector<int64_t>{*id});
-  auto none = store_->jobSweepIds(newJob());
+  auto none = store_->runs().jobSweepIds(newJob());
   ASSERT_TRUE(none);
   EXPECT_TRUE(none->empty());
-  auto missing = store_->getSweep(*id + 1000);
+  auto missing = store_->runs().sweep(*id + 1000);
   ASSERT_TRUE(missing);
   EXPECT_FALSE(missing->has_value());
 }
@@ -53,10 +53,10 @@ TEST_F(Sweeps, ReadsBackWhatWentIn) {
 TEST_F(Sweeps, NothingFailingIsStoredAsNull) {
   json result = sweepResult();
   result["fails_at"] = nullptr;
-  auto id = store_->ingestSweep(newSweepJob(), result);
+  auto id = store_->runs().ingestSweep(newSweepJob(), result);
   ASSERT_TRUE(id) << id.error();
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM sweeps WHERE fails_at IS NULL"), 1);
-  auto sweep = store_->getSweep(*id);
+  auto sweep = store_->runs().sweep(*id);
   ASSERT_TRUE(sweep && sweep->has_value());
   EXPECT_TRUE((*sweep)->row.failsAt.is_null());
 }
@@ -69,9 +69,9 @@ TEST_F(Sweeps, NamedParametersAndAListOfGroups) {
   for (auto& p : result["points"]) p["selection"] = p["near"] == 1.0 ? "uniform" : "first_lane";
   result["plots"][0]["series"] = {"selection"};
   result["fails_at"] = {{{"selection", "first_lane"}, {"distance", 300.0}}, {{"selection", "uniform"}, {"distance", nullptr}}};
-  auto id = store_->ingestSweep(newSweepJob(), result);
+  auto id = store_->runs().ingestSweep(newSweepJob(), result);
   ASSERT_TRUE(id) << id.error();
-  auto sweep = store_->getSweep(*id);
+  auto sweep = store_->runs().sweep(*id);
   ASSERT_TRUE(sweep && sweep->has_value());
   EXPECT_EQ((*sweep)->row.failsAt, result["fails_at"]);
   EXPECT_EQ((*sweep)->result, result);
@@ -80,18 +80,18 @@ TEST_F(Sweeps, NamedParametersAndAListOfGroups) {
 TEST_F(Sweeps, IngestingTwiceKeepsOneSweepPerJob) {
   int64_t jobId = newSweepJob();
   json result = sweepResult();
-  ASSERT_TRUE(store_->ingestSweep(jobId, result));
+  ASSERT_TRUE(store_->runs().ingestSweep(jobId, result));
   result["threshold"] = {{"relative", 1e-3}};
-  auto again = store_->ingestSweep(jobId, result);
+  auto again = store_->runs().ingestSweep(jobId, result);
   ASSERT_TRUE(again) << again.error();
   EXPECT_EQ(count("sweeps"), 1);
-  EXPECT_EQ((*store_->getSweep(*again))->row.threshold, result["threshold"]);
+  EXPECT_EQ((*store_->runs().sweep(*again))->row.threshold, result["threshold"]);
   EXPECT_EQ(count("devices"), 1);  // the same device, not a second row
 }
 
 TEST_F(Sweeps, DeletingTheJobDeletesItsSweep) {
   int64_t jobId = newSweepJob();
-  ASSERT_TRUE(store_->ingestSweep(jobId, sweepResult()));
+  ASSERT_TRUE(store_->runs().ingestSweep(jobId, sweepResult()));
   ASSERT_EQ(count("sweeps"), 1);
   ASSERT_NO_THROW(store_->connection().exec("DELETE FROM jobs WHERE id = " + std::to_string(jobId)));
   EXPECT_EQ(count("sweeps"), 0);
@@ -140,25 +140,25 @@ TEST_F(Sweeps, BadInputNamesTheFieldAndStoresNothing) {
   for (const auto& test : cases) {
     json result = sweepResult();
     test.edit(result);
-    auto stored = store_->ingestSweep(jobId, result);
+    auto stored = store_->runs().ingestSweep(jobId, result);
     ASSERT_FALSE(stored) << test.name;
     EXPECT_NE(stored.error().find(test.error), std::string::npos) << test.name << ": " << stored.error();
     EXPECT_EQ(count("sweeps"), 0) << test.name;
     EXPECT_EQ(count("devices"), 0) << test.name;
   }
-  auto unknownJob = store_->ingestSweep(9999, sweepResult());
+  auto unknownJob = store_->runs().ingestSweep(9999, sweepResult());
   ASSERT_FALSE(unknownJob);
   EXPECT_NE(unknownJob.error().find("job 9999 not found"), std::string::npos) << unknownJob.error();
 }
 
 TEST_F(Sweeps, FailedReingestKeepsThePreviousSweep) {
   int64_t jobId = newSweepJob();
-  auto first = store_->ingestSweep(jobId, sweepResult());
+  auto first = store_->runs().ingestSweep(jobId, sweepResult());
   ASSERT_TRUE(first);
   json bad = sweepResult();
   bad["points"][0].erase("distance");
-  ASSERT_FALSE(store_->ingestSweep(jobId, bad));
-  auto kept = store_->getSweep(*first);
+  ASSERT_FALSE(store_->runs().ingestSweep(jobId, bad));
+  auto kept = store_->runs().sweep(*first);
   ASSERT_TRUE(kept && kept->has_value());
   EXPECT_EQ((*kept)->result, sweepResult());
 }
@@ -172,12 +172,12 @@ TEST_F(Sweeps, ListFiltersAndPages) {
       {"depth-reconstruction", "NVIDIA H200"}};
   for (const auto& [name, deviceName] : made) {
     jobs.push_back(newSweepJob());
-    auto id = store_->ingestSweep(jobs.back(), sweepResult(name, deviceName));
+    auto id = store_->runs().ingestSweep(jobs.back(), sweepResult(name, deviceName));
     ASSERT_TRUE(id) << id.error();
     ids.push_back(*id);
   }
   auto idsOf = [&](const SweepFilter& filter, const Page& page = {}) {
-    auto listed = store_->listSweeps(filter, page);
+    auto listed = store_->runs().sweeps(filter, page);
     EXPECT_TRUE(listed) << listed.error();
     std::vector<int64_t> out;
     if (listed) {
@@ -189,7 +189,7 @@ TEST_F(Sweeps, ListFiltersAndPages) {
   EXPECT_EQ(idsOf({.name = "depth-reconstruction"}), (std::vector<int64_t>{ids[2], ids[0]}));
   EXPECT_EQ(idsOf({.name = "material-edges"}), std::vector<int64_t>{});
   EXPECT_EQ(idsOf({.deviceName = "NVIDIA H200"}), std::vector<int64_t>{ids[2]});
-  auto listed = store_->listSweeps({.jobId = jobs[1]}, {});
+  auto listed = store_->runs().sweeps({.jobId = jobs[1]}, {});
   ASSERT_TRUE(listed);
   ASSERT_EQ(listed->sweeps.size(), 1u);
   EXPECT_EQ(listed->sweeps[0].name, "id-capacity");
@@ -202,15 +202,15 @@ TEST_F(Sweeps, ListFiltersAndPages) {
   std::vector<int64_t> walked;
   Page page{.limit = 1};
   for (int i = 0; i < 5; ++i) {
-    auto one = store_->listSweeps({}, page);
+    auto one = store_->runs().sweeps({}, page);
     ASSERT_TRUE(one) << one.error();
     for (const auto& s : one->sweeps) walked.push_back(s.id);
     if (one->nextCursor.empty()) break;
     page.cursor = one->nextCursor;
   }
   EXPECT_EQ(walked, (std::vector<int64_t>{ids[2], ids[1], ids[0]}));
-  EXPECT_FALSE(store_->listSweeps({}, {.limit = 0}));
-  EXPECT_FALSE(store_->listSweeps({}, {.cursor = "nope"}));
+  EXPECT_FALSE(store_->runs().sweeps({}, {.limit = 0}));
+  EXPECT_FALSE(store_->runs().sweeps({}, {.cursor = "nope"}));
 }
 
 TEST_F(Sweeps, RunsKeepTheirCounterHeadroom) {
@@ -224,17 +224,17 @@ TEST_F(Sweeps, RunsKeepTheirCounterHeadroom) {
   c.result["runs"][0]["counter_headroom"] = headroom;  // runs[1] has none, as results before it did
   int64_t jobId = newJob();
   ASSERT_EQ(ingest(jobId, c), 2);
-  auto page = store_->listRuns({.jobId = jobId}, {});
+  auto page = store_->runs().list({.jobId = jobId}, {});
   ASSERT_TRUE(page);
   ASSERT_EQ(page->runs.size(), 2u);
-  auto forward = store_->getRun(page->runs[1].id), deferred = store_->getRun(page->runs[0].id);
+  auto forward = store_->runs().get(page->runs[1].id), deferred = store_->runs().get(page->runs[0].id);
   ASSERT_TRUE(forward && forward->has_value() && deferred && deferred->has_value());
   EXPECT_EQ((*forward)->row.renderer, "forward");
   EXPECT_EQ((*forward)->counterHeadroom, headroom);
   EXPECT_TRUE((*deferred)->counterHeadroom.is_null());
 
   c.result["runs"][1]["counter_headroom"] = "plenty";
-  auto bad = store_->ingestCapture(newJob(), c.result, c.screenshots);
+  auto bad = store_->runs().ingestCapture(newJob(), c.result, c.screenshots);
   ASSERT_FALSE(bad);
   EXPECT_NE(bad.error().find("runs[1].counter_headroom: must be an object"), std::string::npos) << bad.error();
 }

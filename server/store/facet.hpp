@@ -1,0 +1,34 @@
+// What the facets of one Store (JobQueue, Hosts, Runs, Alerts) share: the
+// Store's one connection, and the mutex that lets one call at a time use it,
+// whichever facet makes the call.
+#pragma once
+
+#include <mutex>
+
+#include "store/db.hpp"
+
+namespace tally::store {
+
+class Store;
+
+struct Shared {
+  explicit Shared(Connection* connection) : db(connection) {}
+  Connection* db;
+  std::mutex mutex;  // one call at a time on this connection
+};
+
+// A facet is a view of its Store's connection: the Store makes it, and it
+// lives as long as the Store, so it is handed out by reference, never copied.
+class Facet {
+ public:
+  Facet(const Facet&) = delete;
+  Facet& operator=(const Facet&) = delete;
+
+ protected:
+  explicit Facet(Shared& shared) : db_(shared.db), mutex_(shared.mutex) {}
+  ~Facet() = default;
+  Connection* db_;
+  std::mutex& mutex_;
+};
+
+}  // namespace tally::store
