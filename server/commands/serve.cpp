@@ -100,7 +100,9 @@ void startMetrics(metrics::Registry& metrics, const ServeSetup& setup) {
   declareMetrics(metrics);
   metrics.set("tally_build_info", {{"version", std::string(version())}, {"commit", std::string(gitCommit())}}, 1);
   metrics.set("tally_device_info", {{"selector", setup.selector}, {"device", ""}}, 1);
-  for (const char* status : {"done", "failed", "cancelled"}) metrics.add("tally_jobs_finished_total", {{"status", status}}, 0);
+  for (store::JobStatus status : store::kJobStatuses) {
+    if (store::isFinal(status)) metrics.add("tally_jobs_finished_total", {{"status", store::toString(status)}}, 0);
+  }
 }
 
 // The worker's options but for its callbacks and its host.
@@ -224,7 +226,7 @@ service::ServiceContext serviceContext(const ServeArgs& args, const ServeSetup& 
   context.onJobQueued = [&worker] { worker.wake(); };
   context.health = &storeHealth;
   context.onQueuedJobCancelled = [&metrics](int64_t) {
-    metrics.add("tally_jobs_finished_total", {{"status", "cancelled"}});
+    metrics.add("tally_jobs_finished_total", {{"status", store::toString(store::JobStatus::Cancelled)}});
   };
   return context;
 }

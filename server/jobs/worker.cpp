@@ -370,11 +370,11 @@ void Worker::runJob(const store::Job& job) {
   const auto started = std::chrono::steady_clock::now();
   const bool isSweep = job.spec.is_object() && job.spec.contains("sweep");
   std::string device;
-  auto finished = [&](const char* status) {
+  auto finished = [&](store::JobStatus status) {
     if (!options_.onFinished) return;
     JobOutcome outcome;
     outcome.id = job.id;
-    outcome.status = status;
+    outcome.status = store::toString(status);
     outcome.kind = isSweep ? "sweep" : "capture";
     outcome.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     outcome.device = device;
@@ -389,7 +389,7 @@ void Worker::runJob(const store::Job& job) {
     ~Release() { job = 0; }
   } release{currentJob_};
   auto fail = [&](const std::string& reason) {
-    if (recordFailure(lease, reason)) finished("failed");
+    if (recordFailure(lease, reason)) finished(store::JobStatus::Failed);
   };
 
   auto dir = makeJobFolder(options_.tempRoot, job);
@@ -408,7 +408,7 @@ void Worker::runJob(const store::Job& job) {
     bool wasCancelled = !now || !now->has_value() || (*now)->status == store::JobStatus::Cancelled;
     log(log::Level::kInfo, job.id,
         wasCancelled ? "cancelled" : "stopped: its lease expired and it was queued again");
-    finished("cancelled");
+    finished(store::JobStatus::Cancelled);
     return;
   }
   if (!ran) return fail(ran.error());
@@ -440,7 +440,7 @@ void Worker::runJob(const store::Job& job) {
   if (!error.empty()) return fail((isSweep ? "cannot store the sweep: " : "cannot store the result: ") + error);
   log(log::Level::kInfo, job.id,
       isSweep ? "done, sweep " + std::to_string(stored) : "done, " + std::to_string(stored) + " runs");
-  finished("done");
+  finished(store::JobStatus::Done);
 }
 
 std::string Worker::ingest(const store::Lease& lease, const nlohmann::json& result,
