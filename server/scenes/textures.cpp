@@ -18,11 +18,7 @@ const char* toString(ProceduralMaterial kind) {
   return "?";
 }
 
-namespace {
-
-constexpr float kPi = 3.14159265358979f;
-
-uint32_t hash(uint32_t x, uint32_t y, uint32_t seed) {
+uint32_t texelHash(uint32_t x, uint32_t y, uint32_t seed) {
   uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ seed * 0xcb1ab31fu;
   h ^= h >> 16;
   h *= 0x7feb352du;
@@ -32,8 +28,13 @@ uint32_t hash(uint32_t x, uint32_t y, uint32_t seed) {
   return h;
 }
 
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+
 float hash01(uint32_t x, uint32_t y, uint32_t seed) {
-  return float(hash(x, y, seed) >> 8) * (1.0f / 16777216.0f);
+  return float(texelHash(x, y, seed) >> 8) * (1.0f / 16777216.0f);
 }
 
 // Value noise on a lattice of `period` cells per unit, wrapping so the result

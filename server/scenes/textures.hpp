@@ -22,4 +22,8 @@ constexpr uint32_t kProceduralMapSize = 256;
 // scene.materials; returns the material's index.
 uint32_t addProceduralMaterial(Scene& scene, ProceduralMaterial kind, uint32_t size = kProceduralMapSize);
 
+// The integer hash behind every procedural texel: deterministic, well mixed
+// in all 32 bits, for texel (x, y) of layer or material `seed`.
+uint32_t texelHash(uint32_t x, uint32_t y, uint32_t seed);
+
 }  // namespace tally::scenes

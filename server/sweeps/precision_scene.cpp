@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "scenes/mesh_builder.hpp"
+#include "scenes/textures.hpp"
 #include "sweeps/precision_plane.hpp"
 
 namespace tally::sweeps {
@@ -19,16 +20,6 @@ using precision_plane::uvMapOf;
 using precision_plane::View;
 using precision_plane::viewOf;
 
-uint32_t hashTexel(uint32_t x, uint32_t y, uint32_t seed) {
-  uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ seed * 0xcb1ab31fu;
-  h ^= h >> 16;
-  h *= 0x7feb352du;
-  h ^= h >> 15;
-  h *= 0x846ca68bu;
-  h ^= h >> 16;
-  return h;
-}
-
 }  // namespace
 
 scenes::Texture precisionTexture(uint32_t size) {
@@ -43,7 +34,7 @@ scenes::Texture precisionTexture(uint32_t size) {
     for (uint32_t y = 0; y < n; ++y) {
       for (uint32_t x = 0; x < n; ++x) {
         const float checker = ((x + y) & 1u) ? 1.0f : 0.35f;
-        const float jitter = 0.9f + 0.2f * float(hashTexel(x, y, l) >> 8) * (1.0f / 16777216.0f);
+        const float jitter = 0.9f + 0.2f * float(scenes::texelHash(x, y, l) >> 8) * (1.0f / 16777216.0f);
         const glm::vec3 c = glm::clamp(kLevelColours[l % kColours] * checker * jitter, 0.0f, 1.0f);
         uint8_t* t = &texels[(size_t(y) * n + x) * 4];
         for (int i = 0; i < 3; ++i) t[i] = uint8_t(std::lround(c[i] * 255.0f));

@@ -17,6 +17,14 @@ using test::instrumentOk;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+// The index of the function with OpName `name` in m.functions, or -1.
+int functionNamed(const Module& m, const DefIndex& defs, const std::string& name) {
+  for (size_t f = 0; f < m.functions.size(); ++f) {
+    if (defs.name(m.functions[f].id()) == name) return int(f);
+  }
+  return -1;
+}
+
 InstrumentOptions accumulate(const char* mode) {
   InstrumentOptions o;
   auto m = parseMode(mode);
@@ -59,6 +67,14 @@ TEST(Accumulate, PerLaneFlushCountsSitesThatRunOncePerAccess) {
   bool noted = false;
   for (const auto& n : r.notes) noted = noted || contains(n, "2 fragment sites that run at most once per invocation counted per access");
   EXPECT_TRUE(noted);
+}
+
+TEST(Accumulate, SubgroupFlushAccumulatesSitesThatRunOnce) {
+  // A reduction turns a subgroup's once-per-lane atomics into one: worth it.
+  auto r = instrumentOk(compileGlsl(kOnceAndLoop, Stage::Fragment), accumulate("accumulate:subgroup"));
+  std::string dis = disassemble(r.words);
+  EXPECT_FALSE(contains(dis, "%tally_count_exact")) << dis;
+  EXPECT_TRUE(contains(dis, "OpGroupNonUniformIAdd")) << dis;
 }
 
 TEST(Accumulate, SitesOnEveryPathAreDerivedFromTheInvocationCount) {
@@ -136,10 +152,7 @@ void main() {
   auto module = Module::parse(words);
   ASSERT_TRUE(module.ok()) << module.error();
   DefIndex defs(*module);
-  int entry = -1;
-  for (size_t f = 0; f < module->functions.size(); ++f) {
-    if (defs.name(module->functions[f].id()) == "main") entry = int(f);
-  }
+  const int entry = functionNamed(*module, defs, "main");
   ASSERT_GE(entry, 0);
   auto once = functionsRunOnce(*module, defs, entry);
   for (size_t f = 0; f < module->functions.size(); ++f) {
@@ -169,10 +182,7 @@ void main() {
   auto module = Module::parse(words);
   ASSERT_TRUE(module.ok()) << module.error();
   DefIndex defs(*module);
-  int entry = -1;
-  for (size_t f = 0; f < module->functions.size(); ++f) {
-    if (defs.name(module->functions[f].id()) == "main") entry = int(f);
-  }
+  const int entry = functionNamed(*module, defs, "main");
   ASSERT_GE(entry, 0);
   auto exactly = functionsRunExactlyOnce(*module, defs, entry);
   auto once = functionsRunOnce(*module, defs, entry);
