@@ -163,8 +163,8 @@ std::map<uint32_t, std::vector<uint32_t>> Injector::imageOperands(const Instruct
 }
 
 Injector::TexelCoords Injector::texelCoords(Body& b, uint32_t coord, uint32_t dim, bool arrayed) {
-  uint32_t i = tI32();
-  auto c = [&](uint32_t k) { return intAs(b, component(b, coord, k, i), true); };
+  tI32();  // made first, as before coordinates were converted by type
+  auto c = [&](uint32_t k) { return intComponent(b, coord, k, true); };
   bool twoD = dim != uint32_t(spv::Dim::Dim1D);
   uint32_t x = c(0);
   uint32_t y = twoD ? c(1) : constantI32(0);
@@ -237,8 +237,8 @@ bool Injector::emitImageFootprint(Body& b, const FoundSite& s, const Instruction
   }
   if (site.kind == SiteKind::AttachmentRead) {
     auto [x, y] = fragmentPixel(b, stage);
-    uint32_t ox = intAs(b, component(b, inst.word(4), 0, i), true);
-    uint32_t oy = intAs(b, component(b, inst.word(4), 1, i), true);
+    uint32_t ox = intComponent(b, inst.word(4), 0, true);
+    uint32_t oy = intComponent(b, inst.word(4), 1, true);
     fnCall(b, fpTexelFn(), {entry, op(b, spv::Op::OpIAdd, i, {x, ox}), op(b, spv::Op::OpIAdd, i, {y, oy}),
                             constantI32(0), constantU32(0)});
     return true;
@@ -258,9 +258,9 @@ bool Injector::emitImageFootprint(Body& b, const FoundSite& s, const Instruction
       if (auto l = ops.find(0x2); l != ops.end()) lod = intAs(b, l->second[0], false);
       for (uint32_t bit : {0x8u, 0x10u}) {
         if (auto off = ops.find(bit); off != ops.end()) {
-          c.x = op(b, spv::Op::OpIAdd, i, {c.x, intAs(b, component(b, off->second[0], 0, i), true)});
+          c.x = op(b, spv::Op::OpIAdd, i, {c.x, intComponent(b, off->second[0], 0, true)});
           if (dim != uint32_t(spv::Dim::Dim1D)) {
-            c.y = op(b, spv::Op::OpIAdd, i, {c.y, intAs(b, component(b, off->second[0], 1, i), true)});
+            c.y = op(b, spv::Op::OpIAdd, i, {c.y, intComponent(b, off->second[0], 1, true)});
           }
         }
       }
@@ -275,7 +275,10 @@ bool Injector::emitImageFootprint(Body& b, const FoundSite& s, const Instruction
 // filter's texels are worked out by the tally_fp_sample helper.
 bool Injector::emitFilteredFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
                                      uint32_t coord, const Instruction* imageType, std::string& why) {
-  const uint32_t u = tU32(), i = tI32(), fl = tF32();
+  // Made in this order whatever the access: the output's ids follow from it.
+  const uint32_t u = tU32();
+  tI32();
+  const uint32_t fl = tF32();
   const uint32_t dim = imageType->word(3);
   const bool arrayed = imageType->word(5) != 0;
   size_t operandsAt = 0;
@@ -335,8 +338,8 @@ bool Injector::emitFilteredFootprint(Body& b, const FoundSite& s, const Instruct
   uint32_t ox = constantI32(0), oy = constantI32(0);
   for (uint32_t bit : {0x8u, 0x10u}) {
     if (auto off = ops.find(bit); off != ops.end()) {
-      ox = intAs(b, component(b, off->second[0], 0, i), true);
-      if (twoD) oy = intAs(b, component(b, off->second[0], 1, i), true);
+      ox = intComponent(b, off->second[0], 0, true);
+      if (twoD) oy = intComponent(b, off->second[0], 1, true);
     }
   }
   fnCall(b, fpSampleFn(), {entry, uc, vc, layer, constantU32(lodKind), a, lambda, ox, oy});

@@ -142,9 +142,12 @@ class ModuleBuilder {
 
   // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
   uint32_t intAs(Body& b, uint32_t value, bool asSigned);
+  uint32_t intOfType(Body& b, uint32_t value, uint32_t type, bool asSigned);
 
   // Component k of a scalar or vector value (the scalar itself for k = 0).
   uint32_t component(Body& b, uint32_t value, uint32_t k, uint32_t scalarType);
+  // Component k of an integer scalar or vector, as i32 (u32 without `asSigned`).
+  uint32_t intComponent(Body& b, uint32_t value, uint32_t k, bool asSigned);
 
   uint32_t componentCount(uint32_t value);
 

@@ -217,17 +217,20 @@ uint32_t ModuleBuilder::fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args)
 
 // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
 uint32_t ModuleBuilder::intAs(Body& b, uint32_t value, bool asSigned) {
+  const uint32_t type = types_.typeOf(value);
+  if (defs_.def(type) == nullptr) return value;  // created here: a u32 or i32
+  return intOfType(b, value, type, asSigned);
+}
+
+// intAs for a value whose integer type the caller knows: values made here
+// (a component just extracted) are not in the module's definitions.
+uint32_t ModuleBuilder::intOfType(Body& b, uint32_t value, uint32_t type, bool asSigned) {
   uint32_t want = asSigned ? tI32() : tU32();
-  const Instruction* t = defs_.def(types_.typeOf(value));
-  if (t == nullptr) {  // created here: a u32 or i32
-    return value;
-  }
-  if (t->opcode() != spv::Op::OpTypeInt) return value;
-  if (t->word(2) != 32) {
-    value = op(b, t->word(3) == 1 ? spv::Op::OpSConvert : spv::Op::OpUConvert, t->word(3) == 1 ? tI32() : tU32(), {value});
-    return (t->word(3) == 1) == asSigned ? value : op(b, spv::Op::OpBitcast, want, {value});
-  }
-  return (t->word(3) == 1) == asSigned ? value : op(b, spv::Op::OpBitcast, want, {value});
+  const Instruction* t = defs_.def(type);
+  if (t == nullptr || t->opcode() != spv::Op::OpTypeInt) return value;
+  const bool isSigned = t->word(3) == 1;
+  if (t->word(2) != 32) value = op(b, isSigned ? spv::Op::OpSConvert : spv::Op::OpUConvert, isSigned ? tI32() : tU32(), {value});
+  return isSigned == asSigned ? value : op(b, spv::Op::OpBitcast, want, {value});
 }
 
 // Component k of a scalar or vector value (the scalar itself for k = 0).
@@ -238,6 +241,15 @@ uint32_t ModuleBuilder::component(Body& b, uint32_t value, uint32_t k, uint32_t 
   }
   (void)scalarType;
   return value;
+}
+
+// Component k of an integer scalar or vector (coordinates, offsets: signed
+// or unsigned, any width) as an i32 (u32 without `asSigned`).
+uint32_t ModuleBuilder::intComponent(Body& b, uint32_t value, uint32_t k, bool asSigned) {
+  const Instruction* t = defs_.def(types_.typeOf(value));
+  if (t == nullptr || t->opcode() != spv::Op::OpTypeVector) return intAs(b, value, asSigned);
+  const uint32_t scalar = t->word(2);
+  return intOfType(b, op(b, spv::Op::OpCompositeExtract, scalar, {value, k}), scalar, asSigned);
 }
 
 uint32_t ModuleBuilder::componentCount(uint32_t value) {

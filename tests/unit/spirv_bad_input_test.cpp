@@ -164,6 +164,100 @@ TEST_F(BadInput, RandomCorruptionNeverCrashes) {
   RecordProperty("accepted_mutants", accepted);
 }
 
+// Found by fuzzing: integer coordinates, gather components and offsets may be
+// unsigned (GLSL always makes them signed). The footprint's texel helpers take
+// i32: the instrumentation must convert them, in every mode and block size.
+TEST_F(BadInput, UnsignedCoordinatesAndOffsetsInstrumentWithFootprint) {
+  const char* text = R"(
+    OpCapability Shader
+    %1 = OpExtInstImport "GLSL.std.450"
+    OpMemoryModel Logical GLSL450
+    OpEntryPoint Fragment %main "main" %gl_FragCoord %inUv %outColor
+    OpExecutionMode %main OriginUpperLeft
+    OpSource GLSL 450
+    OpName %main "main"
+    OpName %texel "texel"
+    OpName %gbuffer "gbuffer"
+    OpName %gl_FragCoord "gl_FragCoord"
+    OpName %reds "reds"
+    OpName %ao "ao"
+    OpName %inUv "inUv"
+    OpName %greens "greens"
+    OpName %outColor "outColor"
+    OpDecorate %gbuffer DescriptorSet 0
+    OpDecorate %gbuffer Binding 3
+    OpDecorate %gl_FragCoord BuiltIn FragCoord
+    OpDecorate %ao DescriptorSet 2
+    OpDecorate %ao Binding 2
+    OpDecorate %inUv Location 0
+    OpDecorate %outColor Location 0
+    %void = OpTypeVoid
+    %3 = OpTypeFunction %void
+    %float = OpTypeFloat 32
+    %v4float = OpTypeVector %float 4
+    %_ptr_Function_v4float = OpTypePointer Function %v4float
+    %10 = OpTypeImage %float 2D 0 0 0 1 Unknown
+    %11 = OpTypeSampledImage %10
+    %_ptr_UniformConstant_11 = OpTypePointer UniformConstant %11
+    %gbuffer = OpVariable %_ptr_UniformConstant_11 UniformConstant
+    %_ptr_Input_v4float = OpTypePointer Input %v4float
+    %gl_FragCoord = OpVariable %_ptr_Input_v4float Input
+    %v2float = OpTypeVector %float 2
+    %uint = OpTypeInt 32 0
+    %v2uint = OpTypeVector %uint 2
+    %uint_0 = OpConstant %uint 0
+    %ao = OpVariable %_ptr_UniformConstant_11 UniformConstant
+    %_ptr_Input_v2float = OpTypePointer Input %v2float
+    %inUv = OpVariable %_ptr_Input_v2float Input
+    %uint_1 = OpConstant %uint 1
+    %37 = OpConstantComposite %v2uint %uint_1 %uint_0
+    %_ptr_Output_v4float = OpTypePointer Output %v4float
+    %outColor = OpVariable %_ptr_Output_v4float Output
+    %main = OpFunction %void None %3
+    %5 = OpLabel
+    %texel = OpVariable %_ptr_Function_v4float Function
+    %reds = OpVariable %_ptr_Function_v4float Function
+    %greens = OpVariable %_ptr_Function_v4float Function
+    %14 = OpLoad %11 %gbuffer
+    %18 = OpLoad %v4float %gl_FragCoord
+    %19 = OpVectorShuffle %v2float %18 %18 0 1
+    %22 = OpConvertFToS %v2uint %19
+    %24 = OpImage %10 %14
+    %25 = OpImageFetch %v4float %24 %22 Lod %uint_0
+    OpStore %texel %25
+    %28 = OpLoad %11 %ao
+    %31 = OpLoad %v2float %inUv
+    %32 = OpImageGather %v4float %28 %31 %uint_0
+    OpStore %reds %32
+    %34 = OpLoad %11 %ao
+    %35 = OpLoad %v2float %inUv
+    %38 = OpImageGather %v4float %34 %35 %uint_1 ConstOffset %37
+    OpStore %greens %38
+    %41 = OpLoad %v4float %texel
+    %42 = OpLoad %v4float %reds
+    %43 = OpFAdd %v4float %41 %42
+    %44 = OpLoad %v4float %greens
+    %45 = OpFAdd %v4float %43 %44
+    OpStore %outColor %45
+    OpReturn
+    OpFunctionEnd
+  )";
+  const auto words = test::assemble(text, SPV_ENV_VULKAN_1_0);
+  for (const char* mode : {"exact", "subgroup", "sampled:4", "accumulate", "accumulate:subgroup", "accumulate:lane"}) {
+    for (uint32_t block : {32u, 64u, 128u}) {
+      InstrumentOptions options;
+      options.mode = *parseMode(mode);
+      options.footprintBlockBytes = block;
+      auto r = instrument(words, options);
+      ASSERT_TRUE(r.ok()) << mode << ", " << block << " B blocks: " << r.error();
+      // The fetch and both gathers are marked, not noted as unsupported.
+      int marked = 0;
+      for (const Site& site : r->sites) marked += site.kind == SiteKind::TextureRead && site.footprint;
+      EXPECT_EQ(marked, 3) << mode << ", " << block << " B blocks";
+    }
+  }
+}
+
 TEST_F(BadInput, NoEntryPoints) {
   const char* text = R"(
     OpCapability Shader
