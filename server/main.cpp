@@ -29,6 +29,8 @@ CLI::App* addInstrument(CLI::App& app, tally::cli::InstrumentArgs& args) {
                          "0: off); the table and bitmaps bind at --binding + 1 and + 2")
       ->capture_default_str();
   instrument->add_flag("--analyze", args.analyzeOnly, "Print the site table without rewriting");
+  instrument->add_flag("--sites", args.perSite,
+                       "Give every access site counter slots of its own, and print its function, instruction and disassembly");
   return instrument;
 }
 

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <deque>
 #include <fstream>
+#include <set>
 #include <future>
 #include <iterator>
 #include <map>
@@ -177,6 +178,21 @@ json shaderHashes() {
   return out;
 }
 
+// The text of the shader files whose lines the sites name (RendererOptions::sites), for a shader view.
+json shaderSources(const std::set<std::string>& names) {
+  json out = json::object();
+  auto dir = renderers::shaderDirectory();
+  if (!dir) return out;
+  for (const auto& name : names) {
+    // Only files of the shader directory itself: a name is a file name, never a path.
+    if (name.empty() || name.find('/') != std::string::npos || name.find("..") != std::string::npos) continue;
+    std::ifstream in(std::filesystem::path(*dir) / name, std::ios::binary);
+    if (!in) continue;
+    out[name] = std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  return out;
+}
+
 json errorJson(const std::string& against, const ImageError& error) {
   return {{"against", against},
           {"psnr", std::isinf(error.psnr) ? json(nullptr) : json(error.psnr)},
@@ -326,6 +342,7 @@ Result<json> runOne(CaptureSession& session, const SceneInCapture& current, rend
     run["pipeline_statistics"] = {{"instrumented", std::move(counted)}, {"plain", plain.pipelineStatistics()}};
   }
   CounterHeadroom headroom;
+  std::set<std::string> siteFiles;  // the shader files the sites' lines are in
   for (size_t c = 0; c < cameras.size(); ++c) {
     const auto& camera = cameras[c];
     progress.current = where + " camera " + std::to_string(c);
@@ -349,6 +366,9 @@ Result<json> runOne(CaptureSession& session, const SceneInCapture& current, rend
       image = plain.finalImage();
     }
     json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrDefault());
+    for (const auto& [pass, sites] : m.sites) {
+      for (const auto& s : sites) siteFiles.insert({s.site.shader, s.site.file});
+    }
     addRoofline(sample, m, ceilings);
     sample["camera"] = scenes::toJson(camera);
     sample["camera"]["index"] = c;
@@ -386,6 +406,7 @@ Result<json> runOne(CaptureSession& session, const SceneInCapture& current, rend
     ++progress.done;
   }
   instrumented->destroy();
+  if (ro.sites) run["shader_sources"] = shaderSources(siteFiles);
   // Counters are zeroed every frame (RendererBase::recordAll): one frame accumulates.
   run["counter_headroom"] = toJson(headroom, gpu::instrumentOptionsFor(ctx, mode).width, 1);
   return run;
@@ -516,6 +537,7 @@ renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const Render
   renderers::RendererOptions ro{{res.width, res.height}, instrumented, mode, spec.lights};
   renderers::applyOptions(variant.options, ro);
   if (instrumented) ro.footprintBlockBytes = spec.footprintBlockBytes;
+  ro.sites = instrumented && spec.sites;
   return ro;
 }
 

@@ -10,6 +10,58 @@ using analysis::Spread;
 using analysis::spreadOf;
 using nlohmann::json;
 
+namespace {
+
+std::string lineKey(const std::string& resource, bool write, const std::string& source) {
+  return resource + (write ? "\x1fw\x1f" : "\x1fr\x1f") + source;
+}
+
+void addSites(SampleMeasure& m, const renderers::PassResult& pass) {
+  auto& list = m.sites[pass.name];
+  auto& index = m.siteIndex[pass.name];
+  for (const auto& c : pass.sites) {
+    std::string key = c.shader + "\x1f" + std::to_string(c.instruction) + "\x1f" + std::to_string(c.line) + "\x1f" +
+                      lineKey(c.resource, c.write, "counter");
+    auto [it, inserted] = index.try_emplace(key, list.size());
+    if (inserted) list.push_back({c, lineKey(c.resource, c.write, "counter"), 0, 0});
+    list[it->second].count += double(c.count);
+    list[it->second].bytes += double(c.bytes);
+  }
+}
+
+}  // namespace
+
+json sitesJson(const SampleMeasure& m, const std::string& pass) {
+  json out = json::array();
+  auto found = m.sites.find(pass);
+  if (found == m.sites.end()) return out;
+  std::vector<const SiteLine*> order;
+  for (const auto& s : found->second) order.push_back(&s);
+  std::stable_sort(order.begin(), order.end(), [](const SiteLine* a, const SiteLine* b) { return a->bytes > b->bytes; });
+  for (const SiteLine* s : order) {
+    auto line = m.lines.find({pass, s->lineKey});
+    const double frames = line != m.lines.end() && !line->second.counts.empty() ? double(line->second.counts.size()) : 1.0;
+    const renderers::SiteCount& c = s->site;
+    out.push_back({
+        {"shader", c.shader},
+        {"stage", c.stage},
+        {"entry_point", c.entryPoint},
+        {"function", c.function},
+        {"instruction", c.instruction},
+        {"opcode", c.opcode},
+        {"resource", c.resource},
+        {"access", c.write ? "write" : "read"},
+        {"kind", c.kind},
+        {"file", c.line != 0 ? json(c.file) : json(nullptr)},
+        {"line", c.line != 0 ? json(c.line) : json(nullptr)},
+        {"disassembly", c.disassembly},
+        {"count", s->count / frames},
+        {"bytes", s->bytes / frames},
+    });
+  }
+  return out;
+}
+
 void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
   double total = 0;
   for (const auto& pass : frame.passes) {
@@ -32,7 +84,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
       // One line per (pass, resource, access, source): a counted and a
       // derived line on one resource (the visibility pass's index reads)
       // stay apart, not averaged into one.
-      auto key = std::make_pair(pass.name, a.resource + (a.write ? "\x1fw\x1f" : "\x1fr\x1f") + a.source);
+      auto key = std::make_pair(pass.name, lineKey(a.resource, a.write, a.source));
       auto [it, inserted] = m.lines.try_emplace(key);
       if (inserted) {
         it->second.pass = pass.name;
@@ -49,6 +101,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
       if (a.footprintBytes >= 0 && a.footprintBlocks >= 0) it->second.footprintBlocks.push_back(double(a.footprintBlocks));
       if (a.footprintBytes >= 0 && a.footprintClamped) ++it->second.footprintClampedFrames;
     }
+    addSites(m, pass);
   }
   m.instrumentedFrameMs.push_back(total);
 }
@@ -143,6 +196,7 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
       lines.push_back(std::move(r));
     }
     pass["resources"] = std::move(lines);
+    if (m.sites.count(name)) pass["sites"] = sitesJson(m, name);
     pass["bytes"] = passBytes;                 // the immediate-mode model: every line
     pass["bytes_tile_model"] = passDram;       // the tile-memory model: lines not on chip
     if (passHasFootprint) {

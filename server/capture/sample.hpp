@@ -30,6 +30,13 @@ struct Line {
   uint32_t footprintClampedFrames = 0;  // frames whose Access::footprintClamped was set
 };
 
+// Accumulates one access site's share of one line over frames (RendererOptions::sites).
+struct SiteLine {
+  renderers::SiteCount site;  // its first frame's (what it is; count and bytes unused)
+  std::string lineKey;        // its line's key in SampleMeasure::lines
+  double count = 0, bytes = 0;  // summed over the frames
+};
+
 // F instrumented frames: counts per frame; F uninstrumented frames: times.
 struct SampleMeasure {
   std::vector<std::string> passOrder;
@@ -43,6 +50,9 @@ struct SampleMeasure {
   std::map<std::string, std::vector<double>> plainMsByFrame;
   std::map<std::string, std::vector<double>> arithmeticOps;  // per pass, where known (PassResult::arithmeticOps)
   std::set<std::string> arithmeticCounted;                    // passes whose arithmetic was counted, not estimated
+  // Per pass, its sites in first-seen order (key: shader, instruction, line).
+  std::map<std::string, std::vector<SiteLine>> sites;
+  std::map<std::string, std::map<std::string, size_t>> siteIndex;
 };
 
 // A counted frame: its lines' counts, bytes and footprints, its pass times.
@@ -59,6 +69,11 @@ void addTimes(SampleMeasure& m, const renderers::FrameResult& frame);
 // lines that have one (absent where none has). "frame_ms_frames" (the sample)
 // and "gpu_ms_frames" (each pass) hold every uninstrumented frame's time in
 // order: their medians are frame_ms and gpu_ms.
+// A pass's "sites": each site's count and bytes per frame (its sums over
+// the frames divided by the frames its line was counted in, as the line's
+// own mean is), sorted by bytes, most first.
+nlohmann::json sitesJson(const SampleMeasure& m, const std::string& pass);
+
 nlohmann::json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources,
                           uint32_t frames, uint32_t countedFrames);
 

@@ -285,7 +285,7 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j,
   if (auto e = json_fields::unknownKey(
           j, "",
           {"renderers", "workloads", "scenes", "resolutions", "cameras", "frames", "counted_frames",
-           "counting", "lights", "footprint", "ceilings", "heatmap", "labels"})) {
+           "counting", "lights", "footprint", "sites", "ceilings", "heatmap", "labels"})) {
     return *e;
   }
   CaptureSpec spec;
@@ -341,6 +341,11 @@ Result<CaptureSpec> parseCaptureSpec(const nlohmann::json& j,
     auto footprint = parseFootprint(j["footprint"]);
     if (!footprint) return footprint.failure();
     spec.footprintBlockBytes = *footprint;
+  }
+  if (j.contains("sites")) {
+    auto sites = json_fields::boolean(j["sites"], "sites");
+    if (!sites) return sites.failure();
+    spec.sites = *sites;
   }
 
   size_t camerasPerScene = spec.camerasPerScene();

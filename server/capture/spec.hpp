@@ -85,6 +85,10 @@ struct CaptureSpec {
   // bitmaps that mark the distinct blocks each line touches. Instrumented
   // runs only (renderers::RendererOptions::footprintBlockBytes).
   uint32_t footprintBlockBytes = 0;
+  // Counts per access site (docs/measurement.md, "Sites, draws and
+  // materials"; the spec's "sites"): each pass's bytes per shader source
+  // line and per draw. Instrumented runs only (RendererOptions::sites).
+  bool sites = false;
   // Measure the device's ceilings (gpu/ceilings.hpp) at the capture's start
   // for the roofline; "ceilings": false skips them (and every pass's
   // roofline then has null fractions of peak).

@@ -18,6 +18,7 @@ struct InstrumentArgs {
   uint32_t computeCopies = 16;
   uint32_t footprintBlockBytes = 0;  // 0 off; 32, 64 or 128
   bool analyzeOnly = false;
+  bool perSite = false;  // counter slots per access site, with each site's instruction
 };
 
 // Prints the site table as JSON on stdout; on bad input prints one line on

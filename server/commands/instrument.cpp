@@ -60,6 +60,7 @@ int runInstrument(const InstrumentArgs& args) {
   options.firstSlot = args.firstSlot;
   options.computeCopies = args.computeCopies;
   options.footprintBlockBytes = args.footprintBlockBytes;
+  options.perSite = args.perSite;
   options.footprintTableBinding = args.binding + 1;
   options.footprintBitmapBinding = args.binding + 2;
   if (args.width == "int64") {

@@ -56,6 +56,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     size_t eol = source->source.find('\n');
     std::string text;
     for (const auto& d : allDefines) text += "#define " + d + "\n";
+    text += "#line 2\n";  // the file's own line numbers after them (messages, OpLine)
     source->source.insert(eol == std::string::npos ? source->source.size() : eol + 1, text);
   }
   std::vector<uint32_t> words;
@@ -67,6 +68,9 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     // block, 1.10-1.14x per frame on Sponza against 1.02-1.03x without
     // (docs/accuracy.md); elsewhere the arithmetic is the static estimate.
     instrumentOptions.countArithmetic = options_.footprintBlockBytes != 0;
+    // Bytes per source line: slots per site, and OpLine in the module.
+    instrumentOptions.perSite = options_.sites;
+    source->compile.debugInfo = options_.sites;
     if (auto why = gpu::unsupportedReason(*ctx_, source->stage, instrumentOptions); !why.empty()) {
       return makeError(file + ": " + why);
     }
@@ -77,6 +81,7 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     if (compiled->result.layout().needsSettling()) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
+    passes_[passIndex].siteShaders.resize(sites.size(), file);
     if (compiled->result.arithmeticSlot >= 0) {  // the roofline's arithmetic, counted as executed
       passes_[passIndex].arithmetic.emplace_back(uint32_t(compiled->result.arithmeticSlot), 1);
       passes_[passIndex].arithmeticCounted = true;

@@ -57,8 +57,32 @@ void addAccess(std::vector<Access>& accesses, const std::string& resource, bool 
 }
 
 PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,
-                             const PassBindings& bindings, const std::vector<ResourceInfo>& resources) {
+                             const PassBindings& bindings, const std::vector<ResourceInfo>& resources,
+                             const std::vector<std::string>* siteShaders) {
   PassCounts out;
+  // A counted access: to its line, and with siteShaders to its site's own entry.
+  auto count = [&](size_t siteIndex, const std::string& name, bool write, uint64_t n, uint64_t elementBytes,
+                   const std::string& kind) {
+    addAccess(out.accesses, name, write, n, elementBytes, "counter", kind);
+    if (siteShaders == nullptr) return;
+    const spirv::Site& site = sites[siteIndex];
+    SiteCount c;
+    c.shader = siteIndex < siteShaders->size() ? (*siteShaders)[siteIndex] : std::string();
+    c.stage = std::string(spirv::toString(site.stage));
+    c.entryPoint = site.entryPoint;
+    c.function = site.function;
+    c.opcode = site.opcode;
+    c.file = site.file;
+    c.line = site.line;
+    c.instruction = site.instruction;
+    c.disassembly = site.disassembly;
+    c.resource = name;
+    c.kind = kind;
+    c.write = write;
+    c.count = n;
+    c.bytes = n * elementBytes;
+    out.sites.push_back(std::move(c));
+  };
   // The line's kind from the site's use; a texel buffer is a buffer, an
   // input attachment of a depth target a depth read.
   auto kindOf = [&](const spirv::Site& site, const std::string& name) -> std::string {
@@ -79,7 +103,8 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       out.maxSlotResource = name;
     }
   };
-  for (const auto& site : sites) {
+  for (size_t siteIndex = 0; siteIndex < sites.size(); ++siteIndex) {
+    const spirv::Site& site = sites[siteIndex];
     using spirv::SiteKind;
     if (!seen.insert(site.slot).second) continue;
     if (site.kind == SiteKind::Invocation) {
@@ -92,8 +117,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
     }
     if (site.kind == SiteKind::OutputWrite) {
       const std::string name = lineNames(site, bindings)[0];
-      addAccess(out.accesses, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes),
-                "counter", kindOf(site, name));
+      count(siteIndex, name, true, slotValue(counters, site.slot), bytesOf(name, site.elementBytes), kindOf(site, name));
       noteSlot(slotValue(counters, site.slot), name);
       continue;
     }
@@ -102,7 +126,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
     const bool isBuffer = site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite;
     if (site.kind == SiteKind::BufferRead && site.location) {  // a vertex attribute
       const std::string buffer = lineNames(site, bindings)[0];
-      addAccess(out.accesses, buffer, false, slotValue(counters, site.slot), site.elementBytes, "counter", "buffer");
+      count(siteIndex, buffer, false, slotValue(counters, site.slot), site.elementBytes, "buffer");
       noteSlot(slotValue(counters, site.slot), buffer);
       continue;
     }
@@ -117,7 +141,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       if (auto o = bindings.elementBytes.find({site.set, site.binding}); o != bindings.elementBytes.end()) {
         bytes = o->second;
       }
-      addAccess(out.accesses, name, write, n, bytes, "counter", kindOf(site, name));
+      count(siteIndex, name, write, n, bytes, kindOf(site, name));
       noteSlot(n, name);
     }
   }

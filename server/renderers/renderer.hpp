@@ -81,6 +81,22 @@ struct Access {
   bool footprintClamped = false;
 };
 
+// One access site's count in a frame (RendererOptions::sites): which
+// instruction of which shader, and the line (resource and direction) it
+// counts toward. A site with a dynamic descriptor index has one entry per
+// element it reached, each under that element's resource.
+struct SiteCount {
+  std::string shader;  // the GLSL file the module was compiled from
+  std::string stage, entryPoint, function, opcode;
+  std::string file;  // source file of the line ("" where the module has no line information)
+  uint32_t line = 0;
+  uint32_t instruction = 0;  // spirv::Site::instruction
+  std::string disassembly;
+  std::string resource, kind;  // as the Access it adds to
+  bool write = false;
+  uint64_t count = 0, bytes = 0;
+};
+
 struct PassResult {
   std::string name;        // part of the result format: "gbuffer", "lighting", ...
   double gpuMs = 0;        // from timestamps around the pass
@@ -98,6 +114,9 @@ struct PassResult {
   // shaders. -1 where unknown (uninstrumented frames, no shader).
   int64_t arithmeticOps = -1;
   bool arithmeticCounted = false;
+  // RendererOptions::sites: every counted access site of the pass's shaders;
+  // a line's count and bytes are the sums over its sites.
+  std::vector<SiteCount> sites;
 };
 
 struct FrameResult {
@@ -274,6 +293,9 @@ struct RendererOptions {
   // block size in bytes (32, 64 or 128) of the per-resource bitmaps that
   // mark which blocks each access touches. Needs instrumented.
   uint32_t footprintBlockBytes = 0;
+  // Counts per access site (spirv::InstrumentOptions::perSite), shaders
+  // compiled with line information: PassResult::sites. Needs instrumented.
+  bool sites = false;
 };
 
 class Renderer {

@@ -334,12 +334,14 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       r.computeInvocationsStatistic = int64_t(stats[i].computeShaderInvocations);
     }
     if (options_.instrumented) {
-      PassCounts counts = attributeCounters(p.sites, counters, p.bindings, resources_);
+      PassCounts counts =
+          attributeCounters(p.sites, counters, p.bindings, resources_, options_.sites ? &p.siteShaders : nullptr);
       r.fragmentInvocations = counts.fragmentInvocations;
       r.computeInvocations = counts.computeInvocations;
       r.accesses = std::move(counts.accesses);
       r.maxSlotCount = counts.maxSlotCount;
       r.maxSlotResource = std::move(counts.maxSlotResource);
+      r.sites = std::move(counts.sites);
       if (footprintReady_) attributeFootprint(i, r.accesses, bitmap);
       if (!p.arithmetic.empty()) {
         r.arithmeticOps = 0;

@@ -129,6 +129,9 @@ class Scanner {
  public:
   Scanner(const Module& m, const DefIndex& d, const Types& t) : module_(m), defs_(d), types_(t), resolver_(m, d, t) {
     for (size_t i = 0; i < m.functions.size(); ++i) functionIndex_[m.functions[i].id()] = static_cast<int>(i);
+    for (const auto& import : m.imports) {
+      if (import.literalString(2) == "NonSemantic.Shader.DebugInfo.100") debugInfo_ = import.resultId();
+    }
   }
 
   Result<SiteScan> run() {
@@ -259,6 +262,10 @@ class Scanner {
             s.site.file = line->second.first;
             s.site.line = line->second.second;
           }
+          if (auto store = outputStores_.find(var); store != outputStores_.end()) {
+            s.shownFunction = store->second.first;
+            s.shownInstruction = store->second.second;
+          }
           s.function = ep.functionIndex;
           s.placement = Placement::BeforeReturns;
           s.entryIndex = e;
@@ -266,6 +273,23 @@ class Scanner {
         }
       }
     }
+  }
+
+  // NonSemantic.Shader.DebugInfo.100 (glslang -gVS): DebugLine sets the
+  // position as OpLine does, DebugNoLine ends it.
+  void debugLine(const Instruction& inst, std::string& file, uint32_t& line) const {
+    constexpr uint32_t kDebugSource = 35, kDebugLine = 103, kDebugNoLine = 104;
+    if (inst.word(4) == kDebugNoLine) {
+      file.clear();
+      line = 0;
+      return;
+    }
+    if (inst.word(4) != kDebugLine || inst.size() < 7) return;
+    const Instruction* source = defs_.def(inst.word(5));
+    const Instruction* start = defs_.def(inst.word(6));
+    if (source == nullptr || start == nullptr || start->opcode() != spv::Op::OpConstant) return;
+    if (source->opcode() == spv::Op::OpExtInst && source->word(4) == kDebugSource) file = defs_.stringOf(source->word(5));
+    line = start->word(3);
   }
 
   void scanFunction(int f, uint32_t entry) {
@@ -283,6 +307,10 @@ class Scanner {
       if (op == spv::Op::OpNoLine || op == spv::Op::OpLabel) {
         file.clear();
         line = 0;
+        continue;
+      }
+      if (op == spv::Op::OpExtInst && debugInfo_ != 0 && inst.word(3) == debugInfo_) {
+        debugLine(inst, file, line);
         continue;
       }
       auto add = [&](SiteKind kind, const Resource& r, uint32_t elementType, std::string typeName = {},
@@ -304,6 +332,8 @@ class Scanner {
         }
         s.function = f;
         s.instruction = i;
+        s.shownFunction = f;
+        s.shownInstruction = i;
         s.entryIndex = entry;
         scan_.sites.push_back(std::move(s));
       };
@@ -340,9 +370,10 @@ class Scanner {
         auto sc = types_.storageClassOfValue(ptr);
         if (isBufferClass(sc)) {
           add(SiteKind::BufferWrite, resolver_.pointer(ptr), types_.pointee(types_.typeOf(ptr)));
-        } else if (sc == spv::StorageClass::Output && line != 0) {
+        } else if (sc == spv::StorageClass::Output) {
           uint32_t var = resolver_.baseVariable(ptr);
-          if (var != 0 && !outputLines_.count(var)) outputLines_[var] = {file, line};
+          if (var != 0 && line != 0 && !outputLines_.count(var)) outputLines_[var] = {file, line};
+          if (var != 0) outputStores_.try_emplace(var, f, i);
         }
         continue;
       }
@@ -410,6 +441,8 @@ class Scanner {
   Resolver resolver_;
   std::unordered_map<uint32_t, int> functionIndex_;
   std::map<uint32_t, std::pair<std::string, uint32_t>> outputLines_;
+  std::map<uint32_t, std::pair<int, size_t>> outputStores_;
+  uint32_t debugInfo_ = 0;  // the NonSemantic.Shader.DebugInfo.100 import, 0 if none  // output variable -> its first store (function, index)
   SiteScan scan_;
 };
 

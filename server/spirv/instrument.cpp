@@ -8,6 +8,7 @@
 #include "spirv/find_sites.hpp"
 #include "spirv/inject.hpp"
 #include "spirv/module.hpp"
+#include "spirv/site_text.hpp"
 #include "spirv/types.hpp"
 #include "spirv/footprint.hpp"
 #include "spirv/validate.hpp"
@@ -123,15 +124,17 @@ namespace {
 
 // Slots are per (stage, kind, resource); buffers also split by access width
 // so that bytes = count x element size holds for every slot.
-using SlotKey = std::tuple<int, int, int64_t, int64_t, int64_t, std::string, int64_t, uint32_t, std::string>;
+// With perSite, each access site is a key of its own (its position in the scan).
+using SlotKey = std::tuple<int, int, int64_t, int64_t, int64_t, std::string, int64_t, uint32_t, std::string, int64_t>;
 
-SlotKey slotKey(const Site& s) {
+SlotKey slotKey(const Site& s, int64_t site) {
   bool buffer = s.kind == SiteKind::BufferRead || s.kind == SiteKind::BufferWrite;
   bool perEntry = s.kind == SiteKind::Invocation || s.kind == SiteKind::OutputWrite;
   int64_t index = s.dynamicIndex ? -2 : (s.index ? static_cast<int64_t>(*s.index) : -1);
   return {static_cast<int>(s.stage), static_cast<int>(s.kind), s.set, s.binding, index,
           s.set < 0 ? s.resource : std::string(), s.location ? static_cast<int64_t>(*s.location) : -1,
-          buffer ? s.elementBytes : 0u, perEntry ? s.entryPoint : std::string()};
+          buffer ? s.elementBytes : 0u, perEntry ? s.entryPoint : std::string(),
+          s.kind == SiteKind::Invocation ? -1 : site};
 }
 
 Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOptions& options, bool rewrite) {
@@ -213,7 +216,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   for (const auto& found : scan->sites) {
     uint32_t count = 1;
     if (found.site.dynamicIndex) count = found.arrayLength != 0 ? found.arrayLength : kRuntimeArraySlots;
-    auto key = slotKey(found.site);
+    auto key = slotKey(found.site, options.perSite ? int64_t(result.sites.size()) : -1);
     auto it = slotOf.find(key);
     if (it == slotOf.end()) {
       it = slotOf.emplace(key, std::make_pair(next, count)).first;
@@ -225,6 +228,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     site.slotCount = it->second.second;
     result.sites.push_back(std::move(site));
   }
+  if (options.perSite) describeSites(module, *defs, scan->sites, result.sites);
   if (rewrite && options.countArithmetic && options.mode.kind == CountMode::Accumulate) result.arithmeticSlot = next++;
   result.slotCount = next - options.firstSlot;
   result.firstSlot = options.firstSlot;
@@ -327,6 +331,11 @@ nlohmann::json toJson(const Site& s) {
   if (s.line != 0) {
     j["file"] = s.file;
     j["line"] = s.line;
+  }
+  if (!s.disassembly.empty()) {
+    j["function"] = s.function;
+    j["instruction"] = s.instruction;
+    j["disassembly"] = s.disassembly;
   }
   return j;
 }

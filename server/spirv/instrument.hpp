@@ -83,6 +83,11 @@ struct InstrumentOptions {
   // instead of counted in the shader. Off, every site adds in the shader:
   // for tests of the shader's own adds (counter overflow).
   bool deriveOnceSites = true;
+  // Each access site gets counter slots of its own (Site::slot), and its
+  // function, instruction and disassembly: the reader sums a resource line
+  // over its sites, and keeps each site's count (bytes per source line).
+  // Off, sites of one resource and stage share their slots.
+  bool perSite = false;
   // accumulate mode: also count the arithmetic the invocations execute
   // (each block adds its operations, as spirv/arith.hpp counts them, to a
   // register flushed with the others into Instrumented::arithmeticSlot).

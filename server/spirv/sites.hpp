@@ -59,8 +59,16 @@ struct Site {
   // footprint is off or the access is one the model does not cover; a note says which).
   bool footprint = false;
   std::string opcode;  // the instruction that accesses memory, e.g. "OpImageSampleImplicitLod"
-  std::string file;    // from OpLine, when present
+  std::string file;    // from OpLine or NonSemantic.Shader.DebugInfo.100's DebugLine, when present
   uint32_t line = 0;
+  // InstrumentOptions::perSite: the function holding the access (its OpName,
+  // or "%id"), the instruction's position in the module as instrumented from
+  // (0-based after the header: spirv-dis --no-header's line) and its text,
+  // for a reader without line information. Output writes: the first store
+  // to the output.
+  std::string function;
+  uint32_t instruction = 0;
+  std::string disassembly;
 };
 
 }  // namespace tally::spirv

@@ -21,20 +21,6 @@ using spirv::CounterWidth;
 using spirv::SiteKind;
 using spirv::Stage;
 
-struct ExactMode {
-  const char* mode;
-  CounterWidth width;
-};
-const ExactMode kExactModes[] = {{"exact", CounterWidth::Int64},
-                                 {"exact", CounterWidth::Uint32Pair},
-                                 {"subgroup", CounterWidth::Int64},
-                                 {"accumulate", CounterWidth::Int64},
-                                 {"accumulate", CounterWidth::Uint32Pair},
-                                 {"accumulate:subgroup", CounterWidth::Int64},
-                                 {"accumulate:subgroup", CounterWidth::Uint32Pair},
-                                 {"accumulate:lane", CounterWidth::Int64},
-                                 {"accumulate:lane", CounterWidth::Uint32Pair}};
-
 // Sum over the slots of the sites of `kind` on the resource named `resource`.
 uint64_t sumResource(const PassRun& run, SiteKind kind, const std::string& resource) {
   std::vector<spirv::Site> picked;
@@ -49,13 +35,10 @@ const gpu::Context* deviceOrSkip(std::string& why) { return testContext(&why); }
 // Runs `pass` in every exact mode the device can, handing each run and its label to `check`.
 template <class Pass, class Check>
 void forEachExactMode(const gpu::Context& ctx, Pass& pass, Check check) {
-  for (const auto& m : kExactModes) {
-    if (m.width == CounterWidth::Int64 && !ctx.int64Atomics) continue;
-    auto mode = spirv::parseMode(m.mode);
-    ASSERT_TRUE(mode.ok());
-    auto run = pass.run({*mode, m.width, 1});
+  for (const auto& [mode, width] : exactModes(ctx)) {
+    auto run = pass.run({mode, width, 1});
     ASSERT_TRUE(run.ok()) << run.error();
-    check(*run, modeLabel(*mode, m.width));
+    check(*run, modeLabel(mode, width));
   }
 }
 

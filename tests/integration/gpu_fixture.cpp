@@ -121,4 +121,20 @@ std::string modeLabel(const spirv::Mode& mode, spirv::CounterWidth width) {
   return label;
 }
 
+std::vector<std::pair<spirv::Mode, spirv::CounterWidth>> exactModes(const gpu::Context& ctx) {
+  using spirv::CounterWidth;
+  const std::pair<const char*, CounterWidth> all[] = {
+      {"exact", CounterWidth::Int64},          {"exact", CounterWidth::Uint32Pair},
+      {"subgroup", CounterWidth::Int64},       {"accumulate", CounterWidth::Int64},
+      {"accumulate", CounterWidth::Uint32Pair}, {"accumulate:subgroup", CounterWidth::Int64},
+      {"accumulate:subgroup", CounterWidth::Uint32Pair}, {"accumulate:lane", CounterWidth::Int64},
+      {"accumulate:lane", CounterWidth::Uint32Pair}};
+  std::vector<std::pair<spirv::Mode, CounterWidth>> out;
+  for (const auto& [name, width] : all) {
+    if (width == CounterWidth::Int64 && !ctx.int64Atomics) continue;
+    out.emplace_back(*spirv::parseMode(name), width);
+  }
+  return out;
+}
+
 }  // namespace tally::test

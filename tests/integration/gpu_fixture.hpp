@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -47,6 +48,10 @@ uint64_t sampledBound(const spirv::Mode& mode, uint32_t width, uint32_t height,
 
 // Appends one JSON object as a line to exactness_stats.json in the working directory.
 void appendStatsLine(const nlohmann::json& line);
+
+// The modes that count exactly, in every counter width the device can run:
+// exact, subgroup and accumulate with each of its flushes.
+std::vector<std::pair<spirv::Mode, spirv::CounterWidth>> exactModes(const gpu::Context& ctx);
 
 // "exact", "exact/uint32_pair", "subgroup", "sampled:16" ...
 std::string modeLabel(const spirv::Mode& mode, spirv::CounterWidth width);

@@ -48,6 +48,7 @@ Result<std::vector<uint32_t>> compileFile(const gpu::Context& ctx, const std::st
   auto source = gpu::loadShaderSource(ctx, shaderDir(), name);
   if (!source) return makeError(source.error());
   if (target) source->compile.target = *target;
+  source->compile.debugInfo = true;  // OpLine: each site's source line
   auto compiled = gpu::compileShader(*source);
   if (!compiled) return makeError(compiled.error());
   return std::move(compiled->words);
@@ -88,6 +89,7 @@ Result<InstrumentedModules> instrumentAll(
     instrumentOptions.width = options.width;
     if (options.computeCopies != 0) instrumentOptions.computeCopies = options.computeCopies;
     instrumentOptions.deriveOnceSites = options.deriveOnceSites;
+    instrumentOptions.perSite = options.perSite;
     if (auto why = gpu::unsupportedReason(ctx, stage, instrumentOptions); !why.empty()) {
       return makeError(std::string(spirv::toString(stage)) + ": " + why);
     }
@@ -210,9 +212,10 @@ VkDescriptorSetLayoutBinding binding(uint32_t index, VkDescriptorType type, VkSh
 // ---------------------------------------------------------------- fragment
 
 FragmentPass::FragmentPass(const gpu::Context& ctx, uint32_t width, uint32_t height,
-                           std::optional<glsl::Target> target, const std::string& fragment)
+                           std::optional<glsl::Target> target, const std::string& fragment,
+                           const std::string& vertex)
     : ctx_(ctx), width_(width), height_(height) {
-  auto vert = compileFile(ctx, "fullscreen.vert.glsl", target);
+  auto vert = compileFile(ctx, vertex, target);
   auto frag = compileFile(ctx, fragment, target);
   if (!vert) compileError_ = vert.error();
   if (!frag) compileError_ = frag.error();
@@ -239,7 +242,8 @@ FragmentPass::FragmentPass(const gpu::Context& ctx, uint32_t width, uint32_t hei
 
   std::array<VkDescriptorSetLayoutBinding, kFragmentTextures> sceneBindings;
   for (uint32_t i = 0; i < kFragmentTextures; ++i) {
-    sceneBindings[i] = binding(i, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_SHADER_STAGE_FRAGMENT_BIT);
+    sceneBindings[i] = binding(i, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                               VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT);
   }
   sceneLayout_ = gpu::createDescriptorSetLayout(ctx, sceneBindings);
   emptyLayout_ = gpu::createDescriptorSetLayout(ctx, {});

@@ -37,6 +37,8 @@ struct RunOptions {
   uint32_t computeCopies = 0;
   // accumulate: derive the sites that run once in every invocation (InstrumentOptions::deriveOnceSites).
   bool deriveOnceSites = true;
+  // Counter slots per access site (InstrumentOptions::perSite).
+  bool perSite = false;
 };
 
 struct PassRun {
@@ -57,10 +59,12 @@ struct PassRun {
 class FragmentPass {
  public:
   // `target` overrides gpu::glslTarget(ctx) for both stages. `fragment` is a
-  // shader of shaders/ with five_reads' bindings (3 sampler2D, one output).
+  // shader of shaders/ with five_reads' bindings (3 sampler2D, one output),
+  // `vertex` one that draws fullscreen.vert's triangle (it may read them too).
   FragmentPass(const gpu::Context& ctx, uint32_t width, uint32_t height,
                std::optional<glsl::Target> target = std::nullopt,
-               const std::string& fragment = "five_reads.frag.glsl");
+               const std::string& fragment = "five_reads.frag.glsl",
+               const std::string& vertex = "fullscreen.vert.glsl");
   ~FragmentPass();
   FragmentPass(const FragmentPass&) = delete;
   FragmentPass& operator=(const FragmentPass&) = delete;
