@@ -184,8 +184,8 @@ json shaderSources(const std::set<std::string>& names) {
   auto dir = renderers::shaderDirectory();
   if (!dir) return out;
   for (const auto& name : names) {
-    // Only files of the shader directory itself: a name is a file name, never a path.
-    if (name.empty() || name.find('/') != std::string::npos || name.find("..") != std::string::npos) continue;
+    // Only files inside the shader folder: names are relative to it.
+    if (name.empty() || name.front() == '/' || name.find("..") != std::string::npos) continue;
     std::ifstream in(std::filesystem::path(*dir) / name, std::ios::binary);
     if (!in) continue;
     out[name] = std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

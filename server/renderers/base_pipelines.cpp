@@ -80,7 +80,12 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     slotCount_ += compiled->result.layout().reserved();
     if (compiled->result.layout().needsSettling()) copyLayouts_.push_back(compiled->result.layout());
     auto& sites = passes_[passIndex].sites;
+    const size_t first = sites.size();
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
+    // Lines in included files come with the includer's full path: name them as the shader folder does.
+    for (size_t k = first; k < sites.size(); ++k) {
+      if (sites[k].file.rfind(*dir + "/", 0) == 0) sites[k].file.erase(0, dir->size() + 1);
+    }
     passes_[passIndex].siteShaders.resize(sites.size(), file);
     if (compiled->result.arithmeticSlot >= 0) {  // the roofline's arithmetic, counted as executed
       passes_[passIndex].arithmetic.emplace_back(uint32_t(compiled->result.arithmeticSlot), 1);

@@ -179,6 +179,7 @@ class Scanner {
       }
     }
     addOutputSites();
+    placeVertexInputSites();
     return std::move(scan_);
   }
 
@@ -223,7 +224,21 @@ class Scanner {
       s.function = ep.functionIndex;
       s.placement = Placement::EntryStart;
       s.entryIndex = e;
+      vertexInputSites_.emplace_back(scan_.sites.size(), var);
       scan_.sites.push_back(std::move(s));
+    }
+  }
+
+  // A vertex input's site is shown at the first load of the input (its line and instruction).
+  void placeVertexInputSites() {
+    for (const auto& [site, var] : vertexInputSites_) {
+      auto load = inputLoads_.find(var);
+      if (load == inputLoads_.end()) continue;
+      FoundSite& s = scan_.sites[site];
+      s.shownFunction = load->second.function;
+      s.shownInstruction = load->second.instruction;
+      s.site.file = load->second.file;
+      s.site.line = load->second.line;
     }
   }
 
@@ -362,7 +377,11 @@ class Scanner {
       }
       if (op == spv::Op::OpLoad) {
         uint32_t ptr = inst.word(3);
-        if (isBufferClass(types_.storageClassOfValue(ptr))) add(SiteKind::BufferRead, resolver_.pointer(ptr), inst.resultType());
+        const auto sc = types_.storageClassOfValue(ptr);
+        if (isBufferClass(sc)) add(SiteKind::BufferRead, resolver_.pointer(ptr), inst.resultType());
+        if (sc == spv::StorageClass::Input) {
+          if (uint32_t var = resolver_.baseVariable(ptr); var != 0) inputLoads_.try_emplace(var, Shown{f, i, file, line});
+        }
         continue;
       }
       if (op == spv::Op::OpStore) {
@@ -442,7 +461,15 @@ class Scanner {
   std::unordered_map<uint32_t, int> functionIndex_;
   std::map<uint32_t, std::pair<std::string, uint32_t>> outputLines_;
   std::map<uint32_t, std::pair<int, size_t>> outputStores_;
-  uint32_t debugInfo_ = 0;  // the NonSemantic.Shader.DebugInfo.100 import, 0 if none  // output variable -> its first store (function, index)
+  uint32_t debugInfo_ = 0;  // the NonSemantic.Shader.DebugInfo.100 import, 0 if none
+  struct Shown {
+    int function = -1;
+    size_t instruction = 0;
+    std::string file;
+    uint32_t line = 0;
+  };
+  std::map<uint32_t, Shown> inputLoads_;                       // Input variable -> its first load
+  std::vector<std::pair<size_t, uint32_t>> vertexInputSites_;  // (site, Input variable)  // output variable -> its first store (function, index)
   SiteScan scan_;
 };
 

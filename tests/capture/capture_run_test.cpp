@@ -357,6 +357,61 @@ TEST_F(CaptureRun, RooflinePerPass) {
   }
 }
 
+// Per-site counts ("sites": true) in every renderer, counting mode and with
+// footprint on: each counted line is the sum of its sites' counts and bytes;
+// every line, footprint included, equals the same capture's without sites
+// (a second mechanism: slots shared per resource); and every site of the
+// built-in shaders maps to a line of a shader file the run carries.
+TEST_F(CaptureRun, SitesSumToTheirLinesAndChangeNoLine) {
+  json spec = {{"renderers", renderers::rendererNames()},
+               {"scenes", {{{"name", "planes"}, {"layers", 2}}}},
+               {"resolutions", {{40, 24}}},
+               {"cameras", {{{"eye", {0, 0, 0}}, {"target", {0, 0, -1}}, {"fov_deg", 60}}}},
+               {"frames", 1},
+               {"counted_frames", 1},
+               {"lights", 3},
+               {"counting", {"exact", "accumulate", "accumulate:lane"}},
+               {"footprint", 64},
+               {"ceilings", false}};
+  fs::path plainOut = dir_ / "plain.json", sitesOut = dir_ / "sites.json";
+  ASSERT_EQ(capture(spec, plainOut.string()), 0) << test::readFile(dir_ / "err");
+  spec["sites"] = true;
+  ASSERT_EQ(capture(spec, sitesOut.string()), 0) << test::readFile(dir_ / "err");
+  json plain = json::parse(test::readFile(plainOut)), sites = json::parse(test::readFile(sitesOut));
+  ASSERT_EQ(plain["runs"].size(), sites["runs"].size());
+  size_t counted = 0;
+  for (size_t r = 0; r < sites["runs"].size(); ++r) {
+    const json& run = sites["runs"][r];
+    SCOPED_TRACE(run["renderer"].get<std::string>() + " " + run["counting"].get<std::string>());
+    ASSERT_TRUE(run["shader_sources"].is_object());
+    for (size_t p = 0; p < run["samples"][0]["passes"].size(); ++p) {
+      const json& pass = run["samples"][0]["passes"][p];
+      const json& before = plain["runs"][r]["samples"][0]["passes"][p];
+      SCOPED_TRACE(pass["name"].get<std::string>());
+      EXPECT_EQ(pass["resources"], before["resources"]);
+      std::map<std::string, std::pair<double, double>> bySites;
+      for (const json& site : pass.value("sites", json::array())) {
+        bySites[site["resource"].get<std::string>() + "/" + site["access"].get<std::string>()].first += site["count"].get<double>();
+        bySites[site["resource"].get<std::string>() + "/" + site["access"].get<std::string>()].second += site["bytes"].get<double>();
+        ASSERT_TRUE(site["line"].is_number()) << site.dump();
+        const std::string file = site["file"].get<std::string>();
+        ASSERT_TRUE(run["shader_sources"].contains(file)) << file;
+        const std::string text = run["shader_sources"][file].get<std::string>();
+        EXPECT_LE(site["line"].get<size_t>(), size_t(std::count(text.begin(), text.end(), '\n')) + 1) << site.dump();
+        EXPECT_FALSE(site["disassembly"].get<std::string>().empty());
+      }
+      for (const json& line : pass["resources"]) {
+        if (line["source"] != "counter") continue;
+        const auto& [count, bytes] = bySites[line["name"].get<std::string>() + "/" + line["access"].get<std::string>()];
+        EXPECT_EQ(count, line["count"].get<double>()) << line.dump();
+        EXPECT_EQ(bytes, line["bytes"].get<double>()) << line.dump();
+        ++counted;
+      }
+    }
+  }
+  EXPECT_GT(counted, 0u);
+}
+
 TEST_F(CaptureRun, BadSpecNamesTheFieldAndWritesNothing) {
   json spec = {{"renderers", {"forward", "warp"}}, {"resolutions", {{64, 36}}}};
   fs::path out = dir_ / "bad.json";
