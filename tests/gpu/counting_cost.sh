@@ -14,6 +14,7 @@
 #   COUNTING_FRAMES=N        replaces the 10 frames per sample
 #   COUNTING_SPECS="sponza compute"
 #   COUNTING_MODES=a,b       replaces the specs' counting modes (e.g. exact,accumulate)
+#   COUNTING_SITES=1         also runs each spec with per-site counts ("sites": true): counting-<name>-sites.*
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -25,11 +26,16 @@ sponza="$(tally_sponza_path)"
 
 status=0
 results=()
+names=()
 for name in ${COUNTING_SPECS:-sponza compute}; do
+  names+=("$name")
+  [ -n "${COUNTING_SITES:-}" ] && names+=("$name-sites")
+done
+for name in "${names[@]}"; do
   spec="$out/counting-$name-spec.json"
-  python3 tests/gpu/spec_edit.py "tests/gpu/counting/$name.json" --sponza "$sponza" \
+  python3 tests/gpu/spec_edit.py "tests/gpu/counting/${name%-sites}.json" --sponza "$sponza" \
     --resolution "${width}x${height}" --frames "$frames" ${COUNTING_MODES:+--counting "$COUNTING_MODES"} \
-    > "$spec" || { status=2; continue; }
+    $([ "$name" != "${name%-sites}" ] && echo --sites) > "$spec" || { status=2; continue; }
   tally_timed_capture "counting $name ${width}x${height}" "$spec" "$out/counting-$name.json" \
     "$out/counting-$name.log" "$out/counting.log" || { status=$?; continue; }
   "$tallyd" accuracy --result "$out/counting-$name.json" > "$out/counting-$name.txt" || status=1

@@ -38,6 +38,7 @@ def main():
     ap.add_argument("--scene")
     ap.add_argument("--cameras", type=int, default=2)
     ap.add_argument("--counting", help="comma-separated counting modes")
+    ap.add_argument("--sites", action="store_true", help="count per access site (the spec's \"sites\")")
     args = ap.parse_args()
 
     with open(args.spec) as f:
@@ -59,6 +60,8 @@ def main():
             spec["resolutions"] = [args.resolution]
     if args.counting:
         spec["counting"] = [m for m in args.counting.split(",") if m]
+    if args.sites:
+        spec["sites"] = True
     if args.frames:
         # A spec that counts every frame keeps doing so; one that counts
         # fewer keeps its count, within the new frames.
