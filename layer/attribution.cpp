@@ -80,6 +80,12 @@ void join(PassRecord& into, const PassRecord& p) {
     to.kind = line.kind;
     to.format = line.format;
   }
+  for (const auto& [key, site] : p.sites) {
+    auto [to, inserted] = into.sites.try_emplace(key, site);
+    if (inserted) continue;
+    to->second.count += site.count;
+    to->second.bytes += site.bytes;
+  }
 }
 
 }  // namespace

@@ -88,6 +88,14 @@ Config Config::fromEnvironment() {
       c.mode = *parsed;
     }
   }
+  if (const char* sites = std::getenv("TALLY_LAYER_SITES"); sites != nullptr && *sites != '\0' && error.empty()) {
+    const std::string value = sites;
+    if (value == "1") {
+      c.sites = true;
+    } else if (value != "0") {
+      error = "TALLY_LAYER_SITES: '" + value + "' is not 0 or 1";
+    }
+  }
   if (const char* timing = std::getenv("TALLY_LAYER_TIMING"); timing != nullptr && *timing != '\0' && error.empty()) {
     const std::string value = timing;
     if (value == "timestamps") {

@@ -85,6 +85,15 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         continue;
       }
       addLine(pass, name, write, "counter", n, bytes, kind, format);
+      if (dev.config.sites) {
+        auto [at, inserted] = pass.sites.try_emplace({site.shader, site.instruction, name, write});
+        if (inserted) {
+          at->second.site = site;
+          at->second.kind = kind;
+        }
+        at->second.count += n;
+        at->second.bytes += n * bytes;
+      }
     }
   }
 }

@@ -37,6 +37,11 @@ nlohmann::json framesJson(const DeviceState& dev, std::map<std::string, const Re
         used[name] = nullptr;
       }
       frameMs += p.timed ? p.gpuMs : 0;
+      json sites = json::array();
+      for (const auto& [key, s] : p.sites) {
+        sites.push_back(spirv::countedSiteJson(s.site, std::get<2>(key), std::get<3>(key), s.kind, double(s.count),
+                                               double(s.bytes)));
+      }
       passes.push_back({{"name", p.name},
                         {"gpu_ms", p.timed ? p.gpuMs : -1.0},
                         {"draws", p.draws},
@@ -48,6 +53,7 @@ nlohmann::json framesJson(const DeviceState& dev, std::map<std::string, const Re
                         {"compute_invocations", p.computeInvocations},
                         {"compute_invocations_statistic", p.computeStatistic},
                         {"resources", std::move(resources)}});
+      if (!sites.empty()) passes.back()["sites"] = std::move(sites);
     }
     frames.push_back({{"index", index}, {"submissions", frame.submissions}, {"frame_ms", frameMs}, {"passes", passes}});
   }
@@ -78,6 +84,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
        {{"name", "VK_LAYER_TALLY_counters"},
         {"version", "0.1.0"},
         {"counting", dev.config.counts ? spirv::toString(dev.config.mode) : "off"},
+        {"sites", dev.config.sites},
         {"timing", dev.config.statistics ? "all" : dev.config.timestamps ? "timestamps" : "none"},
         {"counter_bits", dev.int64Atomics ? 64 : 32},
         {"statistics_frames", dev.config.statisticsFrames == UINT32_MAX ? json("all") : json(dev.config.statisticsFrames)},

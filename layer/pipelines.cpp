@@ -158,6 +158,7 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
     if (why.empty()) {
       spirv::InstrumentOptions options = dev.instrumentOptions;
       options.firstSlot = next;
+      options.perSite = dev.config.sites;
       if (s == spirv::Stage::Fragment && plan != nullptr && !plan->early()) options.earlyFragmentTests = false;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.
@@ -182,7 +183,10 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
           stage.module = module;
           next += result->layout().reserved();
           if (result->layout().needsSettling()) info.foldLayouts.push_back(result->layout());
-          for (auto& site : result->sites) info.sites.push_back(std::move(site));
+          for (auto& site : result->sites) {
+            site.shader = report["name"].get<std::string>();
+            info.sites.push_back(std::move(site));
+          }
           report["instrumented"] = true;
           report["sites"] = result->sites.size();
           std::vector<std::string> notes = result->notes;

@@ -53,6 +53,9 @@ struct Config {
   // application's own pipelines bound, nothing counted: what the counters
   // cost, per pass, beside a counting run.
   bool counts = true;
+  // TALLY_LAYER_SITES=1: counter slots per access site, and each pass's
+  // "sites" (bytes per shader source line) in the output.
+  bool sites = false;
   std::string error;           // a variable that did not parse: the layer counts nothing and says so
   static Config fromEnvironment();
 };
@@ -322,6 +325,14 @@ struct PassRecord {
     std::string kind, format;
   };
   std::map<std::tuple<std::string, bool, std::string>, Line> lines;  // (resource name, write, source)
+  // Config::sites: each site's share of the counted lines.
+  struct SiteLine {
+    spirv::Site site;
+    std::string kind;
+    uint64_t count = 0, bytes = 0;
+  };
+  // (shader, instruction, resource name, write)
+  std::map<std::tuple<std::string, uint32_t, std::string, bool>, SiteLine> sites;
 };
 struct FrameRecord {
   uint64_t index = 0;

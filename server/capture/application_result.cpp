@@ -51,6 +51,44 @@ json lineOf(const json& line, const std::string& path) {
   return out;
 }
 
+// A pass's "sites" (TALLY_LAYER_SITES): each entry checked as a line is,
+// its source position and instruction where the module had them.
+json sitesOf(const json& sites, const std::string& path) {
+  json out = json::array();
+  for (size_t i = 0; i < sites.size(); ++i) {
+    const std::string where = path + "[" + std::to_string(i) + "]";
+    const json& site = sites[i];
+    if (!site.is_object()) malformed(where, "must be an object");
+    json line = lineOf({{"name", kMembers.text(site, "resource", where)},
+                        {"access", kMembers.text(site, "access", where)},
+                        {"kind", kMembers.optText(site, "kind", where).value_or("")},
+                        {"count", site.contains("count") ? site["count"] : json()},
+                        {"bytes", site.contains("bytes") ? site["bytes"] : json()}},
+                       where);
+    json entry = {{"shader", kMembers.optText(site, "shader", where).value_or("")},
+                  {"stage", kMembers.optText(site, "stage", where).value_or("")},
+                  {"entry_point", kMembers.optText(site, "entry_point", where).value_or("")},
+                  {"function", kMembers.optText(site, "function", where).value_or("")},
+                  {"opcode", kMembers.optText(site, "opcode", where).value_or("")},
+                  {"disassembly", kMembers.optText(site, "disassembly", where).value_or("")},
+                  {"resource", line["name"]},
+                  {"access", line["access"]},
+                  {"kind", line["kind"]},
+                  {"count", line["count"]},
+                  {"bytes", line["bytes"]},
+                  {"file", nullptr},
+                  {"line", nullptr}};
+    if (auto instruction = kMembers.optInteger(site, "instruction", where)) entry["instruction"] = *instruction;
+    if (auto file = kMembers.optText(site, "file", where)) entry["file"] = *file;
+    if (auto number = kMembers.optInteger(site, "line", where)) {
+      if (*number < 1) malformed(at(where, "line"), "must be at least 1");
+      entry["line"] = *number;
+    }
+    out.push_back(std::move(entry));
+  }
+  return out;
+}
+
 // A pass as the capture result has it. gpu_ms is -1 where the device has no
 // timestamps (0 here, and the run says so); a statistic of -1 was not queried
 // (left out).
@@ -88,6 +126,7 @@ json passOf(const json& pass, const std::string& path, bool& untimed) {
   }
   out["resources"] = std::move(lines);
   out["bytes"] = bytes;
+  if (find(pass, "sites")) out["sites"] = sitesOf(kMembers.array(pass, "sites", path), at(path, "sites"));
   return out;
 }
 

@@ -367,7 +367,7 @@ Result<json> runOne(CaptureSession& session, const SceneInCapture& current, rend
     }
     json sample = sampleJson(m, instrumented->resources(), spec.frames, spec.countedFramesOrDefault());
     for (const auto& [pass, sites] : m.sites) {
-      for (const auto& s : sites) siteFiles.insert({s.site.shader, s.site.file});
+      for (const auto& s : sites) siteFiles.insert({s.site.site.shader, s.site.site.file});
     }
     addRoofline(sample, m, ceilings);
     sample["camera"] = scenes::toJson(camera);

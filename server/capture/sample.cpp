@@ -20,8 +20,8 @@ void addSites(SampleMeasure& m, const renderers::PassResult& pass) {
   auto& list = m.sites[pass.name];
   auto& index = m.siteIndex[pass.name];
   for (const auto& c : pass.sites) {
-    std::string key = c.shader + "\x1f" + std::to_string(c.instruction) + "\x1f" + std::to_string(c.line) + "\x1f" +
-                      lineKey(c.resource, c.write, "counter");
+    std::string key = c.site.shader + "\x1f" + std::to_string(c.site.instruction) + "\x1f" +
+                      std::to_string(c.site.line) + "\x1f" + lineKey(c.resource, c.write, "counter");
     auto [it, inserted] = index.try_emplace(key, list.size());
     if (inserted) list.push_back({c, lineKey(c.resource, c.write, "counter"), 0, 0});
     list[it->second].count += double(c.count);
@@ -42,22 +42,7 @@ json sitesJson(const SampleMeasure& m, const std::string& pass) {
     auto line = m.lines.find({pass, s->lineKey});
     const double frames = line != m.lines.end() && !line->second.counts.empty() ? double(line->second.counts.size()) : 1.0;
     const renderers::SiteCount& c = s->site;
-    out.push_back({
-        {"shader", c.shader},
-        {"stage", c.stage},
-        {"entry_point", c.entryPoint},
-        {"function", c.function},
-        {"instruction", c.instruction},
-        {"opcode", c.opcode},
-        {"resource", c.resource},
-        {"access", c.write ? "write" : "read"},
-        {"kind", c.kind},
-        {"file", c.line != 0 ? json(c.file) : json(nullptr)},
-        {"line", c.line != 0 ? json(c.line) : json(nullptr)},
-        {"disassembly", c.disassembly},
-        {"count", s->count / frames},
-        {"bytes", s->bytes / frames},
-    });
+    out.push_back(spirv::countedSiteJson(c.site, c.resource, c.write, c.kind, s->count / frames, s->bytes / frames));
   }
   return out;
 }

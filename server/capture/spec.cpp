@@ -485,7 +485,7 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   if (replay) {
     if (auto e = json_fields::unknownKey(j, "",
                                          {"replay", "frames", "skip_frames", "frame_submits", "env",
-                                          "display", "timeout_s", "counting"})) {
+                                          "display", "timeout_s", "counting", "sites"})) {
       return *e;
     }
     for (const auto& [key, value] : j.items()) {
@@ -502,7 +502,7 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (std::ifstream in(path, std::ios::binary); !in) return fieldError("replay", path.string() + ": cannot be read");
     spec.replayFile = path.string();
   } else {
-    if (auto e = json_fields::unknownKey(j, "", {"application", "counting"})) return *e;
+    if (auto e = json_fields::unknownKey(j, "", {"application", "counting", "sites"})) return *e;
     const auto& app = j["application"];
     if (!app.is_object()) {
       return fieldError("application", "must be an object with \"command\", got " + show(app));
@@ -566,6 +566,11 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
         json_fields::oneOf(j["counting"], "counting", {"accumulate", "exact"}, "(the layer's modes)");
     if (!counting) return counting.failure();
     spec.counting = *counting;
+  }
+  if (j.contains("sites")) {
+    auto sites = json_fields::boolean(j["sites"], "sites");
+    if (!sites) return sites.failure();
+    spec.sites = *sites;
   }
   return spec;
 }

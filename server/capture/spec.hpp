@@ -191,6 +191,7 @@ struct ApplicationSpec {
   Display display = Display::None;
   uint32_t timeoutSeconds = kDefaultApplicationTimeoutSeconds;
   std::string counting = "accumulate";  // the layer's modes: accumulate or exact
+  bool sites = false;  // the spec's "sites": counts per access site (TALLY_LAYER_SITES)
   nlohmann::json source;                // the spec as given
 
   // "application." for an application (its fields live in that object), "" for a replay.

@@ -84,9 +84,9 @@ Result<VkShaderModule> RendererBase::shader(uint32_t passIndex, const std::strin
     sites.insert(sites.end(), compiled->result.sites.begin(), compiled->result.sites.end());
     // Lines in included files come with the includer's full path: name them as the shader folder does.
     for (size_t k = first; k < sites.size(); ++k) {
+      sites[k].shader = file;
       if (sites[k].file.rfind(*dir + "/", 0) == 0) sites[k].file.erase(0, dir->size() + 1);
     }
-    passes_[passIndex].siteShaders.resize(sites.size(), file);
     if (compiled->result.arithmeticSlot >= 0) {  // the roofline's arithmetic, counted as executed
       passes_[passIndex].arithmetic.emplace_back(uint32_t(compiled->result.arithmeticSlot), 1);
       passes_[passIndex].arithmeticCounted = true;

@@ -58,24 +58,15 @@ void addAccess(std::vector<Access>& accesses, const std::string& resource, bool 
 
 PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,
                              const PassBindings& bindings, const std::vector<ResourceInfo>& resources,
-                             const std::vector<std::string>* siteShaders) {
+                             bool perSite) {
   PassCounts out;
-  // A counted access: to its line, and with siteShaders to its site's own entry.
+  // A counted access: to its line, and with perSite to its site's own entry.
   auto count = [&](size_t siteIndex, const std::string& name, bool write, uint64_t n, uint64_t elementBytes,
                    const std::string& kind) {
     addAccess(out.accesses, name, write, n, elementBytes, "counter", kind);
-    if (siteShaders == nullptr) return;
-    const spirv::Site& site = sites[siteIndex];
+    if (!perSite) return;
     SiteCount c;
-    c.shader = siteIndex < siteShaders->size() ? (*siteShaders)[siteIndex] : std::string();
-    c.stage = std::string(spirv::toString(site.stage));
-    c.entryPoint = site.entryPoint;
-    c.function = site.function;
-    c.opcode = site.opcode;
-    c.file = site.file;
-    c.line = site.line;
-    c.instruction = site.instruction;
-    c.disassembly = site.disassembly;
+    c.site = sites[siteIndex];
     c.resource = name;
     c.kind = kind;
     c.write = write;

@@ -40,7 +40,7 @@ struct PassCounts {
   // name, or "fragment invocations"): how close a counter came to wrapping.
   uint64_t maxSlotCount = 0;
   std::string maxSlotResource;
-  std::vector<SiteCount> sites;  // with siteShaders: each site's share of the lines
+  std::vector<SiteCount> sites;  // with perSite: each site's share of the lines
 };
 
 // The line names a site's slots count for: the attachment at an output's
@@ -53,12 +53,12 @@ const std::string& elementName(const std::vector<std::string>& names, size_t ele
 
 // `counters` is the whole counter buffer (a site's slots index it directly).
 // Resources missing from `resources` fall back to the site's element bytes.
-// With `siteShaders` (the GLSL file of each site; sites counted with
-// spirv::InstrumentOptions::perSite), PassCounts::sites gets every site's
-// count: the lines are then the sums over their sites.
+// With `perSite` (sites counted with spirv::InstrumentOptions::perSite),
+// PassCounts::sites gets every site's count: the lines are then the sums
+// over their sites.
 PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::vector<uint64_t>& counters,
                              const PassBindings& bindings, const std::vector<ResourceInfo>& resources,
-                             const std::vector<std::string>* siteShaders = nullptr);
+                             bool perSite = false);
 
 // Adds (or merges into) a line.
 void addAccess(std::vector<Access>& accesses, const std::string& resource, bool write, uint64_t count,

@@ -86,12 +86,7 @@ struct Access {
 // counts toward. A site with a dynamic descriptor index has one entry per
 // element it reached, each under that element's resource.
 struct SiteCount {
-  std::string shader;  // the GLSL file the module was compiled from
-  std::string stage, entryPoint, function, opcode;
-  std::string file;  // source file of the line ("" where the module has no line information)
-  uint32_t line = 0;
-  uint32_t instruction = 0;  // spirv::Site::instruction
-  std::string disassembly;
+  spirv::Site site;  // shader (the GLSL file), instruction, source line
   std::string resource, kind;  // as the Access it adds to
   bool write = false;
   uint64_t count = 0, bytes = 0;

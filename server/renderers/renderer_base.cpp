@@ -335,7 +335,7 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
     }
     if (options_.instrumented) {
       PassCounts counts =
-          attributeCounters(p.sites, counters, p.bindings, resources_, options_.sites ? &p.siteShaders : nullptr);
+          attributeCounters(p.sites, counters, p.bindings, resources_, options_.sites);
       r.fragmentInvocations = counts.fragmentInvocations;
       r.computeInvocations = counts.computeInvocations;
       r.accesses = std::move(counts.accesses);

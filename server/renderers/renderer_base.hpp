@@ -75,7 +75,6 @@ class RendererBase : public Renderer {
     std::function<void(VkCommandBuffer)> record;
     PassBindings bindings;
     std::vector<spirv::Site> sites;
-    std::vector<std::string> siteShaders;  // the GLSL file of each site (RendererOptions::sites)
     // Per instrumented shader: its invocation counter slot and its static
     // arithmetic per invocation (PassResult::arithmeticOps).
     // A shader whose executed arithmetic was counted (accumulate mode) has

@@ -340,6 +340,25 @@ nlohmann::json toJson(const Site& s) {
   return j;
 }
 
+nlohmann::json countedSiteJson(const Site& s, const std::string& resource, bool write, const std::string& kind,
+                               double count, double bytes) {
+  const bool placed = s.line != 0;
+  return {{"shader", s.shader},
+          {"stage", toString(s.stage)},
+          {"entry_point", s.entryPoint},
+          {"function", s.function},
+          {"instruction", s.instruction},
+          {"opcode", s.opcode},
+          {"resource", resource},
+          {"access", write ? "write" : "read"},
+          {"kind", kind},
+          {"file", placed ? nlohmann::json(s.file) : nlohmann::json(nullptr)},
+          {"line", placed ? nlohmann::json(s.line) : nlohmann::json(nullptr)},
+          {"disassembly", s.disassembly},
+          {"count", count},
+          {"bytes", bytes}};
+}
+
 nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
   nlohmann::json sites = nlohmann::json::array();
   for (const auto& s : r.sites) sites.push_back(toJson(s));

@@ -174,6 +174,11 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
 Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options);
 
 nlohmann::json toJson(const Site& site);
+// A site's share of a result line (InstrumentOptions::perSite), as a pass's
+// "sites" entry carries it (docs/result-schema.md): what the site is, where
+// in the source, and its count and bytes per frame.
+nlohmann::json countedSiteJson(const Site& site, const std::string& resource, bool write, const std::string& kind,
+                               double count, double bytes);
 nlohmann::json toJson(const Instrumented& result, const InstrumentOptions& options);
 
 // Whether the module demotes fragments to helpers (OpDemoteToHelperInvocation):

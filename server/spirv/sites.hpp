@@ -69,6 +69,9 @@ struct Site {
   std::string function;
   uint32_t instruction = 0;
   std::string disassembly;
+  // The shader the module came from, as its owner names it (a GLSL file, a
+  // module's debug name): set by the caller, not the instrumentation.
+  std::string shader;
 };
 
 }  // namespace tally::spirv

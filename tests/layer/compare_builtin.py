@@ -40,6 +40,44 @@ def counted_lines(passes, source="counter"):
     return out
 
 
+def site_sums(passes):
+    """{(pass, resource, access): count} summed over each pass's sites."""
+    out = {}
+    for p in passes:
+        for site in p.get("sites", []):
+            key = (p["name"], site["resource"], site["access"])
+            out[key] = out.get(key, 0) + site["count"]
+    return out
+
+
+def site_counts(passes):
+    """{(pass, shader, resource, access): sorted counts of its sites}: how a
+    line splits over the instructions of each shader, whatever their ids."""
+    out = {}
+    for p in passes:
+        for site in p.get("sites", []):
+            out.setdefault((p["name"], site["shader"], site["resource"], site["access"]), []).append(site["count"])
+    return {k: sorted(v) for k, v in out.items()}
+
+
+def check_sites(builtin_passes, layer_passes):
+    """With --sites: each side's lines are the sums of its sites, and both
+    sides split each line over a shader's sites alike."""
+    problems = []
+    for side, passes in (("built-in", builtin_passes), ("layer", layer_passes)):
+        lines, sums = counted_lines(passes), site_sums(passes)
+        for k in sorted(lines.keys() | sums.keys()):
+            if lines.get(k, 0) != sums.get(k, 0):
+                problems.append("%s %s: line %s, sites sum to %s" % (side, "/".join(k), lines.get(k), sums.get(k)))
+        if not sums:
+            problems.append("%s: no sites" % side)
+    a, b = site_counts(builtin_passes), site_counts(layer_passes)
+    for k in sorted(a.keys() | b.keys()):
+        if a.get(k, []) != b.get(k, []) and any(a.get(k, [])) | any(b.get(k, [])):
+            problems.append("sites of %s: built-in %s, layer %s" % ("/".join(k), a.get(k), b.get(k)))
+    return problems
+
+
 def line_kinds(passes):
     """{(pass, resource, access, source): kind}."""
     return {(p["name"], r["name"], r["access"], r["source"]): r["kind"] for p in passes for r in p["resources"]}
@@ -70,6 +108,7 @@ def compare(args, renderer, tmp, builtin_run):
         "TALLY_LAYER_SKIP_FRAMES": "1",
         "TALLY_LAYER_FRAME_SUBMITS": "1",
         "TALLY_LAYER_COUNTING": args.counting,
+        "TALLY_LAYER_SITES": "1" if args.sites else "0",
     })
     camera = builtin_run["samples"][0]["camera"]
     w, h = args.resolution.split("x")
@@ -114,6 +153,8 @@ def compare(args, renderer, tmp, builtin_run):
         incomplete.append("the layer's output says complete: %r" % layer.get("complete"))
     if len(layer["frames"]) != args.layer_frames:
         incomplete.append("%d frames in the layer's output, %d asked for" % (len(layer["frames"]), args.layer_frames))
+    if args.sites:
+        incomplete += check_sites(builtin_run["samples"][0]["passes"], frame["passes"])
     if sorted(passes_builtin) != sorted(passes_layer):
         incomplete.append("passes differ: built-in %s, layer %s" % (passes_builtin, passes_layer))
     times = {p["name"]: p["gpu_ms"] for p in frame["passes"]}
@@ -157,6 +198,8 @@ def main():
     parser.add_argument("--device", default="")
     parser.add_argument("--min-lines-per-pass", type=int, default=1,
                         help="equal lines with a non-zero count each pass must have")
+    parser.add_argument("--sites", action="store_true",
+                        help="count per access site on both sides: lines are their sites' sums, sites agree")
     parser.add_argument("--out", default="")
     args = parser.parse_args()
     args.layer_dir = os.path.abspath(args.layer_dir)
@@ -170,7 +213,7 @@ def main():
     failed = False
     with tempfile.TemporaryDirectory(prefix="tally-layer-compare-") as tmp:
         spec = {"renderers": renderers, "scenes": [scene], "resolutions": [[w, h]], "cameras": "auto",
-                "frames": args.builtin_frames, "counted_frames": 1, "counting": "exact", "ceilings": False}
+                "frames": args.builtin_frames, "counted_frames": 1, "counting": "exact", "ceilings": False, "sites": args.sites}
         spec_path, result_path = os.path.join(tmp, "spec.json"), os.path.join(tmp, "builtin.json")
         with open(spec_path, "w") as f:
             json.dump(spec, f)
