@@ -6,6 +6,7 @@
 // screen readers and for anyone who wants the figures rather than the
 // picture. Chart.getChart(canvas) gives the chart object itself.
 import { h } from './dom.js';
+import { labelColor, seriesColor } from './palette.js';
 
 const { Chart } = window;
 
@@ -119,11 +120,14 @@ const crossingPlugin = {
 };
 Chart.register(crossingPlugin);
 
-// n well-separated colours; the same index gets the same colour in every chart.
-export function color(i, alpha = 1) {
-  const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most
-  return `hsla(${hue.toFixed(1)}, 62%, ${i % 2 ? 42 : 55}%, ${alpha})`;
-}
+// The i-th colour of the palette's series (web/palette.js), for things that
+// have no label of their own.
+export const color = seriesColor;
+
+// A dataset's colour follows its label (or its colorKey: a renderer's variant
+// where the label adds a run id), so that a renderer has one colour in every
+// chart, whatever the order in which runs were picked.
+const colorOf = (d) => labelColor(d.colorKey ?? d.label);
 
 // A figure with an empty canvas and a data table; draw with drawChart once it
 // is in the document (Chart.js measures its parent).
@@ -191,7 +195,7 @@ export function barChart(parent, spec) {
     type: 'bar',
     data: {
       labels,
-      datasets: datasets.map((d, i) => ({ backgroundColor: color(i), ...d })),
+      datasets: datasets.map((d) => ({ backgroundColor: colorOf(d), ...d })),
     },
     options: {
       indexAxis: categoryAxis,
@@ -221,7 +225,7 @@ export function xyChart(parent, spec) {
   return new Chart(fig.querySelector('canvas'), {
     type: 'scatter',
     data: {
-      datasets: spec.datasets.map((d, i) => ({ backgroundColor: color(i), borderColor: color(i), pointRadius: 4, ...d })),
+      datasets: spec.datasets.map((d) => ({ backgroundColor: colorOf(d), borderColor: colorOf(d), pointRadius: 4, ...d })),
     },
     options: {
       scales: { x: axis(spec.x), y: axis(spec.y) },

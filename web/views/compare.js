@@ -7,22 +7,34 @@
 // whether each run's times differ from the first's (significance, from
 // /api/compare) and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
-import { barChart, color, destroyCharts, xyChart } from '../charts.js';
+import { barChart, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch } from '../dom.js';
 import * as fmt from '../format.js';
+import { breakdownTable, passNodes } from '../breakdown.js';
+import { changeClass, kRead, kWritten, labelColor } from '../palette.js';
+import { frameTime, kStatisticText, sampleDetails } from '../stats.js';
+
+// A compared run's dataset fields: its label, and its variant's colour (paler
+// for a second run of a variant already shown), whatever the order of selection.
+function runSeries(runs, i) {
+  const variant = fmt.variant(runs[i]);
+  const repeat = runs.slice(0, i).some((r) => fmt.variant(r) === variant);
+  return { label: `${variant} #${runs[i].id}`, colorKey: variant, backgroundColor: labelColor(variant, repeat ? 0.5 : 1), borderColor: labelColor(variant) };
+}
 
 // "value (Δ delta, ×ratio)" cells for one quantity of every run; the first run is the reference.
-function comparedCells(values, format) {
+// Lower is better (time, bytes) unless higherIsBetter (reuse).
+function comparedCells(values, format, higherIsBetter = false) {
   return values.map((c, i) => h('td', { class: 'num', dataset: { value: c.value ?? '', delta: c.delta ?? '', ratio: c.ratio ?? '' } },
     h('div', {}, c.value === null ? '–' : format(c.value)),
-    i === 0 || c.value === null ? null : h('div', { class: `muted ${c.delta < 0 ? 'better' : c.delta > 0 ? 'worse' : ''}` },
+    i === 0 || c.value === null ? null : h('div', { class: `muted ${changeClass(c.delta, higherIsBetter)}`, dataset: { change: changeClass(c.delta, higherIsBetter) || 'same' } },
       `${fmt.delta(c.delta, format)} · ${fmt.ratio(c.ratio)}`)));
 }
 
 function comparedTable(runs, rows, label) {
   return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': label, dataset: { table: label } },
     h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, ''), runs.map((r, i) => h('th', { scope: 'col', class: 'num' }, `${i === 0 ? 'reference: ' : ''}${fmt.variant(r)} #${r.id}`)))),
-    h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format))))));
+    h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format, row.higherIsBetter))))));
 }
 
 // The two byte measures: requested bytes ("bytes") and footprint
@@ -50,16 +62,27 @@ function against(values) {
   return values.map((v) => ({ value: v, delta: v - values[0], ratio: values[0] ? v / values[0] : null }));
 }
 
-function totals(page, c, bytesBox) {
+// Each run's frame time as one statistic: the median of its frames, or the
+// mean of its cameras' medians where a run has no per-frame times (then every
+// run is shown by the mean, so that the ratio compares like with like).
+function frameTimes(c, details) {
+  const each = c.runs.map((r, i) => frameTime(r, details[i]));
+  const statistic = each.every((t) => t.statistic === 'median') ? 'median' : 'mean';
+  const values = statistic === 'median' ? each.map((t) => t.value) : c.runs.map((r) => r.mean_frame_ms);
+  return { statistic, values: against(values) };
+}
+
+function totals(page, c, bytesBox, details) {
+  const time = frameTimes(c, details);
   const rows = [
     { key: 'total_bytes', label: 'Requested bytes per frame', values: c.total_bytes, format: fmt.bytes },
     { key: 'read_bytes', label: 'read', values: against(byAccess(c, 'read')), format: fmt.bytes },
     { key: 'written_bytes', label: 'written', values: against(byAccess(c, 'write')), format: fmt.bytes },
     ...(anyFootprint(c)
       ? [{ key: 'total_footprint_bytes', label: 'Footprint per frame', values: c.total_footprint_bytes, format: fmt.bytes },
-        { key: 'reuse', label: 'Reuse (requested / footprint)', values: c.reuse, format: reuseText }]
+        { key: 'reuse', label: 'Reuse (requested / footprint)', values: c.reuse, format: reuseText, higherIsBetter: true }]
       : []),
-    { key: 'frame_ms', label: 'Frame time', values: c.frame_ms, format: fmt.ms },
+    { key: 'frame_ms', label: `Frame time (${kStatisticText[time.statistic]})`, values: time.values, format: fmt.ms },
   ];
   page.append(h('h2', {}, 'Totals'), comparedTable(c.runs, rows, 'totals'));
   const box = h('div', { class: 'charts' });
@@ -67,8 +90,8 @@ function totals(page, c, bytesBox) {
   const labels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
   box.append(bytesBox);
   barChart(box, {
-    id: 'compare-frame-ms', title: 'Frame time', labels, labelHeader: 'Run', format: fmt.ms,
-    datasets: [{ label: 'frame time', data: c.frame_ms.map((v) => v.value) }],
+    id: 'compare-frame-ms', title: `Frame time (${kStatisticText[time.statistic]})`, labels, labelHeader: 'Run', format: fmt.ms,
+    datasets: [{ label: 'frame time', data: time.values.map((v) => v.value), backgroundColor: c.runs.map((_, i) => runSeries(c.runs, i).backgroundColor) }],
   });
 }
 
@@ -84,18 +107,18 @@ function byteCharts(c, measure, boxes) {
   const runLabels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
   barChart(boxes.totals, {
     id: 'compare-bytes', title: `${noun} per frame`, labels: runLabels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
-    datasets: [{ label: 'read', data: byAccess(c, 'read', key) }, { label: 'written', data: byAccess(c, 'write', key) }],
+    datasets: [{ label: 'read', data: byAccess(c, 'read', key), backgroundColor: kRead }, { label: 'written', data: byAccess(c, 'write', key), backgroundColor: kWritten }],
   });
   const resourceLabels = c.resources.map((r) => `${r.resource} (${r.access})`);
   barChart(boxes.resources, {
     id: 'compare-resources', title: `${noun} per frame by resource`, caption: 'summed over passes',
     labels: resourceLabels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.resources.map((res) => res[key][i].value) })),
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.resources.map((res) => res[key][i].value) })),
   });
   boxes.resources.querySelector('.chart-box').style.height = `${Math.max(330, 18 * resourceLabels.length * Math.min(c.runs.length, 3))}px`;
   barChart(boxes.passes, {
     id: 'compare-pass-bytes', title: `${noun} per frame by pass`, labels: c.passes.map((p) => p.pass), labelHeader: 'Pass', logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) })),
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => p[key][i].value) })),
   });
 }
 
@@ -107,7 +130,7 @@ function perResource(page, c, box) {
       { key: `${r.resource}|${r.access}`, label: `${r.resource} (${r.access})${footprint ? ' requested' : ''}`, values: r.bytes, format: fmt.bytes },
       ...(footprint
         ? [{ key: `${r.resource}|${r.access}|footprint`, label: `${r.resource} (${r.access}) footprint`, values: r.footprint_bytes, format: fmt.bytes },
-          { key: `${r.resource}|${r.access}|reuse`, label: `${r.resource} (${r.access}) reuse`, values: r.reuse, format: reuseText }]
+          { key: `${r.resource}|${r.access}|reuse`, label: `${r.resource} (${r.access}) reuse`, values: r.reuse, format: reuseText, higherIsBetter: true }]
         : []),
     ]), 'resources')));
 }
@@ -118,7 +141,7 @@ function perPass(page, c, bytesBox) {
   const box = h('div', { class: 'charts' });
   page.append(box);
   box.append(bytesBox);
-  const series = (key) => c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
+  const series = (key) => c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => p[key][i].value) }));
   barChart(box, { id: 'compare-pass-ms', title: 'GPU time by pass', labels, labelHeader: 'Pass', format: fmt.ms, datasets: series('gpu_ms') });
   const footprint = anyFootprint(c);
   page.append(h('details', {}, h('summary', {}, 'Per pass: values, deltas and ratios'),
@@ -126,7 +149,7 @@ function perPass(page, c, bytesBox) {
       { key: `${p.pass}|bytes`, label: `${p.pass} requested bytes`, values: p.bytes, format: fmt.bytes },
       ...(footprint
         ? [{ key: `${p.pass}|footprint_bytes`, label: `${p.pass} footprint`, values: p.footprint_bytes, format: fmt.bytes },
-          { key: `${p.pass}|reuse`, label: `${p.pass} reuse`, values: p.reuse, format: reuseText }]
+          { key: `${p.pass}|reuse`, label: `${p.pass} reuse`, values: p.reuse, format: reuseText, higherIsBetter: true }]
         : []),
       { key: `${p.pass}|gpu_ms`, label: `${p.pass} time`, values: p.gpu_ms, format: fmt.ms },
     ]), 'passes')));
@@ -136,8 +159,7 @@ function perPass(page, c, bytesBox) {
 // GPU time, both averaged over the run's samples) as a fraction of the
 // bandwidth ceiling measured by that run's capture (GET /runs/{id}
 // "ceilings"; null for runs without one).
-async function bandwidthFractions(page, c, signal) {
-  const runs = await Promise.all(c.runs.map((r) => get(`/runs/${r.id}`, signal)));
+function bandwidthFractions(page, c, runs) {
   const ceiling = runs.map((r) => (r.ceilings ? r.ceilings.bandwidth_bytes_per_s : null));
   const fraction = (p, i) => {
     const bytes = p.bytes[i].value, ms = p.gpu_ms[i].value;
@@ -155,7 +177,7 @@ async function bandwidthFractions(page, c, signal) {
     id: 'compare-pass-bandwidth-fraction', title: 'Achieved fraction of the bandwidth ceiling',
     caption: "bytes per frame (requested) over the pass's GPU time, against the ceiling each run's capture measured",
     labels, labelHeader: 'Pass', format: fmt.percent,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => fraction(p, i)) })),
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => fraction(p, i)) })),
   });
   page.append(h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Bandwidth fraction', dataset: { table: 'bandwidth-fraction' } },
     h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'Pass'), c.runs.map((r, i) => h('th', { scope: 'col', class: 'num' },
@@ -214,17 +236,13 @@ function fittedSeries(answer, run) {
 
 // One dashed line per fit across the pixel range of all fits, coloured as its
 // renderer's points; crossings inside the range as marks with their interval.
-function fitOverlay(answer, run, series) {
+function fitOverlay(answer, run) {
   const fits = fittedSeries(answer, run);
   if (!fits.length) return { datasets: [], marks: [] };
   const low = Math.min(...fits.map((s) => s.fit.min_pixels)), high = Math.max(...fits.map((s) => s.fit.max_pixels));
-  let extra = series.length;
   const datasets = fits.map((s) => {
-    const at = series.findIndex((x) => x.variant === s.variant);
-    const i = at >= 0 ? at : extra++;
     const { a, b } = s.fit;
-    return { label: `${s.variant} fit`, showLine: true, pointRadius: 0, borderWidth: 2, borderDash: [6, 4],
-      backgroundColor: color(i), borderColor: color(i), fit: { variant: s.variant, a, b, r2: s.fit.r2, poor: s.fit.poor_fit },
+    return { label: `${s.variant} fit`, colorKey: s.variant, showLine: true, pointRadius: 0, borderWidth: 2, borderDash: [6, 4], fit: { variant: s.variant, a, b, r2: s.fit.r2, poor: s.fit.poor_fit },
       data: [{ x: low, y: a + b * low }, { x: high, y: a + b * high }] };
   });
   const names = new Set(fits.map((s) => s.variant));
@@ -291,8 +309,8 @@ async function scaling(page, c, signal) {
   const box = h('div', { class: 'charts' });
   page.append(box);
   const pixels = { title: 'pixels', format: (v) => fmt.count(v) };
-  const datasets = (value) => series.map((s) => ({ label: s.label, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
-  const bytesFit = fitOverlay(answers.bytes, c.runs[0], series), msFit = fitOverlay(answers.frame_ms, c.runs[0], series);
+  const datasets = (value) => series.map((s) => ({ label: s.label, colorKey: s.variant, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
+  const bytesFit = fitOverlay(answers.bytes, c.runs[0]), msFit = fitOverlay(answers.frame_ms, c.runs[0]);
   const caption = `per renderer, same scene and device${bytesFit.datasets.length ? '; dashed: fitted lines, vertical: crossings with their interval' : ''}`;
   xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption, x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: [...datasets('mean_bytes'), ...bytesFit.datasets], marks: bytesFit.marks, table });
   xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption, x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: [...datasets('mean_frame_ms'), ...msFit.datasets], marks: msFit.marks, table: table.cloneNode(true) });
@@ -501,7 +519,7 @@ function significanceTable(c) {
   const pct = Math.round(c.confidence * 1000) / 10;
   return h('div', {},
     h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'significance', dataset: { table: 'significance', confidence: c.confidence, strata: c.significance.find((s) => s.frame)?.frame.strata ?? '' } },
-      h('thead', {}, h('tr', {}, ['Run', 'Figure', 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
+      h('thead', {}, h('tr', {}, ['Run', 'Figure', c.significance.some((x) => x.frame?.strata === 'cameras') ? 'Ratio of medians (each camera aligned)' : 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
       h('tbody', {}, rows))),
     h('ul', { class: 'counts-verdicts' }, counts));
 }
@@ -557,7 +575,13 @@ export async function render(page, { query, signal }) {
   const boxes = { totals: h('div', {}), resources: h('div', {}), passes: h('div', {}) };
   page.append(measureSwitch('compare-measure', anyFootprint(c),
     'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).', (measure) => byteCharts(c, measure, boxes)));
-  totals(page, c, boxes.totals);
+  const [runs, details] = await Promise.all([Promise.all(c.runs.map((r) => get(`/runs/${r.id}`, signal))),
+    Promise.all(c.runs.map((r) => sampleDetails(r.id, signal)))]);
+  page.append(h('h2', {}, 'Where the bytes go'), breakdownTable({
+    id: 'compare', columns: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), nodes: passNodes(runs.map((r) => r.passes)),
+    total: c.total_bytes.map((v) => v.value),
+    caption: 'requested bytes per frame; passes ranked by the reference run (the first column), each opening onto its resources; shares of each run\'s total.' }));
+  totals(page, c, boxes.totals, details);
   significance(page, c, ids, signal);
   perResource(page, c, boxes.resources);
   perPass(page, c, boxes.passes);
@@ -565,6 +589,7 @@ export async function render(page, { query, signal }) {
   // Both need more requests: fetch them side by side, each into its own section.
   const [fractionSection, repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section'), h('section')];
   page.append(fractionSection, repeatSection, scalingSection, imageSection);
-  await Promise.all([bandwidthFractions(fractionSection, c, signal), repeats(repeatSection, c, signal),
+  bandwidthFractions(fractionSection, c, runs);
+  await Promise.all([repeats(repeatSection, c, signal),
     scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
 }

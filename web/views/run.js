@@ -6,9 +6,12 @@
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
 import { downloadSource, get, hasToken, imageSource, request } from '../api.js';
-import { barChart, color, destroyCharts, xyChart } from '../charts.js';
+import { breakdownTable, passNodes } from '../breakdown.js';
+import { barChart, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch, table } from '../dom.js';
 import * as fmt from '../format.js';
+import { kRead, kWritten } from '../palette.js';
+import { frameTime, kStatisticText } from '../stats.js';
 
 const tile = (label, value, key) => h('div', { class: 'tile', dataset: { tile: key } },
   h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
@@ -50,10 +53,20 @@ function appSource(run) {
 }
 
 
+// The ranked pass -> resource table above the charts. A resource line has no
+// children yet; per-site and per-draw figures (GET /api/samples/{id}/sites,
+// /draws) nest here as a third level through breakdownTable's childrenOf.
+function bytesBreakdown(run, measure) {
+  const { key, noun } = kMeasures[measure];
+  const nodes = passNodes([run.passes], key);
+  const total = nodes.reduce((sum, n) => sum + (n.values[0] ?? 0), 0);
+  return breakdownTable({ id: 'run', columns: [`${noun} per frame`], nodes, total: [total],
+    caption: `${noun.toLowerCase()} per frame, passes ranked by their share, each opening onto its resources; averaged over the samples.` });
+}
+
 function passResourceCharts(parent, run, measure = 'requested') {
   const { key, noun } = kMeasures[measure];
   const labels = run.passes.map((p) => p.name);
-  const all = [...new Set(run.passes.flatMap((p) => p.resources.map((r) => r.name)))];  // one colour per resource
   const box = h('div', { class: 'charts', dataset: { measure } });
   parent.append(box);
   for (const [access, title] of [['read', `${noun} read per frame`], ['write', `${noun} written per frame`]]) {
@@ -69,7 +82,6 @@ function passResourceCharts(parent, run, measure = 'requested') {
       datasets: resources.map((name) => ({
         label: name,
         data: byPass.map((sums) => (name in sums ? sums[name] : null)),
-        backgroundColor: color(all.indexOf(name)),
       })),
     });
   }
@@ -99,8 +111,8 @@ function perSampleChart(parent, samples, details, measure = 'requested') {
     labelHeader: samples.some(frameLabel) ? 'Frame' : 'Camera',
     format: fmt.bytes,
     datasets: [
-      { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y' },
-      { label: 'written', data: footprint ? details.map((d) => footprintByAccess(d, 'write')) : samples.map((s) => s.bytes_written), yAxisID: 'y2' },
+      { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y', backgroundColor: kRead },
+      { label: 'written', data: footprint ? details.map((d) => footprintByAccess(d, 'write')) : samples.map((s) => s.bytes_written), yAxisID: 'y2', backgroundColor: kWritten },
     ],
     yTitle: 'read',
     axes: { y2: { position: 'right', beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: 'written' }, ticks: { callback: (v) => fmt.bytes(v) } } },
@@ -492,6 +504,7 @@ export async function render(page, { params, signal }) {
   // Per-pass spreads live with each sample: one request per camera.
   const details = await Promise.all(samples.map((s) => get(`/samples/${s.id}`, signal)));
   const iqr = passIqr(run, details);
+  const time = frameTime(run, details);
   const read = samples.reduce((sum, s) => sum + s.bytes_read, 0) / (samples.length || 1);
   const written = samples.reduce((sum, s) => sum + s.bytes_written, 0) / (samples.length || 1);
   const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
@@ -518,7 +531,7 @@ export async function render(page, { params, signal }) {
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
       app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
-      tile(app ? 'GPU time per frame (under the layer)' : 'Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
+      tile(app ? `GPU time per frame (under the layer, ${kStatisticText[time.statistic]})` : `Frame time (${kStatisticText[time.statistic]})`, fmt.ms(time.value), 'frame-ms'),
       ...(app ? [] : [
         tile('Counted frame', fmt.ms(run.mean_frame_ms_instrumented), 'frame-ms-instrumented'),
         tile('Overhead of counting', fmt.ratio(run.mean_overhead_ratio), 'overhead'),
@@ -543,6 +556,7 @@ export async function render(page, { params, signal }) {
     destroyCharts(cameraBytes);
     traffic.replaceChildren();
     cameraBytes.replaceChildren();
+    traffic.append(bytesBreakdown(run, measure));
     passResourceCharts(traffic, run, measure);
     perSampleChart(cameraBytes, samples, details, measure);
   };
