@@ -120,6 +120,43 @@ const crossingPlugin = {
 };
 Chart.register(crossingPlugin);
 
+// Point labels: an xy dataset flagged `pointLabels: true` has each point's
+// `label` written beside it, on the first side (right, left, above, below)
+// where it overlaps no label already placed and stays inside the plot; a
+// label that fits nowhere is left out (the chart's table lists every point).
+// The boxes placed are kept on the chart as `tallyLabelBoxes`, for tests.
+const pointLabelPlugin = {
+  id: 'tallyPointLabels',
+  afterDatasetsDraw(chart) {
+    const { ctx, chartArea } = chart;
+    const placed = [];
+    ctx.save();
+    ctx.font = `11px ${Chart.defaults.font.family}`;
+    ctx.textBaseline = 'middle';
+    chart.data.datasets.forEach((d, di) => {
+      const meta = chart.getDatasetMeta(di);
+      if (!d.pointLabels || meta.hidden) return;
+      meta.data.forEach((point, i) => {
+        const text = d.data[i]?.label;
+        if (!text) return;
+        const w = ctx.measureText(text).width, hgt = 13, gap = 7;
+        const tries = [[point.x + gap, point.y - hgt / 2], [point.x - gap - w, point.y - hgt / 2],
+          [point.x - w / 2, point.y - gap - hgt], [point.x - w / 2, point.y + gap]];
+        const fits = ([x, y]) => x >= chartArea.left && x + w <= chartArea.right && y >= chartArea.top && y + hgt <= chartArea.bottom
+          && placed.every((b) => x + w <= b.x || b.x + b.w <= x || y + hgt <= b.y || b.y + b.h <= y);
+        const at = tries.find(fits);
+        if (!at) return;
+        placed.push({ x: at[0], y: at[1], w, h: hgt, text });
+        ctx.fillStyle = d.data[i].flag ? '#a61b1b' : '#222';
+        ctx.fillText(text, at[0], at[1] + hgt / 2);
+      });
+    });
+    chart.tallyLabelBoxes = placed;
+    ctx.restore();
+  },
+};
+Chart.register(pointLabelPlugin);
+
 // The i-th colour of the palette's series (web/palette.js), for things that
 // have no label of their own.
 export const color = seriesColor;
@@ -219,6 +256,8 @@ export function xyChart(parent, spec) {
   const axis = (a) => ({
     type: a.type || 'linear',
     reverse: Boolean(a.reverse),
+    min: a.min,
+    max: a.max,
     title: { display: true, text: a.title },
     ticks: { callback: (v) => a.format(v) },
   });
@@ -230,7 +269,8 @@ export function xyChart(parent, spec) {
     options: {
       scales: { x: axis(spec.x), y: axis(spec.y) },
       plugins: {
-        legend: { position: 'bottom', labels: { boxWidth: 12 } },
+        // A dataset with `legend: false` (a line joining two points, a band's edge) has no entry.
+        legend: { position: 'bottom', labels: { boxWidth: 12, filter: (item, data) => data.datasets[item.datasetIndex].legend !== false } },
         tooltip: { callbacks: { label: spec.tooltip || ((c) => `${c.dataset.label}: ${spec.x.format(c.raw.x)}, ${spec.y.format(c.raw.y)}`) } },
         tallyCrossings: { marks: spec.marks || [] },
       },
