@@ -91,6 +91,7 @@ const crossingPlugin = {
     const scale = chart.scales.x;
     if (!scale || !marks.length) return;
     const clip = (px) => Math.min(chartArea.right, Math.max(chartArea.left, px));
+    const placed = [];  // label boxes: a label that would overlap one goes a line lower
     ctx.save();
     for (const m of marks) {
       const x = scale.getPixelForValue(m.x);
@@ -112,9 +113,14 @@ const crossingPlugin = {
         ctx.font = `12px ${Chart.defaults.font.family}`;
         const width = ctx.measureText(m.label).width;
         const left = x + 4 + width > chartArea.right ? x - 4 - width : x + 4;
-        ctx.fillText(m.label, left, chartArea.top + 12);
+        let top = chartArea.top + 2;
+        const hits = (t) => placed.some((b) => left < b.x + b.w + 3 && b.x < left + width + 3 && t < b.y + b.h && b.y < t + 14);
+        while (hits(top) && top + 28 < chartArea.bottom) top += 14;
+        placed.push({ x: left, y: top, w: width, h: 14, text: m.label });
+        ctx.fillText(m.label, left, top + 10);
       }
     }
+    chart.tallyCrossingLabels = placed;
     ctx.restore();
   },
 };

@@ -95,6 +95,30 @@ function totals(page, c, bytesBox, details) {
   });
 }
 
+const kTopResources = 10;
+
+// Per resource, sorted by size (the largest value over the runs), the top 10
+// first with "show all"; the log switch keeps small resources visible.
+function resourceChart(c, key, noun, box, all = false) {
+  destroyCharts(box);
+  box.replaceChildren();
+  const size = (res) => Math.max(0, ...res[key].map((v) => v.value ?? 0));
+  const sorted = [...c.resources].sort((x, y) => size(y) - size(x));
+  const shown = all ? sorted : sorted.slice(0, kTopResources);
+  const chart = barChart(box, {
+    id: 'compare-resources', title: `${noun} per frame by resource`,
+    caption: `summed over passes, largest first${shown.length < sorted.length ? `; the ${shown.length} largest of ${sorted.length}` : ''}`,
+    labels: shown.map((r) => `${r.resource} (${r.access})`), labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: shown.map((res) => res[key][i].value) })),
+  });
+  box.querySelector('.chart-box').style.height = `${Math.max(260, 16 * shown.length * Math.min(c.runs.length, 3) + 60)}px`;
+  chart.resize();
+  if (sorted.length > kTopResources) {
+    box.append(h('button', { type: 'button', class: 'secondary', dataset: { showAllResources: String(!all) },
+      onclick: () => resourceChart(c, key, noun, box, !all) }, all ? `Show the ${kTopResources} largest` : `Show all ${sorted.length} resources`));
+  }
+}
+
 // The byte charts of one measure: per run (read and written stacked), per
 // resource and per pass. Redrawn when the switch changes.
 function byteCharts(c, measure, boxes) {
@@ -109,13 +133,7 @@ function byteCharts(c, measure, boxes) {
     id: 'compare-bytes', title: `${noun} per frame`, labels: runLabels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
     datasets: [{ label: 'read', data: byAccess(c, 'read', key), backgroundColor: kRead }, { label: 'written', data: byAccess(c, 'write', key), backgroundColor: kWritten }],
   });
-  const resourceLabels = c.resources.map((r) => `${r.resource} (${r.access})`);
-  barChart(boxes.resources, {
-    id: 'compare-resources', title: `${noun} per frame by resource`, caption: 'summed over passes',
-    labels: resourceLabels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.resources.map((res) => res[key][i].value) })),
-  });
-  boxes.resources.querySelector('.chart-box').style.height = `${Math.max(330, 18 * resourceLabels.length * Math.min(c.runs.length, 3))}px`;
+  resourceChart(c, key, noun, boxes.resources);
   barChart(boxes.passes, {
     id: 'compare-pass-bytes', title: `${noun} per frame by pass`, labels: c.passes.map((p) => p.pass), labelHeader: 'Pass', logSwitch: true, format: fmt.bytes,
     datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => p[key][i].value) })),
@@ -306,14 +324,28 @@ async function scaling(page, c, signal) {
       h('td', { class: 'num', dataset: { value: r.mean_bytes } }, fmt.bytes(r.mean_bytes)),
       h('td', { class: 'num', dataset: { value: r.mean_frame_ms } }, fmt.ms(r.mean_frame_ms)),
       h('td', {}, h('a', { href: `#/runs/${r.id}` }, `#${r.id}`)))))));
+  // A series needs two resolutions to show a slope: with fewer, its dots
+  // would stand in one column. Such charts are left out, and the view says why.
+  const single = series.filter((s) => new Set(s.points.map((r) => r.width * r.height)).size < 2);
+  if (single.length === series.length) {
+    const at = [...new Set(rows.map(({ r }) => fmt.resolution(r)))].join(', ');
+    page.append(h('p', { class: 'panel muted', dataset: { scaling: 'one-resolution' } },
+      `Not drawn: ${series.length === 1 ? 'this renderer was' : 'these renderers were'} measured at one resolution only (${at || 'none'}) on this scene and device, `,
+      'and a scaling chart needs two or more. Capture the same renderers at more resolutions (three or more also fit lines and find crossings).'), table);
+    return;
+  }
   const box = h('div', { class: 'charts' });
   page.append(box);
-  const pixels = { title: 'pixels', format: (v) => fmt.count(v) };
+  if (single.length) {
+    page.append(h('p', { class: 'muted', dataset: { scaling: 'some-single' } },
+      `${single.map((s) => s.label).join(', ')}: measured at one resolution only, drawn as a single point.`));
+  }
+  const pixels = { title: 'pixels (px)', format: (v) => fmt.count(v) };
   const datasets = (value) => series.map((s) => ({ label: s.label, colorKey: s.variant, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
   const bytesFit = fitOverlay(answers.bytes, c.runs[0]), msFit = fitOverlay(answers.frame_ms, c.runs[0]);
   const caption = `per renderer, same scene and device${bytesFit.datasets.length ? '; dashed: fitted lines, vertical: crossings with their interval' : ''}`;
-  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption, x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: [...datasets('mean_bytes'), ...bytesFit.datasets], marks: bytesFit.marks, table });
-  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption, x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: [...datasets('mean_frame_ms'), ...msFit.datasets], marks: msFit.marks, table: table.cloneNode(true) });
+  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption, x: pixels, y: { title: 'bytes per frame (B)', format: fmt.bytes }, datasets: [...datasets('mean_bytes'), ...bytesFit.datasets], marks: bytesFit.marks, table });
+  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption, x: pixels, y: { title: 'frame time (ms)', format: fmt.ms }, datasets: [...datasets('mean_frame_ms'), ...msFit.datasets], marks: msFit.marks, table: table.cloneNode(true) });
   page.append(crossoverTables(answers, c.runs[0]));
 }
 
@@ -486,13 +518,13 @@ function significanceRow(run, figure, t) {
     h('td', { class: 'num' }, t.mann_whitney.p < 1e-4 ? '< 0.0001' : t.mann_whitney.p.toFixed(4)),
     h('td', { class: 'num' }, `${t.cliffs_delta.delta >= 0 ? '+' : ''}${t.cliffs_delta.delta.toFixed(2)} (${t.cliffs_delta.magnitude})`),
     h('td', {}, h('span', { class: `badge verdict ${t.verdict}` }, verdictText[t.verdict])),
-    h('td', { class: 'muted' }, note));
+    h('td', { class: 'muted why' }, note));
 }
 
 function missingRow(run, figure, reason) {
   return h('tr', { dataset: { run: run.id, figure, verdict: 'missing' } },
     h('th', { scope: 'row' }, `${fmt.variant(run)} #${run.id}`), h('td', {}, figure),
-    h('td', { colspan: 5, class: 'muted' }, '–'), h('td', { class: 'muted' }, reason));
+    h('td', { colspan: 5, class: 'muted' }, '–'), h('td', { class: 'muted why' }, reason));
 }
 
 function significanceTable(c) {
