@@ -421,6 +421,7 @@ export async function render(page, { params, signal }) {
         [i ? ', ' : '', h('a', { href: `#/runs?label=${encodeURIComponent(`${k}=${v}`)}`, title: `runs labelled ${k}=${v}` }, `${k}=${v}`)])) : null,
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
+      run.notes && run.notes.heatmap ? h('li', {}, h('a', { href: `#/heatmap?capture=${run.capture}`, dataset: { heatmapLink: String(run.capture) } }, 'its camera heatmap')) : null,
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
       app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
