@@ -73,3 +73,23 @@ export function imageError(run) {
 
 // A capture's labels as "commit=4f2a9c1, branch=main"; '' for none.
 export const labels = (l) => Object.entries(l || {}).map(([k, v]) => `${k}=${v}`).join(', ');
+
+// One minus sign everywhere: U+2212, never the hyphen that toFixed writes.
+const minus = (text) => text.replace(/^-/, '−');
+
+// A number with fixed decimals: "−12.0", "3.50".
+export const fixed = (n, digits) => (n === null || n === undefined ? '–' : minus(n.toFixed(digits)));
+
+// A signed number: "+0.52", "−1.00", "0.00".
+export const signed = (n, digits) => (n === null || n === undefined ? '–' : `${n > 0 ? '+' : ''}${fixed(n, digits)}`);
+
+// A plain number in a few significant digits, never in e-notation: 0.0123,
+// 4.56, 1,230, 3,800,000,000 (grouped), so that 1e6 and 100000 never meet.
+export function number(n, digits = 3) {
+  if (n === null || n === undefined || !Number.isFinite(n)) return '–';
+  const rounded = Number(n.toPrecision(digits));
+  return minus(Math.abs(rounded) >= 1000 ? Math.round(rounded).toLocaleString('en-US') : String(rounded));
+}
+
+// A p-value: four decimals, "< 0.0001" below them.
+export const pValue = (p) => (p === null || p === undefined ? '–' : p < 1e-4 ? '< 0.0001' : p.toFixed(4));

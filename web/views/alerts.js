@@ -45,7 +45,7 @@ function alertColumns(onChange) {
     { label: 'What', className: 'what', value: (a) => h('span', { class: alertClass(a), dataset: { change: alertClass(a) || 'same' } }, whatChanged(a)) },
     { label: 'Ratio', className: 'num', value: (a) => fmt.ratio(a.ratio) },
     { label: '95% interval', className: 'num', value: interval },
-    { label: 'p', className: 'num', value: (a) => (a.p_value === null ? '–' : a.p_value.toPrecision(3)) },
+    { label: 'p', className: 'num', value: (a) => fmt.pValue(a.p_value) },
     { label: 'Baseline (A)', className: 'num', value: (a) => value(a, a.value_a) },
     { label: 'Run (B)', className: 'num', value: (a) => value(a, a.value_b) },
     { label: 'Trend', value: (a) => h('a', { href: `#/trend/${a.baseline}`, dataset: { trend: String(a.baseline) } }, `baseline #${a.baseline}`) },
@@ -175,7 +175,7 @@ export async function render(page, { params, query, signal }) {
       h('p', {}, `Run `, h('a', { href: `#/runs/${a.run}` }, `#${a.run}`), ` against baseline run `,
         h('a', { href: `#/runs/${a.baseline_run}` }, `#${a.baseline_run}`), ' (', h('a', { href: `#/trend/${a.baseline}` }, 'trend'), ')',
         a.run_row && fmt.labels(a.run_row.labels) ? `; labels ${fmt.labels(a.run_row.labels)}` : ''),
-      a.kind === 'time' ? h('p', {}, `ratio ${fmt.ratio(a.ratio)} ${interval(a)}, p = ${a.p_value?.toPrecision(3)}, Cliff's delta ${a.cliffs_delta?.toFixed(3)}; ${a.details?.reason || ''}`) : null,
+      a.kind === 'time' ? h('p', {}, `ratio ${fmt.ratio(a.ratio)} ${interval(a)}, p ${a.p_value < 1e-4 ? '' : '= '}${fmt.pValue(a.p_value)}, Cliff's delta ${fmt.signed(a.cliffs_delta, 3)}; ${a.details?.reason || ''}`) : null,
       a.kind === 'counts' ? table([
         { label: 'Line', value: (c) => c.line },
         { label: 'Baseline', className: 'num', value: (c) => fmt.count(c.a) },

@@ -287,7 +287,7 @@ function crossoverTables(answers, run) {
         h('td', {}, kMetricText[metric]), h('td', {}, s.variant),
         h('td', { class: 'num', dataset: { value: s.fit.a } }, `${format(s.fit.a)} (${format(s.fit.a_ci[0])} to ${format(s.fit.a_ci[1])})`),
         h('td', { class: 'num', dataset: { value: s.fit.b } }, `${format(s.fit.b * 1e6)}/Mpx (${format(s.fit.b_ci[0] * 1e6)} to ${format(s.fit.b_ci[1] * 1e6)})`),
-        h('td', { class: `num ${s.fit.poor_fit ? 'worse' : ''}` }, `${s.fit.r2.toFixed(4)}${s.fit.poor_fit ? ' poor fit' : ''}`)));
+        h('td', { class: `num ${s.fit.poor_fit ? 'worse' : ''}` }, `${fmt.fixed(s.fit.r2, 4)}${s.fit.poor_fit ? ' poor fit' : ''}`)));
     }
     for (const c of answer.crossings.filter((x) => names.has(x.first) && names.has(x.second))) {
       const interval = c.pixels_ci ? `${fmt.count(c.pixels_ci[0])} to ${fmt.count(c.pixels_ci[1])}` : '–';
@@ -515,8 +515,8 @@ function significanceRow(run, figure, t) {
     h('td', {}, figure),
     h('td', { class: 'num' }, fmt.ratio(t.ratio)),
     h('td', { class: 'num' }, `[${endText(t.interval.lower)}, ${endText(t.interval.upper)}]`),
-    h('td', { class: 'num' }, t.mann_whitney.p < 1e-4 ? '< 0.0001' : t.mann_whitney.p.toFixed(4)),
-    h('td', { class: 'num' }, `${t.cliffs_delta.delta >= 0 ? '+' : ''}${t.cliffs_delta.delta.toFixed(2)} (${t.cliffs_delta.magnitude})`),
+    h('td', { class: 'num' }, fmt.pValue(t.mann_whitney.p)),
+    h('td', { class: 'num' }, `${fmt.signed(t.cliffs_delta.delta, 2)} (${t.cliffs_delta.magnitude})`),
     h('td', {}, h('span', { class: `badge verdict ${t.verdict}` }, verdictText[t.verdict])),
     h('td', { class: 'muted why' }, note));
 }

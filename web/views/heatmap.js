@@ -61,14 +61,14 @@ const valueText = (metric, v) => (metric === 'bytes' ? fmt.bytes(v) : fmt.ms(v))
 export function cellTitle(body, cell) {
   const layout = body.layout;
   const where = layout.layout === 'floor'
-    ? `cell ${cell.column},${cell.row} (x ${(layout.origin[0] + (cell.column + 0.5) * layout.cell_size[0]).toFixed(1)}, z ${(layout.origin[1] + (cell.row + 0.5) * layout.cell_size[1]).toFixed(1)})`
-    : `ring ${cell.row}, segment ${cell.column} (lat ${layout.latitudes_deg[cell.row].toFixed(0)}°, lon ${layout.longitudes_deg[cell.column].toFixed(0)}°)`;
+    ? `cell ${cell.column},${cell.row} (x ${fmt.fixed(layout.origin[0] + (cell.column + 0.5) * layout.cell_size[0], 1)}, z ${fmt.fixed(layout.origin[1] + (cell.row + 0.5) * layout.cell_size[1], 1)})`
+    : `ring ${cell.row}, segment ${cell.column} (lat ${fmt.fixed(layout.latitudes_deg[cell.row], 0)}°, lon ${fmt.fixed(layout.longitudes_deg[cell.column], 0)}°)`;
   if (cell.value_a === null) {
     const why = { no_surface: 'no floor below', no_headroom: 'no headroom above the floor', eye_blocked: 'the eye would be in or next to geometry', off_level: 'floor off the ground level', incomplete: 'measured by one renderer only', not_measured: 'not measured' };
     return `${where}: empty (${why[cell.empty] || cell.empty || 'no samples'})`;
   }
   const lines = [where];
-  if (cell.floor !== null && cell.floor !== undefined) lines.push(`floor y ${cell.floor.toFixed(2)}`);
+  if (cell.floor !== null && cell.floor !== undefined) lines.push(`floor y ${fmt.fixed(cell.floor, 2)}`);
   lines.push(`${body.renderer}: ${valueText(body.metric, cell.value_a)}`);
   if (body.versus) {
     lines.push(`${body.versus}: ${valueText(body.metric, cell.value_b)}`);

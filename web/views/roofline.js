@@ -93,8 +93,8 @@ function rooflineTable(passes, c) {
     { label: 'Arithmetic', className: 'num', value: (p) => `${si(p.ops, 'op')}${p.counted ? '' : ' (estimate)'}` },
     { label: 'Bytes', className: 'num', value: (p) => fmt.bytes(p.bytes) },
     { label: 'Footprint', className: 'num', value: (p) => (p.footprint === null ? '–' : fmt.bytes(p.footprint)) },
-    { label: 'Ops per byte', className: 'num', value: (p) => (p.intensity === null ? '–' : p.intensity.toPrecision(3)) },
-    { label: 'Ops per footprint byte', className: 'num', value: (p) => (p.intensityFootprint === null ? '–' : p.intensityFootprint.toPrecision(3)) },
+    { label: 'Ops per byte', className: 'num', value: (p) => fmt.number(p.intensity) },
+    { label: 'Ops per footprint byte', className: 'num', value: (p) => fmt.number(p.intensityFootprint) },
     { label: 'Ops/s', className: 'num', value: (p) => si(p.rate, 'op/s') },
     { label: 'Bandwidth', className: 'num', value: (p) => si(p.bandwidth, 'B/s') },
     { label: 'Of peak bandwidth', className: 'num', value: (p) => h('span', { dataset: { fraction: p.bandwidth !== null && c ? String(p.bandwidth / c.bandwidth_bytes_per_s) : '' } },
@@ -171,12 +171,12 @@ export function rooflineSection(run, samples, application, tile) {
     table: rooflineTable(passes, c),
     tooltip: (ctx) => (ctx.dataset.ceiling || ctx.dataset.join
       ? `${ctx.dataset.label}`
-      : `${ctx.raw.pass} (${ctx.dataset.label}): ${ctx.raw.x.toPrecision(3)} ops/byte, ${si(ctx.raw.y, 'op/s')}${ctx.raw.flag ? ', above the roof' : ''}`),
+      : `${ctx.raw.pass} (${ctx.dataset.label}): ${fmt.number(ctx.raw.x)} ops/byte, ${si(ctx.raw.y, 'op/s')}${ctx.raw.flag ? ', above the roof' : ''}`),
   });
   box.append(aboveNote(all.filter((p) => p.flag), c) || '');
   const tiles = c ? h('div', { class: 'tiles' },
     tile('Bandwidth ceiling', si(c.bandwidth_bytes_per_s, 'B/s'), 'ceiling-bandwidth'),
     tile('Arithmetic ceiling', si(c.arithmetic_ops_per_s, 'op/s'), 'ceiling-arithmetic'),
-    tile('Ridge', `${c.ridge_intensity.toPrecision(3)} ops/byte`, 'ceiling-ridge')) : null;
+    tile('Ridge', `${fmt.number(c.ridge_intensity)} ops/byte`, 'ceiling-ridge')) : null;
   return h('div', {}, tiles, box);
 }

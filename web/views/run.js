@@ -318,11 +318,13 @@ function resourceTable(run) {
   ], run.resources, { 'aria-label': 'Resources' });
 }
 
-// A wrap factor in a few characters: "3.2", "186", "8.0e11".
+// A wrap factor in a few characters and no e-notation: "3.2", "186",
+// "4,300", "8.0 billion".
 function factor(v) {
   if (v === null || v === undefined) return '–';
-  if (v >= 1e6) return v.toExponential(1).replace('e+', 'e');
-  return v >= 100 ? String(Math.round(v)) : v.toFixed(1);
+  const words = [[1e12, 'trillion'], [1e9, 'billion'], [1e6, 'million']].find(([k]) => v >= k);
+  if (words) return `${(v / words[0]).toFixed(1)} ${words[1]}`;
+  return v >= 100 ? fmt.number(v, 2) : v.toFixed(1);
 }
 
 // How far the run's counters are from wrapping (docs/measurement.md,
