@@ -1,7 +1,7 @@
 // Where the bytes go: a ranked table of passes, each opening onto its
 // resources (a tree), with each row's share of the frame's bytes and a top-N
 // with "show all". One value column per run (the run view has one; compare
-// one per run, the first the reference the rows are ranked by).
+// one per run), rows ranked by their largest value over the runs.
 //
 // A node is {key, name, values: [bytes per column], children}, where
 // children is an array of nodes, or a function returning a promise of them
@@ -38,7 +38,10 @@ export function passNodes(runsPasses, key = 'bytes') {
   });
 }
 
-const rank = (nodes) => [...nodes].sort((a, b) => (b.values[0] ?? -1) - (a.values[0] ?? -1) || a.name.localeCompare(b.name));
+// Largest first, by the largest value over the columns: a pass only one of the
+// compared runs has (deferred's lighting) ranks by its own size.
+const largest = (n) => Math.max(-1, ...n.values.map((v) => v ?? -1));
+const rank = (nodes) => [...nodes].sort((a, b) => largest(b) - largest(a) || a.name.localeCompare(b.name));
 
 // spec: {id, columns: [header text], nodes, total: [bytes per column], caption, topN, childrenOf}.
 export function breakdownTable(spec) {

@@ -38,20 +38,19 @@ function statusControl(a, onChange) {
   return h('span', {}, select, ' ', ack);
 }
 
+// Compact enough for 1280 px: the ratio carries its interval, A and B share a
+// cell, and the run and its trend are named once, in the run's header row.
 function alertColumns(onChange) {
   return [
     { label: 'Alert', value: (a) => h('a', { href: `#/alerts/${a.id}` }, `#${a.id}`) },
     { label: 'Status', value: (a) => h('span', { dataset: { status: a.status } }, a.status) },
     { label: 'What', className: 'what', value: (a) => h('span', { class: alertClass(a), dataset: { change: alertClass(a) || 'same' } }, whatChanged(a)) },
-    { label: 'Ratio', className: 'num', value: (a) => fmt.ratio(a.ratio) },
-    { label: '95% interval', className: 'num', value: interval },
+    { label: 'Ratio [95% interval]', className: 'num', value: (a) => [h('div', {}, fmt.ratio(a.ratio)), h('div', { class: 'muted' }, interval(a))] },
     { label: 'p', className: 'num', value: (a) => fmt.pValue(a.p_value) },
-    { label: 'Baseline (A)', className: 'num', value: (a) => value(a, a.value_a) },
-    { label: 'Run (B)', className: 'num', value: (a) => value(a, a.value_b) },
-    { label: 'Trend', value: (a) => h('a', { href: `#/trend/${a.baseline}`, dataset: { trend: String(a.baseline) } }, `baseline #${a.baseline}`) },
-    { label: 'Raised (UTC)', value: (a) => fmt.date(a.created_at) },
+    { label: 'Baseline (A) → run (B)', className: 'num', value: (a) => [h('div', {}, value(a, a.value_a)), h('div', {}, `→ ${value(a, a.value_b)}`)] },
+    { label: 'Raised (UTC)', className: 'date', value: (a) => fmt.date(a.created_at) },
     { label: 'Webhook', value: (a) => (a.delivery.state === 'none' ? '–' : h('span', { title: a.delivery.last_error || '' }, `${a.delivery.state} (${a.delivery.attempts})`)) },
-    { label: '', value: (a) => statusControl(a, onChange) },
+    { label: '', className: 'controls', value: (a) => statusControl(a, onChange) },
   ];
 }
 
@@ -96,6 +95,7 @@ function alertTable(alerts, onChange, highlight, runsById) {
         h('span', { class: `group-mark ${worst}` }), h('a', { href: `#/runs/${runId}` }, `Run #${runId}`),
         `: ${list.length} alert${list.length === 1 ? '' : 's'} against baseline run #${a0.baseline_run} · `,
         h('a', { href: `#/compare?runs=${a0.baseline_run},${runId}`, dataset: { compareRuns: `${a0.baseline_run},${runId}` } }, 'compare these two runs'),
+        ' · ', h('a', { href: `#/trend/${a0.baseline}`, dataset: { trend: String(a0.baseline) } }, `trend of baseline #${a0.baseline}`),
         h('span', { class: 'spec-changes', dataset: { specChanges: changes.map((c) => c.field).join(',') } },
           changes.length ? ` · changed: ${changes.map((c) => `${c.field} ${c.a} → ${c.b}`).join('; ')}` : ' · no spec field changed'))));
     for (const a of list) {

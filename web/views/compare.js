@@ -612,7 +612,7 @@ export async function render(page, { query, signal }) {
   page.append(h('h2', {}, 'Where the bytes go'), breakdownTable({
     id: 'compare', columns: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), nodes: passNodes(runs.map((r) => r.passes)),
     total: c.total_bytes.map((v) => v.value),
-    caption: 'requested bytes per frame; passes ranked by the reference run (the first column), each opening onto its resources; shares of each run\'s total.' }));
+    caption: 'requested bytes per frame; passes ranked by their largest value over the runs, each opening onto its resources; shares of each run\'s total.' }));
   totals(page, c, boxes.totals, details);
   significance(page, c, ids, signal);
   perResource(page, c, boxes.resources);
