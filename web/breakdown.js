@@ -43,7 +43,7 @@ export function passNodes(runsPasses, key = 'bytes') {
 const largest = (n) => Math.max(-1, ...n.values.map((v) => v ?? -1));
 const rank = (nodes) => [...nodes].sort((a, b) => largest(b) - largest(a) || a.name.localeCompare(b.name));
 
-// spec: {id, columns: [header text], nodes, total: [bytes per column], caption, topN, childrenOf}.
+// spec: {id, columns: [header text], nodes, total: [bytes per column], title, caption, topN, childrenOf}.
 export function breakdownTable(spec) {
   const { id, columns, nodes, total } = spec;
   const topN = spec.topN ?? kTopN;
@@ -109,7 +109,8 @@ export function breakdownTable(spec) {
 
   tbody.append(...level(rank(nodes), 0, null));
   return h('figure', { class: 'breakdown', dataset: { breakdown: id } },
-    h('figcaption', {}, h('strong', {}, 'Where the bytes go'), h('span', { class: 'caption' }, ' ', spec.caption || '')),
+    // No title where the section's heading already says it (spec.title null).
+    h('figcaption', {}, spec.title === null ? null : h('strong', {}, spec.title || 'Where the bytes go'), h('span', { class: 'caption' }, ' ', spec.caption || '')),
     h('div', { class: 'table-wrap' }, h('table', { class: 'breakdown-table', 'aria-label': 'Where the bytes go', dataset: { table: `breakdown-${id}` } },
       head, tbody, h('tfoot', {}, h('tr', {}, h('th', { scope: 'row', class: 'sticky-col' }, 'Total per frame'),
         total.map((v) => [h('td', { class: 'num', dataset: { value: v ?? '' } }, fmt.bytes(v)), h('td', { class: 'num share-col' }, v ? '100 %' : '–')]))))));

@@ -611,7 +611,7 @@ export async function render(page, { query, signal }) {
     Promise.all(c.runs.map((r) => sampleDetails(r.id, signal)))]);
   page.append(h('h2', {}, 'Where the bytes go'), breakdownTable({
     id: 'compare', columns: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), nodes: passNodes(runs.map((r) => r.passes)),
-    total: c.total_bytes.map((v) => v.value),
+    total: c.total_bytes.map((v) => v.value), title: null,
     caption: 'requested bytes per frame; passes ranked by their largest value over the runs, each opening onto its resources; shares of each run\'s total.' }));
   totals(page, c, boxes.totals, details);
   significance(page, c, ids, signal);
