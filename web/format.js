@@ -28,10 +28,11 @@ export function percent(n) {
   if (n === null || n === undefined) return '–';
   const p = 100 * n;
   const digits = p === 0 ? 1 : Math.max(1, Math.min(6, 1 - Math.floor(Math.log10(Math.abs(p)))));
-  return `${p.toFixed(digits)} %`;
+  return `${p.toFixed(digits).replace('-', '−')} %`;
 }
 export const psnr = (n) => (n === null || n === undefined ? '–' : `${n.toFixed(1)} dB`);
-export const count = (n) => (n === null || n === undefined ? '–' : Math.round(n).toLocaleString('en-US'));
+// Grouped digits, one minus sign (toLocaleString writes a hyphen): "−1,696".
+export const count = (n) => (n === null || n === undefined ? '–' : Math.round(n).toLocaleString('en-US').replace('-', '−'));
 
 // A signed difference in the value's own format: "+1.20 MiB", "−0.40 ms".
 export function delta(n, fmt) {

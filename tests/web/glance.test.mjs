@@ -280,6 +280,7 @@ describe('one statistic, one number format', () => {
     assert.equal(fmt.ms(1.5), '1.500 ms');
     assert.equal(fmt.signed(-0.5, 2), '−0.50');
     assert.equal(fmt.number(1e6), '1,000,000');
+    assert.equal(fmt.count(-1696.4), '−1,696');
   });
 });
 

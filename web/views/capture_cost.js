@@ -69,7 +69,7 @@ export function costText(spec, rate) {
     h('strong', { dataset: { samples: String(c.samples), frames: String(c.samples * c.frames), pixelFrames: String(c.pixelFrames) } },
       `${fmt.count(c.samples)} samples × ${fmt.count(c.frames)} frames = ${fmt.count(c.samples * c.frames)} frames`),
     ` (${c.variants} variant${c.variants === 1 ? '' : 's'} × ${c.scenes} scene${c.scenes === 1 ? '' : 's'} × ${c.cameras} camera${c.cameras === 1 ? '' : 's'} × ${c.resolutions} resolution${c.resolutions === 1 ? '' : 's'}); `,
-    h('span', { class: over ? 'worse' : null }, `${c.pixelFrames.toLocaleString('en-US')} pixel-frames${over ? `, over the server's default bound of ${kMaxCost.toLocaleString('en-US')}` : ''}`),
+    h('span', { class: over ? 'worse' : null }, `${fmt.count(c.pixelFrames)} pixel-frames${over ? `, over the server's default bound of ${fmt.count(kMaxCost)}` : ''}`),
     rate && c.samples
       ? h('span', { dataset: { estimate: String(rate.perSample * c.samples + rate.perPixelFrame * c.pixelFrames) } },
         `; ${duration(rate.perSample * c.samples + rate.perPixelFrame * c.pixelFrames)} on ${rate.host || 'this host'}, from its last ${rate.jobs} capture${rate.jobs === 1 ? '' : 's'}`)
