@@ -6,6 +6,7 @@
 // screen readers and for anyone who wants the figures rather than the
 // picture. Chart.getChart(canvas) gives the chart object itself.
 import { h } from './dom.js';
+import { labelColor, seriesColor } from './palette.js';
 
 const { Chart } = window;
 
@@ -90,6 +91,7 @@ const crossingPlugin = {
     const scale = chart.scales.x;
     if (!scale || !marks.length) return;
     const clip = (px) => Math.min(chartArea.right, Math.max(chartArea.left, px));
+    const placed = [];  // label boxes: a label that would overlap one goes a line lower
     ctx.save();
     for (const m of marks) {
       const x = scale.getPixelForValue(m.x);
@@ -111,19 +113,64 @@ const crossingPlugin = {
         ctx.font = `12px ${Chart.defaults.font.family}`;
         const width = ctx.measureText(m.label).width;
         const left = x + 4 + width > chartArea.right ? x - 4 - width : x + 4;
-        ctx.fillText(m.label, left, chartArea.top + 12);
+        let top = chartArea.top + 2;
+        const hits = (t) => placed.some((b) => left < b.x + b.w + 3 && b.x < left + width + 3 && t < b.y + b.h && b.y < t + 14);
+        while (hits(top) && top + 28 < chartArea.bottom) top += 14;
+        placed.push({ x: left, y: top, w: width, h: 14, text: m.label });
+        ctx.fillText(m.label, left, top + 10);
       }
     }
+    chart.tallyCrossingLabels = placed;
     ctx.restore();
   },
 };
 Chart.register(crossingPlugin);
 
-// n well-separated colours; the same index gets the same colour in every chart.
-export function color(i, alpha = 1) {
-  const hue = (i * 137.508) % 360;  // golden angle: neighbours differ most
-  return `hsla(${hue.toFixed(1)}, 62%, ${i % 2 ? 42 : 55}%, ${alpha})`;
-}
+// Point labels: an xy dataset flagged `pointLabels: true` has each point's
+// `label` written beside it, on the first side (right, left, above, below)
+// where it overlaps no label already placed and stays inside the plot; a
+// label that fits nowhere is left out (the chart's table lists every point).
+// The boxes placed are kept on the chart as `tallyLabelBoxes`, for tests.
+const pointLabelPlugin = {
+  id: 'tallyPointLabels',
+  afterDatasetsDraw(chart) {
+    const { ctx, chartArea } = chart;
+    const placed = [];
+    ctx.save();
+    ctx.font = `11px ${Chart.defaults.font.family}`;
+    ctx.textBaseline = 'middle';
+    chart.data.datasets.forEach((d, di) => {
+      const meta = chart.getDatasetMeta(di);
+      if (!d.pointLabels || meta.hidden) return;
+      meta.data.forEach((point, i) => {
+        const text = d.data[i]?.label;
+        if (!text) return;
+        const w = ctx.measureText(text).width, hgt = 13, gap = 7;
+        const tries = [[point.x + gap, point.y - hgt / 2], [point.x - gap - w, point.y - hgt / 2],
+          [point.x - w / 2, point.y - gap - hgt], [point.x - w / 2, point.y + gap]];
+        const fits = ([x, y]) => x >= chartArea.left && x + w <= chartArea.right && y >= chartArea.top && y + hgt <= chartArea.bottom
+          && placed.every((b) => x + w <= b.x || b.x + b.w <= x || y + hgt <= b.y || b.y + b.h <= y);
+        const at = tries.find(fits);
+        if (!at) return;
+        placed.push({ x: at[0], y: at[1], w, h: hgt, text });
+        ctx.fillStyle = d.data[i].flag ? '#a61b1b' : '#222';
+        ctx.fillText(text, at[0], at[1] + hgt / 2);
+      });
+    });
+    chart.tallyLabelBoxes = placed;
+    ctx.restore();
+  },
+};
+Chart.register(pointLabelPlugin);
+
+// The i-th colour of the palette's series (web/palette.js), for things that
+// have no label of their own.
+export const color = seriesColor;
+
+// A dataset's colour follows its label (or its colorKey: a renderer's variant
+// where the label adds a run id), so that a renderer has one colour in every
+// chart, whatever the order in which runs were picked.
+const colorOf = (d) => labelColor(d.colorKey ?? d.label);
 
 // A figure with an empty canvas and a data table; draw with drawChart once it
 // is in the document (Chart.js measures its parent).
@@ -191,7 +238,7 @@ export function barChart(parent, spec) {
     type: 'bar',
     data: {
       labels,
-      datasets: datasets.map((d, i) => ({ backgroundColor: color(i), ...d })),
+      datasets: datasets.map((d) => ({ backgroundColor: colorOf(d), ...d })),
     },
     options: {
       indexAxis: categoryAxis,
@@ -215,18 +262,21 @@ export function xyChart(parent, spec) {
   const axis = (a) => ({
     type: a.type || 'linear',
     reverse: Boolean(a.reverse),
+    min: a.min,
+    max: a.max,
     title: { display: true, text: a.title },
     ticks: { callback: (v) => a.format(v) },
   });
   return new Chart(fig.querySelector('canvas'), {
     type: 'scatter',
     data: {
-      datasets: spec.datasets.map((d, i) => ({ backgroundColor: color(i), borderColor: color(i), pointRadius: 4, ...d })),
+      datasets: spec.datasets.map((d) => ({ backgroundColor: colorOf(d), borderColor: colorOf(d), pointRadius: 4, ...d })),
     },
     options: {
       scales: { x: axis(spec.x), y: axis(spec.y) },
       plugins: {
-        legend: { position: 'bottom', labels: { boxWidth: 12 } },
+        // A dataset with `legend: false` (a line joining two points, a band's edge) has no entry.
+        legend: { position: 'bottom', labels: { boxWidth: 12, filter: (item, data) => data.datasets[item.datasetIndex].legend !== false } },
         tooltip: { callbacks: { label: spec.tooltip || ((c) => `${c.dataset.label}: ${spec.x.format(c.raw.x)}, ${spec.y.format(c.raw.y)}`) } },
         tallyCrossings: { marks: spec.marks || [] },
       },

@@ -28,10 +28,11 @@ export function percent(n) {
   if (n === null || n === undefined) return '–';
   const p = 100 * n;
   const digits = p === 0 ? 1 : Math.max(1, Math.min(6, 1 - Math.floor(Math.log10(Math.abs(p)))));
-  return `${p.toFixed(digits)} %`;
+  return `${p.toFixed(digits).replace('-', '−')} %`;
 }
 export const psnr = (n) => (n === null || n === undefined ? '–' : `${n.toFixed(1)} dB`);
-export const count = (n) => (n === null || n === undefined ? '–' : Math.round(n).toLocaleString('en-US'));
+// Grouped digits, one minus sign (toLocaleString writes a hyphen): "−1,696".
+export const count = (n) => (n === null || n === undefined ? '–' : Math.round(n).toLocaleString('en-US').replace('-', '−'));
 
 // A signed difference in the value's own format: "+1.20 MiB", "−0.40 ms".
 export function delta(n, fmt) {
@@ -73,3 +74,23 @@ export function imageError(run) {
 
 // A capture's labels as "commit=4f2a9c1, branch=main"; '' for none.
 export const labels = (l) => Object.entries(l || {}).map(([k, v]) => `${k}=${v}`).join(', ');
+
+// One minus sign everywhere: U+2212, never the hyphen that toFixed writes.
+const minus = (text) => text.replace(/^-/, '−');
+
+// A number with fixed decimals: "−12.0", "3.50".
+export const fixed = (n, digits) => (n === null || n === undefined ? '–' : minus(n.toFixed(digits)));
+
+// A signed number: "+0.52", "−1.00", "0.00".
+export const signed = (n, digits) => (n === null || n === undefined ? '–' : `${n > 0 ? '+' : ''}${fixed(n, digits)}`);
+
+// A plain number in a few significant digits, never in e-notation: 0.0123,
+// 4.56, 1,230, 3,800,000,000 (grouped), so that 1e6 and 100000 never meet.
+export function number(n, digits = 3) {
+  if (n === null || n === undefined || !Number.isFinite(n)) return '–';
+  const rounded = Number(n.toPrecision(digits));
+  return minus(Math.abs(rounded) >= 1000 ? Math.round(rounded).toLocaleString('en-US') : String(rounded));
+}
+
+// A p-value: four decimals, "< 0.0001" below them.
+export const pValue = (p) => (p === null || p === undefined ? '–' : p < 1e-4 ? '< 0.0001' : p.toFixed(4));

@@ -118,14 +118,36 @@ describe('alerts', () => {
       const { page, errors, close } = await open('#/alerts');
       assert.equal(await (await badge(page, open0)).textContent(), String(open0));
       assert.doesNotMatch(await page.locator('#view').textContent(), /\b(null|undefined|NaN)\b/);
-      const rows = page.locator('table.alerts tbody tr');
+      const rows = page.locator('table.alerts tbody tr[data-alert]');
       assert.equal(await rows.count(), alerts.length);
+      // Grouped by run: one header row for the regressed run, its alerts under it.
+      const group = page.locator(`tr[data-alert-group="${run.id}"]`);
+      assert.equal(await page.locator('tr[data-alert-group]').count(), 1);
+      assert.match(await group.textContent(), new RegExp(`Run #${run.id}: ${alerts.length} alerts? against baseline run #${data.baseRun.id}`));
+      // A link comparing the two runs, and the spec fields that changed.
+      assert.equal(await group.locator('a[data-compare-runs]').getAttribute('href'), `#/compare?runs=${data.baseRun.id},${run.id}`);
+      assert.equal(await group.locator('[data-spec-changes]').getAttribute('data-spec-changes'), 'lights,commit');
+      assert.match(await group.textContent(), /lights 4 → 400; commit base → more-lights/);
       for (const a of alerts) {
         const row = page.locator(`tr[data-alert="${a.id}"]`);
         assert.equal(await row.getAttribute('data-status'), 'open');
-        assert.match(await row.textContent(), new RegExp(`#${run.id}`));
+        // Regressions red, improvements green: a slower time or more bytes is worse.
+        const worse = a.kind === 'time' ? a.verdict === 'slower' : a.ratio > 1;
+        const change = await row.locator('td.what span').getAttribute('data-change');
+        assert.equal(change, worse ? 'worse' : 'better', `alert ${a.id} (${a.metric} ${a.verdict}, ratio ${a.ratio})`);
+        assert.equal(await row.locator('td.what span').evaluate((el) => getComputedStyle(el).color),
+          worse ? 'rgb(166, 27, 27)' : 'rgb(27, 110, 58)');
+        // "What" is never cut off: its text fits its cell, and the cell the window.
+        const fit = await row.locator('td.what').evaluate((td) => ({ over: td.scrollWidth - td.clientWidth, right: td.getBoundingClientRect().right, width: window.innerWidth }));
+        assert.ok(fit.over <= 0 && fit.right <= fit.width, `alert ${a.id}: What is cut off (${JSON.stringify(fit)})`);
       }
+      // More lights, more bytes: the counts alert is a regression.
+      assert.ok(counts[0].ratio > 1);
       assert.match(await page.locator(`tr[data-alert="${counts[0].id}"]`).textContent(), /counts changed/);
+      // Every cell of the table lies inside the window at 1280 px.
+      const outside = await page.locator('table.alerts').evaluate((t) => [...t.querySelectorAll('th, td')]
+        .filter((c) => c.getBoundingClientRect().right > window.innerWidth + 0.5).map((c) => c.textContent));
+      assert.deepEqual(outside, [], 'cells beyond the right edge');
       await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, 'alerts.png'), fullPage: true });
       // Acknowledging one: its row says so, and the badge counts one fewer.
       await page.click(`[data-ack="${counts[0].id}"]`);
@@ -170,6 +192,30 @@ describe('alerts', () => {
         const marks = chart.datasets.find((d) => d.alerts);
         assert.deepEqual(marks.data.map((p) => p.run), alerted ? [run.id] : [], `${id}: alert marks`);
         assert.ok(chart.ticks.includes('base') && chart.ticks.includes('more-lights'), `${id}: x by commit: ${chart.ticks}`);
+      }
+      // The frame time's interval as a shaded band (the high edge filled down
+      // to the low one), and the baseline ± threshold as a second band.
+      const bands = await page.evaluate(() => {
+        const c = window.Chart.getChart(document.querySelector('[data-chart="trend-frame"] canvas'));
+        return c.data.datasets.filter((d) => d.band).map((d) => ({ band: d.band, edge: d.edge, fill: d.fill ?? null, legend: d.legend ?? true, ys: d.data.map((p) => p.y) }));
+      });
+      const interval = bands.filter((b) => b.band === 'interval');
+      assert.deepEqual(interval.map((b) => [b.edge, b.fill]), [['low', null], ['high', '-1']]);
+      assert.deepEqual(interval[0].ys, trend.runs.map((r) => r.frame_ms.lower).filter((v) => v !== null));
+      assert.deepEqual(interval[1].ys, trend.runs.map((r) => r.frame_ms.upper).filter((v) => v !== null));
+      const limits = bands.filter((b) => b.band === 'threshold');
+      const median0 = trend.runs[0].frame_ms.median;
+      const t = baseline.threshold;
+      assert.deepEqual(limits.map((b) => b.ys), [[median0 * (1 - t), median0 * (1 - t)], [median0 * (1 + t), median0 * (1 + t)]]);
+      // The alert marks: red for a regression, green for an improvement.
+      const timeAlerts = alerts.filter((a) => a.kind === 'time');
+      if (timeAlerts.length) {
+        const markColors = await page.evaluate(() => {
+          const c = window.Chart.getChart(document.querySelector('[data-chart="trend-frame"] canvas'));
+          return c.data.datasets.find((d) => d.alerts).data.map((p) => p.change);
+        });
+        const slower = timeAlerts.some((a) => a.verdict === 'slower');
+        assert.deepEqual(markColors, [slower ? 'worse' : timeAlerts.every((a) => a.verdict === 'faster') ? 'better' : 'same']);
       }
       assert.equal(await page.locator('[data-trend-table] tbody tr').count(), 2);
       await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, 'trend.png'), fullPage: true });

@@ -39,6 +39,15 @@ function assertClose(actual, expected, what) {
 
 const mean = (values) => values.reduce((a, b) => a + b, 0) / values.length;
 
+// The median of a run's frames, pooled over its samples (every camera's
+// frame_ms_frames): the frame time the run and compare views show.
+async function frameMedian(runId) {
+  const { samples } = await daemon.get(`/runs/${runId}/samples`);
+  const frames = (await Promise.all(samples.map((s) => daemon.get(`/samples/${s.id}`)))).flatMap((d) => d.frame_ms_frames).sort((a, b) => a - b);
+  const m = frames.length >> 1;
+  return frames.length % 2 ? frames[m] : (frames[m - 1] + frames[m]) / 2;
+}
+
 const kSweepSpec = { sweep: 'depth-reconstruction', near: [0.01], far: [1000], distances: [3, 300], resolution: [32, 18], threshold: { relative: 1e-3 } };
 
 // A point's value at a dotted path ("error.max_relative").
@@ -288,7 +297,8 @@ describe('dashboard', () => {
     // Tiles: overhead ratio and image error against forward, as the API gives them.
     assert.equal((await page.locator('[data-tile="overhead"] .value').textContent()), fmt.ratio(run.mean_overhead_ratio));
     assert.equal((await page.locator('[data-tile="image-error"] .value').textContent()), fmt.psnr(run.image_error.mean_psnr));
-    assert.equal((await page.locator('[data-tile="frame-ms"] .value').textContent()), fmt.ms(run.mean_frame_ms));
+    // Frame time: the median of all the run's frames (every camera's), as the trend and compare show it.
+    assert.equal((await page.locator('[data-tile="frame-ms"] .value').textContent()), fmt.ms(await frameMedian(run.id)));
 
     // Gallery: one screenshot per camera, at the run's resolution, with its sky fraction.
     const shots = page.locator('.gallery figure');
@@ -311,6 +321,7 @@ describe('dashboard', () => {
     const runs = [runOf('deferred', 128), runOf('visbuffer', 128), runOf('visbuffer-lean', 128)];
     const ids = runs.map((r) => r.id);
     const c = await daemon.get(`/compare?runs=${ids.join(',')}`);
+    const medians = await Promise.all(ids.map(frameMedian));
     const { page, errors, close } = await open(`#/compare?runs=${ids.join(',')}`);
 
     // The ratio of total bytes per frame against the first run: the API's, and
@@ -323,16 +334,18 @@ describe('dashboard', () => {
       assertClose(ratio, runs[i].mean_bytes / runs[0].mean_bytes, `ratio of run ${ids[i]}`);
       assert.ok((await totalCells.nth(i).textContent()).includes(`×${ratio.toFixed(3)}`));
       const frameRatio = Number(await page.locator('[data-table="totals"] tr[data-row="frame_ms"] td').nth(i).getAttribute('data-ratio'));
-      assertClose(frameRatio, runs[i].mean_frame_ms / runs[0].mean_frame_ms, `frame time ratio of run ${ids[i]}`);
+      assertClose(frameRatio, medians[i] / medians[0], `frame time ratio of run ${ids[i]}`);
     }
 
+    // Per resource: the 10 largest first (glance.test.mjs checks the order and "show all").
     const resources = await chart(page, 'compare-resources');
-    assert.deepEqual(resources.labels, c.resources.map((r) => `${r.resource} (${r.access})`));
-    resources.datasets.forEach((d, i) => assert.deepEqual(d.data, c.resources.map((r) => r.bytes[i].value)));
+    const shown = resources.labels.map((label) => c.resources.find((r) => `${r.resource} (${r.access})` === label));
+    assert.equal(shown.length, Math.min(10, c.resources.length));
+    resources.datasets.forEach((d, i) => assert.deepEqual(d.data, shown.map((r) => r.bytes[i].value)));
     const passes = await chart(page, 'compare-pass-ms');
     passes.datasets.forEach((d, i) => assert.deepEqual(d.data, c.passes.map((p) => p.gpu_ms[i].value)));
     const frame = await chart(page, 'compare-frame-ms');
-    assert.deepEqual(frame.datasets[0].data, c.frame_ms.map((v) => v.value));
+    assert.deepEqual(frame.datasets[0].data, medians);
 
     // Across repeated captures: visbuffer-lean was captured twice with one
     // configuration, the others once. The table and the chart give the API's
@@ -587,6 +600,8 @@ describe('dashboard', () => {
     for (const box of await page.locator('input[name="renderers"]').all()) {
       if ((await box.getAttribute('value')) !== 'forward') await box.uncheck();
     }
+    // forward is not among the form's default renderers (deferred and visbuffer).
+    await page.locator('input[name="renderers"][value="forward"]').first().check();
     await page.fill('input[name="resolutions"]', '64x36');
     await page.fill('input[name="frames"]', '1');
     // Record every status the progress panel shows.
@@ -767,7 +782,9 @@ describe('dashboard', () => {
     // The factors are 2^bits over the largest slot's count per readback.
     assert.ok(Math.abs(hr.wrap_factor_32bit - 2 ** 32 / (hr.max_slot_count_per_frame * hr.frames_accumulated)) <= 1e-9 * hr.wrap_factor_32bit);
     assert.equal(await page.locator('[data-headroom="max-slot-count"] .value').textContent(), hr.max_slot_count_per_frame.toLocaleString('en-US'));
-    assert.match(await page.locator('[data-headroom="sentence"]').textContent(), /^32-bit counters would wrap at [0-9.e]+× this resolution × overshading/);
+    assert.match(await page.locator('[data-headroom="sentence"]').textContent(), /^32-bit counters would wrap at [0-9.,]+( (million|billion|trillion))?× this resolution × overshading/);
+    // No e-notation: a large factor in words.
+    assert.doesNotMatch(await page.locator('[data-headroom="sentence"]').textContent(), /\de\d/);
     assert.deepEqual(errors, []);
     await close();
   });
@@ -1038,10 +1055,19 @@ with db:
     assert.ok(c.total_footprint_bytes[0].value > 0);
     assert.equal(c.total_footprint_bytes[1].value, null);
     const cmp = await open(`#/compare?runs=${id},${plain.id}`);
-    const resourceData = async () => (await chart(cmp.page, 'compare-resources')).datasets.map((d) => d.data);
-    assert.deepEqual(await resourceData(), [0, 1].map((i) => c.resources.map((r) => r.bytes[i].value)));
+    // Every resource ("show all"), in the order drawn: the largest first.
+    const resourceData = async (key) => {
+      if (await cmp.page.locator('[data-show-all-resources="true"]').count()) await cmp.page.click('[data-show-all-resources="true"]');
+      const drawn = await chart(cmp.page, 'compare-resources');
+      const rows = drawn.labels.map((label) => c.resources.find((r) => `${r.resource} (${r.access})` === label));
+      assert.equal(rows.length, c.resources.length);
+      return { drawn: drawn.datasets.map((d) => d.data), expected: [0, 1].map((i) => rows.map((r) => r[key][i].value)) };
+    };
+    const requested = await resourceData('bytes');
+    assert.deepEqual(requested.drawn, requested.expected);
     await cmp.page.locator('[data-measure-switch="compare-measure"] input[value="footprint"]').check();
-    assert.deepEqual(await resourceData(), [0, 1].map((i) => c.resources.map((r) => r.footprint_bytes[i].value)));
+    const footprint = await resourceData('footprint_bytes');
+    assert.deepEqual(footprint.drawn, footprint.expected);
     const passBytes = await chart(cmp.page, 'compare-pass-bytes');
     assert.deepEqual(passBytes.datasets[0].data, c.passes.map((p) => p.footprint_bytes[0].value));
     const totals = await chart(cmp.page, 'compare-bytes');

@@ -204,7 +204,7 @@ describe('heatmap', () => {
     const cells = await drawnCells(page);
     assert.equal(cells.length, 6);
     assert.ok(cells.every((c) => c.value !== null && c.fill.startsWith('rgb(')));
-    assert.ok(cells[0].title.startsWith('ring 0, segment 0 (lat 45°, lon -120°)'), cells[0].title);
+    assert.ok(cells[0].title.startsWith('ring 0, segment 0 (lat 45°, lon −120°)'), cells[0].title);
     // Two resolutions: two maps, the first shown, the other one select away.
     assert.match(await page.locator('#view .meta').textContent(), /32×18/);
     const rendered = await page.evaluate(() => document.getElementById('view').dataset.rendered);

@@ -13,10 +13,15 @@ import { ApiError, get, request } from '../api.js';
 import { h } from '../dom.js';
 import * as fmt from '../format.js';
 import { poll } from '../poll.js';
+import { applicable, captureRate, costText } from './capture_cost.js';
 
 const kPollMs = 500;      // progress of the capture just started
 const kListPollMs = 2000;  // the job list, while any job is queued or running
 const kFinished = ['done', 'failed', 'cancelled'];
+// A first capture that finishes in a minute or so on a laptop, not 5 renderers
+// x 10 cameras x 20 frames: the two renderers the founding study compares.
+const kDefaultRenderers = ['deferred', 'visbuffer'];
+const kDefaultFrames = 10;
 
 // "320x180, 640x360" -> [[320, 180], [640, 360]]. A token that is not WxH goes
 // to the server as it is, so that the server's message names it.
@@ -209,7 +214,7 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
   const gltf = scenes.gltf.flatMap((folder) => folder.files);
   const form = h('form', { class: 'capture-form', novalidate: true, 'aria-label': 'New capture' },
     h('fieldset', { dataset: { field: 'renderers' } }, h('legend', {}, 'Renderers'),
-      h('div', { class: 'variants' }, renderers.map((r) => variantRow(r, optionDefs, true)))),
+      h('div', { class: 'variants' }, renderers.map((r) => variantRow(r, optionDefs, kDefaultRenderers.includes(r) || !renderers.some((x) => kDefaultRenderers.includes(x)))))),
     workloads.length
       ? h('fieldset', { dataset: { field: 'workloads' } }, h('legend', {}, 'Workloads (compute: scene bounds and cameras only)'),
         h('div', { class: 'variants' }, workloads.map((w) => variantRow(w, optionDefs, false, 'workloads'))))
@@ -220,7 +225,7 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
         gltf.map((path) => choice('gltf', path, false)))),
     h('div', { class: 'form-grid' },
       field('Resolutions', h('input', { name: 'resolutions', value: '320x180', required: true }), 'WxH, comma-separated'),
-      field('Frames per sample', h('input', { name: 'frames', value: '20', inputmode: 'numeric' }), 'timed, uninstrumented'),
+      field('Frames per sample', h('input', { name: 'frames', value: String(kDefaultFrames), inputmode: 'numeric' }), 'timed, uninstrumented'),
       field('Counted frames', h('input', { name: 'counted_frames', value: '', placeholder: '2', inputmode: 'numeric' }), 'instrumented frames per sample; left blank, the server counts 2 (never more than the frames)'),
       field('Counting', counting),
       h('label', { class: 'field', dataset: { field: 'counting' } }, h('span', {}, 'N (sampled only)'), samplingN),
@@ -233,7 +238,8 @@ function captureForm(renderers, optionDefs, scenes, onSubmit, workloads = []) {
           .map(([value, text]) => h('option', { value, selected: value === 'auto' }, text)))),
       field('Heatmap grid', h('input', { name: 'heatmap_grid', value: '8x4' }), 'floor: cells along x × z; sphere: rings × segments', 'heatmap.cells'),
       field('Heatmap yaws', h('input', { name: 'heatmap_yaws', value: '4', inputmode: 'numeric' }), 'floor: directions per cell', 'heatmap.yaws')),
-    h('button', { type: 'submit' }, 'Start capture'),
+    h('div', { class: 'start-row' }, h('button', { type: 'submit' }, 'Start capture'),
+      h('p', { class: 'cost', role: 'status', dataset: { cost: '' } })),
     h('div', { class: 'form-error', role: 'alert' }));
   form.addEventListener('submit', (e) => {
     e.preventDefault();
@@ -317,7 +323,7 @@ function jobTable(jobs, onCancel) {
       h('td', { dataset: { cell: 'host' } }, j.host || '–'),
       h('td', {}, progressText(j)),
       h('td', { dataset: { cell: 'attempts' } }, attemptsText(j), attemptErrors(j)),
-      h('td', {}, summary(j.spec)),
+      h('td', { class: 'spec-cell' }, summary(j.spec)),
       h('td', {}, fmt.date(j.created_at)),
       h('td', {}, fmt.date(j.finished_at)),
       h('td', { class: 'error', style: 'white-space: normal; min-width: 12rem' }, j.error || ''),
@@ -360,6 +366,10 @@ export async function render(page, { signal }) {
 
   async function start(spec, form) {
     const button = form.querySelector('button[type="submit"]');
+    // The progress shows beside the Start that was pressed, not below the fold.
+    const row = form.querySelector('.start-row');
+    if (row) row.append(progress);
+    else button.after(progress);
     clearError(form);
     button.disabled = true;
     let created;
@@ -387,13 +397,22 @@ export async function render(page, { signal }) {
 
   const form = captureForm(renderers.renderers, renderers.options || [], scenes, (spec) => start(spec, form),
     renderers.workloads || []);
+  const rate = captureRate(first.captures);
+  const update = () => {
+    applicable(form);
+    form.querySelector('[data-cost]').replaceChildren(...costText(specOf(form), rate));
+  };
+  form.querySelector('.start-row').append(progress);
+  form.addEventListener('input', update);
+  form.addEventListener('change', update);
+  update();
   const sweeps = sweepForm((spec) => start(spec, sweeps));
   const apps = appForm((spec) => start(spec, apps));
   page.append(h('h1', {}, 'New capture'), form,
     h('details', { class: 'app-box', dataset: { box: 'application' } },
       h('summary', {}, h('h2', { class: 'inline' }, 'Or profile an application under the Vulkan layer')), apps),
     h('details', { class: 'sweep-box' }, h('summary', {}, h('h2', { class: 'inline' }, 'Or a spec as JSON: a stability sweep, an application, a replay')), sweeps),
-    progress, h('h2', {}, 'Captures'), listStatus, list);
+    h('h2', {}, 'Captures'), listStatus, list);
   drawList(first.captures);
   if (!first.captures.every((j) => kFinished.includes(j.status))) watchList();
 }

@@ -1,28 +1,41 @@
 // Compare 2 to 4 runs (#/compare?runs=a,b,c): totals and per-resource and
 // per-pass traffic side by side with deltas and ratios against the first run
 // (all from /api/compare), how bytes and frame time scale with the pixel
-// count for each run's renderer (the founding study's total figure) with the
+// count for each run's renderer (views/scaling.js) with the
 // fitted lines and crossings of the first run's capture (/api/crossover), the
 // spread across repeated captures of each run's configuration (/api/repeats),
 // whether each run's times differ from the first's (significance, from
 // /api/compare) and an A/B/difference viewer of one camera's screenshots.
 import { get, imageSource, queryString } from '../api.js';
-import { barChart, color, destroyCharts, xyChart } from '../charts.js';
+import { barChart, destroyCharts } from '../charts.js';
 import { h, measureSwitch } from '../dom.js';
 import * as fmt from '../format.js';
+import { breakdownTable, passNodes } from '../breakdown.js';
+import { changeClass, kRead, kWritten, labelColor } from '../palette.js';
+import { frameTime, kStatisticText, sampleDetails } from '../stats.js';
+import { scaling } from './scaling.js';
+
+// A compared run's dataset fields: its label, and its variant's colour (paler
+// for a second run of a variant already shown), whatever the order of selection.
+function runSeries(runs, i) {
+  const variant = fmt.variant(runs[i]);
+  const repeat = runs.slice(0, i).some((r) => fmt.variant(r) === variant);
+  return { label: `${variant} #${runs[i].id}`, colorKey: variant, backgroundColor: labelColor(variant, repeat ? 0.5 : 1), borderColor: labelColor(variant) };
+}
 
 // "value (Δ delta, ×ratio)" cells for one quantity of every run; the first run is the reference.
-function comparedCells(values, format) {
+// Lower is better (time, bytes) unless higherIsBetter (reuse).
+function comparedCells(values, format, higherIsBetter = false) {
   return values.map((c, i) => h('td', { class: 'num', dataset: { value: c.value ?? '', delta: c.delta ?? '', ratio: c.ratio ?? '' } },
     h('div', {}, c.value === null ? '–' : format(c.value)),
-    i === 0 || c.value === null ? null : h('div', { class: `muted ${c.delta < 0 ? 'better' : c.delta > 0 ? 'worse' : ''}` },
+    i === 0 || c.value === null ? null : h('div', { class: `muted ${changeClass(c.delta, higherIsBetter)}`, dataset: { change: changeClass(c.delta, higherIsBetter) || 'same' } },
       `${fmt.delta(c.delta, format)} · ${fmt.ratio(c.ratio)}`)));
 }
 
 function comparedTable(runs, rows, label) {
   return h('div', { class: 'table-wrap' }, h('table', { 'aria-label': label, dataset: { table: label } },
     h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, ''), runs.map((r, i) => h('th', { scope: 'col', class: 'num' }, `${i === 0 ? 'reference: ' : ''}${fmt.variant(r)} #${r.id}`)))),
-    h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format))))));
+    h('tbody', {}, rows.map((row) => h('tr', { dataset: { row: row.key } }, h('th', { scope: 'row' }, row.label), comparedCells(row.values, row.format, row.higherIsBetter))))));
 }
 
 // The two byte measures: requested bytes ("bytes") and footprint
@@ -50,16 +63,27 @@ function against(values) {
   return values.map((v) => ({ value: v, delta: v - values[0], ratio: values[0] ? v / values[0] : null }));
 }
 
-function totals(page, c, bytesBox) {
+// Each run's frame time as one statistic: the median of its frames, or the
+// mean of its cameras' medians where a run has no per-frame times (then every
+// run is shown by the mean, so that the ratio compares like with like).
+function frameTimes(c, details) {
+  const each = c.runs.map((r, i) => frameTime(r, details[i]));
+  const statistic = each.every((t) => t.statistic === 'median') ? 'median' : 'mean';
+  const values = statistic === 'median' ? each.map((t) => t.value) : c.runs.map((r) => r.mean_frame_ms);
+  return { statistic, values: against(values) };
+}
+
+function totals(page, c, bytesBox, details) {
+  const time = frameTimes(c, details);
   const rows = [
     { key: 'total_bytes', label: 'Requested bytes per frame', values: c.total_bytes, format: fmt.bytes },
     { key: 'read_bytes', label: 'read', values: against(byAccess(c, 'read')), format: fmt.bytes },
     { key: 'written_bytes', label: 'written', values: against(byAccess(c, 'write')), format: fmt.bytes },
     ...(anyFootprint(c)
       ? [{ key: 'total_footprint_bytes', label: 'Footprint per frame', values: c.total_footprint_bytes, format: fmt.bytes },
-        { key: 'reuse', label: 'Reuse (requested / footprint)', values: c.reuse, format: reuseText }]
+        { key: 'reuse', label: 'Reuse (requested / footprint)', values: c.reuse, format: reuseText, higherIsBetter: true }]
       : []),
-    { key: 'frame_ms', label: 'Frame time', values: c.frame_ms, format: fmt.ms },
+    { key: 'frame_ms', label: `Frame time (${kStatisticText[time.statistic]})`, values: time.values, format: fmt.ms },
   ];
   page.append(h('h2', {}, 'Totals'), comparedTable(c.runs, rows, 'totals'));
   const box = h('div', { class: 'charts' });
@@ -67,9 +91,33 @@ function totals(page, c, bytesBox) {
   const labels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
   box.append(bytesBox);
   barChart(box, {
-    id: 'compare-frame-ms', title: 'Frame time', labels, labelHeader: 'Run', format: fmt.ms,
-    datasets: [{ label: 'frame time', data: c.frame_ms.map((v) => v.value) }],
+    id: 'compare-frame-ms', title: `Frame time (${kStatisticText[time.statistic]})`, labels, labelHeader: 'Run', format: fmt.ms,
+    datasets: [{ label: 'frame time', data: time.values.map((v) => v.value), backgroundColor: c.runs.map((_, i) => runSeries(c.runs, i).backgroundColor) }],
   });
+}
+
+const kTopResources = 10;
+
+// Per resource, sorted by size (the largest value over the runs), the top 10
+// first with "show all"; the log switch keeps small resources visible.
+function resourceChart(c, key, noun, box, all = false) {
+  destroyCharts(box);
+  box.replaceChildren();
+  const size = (res) => Math.max(0, ...res[key].map((v) => v.value ?? 0));
+  const sorted = [...c.resources].sort((x, y) => size(y) - size(x));
+  const shown = all ? sorted : sorted.slice(0, kTopResources);
+  const chart = barChart(box, {
+    id: 'compare-resources', title: `${noun} per frame by resource`,
+    caption: `summed over passes, largest first${shown.length < sorted.length ? `; the ${shown.length} largest of ${sorted.length}` : ''}`,
+    labels: shown.map((r) => `${r.resource} (${r.access})`), labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: shown.map((res) => res[key][i].value) })),
+  });
+  box.querySelector('.chart-box').style.height = `${Math.max(260, 16 * shown.length * Math.min(c.runs.length, 3) + 60)}px`;
+  chart.resize();
+  if (sorted.length > kTopResources) {
+    box.append(h('button', { type: 'button', class: 'secondary', dataset: { showAllResources: String(!all) },
+      onclick: () => resourceChart(c, key, noun, box, !all) }, all ? `Show the ${kTopResources} largest` : `Show all ${sorted.length} resources`));
+  }
 }
 
 // The byte charts of one measure: per run (read and written stacked), per
@@ -84,18 +132,12 @@ function byteCharts(c, measure, boxes) {
   const runLabels = c.runs.map((r) => `${fmt.variant(r)} #${r.id}`);
   barChart(boxes.totals, {
     id: 'compare-bytes', title: `${noun} per frame`, labels: runLabels, labelHeader: 'Run', stacked: true, format: fmt.bytes,
-    datasets: [{ label: 'read', data: byAccess(c, 'read', key) }, { label: 'written', data: byAccess(c, 'write', key) }],
+    datasets: [{ label: 'read', data: byAccess(c, 'read', key), backgroundColor: kRead }, { label: 'written', data: byAccess(c, 'write', key), backgroundColor: kWritten }],
   });
-  const resourceLabels = c.resources.map((r) => `${r.resource} (${r.access})`);
-  barChart(boxes.resources, {
-    id: 'compare-resources', title: `${noun} per frame by resource`, caption: 'summed over passes',
-    labels: resourceLabels, labelHeader: 'Resource', horizontal: true, logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.resources.map((res) => res[key][i].value) })),
-  });
-  boxes.resources.querySelector('.chart-box').style.height = `${Math.max(330, 18 * resourceLabels.length * Math.min(c.runs.length, 3))}px`;
+  resourceChart(c, key, noun, boxes.resources);
   barChart(boxes.passes, {
     id: 'compare-pass-bytes', title: `${noun} per frame by pass`, labels: c.passes.map((p) => p.pass), labelHeader: 'Pass', logSwitch: true, format: fmt.bytes,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) })),
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => p[key][i].value) })),
   });
 }
 
@@ -107,7 +149,7 @@ function perResource(page, c, box) {
       { key: `${r.resource}|${r.access}`, label: `${r.resource} (${r.access})${footprint ? ' requested' : ''}`, values: r.bytes, format: fmt.bytes },
       ...(footprint
         ? [{ key: `${r.resource}|${r.access}|footprint`, label: `${r.resource} (${r.access}) footprint`, values: r.footprint_bytes, format: fmt.bytes },
-          { key: `${r.resource}|${r.access}|reuse`, label: `${r.resource} (${r.access}) reuse`, values: r.reuse, format: reuseText }]
+          { key: `${r.resource}|${r.access}|reuse`, label: `${r.resource} (${r.access}) reuse`, values: r.reuse, format: reuseText, higherIsBetter: true }]
         : []),
     ]), 'resources')));
 }
@@ -118,7 +160,7 @@ function perPass(page, c, bytesBox) {
   const box = h('div', { class: 'charts' });
   page.append(box);
   box.append(bytesBox);
-  const series = (key) => c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => p[key][i].value) }));
+  const series = (key) => c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => p[key][i].value) }));
   barChart(box, { id: 'compare-pass-ms', title: 'GPU time by pass', labels, labelHeader: 'Pass', format: fmt.ms, datasets: series('gpu_ms') });
   const footprint = anyFootprint(c);
   page.append(h('details', {}, h('summary', {}, 'Per pass: values, deltas and ratios'),
@@ -126,7 +168,7 @@ function perPass(page, c, bytesBox) {
       { key: `${p.pass}|bytes`, label: `${p.pass} requested bytes`, values: p.bytes, format: fmt.bytes },
       ...(footprint
         ? [{ key: `${p.pass}|footprint_bytes`, label: `${p.pass} footprint`, values: p.footprint_bytes, format: fmt.bytes },
-          { key: `${p.pass}|reuse`, label: `${p.pass} reuse`, values: p.reuse, format: reuseText }]
+          { key: `${p.pass}|reuse`, label: `${p.pass} reuse`, values: p.reuse, format: reuseText, higherIsBetter: true }]
         : []),
       { key: `${p.pass}|gpu_ms`, label: `${p.pass} time`, values: p.gpu_ms, format: fmt.ms },
     ]), 'passes')));
@@ -136,8 +178,7 @@ function perPass(page, c, bytesBox) {
 // GPU time, both averaged over the run's samples) as a fraction of the
 // bandwidth ceiling measured by that run's capture (GET /runs/{id}
 // "ceilings"; null for runs without one).
-async function bandwidthFractions(page, c, signal) {
-  const runs = await Promise.all(c.runs.map((r) => get(`/runs/${r.id}`, signal)));
+function bandwidthFractions(page, c, runs) {
   const ceiling = runs.map((r) => (r.ceilings ? r.ceilings.bandwidth_bytes_per_s : null));
   const fraction = (p, i) => {
     const bytes = p.bytes[i].value, ms = p.gpu_ms[i].value;
@@ -155,7 +196,7 @@ async function bandwidthFractions(page, c, signal) {
     id: 'compare-pass-bandwidth-fraction', title: 'Achieved fraction of the bandwidth ceiling',
     caption: "bytes per frame (requested) over the pass's GPU time, against the ceiling each run's capture measured",
     labels, labelHeader: 'Pass', format: fmt.percent,
-    datasets: c.runs.map((r, i) => ({ label: `${fmt.variant(r)} #${r.id}`, data: c.passes.map((p) => fraction(p, i)) })),
+    datasets: c.runs.map((r, i) => ({ ...runSeries(c.runs, i), data: c.passes.map((p) => fraction(p, i)) })),
   });
   page.append(h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Bandwidth fraction', dataset: { table: 'bandwidth-fraction' } },
     h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'Pass'), c.runs.map((r, i) => h('th', { scope: 'col', class: 'num' },
@@ -165,138 +206,6 @@ async function bandwidthFractions(page, c, signal) {
         const f = fraction(p, i);
         return h('td', { class: 'num', dataset: { run: r.id, fraction: f === null ? '' : String(f) } }, fmt.percent(f));
       })))))));
-}
-
-// For each compared run's variant: the newest run at every resolution with
-// the same scene, device, counting mode and light count. Variants of one
-// renderer are series of their own.
-async function scalingSeries(runs, signal) {
-  const byKey = new Map();  // one series per variant, counting mode, scene, device, lights
-  for (const run of runs) {
-    const key = `${fmt.variant(run)}|${run.scene}|${JSON.stringify(run.scene_params)}|${run.device_id}|${run.counting}|${run.lights}|${run.footprint_block_bytes ?? ''}`;
-    if (!byKey.has(key)) byKey.set(key, run);
-  }
-  return Promise.all([...byKey.values()].map(async (run) => {
-    const filter = run.variant ? { variant: run.variant } : { renderer: run.renderer };
-    const { runs: found } = await get('/runs' + queryString({ ...filter, scene: run.scene, device: run.device_id, limit: 1000 }), signal);
-    const newest = new Map();  // "WxH" -> run; the list is newest first
-    for (const r of found) {
-      if (r.counting !== run.counting || r.lights !== run.lights || JSON.stringify(r.scene_params) !== JSON.stringify(run.scene_params)) continue;
-      if ((r.footprint_block_bytes ?? null) !== (run.footprint_block_bytes ?? null)) continue;  // footprint runs are a series of their own
-      if (!newest.has(fmt.resolution(r))) newest.set(fmt.resolution(r), r);
-    }
-    const points = [...newest.values()].sort((a, b) => a.width * a.height - b.width * b.height);
-    const footprint = run.footprint_block_bytes ? ` + footprint ${run.footprint_block_bytes}` : '';
-    return { label: `${fmt.variant(run)}${run.counting !== 'exact' || footprint ? ` (${run.counting}${footprint})` : ''}`, variant: fmt.variant(run), points };
-  }));
-}
-
-// Fits against pixel count and crossings (GET /api/crossover) over the
-// capture of the first compared run, on its scene and device, for both
-// metrics; a metric's answer is null when the server gives none.
-async function crossovers(run, signal) {
-  const fetchOne = (metric) => get('/crossover' + queryString({ capture: run.capture, metric, scene: run.scene, device: run.device_id }), signal)
-    .catch((error) => {
-      if (signal.aborted) throw error;
-      return null;
-    });
-  const [bytes, frameMs] = await Promise.all([fetchOne('bytes'), fetchOne('frame_ms')]);
-  return { bytes, frame_ms: frameMs };
-}
-
-// The crossover series that belong to the compared runs' configuration
-// (counting mode, lights, footprint block of the first run): those with a fit.
-function fittedSeries(answer, run) {
-  if (!answer) return [];
-  return answer.series.filter((s) => s.fit && s.counting === run.counting && s.lights === run.lights
-    && (s.footprint_block_bytes ?? null) === (run.footprint_block_bytes ?? null));
-}
-
-// One dashed line per fit across the pixel range of all fits, coloured as its
-// renderer's points; crossings inside the range as marks with their interval.
-function fitOverlay(answer, run, series) {
-  const fits = fittedSeries(answer, run);
-  if (!fits.length) return { datasets: [], marks: [] };
-  const low = Math.min(...fits.map((s) => s.fit.min_pixels)), high = Math.max(...fits.map((s) => s.fit.max_pixels));
-  let extra = series.length;
-  const datasets = fits.map((s) => {
-    const at = series.findIndex((x) => x.variant === s.variant);
-    const i = at >= 0 ? at : extra++;
-    const { a, b } = s.fit;
-    return { label: `${s.variant} fit`, showLine: true, pointRadius: 0, borderWidth: 2, borderDash: [6, 4],
-      backgroundColor: color(i), borderColor: color(i), fit: { variant: s.variant, a, b, r2: s.fit.r2, poor: s.fit.poor_fit },
-      data: [{ x: low, y: a + b * low }, { x: high, y: a + b * high }] };
-  });
-  const names = new Set(fits.map((s) => s.variant));
-  const marks = answer.crossings.filter((c) => c.kind === 'crosses' && names.has(c.first) && names.has(c.second))
-    .map((c) => ({ x: c.pixels, low: c.pixels_ci?.[0] ?? null, high: c.pixels_ci?.[1] ?? null,
-      label: c.resolution ? `${c.resolution.width}×${c.resolution.height}` : fmt.count(c.pixels), first: c.first, second: c.second }));
-  return { datasets, marks };
-}
-
-const kCrossingText = { crosses: 'crosses', outside_range: 'no crossing in range', parallel: 'parallel within error' };
-const kMetricText = { bytes: 'Bytes', frame_ms: 'Frame time' };
-const resolutionText = (r) => (r ? `${r.width}×${r.height}` : '–');
-
-// The fits (with R² and the poor-fit flag) and the crossings of both metrics.
-function crossoverTables(answers, run) {
-  const fitRows = [], crossingRows = [];
-  for (const [metric, answer] of Object.entries(answers)) {
-    if (!answer) continue;
-    const format = metric === 'bytes' ? fmt.bytes : fmt.ms;
-    const fits = fittedSeries(answer, run);
-    const names = new Set(fits.map((s) => s.variant));
-    for (const s of fits) {
-      fitRows.push(h('tr', { dataset: { metric, variant: s.variant, r2: s.fit.r2, poor: String(s.fit.poor_fit) } },
-        h('td', {}, kMetricText[metric]), h('td', {}, s.variant),
-        h('td', { class: 'num', dataset: { value: s.fit.a } }, `${format(s.fit.a)} (${format(s.fit.a_ci[0])} to ${format(s.fit.a_ci[1])})`),
-        h('td', { class: 'num', dataset: { value: s.fit.b } }, `${format(s.fit.b * 1e6)}/Mpx (${format(s.fit.b_ci[0] * 1e6)} to ${format(s.fit.b_ci[1] * 1e6)})`),
-        h('td', { class: `num ${s.fit.poor_fit ? 'worse' : ''}` }, `${s.fit.r2.toFixed(4)}${s.fit.poor_fit ? ' poor fit' : ''}`)));
-    }
-    for (const c of answer.crossings.filter((x) => names.has(x.first) && names.has(x.second))) {
-      const interval = c.pixels_ci ? `${fmt.count(c.pixels_ci[0])} to ${fmt.count(c.pixels_ci[1])}` : '–';
-      const resolutions = c.resolution_ci ? `${resolutionText(c.resolution_ci[0])} to ${resolutionText(c.resolution_ci[1])}` : '';
-      const lower = c.kind === 'crosses' ? `${c.lower_below} below, ${c.lower_above} above` : `${c.lower_throughout} throughout`;
-      crossingRows.push(h('tr', { dataset: { metric, kind: c.kind, first: c.first, second: c.second, pixels: c.pixels ?? '' } },
-        h('td', {}, kMetricText[metric]), h('td', {}, `${c.first} / ${c.second}`), h('td', {}, kCrossingText[c.kind] || c.kind),
-        h('td', { class: 'num' }, c.kind === 'crosses' ? `${resolutionText(c.resolution)} (${fmt.count(c.pixels)} px)` : '–'),
-        h('td', { class: 'num' }, c.kind === 'crosses' ? `${interval} px${resolutions ? ` (${resolutions})` : ''}` : '–'),
-        h('td', {}, lower)));
-    }
-  }
-  if (!fitRows.length) {
-    return h('p', { class: 'muted', dataset: { crossover: 'none' } },
-      `No fitted lines: capture #${run.capture} needs 3 or more resolutions per renderer (docs/measurement.md, "Crossover").`);
-  }
-  const head = (titles) => h('thead', {}, h('tr', {}, titles.map((t) => h('th', { scope: 'col' }, t))));
-  return h('div', { class: 'crossover' },
-    h('p', { class: 'muted' }, `Lines: y = a + b × pixels, least squares over capture #${run.capture}; 95 % intervals (t for a and b, delta method for the crossing). R² below 0.9: the line does not describe the points.`),
-    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Fits', dataset: { table: 'fits' } },
-      head(['Metric', 'Renderer', 'a (fixed)', 'b (per pixel)', 'R²']), h('tbody', {}, fitRows))),
-    h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Crossings', dataset: { table: 'crossings' } },
-      head(['Metric', 'Renderers', 'Result', 'Where (16:9)', '95 % interval', 'Lower']), h('tbody', {}, crossingRows))));
-}
-
-async function scaling(page, c, signal) {
-  page.append(h('h2', {}, 'Scaling with resolution'));
-  const [series, answers] = await Promise.all([scalingSeries(c.runs, signal), crossovers(c.runs[0], signal)]);
-  const rows = series.flatMap((s) => s.points.map((r) => ({ s, r })));
-  const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Scaling', dataset: { chartTable: 'scaling' } },
-    h('thead', {}, h('tr', {}, ['Renderer', 'Resolution', 'Pixels', 'Bytes per frame', 'Frame time', 'Run'].map((t) => h('th', { scope: 'col' }, t)))),
-    h('tbody', {}, rows.map(({ s, r }) => h('tr', {},
-      h('td', {}, s.label), h('td', {}, fmt.resolution(r)), h('td', { class: 'num' }, fmt.count(r.width * r.height)),
-      h('td', { class: 'num', dataset: { value: r.mean_bytes } }, fmt.bytes(r.mean_bytes)),
-      h('td', { class: 'num', dataset: { value: r.mean_frame_ms } }, fmt.ms(r.mean_frame_ms)),
-      h('td', {}, h('a', { href: `#/runs/${r.id}` }, `#${r.id}`)))))));
-  const box = h('div', { class: 'charts' });
-  page.append(box);
-  const pixels = { title: 'pixels', format: (v) => fmt.count(v) };
-  const datasets = (value) => series.map((s) => ({ label: s.label, showLine: true, data: s.points.map((r) => ({ x: r.width * r.height, y: r[value], run: r.id })) }));
-  const bytesFit = fitOverlay(answers.bytes, c.runs[0], series), msFit = fitOverlay(answers.frame_ms, c.runs[0], series);
-  const caption = `per renderer, same scene and device${bytesFit.datasets.length ? '; dashed: fitted lines, vertical: crossings with their interval' : ''}`;
-  xyChart(box, { id: 'scaling-bytes', title: 'Bytes per frame against pixel count', caption, x: pixels, y: { title: 'bytes per frame', format: fmt.bytes }, datasets: [...datasets('mean_bytes'), ...bytesFit.datasets], marks: bytesFit.marks, table });
-  xyChart(box, { id: 'scaling-frame-ms', title: 'Frame time against pixel count', caption, x: pixels, y: { title: 'frame time', format: fmt.ms }, datasets: [...datasets('mean_frame_ms'), ...msFit.datasets], marks: msFit.marks, table: table.cloneNode(true) });
-  page.append(crossoverTables(answers, c.runs[0]));
 }
 
 // ---- Repeated captures ---------------------------------------------------------
@@ -465,16 +374,16 @@ function significanceRow(run, figure, t) {
     h('td', {}, figure),
     h('td', { class: 'num' }, fmt.ratio(t.ratio)),
     h('td', { class: 'num' }, `[${endText(t.interval.lower)}, ${endText(t.interval.upper)}]`),
-    h('td', { class: 'num' }, t.mann_whitney.p < 1e-4 ? '< 0.0001' : t.mann_whitney.p.toFixed(4)),
-    h('td', { class: 'num' }, `${t.cliffs_delta.delta >= 0 ? '+' : ''}${t.cliffs_delta.delta.toFixed(2)} (${t.cliffs_delta.magnitude})`),
+    h('td', { class: 'num' }, fmt.pValue(t.mann_whitney.p)),
+    h('td', { class: 'num' }, `${fmt.signed(t.cliffs_delta.delta, 2)} (${t.cliffs_delta.magnitude})`),
     h('td', {}, h('span', { class: `badge verdict ${t.verdict}` }, verdictText[t.verdict])),
-    h('td', { class: 'muted' }, note));
+    h('td', { class: 'muted why' }, note));
 }
 
 function missingRow(run, figure, reason) {
   return h('tr', { dataset: { run: run.id, figure, verdict: 'missing' } },
     h('th', { scope: 'row' }, `${fmt.variant(run)} #${run.id}`), h('td', {}, figure),
-    h('td', { colspan: 5, class: 'muted' }, '–'), h('td', { class: 'muted' }, reason));
+    h('td', { colspan: 5, class: 'muted' }, '–'), h('td', { class: 'muted why' }, reason));
 }
 
 function significanceTable(c) {
@@ -501,7 +410,7 @@ function significanceTable(c) {
   const pct = Math.round(c.confidence * 1000) / 10;
   return h('div', {},
     h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'significance', dataset: { table: 'significance', confidence: c.confidence, strata: c.significance.find((s) => s.frame)?.frame.strata ?? '' } },
-      h('thead', {}, h('tr', {}, ['Run', 'Figure', 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
+      h('thead', {}, h('tr', {}, ['Run', 'Figure', c.significance.some((x) => x.frame?.strata === 'cameras') ? 'Ratio of medians (each camera aligned)' : 'Ratio of medians', `${pct}% interval`, 'Mann-Whitney p', "Cliff's delta", 'Verdict', 'Why'].map((t) => h('th', { scope: 'col' }, t)))),
       h('tbody', {}, rows))),
     h('ul', { class: 'counts-verdicts' }, counts));
 }
@@ -557,7 +466,13 @@ export async function render(page, { query, signal }) {
   const boxes = { totals: h('div', {}), resources: h('div', {}), passes: h('div', {}) };
   page.append(measureSwitch('compare-measure', anyFootprint(c),
     'None of these runs has a footprint: capture with "footprint" on (the capture form\'s Footprint select).', (measure) => byteCharts(c, measure, boxes)));
-  totals(page, c, boxes.totals);
+  const [runs, details] = await Promise.all([Promise.all(c.runs.map((r) => get(`/runs/${r.id}`, signal))),
+    Promise.all(c.runs.map((r) => sampleDetails(r.id, signal)))]);
+  page.append(h('h2', {}, 'Where the bytes go'), breakdownTable({
+    id: 'compare', columns: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), nodes: passNodes(runs.map((r) => r.passes)),
+    total: c.total_bytes.map((v) => v.value), title: null,
+    caption: 'requested bytes per frame; passes ranked by their largest value over the runs, each opening onto its resources; shares of each run\'s total.' }));
+  totals(page, c, boxes.totals, details);
   significance(page, c, ids, signal);
   perResource(page, c, boxes.resources);
   perPass(page, c, boxes.passes);
@@ -565,6 +480,7 @@ export async function render(page, { query, signal }) {
   // Both need more requests: fetch them side by side, each into its own section.
   const [fractionSection, repeatSection, scalingSection, imageSection] = [h('section'), h('section'), h('section'), h('section')];
   page.append(fractionSection, repeatSection, scalingSection, imageSection);
-  await Promise.all([bandwidthFractions(fractionSection, c, signal), repeats(repeatSection, c, signal),
+  bandwidthFractions(fractionSection, c, runs);
+  await Promise.all([repeats(repeatSection, c, signal),
     scaling(scalingSection, c, signal), imageViewer(imageSection, c.runs, signal)]);
 }

@@ -7,7 +7,7 @@
 // hatched. A cell's tooltip gives its values, interval and verdict; a click
 // shows its samples with their screenshots.
 import { get, imageSource, queryString } from '../api.js';
-import { append, h } from '../dom.js';
+import { append, h, table } from '../dom.js';
 import * as fmt from '../format.js';
 
 const kSvg = 'http://www.w3.org/2000/svg';
@@ -61,14 +61,14 @@ const valueText = (metric, v) => (metric === 'bytes' ? fmt.bytes(v) : fmt.ms(v))
 export function cellTitle(body, cell) {
   const layout = body.layout;
   const where = layout.layout === 'floor'
-    ? `cell ${cell.column},${cell.row} (x ${(layout.origin[0] + (cell.column + 0.5) * layout.cell_size[0]).toFixed(1)}, z ${(layout.origin[1] + (cell.row + 0.5) * layout.cell_size[1]).toFixed(1)})`
-    : `ring ${cell.row}, segment ${cell.column} (lat ${layout.latitudes_deg[cell.row].toFixed(0)}°, lon ${layout.longitudes_deg[cell.column].toFixed(0)}°)`;
+    ? `cell ${cell.column},${cell.row} (x ${fmt.fixed(layout.origin[0] + (cell.column + 0.5) * layout.cell_size[0], 1)}, z ${fmt.fixed(layout.origin[1] + (cell.row + 0.5) * layout.cell_size[1], 1)})`
+    : `ring ${cell.row}, segment ${cell.column} (lat ${fmt.fixed(layout.latitudes_deg[cell.row], 0)}°, lon ${fmt.fixed(layout.longitudes_deg[cell.column], 0)}°)`;
   if (cell.value_a === null) {
     const why = { no_surface: 'no floor below', no_headroom: 'no headroom above the floor', eye_blocked: 'the eye would be in or next to geometry', off_level: 'floor off the ground level', incomplete: 'measured by one renderer only', not_measured: 'not measured' };
     return `${where}: empty (${why[cell.empty] || cell.empty || 'no samples'})`;
   }
   const lines = [where];
-  if (cell.floor !== null && cell.floor !== undefined) lines.push(`floor y ${cell.floor.toFixed(2)}`);
+  if (cell.floor !== null && cell.floor !== undefined) lines.push(`floor y ${fmt.fixed(cell.floor, 2)}`);
   lines.push(`${body.renderer}: ${valueText(body.metric, cell.value_a)}`);
   if (body.versus) {
     lines.push(`${body.versus}: ${valueText(body.metric, cell.value_b)}`);
@@ -236,6 +236,17 @@ export async function render(page, { query, signal }) {
     return;
   }
   const runs = (await get(`/runs${queryString({ capture, limit: 1000 })}`, signal)).runs;
+  // A capture whose cameras were not a heatmap's (auto, or listed) has no cells: say so plainly.
+  if (!runs.some((r) => r.notes && r.notes.heatmap)) {
+    page.append(h('p', { class: 'panel', dataset: { heatmap: 'not-a-heatmap' } },
+      runs.length
+        ? `Capture #${capture} is not a heatmap capture: its cameras were not placed on a grid, so there is no map to draw. `
+        : `Capture #${capture} has no runs (yet), so there is no map to draw. `,
+      'A heatmap comes from a capture whose Cameras are "heatmap: floor grid" or "heatmap: sphere" in the ',
+      h('a', { href: '#/capture' }, 'capture form'), '. ', runs.length ? h('a', { href: `#/runs?capture=${capture}` }, `The runs of capture #${capture}`) : null,
+      runs.length ? '.' : null));
+    return;
+  }
   const variants = [...new Set(runs.map(fmt.variant))];
   const configs = configsOf(runs);
   const first = configs[0] || {};
@@ -272,7 +283,39 @@ export async function render(page, { query, signal }) {
   }
   const details = h('div', { class: 'panel heatmap-details', dataset: { details: '' } }, h('p', { class: 'muted' }, 'Click a cell for its samples and screenshots.'));
   const { svg, scale } = drawing(body, src, details, signal);
-  append(page, [h('div', { class: 'heatmap', dataset: { layout: body.layout.layout, topdown: src ? 'shown' : 'none' } }, svg),
+  const hover = hoverReadout(svg, body);
+  append(page, [hover, h('div', { class: 'heatmap', dataset: { layout: body.layout.layout, topdown: src ? 'shown' : 'none' } }, svg),
     body.layout.layout === 'sphere' ? h('p', { class: 'caption' }, 'Rows: latitude from north (top, +y) to south; columns: longitude from −180° to 180°. Each pose looks at the scene\'s centre.') : null,
-    legend(body, scale), summaryList(body), details]);
+    legend(body, scale), summaryList(body), details, cellTable(body)]);
+}
+
+// The value of the cell under the pointer (or focused), in words, above the
+// map: the SVG title shows it too, but only after a delay and not on touch.
+function hoverReadout(svg, body) {
+  const out = h('p', { class: 'heatmap-hover', role: 'status', dataset: { hover: '' } }, 'Point at a cell for its value.');
+  const show = (e) => {
+    const g = e.target.closest?.('g.cell');
+    if (!g) return;
+    const cell = body.cells.find((c) => String(c.column) === g.dataset.column && String(c.row) === g.dataset.row);
+    out.textContent = cellTitle(body, cell).split('\n').join(' · ');
+    out.dataset.hover = `${cell.column},${cell.row}`;
+  };
+  svg.addEventListener('mouseover', show);
+  svg.addEventListener('focusin', show);
+  return out;
+}
+
+// Every cell as a row: where, the values, the ratio and the verdict.
+function cellTable(body) {
+  const measured = body.cells.filter((c) => c.value_a !== null);
+  const columns = [
+    { label: 'Cell', value: (c) => cellTitle(body, c).split('\n')[0] },
+    { label: body.renderer, className: 'num', value: (c) => h('span', { dataset: { value: String(c.value_a) } }, valueText(body.metric, c.value_a)) },
+    ...(body.versus ? [
+      { label: body.versus, className: 'num', value: (c) => valueText(body.metric, c.value_b) },
+      { label: `${body.versus} / ${body.renderer}`, className: 'num', value: (c) => (c.ratio === null ? '–' : fmt.ratio(c.ratio)) },
+      { label: 'Verdict', value: (c) => (c.verdict ? `${c.verdict}${c.significant ? '' : ' (not significant)'}` : '–') }] : []),
+  ];
+  return h('details', { class: 'heatmap-table', dataset: { cellTable: String(measured.length) } },
+    h('summary', {}, `The ${measured.length} measured cells as a table`), table(columns, measured, { 'aria-label': 'Heatmap cells' }));
 }

@@ -6,9 +6,13 @@
 // (whiskers, table columns). Requests: the run (with its passes averaged over
 // the samples), its samples, and each sample (its passes' spreads).
 import { downloadSource, get, hasToken, imageSource, request } from '../api.js';
-import { barChart, color, destroyCharts, xyChart } from '../charts.js';
+import { breakdownTable, passNodes } from '../breakdown.js';
+import { barChart, destroyCharts, xyChart } from '../charts.js';
 import { h, measureSwitch, table } from '../dom.js';
 import * as fmt from '../format.js';
+import { kRead, kWritten } from '../palette.js';
+import { rooflineSection } from './roofline.js';
+import { frameTime, kStatisticText } from '../stats.js';
 
 const tile = (label, value, key) => h('div', { class: 'tile', dataset: { tile: key } },
   h('div', { class: 'label' }, label), h('div', { class: 'value' }, value));
@@ -50,10 +54,20 @@ function appSource(run) {
 }
 
 
+// The ranked pass -> resource table above the charts. A resource line has no
+// children yet; per-site and per-draw figures (GET /api/samples/{id}/sites,
+// /draws) nest here as a third level through breakdownTable's childrenOf.
+function bytesBreakdown(run, measure) {
+  const { key, noun } = kMeasures[measure];
+  const nodes = passNodes([run.passes], key);
+  const total = nodes.reduce((sum, n) => sum + (n.values[0] ?? 0), 0);
+  return breakdownTable({ id: 'run', columns: [`${noun} per frame`], nodes, total: [total],
+    caption: `${noun.toLowerCase()} per frame, passes ranked by their share, each opening onto its resources; averaged over the samples.` });
+}
+
 function passResourceCharts(parent, run, measure = 'requested') {
   const { key, noun } = kMeasures[measure];
   const labels = run.passes.map((p) => p.name);
-  const all = [...new Set(run.passes.flatMap((p) => p.resources.map((r) => r.name)))];  // one colour per resource
   const box = h('div', { class: 'charts', dataset: { measure } });
   parent.append(box);
   for (const [access, title] of [['read', `${noun} read per frame`], ['write', `${noun} written per frame`]]) {
@@ -69,7 +83,6 @@ function passResourceCharts(parent, run, measure = 'requested') {
       datasets: resources.map((name) => ({
         label: name,
         data: byPass.map((sums) => (name in sums ? sums[name] : null)),
-        backgroundColor: color(all.indexOf(name)),
       })),
     });
   }
@@ -99,8 +112,8 @@ function perSampleChart(parent, samples, details, measure = 'requested') {
     labelHeader: samples.some(frameLabel) ? 'Frame' : 'Camera',
     format: fmt.bytes,
     datasets: [
-      { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y' },
-      { label: 'written', data: footprint ? details.map((d) => footprintByAccess(d, 'write')) : samples.map((s) => s.bytes_written), yAxisID: 'y2' },
+      { label: 'read', data: footprint ? details.map((d) => footprintByAccess(d, 'read')) : samples.map((s) => s.bytes_read), yAxisID: 'y', backgroundColor: kRead },
+      { label: 'written', data: footprint ? details.map((d) => footprintByAccess(d, 'write')) : samples.map((s) => s.bytes_written), yAxisID: 'y2', backgroundColor: kWritten },
     ],
     yTitle: 'read',
     axes: { y2: { position: 'right', beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: 'written' }, ticks: { callback: (v) => fmt.bytes(v) } } },
@@ -210,114 +223,6 @@ function optionsText(options) {
   return Object.entries(options || {}).map(([k, v]) => `${k}=${typeof v === 'string' ? v : JSON.stringify(v)}`).join(', ');
 }
 
-// ---- Roofline (docs/measurement.md, "Device ceilings", "Arithmetic per pass") ----
-
-// "1.23 G": a rate or a count in a few characters.
-function si(v, unit) {
-  if (v === null || v === undefined || !Number.isFinite(v)) return '–';
-  const steps = [[1e12, 'T'], [1e9, 'G'], [1e6, 'M'], [1e3, 'k']];
-  const [scale, prefix] = steps.find(([k]) => Math.abs(v) >= k) || [1, ''];
-  return `${(v / scale).toPrecision(3)} ${prefix}${unit}`;
-}
-
-const decades = (unit) => (v) => (Math.abs(Math.log10(v) - Math.round(Math.log10(v))) < 1e-9 ? si(v, unit) : '');
-
-// Per pass, its roofline averaged over the samples (extras.roofline.passes,
-// stored by the capture): arithmetic, requested and footprint bytes and time,
-// then intensity (ops per byte) and rate (ops per second) from the means.
-function rooflinePasses(samples) {
-  const byPass = new Map();
-  for (const s of samples) {
-    const passes = (s.extras && s.extras.roofline && s.extras.roofline.passes) || {};
-    for (const [name, r] of Object.entries(passes)) {
-      if (!byPass.has(name)) byPass.set(name, []);
-      byPass.get(name).push(r);
-    }
-  }
-  const mean = (list, key) => (list.every((r) => typeof r[key] === 'number') ? list.reduce((sum, r) => sum + r[key], 0) / list.length : null);
-  return [...byPass.entries()].map(([name, list]) => {
-    const ops = mean(list, 'arithmetic_ops');
-    const bytes = mean(list, 'bytes_requested');
-    const footprint = mean(list, 'footprint_bytes');
-    const seconds = mean(list, 'gpu_ms') === null ? null : mean(list, 'gpu_ms') / 1e3;
-    const per = (a, b) => (a !== null && b ? a / b : null);
-    // "counted" (executed operations, the accumulate mode) where every sample counted them, else an estimate.
-    const counted = list.every((r) => r.arithmetic === 'counted');
-    return { name, ops, bytes, footprint, seconds, counted,
-      intensity: per(ops, bytes), intensityFootprint: per(ops, footprint), rate: per(ops, seconds),
-      bandwidth: per(bytes, seconds), bandwidthFootprint: per(footprint, seconds) };
-  });
-}
-
-// How the passes' arithmetic was obtained, for the chart's caption.
-function arithmeticNote(passes) {
-  if (passes.every((p) => p.counted)) return 'Arithmetic is counted as executed.';
-  return 'Arithmetic is a static estimate (loops counted once) where it was not counted (modes other than accumulate).';
-}
-
-// Log-log roofline: x arithmetic intensity (ops per byte), y ops per second;
-// the bandwidth ceiling rises with slope 1 up to the ridge, the arithmetic
-// ceiling is flat after it. One point per pass in each series (requested
-// bytes; footprint bytes where measured). Passes without arithmetic, bytes or
-// time cannot sit on log axes and are left out (the table lists every pass).
-function rooflineSection(run, samples) {
-  const passes = rooflinePasses(samples);
-  const c = run.ceilings;
-  if (!passes.length) {
-    return h('p', { class: 'panel muted', dataset: { roofline: 'none' } }, appSource(run)
-      ? 'Not measured for an application captured under the layer.'
-      : 'Not recorded for this run (captured before the roofline was measured).');
-  }
-  const box = h('div', { class: 'charts', dataset: { roofline: '' } });
-  const plotted = (x, y) => x > 0 && y > 0 && Number.isFinite(x) && Number.isFinite(y);
-  const requested = passes.filter((p) => plotted(p.intensity, p.rate)).map((p) => ({ x: p.intensity, y: p.rate, pass: p.name }));
-  const footprint = passes.filter((p) => plotted(p.intensityFootprint, p.rate)).map((p) => ({ x: p.intensityFootprint, y: p.rate, pass: p.name }));
-  const datasets = [{ label: 'requested bytes', data: requested, pointRadius: 5 }];
-  if (footprint.length) datasets.push({ label: 'footprint bytes', data: footprint, pointRadius: 5, pointStyle: 'triangle' });
-  if (c) {
-    const xs = [...requested, ...footprint].map((p) => p.x);
-    const ridge = c.arithmetic_ops_per_s / c.bandwidth_bytes_per_s;
-    const lo = Math.min(ridge, ...xs) / 10, hi = Math.max(ridge, ...xs) * 10;
-    datasets.push(
-      { label: 'bandwidth ceiling', ceiling: true, showLine: true, pointRadius: 0, borderWidth: 2, borderColor: '#444', backgroundColor: '#444',
-        data: [{ x: lo, y: lo * c.bandwidth_bytes_per_s }, { x: ridge, y: c.arithmetic_ops_per_s }] },
-      { label: 'arithmetic ceiling', ceiling: true, showLine: true, pointRadius: 0, borderWidth: 2, borderDash: [6, 4], borderColor: '#888', backgroundColor: '#888',
-        data: [{ x: ridge, y: c.arithmetic_ops_per_s }, { x: hi, y: c.arithmetic_ops_per_s }] });
-  }
-  const dataTable = table([
-    { label: 'Pass', value: (p) => p.name },
-    { label: 'Arithmetic', className: 'num', value: (p) => `${si(p.ops, 'op')}${p.counted ? '' : ' (estimate)'}` },
-    { label: 'Bytes', className: 'num', value: (p) => fmt.bytes(p.bytes) },
-    { label: 'Footprint', className: 'num', value: (p) => (p.footprint === null ? '–' : fmt.bytes(p.footprint)) },
-    { label: 'Ops per byte', className: 'num', value: (p) => (p.intensity === null ? '–' : p.intensity.toPrecision(3)) },
-    { label: 'Ops per footprint byte', className: 'num', value: (p) => (p.intensityFootprint === null ? '–' : p.intensityFootprint.toPrecision(3)) },
-    { label: 'Ops/s', className: 'num', value: (p) => si(p.rate, 'op/s') },
-    { label: 'Bandwidth', className: 'num', value: (p) => si(p.bandwidth, 'B/s') },
-    { label: 'Of peak bandwidth', className: 'num', value: (p) => h('span', { dataset: { fraction: p.bandwidth !== null && c ? String(p.bandwidth / c.bandwidth_bytes_per_s) : '' } },
-      p.bandwidth !== null && c ? fmt.percent(p.bandwidth / c.bandwidth_bytes_per_s) : '–') },
-  ], passes, { 'aria-label': 'Roofline', dataset: { table: 'roofline' } });
-  xyChart(box, {
-    id: 'roofline',
-    title: 'Roofline',
-    caption: c
-      ? `per pass, averaged over the samples; ceilings measured at the capture's start: ${si(c.bandwidth_bytes_per_s, 'B/s')}, ${si(c.arithmetic_ops_per_s, 'op/s')}. ${arithmeticNote(passes)}`
-      : `per pass, averaged over the samples; no ceilings were measured for this capture. ${arithmeticNote(passes)}`,
-    // A log axis ticks 1-9 per decade: label the decades only.
-    x: { title: 'arithmetic intensity (ops per byte)', type: 'logarithmic', format: decades('') },
-    y: { title: 'ops per second', type: 'logarithmic', format: decades('op/s') },
-    datasets,
-    table: dataTable,
-    tooltip: (ctx) => (ctx.dataset.ceiling
-      ? `${ctx.dataset.label}`
-      : `${ctx.raw.pass} (${ctx.dataset.label}): ${ctx.raw.x.toPrecision(3)} ops/byte, ${si(ctx.raw.y, 'op/s')}`),
-  });
-  const tiles = c ? h('div', { class: 'tiles' },
-    tile('Bandwidth ceiling', si(c.bandwidth_bytes_per_s, 'B/s'), 'ceiling-bandwidth'),
-    tile('Arithmetic ceiling', si(c.arithmetic_ops_per_s, 'op/s'), 'ceiling-arithmetic'),
-    tile('Ridge', `${c.ridge_intensity.toPrecision(3)} ops/byte`, 'ceiling-ridge')) : null;
-  return h('div', {}, tiles, box);
-}
-
 // A sample's technique measurements, shown without knowing the techniques:
 // a table of key and value per technique, nested values as JSON.
 function extrasSection(samples) {
@@ -413,11 +318,13 @@ function resourceTable(run) {
   ], run.resources, { 'aria-label': 'Resources' });
 }
 
-// A wrap factor in a few characters: "3.2", "186", "8.0e11".
+// A wrap factor in a few characters and no e-notation: "3.2", "186",
+// "4,300", "8.0 billion".
 function factor(v) {
   if (v === null || v === undefined) return '–';
-  if (v >= 1e6) return v.toExponential(1).replace('e+', 'e');
-  return v >= 100 ? String(Math.round(v)) : v.toFixed(1);
+  const words = [[1e12, 'trillion'], [1e9, 'billion'], [1e6, 'million']].find(([k]) => v >= k);
+  if (words) return `${(v / words[0]).toFixed(1)} ${words[1]}`;
+  return v >= 100 ? fmt.number(v, 2) : v.toFixed(1);
 }
 
 // How far the run's counters are from wrapping (docs/measurement.md,
@@ -492,6 +399,7 @@ export async function render(page, { params, signal }) {
   // Per-pass spreads live with each sample: one request per camera.
   const details = await Promise.all(samples.map((s) => get(`/samples/${s.id}`, signal)));
   const iqr = passIqr(run, details);
+  const time = frameTime(run, details);
   const read = samples.reduce((sum, s) => sum + s.bytes_read, 0) / (samples.length || 1);
   const written = samples.reduce((sum, s) => sum + s.bytes_written, 0) / (samples.length || 1);
   const compareHref = `#/runs?scene=${encodeURIComponent(run.scene)}&resolution=${run.width}x${run.height}&device=${run.device_id}&select=${run.id}`;
@@ -515,10 +423,11 @@ export async function render(page, { params, signal }) {
         [i ? ', ' : '', h('a', { href: `#/runs?label=${encodeURIComponent(`${k}=${v}`)}`, title: `runs labelled ${k}=${v}` }, `${k}=${v}`)])) : null,
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
+      run.notes && run.notes.heatmap ? h('li', {}, h('a', { href: `#/heatmap?capture=${run.capture}`, dataset: { heatmapLink: String(run.capture) } }, 'its camera heatmap')) : null,
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
       app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
-      tile(app ? 'GPU time per frame (under the layer)' : 'Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
+      tile(app ? `GPU time per frame (under the layer, ${kStatisticText[time.statistic]})` : `Frame time (${kStatisticText[time.statistic]})`, fmt.ms(time.value), 'frame-ms'),
       ...(app ? [] : [
         tile('Counted frame', fmt.ms(run.mean_frame_ms_instrumented), 'frame-ms-instrumented'),
         tile('Overhead of counting', fmt.ratio(run.mean_overhead_ratio), 'overhead'),
@@ -543,6 +452,7 @@ export async function render(page, { params, signal }) {
     destroyCharts(cameraBytes);
     traffic.replaceChildren();
     cameraBytes.replaceChildren();
+    traffic.append(bytesBreakdown(run, measure));
     passResourceCharts(traffic, run, measure);
     perSampleChart(cameraBytes, samples, details, measure);
   };
@@ -556,9 +466,9 @@ export async function render(page, { params, signal }) {
   const timing = h('div', { class: 'charts' });
   page.append(timing);
   passTimeChart(timing, run, iqr);
-  timing.append(h('div', {}, passTable(run, iqr)));
+  page.append(passTable(run, iqr));  // below the chart, at full width: its columns need it
 
-  page.append(h('h2', {}, 'Roofline'), rooflineSection(run, samples));
+  page.append(h('h2', {}, 'Roofline'), rooflineSection(run, samples, Boolean(app), tile));
 
   page.append(h('h2', {}, 'Screenshots'), gallery(run, samples, signal));
   page.append(h('h2', {}, 'Samples'), sampleTable(samples));

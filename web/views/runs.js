@@ -10,24 +10,32 @@ import * as fmt from '../format.js';
 
 const kPageSize = 100;
 
-// Sortable columns: key -> how a run sorts and shows.
+// Long text (labels, device names, a command line for a scene) is cut to its
+// column's width with an ellipsis; the whole text is its title.
+const clipped = (text) => h('span', { class: 'clip', title: text }, text);
+
+// Sortable columns: key -> how a run sorts and shows. The figures a reader
+// decides by (frame time, bytes per frame) come right after the renderer, so
+// that they stay on screen however long the labels are.
 const kColumns = [
   { key: 'id', label: 'Run', sort: (r) => r.id, cell: (r) => h('a', { href: `#/runs/${r.id}` }, `#${r.id}`) },
-  { key: 'created_at', label: 'Date (UTC)', sort: (r) => r.created_at, cell: (r) => fmt.date(r.created_at) },
-  { key: 'renderer', label: 'Renderer', sort: (r) => fmt.variant(r), cell: (r) => fmt.variant(r) },
-  { key: 'scene', label: 'Scene', sort: (r) => r.scene, cell: (r) => r.scene },
-  { key: 'resolution', label: 'Resolution', sort: (r) => r.width * r.height, cell: fmt.resolution, num: true },
-  { key: 'device', label: 'Device', sort: (r) => r.device, cell: (r) => h('span', { class: 'clip', title: r.device }, r.device) },
-  // null for runs stored before hosts existed
-  { key: 'host', label: 'Host', sort: (r) => r.host, cell: (r) => (r.host ? h('span', { class: 'clip', title: r.host }, r.host) : '–') },
-  { key: 'counting', label: 'Counting', sort: (r) => r.counting, cell: (r) => r.counting },
-  // The capture's labels (commit, branch, ...); {} for none
-  { key: 'labels', label: 'Labels', sort: (r) => fmt.labels(r.labels), cell: (r) => fmt.labels(r.labels) || '–' },
-  { key: 'sample_count', label: 'Samples', sort: (r) => r.sample_count, cell: (r) => String(r.sample_count), num: true },
-  { key: 'mean_frame_ms', label: 'Frame time', sort: (r) => r.mean_frame_ms, cell: (r) => fmt.ms(r.mean_frame_ms), num: true },
-  { key: 'mean_overhead_ratio', label: 'Overhead', sort: (r) => r.mean_overhead_ratio, cell: (r) => fmt.ratio(r.mean_overhead_ratio), num: true },
+  { key: 'renderer', label: 'Renderer', sort: (r) => fmt.variant(r), cell: (r) => clipped(fmt.variant(r)) },
+  // The API's mean over cameras of each camera's median frame time, labelled so
+  // (the run view and compare show the median of all frames, from the samples).
+  { key: 'mean_frame_ms', label: 'Frame time (mean of cameras)', title: 'the mean over the cameras of each camera\'s median frame time; the run view shows the median of all frames', sort: (r) => r.mean_frame_ms, cell: (r) => fmt.ms(r.mean_frame_ms), num: true },
   { key: 'mean_bytes', label: 'Bytes / frame', sort: (r) => r.mean_bytes, cell: (r) => fmt.bytes(r.mean_bytes), num: true },
   { key: 'psnr', label: 'PSNR', sort: psnrKey, cell: fmt.imageError, num: true },
+  { key: 'scene', label: 'Scene', sort: (r) => r.scene, cell: (r) => clipped(r.scene) },
+  { key: 'resolution', label: 'Resolution', sort: (r) => r.width * r.height, cell: fmt.resolution, num: true },
+  { key: 'device', label: 'Device', sort: (r) => r.device, cell: (r) => clipped(r.device) },
+  // null for runs stored before hosts existed
+  { key: 'host', label: 'Host', sort: (r) => r.host, cell: (r) => (r.host ? clipped(r.host) : '–') },
+  { key: 'counting', label: 'Counting', sort: (r) => r.counting, cell: (r) => r.counting },
+  // The capture's labels (commit, branch, ...); {} for none
+  { key: 'labels', label: 'Labels', sort: (r) => fmt.labels(r.labels), cell: (r) => (fmt.labels(r.labels) ? clipped(fmt.labels(r.labels)) : '–') },
+  { key: 'sample_count', label: 'Samples', sort: (r) => r.sample_count, cell: (r) => String(r.sample_count), num: true },
+  { key: 'mean_overhead_ratio', label: 'Overhead', sort: (r) => r.mean_overhead_ratio, cell: (r) => fmt.ratio(r.mean_overhead_ratio), num: true },
+  { key: 'created_at', label: 'Date (UTC)', sort: (r) => r.created_at, cell: (r) => fmt.date(r.created_at) },
 ];
 
 // Identical images rank above any PSNR; runs never compared rank last.
@@ -119,30 +127,39 @@ export async function render(page, { query, signal }) {
   const thead = h('thead');
   const status = h('p', { class: 'muted', role: 'status' });
   const more = h('button', { type: 'button', class: 'secondary' }, `Load ${kPageSize} more`);
-  const compareButton = h('button', { type: 'button', onclick: () => { location.hash = `#/compare?runs=${selected.join(',')}`; } });
+  const selectionReason = h('span', { class: 'muted selection-reason', id: 'selection-reason', dataset: { selectionReason: '' } });
+  const compareButton = h('button', { type: 'button', 'aria-describedby': 'selection-reason', onclick: () => { location.hash = `#/compare?runs=${selected.join(',')}`; } });
 
   function drawHead() {
     thead.replaceChildren(h('tr', {},
-      h('th', { scope: 'col' }, h('span', { class: 'visually-hidden' }, 'Select')),
-      kColumns.map((c) => h('th', { scope: 'col', class: c.num ? 'num' : null, 'aria-sort': sort.key === c.key ? (sort.direction > 0 ? 'ascending' : 'descending') : 'none' },
+      kColumns.map((c, i) => h('th', { scope: 'col', class: [c.num ? 'num' : '', i === 0 ? 'sticky-col' : ''].join(' ').trim() || null, title: c.title,
+        'aria-sort': sort.key === c.key ? (sort.direction > 0 ? 'ascending' : 'descending') : 'none' },
+        i === 0 ? h('span', { class: 'visually-hidden' }, 'Select, ') : null,
         h('button', { type: 'button', class: 'sort', dataset: { sort: c.key }, onclick: () => sortBy(c.key) }, c.label)))));
   }
 
   function drawRows() {
     const column = kColumns.find((c) => c.key === sort.key);
     rows.sort(compareRows(column, sort.direction));
+    // The first cell (tick and run) stays in view when the table scrolls sideways;
+    // data-label names each cell on a phone, where the rows become cards.
     tbody.replaceChildren(...rows.map((r) => h('tr', { dataset: { runId: r.id } },
-      h('td', {}, h('input', { type: 'checkbox', 'aria-label': `Select run ${r.id}`, checked: selected.includes(r.id), onchange: (e) => toggle(r.id, e.target.checked) })),
-      kColumns.map((c) => h('td', { class: c.num ? 'num' : null }, c.cell(r))))));
+      kColumns.map((c, i) => h('td', { class: [c.num ? 'num' : '', i === 0 ? 'sticky-col' : ''].join(' ').trim() || null, dataset: { label: c.label, column: c.key } },
+        i === 0 ? [h('input', { type: 'checkbox', 'aria-label': `Select run ${r.id}`, checked: selected.includes(r.id), onchange: (e) => toggle(r.id, e.target.checked) }), ' '] : null,
+        c.cell(r))))));
     status.textContent = `${rows.length} run${rows.length === 1 ? '' : 's'} loaded${cursor ? ', more on the server' : ''}. Sorting applies to the loaded runs; PSNR is the image error against forward.`;
     more.hidden = !cursor;
     drawSelection();
   }
 
+  // Why the button is greyed out, beside it rather than in a tooltip only.
   function drawSelection() {
     compareButton.textContent = `Compare selected (${selected.length})`;
-    compareButton.disabled = selected.length < 2 || selected.length > 4;
-    compareButton.title = 'Tick 2 to 4 runs';
+    const n = selected.length;
+    const why = n > 4 ? `Compare takes at most 4 runs: untick ${n - 4}.` : n < 2 ? `Tick ${n ? 'one more run' : '2 to 4 runs'} to compare.` : '';
+    compareButton.disabled = Boolean(why);
+    compareButton.title = why || `Compare runs ${selected.join(', ')}`;
+    selectionReason.textContent = why;
   }
 
   function toggle(id, on) {
@@ -179,7 +196,7 @@ export async function render(page, { query, signal }) {
     h('h1', {}, 'Runs'),
     filterForm(query, { renderers: [...renderers.renderers, ...(renderers.workloads || [])], scenes: sceneNames, devices: devices.devices,
       hosts: hostOptions(hosts.hosts, rows, query.get('host')) }, apply),
-    h('div', { class: 'toolbar' }, compareButton, status),
+    h('div', { class: 'toolbar' }, compareButton, selectionReason, status),
     rows.length
       ? h('div', { class: 'table-wrap' }, h('table', { class: 'runs', 'aria-label': 'Runs' }, thead, tbody))
       : h('p', { class: 'panel' }, 'No runs match. ', h('a', { href: '#/capture' }, 'Start a capture'), '.'),

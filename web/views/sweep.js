@@ -15,15 +15,15 @@ export function valueAt(point, path) {
   return path.split('.').reduce((v, key) => (v !== null && typeof v === 'object' && key in v ? v[key] : undefined), point);
 }
 
-// Short text for a sweep value: four significant digits, exponents outside
-// 1e-3 .. 1e6 ("300", "0.01", "6.525e-5"); names as they are.
+// Short text for a sweep value: four significant digits, large values
+// grouped ("300", "0.01", "2,000,000"), an exponent only below 1e-3, where
+// zeros would hide the digits ("6.525e−5"); one minus sign; names as they are.
 export function num(v) {
   if (v === null || v === undefined) return '–';
   if (typeof v !== 'number') return String(v);
-  if (v === 0 || (Number.isInteger(v) && Math.abs(v) < 1e6)) return String(v);
   const a = Math.abs(v);
-  if (a >= 1e-3 && a < 1e6) return String(Number(v.toPrecision(4)));
-  return v.toExponential(3).replace(/\.?0+e/, 'e').replace('e+', 'e');
+  if (v === 0 || a >= 1e-3) return fmt.number(v, 4);
+  return v.toExponential(3).replace(/\.?0+e/, 'e').replace(/-/g, '−');
 }
 
 // The rows of fails_at: {swept, group: [[field, value]...], value (null: holds)}.

@@ -7,9 +7,10 @@ import { get } from '../api.js';
 import { destroyCharts, xyChart } from '../charts.js';
 import { h, table } from '../dom.js';
 import * as fmt from '../format.js';
+import { kBetter, kPalette, kSame, kWorse } from '../palette.js';
+import { alertClass } from './alerts.js';
 
 const kBaselineColor = '#555';
-const kAlertColor = '#c62828';
 
 // The x axis's text for run i: one of its labels, or its date.
 function xLabel(run, axis) {
@@ -30,30 +31,53 @@ function dataTable(runs, axis, alertsById) {
   ], runs, { 'aria-label': 'Runs of the configuration', dataset: { trendTable: '' } });
 }
 
-// One chart: the series, the baseline's value as a dashed line, the alerts' runs marked.
-function trendChart(parent, { id, title, runs, axis, y, yFormat, alertKinds, alertsById, interval }) {
+// A shaded band between two edges (each [{x, y}]): the low edge has no legend
+// entry, the high one fills down to it and names the band.
+function band(label, lows, highs, fillColor, kind) {
+  return [
+    { label: `${label} (low)`, legend: false, band: kind, edge: 'low', data: lows, showLine: true, pointRadius: 0, borderWidth: 0, borderColor: 'rgba(0,0,0,0)', backgroundColor: fillColor },
+    { label, band: kind, edge: 'high', data: highs, showLine: true, pointRadius: 0, borderWidth: 0, borderColor: 'rgba(0,0,0,0)', backgroundColor: fillColor, fill: '-1' },
+  ];
+}
+
+// One chart: the series with its interval as a shaded band, the baseline's
+// value as a dashed line inside its ± threshold band (time only: counts are
+// exact), and the alerts' runs marked, regressions red and improvements green.
+function trendChart(parent, { id, title, runs, axis, y, yFormat, alertKinds, alertsById, interval, threshold }) {
   const points = runs.map((r, i) => ({ x: i, y: y(r), run: r.id })).filter((p) => p.y !== null && p.y !== undefined);
   const baselineRun = runs.find((r) => r.baseline);
   const datasets = [{ label: title, data: points, showLine: true, borderWidth: 2 }];
   if (interval) {
     const lows = runs.map((r, i) => ({ x: i, y: r.frame_ms.lower })).filter((p) => p.y !== null);
     const highs = runs.map((r, i) => ({ x: i, y: r.frame_ms.upper })).filter((p) => p.y !== null);
-    datasets.push({ label: '95% interval (low)', data: lows, showLine: true, borderDash: [2, 3], pointRadius: 0, borderWidth: 1, borderColor: '#999', backgroundColor: '#999' });
-    datasets.push({ label: '95% interval (high)', data: highs, showLine: true, borderDash: [2, 3], pointRadius: 0, borderWidth: 1, borderColor: '#999', backgroundColor: '#999' });
+    datasets.push(...band('95% interval', lows, highs, kPalette.band, 'interval'));
   }
   if (baselineRun && y(baselineRun) !== null && y(baselineRun) !== undefined) {
     const v = y(baselineRun);
-    datasets.push({ label: `baseline (run #${baselineRun.id})`, baseline: true, threshold: true, data: [{ x: 0, y: v }, { x: Math.max(0, runs.length - 1), y: v }],
+    const ends = [0, Math.max(0, runs.length - 1)];
+    if (threshold) {
+      datasets.push(...band(`baseline ± ${fmt.percent(threshold)} threshold`, ends.map((x) => ({ x, y: v * (1 - threshold) })),
+        ends.map((x) => ({ x, y: v * (1 + threshold) })), kPalette.threshold_band, 'threshold'));
+    }
+    datasets.push({ label: `baseline (run #${baselineRun.id})`, baseline: true, threshold: true, data: ends.map((x) => ({ x, y: v })),
       borderColor: kBaselineColor, backgroundColor: kBaselineColor, pointRadius: 0, showLine: false });
   }
   const alerted = runs.map((r, i) => ({ r, i })).filter(({ r }) => r.alerts.some((a) => alertKinds.includes(alertsById.get(a)?.kind)));
-  datasets.push({ label: 'alerts', alerts: true, data: alerted.map(({ r, i }) => ({ x: i, y: y(r), run: r.id, alerts: r.alerts })),
-    pointStyle: 'triangle', pointRadius: 9, borderColor: kAlertColor, backgroundColor: kAlertColor, showLine: false });
+  // A run's mark is red if any of its alerts of this chart is a regression, green if all are improvements.
+  const change = (r) => {
+    const classes = r.alerts.map((a) => alertsById.get(a)).filter((a) => a && alertKinds.includes(a.kind)).map(alertClass);
+    return classes.includes('worse') ? 'worse' : classes.every((c) => c === 'better') ? 'better' : 'same';
+  };
+  const markColor = { worse: kWorse, better: kBetter, same: kSame };
+  const marks = alerted.map(({ r, i }) => ({ x: i, y: y(r), run: r.id, alerts: r.alerts, change: change(r) }));
+  datasets.push({ label: 'alerts (red: regression, green: improvement)', alerts: true, data: marks,
+    pointStyle: 'triangle', pointRadius: 9, borderColor: marks.map((m) => markColor[m.change]), backgroundColor: marks.map((m) => markColor[m.change]),
+    pointBackgroundColor: marks.map((m) => markColor[m.change]), pointBorderColor: marks.map((m) => markColor[m.change]), showLine: false });
   return xyChart(parent, {
-    id, title, caption: `over ${axis === 'date' ? 'dates' : `label ${axis}`}, oldest first`,
+    id, title, caption: `over ${axis === 'date' ? 'dates' : `label ${axis}`}, oldest first${interval ? '; shaded: the 95 % interval of the median' : ''}${threshold ? '; grey band: the baseline ± its threshold' : ''}`,
     datasets,
     x: { title: axis === 'date' ? 'date (UTC)' : axis, format: (v) => (Number.isInteger(v) && runs[v] ? xLabel(runs[v], axis) : ''), type: 'linear' },
-    y: { title, format: yFormat },
+    y: { title: `${title} (${yFormat === fmt.ms ? 'ms' : 'bytes'})`, format: yFormat },
     tooltip: (c) => `${c.dataset.label}: ${yFormat(c.raw.y)}${c.raw.run ? ` (run #${c.raw.run})` : ''}`,
     table: h('p', { class: 'muted' }, 'The figures are in the table below.'),
   });
@@ -74,7 +98,7 @@ export async function render(page, { params, query, signal }) {
   function draw() {
     destroyCharts(charts);
     charts.replaceChildren();
-    trendChart(charts, { id: 'trend-frame', title: 'Frame time', runs, axis, y: (r) => r.frame_ms.median, yFormat: fmt.ms, alertKinds: ['time'], alertsById, interval: true });
+    trendChart(charts, { id: 'trend-frame', title: 'Frame time (median)', runs, axis, y: (r) => r.frame_ms.median, yFormat: fmt.ms, alertKinds: ['time'], alertsById, interval: true, threshold: baseline.threshold });
     trendChart(charts, { id: 'trend-bytes', title: 'Bytes per frame', runs, axis, y: (r) => r.mean_bytes, yFormat: fmt.bytes, alertKinds: ['counts'], alertsById });
     tableBox.replaceChildren(dataTable(runs, axis, alertsById));
   }
