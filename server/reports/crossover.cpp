@@ -105,7 +105,7 @@ Result<json> crossoverModels(store::Store& store, const store::RunFilter& filter
               {"model", "y = a + b * pixels (ordinary least squares)"},
               {"confidence", analysis::kCrossoverConfidence},
               {"poor_fit_r2", analysis::kPoorFitR2},
-              {"interval_method", "t intervals for a and b (n - 2 df); delta method for the crossing (n1 + n2 - 4 df)"},
+              {"interval_method", "t intervals for a and b (n - 2 df); Fieller for the crossing, delta method beside it (n1 + n2 - 4 df)"},
               {"series", std::move(out)},
               {"crossings", std::move(crossings)},
               {"truncated", !complete}};
