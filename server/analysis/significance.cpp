@@ -348,22 +348,15 @@ Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vec
   LogInterval li = intervalOf(*p, options.confidence, *exact, &cdf);
   c.interval = li.interval;
   if (c.interval.bounded && options.acrossCaptureLogSd > 0) {
-    // Across-capture noise (docs/statistics.md): the interval is at least as
-    // wide, on the log scale, as that of the difference of two captures'
-    // medians; the noisier of the two wins. Its asymmetry is kept.
+    // Across-capture noise (docs/statistics.md): the frames' interval and
+    // that of the difference of two captures' medians are independent
+    // sources of error, so their half-widths add as variances, each side on
+    // its own (the frames' asymmetry is kept).
     double across = acrossCaptureHalfWidth(options.acrossCaptureLogSd, options.acrossCaptureRuns, options.confidence);
-    double within = (li.logUpper - li.logLower) / 2;
-    double lower = li.logLower, upper = li.logUpper, f = 1;
-    if (within > 0) {
-      f = std::max(1.0, across / within);
-      lower = li.logEstimate - f * (li.logEstimate - li.logLower);
-      upper = li.logEstimate + f * (li.logUpper - li.logEstimate);
-    } else {  // every pairwise difference equal: the across-capture interval alone
-      f = std::numeric_limits<double>::infinity();
-      lower = li.logEstimate - across;
-      upper = li.logEstimate + across;
-    }
-    c.interval.widening = f;
+    double below = li.logEstimate - li.logLower, above = li.logUpper - li.logEstimate;
+    double lower = li.logEstimate - std::hypot(below, across), upper = li.logEstimate + std::hypot(above, across);
+    double within = li.logUpper - li.logLower;
+    c.interval.widening = within > 0 ? (upper - lower) / within : std::numeric_limits<double>::infinity();
     c.interval.lower = std::exp(lower);
     c.interval.upper = std::exp(upper);
   }
