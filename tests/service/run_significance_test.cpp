@@ -5,7 +5,9 @@
 // own offsets widen the interval by the spread of their medians (computed
 // here independently), and runs without per-frame times or with zero pass
 // times say why instead of failing.
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -238,30 +240,88 @@ TEST_F(RunSignificance, RepeatedCapturesWidenByTheSpreadOfTheirMedians) {
   std::vector<int64_t> got = across->runs;
   std::sort(got.begin(), got.end());
   EXPECT_EQ(got, expectedRuns);
-  EXPECT_EQ(across->degreesOfFreedom, 3u);
-  // The same standard deviation from the stored samples' own frames.
-  std::vector<double> logs;
+  // One cell per camera and figure (the frame and the passes gbuffer and
+  // lights): 3 x 3 cells of 4 captures, 3 degrees of freedom each.
+  EXPECT_EQ(across->cells, 9u);
+  EXPECT_EQ(across->captures, 4u);
+  EXPECT_EQ(across->degreesOfFreedom, 27u);
+  // The same standard deviation from the stored samples' own per-frame times.
+  std::map<std::string, std::vector<double>> cells;
+  auto logMedian = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return std::log(n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+  };
   for (int i = 0; i < 4; ++i) {
-    std::vector<double> pooledFrames;
     auto rows = store_->runs().samples(ids[i]);
     ASSERT_TRUE(rows);
     for (const auto& row : *rows) {
       auto sample = store_->runs().sample(row.id);
       ASSERT_TRUE(sample && *sample);
-      pooledFrames.insert(pooledFrames.end(), (**sample).row.frameMsFrames.begin(), (**sample).row.frameMsFrames.end());
+      std::string camera = std::to_string(row.cameraIndex);
+      cells[camera + " frame"].push_back(logMedian((**sample).row.frameMsFrames));
+      for (const auto& pass : (**sample).passes) cells[camera + " " + pass.name].push_back(logMedian(pass.gpuMsFrames));
     }
-    std::sort(pooledFrames.begin(), pooledFrames.end());
-    size_t n = pooledFrames.size();
-    logs.push_back(std::log(0.5 * (pooledFrames[n / 2 - 1] + pooledFrames[n / 2])));
   }
-  double mean = (logs[0] + logs[1] + logs[2] + logs[3]) / 4, ss = 0;
-  for (double l : logs) ss += (l - mean) * (l - mean);
-  EXPECT_NEAR(across->logSd, std::sqrt(ss / 3), 1e-12);
+  ASSERT_EQ(cells.size(), 9u);
+  double ss = 0;
+  for (const auto& [key, logs] : cells) {
+    double mean = (logs[0] + logs[1] + logs[2] + logs[3]) / 4;
+    for (double l : logs) ss += (l - mean) * (l - mean);
+  }
+  EXPECT_NEAR(across->logSd, std::sqrt(ss / 27), 1e-12);
+  // Four captures bound the noise: the verdict says nothing about it.
+  EXPECT_TRUE(widened->frame->noiseNote.empty()) << widened->frame->noiseNote;
   EXPECT_GT(widened->frame->time.interval.widening, 1.0);
   EXPECT_LT(widened->frame->time.interval.lower, frames->frame->time.interval.lower);
   EXPECT_GT(widened->frame->time.interval.upper, frames->frame->time.interval.upper);
   // The p-value stays the frames' own.
   EXPECT_DOUBLE_EQ(widened->frame->time.test.pValue, frames->frame->time.test.pValue);
+}
+
+// Two captures of one configuration that differ by 35% (noisy, as on a busy
+// machine) and a third 10x slower. One degree of freedom would put t at 12.7
+// and the widened interval past 10x; pooled over the 3 cameras and 3 figures
+// the spread has 9, and the slower capture is called slower, with a word that
+// two captures are too few to bound the noise.
+TEST_F(RunSignificance, TwoNoisyRepeatsStillShowATenfoldSlowdown) {
+  int64_t first = store(runOf(rng_, {}));
+  int64_t second = store(runOf(rng_, {.scale = 1.35}));
+  int64_t slow = store(runOf(rng_, {.scale = 10}));
+  auto s = runSignificance(*store_, second, slow);
+  ASSERT_TRUE(s && s->frame) << (s ? s->frameMissing : s.error());
+  const auto& across = s->frame->acrossCapture;
+  ASSERT_TRUE(across);
+  std::vector<int64_t> runs = across->runs;
+  std::sort(runs.begin(), runs.end());
+  EXPECT_EQ(runs, (std::vector<int64_t>{first, second}));
+  EXPECT_EQ(across->captures, 2u);
+  EXPECT_EQ(across->degreesOfFreedom, 9u);
+  // What a single degree of freedom would have done: a half-width past log 10.
+  EXPECT_GT(tally::analysis::acrossCaptureHalfWidth(across->logSd, 2, 0.95), std::log(10.0));
+  EXPECT_EQ(s->frame->time.verdict, Verdict::Slower) << s->frame->time.reason;
+  EXPECT_GT(s->frame->time.interval.lower, 1.0);
+  for (const auto& pass : s->passes) EXPECT_EQ(pass.time.verdict, Verdict::Slower) << pass.figure;
+  EXPECT_NE(s->frame->time.reason.find("only 2 repeated captures: too few to bound"), std::string::npos)
+      << s->frame->time.reason;
+  json j = tally::reports::toJson(*s);
+  EXPECT_EQ(j["frame"]["noise_note"], s->frame->noiseNote);
+  EXPECT_EQ(j["frame"]["across_capture"]["captures"], 2);
+  EXPECT_EQ(j["frame"]["across_capture"]["cells"], 9);
+
+  // Without any repeat of either configuration the verdict says so too.
+  json fewLights = runOf(rng_, {}), moreLights = runOf(rng_, {.scale = 10});
+  fewLights["lights"] = 100;  // two more configurations, each captured once
+  moreLights["lights"] = 200;
+  auto alone = runSignificance(*store_, store(fewLights), store(moreLights));
+  ASSERT_TRUE(alone && alone->frame);
+  EXPECT_FALSE(alone->frame->acrossCapture);
+  EXPECT_NE(alone->frame->time.reason.find("capture-to-capture noise is not bounded"), std::string::npos)
+      << alone->frame->time.reason;
+  // Not sought: nothing said.
+  auto framesAlone = runSignificance(*store_, slow, first, framesOnly());
+  ASSERT_TRUE(framesAlone && framesAlone->frame);
+  EXPECT_TRUE(framesAlone->frame->noiseNote.empty());
 }
 
 TEST_F(RunSignificance, RunsWithoutPerFrameTimesSayWhy) {
