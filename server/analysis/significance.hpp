@@ -100,8 +100,10 @@ Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vec
 // times together. A ratio common to every stratum survives the alignment;
 // under no difference a stratum's times stay exchangeable between A and B,
 // since m_s is a function of the stratum's times as a set
-// (docs/statistics.md, "Cameras as strata"). Returns the aligned A and B,
-// pooled in stratum order. Errors as compareTimes's for a non-positive or
+// (docs/statistics.md, "Cameras as strata"). The aligned doubles keep the
+// order and the ties of the exact values time x M / m_s: rounding creates no
+// tie the exact values lack, and keeps every one they have. Returns the
+// aligned A and B, pooled in stratum order. Errors as compareTimes's for a non-positive or
 // non-finite time, or a stratum with no time in A or in B.
 struct Stratum {
   std::vector<double> a, b;

@@ -621,3 +621,65 @@ TEST(Significance, AlignStrataScalesEachStratumToTheGrandMedian) {
   EXPECT_NE(alignStrata({{{1}, {0}}}).error().find("stratum 0, sample B: time 0 is not positive (0 ms)"),
             std::string::npos);
 }
+
+namespace {
+
+bool hasTie(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return std::adjacent_find(v.begin(), v.end()) != v.end();
+}
+
+}  // namespace
+
+// Times of 0.01 ms resolution in two cameras, twelve different values. Scaled
+// by grand / median the way a product rounds, 8.75 x (11.84 / 10.15) and
+// 10.75 x (11.84 / 12.47) are one double, though 8.75 / 10.15 and
+// 10.75 / 12.47 differ as the doubles they are: a tie the raw frames do not
+// have, which would switch the test to the normal approximation. Aligned in
+// exact order, they stay apart, and the exact test is used.
+TEST(Significance, AlignmentCreatesNoTie) {
+  std::vector<Stratum> strata{{{6.45, 5.91, 11.55}, {8.75, 13.27, 13.82}}, {{12.81, 12.13, 10.75}, {13.0, 9.12, 12.88}}};
+  std::vector<double> raw;
+  for (const auto& s : strata) {
+    raw.insert(raw.end(), s.a.begin(), s.a.end());
+    raw.insert(raw.end(), s.b.begin(), s.b.end());
+  }
+  ASSERT_FALSE(hasTie(raw));
+  // The rounded products alone: the tie this test is about.
+  const double grand = (11.55 + 12.13) / 2, median0 = (8.75 + 11.55) / 2, median1 = (12.13 + 12.81) / 2;
+  ASSERT_EQ(8.75 * (grand / median0), 10.75 * (grand / median1));
+  ASSERT_NE(8.75 * median1, 10.75 * median0);  // the exact values differ
+
+  auto out = alignStrata(strata);
+  ASSERT_TRUE(out.ok()) << out.error();
+  std::vector<double> pooled = out->a;
+  pooled.insert(pooled.end(), out->b.begin(), out->b.end());
+  EXPECT_FALSE(hasTie(pooled));
+  // Still the aligned values, to a few units in the last place.
+  EXPECT_NEAR(out->b[0], 8.75 * grand / median0, 1e-14);
+  EXPECT_NEAR(out->a[5], 10.75 * grand / median1, 1e-14);
+  // Their order is that of time / median.
+  EXPECT_EQ(out->b[0] < out->a[5], 8.75 / median0 < 10.75 / median1);
+  auto test = mannWhitney(out->a, out->b);
+  ASSERT_TRUE(test.ok());
+  EXPECT_TRUE(test->exact);
+  EXPECT_FALSE(test->ties);
+}
+
+// Ties the exact values have are kept: a camera whose times are 3 times
+// another's aligns onto it value for value, however the factors round.
+TEST(Significance, AlignmentKeepsExactTies) {
+  // Multiples of 1/64: 3 x v is exact, so the exact ratios are equal.
+  std::vector<double> a{3.125, 5.3125, 7.875}, b{9.6875, 11.3125, 13.140625}, a3, b3;
+  for (double v : a) a3.push_back(3 * v);
+  for (double v : b) b3.push_back(3 * v);
+  auto out = alignStrata({{a, b}, {a3, b3}});
+  ASSERT_TRUE(out.ok()) << out.error();
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(out->a[i], out->a[3 + i]) << i;
+    EXPECT_EQ(out->b[i], out->b[3 + i]) << i;
+  }
+  auto test = mannWhitney(out->a, out->b);
+  ASSERT_TRUE(test.ok());
+  EXPECT_TRUE(test->ties);
+}
