@@ -24,7 +24,12 @@ Result<LinearFit> fitLinear(const std::vector<double>& pixels, const std::vector
   }
   const size_t n = pixels.size();
   if (n < 3) {
-    return makeError("a fit needs at least 3 resolutions, got " + std::to_string(n) +
+    // Resolutions, not runs: two runs of one resolution are one resolution.
+    std::vector<double> distinct = pixels;
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    std::string runs = distinct.size() == n ? "" : ", in " + std::to_string(n) + " runs";
+    return makeError("a fit needs at least 3 resolutions, got " + std::to_string(distinct.size()) + runs +
                      " (with 2 the line passes through both points and has no error to state)");
   }
   for (size_t i = 0; i < n; ++i) {

@@ -277,9 +277,13 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
       a = std::move(aligned->a);
       b = std::move(aligned->b);
     }
-    if (a.size() < 2 || b.size() < 2) {
-      missing = "a shared camera has fewer than 2 per-frame times stored in one of the runs (runs stored before "
+    if (a.empty() || b.empty()) {
+      missing = "a shared camera has no per-frame times stored in one of the runs (runs stored before "
                 "per-frame times were kept have none)";
+      return std::nullopt;
+    }
+    if (a.size() < 2 || b.size() < 2) {
+      missing = std::string("sample ") + (a.size() < 2 ? "A" : "B") + " has 1 frame time; a comparison needs at least 2";
       return std::nullopt;
     }
     FigureSignificance f;

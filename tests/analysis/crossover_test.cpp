@@ -87,7 +87,11 @@ TEST(CrossoverFit, PoorFitIsFlagged) {
 TEST(CrossoverFit, DegenerateInputsAreErrors) {
   auto two = fitLinear({1e5, 2e5}, {1, 2});
   ASSERT_FALSE(two);
-  EXPECT_NE(two.error().find("at least 3 resolutions"), std::string::npos) << two.error();
+  EXPECT_NE(two.error().find("at least 3 resolutions, got 2 ("), std::string::npos) << two.error();
+  // Two runs of one resolution are one resolution.
+  auto repeated = fitLinear({2e5, 2e5}, {1, 2});
+  ASSERT_FALSE(repeated);
+  EXPECT_NE(repeated.error().find("at least 3 resolutions, got 1, in 2 runs"), std::string::npos) << repeated.error();
   auto none = fitLinear({}, {});
   ASSERT_FALSE(none);
   EXPECT_NE(none.error().find("at least 3 resolutions, got 0"), std::string::npos) << none.error();

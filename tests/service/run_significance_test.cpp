@@ -30,7 +30,9 @@ struct RunShape {
   bool passZero = false;     // the "lights" pass reads 0 ms in every frame
   bool perFrame = true;      // store frame_ms_frames and gpu_ms_frames
   double lightsCount = 1000; // the lights pass's counter
-  int firstCamera = 0;       // cameras firstCamera .. firstCamera + kCameras - 1
+  int firstCamera = 0;       // cameras firstCamera .. firstCamera + cameras - 1
+  int cameras = kCameras;
+  int frames = kFrames;
 };
 
 // Lognormal frame times around 4 ms + 1 ms per camera index (sigma of log
@@ -38,9 +40,9 @@ struct RunShape {
 json runOf(std::mt19937_64& rng, const RunShape& shape) {
   std::lognormal_distribution<double> noise(0.0, 0.05);
   std::vector<json> samples;
-  for (int c = shape.firstCamera; c < shape.firstCamera + kCameras; ++c) {
+  for (int c = shape.firstCamera; c < shape.firstCamera + shape.cameras; ++c) {
     std::vector<double> frames, gbuffer, lights;
-    for (int f = 0; f < kFrames; ++f) {
+    for (int f = 0; f < shape.frames; ++f) {
       double t = (4.0 + c) * noise(rng) * shape.scale;
       frames.push_back(t);
       gbuffer.push_back(0.3 * t);
@@ -48,7 +50,7 @@ json runOf(std::mt19937_64& rng, const RunShape& shape) {
     }
     auto median = [](std::vector<double> v) {
       std::sort(v.begin(), v.end());
-      return 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
     };
     json g = st::makePass("gbuffer", median(gbuffer), 1000, {st::makeCounter("gbuffer.normal", "write", 500, 4000)});
     json l = st::makePass("lights", median(lights), 1000,
@@ -59,7 +61,7 @@ json runOf(std::mt19937_64& rng, const RunShape& shape) {
     }
     json s = st::makeSample(c, median(frames), {g, l});
     s["camera"]["eye"] = {double(c), 2.0, 3.0};
-    s["frames"] = kFrames;
+    s["frames"] = shape.frames;
     if (shape.perFrame) s["frame_ms_frames"] = frames;
     samples.push_back(std::move(s));
   }
@@ -334,6 +336,18 @@ TEST_F(RunSignificance, RunsWithoutPerFrameTimesSayWhy) {
   EXPECT_TRUE(s->passes.empty());
   EXPECT_EQ(s->passesMissing.size(), 2u);
   EXPECT_FALSE(s->countsChanged());  // counts still compare
+}
+
+TEST_F(RunSignificance, ARunOfOneFrameSaysSo) {
+  int64_t a = store(runOf(rng_, {.cameras = 1, .frames = 1}));
+  int64_t b = store(runOf(rng_, {.cameras = 1}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s) << s.error();
+  EXPECT_FALSE(s->frame);
+  EXPECT_EQ(s->frameMissing, "sample A has 1 frame time; a comparison needs at least 2");
+  auto reversed = runSignificance(*store_, b, a, framesOnly());
+  ASSERT_TRUE(reversed) << reversed.error();
+  EXPECT_EQ(reversed->frameMissing, "sample B has 1 frame time; a comparison needs at least 2");
 }
 
 TEST_F(RunSignificance, ZeroPassTimesAreReportedNotFatal) {
