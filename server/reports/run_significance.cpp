@@ -64,6 +64,11 @@ std::vector<double> pooled(const Samples& samples, const std::vector<std::string
   return out;
 }
 
+std::optional<double> medianOf(const std::vector<double>& times) {
+  if (times.empty()) return std::nullopt;
+  return analysis::spreadOf(times).median;
+}
+
 bool sameConfig(const analysis::RunConfig& a, const analysis::RunConfig& b) {
   return a.renderer == b.renderer && a.options == b.options && a.scene == b.scene && a.sceneParams == b.sceneParams &&
          a.device == b.device && a.counting == b.counting && a.width == b.width && a.height == b.height &&
@@ -174,6 +179,8 @@ json figureJson(const FigureSignificance& f) {
   out["across_capture"] = acrossJson(f.acrossCapture);
   out["strata"] = f.camerasAsStrata ? "cameras" : "none";
   out["noise_note"] = f.noiseNote.empty() ? json(nullptr) : json(f.noiseNote);
+  out["run_median_a"] = f.runMedianA ? json(*f.runMedianA) : json(nullptr);
+  out["run_median_b"] = f.runMedianB ? json(*f.runMedianB) : json(nullptr);
   return out;
 }
 
@@ -235,9 +242,13 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
   addCounts(*samplesA, true);
   addCounts(*samplesB, false);
   out.countLines = order.size();
+  // Compared as sums (exact), reported per frame as every other view shows
+  // bytes: the mean over the shared cameras.
+  const double cameras = static_cast<double>(out.cameras.size());
   for (const auto& line : order) {
     auto [a, b] = lines[line];
-    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed) out.countChanges.push_back({line, a, b});
+    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed)
+      out.countChanges.push_back({line, a / cameras, b / cameras});
   }
 
   // Repeats of each configuration (one group when both runs share it: B is
@@ -265,6 +276,8 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
   // A figure's comparison, or why there is none.
   auto figure = [&](const std::string& name, std::string& missing) -> std::optional<FigureSignificance> {
     std::vector<double> a = pooled(*samplesA, out.cameras, name), b = pooled(*samplesB, out.cameras, name);
+    // The runs' own medians, before any alignment: what the runs list and the trend show.
+    const std::optional<double> runMedianA = medianOf(a), runMedianB = medianOf(b);
     if (options.camerasAsStrata && !a.empty() && !b.empty()) {
       std::vector<analysis::Stratum> strata;
       auto ca = perCamera(*samplesA, out.cameras, name), cb = perCamera(*samplesB, out.cameras, name);
@@ -289,6 +302,8 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
     FigureSignificance f;
     f.figure = name;
     f.camerasAsStrata = options.camerasAsStrata;
+    f.runMedianA = runMedianA;
+    f.runMedianB = runMedianB;
     analysis::CompareOptions compare = options.compare;
     f.acrossCapture = across;
     if (across) {

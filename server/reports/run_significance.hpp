@@ -46,6 +46,10 @@ struct FigureSignificance {
   // cameras were strata: then the medians and ratio are of aligned times.
   analysis::TimeComparison time;
   bool camerasAsStrata = true;
+  // The median of each run's raw times pooled over the shared cameras, not
+  // aligned: the runs' frame_ms_median (reports/frame_time.hpp) when they
+  // share every camera, whatever the strata.
+  std::optional<double> runMedianA, runMedianB;
   std::optional<AcrossCapture> acrossCapture;  // absent: no configuration had 2 comparable captures
   // Set, and appended to time.reason, when across-capture noise was sought
   // but the repeats are too few to bound it (fewer than
@@ -55,7 +59,7 @@ struct FigureSignificance {
 
 struct CountChange {
   std::string line;  // "total" (the sample bytes) or "pass/resource access" (its count)
-  double a = 0, b = 0;  // summed over the shared cameras, per frame
+  double a = 0, b = 0;  // per frame: the mean over the shared cameras (compared as sums, exactly)
 };
 
 struct RunSignificance {
