@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "../store/store_fixture.hpp"
+#include "reports/frame_time.hpp"
 #include "reports/run_significance.hpp"
 
 namespace {
@@ -375,6 +376,51 @@ TEST_F(RunSignificance, RunsWithoutACommonCameraAreIncomparable) {
   auto missing = runSignificance(*store_, a, 9999);
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error(), "no run 9999");
+}
+
+}  // namespace
+
+namespace {
+
+using tally::reports::runFrameTime;
+using tally::store::SampleFrameTimes;
+
+// The one frame time of a run: the median of every frame of every sample,
+// with the order-statistic interval; the median of the samples' medians,
+// labelled, where a sample has no per-frame times; nothing without samples.
+TEST(RunFrameTime, MedianOfEveryFrameOrOfTheSamples) {
+  // 1..10 and 11..20 ms: pooled median 10.5, k = floor(10 - 0.98 sqrt(20)) = 5.
+  std::vector<SampleFrameTimes> samples(2);
+  for (int f = 1; f <= 10; ++f) {
+    samples[0].frames.push_back(f);
+    samples[1].frames.push_back(10 + f);
+  }
+  samples[0].frameMs = 5.5;
+  samples[1].frameMs = 15.5;
+  auto t = runFrameTime(samples);
+  EXPECT_EQ(t.source, "frames");
+  EXPECT_EQ(t.frames, 20u);
+  EXPECT_EQ(t.median, 10.5);
+  EXPECT_EQ(t.lower, 5.0);   // the 5th smallest
+  EXPECT_EQ(t.upper, 16.0);  // the 16th
+  // A third camera of one frame, 40 ms: the mean of the camera medians
+  // (20.33) is pulled far above the median of the frames (11).
+  samples.push_back({40.0, {40.0}});
+  auto skewed = runFrameTime(samples);
+  EXPECT_EQ(skewed.median, 11.0);
+  // Without the frames of one sample: the median of the samples' medians.
+  samples[2].frames.clear();
+  auto fallback = runFrameTime(samples);
+  EXPECT_EQ(fallback.source, "samples");
+  EXPECT_EQ(fallback.median, 15.5);
+  EXPECT_FALSE(fallback.lower);
+  EXPECT_EQ(fallback.frames, 0u);
+  json j = tally::reports::toJson(fallback);
+  EXPECT_EQ(j["source"], "samples");
+  EXPECT_TRUE(j["lower"].is_null());
+  auto none = runFrameTime({});
+  EXPECT_EQ(none.source, "none");
+  EXPECT_FALSE(none.median);
 }
 
 }  // namespace
