@@ -179,13 +179,13 @@ Crossing crossing(const LinearFit& first, const LinearFit& second) {
     c.kind = CrossingKind::NotSignificant;
     char level[16];
     std::snprintf(level, sizeof level, "%g%%", 100 * c.confidence);
-    if (*c.low <= 0) {
-      c.why = std::string("the ") + level + " interval of the crossing reaches 0 pixels or below";
-    } else if (beyondBoth) {
-      c.why = std::string("the ") + level + " interval of the crossing extends beyond the measured range on both sides";
-    } else {
+    if (!inside) {
       c.why = std::string("the crossing is estimated outside the measured range, but its ") + level +
               " interval reaches into it";
+    } else if (*c.low <= 0) {
+      c.why = std::string("the ") + level + " interval of the crossing reaches 0 pixels or below";
+    } else {
+      c.why = std::string("the ") + level + " interval of the crossing extends beyond the measured range on both sides";
     }
   }
   c.lowerBelow = c.lowerAbove = lowerAtMiddle;
