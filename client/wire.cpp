@@ -157,7 +157,7 @@ RunView runView(const json& run) {
   v.lights = integer(run, "lights");
   v.renderTargetBytes = integer(run, "render_target_bytes");
   if (auto s = runNum(run, {"samples", "sample_count"})) v.samples = static_cast<int64_t>(*s);
-  v.frameMs = runNum(run, {"frame_ms", "mean_frame_ms"});
+  v.frameMs = runNum(run, {"frame_ms_median", "frame_ms", "mean_frame_ms"});  // the median where the daemon serves it
   v.bytes = runNum(run, {"bytes", "mean_bytes"});
   v.footprintBlockBytes = integer(run, "footprint_block_bytes");
   v.footprintBytes = runNum(run, {"footprint_bytes", "mean_footprint_bytes"});
