@@ -165,6 +165,36 @@ std::string noiseNote(const std::optional<AcrossCapture>& across, bool sought) {
          " degrees of freedom)";
 }
 
+// Counts: every line summed over the shared cameras, compared exactly.
+void compareCountLines(const Samples& samplesA, const Samples& samplesB, RunSignificance& out) {
+  std::map<std::string, std::pair<double, double>> lines;
+  std::vector<std::string> order{"total"};
+  auto addCounts = [&](const Samples& samples, bool isA) {
+    for (const auto& key : out.cameras) {
+      const store::Sample& s = samples.at(key);
+      (isA ? lines["total"].first : lines["total"].second) += s.row.bytes;
+      for (const auto& p : s.passes) {
+        for (const auto& c : p.counters) {
+          std::string line = lineKey(p.name, c);
+          if (!lines.count(line)) order.push_back(line);
+          (isA ? lines[line].first : lines[line].second) += c.count;
+        }
+      }
+    }
+  };
+  addCounts(samplesA, true);
+  addCounts(samplesB, false);
+  out.countLines = order.size();
+  // Compared as sums (exact), reported per frame as every other view shows
+  // bytes: the mean over the shared cameras.
+  const double cameras = static_cast<double>(out.cameras.size());
+  for (const auto& line : order) {
+    auto [a, b] = lines[line];
+    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed)
+      out.countChanges.push_back({line, a / cameras, b / cameras});
+  }
+}
+
 json acrossJson(const std::optional<AcrossCapture>& a) {
   if (!a) return nullptr;
   return {{"runs", a->runs},
@@ -223,33 +253,7 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
     return out;
   }
 
-  // Counts: every line summed over the shared cameras, compared exactly.
-  std::map<std::string, std::pair<double, double>> lines;
-  std::vector<std::string> order{"total"};
-  auto addCounts = [&](const Samples& samples, bool isA) {
-    for (const auto& key : out.cameras) {
-      const store::Sample& s = samples.at(key);
-      (isA ? lines["total"].first : lines["total"].second) += s.row.bytes;
-      for (const auto& p : s.passes) {
-        for (const auto& c : p.counters) {
-          std::string line = lineKey(p.name, c);
-          if (!lines.count(line)) order.push_back(line);
-          (isA ? lines[line].first : lines[line].second) += c.count;
-        }
-      }
-    }
-  };
-  addCounts(*samplesA, true);
-  addCounts(*samplesB, false);
-  out.countLines = order.size();
-  // Compared as sums (exact), reported per frame as every other view shows
-  // bytes: the mean over the shared cameras.
-  const double cameras = static_cast<double>(out.cameras.size());
-  for (const auto& line : order) {
-    auto [a, b] = lines[line];
-    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed)
-      out.countChanges.push_back({line, a / cameras, b / cameras});
-  }
+  compareCountLines(*samplesA, *samplesB, out);
 
   // Repeats of each configuration (one group when both runs share it: B is
   // the capture under test, so it is left out).
