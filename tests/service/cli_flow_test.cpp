@@ -568,7 +568,7 @@ std::vector<std::string> comparedCells(const std::string& table, const std::stri
 void CliFlow::checkCompare(Db& db, const DbRun& a, const DbRun& b) {
   Outcome cmp = tally({"compare", std::to_string(a.id), std::to_string(b.id)});
   ASSERT_EQ(cmp.rc, 0) << cmp.err;
-  EXPECT_TRUE(comparesAs(comparedCells(cmp.out, "(frame)", "", "ms"), a.frameMs, b.frameMs, false))
+  EXPECT_TRUE(comparesAs(comparedCells(cmp.out, "(frame)", "", "ms"), a.frameMsMedian, b.frameMsMedian, false))
       << cmp.out;
   EXPECT_TRUE(comparesAs(comparedCells(cmp.out, "(frame)", "(all)", "bytes"), runCounterBytes(db, a.id),
                          runCounterBytes(db, b.id), true))
