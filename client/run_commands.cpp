@@ -460,7 +460,7 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
     residuals.print(io.out);
   }
   const json crossings = body.value("crossings", json::array());
-  io.out << "\nCROSSINGS (pixels* = (a2 - a1) / (b1 - b2), delta-method " << ci << ")\n";
+  io.out << "\nCROSSINGS (pixels* = (a2 - a1) / (b1 - b2), Fieller " << ci << ")\n";
   if (crossings.empty()) {
     io.out << "none: no two variants with a fit on the same scene and device\n";
     return 0;
@@ -472,13 +472,16 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
     std::string lower;
     if (kind == "crosses") {
       lower = str(c, "lower_below") + " below, " + str(c, "lower_above") + " above";
+    } else if (kind == "no_significant_crossing") {
+      lower = kMissing;
     } else {
       lower = str(c, "lower_throughout") + " throughout";
     }
     std::string result = kind == "crosses"         ? "crosses"
                          : kind == "outside_range" ? "no crossing in range"
                          : kind == "parallel"      ? "parallel within error"
-                                                   : kind;
+                         : kind == "no_significant_crossing" ? "no significant crossing"
+                                                             : kind;
     std::string resCi = kMissing;
     if (c.contains("resolution_ci") && c["resolution_ci"].is_array() && c["resolution_ci"].size() == 2) {
       resCi = resolutionText(c["resolution_ci"][0]) + " .. " + resolutionText(c["resolution_ci"][1]);

@@ -145,7 +145,7 @@ void addRunCommands(CLI::App& app, Subcommands& subcommands) {
       ->capture_default_str();
   crossoverCmd->footer(
       "Model: y = a + b * pixels by least squares, 95% t intervals; the crossing (a2 - a1) / (b1 - b2) with a\n"
-      "delta-method interval, also as the 16:9 resolution of that pixel count (docs/measurement.md, \"Crossover\").\n"
+      "Fieller interval, also as the 16:9 resolution of that pixel count (docs/measurement.md, \"Crossover\").\n"
       "Example:\n  tally crossover 7\n  tally crossover 7 --metric frame_ms --json");
 
   HeatmapArgs& heatmapArgs = subcommands.hold<HeatmapArgs>();

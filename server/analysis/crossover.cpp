@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <boost/math/distributions/students_t.hpp>
@@ -23,7 +24,12 @@ Result<LinearFit> fitLinear(const std::vector<double>& pixels, const std::vector
   }
   const size_t n = pixels.size();
   if (n < 3) {
-    return makeError("a fit needs at least 3 resolutions, got " + std::to_string(n) +
+    // Resolutions, not runs: two runs of one resolution are one resolution.
+    std::vector<double> distinct = pixels;
+    std::sort(distinct.begin(), distinct.end());
+    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+    std::string runs = distinct.size() == n ? "" : ", in " + std::to_string(n) + " runs";
+    return makeError("a fit needs at least 3 resolutions, got " + std::to_string(distinct.size()) + runs +
                      " (with 2 the line passes through both points and has no error to state)");
   }
   for (size_t i = 0; i < n; ++i) {
@@ -84,6 +90,7 @@ const char* crossingKindName(CrossingKind kind) {
     case CrossingKind::Crosses: return "crosses";
     case CrossingKind::OutsideRange: return "outside_range";
     case CrossingKind::Parallel: return "parallel";
+    case CrossingKind::NotSignificant: return "no_significant_crossing";
   }
   return "parallel";
 }
@@ -94,6 +101,24 @@ std::optional<Resolution169> resolution169(double pixels) {
   if (height < 1) height = 1;
   if (height > 1e6) return std::nullopt;
   return Resolution169{static_cast<int>(std::round(height * 16.0 / 9.0)), static_cast<int>(height)};
+}
+
+FiellerInterval fiellerInterval(double n, double d, double varN, double varD, double cov, double t) {
+  // (n - r d)^2 <= t^2 (varN - 2 r cov + r^2 varD), i.e. A r^2 - 2 B r + C <= 0.
+  const double t2 = t * t;
+  const double a = d * d - t2 * varD, b = n * d - t2 * cov, c = n * n - t2 * varN;
+  FiellerInterval out;
+  if (!(a > 0) || !std::isfinite(a) || !std::isfinite(b) || !std::isfinite(c)) return out;
+  // The point n / d satisfies the inequality, so the discriminant is >= 0 but for rounding.
+  const double root = std::sqrt(std::max(0.0, b * b - a * c));
+  // The two roots without cancellation: q / a and c / q, q = b + sign(b) root.
+  const double q = b + std::copysign(root, b);
+  double r1 = q / a, r2 = q != 0 ? c / q : r1;
+  if (q == 0) r1 = r2 = b / a;
+  out.bounded = true;
+  out.low = std::min(r1, r2);
+  out.high = std::max(r1, r2);
+  return out;
 }
 
 Crossing crossing(const LinearFit& first, const LinearFit& second) {
@@ -130,17 +155,40 @@ Crossing crossing(const LinearFit& first, const LinearFit& second) {
   const double var = (varDa + p * p * varDb - 2.0 * p * covDaDb) / (db * db);
   c.pixels = p;
   c.pixelsSe = std::sqrt(std::max(0.0, var));
-  c.low = p - t * *c.pixelsSe;
-  c.high = p + t * *c.pixelsSe;
+  c.deltaLow = p - t * *c.pixelsSe;
+  c.deltaHigh = p + t * *c.pixelsSe;
+  const FiellerInterval fieller = fiellerInterval(da, db, varDa, varDb, covDaDb, t);
+  if (!fieller.bounded) {  // |db| > t se(db) makes it bounded; only rounding can land here
+    c.kind = CrossingKind::Parallel;
+    c.lowerBelow = c.lowerAbove = lowerAtMiddle;
+    return c;
+  }
+  c.low = fieller.low;
+  c.high = fieller.high;
   // Above the crossing the smaller slope is lower.
   c.lowerAbove = first.b < second.b ? 0 : 1;
   c.lowerBelow = 1 - c.lowerAbove;
-  if (p >= c.rangeLow && p <= c.rangeHigh) {
-    c.kind = CrossingKind::Crosses;
-  } else {
+  const bool inside = p >= c.rangeLow && p <= c.rangeHigh;
+  const bool beyondBoth = *c.low < c.rangeLow && *c.high > c.rangeHigh;
+  if (*c.high < c.rangeLow || *c.low > c.rangeHigh) {
     c.kind = CrossingKind::OutsideRange;
-    c.lowerBelow = c.lowerAbove = lowerAtMiddle;
+  } else if (inside && *c.low > 0 && !beyondBoth) {
+    c.kind = CrossingKind::Crosses;
+    return c;
+  } else {
+    c.kind = CrossingKind::NotSignificant;
+    char level[16];
+    std::snprintf(level, sizeof level, "%g%%", 100 * c.confidence);
+    if (!inside) {
+      c.why = std::string("the crossing is estimated outside the measured range, but its ") + level +
+              " interval reaches into it";
+    } else if (*c.low <= 0) {
+      c.why = std::string("the ") + level + " interval of the crossing reaches 0 pixels or below";
+    } else {
+      c.why = std::string("the ") + level + " interval of the crossing extends beyond the measured range on both sides";
+    }
   }
+  c.lowerBelow = c.lowerAbove = lowerAtMiddle;
   return c;
 }
 
@@ -178,13 +226,16 @@ json toJson(const Crossing& c, const std::string& firstName, const std::string& 
   const std::string names[2] = {firstName, secondName};
   auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
   bool crosses = c.kind == CrossingKind::Crosses;
+  bool throughout = c.kind == CrossingKind::OutsideRange || c.kind == CrossingKind::Parallel;
   json ci = c.low ? json{*c.low, *c.high} : json(nullptr);
+  json deltaCi = c.deltaLow ? json{*c.deltaLow, *c.deltaHigh} : json(nullptr);
   json resolutionCi = nullptr;
   if (c.low) resolutionCi = json{resolutionJson(c.low), resolutionJson(c.high)};
   return {{"kind", crossingKindName(c.kind)},
           {"pixels", opt(c.pixels)},
           {"pixels_se", opt(c.pixelsSe)},
           {"pixels_ci", ci},
+          {"pixels_ci_delta", deltaCi},
           {"resolution", resolutionJson(c.pixels)},
           {"resolution_ci", resolutionCi},
           {"range", {c.rangeLow, c.rangeHigh}},
@@ -192,10 +243,12 @@ json toJson(const Crossing& c, const std::string& firstName, const std::string& 
           {"slope_difference_se", c.slopeDifferenceSe},
           {"lower_below", crosses ? json(names[c.lowerBelow]) : json(nullptr)},
           {"lower_above", crosses ? json(names[c.lowerAbove]) : json(nullptr)},
-          {"lower_throughout", crosses ? json(nullptr) : json(names[c.lowerBelow])},
+          {"lower_throughout", throughout ? json(names[c.lowerBelow]) : json(nullptr)},
+          {"significant", crosses || c.kind == CrossingKind::OutsideRange},
+          {"why", c.why.empty() ? json(nullptr) : json(c.why)},
           {"confidence", c.confidence},
           {"degrees_of_freedom", c.degreesOfFreedom},
-          {"interval_method", "delta"}};
+          {"interval_method", "fieller"}};
 }
 
 }  // namespace tally::analysis

@@ -2,9 +2,10 @@
 // the pixel count, and at what pixel count two renderers cross. Each series
 // is fitted as a fixed cost plus a per-pixel cost, y = a + b * pixels, by
 // ordinary least squares; a and b get standard errors and t intervals, and
-// two fits cross at pixels* = (a2 - a1) / (b1 - b2), whose interval is the
-// delta method's. Pure: plain numbers in, numbers out. docs/measurement.md
-// ("Crossover") states the model, its assumptions and the decisions below.
+// two fits cross at pixels* = (a2 - a1) / (b1 - b2), whose interval is
+// Fieller's (the delta method's is given beside it). Pure: plain numbers in,
+// numbers out. docs/measurement.md ("Crossover") states the model, its
+// assumptions and the decisions below.
 #pragma once
 
 #include <optional>
@@ -50,11 +51,17 @@ Result<LinearFit> fitLinear(const std::vector<double>& pixels, const std::vector
                             double confidence = kCrossoverConfidence);
 
 enum class CrossingKind {
-  Crosses,        // the lines cross inside the range both fits measured
-  OutsideRange,   // they cross, but outside that range: one is lower throughout it
+  Crosses,        // the lines cross inside the range both fits measured, and the interval says so
+  OutsideRange,   // the whole interval lies outside that range: one is lower throughout it
   Parallel,       // the slopes do not differ beyond their error: no crossing can be located
+  // The slopes differ, but the crossing's interval reaches 0 pixels or below,
+  // or spans the measured range and beyond on both sides, or overlaps the
+  // range while the estimate lies outside it: where, or whether, the lines
+  // cross in the measured range is not established.
+  NotSignificant,
 };
-const char* crossingKindName(CrossingKind kind);  // "crosses", "outside_range", "parallel"
+// "crosses", "outside_range", "parallel", "no_significant_crossing"
+const char* crossingKindName(CrossingKind kind);
 
 // A 16:9 resolution with (about) a given pixel count: height = round(sqrt(p * 9 / 16)),
 // width = round(height * 16 / 9). Empty for a non-positive or non-finite count.
@@ -63,10 +70,25 @@ struct Resolution169 {
 };
 std::optional<Resolution169> resolution169(double pixels);
 
+// Fieller's confidence set for a ratio N / D of two normal estimates with
+// variances vN, vD and covariance cND: every r with (N - r D)^2 <= t^2 (vN -
+// 2 r cND + r^2 vD). It is an interval only when D differs from 0 beyond its
+// error (D^2 > t^2 vD); otherwise it is the whole line or the complement of an
+// interval, both unbounded (bounded false).
+struct FiellerInterval {
+  bool bounded = false;
+  double low = 0, high = 0;  // when bounded
+};
+FiellerInterval fiellerInterval(double numerator, double denominator, double varNumerator, double varDenominator,
+                                double covariance, double t);
+
 struct Crossing {
   CrossingKind kind = CrossingKind::Parallel;
-  // pixels* = (a2 - a1) / (b1 - b2); absent when parallel.
-  std::optional<double> pixels, pixelsSe, low, high;
+  // pixels* = (a2 - a1) / (b1 - b2); absent when parallel. pixelsSe is the
+  // delta method's standard error; [low, high] is Fieller's interval and
+  // decides the kind; [deltaLow, deltaHigh] the symmetric delta-method one.
+  std::optional<double> pixels, pixelsSe, low, high, deltaLow, deltaHigh;
+  std::string why;  // for NotSignificant: what the interval reaches (empty otherwise)
   // The range both fits measured: [max of minima, min of maxima].
   double rangeLow = 0, rangeHigh = 0;
   // Difference of slopes b1 - b2 and its standard error.
@@ -80,9 +102,11 @@ struct Crossing {
 };
 
 // Where `first` and `second` cross. Parallel when |b1 - b2| <= t * se(b1 - b2)
-// (the fits are independent: their variances add). Otherwise the crossing's
-// standard error is the delta method's over (a1, b1, a2, b2), with the t
-// quantile for n1 + n2 - 4 degrees of freedom.
+// (the fits are independent: their variances add), which is exactly when
+// Fieller's set is unbounded. Otherwise the crossing's interval is Fieller's
+// over (a2 - a1, b1 - b2), and its standard error the delta method's, with
+// the t quantile for n1 + n2 - 4 degrees of freedom. The kind follows
+// Fieller's interval, not the point alone (CrossingKind).
 Crossing crossing(const LinearFit& first, const LinearFit& second);
 
 // The two-sided t quantile for `confidence` and `df` degrees of freedom (Boost.Math).

@@ -249,6 +249,16 @@ LogInterval intervalOf(const Prepared& p, double confidence, bool exact, const s
 
 bool validConfidence(double c) { return std::isfinite(c) && c > 0 && c < 1; }
 
+// Whether a x b < c x d for positive finite doubles, exactly: each product is
+// split into its rounded value and the rounding error (p + e = a x b exactly,
+// by a fused multiply-add), and rounding is monotone, so the rounded values
+// decide unless they are equal, and then the errors do.
+bool exactProductLess(double a, double b, double c, double d) {
+  const double p = a * b, q = c * d;
+  if (p != q) return p < q;
+  return std::fma(a, b, -p) < std::fma(c, d, -q);
+}
+
 }  // namespace
 
 double mannWhitneyCdf(size_t m, size_t n, double u) {
@@ -348,22 +358,15 @@ Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vec
   LogInterval li = intervalOf(*p, options.confidence, *exact, &cdf);
   c.interval = li.interval;
   if (c.interval.bounded && options.acrossCaptureLogSd > 0) {
-    // Across-capture noise (docs/statistics.md): the interval is at least as
-    // wide, on the log scale, as that of the difference of two captures'
-    // medians; the noisier of the two wins. Its asymmetry is kept.
+    // Across-capture noise (docs/statistics.md): the frames' interval and
+    // that of the difference of two captures' medians are independent
+    // sources of error, so their half-widths add as variances, each side on
+    // its own (the frames' asymmetry is kept).
     double across = acrossCaptureHalfWidth(options.acrossCaptureLogSd, options.acrossCaptureRuns, options.confidence);
-    double within = (li.logUpper - li.logLower) / 2;
-    double lower = li.logLower, upper = li.logUpper, f = 1;
-    if (within > 0) {
-      f = std::max(1.0, across / within);
-      lower = li.logEstimate - f * (li.logEstimate - li.logLower);
-      upper = li.logEstimate + f * (li.logUpper - li.logEstimate);
-    } else {  // every pairwise difference equal: the across-capture interval alone
-      f = std::numeric_limits<double>::infinity();
-      lower = li.logEstimate - across;
-      upper = li.logEstimate + across;
-    }
-    c.interval.widening = f;
+    double below = li.logEstimate - li.logLower, above = li.logUpper - li.logEstimate;
+    double lower = li.logEstimate - std::hypot(below, across), upper = li.logEstimate + std::hypot(above, across);
+    double within = li.logUpper - li.logLower;
+    c.interval.widening = within > 0 ? (upper - lower) / within : std::numeric_limits<double>::infinity();
     c.interval.lower = std::exp(lower);
     c.interval.upper = std::exp(upper);
   }
@@ -441,14 +444,51 @@ Result<AlignedSamples> alignStrata(const std::vector<Stratum>& strata) {
   }
   std::sort(all.begin(), all.end());
   const double grand = medianOfSorted(all);
+  // Every time with its stratum's median: the aligned time is exactly
+  // time x grand / median, and the order of two aligned times is the order
+  // of time / median, which compares exactly as time_i x median_j against
+  // time_j x median_i (exactProductLess). Rounding time x (grand / median)
+  // can make two different exact values one double (x (g / x) != g): a tie
+  // the raw frames do not have, which turns the exact test into the normal
+  // one; or reverse two close values. The doubles are therefore placed in
+  // the exact order: equal where the exact values are equal, strictly
+  // increasing where they differ, each within a few units in the last place
+  // of its rounded product.
+  struct Entry {
+    double time, median, aligned;
+    bool isA;
+    size_t position;
+  };
+  std::vector<Entry> entries;
   AlignedSamples out;
   for (const auto& stratum : strata) {
     std::vector<double> both(stratum.a);
     both.insert(both.end(), stratum.b.begin(), stratum.b.end());
     std::sort(both.begin(), both.end());
-    const double factor = grand / medianOfSorted(both);
-    for (double v : stratum.a) out.a.push_back(v * factor);
-    for (double v : stratum.b) out.b.push_back(v * factor);
+    const double median = medianOfSorted(both);
+    const double factor = grand / median;
+    for (double v : stratum.a) {
+      entries.push_back({v, median, v * factor, true, out.a.size()});
+      out.a.push_back(v * factor);
+    }
+    for (double v : stratum.b) {
+      entries.push_back({v, median, v * factor, false, out.b.size()});
+      out.b.push_back(v * factor);
+    }
+  }
+  auto less = [](const Entry& x, const Entry& y) { return exactProductLess(x.time, y.median, y.time, x.median); };
+  std::sort(entries.begin(), entries.end(), less);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    Entry& e = entries[i];
+    if (i > 0) {
+      const Entry& prev = entries[i - 1];
+      if (!less(prev, e)) {
+        e.aligned = prev.aligned;  // equal exact values: a true tie
+      } else if (!(e.aligned > prev.aligned)) {
+        e.aligned = std::nextafter(prev.aligned, std::numeric_limits<double>::infinity());
+      }
+    }
+    (e.isA ? out.a : out.b)[e.position] = e.aligned;
   }
   return out;
 }

@@ -36,10 +36,9 @@ struct CompareOptions {
   PValueMethod pValueMethod = PValueMethod::Automatic;  // Exact with tied times is an error
   // Across-capture noise: the standard deviation of log(run median) over
   // repeated captures of one configuration (acrossCaptureLogSd below) and the
-  // number of captures it came from; 0 when unknown. When the difference of
-  // two captures' medians varies more than the frames' own interval says, the
-  // interval is widened to the across-capture one (docs/statistics.md,
-  // "Across-capture noise").
+  // number of captures it came from; 0 when unknown. The interval is widened
+  // by the across-capture one: their log half-widths add as variances, each
+  // side on its own (docs/statistics.md, "Across-capture noise").
   double acrossCaptureLogSd = 0;
   size_t acrossCaptureRuns = 0;  // Student's t with runs - 1 degrees of freedom; below 2: the normal quantile
 };
@@ -68,7 +67,7 @@ struct RatioInterval {
   size_t rank = 0;         // the interval is [D(rank), D(m*n + 1 - rank)] of the sorted pairwise log differences; 0: unbounded
   bool bounded = false;
   std::string method;      // "hodges-lehmann-exact" | "hodges-lehmann-normal"
-  double widening = 1;     // factor the log-scale half-widths were multiplied by for across-capture noise (1: none; +inf: the frames' interval had zero width)
+  double widening = 1;     // the log-scale width over the frames' own after across-capture noise (1: none; +inf: the frames' interval had zero width)
 };
 
 struct TimeComparison {
@@ -101,8 +100,10 @@ Result<TimeComparison> compareTimes(const std::vector<double>& a, const std::vec
 // times together. A ratio common to every stratum survives the alignment;
 // under no difference a stratum's times stay exchangeable between A and B,
 // since m_s is a function of the stratum's times as a set
-// (docs/statistics.md, "Cameras as strata"). Returns the aligned A and B,
-// pooled in stratum order. Errors as compareTimes's for a non-positive or
+// (docs/statistics.md, "Cameras as strata"). The aligned doubles keep the
+// order and the ties of the exact values time x M / m_s: rounding creates no
+// tie the exact values lack, and keeps every one they have. Returns the
+// aligned A and B, pooled in stratum order. Errors as compareTimes's for a non-positive or
 // non-finite time, or a stratum with no time in A or in B.
 struct Stratum {
   std::vector<double> a, b;
@@ -135,8 +136,8 @@ Result<double> acrossCaptureLogSd(const std::vector<double>& perRunMedians);
 // captures' medians when each capture's log median varies with standard
 // deviation acrossLogSd, estimated from `runs` captures: q x sqrt(2) x
 // acrossLogSd, q the two-sided quantile of Student's t with runs - 1 degrees
-// of freedom (the normal's when runs < 2). compareTimes widens its interval's
-// log half-widths by max(1, this / the interval's mean log half-width).
+// of freedom (the normal's when runs < 2). compareTimes widens each of its
+// interval's log half-widths h to sqrt(h^2 + this^2).
 double acrossCaptureHalfWidth(double acrossLogSd, size_t runs, double confidence);
 
 // Counts are deterministic: equal or not, no test.

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "analysis/crossover.hpp"
+#include "reports/frame_time.hpp"
 #include "reports/run_rows.hpp"
 
 namespace tally::reports {
@@ -50,7 +51,13 @@ Result<json> crossoverModels(store::Store& store, const store::RunFilter& filter
     std::vector<double> pixels, values;
     std::vector<const store::RunRow*> used;
     for (const auto* r : s.runs) {
-      const std::optional<double>& v = metric == "bytes" ? r->meanBytes : r->meanFrameMs;
+      // Frame time as every view shows it: the run's median (reports/frame_time.hpp).
+      std::optional<double> v = r->meanBytes;
+      if (metric != "bytes") {
+        auto t = runFrameTime(store, r->id);
+        if (!t) return makeError(t.error());
+        v = t->median;
+      }
       if (!v) continue;  // a run without samples
       pixels.push_back(double(r->width) * double(r->height));
       values.push_back(*v);
@@ -105,7 +112,7 @@ Result<json> crossoverModels(store::Store& store, const store::RunFilter& filter
               {"model", "y = a + b * pixels (ordinary least squares)"},
               {"confidence", analysis::kCrossoverConfidence},
               {"poor_fit_r2", analysis::kPoorFitR2},
-              {"interval_method", "t intervals for a and b (n - 2 df); delta method for the crossing (n1 + n2 - 4 df)"},
+              {"interval_method", "t intervals for a and b (n - 2 df); Fieller for the crossing, delta method beside it (n1 + n2 - 4 df)"},
               {"series", std::move(out)},
               {"crossings", std::move(crossings)},
               {"truncated", !complete}};

@@ -64,6 +64,11 @@ std::vector<double> pooled(const Samples& samples, const std::vector<std::string
   return out;
 }
 
+std::optional<double> medianOf(const std::vector<double>& times) {
+  if (times.empty()) return std::nullopt;
+  return analysis::spreadOf(times).median;
+}
+
 bool sameConfig(const analysis::RunConfig& a, const analysis::RunConfig& b) {
   return a.renderer == b.renderer && a.options == b.options && a.scene == b.scene && a.sceneParams == b.sceneParams &&
          a.device == b.device && a.counting == b.counting && a.width == b.width && a.height == b.height &&
@@ -94,29 +99,50 @@ Result<std::vector<std::pair<int64_t, Samples>>> repeatsOf(store::Store& store, 
   return out;
 }
 
-// The pooled within-configuration standard deviation of log(median of the
-// figure's pooled frames) over the groups' runs that have every camera.
+// The pooled standard deviation of log(median) over the repeats: one cell
+// per configuration, shared camera and figure (the frame and every pass),
+// holding each repeat's log median of that camera's per-frame times of that
+// figure; the cells' squares about their means and their degrees of freedom
+// (values - 1) add up. Two captures give one degree of freedom per cell
+// instead of one in all (docs/statistics.md, "Across-capture noise").
 std::optional<AcrossCapture> acrossCapture(const std::vector<const std::vector<std::pair<int64_t, Samples>>*>& groups,
-                                           const std::vector<std::string>& cameras, const std::string& figure) {
+                                           const std::vector<std::string>& cameras) {
   AcrossCapture out;
   double sumSquares = 0;
   for (const auto* group : groups) {
-    std::vector<double> logs;
+    std::map<std::pair<std::string, std::string>, std::vector<double>> cells;  // (camera, figure) -> logs
     std::vector<int64_t> ids;
     for (const auto& [id, samples] : *group) {
-      std::vector<double> times = pooled(samples, cameras, figure);
-      if (times.empty()) continue;
-      double m = analysis::spreadOf(std::move(times)).median;
-      if (!(m > 0) || !std::isfinite(m)) continue;
-      logs.push_back(std::log(m));
-      ids.push_back(id);
+      bool used = false;
+      for (const auto& camera : cameras) {
+        auto it = samples.find(camera);
+        if (it == samples.end()) continue;
+        std::vector<std::string> figures{kFrame};
+        for (const auto& pass : it->second.passes) figures.push_back(pass.name);
+        for (const auto& figure : figures) {
+          auto times = perCamera(samples, {camera}, figure);
+          if (times.empty()) continue;
+          double m = analysis::spreadOf(std::move(times.front())).median;
+          if (!(m > 0) || !std::isfinite(m)) continue;  // a pass below the timer's resolution
+          cells[{camera, figure}].push_back(std::log(m));
+          used = true;
+        }
+      }
+      if (used) ids.push_back(id);
     }
-    if (logs.size() < 2) continue;
-    double mean = 0;
-    for (double l : logs) mean += l;
-    mean /= static_cast<double>(logs.size());
-    for (double l : logs) sumSquares += (l - mean) * (l - mean);
-    out.degreesOfFreedom += logs.size() - 1;
+    size_t groupDf = 0;
+    for (const auto& [key, logs] : cells) {
+      if (logs.size() < 2) continue;
+      double mean = 0;
+      for (double l : logs) mean += l;
+      mean /= static_cast<double>(logs.size());
+      for (double l : logs) sumSquares += (l - mean) * (l - mean);
+      groupDf += logs.size() - 1;
+      ++out.cells;
+    }
+    if (groupDf == 0) continue;
+    out.degreesOfFreedom += groupDf;
+    out.captures = std::max(out.captures, ids.size());
     out.runs.insert(out.runs.end(), ids.begin(), ids.end());
   }
   if (out.degreesOfFreedom == 0) return std::nullopt;
@@ -124,15 +150,67 @@ std::optional<AcrossCapture> acrossCapture(const std::vector<const std::vector<s
   return out;
 }
 
+// What the verdict says about the capture-to-capture noise it took into
+// account, or empty when the repeats bound it.
+std::string noiseNote(const std::optional<AcrossCapture>& across, bool sought) {
+  if (!sought) return {};
+  if (!across) {
+    return "no configuration has 2 comparable captures: capture-to-capture noise is not bounded, only the "
+           "frames' own";
+  }
+  if (across->captures >= kMinCapturesToBoundNoise) return {};
+  return "only " + std::to_string(across->captures) +
+         " repeated captures: too few to bound capture-to-capture noise (their spread pooled over " +
+         std::to_string(across->cells) + " cameras and passes, " + std::to_string(across->degreesOfFreedom) +
+         " degrees of freedom)";
+}
+
+// Counts: every line summed over the shared cameras, compared exactly.
+void compareCountLines(const Samples& samplesA, const Samples& samplesB, RunSignificance& out) {
+  std::map<std::string, std::pair<double, double>> lines;
+  std::vector<std::string> order{"total"};
+  auto addCounts = [&](const Samples& samples, bool isA) {
+    for (const auto& key : out.cameras) {
+      const store::Sample& s = samples.at(key);
+      (isA ? lines["total"].first : lines["total"].second) += s.row.bytes;
+      for (const auto& p : s.passes) {
+        for (const auto& c : p.counters) {
+          std::string line = lineKey(p.name, c);
+          if (!lines.count(line)) order.push_back(line);
+          (isA ? lines[line].first : lines[line].second) += c.count;
+        }
+      }
+    }
+  };
+  addCounts(samplesA, true);
+  addCounts(samplesB, false);
+  out.countLines = order.size();
+  // Compared as sums (exact), reported per frame as every other view shows
+  // bytes: the mean over the shared cameras.
+  const double cameras = static_cast<double>(out.cameras.size());
+  for (const auto& line : order) {
+    auto [a, b] = lines[line];
+    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed)
+      out.countChanges.push_back({line, a / cameras, b / cameras});
+  }
+}
+
 json acrossJson(const std::optional<AcrossCapture>& a) {
   if (!a) return nullptr;
-  return {{"runs", a->runs}, {"log_sd", a->logSd}, {"degrees_of_freedom", a->degreesOfFreedom}};
+  return {{"runs", a->runs},
+          {"log_sd", a->logSd},
+          {"degrees_of_freedom", a->degreesOfFreedom},
+          {"cells", a->cells},
+          {"captures", a->captures}};
 }
 
 json figureJson(const FigureSignificance& f) {
   json out = analysis::toJson(f.time);
   out["across_capture"] = acrossJson(f.acrossCapture);
   out["strata"] = f.camerasAsStrata ? "cameras" : "none";
+  out["noise_note"] = f.noiseNote.empty() ? json(nullptr) : json(f.noiseNote);
+  out["run_median_a"] = f.runMedianA ? json(*f.runMedianA) : json(nullptr);
+  out["run_median_b"] = f.runMedianB ? json(*f.runMedianB) : json(nullptr);
   return out;
 }
 
@@ -175,29 +253,7 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
     return out;
   }
 
-  // Counts: every line summed over the shared cameras, compared exactly.
-  std::map<std::string, std::pair<double, double>> lines;
-  std::vector<std::string> order{"total"};
-  auto addCounts = [&](const Samples& samples, bool isA) {
-    for (const auto& key : out.cameras) {
-      const store::Sample& s = samples.at(key);
-      (isA ? lines["total"].first : lines["total"].second) += s.row.bytes;
-      for (const auto& p : s.passes) {
-        for (const auto& c : p.counters) {
-          std::string line = lineKey(p.name, c);
-          if (!lines.count(line)) order.push_back(line);
-          (isA ? lines[line].first : lines[line].second) += c.count;
-        }
-      }
-    }
-  };
-  addCounts(*samplesA, true);
-  addCounts(*samplesB, false);
-  out.countLines = order.size();
-  for (const auto& line : order) {
-    auto [a, b] = lines[line];
-    if (analysis::compareCounts(a, b).verdict == analysis::CountVerdict::Changed) out.countChanges.push_back({line, a, b});
-  }
+  compareCountLines(*samplesA, *samplesB, out);
 
   // Repeats of each configuration (one group when both runs share it: B is
   // the capture under test, so it is left out).
@@ -217,9 +273,15 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
     }
   }
 
+  // One across-capture spread for every figure, pooled over all of them.
+  const std::optional<AcrossCapture> across =
+      options.acrossCapture ? acrossCapture(groups, out.cameras) : std::optional<AcrossCapture>();
+
   // A figure's comparison, or why there is none.
   auto figure = [&](const std::string& name, std::string& missing) -> std::optional<FigureSignificance> {
     std::vector<double> a = pooled(*samplesA, out.cameras, name), b = pooled(*samplesB, out.cameras, name);
+    // The runs' own medians, before any alignment: what the runs list and the trend show.
+    const std::optional<double> runMedianA = medianOf(a), runMedianB = medianOf(b);
     if (options.camerasAsStrata && !a.empty() && !b.empty()) {
       std::vector<analysis::Stratum> strata;
       auto ca = perCamera(*samplesA, out.cameras, name), cb = perCamera(*samplesB, out.cameras, name);
@@ -232,19 +294,25 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
       a = std::move(aligned->a);
       b = std::move(aligned->b);
     }
-    if (a.size() < 2 || b.size() < 2) {
-      missing = "a shared camera has fewer than 2 per-frame times stored in one of the runs (runs stored before "
+    if (a.empty() || b.empty()) {
+      missing = "a shared camera has no per-frame times stored in one of the runs (runs stored before "
                 "per-frame times were kept have none)";
+      return std::nullopt;
+    }
+    if (a.size() < 2 || b.size() < 2) {
+      missing = std::string("sample ") + (a.size() < 2 ? "A" : "B") + " has 1 frame time; a comparison needs at least 2";
       return std::nullopt;
     }
     FigureSignificance f;
     f.figure = name;
     f.camerasAsStrata = options.camerasAsStrata;
+    f.runMedianA = runMedianA;
+    f.runMedianB = runMedianB;
     analysis::CompareOptions compare = options.compare;
-    f.acrossCapture = acrossCapture(groups, out.cameras, name);
-    if (f.acrossCapture) {
-      compare.acrossCaptureLogSd = f.acrossCapture->logSd;
-      compare.acrossCaptureRuns = f.acrossCapture->degreesOfFreedom + 1;
+    f.acrossCapture = across;
+    if (across) {
+      compare.acrossCaptureLogSd = across->logSd;
+      compare.acrossCaptureRuns = across->degreesOfFreedom + 1;
     }
     auto time = analysis::compareTimes(a, b, compare);
     if (!time) {
@@ -253,6 +321,8 @@ Result<RunSignificance> runSignificance(store::Store& store, const StoredRun& st
       return std::nullopt;
     }
     f.time = std::move(time).value();
+    f.noiseNote = noiseNote(across, options.acrossCapture);
+    if (!f.noiseNote.empty()) f.time.reason += "; " + f.noiseNote;
     return f;
   };
 

@@ -25,11 +25,19 @@ namespace tally::reports {
 // newest first).
 inline constexpr size_t kMaxAcrossCaptureRepeats = 20;
 
-// The across-capture noise one figure was widened by.
+// Fewer repeated captures of a configuration than this leave the
+// capture-to-capture noise poorly bounded, and the verdict says so.
+inline constexpr size_t kMinCapturesToBoundNoise = 3;
+
+// The across-capture noise every figure was widened by: the spread of the
+// repeats' log medians within each (configuration, camera, figure) cell,
+// pooled over the cells.
 struct AcrossCapture {
   std::vector<int64_t> runs;  // the repeats whose medians gave it (both runs' configurations)
-  double logSd = 0;           // pooled standard deviation of log(run median) within each configuration
-  size_t degreesOfFreedom = 0;
+  double logSd = 0;           // pooled standard deviation of log(per-camera median)
+  size_t degreesOfFreedom = 0;  // sum over the cells of (captures in the cell - 1)
+  size_t cells = 0;             // (configuration, camera, figure) cells with 2 captures or more
+  size_t captures = 0;          // the most captures of one configuration
 };
 
 struct FigureSignificance {
@@ -38,12 +46,20 @@ struct FigureSignificance {
   // cameras were strata: then the medians and ratio are of aligned times.
   analysis::TimeComparison time;
   bool camerasAsStrata = true;
+  // The median of each run's raw times pooled over the shared cameras, not
+  // aligned: the runs' frame_ms_median (reports/frame_time.hpp) when they
+  // share every camera, whatever the strata.
+  std::optional<double> runMedianA, runMedianB;
   std::optional<AcrossCapture> acrossCapture;  // absent: no configuration had 2 comparable captures
+  // Set, and appended to time.reason, when across-capture noise was sought
+  // but the repeats are too few to bound it (fewer than
+  // kMinCapturesToBoundNoise captures, or none).
+  std::string noiseNote;
 };
 
 struct CountChange {
   std::string line;  // "total" (the sample bytes) or "pass/resource access" (its count)
-  double a = 0, b = 0;  // summed over the shared cameras, per frame
+  double a = 0, b = 0;  // per frame: the mean over the shared cameras (compared as sums, exactly)
 };
 
 struct RunSignificance {

@@ -30,16 +30,23 @@ store::NewAlert timeAlert(const std::string& metric, const FigureSignificance& f
   }
   a.pValue = t.test.pValue;
   a.cliffsDelta = t.effect.delta;
-  a.valueA = t.medianA;
-  a.valueB = t.medianB;
+  // The runs' medians as the runs list and the trend show them; the ratio
+  // and its interval stay the comparison's (per-camera aligned).
+  a.valueA = f.runMedianA.value_or(t.medianA);
+  a.valueB = f.runMedianB.value_or(t.medianB);
   a.details = analysis::toJson(t);
   if (f.acrossCapture) {
     a.details["across_capture"] = {{"runs", f.acrossCapture->runs},
                                    {"log_sd", f.acrossCapture->logSd},
-                                   {"degrees_of_freedom", f.acrossCapture->degreesOfFreedom}};
+                                   {"degrees_of_freedom", f.acrossCapture->degreesOfFreedom},
+                                   {"cells", f.acrossCapture->cells},
+                                   {"captures", f.acrossCapture->captures}};
   } else {
     a.details["across_capture"] = nullptr;
   }
+  a.details["noise_note"] = f.noiseNote.empty() ? json(nullptr) : json(f.noiseNote);
+  a.details["run_median_a"] = a.valueA ? json(*a.valueA) : json(nullptr);
+  a.details["run_median_b"] = a.valueB ? json(*a.valueB) : json(nullptr);
   return a;
 }
 

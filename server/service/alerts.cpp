@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 
+#include "reports/frame_time.hpp"
 #include "service/routes.hpp"
 #include "service/webhook.hpp"
 
@@ -132,6 +133,7 @@ Response getAlert(ServiceContext& ctx, const Request& req) {
   json out = alertJson(*a);
   auto run = check(store.runs().get(a->runId));
   out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
+  if (run) reports::addFrameMedian(check(reports::runFrameTime(store, a->runId)), out["run_row"]);
   auto baseline = check(store.alerts().getBaseline(a->baselineId));
   out["baseline_row"] = baseline ? baselineJson(*baseline) : json(nullptr);
   return Response::ok(out);
@@ -149,37 +151,6 @@ Response updateAlert(ServiceContext& ctx, const Request& req) {
   auto a = check(ctx.writer->alerts().setStatus(id, *status));
   if (!a) missing("no alert " + std::to_string(id));
   return Response::ok(alertJson(*a));
-}
-
-// A run's frame time over every per-frame time of its samples: the median and
-// its distribution-free 95% interval (order statistics k and n + 1 - k of the
-// n sorted times, k from the normal approximation to Binomial(n, 1/2)); the
-// mean of the samples' frame times, without interval, where a sample has none.
-json frameFigure(store::Store& store, const store::RunRow& run) {
-  std::vector<double> times;
-  bool complete = true;
-  for (const auto& row : check(store.runs().samples(run.id))) {
-    auto sample = check(store.runs().sample(row.id));
-    if (!sample || sample->row.frameMsFrames.empty()) {
-      complete = false;
-      break;
-    }
-    times.insert(times.end(), sample->row.frameMsFrames.begin(), sample->row.frameMsFrames.end());
-  }
-  if (!complete || times.empty()) {
-    return {{"median", opt(run.meanFrameMs)}, {"lower", nullptr}, {"upper", nullptr}, {"frames", 0}};
-  }
-  std::sort(times.begin(), times.end());
-  const size_t n = times.size();
-  double median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
-  // k = floor(n/2 - 1.96 sqrt(n)/2): P(X < k) <= 2.5% for X ~ Binomial(n, 1/2).
-  double k = std::floor(n / 2.0 - 0.98 * std::sqrt(static_cast<double>(n)));
-  json lower = nullptr, upper = nullptr;
-  if (k >= 1) {
-    lower = times[static_cast<size_t>(k) - 1];
-    upper = times[n - static_cast<size_t>(k)];
-  }
-  return {{"median", median}, {"lower", lower}, {"upper", upper}, {"frames", n}};
 }
 
 // GET /api/trend?baseline=ID[&limit=N]: every run of the baseline's
@@ -209,7 +180,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
                     {"lights", r.lights},
                     {"host", opt(r.host)},
                     {"tally_commit", opt(r.tallyCommit)},
-                    {"frame_ms", frameFigure(store, r)},
+                    {"frame_ms", reports::toJson(check(reports::runFrameTime(store, r.id)))},
                     {"mean_bytes", opt(r.meanBytes)},
                     {"baseline", r.id == baseline->runId},
                     {"alerts", alertsByRun.count(r.id) ? alertsByRun[r.id] : json::array()}});

@@ -2,6 +2,7 @@
 // significance, crossover, heatmaps, accuracy and repeats.
 #include "reports/accuracy.hpp"
 #include "reports/crossover.hpp"
+#include "reports/frame_time.hpp"
 #include "reports/heatmap.hpp"
 #include "reports/repeats.hpp"
 #include "reports/run_significance.hpp"
@@ -63,6 +64,20 @@ Response compare(ServiceContext& ctx, const Request& req) {
     runs.push_back(std::move(*run));
   }
   json out = comparisonJson(check(store.runs().compare(ids)));
+  // The runs' frame times as medians (reports/frame_time.hpp), beside the
+  // store's frame_ms (the mean of the samples' medians), against the first.
+  json medians = json::array();
+  std::optional<double> first;
+  for (size_t i = 0; i < ids.size(); ++i) {
+    auto t = check(reports::runFrameTime(store, ids[i]));
+    reports::addFrameMedian(t, out["runs"][i]);
+    if (i == 0) first = t.median;
+    bool against = first && t.median && *first != 0;
+    medians.push_back({{"value", t.median ? json(*t.median) : json(nullptr)},
+                       {"delta", against ? json(*t.median - *first) : json(nullptr)},
+                       {"ratio", against ? json(*t.median / *first) : json(nullptr)}});
+  }
+  out["frame_ms_median"] = std::move(medians);
   // Each later run against the first: times tested, counts exact.
   json significance = json::array();
   for (size_t i = 1; i < runs.size(); ++i) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <system_error>
 
+#include "reports/frame_time.hpp"
 #include "service/admission.hpp"
 #include "service/handlers.hpp"
 #include "service/routes.hpp"
@@ -18,9 +19,13 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {"renderer", "variant", "scene", "width", "height", "device", "capture", "host", "label", "since", "until", "limit",
                   "cursor"});
   auto filter = queryFilter(req);
-  auto page = check(reader(ctx).runs().list(filter, queryPage(req)));
+  auto& store = reader(ctx);
+  auto page = check(store.runs().list(filter, queryPage(req)));
   json runs = json::array();
-  for (const auto& r : page.runs) runs.push_back(runRowJson(r));
+  for (const auto& r : page.runs) {
+    runs.push_back(runRowJson(r));
+    reports::addFrameMedian(check(reports::runFrameTime(store, r.id)), runs.back());
+  }
   return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
 }
 
@@ -30,6 +35,7 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   auto run = check(reader(ctx).runs().get(id));
   if (!run) missing("no run " + std::to_string(id));
   json j = runRowJson(run->row);
+  reports::addFrameMedian(check(reports::runFrameTime(reader(ctx), id)), j);
   j["device_info"] = deviceJson(run->device);
   json resources = json::array();
   for (const auto& r : run->resources) {

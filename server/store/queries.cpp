@@ -306,6 +306,24 @@ Result<std::vector<SampleRow>> Runs::samples(int64_t runId) {
   });
 }
 
+Result<std::vector<SampleFrameTimes>> Runs::sampleFrameTimes(int64_t runId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::vector<SampleFrameTimes>>("sampleFrameTimes", [&]() -> Result<std::vector<SampleFrameTimes>> {
+    Statement query(db_, "SELECT frame_ms, frame_ms_frames FROM samples WHERE run_id = ?1 ORDER BY camera_index");
+    query.bind(1, runId);
+    std::vector<SampleFrameTimes> out;
+    while (query.step()) {
+      RowReader row(query);
+      SampleFrameTimes s;
+      s.frameMs = row.getDouble();
+      s.frames = frameTimes(row);
+      row.end();
+      out.push_back(std::move(s));
+    }
+    return out;
+  });
+}
+
 Result<std::optional<Sample>> Runs::sample(int64_t sampleId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Sample>>("getSample", [&]() -> Result<std::optional<Sample>> {

@@ -16,6 +16,13 @@
 
 namespace tally::store {
 
+// A sample's frame time (frame_ms: its median over the frames) and its
+// per-frame times (empty when not stored).
+struct SampleFrameTimes {
+  double frameMs = 0;
+  std::vector<double> frames;
+};
+
 class Runs : public Facet {
  public:
   // Stores a whole capture result (docs/result-schema.md) for a job, in one
@@ -52,6 +59,10 @@ class Runs : public Facet {
   // Empty vector for an unknown run or one without samples.
   Result<std::vector<SampleRow>> samples(int64_t runId);
   Result<std::optional<Sample>> sample(int64_t sampleId);
+  // Every sample's frame times, by camera, without its passes and counters
+  // (a run's frame-time statistics, reports/frame_time.hpp). Empty for an
+  // unknown run or one without samples.
+  Result<std::vector<SampleFrameTimes>> sampleFrameTimes(int64_t runId);
   // A run's passes and per-resource counters, per frame, averaged over its
   // samples as compare() does (a sample without a pass or counter counts as
   // 0; overhead ratios are the mean of the samples that have one); spreads

@@ -87,7 +87,11 @@ TEST(CrossoverFit, PoorFitIsFlagged) {
 TEST(CrossoverFit, DegenerateInputsAreErrors) {
   auto two = fitLinear({1e5, 2e5}, {1, 2});
   ASSERT_FALSE(two);
-  EXPECT_NE(two.error().find("at least 3 resolutions"), std::string::npos) << two.error();
+  EXPECT_NE(two.error().find("at least 3 resolutions, got 2 ("), std::string::npos) << two.error();
+  // Two runs of one resolution are one resolution.
+  auto repeated = fitLinear({2e5, 2e5}, {1, 2});
+  ASSERT_FALSE(repeated);
+  EXPECT_NE(repeated.error().find("at least 3 resolutions, got 1, in 2 runs"), std::string::npos) << repeated.error();
   auto none = fitLinear({}, {});
   ASSERT_FALSE(none);
   EXPECT_NE(none.error().find("at least 3 resolutions, got 0"), std::string::npos) << none.error();
@@ -127,7 +131,14 @@ TEST(CrossoverCrossing, FoundWhereConstructed) {
   EXPECT_EQ(j["lower_below"], "deferred");
   EXPECT_EQ(j["lower_above"], "visbuffer");
   EXPECT_TRUE(j["lower_throughout"].is_null());
-  EXPECT_EQ(j["interval_method"], "delta");
+  EXPECT_EQ(j["interval_method"], "fieller");
+  EXPECT_EQ(j["significant"], true);
+  EXPECT_TRUE(j["why"].is_null());
+  // Far from the edges both intervals agree closely; the delta one is symmetric.
+  ASSERT_TRUE(c.deltaLow && c.deltaHigh);
+  EXPECT_NEAR(*c.pixels - *c.deltaLow, *c.deltaHigh - *c.pixels, 1e-6 * *c.pixels);
+  EXPECT_NEAR(*c.low, *c.deltaLow, 0.05 * (*c.high - *c.low));
+  EXPECT_NEAR(*c.high, *c.deltaHigh, 0.05 * (*c.high - *c.low));
   // About 1193x671 at 16:9.
   auto r = resolution169(800000);
   ASSERT_TRUE(r);
@@ -142,7 +153,7 @@ TEST(CrossoverCrossing, FoundWhereConstructed) {
   EXPECT_EQ(swapped.lowerAbove, 0);
 }
 
-// The delta method's interval for the crossing covers the constructed point
+// Fieller's interval for the crossing covers the constructed point
 // at close to the nominal rate when the crossing is well inside the range.
 TEST(CrossoverCrossing, IntervalCoversTheConstructedCrossing) {
   auto x = sweepPixels();
@@ -206,6 +217,148 @@ TEST(CrossoverCrossing, ParallelWithinError) {
   auto e1 = fitLinear(x, line(x, 2.0, 1e-6, 0, rng));
   auto e2 = fitLinear(x, line(x, 3.0, 1e-6, 0, rng));
   EXPECT_EQ(crossing(*e1, *e2).kind, CrossingKind::Parallel);
+}
+
+// Fieller's set found without the quadratic: scan r for the t-statistic
+// |N - r D| / sqrt(vN - 2 r c + r^2 vD) crossing t, then bisect each change.
+std::vector<double> fiellerEdgesByScan(double n, double d, double vN, double vD, double c, double t, double from,
+                                       double to) {
+  auto inside = [&](double r) {
+    double var = vN - 2 * r * c + r * r * vD;
+    return std::abs(n - r * d) <= t * std::sqrt(var);
+  };
+  std::vector<double> edges;
+  const int steps = 200000;
+  double prev = from;
+  for (int i = 1; i <= steps; ++i) {
+    double r = from + (to - from) * i / steps;
+    if (inside(r) != inside(prev)) {
+      double lo = prev, hi = r;
+      for (int k = 0; k < 200; ++k) {
+        double mid = (lo + hi) / 2;
+        (inside(mid) == inside(prev) ? lo : hi) = mid;
+      }
+      edges.push_back((lo + hi) / 2);
+    }
+    prev = r;
+  }
+  return edges;
+}
+
+TEST(CrossoverFieller, SolvedByHand) {
+  // N = 10, D = 5, vN = vD = 1, no covariance, t = 2:
+  // (10 - 5r)^2 = 4 (1 + r^2)  <=>  21 r^2 - 100 r + 96 = 0
+  // r = (50 -/+ sqrt(2500 - 2016)) / 21 = (50 -/+ 22) / 21 = 4/3 and 24/7.
+  FiellerInterval f = fiellerInterval(10, 5, 1, 1, 0, 2);
+  ASSERT_TRUE(f.bounded);
+  EXPECT_NEAR(f.low, 4.0 / 3.0, 1e-14);
+  EXPECT_NEAR(f.high, 24.0 / 7.0, 1e-14);
+  // The denominator within t standard errors of 0 (|D| = 1 < 2 x 1): the
+  // set is the complement of an interval or the whole line, never bounded.
+  EXPECT_FALSE(fiellerInterval(10, 1, 1, 1, 0, 2).bounded);
+  EXPECT_FALSE(fiellerInterval(0.1, 0.1, 1, 1, 0, 2).bounded);
+  // Exact estimates: the point itself.
+  FiellerInterval point = fiellerInterval(6, 3, 0, 0, 0, 2);
+  ASSERT_TRUE(point.bounded);
+  EXPECT_EQ(point.low, 2);
+  EXPECT_EQ(point.high, 2);
+}
+
+TEST(CrossoverFieller, MatchesABruteForceSearch) {
+  struct Case {
+    double n, d, vN, vD, c, t;
+  };
+  // Covariance of both signs, a negative ratio, and a denominator a little
+  // beyond its error (a very asymmetric interval).
+  for (Case k : {Case{3e7, 12.0, 4e12, 1.5, -2e6, 2.12}, Case{-5e6, 4.0, 1e12, 2.0, 1e6, 2.12},
+                 Case{9e6, 3.4, 2e13, 2.0, -4e6, 2.12}, Case{2.0, -0.5, 0.04, 0.01, 0.005, 1.96}}) {
+    FiellerInterval f = fiellerInterval(k.n, k.d, k.vN, k.vD, k.c, k.t);
+    ASSERT_TRUE(f.bounded) << k.n << " / " << k.d;
+    double span = 50 * std::abs(k.n / k.d) + 10;
+    auto edges = fiellerEdgesByScan(k.n, k.d, k.vN, k.vD, k.c, k.t, -span, span);
+    ASSERT_EQ(edges.size(), 2u) << k.n << " / " << k.d;
+    EXPECT_NEAR(f.low, edges[0], 1e-9 * span) << k.n << " / " << k.d;
+    EXPECT_NEAR(f.high, edges[1], 1e-9 * span) << k.n << " / " << k.d;
+    EXPECT_LE(f.low, k.n / k.d);
+    EXPECT_GE(f.high, k.n / k.d);
+  }
+}
+
+// Fits as a sweep of 10 resolutions gives them: residual SE 1e6, so
+// se(b) = s / sqrt(Sxx), se(a) = s sqrt(1/n + mean^2 / Sxx), cov = -mean s^2 / Sxx.
+LinearFit sweepFit(double a, double b, double s) {
+  auto x = sweepPixels();
+  double mean = 0, sxx = 0;
+  for (double v : x) mean += v / double(x.size());
+  for (double v : x) sxx += (v - mean) * (v - mean);
+  LinearFit f;
+  f.n = int(x.size());
+  f.a = a;
+  f.b = b;
+  f.bSe = s / std::sqrt(sxx);
+  f.aSe = s * std::sqrt(1.0 / f.n + mean * mean / sxx);
+  f.covAb = -mean * s * s / sxx;
+  f.minPixels = x.front();
+  f.maxPixels = x.back();
+  return f;
+}
+
+// Slopes that differ by 2.8 standard errors, so not parallel at 95%, and a
+// crossing estimated at 3 Mpx inside the range: the delta method's
+// symmetric interval lies inside the range and above 0, but Fieller's
+// reaches below 0 pixels: no significant crossing. Well beyond the error
+// (6 standard errors) the same pair crosses.
+TEST(CrossoverCrossing, SlopesWithinThreeStandardErrorsDoNotCross) {
+  const double s = 1e6, p = 3e6;
+  LinearFit first = sweepFit(1e6, 40, s);
+  for (double z : {2.8, 6.0}) {
+    double slopeGap = z * std::sqrt(2.0) * first.bSe;
+    LinearFit second = sweepFit(1e6 + p * slopeGap, 40 - slopeGap, s);
+    Crossing c = crossing(first, second);
+    ASSERT_TRUE(c.pixels && c.low && c.deltaLow) << z;
+    EXPECT_NEAR(*c.pixels, p, 1e-6 * p);
+    EXPECT_NEAR(c.slopeDifference / c.slopeDifferenceSe, z, 1e-9);
+    // The bounds are the set where the t-statistic stays within t.
+    double t = tQuantile(0.95, c.degreesOfFreedom);
+    double vN = first.aSe * first.aSe + second.aSe * second.aSe, vD = 2 * first.bSe * first.bSe;
+    auto edges = fiellerEdgesByScan(second.a - first.a, c.slopeDifference, vN, vD, -2 * first.covAb, t, -4e7, 4e7);
+    ASSERT_EQ(edges.size(), 2u);
+    EXPECT_NEAR(*c.low, edges[0], 1e-6 * p);
+    EXPECT_NEAR(*c.high, edges[1], 1e-6 * p);
+    nlohmann::json j = toJson(c, "forward", "deferred");
+    if (z < 3) {
+      EXPECT_GT(*c.deltaLow, 0);
+      EXPECT_LT(*c.deltaHigh, c.rangeHigh);
+      EXPECT_LE(*c.low, 0);
+      EXPECT_EQ(c.kind, CrossingKind::NotSignificant);
+      EXPECT_EQ(j["kind"], "no_significant_crossing");
+      EXPECT_EQ(j["significant"], false);
+      EXPECT_TRUE(j["lower_below"].is_null());
+      EXPECT_TRUE(j["lower_throughout"].is_null());
+      EXPECT_NE(j["why"].get<std::string>().find("0 pixels or below"), std::string::npos) << j["why"];
+    } else {
+      EXPECT_GT(*c.low, c.rangeLow);
+      EXPECT_EQ(c.kind, CrossingKind::Crosses);
+      EXPECT_EQ(j["kind"], "crosses");
+    }
+  }
+}
+
+// An interval beyond the measured range on both sides is no crossing either,
+// even with the estimate inside the range and the interval above 0.
+TEST(CrossoverCrossing, IntervalBeyondBothEndsIsNotSignificant) {
+  LinearFit first = sweepFit(1e6, 40, 1e6);
+  first.minPixels = 2.5e6;  // a narrow common range around the crossing
+  first.maxPixels = 3.5e6;
+  double slopeGap = 4.0 * std::sqrt(2.0) * first.bSe;
+  LinearFit second = sweepFit(1e6 + 3e6 * slopeGap, 40 - slopeGap, 1e6);
+  Crossing c = crossing(first, second);
+  ASSERT_TRUE(c.low && c.high);
+  EXPECT_GT(*c.low, 0);
+  EXPECT_LT(*c.low, c.rangeLow);
+  EXPECT_GT(*c.high, c.rangeHigh);
+  EXPECT_EQ(c.kind, CrossingKind::NotSignificant);
+  EXPECT_NE(c.why.find("both sides"), std::string::npos) << c.why;
 }
 
 TEST(CrossoverCrossing, Resolution169) {

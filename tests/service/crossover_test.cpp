@@ -175,14 +175,21 @@ TEST_F(CrossoverRoute, CrossingsWhereConstructed) {
   EXPECT_NEAR(dv["resolution"]["width"].get<double>(), 1193, 40);
   EXPECT_NEAR(dv["resolution"]["height"].get<double>(), 671, 25);
   EXPECT_EQ(dv["resolution_ci"].size(), 2u);
-  EXPECT_EQ(dv["interval_method"], "delta");
+  EXPECT_EQ(dv["interval_method"], "fieller");
+  EXPECT_EQ(dv["significant"], true);
   EXPECT_EQ(dv["degrees_of_freedom"], 16);
   EXPECT_EQ(dv["scene"], "atrium");
 
+  // Built to cross at 100,000 pixels, below 640x360, with slopes 5 per
+  // pixel apart: the estimate lies below the range, but Fieller's interval
+  // reaches into it, so that deferred is lower throughout is not established.
   const json& df = crossing(body, "deferred", "forward");
-  EXPECT_EQ(df["kind"], "outside_range") << df.dump();
-  EXPECT_EQ(df["lower_throughout"], "deferred");
+  EXPECT_EQ(df["kind"], "no_significant_crossing") << df.dump();
+  EXPECT_EQ(df["significant"], false);
+  EXPECT_TRUE(df["lower_throughout"].is_null());
   EXPECT_LT(df["pixels"].get<double>(), 640.0 * 360.0);
+  EXPECT_GT(df["pixels_ci"][1].get<double>(), 640.0 * 360.0);
+  EXPECT_NE(df["why"].get<std::string>().find("reaches into it"), std::string::npos) << df.dump();
 
   const json& vf = crossing(body, "visbuffer", "forward");
   EXPECT_EQ(vf["kind"], "crosses") << vf.dump();

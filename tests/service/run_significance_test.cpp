@@ -5,12 +5,15 @@
 // own offsets widen the interval by the spread of their medians (computed
 // here independently), and runs without per-frame times or with zero pass
 // times say why instead of failing.
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "../store/store_fixture.hpp"
+#include "reports/frame_time.hpp"
 #include "reports/run_significance.hpp"
 
 namespace {
@@ -28,7 +31,9 @@ struct RunShape {
   bool passZero = false;     // the "lights" pass reads 0 ms in every frame
   bool perFrame = true;      // store frame_ms_frames and gpu_ms_frames
   double lightsCount = 1000; // the lights pass's counter
-  int firstCamera = 0;       // cameras firstCamera .. firstCamera + kCameras - 1
+  int firstCamera = 0;       // cameras firstCamera .. firstCamera + cameras - 1
+  int cameras = kCameras;
+  int frames = kFrames;
 };
 
 // Lognormal frame times around 4 ms + 1 ms per camera index (sigma of log
@@ -36,9 +41,9 @@ struct RunShape {
 json runOf(std::mt19937_64& rng, const RunShape& shape) {
   std::lognormal_distribution<double> noise(0.0, 0.05);
   std::vector<json> samples;
-  for (int c = shape.firstCamera; c < shape.firstCamera + kCameras; ++c) {
+  for (int c = shape.firstCamera; c < shape.firstCamera + shape.cameras; ++c) {
     std::vector<double> frames, gbuffer, lights;
-    for (int f = 0; f < kFrames; ++f) {
+    for (int f = 0; f < shape.frames; ++f) {
       double t = (4.0 + c) * noise(rng) * shape.scale;
       frames.push_back(t);
       gbuffer.push_back(0.3 * t);
@@ -46,7 +51,7 @@ json runOf(std::mt19937_64& rng, const RunShape& shape) {
     }
     auto median = [](std::vector<double> v) {
       std::sort(v.begin(), v.end());
-      return 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
     };
     json g = st::makePass("gbuffer", median(gbuffer), 1000, {st::makeCounter("gbuffer.normal", "write", 500, 4000)});
     json l = st::makePass("lights", median(lights), 1000,
@@ -57,7 +62,7 @@ json runOf(std::mt19937_64& rng, const RunShape& shape) {
     }
     json s = st::makeSample(c, median(frames), {g, l});
     s["camera"]["eye"] = {double(c), 2.0, 3.0};
-    s["frames"] = kFrames;
+    s["frames"] = shape.frames;
     if (shape.perFrame) s["frame_ms_frames"] = frames;
     samples.push_back(std::move(s));
   }
@@ -201,13 +206,14 @@ TEST_F(RunSignificance, ChangedCounterIsTheOneChangeReported) {
   // The sample bytes (every counter's bytes) and the lights line change; the gbuffer write does not.
   ASSERT_EQ(s->countChanges.size(), 2u);
   EXPECT_EQ(s->countChanges[0].line, "total");
-  EXPECT_DOUBLE_EQ(s->countChanges[0].b - s->countChanges[0].a, kCameras * 200.0 * 8);
+  // Per frame, as every other view shows bytes: the mean over the cameras, not their sum.
+  EXPECT_DOUBLE_EQ(s->countChanges[0].b - s->countChanges[0].a, 200.0 * 8);
   EXPECT_EQ(s->countChanges[1].line, "lights/gbuffer.normal read");
-  EXPECT_DOUBLE_EQ(s->countChanges[1].a, kCameras * 1000.0);
-  EXPECT_DOUBLE_EQ(s->countChanges[1].b, kCameras * 1200.0);
+  EXPECT_DOUBLE_EQ(s->countChanges[1].a, 1000.0);
+  EXPECT_DOUBLE_EQ(s->countChanges[1].b, 1200.0);
   json j = tally::reports::toJson(*s);
   EXPECT_EQ(j["counts"]["verdict"], "changed");
-  EXPECT_EQ(j["counts"]["changes"][1]["delta"], kCameras * 200.0);
+  EXPECT_EQ(j["counts"]["changes"][1]["delta"], 200.0);
 }
 
 // Five captures of one configuration, each with its own offset (sigma of log
@@ -238,30 +244,88 @@ TEST_F(RunSignificance, RepeatedCapturesWidenByTheSpreadOfTheirMedians) {
   std::vector<int64_t> got = across->runs;
   std::sort(got.begin(), got.end());
   EXPECT_EQ(got, expectedRuns);
-  EXPECT_EQ(across->degreesOfFreedom, 3u);
-  // The same standard deviation from the stored samples' own frames.
-  std::vector<double> logs;
+  // One cell per camera and figure (the frame and the passes gbuffer and
+  // lights): 3 x 3 cells of 4 captures, 3 degrees of freedom each.
+  EXPECT_EQ(across->cells, 9u);
+  EXPECT_EQ(across->captures, 4u);
+  EXPECT_EQ(across->degreesOfFreedom, 27u);
+  // The same standard deviation from the stored samples' own per-frame times.
+  std::map<std::string, std::vector<double>> cells;
+  auto logMedian = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    size_t n = v.size();
+    return std::log(n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
+  };
   for (int i = 0; i < 4; ++i) {
-    std::vector<double> pooledFrames;
     auto rows = store_->runs().samples(ids[i]);
     ASSERT_TRUE(rows);
     for (const auto& row : *rows) {
       auto sample = store_->runs().sample(row.id);
       ASSERT_TRUE(sample && *sample);
-      pooledFrames.insert(pooledFrames.end(), (**sample).row.frameMsFrames.begin(), (**sample).row.frameMsFrames.end());
+      std::string camera = std::to_string(row.cameraIndex);
+      cells[camera + " frame"].push_back(logMedian((**sample).row.frameMsFrames));
+      for (const auto& pass : (**sample).passes) cells[camera + " " + pass.name].push_back(logMedian(pass.gpuMsFrames));
     }
-    std::sort(pooledFrames.begin(), pooledFrames.end());
-    size_t n = pooledFrames.size();
-    logs.push_back(std::log(0.5 * (pooledFrames[n / 2 - 1] + pooledFrames[n / 2])));
   }
-  double mean = (logs[0] + logs[1] + logs[2] + logs[3]) / 4, ss = 0;
-  for (double l : logs) ss += (l - mean) * (l - mean);
-  EXPECT_NEAR(across->logSd, std::sqrt(ss / 3), 1e-12);
+  ASSERT_EQ(cells.size(), 9u);
+  double ss = 0;
+  for (const auto& [key, logs] : cells) {
+    double mean = (logs[0] + logs[1] + logs[2] + logs[3]) / 4;
+    for (double l : logs) ss += (l - mean) * (l - mean);
+  }
+  EXPECT_NEAR(across->logSd, std::sqrt(ss / 27), 1e-12);
+  // Four captures bound the noise: the verdict says nothing about it.
+  EXPECT_TRUE(widened->frame->noiseNote.empty()) << widened->frame->noiseNote;
   EXPECT_GT(widened->frame->time.interval.widening, 1.0);
   EXPECT_LT(widened->frame->time.interval.lower, frames->frame->time.interval.lower);
   EXPECT_GT(widened->frame->time.interval.upper, frames->frame->time.interval.upper);
   // The p-value stays the frames' own.
   EXPECT_DOUBLE_EQ(widened->frame->time.test.pValue, frames->frame->time.test.pValue);
+}
+
+// Two captures of one configuration that differ by 35% (noisy, as on a busy
+// machine) and a third 10x slower. One degree of freedom would put t at 12.7
+// and the widened interval past 10x; pooled over the 3 cameras and 3 figures
+// the spread has 9, and the slower capture is called slower, with a word that
+// two captures are too few to bound the noise.
+TEST_F(RunSignificance, TwoNoisyRepeatsStillShowATenfoldSlowdown) {
+  int64_t first = store(runOf(rng_, {}));
+  int64_t second = store(runOf(rng_, {.scale = 1.35}));
+  int64_t slow = store(runOf(rng_, {.scale = 10}));
+  auto s = runSignificance(*store_, second, slow);
+  ASSERT_TRUE(s && s->frame) << (s ? s->frameMissing : s.error());
+  const auto& across = s->frame->acrossCapture;
+  ASSERT_TRUE(across);
+  std::vector<int64_t> runs = across->runs;
+  std::sort(runs.begin(), runs.end());
+  EXPECT_EQ(runs, (std::vector<int64_t>{first, second}));
+  EXPECT_EQ(across->captures, 2u);
+  EXPECT_EQ(across->degreesOfFreedom, 9u);
+  // What a single degree of freedom would have done: a half-width past log 10.
+  EXPECT_GT(tally::analysis::acrossCaptureHalfWidth(across->logSd, 2, 0.95), std::log(10.0));
+  EXPECT_EQ(s->frame->time.verdict, Verdict::Slower) << s->frame->time.reason;
+  EXPECT_GT(s->frame->time.interval.lower, 1.0);
+  for (const auto& pass : s->passes) EXPECT_EQ(pass.time.verdict, Verdict::Slower) << pass.figure;
+  EXPECT_NE(s->frame->time.reason.find("only 2 repeated captures: too few to bound"), std::string::npos)
+      << s->frame->time.reason;
+  json j = tally::reports::toJson(*s);
+  EXPECT_EQ(j["frame"]["noise_note"], s->frame->noiseNote);
+  EXPECT_EQ(j["frame"]["across_capture"]["captures"], 2);
+  EXPECT_EQ(j["frame"]["across_capture"]["cells"], 9);
+
+  // Without any repeat of either configuration the verdict says so too.
+  json fewLights = runOf(rng_, {}), moreLights = runOf(rng_, {.scale = 10});
+  fewLights["lights"] = 100;  // two more configurations, each captured once
+  moreLights["lights"] = 200;
+  auto alone = runSignificance(*store_, store(fewLights), store(moreLights));
+  ASSERT_TRUE(alone && alone->frame);
+  EXPECT_FALSE(alone->frame->acrossCapture);
+  EXPECT_NE(alone->frame->time.reason.find("capture-to-capture noise is not bounded"), std::string::npos)
+      << alone->frame->time.reason;
+  // Not sought: nothing said.
+  auto framesAlone = runSignificance(*store_, slow, first, framesOnly());
+  ASSERT_TRUE(framesAlone && framesAlone->frame);
+  EXPECT_TRUE(framesAlone->frame->noiseNote.empty());
 }
 
 TEST_F(RunSignificance, RunsWithoutPerFrameTimesSayWhy) {
@@ -274,6 +338,18 @@ TEST_F(RunSignificance, RunsWithoutPerFrameTimesSayWhy) {
   EXPECT_TRUE(s->passes.empty());
   EXPECT_EQ(s->passesMissing.size(), 2u);
   EXPECT_FALSE(s->countsChanged());  // counts still compare
+}
+
+TEST_F(RunSignificance, ARunOfOneFrameSaysSo) {
+  int64_t a = store(runOf(rng_, {.cameras = 1, .frames = 1}));
+  int64_t b = store(runOf(rng_, {.cameras = 1}));
+  auto s = runSignificance(*store_, a, b, framesOnly());
+  ASSERT_TRUE(s) << s.error();
+  EXPECT_FALSE(s->frame);
+  EXPECT_EQ(s->frameMissing, "sample A has 1 frame time; a comparison needs at least 2");
+  auto reversed = runSignificance(*store_, b, a, framesOnly());
+  ASSERT_TRUE(reversed) << reversed.error();
+  EXPECT_EQ(reversed->frameMissing, "sample B has 1 frame time; a comparison needs at least 2");
 }
 
 TEST_F(RunSignificance, ZeroPassTimesAreReportedNotFatal) {
@@ -300,6 +376,51 @@ TEST_F(RunSignificance, RunsWithoutACommonCameraAreIncomparable) {
   auto missing = runSignificance(*store_, a, 9999);
   ASSERT_FALSE(missing);
   EXPECT_EQ(missing.error(), "no run 9999");
+}
+
+}  // namespace
+
+namespace {
+
+using tally::reports::runFrameTime;
+using tally::store::SampleFrameTimes;
+
+// The one frame time of a run: the median of every frame of every sample,
+// with the order-statistic interval; the median of the samples' medians,
+// labelled, where a sample has no per-frame times; nothing without samples.
+TEST(RunFrameTime, MedianOfEveryFrameOrOfTheSamples) {
+  // 1..10 and 11..20 ms: pooled median 10.5, k = floor(10 - 0.98 sqrt(20)) = 5.
+  std::vector<SampleFrameTimes> samples(2);
+  for (int f = 1; f <= 10; ++f) {
+    samples[0].frames.push_back(f);
+    samples[1].frames.push_back(10 + f);
+  }
+  samples[0].frameMs = 5.5;
+  samples[1].frameMs = 15.5;
+  auto t = runFrameTime(samples);
+  EXPECT_EQ(t.source, "frames");
+  EXPECT_EQ(t.frames, 20u);
+  EXPECT_EQ(t.median, 10.5);
+  EXPECT_EQ(t.lower, 5.0);   // the 5th smallest
+  EXPECT_EQ(t.upper, 16.0);  // the 16th
+  // A third camera of one frame, 40 ms: the mean of the camera medians
+  // (20.33) is pulled far above the median of the frames (11).
+  samples.push_back({40.0, {40.0}});
+  auto skewed = runFrameTime(samples);
+  EXPECT_EQ(skewed.median, 11.0);
+  // Without the frames of one sample: the median of the samples' medians.
+  samples[2].frames.clear();
+  auto fallback = runFrameTime(samples);
+  EXPECT_EQ(fallback.source, "samples");
+  EXPECT_EQ(fallback.median, 15.5);
+  EXPECT_FALSE(fallback.lower);
+  EXPECT_EQ(fallback.frames, 0u);
+  json j = tally::reports::toJson(fallback);
+  EXPECT_EQ(j["source"], "samples");
+  EXPECT_TRUE(j["lower"].is_null());
+  auto none = runFrameTime({});
+  EXPECT_EQ(none.source, "none");
+  EXPECT_FALSE(none.median);
 }
 
 }  // namespace
