@@ -23,7 +23,7 @@ export function pooledFrameMedian(details) {
 export function frameTime(run, details) {
   const m = details ? pooledFrameMedian(details) : null;
   if (m !== null) return { value: m, statistic: 'median' };
-  if (typeof run.median_frame_ms === 'number') return { value: run.median_frame_ms, statistic: 'median' };
+  if (typeof run.frame_ms_median === 'number') return { value: run.frame_ms_median, statistic: 'median' };
   return { value: run.mean_frame_ms, statistic: 'mean' };
 }
 

@@ -72,7 +72,12 @@ function fitOverlay(answer, run) {
   return { datasets, marks };
 }
 
-const kCrossingText = { crosses: 'crosses', outside_range: 'no crossing in range', parallel: 'parallel within error' };
+const kCrossingText = {
+  crosses: 'crosses',
+  outside_range: 'no crossing in range',
+  parallel: 'parallel within error',
+  no_significant_crossing: 'no significant crossing',
+};
 const kMetricText = { bytes: 'Bytes', frame_ms: 'Frame time' };
 const resolutionText = (r) => (r ? `${r.width}×${r.height}` : '–');
 
