@@ -13,6 +13,7 @@
 // recognises.
 #include <libpq-fe.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -39,15 +40,7 @@ class PgStatement final : public StatementImpl {
 
   void bindNull(int index) override { slot(index).reset(); }
   void bindInt(int index, int64_t value) override { slot(index) = Value{std::to_string(value), false}; }
-  void bindDouble(int index, double value) override {
-    char text[32];
-    auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
-    (void)ec;
-    std::string s(text, end);
-    if (std::isnan(value)) s = "NaN";
-    if (std::isinf(value)) s = value > 0 ? "Infinity" : "-Infinity";
-    slot(index) = Value{std::move(s), false};
-  }
+  void bindDouble(int index, double value) override { slot(index) = Value{postgresDoubleText(value), false}; }
   void bindText(int index, std::string_view text) override { slot(index) = Value{std::string(text), false}; }
   void bindBlob(int index, std::span<const uint8_t> blob) override {
     slot(index) = Value{std::string(reinterpret_cast<const char*>(blob.data()), blob.size()), true};
@@ -146,6 +139,7 @@ class PgConnection final : public Connection {
   }
   int64_t changes() const override { return changes_; }
   std::string describe() const override { return redactUrl(url_); }
+  void copyIn(std::string_view copySql, std::string_view data) override;
 
   // Prepares pgSql once (per connection and re-connection); the statement's name.
   const std::string& prepared(const std::string& pgSql, std::string_view original) {
@@ -252,9 +246,44 @@ bool PgStatement::step() {
   return false;
 }
 
+void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
+  ensureConnected();
+  std::string sql(copySql);
+  PGresult* started = PQexec(conn_, sql.c_str());
+  if (!started || PQresultStatus(started) != PGRES_COPY_IN) {
+    finish(started, sql);  // throws with the server's reason
+    throw DbError(0, "", "PostgreSQL: " + sql + " did not start a copy");
+  }
+  PQclear(started);
+  // In pieces, so that libpq's buffer stays small whatever the batch.
+  constexpr size_t kPiece = size_t{1} << 20;
+  bool sent = true;
+  for (size_t at = 0; at < data.size() && sent; at += kPiece) {
+    size_t length = std::min(kPiece, data.size() - at);
+    sent = PQputCopyData(conn_, data.data() + at, static_cast<int>(length)) == 1;
+  }
+  if (PQputCopyEnd(conn_, sent ? nullptr : "the client failed to send the rows") != 1) sent = false;
+  // The command's own result, then nothing: every result is read so that the
+  // connection is ready for the next statement.
+  PGresult* result = PQgetResult(conn_);
+  PGresult* rest = nullptr;
+  while ((rest = PQgetResult(conn_)) != nullptr) PQclear(rest);
+  finish(result, sql);
+  if (!sent) throw DbError(0, "08006", "PostgreSQL: sending the rows of " + sql + " failed: " + trimmed(PQerrorMessage(conn_)));
+}
+
 void ignoreNotice(void*, const char*) {}
 
 }  // namespace
+
+std::string postgresDoubleText(double value) {
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "Infinity" : "-Infinity";
+  char text[32];
+  auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
+  (void)ec;
+  return std::string(text, end);
+}
 
 std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTimeoutSeconds) {
   // connect_timeout goes in as a keyword beside the URL (expand_dbname).

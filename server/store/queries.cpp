@@ -10,24 +10,24 @@ using nlohmann::json;
 
 namespace detail {
 
-const char* const kRunSelect =
-    "SELECT r.id, r.job_id, r.device_id, d.name, r.renderer, sc.name, sc.params, r.width, r.height, "
-    "r.counting, "
-    "r.lights, r.render_target_bytes, r.notes, r.created_at, "
-    "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.frame_ms) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.bytes) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.frame_ms_instrumented) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.overhead_ratio) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT COUNT(s.image_against) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT COUNT(*) FROM samples s WHERE s.run_id = r.id AND s.image_identical = 1), "
-    "(SELECT AVG(s.psnr) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT MIN(s.psnr) FROM samples s WHERE s.run_id = r.id), "
-    "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
-    "(SELECT AVG(s.footprint_bytes) FROM samples s WHERE s.run_id = r.id), "
-    "(SELECT AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = r.id), r.host, "
-    "(SELECT j.labels FROM jobs j WHERE j.id = r.job_id) "
-    "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id";
+std::string runSelect(std::string_view where) {
+  // The per-run sample aggregates in one pass over the run's samples (the
+  // samples-by-run index), grouped by run, instead of a correlated subquery
+  // per aggregate: one index walk per run, not eleven.
+  std::string sql =
+      "SELECT r.id, r.job_id, r.device_id, d.name, r.renderer, sc.name, sc.params, r.width, r.height, "
+      "r.counting, r.lights, r.render_target_bytes, r.notes, r.created_at, "
+      "COUNT(s.id), AVG(s.frame_ms), AVG(s.bytes), AVG(s.frame_ms_instrumented), AVG(s.overhead_ratio), "
+      "COUNT(s.image_against), COUNT(CASE WHEN s.image_identical = 1 THEN 1 END), AVG(s.psnr), MIN(s.psnr), "
+      "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
+      "AVG(s.footprint_bytes), AVG(s.footprint_requested_bytes), r.host, j.labels "
+      "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
+      "LEFT JOIN samples s ON s.run_id = r.id LEFT JOIN jobs j ON j.id = r.job_id ";
+  sql += where;
+  // Every other column is the grouped rows' own (their tables' keys).
+  sql += " GROUP BY r.id, d.id, sc.id, j.id";
+  return sql;
+}
 
 RunRow readRunRow(const Statement& statement) {
   RowReader row(statement);
@@ -191,7 +191,7 @@ std::vector<double> frameTimes(RowReader& row) {
 }
 
 std::optional<RunRow> findRunRow(Connection* db, int64_t runId) {
-  Statement query(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+  Statement query(db, detail::runSelect("WHERE r.id = ?1"));
   query.bind(1, runId);
   if (!query.step()) return std::nullopt;
   return detail::readRunRow(query);
@@ -210,10 +210,11 @@ Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
     // filter that the index cannot return in id order (a device or scene
     // name matching several ids) makes SQLite sort, and it computes every
     // result column, the per-run sample aggregates included, before it sorts.
-    std::string sql = std::string(detail::kRunSelect) + " WHERE r.id IN (SELECT r.id FROM runs r WHERE TRUE" +
-                      detail::runFilterSql(filter);
-    if (after) sql += " AND r.id < ?";
-    sql += " ORDER BY r.id DESC LIMIT ?) ORDER BY r.id DESC";
+    // One statement whatever the page size.
+    std::string ids = "WHERE r.id IN (SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
+    if (after) ids += " AND r.id < ?";
+    ids += " ORDER BY r.id DESC LIMIT ?)";
+    std::string sql = detail::runSelect(ids) + " ORDER BY r.id DESC";
     Statement query(db_, sql);
     int next = detail::bindRunFilter(query, filter, 1);
     if (after) query.bind(next++, *after);
