@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -93,6 +94,14 @@ std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTime
 // A double as the PostgreSQL connection sends it: the shortest text that
 // reads back as the same value; NaN and the infinities spelled as the server reads them.
 std::string postgresDoubleText(double value);
+// Sees every statement a PostgreSQL connection of this process executes, as
+// sent (its "$N" text) with its parameters' text (nullopt: NULL or a blob),
+// from the executing thread. For benchmarks that EXPLAIN what the store ran
+// (benchmarks/query_plans.cpp); an empty function stops it. Costs an
+// atomic load per statement while none is set.
+using StatementObserver =
+    std::function<void(const std::string& sql, const std::vector<std::optional<std::string>>& parameters)>;
+void observePostgresStatements(StatementObserver observer);
 // True for "postgresql://..." and "postgres://...".
 bool isPostgresUrl(std::string_view location);
 // The URL with its password, if any, replaced by "***", for logs and errors.

@@ -18,7 +18,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <atomic>
 #include <map>
+#include <mutex>
 
 #include "store/db.hpp"
 
@@ -32,6 +34,11 @@ std::string trimmed(const char* message) {
 }
 
 class PgConnection;
+
+// observePostgresStatements: the observer, and whether one is set (read first, without the lock).
+std::atomic<bool> gObserved{false};
+std::mutex gObserverMutex;
+StatementObserver gObserver;
 
 class PgStatement final : public StatementImpl {
  public:
@@ -224,6 +231,12 @@ PgStatement::PgStatement(PgConnection& db, std::string_view sql) : db_(db), sql_
 
 bool PgStatement::step() {
   if (!result_) {
+    if (gObserved.load(std::memory_order_relaxed)) {
+      std::vector<std::optional<std::string>> parameters;
+      for (const auto& v : values_) parameters.push_back(v && !v->binary ? std::optional(v->data) : std::nullopt);
+      std::lock_guard lock(gObserverMutex);
+      if (gObserver) gObserver(pgSql_, parameters);
+    }
     const std::string& name = db_.prepared(pgSql_, sql_);
     std::vector<const char*> data(values_.size(), nullptr);
     std::vector<int> lengths(values_.size(), 0), formats(values_.size(), 0);
@@ -275,6 +288,12 @@ void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
 void ignoreNotice(void*, const char*) {}
 
 }  // namespace
+
+void observePostgresStatements(StatementObserver observer) {
+  std::lock_guard lock(gObserverMutex);
+  gObserver = std::move(observer);
+  gObserved = static_cast<bool>(gObserver);
+}
 
 std::string postgresDoubleText(double value) {
   if (std::isnan(value)) return "NaN";
