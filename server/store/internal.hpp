@@ -62,9 +62,9 @@ std::string lostLease(Connection* db, const Lease& lease);
 // this order (a braced list reads them in order).
 Device readDevice(RowReader& row);
 
-// Run rows: runSelect("WHERE ...") (+ ORDER BY ...), read by readRunRow;
-// `where` names the runs through the alias r.
-std::string runSelect(std::string_view where);
+// Run rows: runSelect(db, "WHERE ...") (+ ORDER BY ...), read by
+// readRunRow; `where` names the runs through the alias r.
+std::string runSelect(const Connection& db, std::string_view where);
 RunRow readRunRow(const Statement& row);
 
 // "WHERE"-less clause list for a RunFilter (" AND ..." each, positional "?"),

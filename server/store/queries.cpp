@@ -10,22 +10,40 @@ using nlohmann::json;
 
 namespace detail {
 
-std::string runSelect(std::string_view where) {
-  // The per-run sample aggregates in one pass over the run's samples (the
-  // samples-by-run index), grouped by run, instead of a correlated subquery
-  // per aggregate: one index walk per run, not eleven.
+std::string runSelect(const Connection& db, std::string_view where) {
+  // Each run's sample aggregates in one pass over its samples (the
+  // samples-by-run index) instead of a correlated subquery per aggregate:
+  // one index walk per run, not eleven. PostgreSQL computes them in a
+  // LATERAL subquery, which keeps that walk per run in every plan (a
+  // generic plan, not knowing LIMIT's value, would otherwise hash the whole
+  // samples table); SQLite, which has no LATERAL, by grouping a join.
+  static const char* const kAggregates[] = {
+      "COUNT(s.id)",         "AVG(s.frame_ms)",        "AVG(s.bytes)",
+      "AVG(s.frame_ms_instrumented)", "AVG(s.overhead_ratio)", "COUNT(s.image_against)",
+      "COUNT(CASE WHEN s.image_identical = 1 THEN 1 END)", "AVG(s.psnr)", "MIN(s.psnr)",
+      "AVG(s.footprint_bytes)", "AVG(s.footprint_requested_bytes)"};
+  const bool lateral = db.engine() == Engine::Postgres;
+  auto aggregate = [&](size_t k) {
+    return lateral ? "a.a" + std::to_string(k) : std::string(kAggregates[k]);
+  };
   std::string sql =
       "SELECT r.id, r.job_id, r.device_id, d.name, r.renderer, sc.name, sc.params, r.width, r.height, "
-      "r.counting, r.lights, r.render_target_bytes, r.notes, r.created_at, "
-      "COUNT(s.id), AVG(s.frame_ms), AVG(s.bytes), AVG(s.frame_ms_instrumented), AVG(s.overhead_ratio), "
-      "COUNT(s.image_against), COUNT(CASE WHEN s.image_identical = 1 THEN 1 END), AVG(s.psnr), MIN(s.psnr), "
-      "r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, "
-      "AVG(s.footprint_bytes), AVG(s.footprint_requested_bytes), r.host, j.labels "
-      "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
-      "LEFT JOIN samples s ON s.run_id = r.id LEFT JOIN jobs j ON j.id = r.job_id ";
+      "r.counting, r.lights, r.render_target_bytes, r.notes, r.created_at";
+  for (size_t k = 0; k < 9; ++k) sql += ", " + aggregate(k);
+  sql += ", r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, " +
+         aggregate(9) + ", " + aggregate(10) +
+         ", r.host, j.labels FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
+         "LEFT JOIN jobs j ON j.id = r.job_id ";
+  if (lateral) {
+    sql += "CROSS JOIN LATERAL (SELECT ";
+    for (size_t k = 0; k < 11; ++k) sql += (k ? ", " : "") + std::string(kAggregates[k]) + " AS a" + std::to_string(k);
+    sql += " FROM samples s WHERE s.run_id = r.id) a ";
+  } else {
+    sql += "LEFT JOIN samples s ON s.run_id = r.id ";
+  }
   sql += where;
-  // Every other column is the grouped rows' own (their tables' keys).
-  sql += " GROUP BY r.id, d.id, sc.id, j.id";
+  // SQLite: every other column is the grouped rows' own (their tables' keys).
+  if (!lateral) sql += " GROUP BY r.id, d.id, sc.id, j.id";
   return sql;
 }
 
@@ -191,7 +209,7 @@ std::vector<double> frameTimes(RowReader& row) {
 }
 
 std::optional<RunRow> findRunRow(Connection* db, int64_t runId) {
-  Statement query(db, detail::runSelect("WHERE r.id = ?1"));
+  Statement query(db, detail::runSelect(*db, "WHERE r.id = ?1"));
   query.bind(1, runId);
   if (!query.step()) return std::nullopt;
   return detail::readRunRow(query);
@@ -214,7 +232,7 @@ Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
     std::string ids = "WHERE r.id IN (SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
     if (after) ids += " AND r.id < ?";
     ids += " ORDER BY r.id DESC LIMIT ?)";
-    std::string sql = detail::runSelect(ids) + " ORDER BY r.id DESC";
+    std::string sql = detail::runSelect(*db_, ids) + " ORDER BY r.id DESC";
     Statement query(db_, sql);
     int next = detail::bindRunFilter(query, filter, 1);
     if (after) query.bind(next++, *after);
