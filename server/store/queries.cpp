@@ -42,8 +42,9 @@ std::string runSelect(const Connection& db, std::string_view where) {
     sql += "LEFT JOIN samples s ON s.run_id = r.id ";
   }
   sql += where;
-  // SQLite: every other column is the grouped rows' own (their tables' keys).
-  if (!lateral) sql += " GROUP BY r.id, d.id, sc.id, j.id";
+  // SQLite: the other tables' columns are the run's own (joined on their
+  // keys); grouping by the run alone lets the walk in id order be the grouping.
+  if (!lateral) sql += " GROUP BY r.id";
   return sql;
 }
 
