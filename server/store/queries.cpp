@@ -230,9 +230,15 @@ Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
     // name matching several ids) makes SQLite sort, and it computes every
     // result column, the per-run sample aggregates included, before it sorts.
     // One statement whatever the page size.
-    std::string ids = "WHERE r.id IN (SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
-    if (after) ids += " AND r.id < ?";
-    ids += " ORDER BY r.id DESC LIMIT ?)";
+    std::string pageIds = "SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
+    if (after) pageIds += " AND r.id < ?";
+    pageIds += " ORDER BY r.id DESC LIMIT ?";
+    // PostgreSQL: the page's ids as an array computed once, so that every
+    // plan fetches the runs by key. With "IN (subquery)", a generic plan
+    // (which does not know LIMIT's value and guesses a tenth of the rows)
+    // hash-joins a scan of every run.
+    std::string ids = db_->engine() == Engine::Postgres ? "WHERE r.id = ANY(ARRAY(" + pageIds + "))"
+                                                         : "WHERE r.id IN (" + pageIds + ")";
     std::string sql = detail::runSelect(*db_, ids) + " ORDER BY r.id DESC";
     Statement query(db_, sql);
     int next = detail::bindRunFilter(query, filter, 1);
