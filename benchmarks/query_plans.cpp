@@ -166,6 +166,92 @@ Result<std::vector<PlannedStatement>> explain(const std::string& dbPath,
   return out;
 }
 
+namespace {
+
+struct PostgresRecording {
+  std::mutex mutex;
+  std::set<std::string> seen;
+  std::vector<RecordedStatement> statements;
+};
+
+PostgresRecording& postgresRecording() {
+  static PostgresRecording r;
+  return r;
+}
+
+// A parameter's text as an SQL literal (standard_conforming_strings: only quotes double).
+std::string literal(const std::optional<std::string>& value) {
+  if (!value) return "NULL";
+  std::string out = "'";
+  for (char c : *value) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+std::vector<std::string> postgresProblems(const std::string& line) {
+  static const std::regex kSeqScan(R"(Seq Scan on (\w+))");
+  static const std::set<std::string> kLarge = {"runs", "samples", "passes", "counters", "run_resources",
+                                               "screenshots"};
+  std::smatch match;
+  if (std::regex_search(line, match, kSeqScan) && kLarge.count(match[1])) {
+    return {"sequential scan of " + std::string(match[1]) + ": " + line};
+  }
+  return {};
+}
+
+}  // namespace
+
+void startRecordingPostgres() {
+  PostgresRecording& r = postgresRecording();
+  {
+    std::lock_guard lock(r.mutex);
+    r.seen.clear();
+    r.statements.clear();
+  }
+  store::observePostgresStatements([&r](const std::string& sql, const std::vector<std::optional<std::string>>& p) {
+    std::lock_guard lock(r.mutex);
+    if (r.seen.insert(sql).second) r.statements.push_back({sql, p});
+  });
+}
+
+std::vector<RecordedStatement> stopRecordingPostgres() {
+  store::observePostgresStatements({});
+  PostgresRecording& r = postgresRecording();
+  std::lock_guard lock(r.mutex);
+  return r.statements;
+}
+
+Result<std::vector<PlannedStatement>> explainPostgres(const std::string& url,
+                                                      const std::vector<RecordedStatement>& statements) {
+  std::vector<PlannedStatement> out;
+  try {
+    auto db = store::openPostgres(url);
+    for (const auto& recorded : statements) {
+      if (!isSelect(recorded.sql)) continue;
+      db->exec("PREPARE tally_explain AS " + recorded.sql);
+      std::string arguments;
+      for (const auto& value : recorded.parameters) arguments += (arguments.empty() ? "" : ", ") + literal(value);
+      PlannedStatement planned{recorded.sql, {}, {}};
+      for (const char* mode : {"force_custom_plan", "force_generic_plan"}) {
+        db->exec(std::string("SET plan_cache_mode = ") + mode);
+        planned.plan.push_back(std::string(mode == std::string("force_custom_plan") ? "plan for these values:"
+                                                                                     : "generic plan:"));
+        store::Statement explain(*db, "EXPLAIN EXECUTE tally_explain" +
+                                          (arguments.empty() ? std::string() : "(" + arguments + ")"));
+        while (explain.step()) {
+          std::string line = explain.getText(0);
+          for (auto& problem : postgresProblems(line)) planned.problems.push_back(std::move(problem));
+          planned.plan.push_back("  " + line);
+        }
+      }
+      db->exec("DEALLOCATE tally_explain; RESET plan_cache_mode");
+      out.push_back(std::move(planned));
+    }
+  } catch (const std::exception& e) {
+    return makeError(std::string("EXPLAIN on PostgreSQL: ") + e.what());
+  }
+  return out;
+}
+
 std::unique_ptr<ServerStatements> ServerStatements::connect(const std::string& url, std::string* why) {
   try {
     auto db = store::openPostgres(url);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,24 @@ struct PlannedStatement {
 // run for every selected row, not only for those LIMIT keeps.
 Result<std::vector<PlannedStatement>> explain(const std::string& dbPath,
                                               const std::vector<std::string>& sqls);
+
+// PostgreSQL: records the statements (their "$N" text and parameter values)
+// that this process's store connections execute between the two calls, one
+// per distinct text, in the order first run.
+struct RecordedStatement {
+  std::string sql;
+  std::vector<std::optional<std::string>> parameters;
+};
+void startRecordingPostgres();
+std::vector<RecordedStatement> stopRecordingPostgres();
+
+// EXPLAIN of each recorded SELECT on a connection of its own to `url`, with
+// the values it ran with: the plan chosen for those values (plan_cache_mode =
+// force_custom_plan) and the generic plan a prepared statement may switch to
+// after five runs (force_generic_plan). Problems: a sequential scan of runs
+// or of a table that grows with the samples, in either plan.
+Result<std::vector<PlannedStatement>> explainPostgres(const std::string& url,
+                                                      const std::vector<RecordedStatement>& statements);
 
 // PostgreSQL: what the server's pg_stat_statements view counts for one
 // database, every connection to it included, read over a connection of its

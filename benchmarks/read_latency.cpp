@@ -185,11 +185,14 @@ RouteFigures timeRoute(int port, const Options& options, const RouteBench& bench
 
 // PostgreSQL: the SELECTs one request (or one walk) of the route ran, with
 // what the server counted for them, most time first.
-Result<RoutePlan> serverStatementsOf(int port, ServerStatements& server, const RouteBench& bench) {
+Result<RoutePlan> serverStatementsOf(int port, const std::string& url, ServerStatements& server,
+                                     const RouteBench& bench) {
   HttpClient client(port);
   std::mt19937 random(7);
   auto before = server.snapshot();
+  startRecordingPostgres();
   UnitResult unit = bench.workload(client, random);
+  auto recorded = stopRecordingPostgres();
   auto ran = ServerStatements::difference(before, server.snapshot());
   if (!unit.error.empty()) return makeError(unit.error);
   double requests = static_cast<double>(std::max<size_t>(1, unit.ms.size()));
@@ -214,6 +217,10 @@ Result<RoutePlan> serverStatementsOf(int port, ServerStatements& server, const R
         static_cast<double>(e.blocksRead) / requests);
     plan.statements.push_back(PlannedStatement{e.query, {line}, {}});
   }
+  // The plans of the statements as they ran, with their values.
+  auto explained = explainPostgres(url, recorded);
+  if (!explained) return makeError(explained.error());
+  for (auto& statement : *explained) plan.statements.push_back(std::move(statement));
   return plan;
 }
 
@@ -366,7 +373,7 @@ int run(const Options& options) {
   bool failed = false;
   for (const auto& bench : benches) {
     if (postgres && !source.server) break;  // nothing to show
-    auto plan = postgres ? serverStatementsOf(port, *source.server, bench) : planRoute(port, path, bench);
+    auto plan = postgres ? serverStatementsOf(port, path, *source.server, bench) : planRoute(port, path, bench);
     if (!plan) {
       fail("plans of " + bench.route + ": " + plan.error());
       failed = true;

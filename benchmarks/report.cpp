@@ -82,15 +82,23 @@ void printServerStatements(const Report& report) {
     return;
   }
   std::printf(
-      "\nstatements per route (pg_stat_statements over one request, or one walk; no plans: PostgreSQL 15\n"
-      " cannot EXPLAIN a statement with parameters without their values):\n");
+      "\nstatements per route (pg_stat_statements over one request, or one walk), then the EXPLAIN of each\n"
+      " SELECT with the values it ran with, and its generic plan:\n");
   for (const auto& plan : report.plans) {
     std::printf("%s  [per request: %.0f shared buffers touched]\n", plan.route.c_str(),
                 plan.vmStepsPerRequest);
     for (const auto& statement : plan.statements) {
       std::printf("  %s\n", shortened(statement.sql).c_str());
       for (const auto& line : statement.plan) std::printf("      %s\n", line.c_str());
+      for (const auto& problem : statement.problems) std::printf("    PROBLEM: %s\n", problem.c_str());
     }
+  }
+  size_t problems = report.planProblems();
+  if (problems == 0) {
+    std::printf("query plans: ok (no sequential scan of runs, samples, passes, counters, run_resources or\n"
+                " screenshots, in the plans for the values run nor in the generic plans)\n");
+  } else {
+    std::printf("query plans: %zu problems\n", problems);
   }
 }
 
@@ -237,7 +245,7 @@ void printJson(const Report& report) {
               {"plan_problems", report.planProblems()},
               // PostgreSQL: store ms and the statements per route need pg_stat_statements.
               {"store_ms_measured", !report.postgres || report.serverStatementsMissing.empty()},
-              {"plans_checked", !report.postgres}};
+              {"plans_checked", !report.postgres || report.serverStatementsMissing.empty()}};
   std::printf("%s\n", out.dump(2).c_str());
 }
 

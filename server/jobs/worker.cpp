@@ -175,8 +175,30 @@ void Worker::wake() {
   {
     std::lock_guard lock(mutex_);
     woken_ = true;
+    if (waiter_) waiter_->interrupt();
   }
   cv_.notify_all();
+}
+
+// The waiter that posted jobs wake this worker through; opened again after a
+// failure (the database unreachable), meanwhile the worker polls every
+// JobWaiter::kRetryAfterLoss.
+store::JobWaiter* Worker::openWaiter(std::string& lastError) {
+  {
+    std::lock_guard lock(mutex_);
+    if (waiter_) return waiter_.get();
+  }
+  auto opened = store::JobWaiter::open(store_.location());  // without the lock: wake() must not wait on a connect
+  if (!opened) {
+    if (opened.error() != lastError) log(log::Level::kWarning, std::nullopt, "worker: " + opened.error() + "; polling");
+    lastError = opened.error();
+    return nullptr;
+  }
+  lastError.clear();
+  std::lock_guard lock(mutex_);
+  waiter_ = std::move(*opened);
+  if (woken_ || stopping_) waiter_->interrupt();
+  return waiter_.get();
 }
 
 void Worker::loop() {
@@ -185,7 +207,14 @@ void Worker::loop() {
   claimer.host = options_.host.name;
   claimer.device = options_.host.device;
   claimer.leaseMs = options_.lease.count();
+  std::string waiterError;
+  auto event = [this](WaitEvent e) {
+    if (options_.onWait) options_.onWait(e);
+  };
   while (!stopping_) {
+    store::JobWaiter* waiter = openWaiter(waiterError);
+    // Armed before the claim: a job posted after it wakes the wait below.
+    if (waiter) waiter->arm();
     auto claimed = store_.jobs().claim(claimer);
     if (!claimed) {
       log(log::Level::kError, std::nullopt, "worker: cannot claim a job: " + claimed.error());
@@ -193,10 +222,28 @@ void Worker::loop() {
       runJob(**claimed);
       continue;
     }
+    if (stopping_) break;
+    event(WaitEvent::kIdle);
+    if (waiter) {
+      store::JobWaiter::Wake why = waiter->wait(options_.idlePoll);
+      {
+        std::lock_guard lock(mutex_);
+        woken_ = false;
+      }
+      event(why == store::JobWaiter::Wake::kPosted    ? WaitEvent::kPosted
+            : why == store::JobWaiter::Wake::kTimeout ? WaitEvent::kPolled
+                                                      : WaitEvent::kInterrupted);
+      continue;
+    }
     std::unique_lock lock(mutex_);
-    cv_.wait_for(lock, options_.idlePoll, [this] { return woken_ || stopping_.load(); });
+    bool woken = cv_.wait_for(lock, std::min(options_.idlePoll, std::chrono::milliseconds(store::JobWaiter::kRetryAfterLoss)),
+                              [this] { return woken_ || stopping_.load(); });
     woken_ = false;
+    lock.unlock();
+    event(woken ? WaitEvent::kInterrupted : WaitEvent::kPolled);
   }
+  std::lock_guard lock(mutex_);
+  waiter_.reset();
 }
 
 namespace {

@@ -22,11 +22,17 @@
 
 #include "common/log.hpp"
 #include "common/result.hpp"
+#include "store/job_waiter.hpp"
 #include "store/store.hpp"
 
 namespace tally::jobs {
 
 struct ChildOptions;  // common/child_process.hpp
+
+// An idle worker's waits: it found nothing to claim and began waiting
+// (kIdle), then was woken by a posted job, by its fallback poll's timeout,
+// or by wake() or stop().
+enum class WaitEvent { kIdle, kPosted, kPolled, kInterrupted };
 
 struct WorkerOptions {
   std::string tallydPath;  // the executable run as `tallyd capture ...`
@@ -37,7 +43,14 @@ struct WorkerOptions {
   std::chrono::milliseconds deadline{std::chrono::minutes(30)};  // per job
   int maxAttempts = 3;              // a job interrupted this often fails on restart
   std::filesystem::path tempRoot;   // empty: std::filesystem::temp_directory_path()
-  std::chrono::milliseconds idlePoll{500};  // queue poll when not woken
+  // The fallback poll of an idle worker. Posted jobs wake it at once
+  // (store/job_waiter.hpp: LISTEN/NOTIFY on PostgreSQL, in-process on
+  // SQLite); the poll finds only what no announcement reached it for: a job
+  // posted by another process on the same SQLite file, or one posted while
+  // its PostgreSQL listener was reconnecting (then it polls every second).
+  std::chrono::milliseconds idlePoll{std::chrono::seconds(30)};
+  // How each idle wait began and ended (tests and benchmarks); may be empty.
+  std::function<void(WaitEvent)> onWait;
   std::function<void(const log::Event&)> log;  // default: log::write (stderr, one line per event)
   // Called as each job leaves the worker (not when stop() leaves it running).
   std::function<void(const struct JobOutcome&)> onFinished;
@@ -90,7 +103,7 @@ class Worker {
   // Stops after the current step; a running child is killed and its job
   // queued again with the reason (Store::requeueJob), never left running.
   void stop();
-  // A job was queued: look now instead of at the next poll.
+  // Look at the queue now (a job was queued, or the daemon stops).
   void wake();
 
   // A host instance id: MACHINE:PID:RANDOM; and whether one is a dead
@@ -100,6 +113,7 @@ class Worker {
 
  private:
   void loop();
+  store::JobWaiter* openWaiter(std::string& lastError);
   void heartbeatLoop();
   void runJob(const store::Job& job);
   // The daemon is stopping: the job goes back to the queue with the reason
@@ -129,6 +143,7 @@ class Worker {
   std::mutex mutex_;
   std::condition_variable cv_;
   bool woken_ = false;
+  std::unique_ptr<store::JobWaiter> waiter_;  // set and reset by loop(), under mutex_
 };
 
 }  // namespace tally::jobs

@@ -213,10 +213,9 @@ Result<std::vector<RunRow>> Alerts::configurationRuns(int64_t baselineId, int li
   std::lock_guard lock(mutex_);
   return guarded<std::vector<RunRow>>("configurationRuns", [&]() -> Result<std::vector<RunRow>> {
     Transaction tx(db_, Transaction::Kind::Read);
-    Statement query(db_, std::string(detail::kRunSelect) +
-                             " WHERE r.id IN (SELECT r.id FROM runs r JOIN baselines b ON " +
-                             kSameConfiguration +
-                             " WHERE b.id = ?1 ORDER BY r.id DESC LIMIT ?2) ORDER BY r.id");
+    Statement query(db_, detail::runSelect(*db_, std::string("WHERE r.id IN (SELECT r.id FROM runs r JOIN baselines b ON ") +
+                                           kSameConfiguration + " WHERE b.id = ?1 ORDER BY r.id DESC LIMIT ?2)") +
+                             " ORDER BY r.id");
     query.bind(1, baselineId).bind(2, limit);
     std::vector<RunRow> out;
     while (query.step()) out.push_back(detail::readRunRow(query));
@@ -242,7 +241,7 @@ std::vector<Candidate> candidates(Connection* db, Statement& pick) {
   while (pick.step()) out.push_back({pick.getInt(0), std::nullopt, std::nullopt});
   Statement findBase(db, std::string("SELECT b.id FROM baselines b JOIN runs r ON ") + kSameConfiguration +
                              " WHERE r.id = ?1 AND b.status = 'active' AND b.run_id < r.id");
-  Statement runRow(db, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+  Statement runRow(db, detail::runSelect(*db, "WHERE r.id = ?1"));
   for (auto& c : out) {
     findBase.reset();
     findBase.bind(1, c.runId);

@@ -134,7 +134,7 @@ Result<Comparison> Runs::compare(const std::vector<int64_t>& runIds) {
     Comparison out;
     std::vector<RunTotals> totals;
     for (size_t i = 0; i < runIds.size(); ++i) {
-      Statement query(db_, std::string(detail::kRunSelect) + " WHERE r.id = ?1");
+      Statement query(db_, detail::runSelect(*db_, "WHERE r.id = ?1"));
       query.bind(1, runIds[i]);
       if (!query.step())
         return makeError("runs[" + std::to_string(i) + "]: run " + std::to_string(runIds[i]) + " not found");

@@ -89,6 +89,10 @@ thread_local Fault tLastFault = Fault::kNone;
 Fault lastFault() { return tLastFault; }
 void setLastFault(Fault fault) { tLastFault = fault; }
 
+void Connection::copyIn(std::string_view copySql, std::string_view) {
+  throw DbError(0, "", "this engine has no COPY: " + std::string(copySql.substr(0, 120)));
+}
+
 bool isPostgresUrl(std::string_view location) {
   return location.starts_with("postgresql://") || location.starts_with("postgres://");
 }

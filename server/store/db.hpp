@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -80,6 +81,9 @@ class Connection {
   virtual int64_t changes() const = 0;
   // What the connection is, for messages: the file path, or the server without the password.
   virtual std::string describe() const = 0;
+  // PostgreSQL: runs `copySql` (COPY ... FROM STDIN) and sends `data`, rows
+  // in COPY's text format. SQLite has no COPY: it throws.
+  virtual void copyIn(std::string_view copySql, std::string_view data);
 };
 
 // Opens a SQLite file (created when create is set), with extended result codes
@@ -87,6 +91,17 @@ class Connection {
 std::unique_ptr<Connection> openSqlite(const std::string& path, bool create, int busyTimeoutMs);
 // Opens a PostgreSQL connection from a libpq URL (postgresql://user@host:port/db?...).
 std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTimeoutSeconds = 10);
+// A double as the PostgreSQL connection sends it: the shortest text that
+// reads back as the same value; NaN and the infinities spelled as the server reads them.
+std::string postgresDoubleText(double value);
+// Sees every statement a PostgreSQL connection of this process executes, as
+// sent (its "$N" text) with its parameters' text (nullopt: NULL or a blob),
+// from the executing thread. For benchmarks that EXPLAIN what the store ran
+// (benchmarks/query_plans.cpp); an empty function stops it. Costs an
+// atomic load per statement while none is set.
+using StatementObserver =
+    std::function<void(const std::string& sql, const std::vector<std::optional<std::string>>& parameters)>;
+void observePostgresStatements(StatementObserver observer);
 // True for "postgresql://..." and "postgres://...".
 bool isPostgresUrl(std::string_view location);
 // The URL with its password, if any, replaced by "***", for logs and errors.

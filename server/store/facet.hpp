@@ -4,6 +4,7 @@
 #pragma once
 
 #include <mutex>
+#include <string>
 
 #include "store/db.hpp"
 
@@ -12,8 +13,9 @@ namespace tally::store {
 class Store;
 
 struct Shared {
-  explicit Shared(Connection* connection) : db(connection) {}
+  Shared(Connection* connection, std::string where) : db(connection), location(std::move(where)) {}
   Connection* db;
+  std::string location;  // as given to Store::open: the job queue's wake-ups are keyed by it
   std::mutex mutex;  // one call at a time on this connection
 };
 
@@ -25,10 +27,11 @@ class Facet {
   Facet& operator=(const Facet&) = delete;
 
  protected:
-  explicit Facet(Shared& shared) : db_(shared.db), mutex_(shared.mutex) {}
+  explicit Facet(Shared& shared) : db_(shared.db), mutex_(shared.mutex), location_(shared.location) {}
   ~Facet() = default;
   Connection* db_;
   std::mutex& mutex_;
+  const std::string& location_;
 };
 
 }  // namespace tally::store

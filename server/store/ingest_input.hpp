@@ -1,14 +1,19 @@
-// What the ingest's files share to read a result (ingest.cpp, sweep_frame.cpp):
+// What the ingest's files share to read a result (ingest.cpp, ingest_capture.cpp, sweep_frame.cpp):
 // bad input throws IngestError naming the JSON path, and the ingest's
 // transaction then rolls back.
 #pragma once
 
+#include <cstdint>
+#include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "common/json_fields.hpp"
+#include "store/db.hpp"
 
 namespace tally::store::detail {
 
@@ -27,5 +32,15 @@ inline constexpr json_fields::Members kMembers{[](const Error& error) { throw In
 // sweeps list and the dashboard's charts rely on, whatever the sweep.
 // Throws IngestError naming the first bad field.
 void checkSweep(const nlohmann::json& result);
+
+// The result's "device" as a devices row: the stored one, or inserted (or
+// updated) now; inside the caller's transaction.
+int64_t insertDevice(Connection* db, const nlohmann::json& result);
+
+// A capture's runs for a job, replacing earlier ones; inside the caller's
+// transaction (ingest_capture.cpp). The number of runs stored.
+int64_t storeCapture(Connection* db, int64_t jobId, const nlohmann::json& result,
+                     const std::map<std::string, std::vector<uint8_t>>& screenshots,
+                     const std::optional<std::string>& host);
 
 }  // namespace tally::store::detail

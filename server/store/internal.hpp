@@ -4,6 +4,7 @@
 #include <exception>
 #include <mutex>
 #include <string>
+#include <string_view>
 
 #include "common/result.hpp"
 #include "store/db.hpp"
@@ -61,8 +62,9 @@ std::string lostLease(Connection* db, const Lease& lease);
 // this order (a braced list reads them in order).
 Device readDevice(RowReader& row);
 
-// Run rows: kRunSelect (+ WHERE ...) read by readRunRow.
-extern const char* const kRunSelect;
+// Run rows: runSelect(db, "WHERE ...") (+ ORDER BY ...), read by
+// readRunRow; `where` names the runs through the alias r.
+std::string runSelect(const Connection& db, std::string_view where);
 RunRow readRunRow(const Statement& row);
 
 // "WHERE"-less clause list for a RunFilter (" AND ..." each, positional "?"),

@@ -1,6 +1,7 @@
 // The persistent job queue: transitions queued -> running -> done | failed,
 // and queued | running -> cancelled. Each transition is one write transaction.
 #include "store/internal.hpp"
+#include "store/job_waiter.hpp"
 
 namespace tally::store {
 
@@ -52,6 +53,15 @@ std::optional<Job> findJob(Connection* db, int64_t id) {
 }
 
 // Reads the single row of an "... RETURNING" statement and finishes it.
+// Commits a transaction that made jobs claimable, announcing them to idle
+// workers (job_waiter.hpp): PostgreSQL's NOTIFY is sent inside the
+// transaction and heard at its commit; SQLite's announcement, in-process, follows the commit.
+void commitAnnouncing(Transaction& tx, Connection* db, const std::string& location) {
+  if (db->engine() == Engine::Postgres) db->exec(std::string("NOTIFY ") + kJobChannel);
+  tx.commit();
+  if (db->engine() == Engine::Sqlite) detail::announceJobsInProcess(location);
+}
+
 std::optional<Job> returnedJob(Statement& statement) {
   std::optional<Job> job;
   if (statement.step()) job = detail::readJob(statement);
@@ -147,7 +157,7 @@ Result<CreatedJob> JobQueue::create(const json& spec, std::optional<std::string>
       setLabels.bind(1, kept).bind(2, out.job.id).run();
     }
     out.created = true;
-    tx.commit();
+    commitAnnouncing(tx, db_, location_);
     return out;
   });
 }
@@ -321,7 +331,11 @@ Result<Recovery> JobQueue::requeueExpired() {
       freeHost.reset();
       freeHost.bind(1, job.host).bind(2, job.id).run();
     }
-    tx.commit();
+    if (recovery.requeued.empty()) {
+      tx.commit();
+    } else {
+      commitAnnouncing(tx, db_, location_);
+    }
     return recovery;
   });
 }
@@ -419,7 +433,7 @@ Result<bool> JobQueue::requeue(const Lease& lease, const std::string& reason) {
     requeue.bind(1, lease.jobId).bind(2, errors).run();
     Statement host(db_, "UPDATE hosts SET current_job = NULL WHERE name = ?1 AND current_job = ?2");
     host.bind(1, lease.host).bind(2, lease.jobId).run();
-    tx.commit();
+    commitAnnouncing(tx, db_, location_);
     return true;
   });
 }
@@ -520,7 +534,11 @@ Result<Recovery> JobQueue::requeueInterrupted(int maxAttempts, std::optional<std
         recovery.failed.push_back(id);
       }
     }
-    tx.commit();
+    if (recovery.requeued.empty()) {
+      tx.commit();
+    } else {
+      commitAnnouncing(tx, db_, location_);
+    }
     return recovery;
   });
 }

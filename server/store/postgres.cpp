@@ -13,11 +13,14 @@
 // recognises.
 #include <libpq-fe.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <atomic>
 #include <map>
+#include <mutex>
 
 #include "store/db.hpp"
 
@@ -32,6 +35,11 @@ std::string trimmed(const char* message) {
 
 class PgConnection;
 
+// observePostgresStatements: the observer, and whether one is set (read first, without the lock).
+std::atomic<bool> gObserved{false};
+std::mutex gObserverMutex;
+StatementObserver gObserver;
+
 class PgStatement final : public StatementImpl {
  public:
   PgStatement(PgConnection& db, std::string_view sql);
@@ -39,15 +47,7 @@ class PgStatement final : public StatementImpl {
 
   void bindNull(int index) override { slot(index).reset(); }
   void bindInt(int index, int64_t value) override { slot(index) = Value{std::to_string(value), false}; }
-  void bindDouble(int index, double value) override {
-    char text[32];
-    auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
-    (void)ec;
-    std::string s(text, end);
-    if (std::isnan(value)) s = "NaN";
-    if (std::isinf(value)) s = value > 0 ? "Infinity" : "-Infinity";
-    slot(index) = Value{std::move(s), false};
-  }
+  void bindDouble(int index, double value) override { slot(index) = Value{postgresDoubleText(value), false}; }
   void bindText(int index, std::string_view text) override { slot(index) = Value{std::string(text), false}; }
   void bindBlob(int index, std::span<const uint8_t> blob) override {
     slot(index) = Value{std::string(reinterpret_cast<const char*>(blob.data()), blob.size()), true};
@@ -146,6 +146,7 @@ class PgConnection final : public Connection {
   }
   int64_t changes() const override { return changes_; }
   std::string describe() const override { return redactUrl(url_); }
+  void copyIn(std::string_view copySql, std::string_view data) override;
 
   // Prepares pgSql once (per connection and re-connection); the statement's name.
   const std::string& prepared(const std::string& pgSql, std::string_view original) {
@@ -230,6 +231,12 @@ PgStatement::PgStatement(PgConnection& db, std::string_view sql) : db_(db), sql_
 
 bool PgStatement::step() {
   if (!result_) {
+    if (gObserved.load(std::memory_order_relaxed)) {
+      std::vector<std::optional<std::string>> parameters;
+      for (const auto& v : values_) parameters.push_back(v && !v->binary ? std::optional(v->data) : std::nullopt);
+      std::lock_guard lock(gObserverMutex);
+      if (gObserver) gObserver(pgSql_, parameters);
+    }
     const std::string& name = db_.prepared(pgSql_, sql_);
     std::vector<const char*> data(values_.size(), nullptr);
     std::vector<int> lengths(values_.size(), 0), formats(values_.size(), 0);
@@ -252,9 +259,50 @@ bool PgStatement::step() {
   return false;
 }
 
+void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
+  ensureConnected();
+  std::string sql(copySql);
+  PGresult* started = PQexec(conn_, sql.c_str());
+  if (!started || PQresultStatus(started) != PGRES_COPY_IN) {
+    finish(started, sql);  // throws with the server's reason
+    throw DbError(0, "", "PostgreSQL: " + sql + " did not start a copy");
+  }
+  PQclear(started);
+  // In pieces, so that libpq's buffer stays small whatever the batch.
+  constexpr size_t kPiece = size_t{1} << 20;
+  bool sent = true;
+  for (size_t at = 0; at < data.size() && sent; at += kPiece) {
+    size_t length = std::min(kPiece, data.size() - at);
+    sent = PQputCopyData(conn_, data.data() + at, static_cast<int>(length)) == 1;
+  }
+  if (PQputCopyEnd(conn_, sent ? nullptr : "the client failed to send the rows") != 1) sent = false;
+  // The command's own result, then nothing: every result is read so that the
+  // connection is ready for the next statement.
+  PGresult* result = PQgetResult(conn_);
+  PGresult* rest = nullptr;
+  while ((rest = PQgetResult(conn_)) != nullptr) PQclear(rest);
+  finish(result, sql);
+  if (!sent) throw DbError(0, "08006", "PostgreSQL: sending the rows of " + sql + " failed: " + trimmed(PQerrorMessage(conn_)));
+}
+
 void ignoreNotice(void*, const char*) {}
 
 }  // namespace
+
+void observePostgresStatements(StatementObserver observer) {
+  std::lock_guard lock(gObserverMutex);
+  gObserver = std::move(observer);
+  gObserved = static_cast<bool>(gObserver);
+}
+
+std::string postgresDoubleText(double value) {
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "Infinity" : "-Infinity";
+  char text[32];
+  auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
+  (void)ec;
+  return std::string(text, end);
+}
 
 std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTimeoutSeconds) {
   // connect_timeout goes in as a keyword beside the URL (expand_dbname).

@@ -125,12 +125,12 @@ Result<std::unique_ptr<Store>> Store::open(const std::string& location, Options 
     return migrate(**db);
   }();
   if (!migrated) return makeError("database '" + name + "': " + migrated.error());
-  return std::unique_ptr<Store>(new Store(std::move(*db), *migrated));
+  return std::unique_ptr<Store>(new Store(std::move(*db), *migrated, location));
 }
 
-Store::Store(std::unique_ptr<Connection> db, int version)
+Store::Store(std::unique_ptr<Connection> db, int version, const std::string& location)
     : owner_(std::move(db)),
-      shared_(owner_.get()),
+      shared_(owner_.get(), location),
       schemaVersion_(version),
       jobs_(shared_),
       hosts_(shared_),

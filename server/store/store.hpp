@@ -82,9 +82,11 @@ class Store {
   // The connection, for tests and tools; not for concurrent use.
   Connection& connection() { return *shared_.db; }
   Engine engine() const { return shared_.db->engine(); }
+  // What open() was given: a SQLite path or a postgresql:// URL (JobWaiter::open takes it).
+  const std::string& location() const { return shared_.location; }
 
  private:
-  Store(std::unique_ptr<Connection> db, int version);
+  Store(std::unique_ptr<Connection> db, int version, const std::string& location);
   std::unique_ptr<Connection> owner_;
   Shared shared_;
   int schemaVersion_;

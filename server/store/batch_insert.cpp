@@ -1,0 +1,150 @@
+#include "store/batch_insert.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace tally::store::detail {
+
+namespace {
+
+// COPY's text format: backslash, and the row and column separators, escaped.
+void appendCopyText(std::string& out, std::string_view text) {
+  for (char c : text) {
+    switch (c) {
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      case '\t': out += "\\t"; break;
+      default: out += c;
+    }
+  }
+}
+
+// bytea's hex input form ("\x0a1b..."), its backslash escaped for COPY.
+void appendCopyBytea(std::string& out, std::span<const uint8_t> bytes) {
+  static const char kHex[] = "0123456789abcdef";
+  out += "\\\\x";
+  for (uint8_t b : bytes) {
+    out += kHex[b >> 4];
+    out += kHex[b & 15];
+  }
+}
+
+}  // namespace
+
+BatchInsert::BatchInsert(Connection* db, std::string table, std::vector<std::string> columns)
+    : db_(db), table_(std::move(table)), columns_(std::move(columns)) {
+  if (columns_.empty()) throw std::logic_error("BatchInsert: no columns for " + table_);
+}
+
+BatchInsert& BatchInsert::row() {
+  if (cells_.size() % columns_.size() != 0) {
+    throw std::logic_error("BatchInsert: a row of " + table_ + " has the wrong number of values");
+  }
+  return *this;
+}
+
+BatchInsert& BatchInsert::put(Cell cell) {
+  cells_.push_back(std::move(cell));
+  return *this;
+}
+
+BatchInsert& BatchInsert::add(const nlohmann::json& value) {
+  return put(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
+
+void BatchInsert::flush() {
+  if (cells_.size() % columns_.size() != 0) {
+    throw std::logic_error("BatchInsert: a row of " + table_ + " has the wrong number of values");
+  }
+  if (!cells_.empty()) {
+    if (db_->engine() == Engine::Postgres) {
+      flushPostgres();
+    } else {
+      flushSqlite();
+    }
+  }
+  cells_.clear();
+}
+
+std::string BatchInsert::insertSql(size_t rows) const {
+  std::string sql = "INSERT INTO " + table_ + " (";
+  std::string tuple = "(";
+  for (size_t c = 0; c < columns_.size(); ++c) {
+    sql += (c ? ", " : "") + columns_[c];
+    tuple += c ? ", ?" : "?";
+  }
+  tuple += ")";
+  sql += ") VALUES ";
+  sql.reserve(sql.size() + rows * (tuple.size() + 2));
+  for (size_t r = 0; r < rows; ++r) sql += (r ? ", " : "") + tuple;
+  return sql;
+}
+
+void BatchInsert::flushSqlite() {
+  const size_t width = columns_.size();
+  const size_t total = rows();
+  for (size_t first = 0; first < total; first += kSqliteRowsPerStatement) {
+    size_t count = std::min(kSqliteRowsPerStatement, total - first);
+    std::optional<Statement> partial;
+    Statement* insert = nullptr;
+    if (count == kSqliteRowsPerStatement) {
+      if (!full_) full_.emplace(db_, insertSql(count));
+      insert = &*full_;
+      insert->reset();
+    } else {
+      partial.emplace(db_, insertSql(count));
+      insert = &*partial;
+    }
+    int index = 1;
+    for (size_t k = first * width; k < (first + count) * width; ++k, ++index) {
+      std::visit([&](const auto& value) { insert->bind(index, value); }, cells_[k]);
+    }
+    insert->run();
+  }
+}
+
+void BatchInsert::flushPostgres() {
+  std::string copy = "COPY " + table_ + " (";
+  for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
+  copy += ") FROM STDIN";
+  std::string data;
+  const size_t width = columns_.size();
+  for (size_t k = 0; k < cells_.size(); ++k) {
+    const Cell& cell = cells_[k];
+    if (std::holds_alternative<std::nullptr_t>(cell)) {
+      data += "\\N";
+    } else if (const auto* i = std::get_if<int64_t>(&cell)) {
+      data += std::to_string(*i);
+    } else if (const auto* d = std::get_if<double>(&cell)) {
+      data += postgresDoubleText(*d);
+    } else if (const auto* text = std::get_if<std::string>(&cell)) {
+      appendCopyText(data, *text);
+    } else {
+      appendCopyBytea(data, std::get<std::span<const uint8_t>>(cell));
+    }
+    data += (k + 1) % width == 0 ? '\n' : '\t';
+  }
+  db_->copyIn(copy, data);
+}
+
+std::vector<int64_t> reserveIds(Connection* db, std::string_view table, size_t count) {
+  std::vector<int64_t> ids;
+  if (count == 0) return ids;
+  ids.reserve(count);
+  if (db->engine() == Engine::Postgres) {
+    // nextval is outside transactions: concurrent ingests never get the same id.
+    Statement next(db, "SELECT nextval(pg_get_serial_sequence(?1, 'id')) FROM generate_series(1, ?2::bigint)");
+    next.bind(1, table).bind(2, static_cast<int64_t>(count));
+    while (next.step()) ids.push_back(next.getInt(0));
+    if (ids.size() != count) throw DbError(0, "", "PostgreSQL: reserving ids of " + std::string(table) + " failed");
+    return ids;
+  }
+  Statement largest(db, "SELECT COALESCE(MAX(id), 0) FROM " + std::string(table));
+  int64_t last = largest.step() ? largest.getInt(0) : 0;
+  largest.run();
+  for (size_t k = 1; k <= count; ++k) ids.push_back(last + static_cast<int64_t>(k));
+  return ids;
+}
+
+}  // namespace tally::store::detail

@@ -1,0 +1,482 @@
+// storeCapture: one capture result (docs/result-schema.md) -> rows, inside
+// the caller's transaction. The result is read and checked whole first, its
+// rows gathered per table (CaptureRows), and then each table's rows are
+// written in one batch (batch_insert.hpp), parents before children. Ids that
+// children refer to (runs, screenshots, samples, passes) are reserved up
+// front, so no row waits for its parent's id. Bad input throws IngestError
+// naming the JSON path before anything of the capture is written.
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "common/json_fields.hpp"
+#include "store/batch_insert.hpp"
+#include "store/ingest_input.hpp"
+#include "store/internal.hpp"
+
+namespace tally::store::detail {
+
+using nlohmann::json;
+using json_fields::find;
+
+namespace {
+
+// Width and height from a PNG's IHDR chunk (the signature and IHDR come first).
+std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::string& path) {
+  static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (png.size() < 24 || !std::equal(kSignature, kSignature + 8, png.begin()) || png[12] != 'I' ||
+      png[13] != 'H' || png[14] != 'D' || png[15] != 'R') {
+    bad(path, "not a PNG image");
+  }
+  auto be32 = [&](size_t at) {
+    return int64_t{png[at]} << 24 | int64_t{png[at + 1]} << 16 | int64_t{png[at + 2]} << 8 |
+           int64_t{png[at + 3]};
+  };
+  return {be32(16), be32(20)};
+}
+
+// Ids handed out in order from a reserved list.
+class Ids {
+ public:
+  Ids(Connection* db, std::string_view table, size_t count) : ids_(reserveIds(db, table, count)) {}
+  int64_t next() {
+    // The count came from the same result, so this holds unless the counting below is wrong.
+    if (at_ == ids_.size()) throw IngestError("more rows than ids reserved for them");
+    return ids_[at_++];
+  }
+
+ private:
+  std::vector<int64_t> ids_;
+  size_t at_ = 0;
+};
+
+// How many rows of each table with children a result makes; shapes that the
+// reading below refuses count as nothing.
+struct RowCounts {
+  size_t runs = 0, screenshots = 0, samples = 0, passes = 0;
+};
+
+RowCounts countRows(const json& runs) {
+  RowCounts n;
+  for (const auto& run : runs) {
+    ++n.runs;
+    const json* samples = run.is_object() ? find(run, "samples") : nullptr;
+    if (!samples || !samples->is_array()) continue;
+    for (const auto& sample : *samples) {
+      if (!sample.is_object()) continue;
+      ++n.samples;
+      if (find(sample, "screenshot")) ++n.screenshots;
+      const json* passes = find(sample, "passes");
+      if (passes && passes->is_array()) n.passes += passes->size();
+    }
+  }
+  return n;
+}
+
+// Every row of one capture, by table, and the ids reserved for them. Write
+// order (write()) is the foreign keys' order.
+struct CaptureRows {
+  CaptureRows(Connection* connection, const RowCounts& counts)
+      : db(connection),
+        runIds(db, "runs", counts.runs),
+        screenshotIds(db, "screenshots", counts.screenshots),
+        sampleIds(db, "samples", counts.samples),
+        passIds(db, "passes", counts.passes),
+        runs(db, "runs",
+             {"id", "job_id", "device_id", "renderer", "scene_id", "width", "height", "counting", "lights",
+              "render_target_bytes", "notes", "shaders", "counter_headroom", "options", "variant", "tally_version",
+              "tally_commit", "footprint_block_bytes", "host"}),
+        resources(db, "run_resources",
+                  {"run_id", "position", "name", "kind", "format", "element_bytes", "width", "height",
+                   "allocation_bytes", "format_bytes", "usage"}),
+        screenshots(db, "screenshots", {"id", "name", "png", "width", "height"}),
+        samples(db, "samples",
+                {"id", "run_id", "camera_index", "camera", "sky_fraction", "sky_fraction_estimate", "frames",
+                 "frame_ms", "frame_ms_spread", "frame_ms_instrumented", "overhead_ratio", "image_against",
+                 "image_identical", "psnr", "max_abs", "mean_abs", "screenshot_id", "extras", "variant_against",
+                 "variant_identical", "variant_psnr", "variant_max_abs", "variant_mean_abs", "frame_ms_frames",
+                 "bytes", "footprint_bytes", "footprint_requested_bytes"}),
+        passes(db, "passes",
+               {"id", "sample_id", "position", "name", "gpu_ms", "gpu_ms_spread", "gpu_ms_instrumented",
+                "overhead_ratio", "fragment_invocations", "fragment_invocations_statistic", "compute_invocations",
+                "compute_invocations_statistic", "gpu_ms_frames"}),
+        counters(db, "counters",
+                 {"pass_id", "position", "resource", "kind", "format", "access", "count", "bytes", "count_spread",
+                  "source", "footprint_bytes"}),
+        findScene(db, "SELECT id FROM scenes WHERE name = ?1 AND params = ?2"),
+        insertScene(db,
+                    "INSERT INTO scenes (name, params) VALUES (?1, ?2) "
+                    "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id") {}
+
+  void write() {
+    for (BatchInsert* table : {&runs, &resources, &screenshots, &samples, &passes, &counters}) table->flush();
+  }
+
+  Connection* db;
+  Ids runIds, screenshotIds, sampleIds, passIds;
+  BatchInsert runs, resources, screenshots, samples, passes, counters;
+  Statement findScene, insertScene;
+  std::map<std::pair<std::string, std::string>, int64_t> sceneIds;  // by name and compact params
+  json ceilings;  // the capture's device.ceilings (null when not measured)
+  // The sample being read: all its lines' bytes; the footprint of the lines
+  // that have one and those lines' requested bytes (null when none has).
+  struct Sums {
+    double bytes = 0;
+    std::optional<double> footprint, footprintRequested;
+  } sums;
+};
+
+std::optional<json> optJson(const json& object, const char* key) {
+  const json* value = find(object, key);
+  return value ? std::optional<json>(*value) : std::nullopt;
+}
+
+// Per-frame times (frame_ms_frames, gpu_ms_frames): absent (or null), or an
+// array of finite, non-negative milliseconds; errors name the entry.
+std::optional<json> optFrameTimes(const json& object, const char* key, const std::string& path) {
+  const json* value = find(object, key);
+  if (!value) return std::nullopt;
+  std::string at = path + "." + key;
+  if (!value->is_array()) bad(at, "must be an array of milliseconds, got " + value->dump());
+  for (size_t i = 0; i < value->size(); ++i) {
+    const json& ms = (*value)[i];
+    std::string entry = at + "[" + std::to_string(i) + "]";
+    if (!ms.is_number()) bad(entry, "must be a number, got " + ms.dump());
+    double x = ms.get<double>();
+    if (!std::isfinite(x)) bad(entry, "must be finite");
+    if (x < 0) bad(entry, "must not be negative, got " + ms.dump());
+  }
+  return *value;
+}
+
+void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::string& path) {
+  const json& counters = kMembers.array(pass, "resources", path);
+  for (size_t c = 0; c < counters.size(); ++c) {
+    std::string at = path + ".resources[" + std::to_string(c) + "]";
+    const json& counter = counters[c];
+    if (!counter.is_object()) bad(at, "must be an object");
+    std::string access = kMembers.text(counter, "access", at);
+    if (access != "read" && access != "write")
+      bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
+    // Absent (or null) where the line's footprint was not measured.
+    std::optional<double> footprint = kMembers.optNumber(counter, "footprint_bytes", at);
+    if (footprint && *footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
+    std::string resource = kMembers.text(counter, "name", at);
+    auto kind = kMembers.optText(counter, "kind", at);
+    auto format = kMembers.optText(counter, "format", at);
+    double count = kMembers.number(counter, "count", at);
+    double bytes = kMembers.number(counter, "bytes", at);
+    in.counters.row()
+        .add(passId)
+        .add(static_cast<int64_t>(c))
+        .add(std::move(resource))
+        .add(kind)
+        .add(format)
+        .add(std::move(access))
+        .add(count)
+        .add(bytes)
+        .add(optJson(counter, "count_spread"))
+        .add(kMembers.text(counter, "source", at))
+        .add(footprint);
+    in.sums.bytes += bytes;
+    if (footprint) {
+      in.sums.footprint = in.sums.footprint.value_or(0) + *footprint;
+      in.sums.footprintRequested = in.sums.footprintRequested.value_or(0) + bytes;
+    }
+  }
+}
+
+void addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const std::string& path) {
+  const json& passes = kMembers.array(sample, "passes", path);
+  for (size_t p = 0; p < passes.size(); ++p) {
+    std::string at = path + ".passes[" + std::to_string(p) + "]";
+    const json& pass = passes[p];
+    if (!pass.is_object()) bad(at, "must be an object");
+    int64_t passId = in.passIds.next();
+    in.passes.row()
+        .add(passId)
+        .add(sampleId)
+        .add(static_cast<int64_t>(p))
+        .add(kMembers.text(pass, "name", at))
+        .add(kMembers.number(pass, "gpu_ms", at))
+        .add(optJson(pass, "gpu_ms_spread"))
+        .add(kMembers.optNumber(pass, "gpu_ms_instrumented", at))
+        .add(kMembers.optNumber(pass, "overhead_ratio", at))
+        .add(kMembers.optNumber(pass, "fragment_invocations", at))
+        .add(kMembers.optNumber(pass, "fragment_invocations_statistic", at))
+        .add(kMembers.optNumber(pass, "compute_invocations", at))
+        .add(kMembers.optNumber(pass, "compute_invocations_statistic", at))
+        .add(optFrameTimes(pass, "gpu_ms_frames", at));
+    addCounters(in, passId, pass, at);
+  }
+}
+
+std::optional<int64_t> addScreenshot(CaptureRows& in, const json& sample, const std::string& path,
+                                     const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  auto name = kMembers.optText(sample, "screenshot", path);
+  if (!name) return std::nullopt;
+  auto it = screenshots.find(*name);
+  if (it == screenshots.end())
+    bad(path + ".screenshot", "'" + *name + "' is not among the screenshots given");
+  auto [width, height] = pngSize(it->second, path + ".screenshot");
+  int64_t id = in.screenshotIds.next();
+  in.screenshots.row().add(id).add(*name).add(std::span<const uint8_t>(it->second)).add(width).add(height);
+  return id;
+}
+
+// The columns of an {"against", "psnr", "identical", "max_abs", "mean_abs"}
+// object; all empty when the sample has no such key.
+struct ImageErrorColumns {
+  std::optional<std::string> against;
+  std::optional<int64_t> identical;
+  std::optional<double> psnr, maxAbs, meanAbs;
+};
+
+ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const std::string& at,
+                                    const std::optional<std::string>& defaultAgainst) {
+  ImageErrorColumns out;
+  const json* error = find(sample, key);
+  if (!error) return out;
+  std::string errorPath = at + "." + key;
+  if (!error->is_object()) bad(errorPath, "must be an object");
+  out.against = defaultAgainst ? kMembers.optText(*error, "against", errorPath).value_or(*defaultAgainst)
+                               : kMembers.text(*error, "against", errorPath);
+  const json* same = find(*error, "identical");
+  if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
+  out.psnr = kMembers.optNumber(*error, "psnr", errorPath);
+  out.identical = same ? int64_t{same->get<bool>()} : int64_t{!out.psnr};
+  out.maxAbs = kMembers.number(*error, "max_abs", errorPath);
+  out.meanAbs = kMembers.number(*error, "mean_abs", errorPath);
+  return out;
+}
+
+BatchInsert& addImageError(BatchInsert& row, const ImageErrorColumns& e) {
+  return row.add(e.against).add(e.identical).add(e.psnr).add(e.maxAbs).add(e.meanAbs);
+}
+
+// The sample's extras, with "roofline" added where its passes carry one: the
+// capture's ceilings and each pass's roofline with its time, kept per run
+// (the device row holds only the latest capture's device object) and without
+// columns of their own (docs/result-schema.md, "extras.roofline").
+json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
+  const json* passes = find(sample, "passes");
+  if (!passes || !passes->is_array()) return extras;
+  json byPass = json::object();
+  for (const auto& pass : *passes) {
+    const json* roofline = pass.is_object() ? find(pass, "roofline") : nullptr;
+    const json* name = pass.is_object() ? find(pass, "name") : nullptr;
+    if (!roofline || !roofline->is_object() || !name || !name->is_string()) continue;
+    json entry = *roofline;
+    if (const json* ms = find(pass, "gpu_ms")) entry["gpu_ms"] = *ms;
+    byPass[name->get<std::string>()] = std::move(entry);
+  }
+  if (byPass.empty()) return extras;
+  if (!extras.is_object()) extras = json::object();
+  extras["roofline"] = {{"ceilings", ceilings.is_object() ? ceilings : json(nullptr)}, {"passes", std::move(byPass)}};
+  return extras;
+}
+
+// The camera's index within its run, refused when an earlier sample of the
+// run has it (the samples table keeps one sample per camera and run).
+int64_t cameraIndexOf(const json& camera, size_t s, const std::string& at, std::map<int64_t, size_t>& seen) {
+  int64_t index = kMembers.optInteger(camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
+  auto [it, added] = seen.emplace(index, s);
+  if (!added) {
+    bad(at + ".camera.index", std::to_string(index) + " is already the camera of samples[" +
+                                  std::to_string(it->second) + "] of this run: a run holds one sample per camera");
+  }
+  return index;
+}
+
+void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path,
+                const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  const json& samples = kMembers.array(run, "samples", path);
+  std::map<int64_t, size_t> cameras;  // camera index -> the sample that has it
+  for (size_t s = 0; s < samples.size(); ++s) {
+    std::string at = path + ".samples[" + std::to_string(s) + "]";
+    const json& sample = samples[s];
+    if (!sample.is_object()) bad(at, "must be an object");
+    const json* camera = find(sample, "camera");
+    if (!camera || !camera->is_object()) bad(at + ".camera", "missing or not an object");
+    int64_t cameraIndex = cameraIndexOf(*camera, s, at, cameras);
+    // -1: the renderer has no skybox pass.
+    std::optional<double> sky;
+    if (find(sample, "sky_fraction")) {
+      if (double given = kMembers.number(sample, "sky_fraction", at); given >= 0) sky = given;
+    }
+    ImageErrorColumns image = imageErrorColumns(sample, "image_error", at, "forward");
+    // A variant's error against its reference variant; "against" is required
+    // there, as no renderer is its implied reference.
+    ImageErrorColumns variant = imageErrorColumns(sample, "variant_error", at, std::nullopt);
+    auto screenshotId = addScreenshot(in, sample, at, screenshots);
+    auto frames = kMembers.optInteger(sample, "frames", at);
+    auto skyEstimate = kMembers.optNumber(sample, "sky_fraction_estimate", at);
+    double frameMs = kMembers.number(sample, "frame_ms", at);
+    auto frameMsInstrumented = kMembers.optNumber(sample, "frame_ms_instrumented", at);
+    auto overhead = kMembers.optNumber(sample, "overhead_ratio", at);
+    json extras = extrasWithRoofline(kMembers.object(sample, "extras", at), sample, in.ceilings);
+    auto frameTimes = optFrameTimes(sample, "frame_ms_frames", at);
+    int64_t sampleId = in.sampleIds.next();
+    in.sums = {};
+    addPasses(in, sampleId, sample, at);
+    in.samples.row()
+        .add(sampleId)
+        .add(runId)
+        .add(cameraIndex)
+        .add(*camera)
+        .add(sky)
+        .add(skyEstimate)
+        .add(frames)
+        .add(frameMs)
+        .add(optJson(sample, "frame_ms_spread"))
+        .add(frameMsInstrumented)
+        .add(overhead);
+    addImageError(in.samples, image).add(screenshotId).add(extras);
+    addImageError(in.samples, variant)
+        .add(frameTimes)
+        .add(in.sums.bytes)
+        .add(in.sums.footprint)
+        .add(in.sums.footprintRequested);
+  }
+}
+
+void addResources(CaptureRows& in, int64_t runId, const json& list, const std::string& path) {
+  for (size_t r = 0; r < list.size(); ++r) {
+    std::string at = path + "[" + std::to_string(r) + "]";
+    const json& resource = list[r];
+    if (!resource.is_object()) bad(at, "must be an object");
+    in.resources.row()
+        .add(runId)
+        .add(static_cast<int64_t>(r))
+        .add(kMembers.text(resource, "name", at))
+        .add(kMembers.text(resource, "kind", at))
+        .add(kMembers.optText(resource, "format", at))
+        .add(kMembers.optInteger(resource, "element_bytes", at))
+        .add(kMembers.optInteger(resource, "width", at))
+        .add(kMembers.optInteger(resource, "height", at))
+        .add(kMembers.optInteger(resource, "allocation_bytes", at))
+        .add(kMembers.optInteger(resource, "format_bytes", at))
+        .add(kMembers.optText(resource, "usage", at));
+  }
+}
+
+// The build that made a result: {"version", "commit"} (absent before builds recorded it).
+struct Build {
+  std::optional<std::string> version, commit;
+};
+
+Build buildOf(const json& result) {
+  const json* tally = find(result, "tally");
+  if (!tally) return {};
+  if (!tally->is_object()) bad("tally", "must be an object");
+  return {kMembers.optText(*tally, "version", "tally"), kMembers.optText(*tally, "commit", "tally")};
+}
+
+// The scene's id: stored already (a plain read, so that concurrent ingests
+// of one scene do not queue on the upsert's row lock), or inserted now.
+int64_t sceneId(CaptureRows& in, const std::string& name, const json& params) {
+  auto key = std::make_pair(name, params.dump());
+  if (auto it = in.sceneIds.find(key); it != in.sceneIds.end()) return it->second;
+  in.findScene.reset();
+  in.findScene.bind(1, name).bind(2, params);
+  int64_t id = 0;
+  if (in.findScene.step()) {
+    id = in.findScene.getInt(0);
+    in.findScene.run();
+  } else {
+    in.insertScene.reset();
+    in.insertScene.bind(1, name).bind(2, params);
+    if (!in.insertScene.step()) throw IngestError("no id returned");
+    id = in.insertScene.getInt(0);
+    in.insertScene.run();
+  }
+  return in.sceneIds[key] = id;
+}
+
+struct RunContext {
+  int64_t jobId = 0, deviceId = 0;
+  json shaders;
+  Build build;
+  std::optional<std::string> host;
+};
+
+void addRun(CaptureRows& in, const RunContext& context, const json& run, const std::string& path,
+            const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  if (!run.is_object()) bad(path, "must be an object");
+  int64_t scene = sceneId(in, kMembers.text(run, "scene", path), kMembers.object(run, "scene_params", path));
+  int64_t width = kMembers.integer(run, "width", path);
+  int64_t height = kMembers.integer(run, "height", path);
+  if (width < 1 || width > 16384) bad(path + ".width", "must be between 1 and 16384");
+  if (height < 1 || height > 16384) bad(path + ".height", "must be between 1 and 16384");
+  int64_t lights = kMembers.optInteger(run, "lights", path).value_or(0);
+  if (lights < 0) bad(path + ".lights", "must not be negative");
+  json resources = kMembers.object(run, "resources", path);
+  std::optional<json> headroom;  // absent in results from before it was measured
+  if (const json* h = find(run, "counter_headroom")) {
+    if (!h->is_object()) bad(path + ".counter_headroom", "must be an object");
+    headroom = *h;
+  }
+  // The footprint's block size; absent or null when footprint was off.
+  std::optional<int64_t> footprintBlock = kMembers.optInteger(run, "footprint_block_bytes", path);
+  if (footprintBlock && *footprintBlock != 32 && *footprintBlock != 64 && *footprintBlock != 128)
+    bad(path + ".footprint_block_bytes", "must be 32, 64 or 128, got " + std::to_string(*footprintBlock));
+  std::string renderer = kMembers.text(run, "renderer", path);
+  int64_t runId = in.runIds.next();
+  in.runs.row()
+      .add(runId)
+      .add(context.jobId)
+      .add(context.deviceId)
+      .add(renderer)
+      .add(scene)
+      .add(width)
+      .add(height)
+      .add(kMembers.optText(run, "counting", path).value_or("exact"))
+      .add(lights)
+      .add(kMembers.optInteger(resources, "render_target_bytes", path + ".resources"))
+      .add(kMembers.object(run, "notes", path))
+      .add(context.shaders)
+      .add(headroom)
+      .add(kMembers.object(run, "options", path))
+      .add(kMembers.optText(run, "variant", path).value_or(renderer))
+      .add(context.build.version)
+      .add(context.build.commit)
+      .add(footprintBlock)
+      .add(context.host);
+  addResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
+  addSamples(in, runId, run, path, screenshots);
+}
+
+}  // namespace
+
+int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
+                     const std::map<std::string, std::vector<uint8_t>>& screenshots,
+                     const std::optional<std::string>& host) {
+  // Idempotency: a job's result replaces whatever was ingested for it before
+  // (its screenshots first, then its runs, which cascade to samples,
+  // passes, counters and resources).
+  Statement dropShots(db,
+                      "DELETE FROM screenshots WHERE id IN (SELECT s.screenshot_id FROM samples s "
+                      "JOIN runs r ON r.id = s.run_id WHERE r.job_id = ?1)");
+  dropShots.bind(1, jobId).run();
+  Statement dropRuns(db, "DELETE FROM runs WHERE job_id = ?1");
+  dropRuns.bind(1, jobId).run();
+
+  RunContext context{jobId, insertDevice(db, result), {}, {}, host};
+  json ceilings;
+  if (const json* device = find(result, "device"); device && device->is_object()) {
+    if (const json* c = find(*device, "ceilings"); c && c->is_object()) ceilings = *c;
+  }
+  context.shaders = kMembers.object(result, "shaders", "result");
+  context.build = buildOf(result);
+  const json* runs = find(result, "runs");
+  if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
+  CaptureRows in(db, countRows(*runs));
+  in.ceilings = std::move(ceilings);
+  for (size_t r = 0; r < runs->size(); ++r) {
+    addRun(in, context, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
+  }
+  in.write();
+  return static_cast<int64_t>(runs->size());
+}
+
+}  // namespace tally::store::detail
