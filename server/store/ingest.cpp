@@ -8,6 +8,7 @@
 
 #include "common/json_fields.hpp"
 #include "store/ingest_input.hpp"
+#include "store/ingest_sites.hpp"
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -204,7 +205,9 @@ void insertPasses(Inserter& in, int64_t sampleId, const json& sample, const std:
         .bind(10, kMembers.optNumber(pass, "compute_invocations", at))
         .bind(11, kMembers.optNumber(pass, "compute_invocations_statistic", at))
         .bind(12, optFrameTimes(pass, "gpu_ms_frames", at));
-    insertCounters(in, returnedId(in.pass), pass, at);
+    int64_t passId = returnedId(in.pass);
+    insertCounters(in, passId, pass, at);
+    detail::insertPassSites(in.db, passId, pass, at);
   }
 }
 
@@ -416,6 +419,7 @@ int64_t insertRun(Inserter& in, int64_t jobId, int64_t deviceId, const json& sha
   int64_t runId = returnedId(in.run);
   insertResources(in, runId, kMembers.array(resources, "list", path + ".resources"),
                   path + ".resources.list");
+  detail::insertShaderSources(in.db, runId, run, path);
   insertSamples(in, runId, run, path, screenshots);
   return runId;
 }
