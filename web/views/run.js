@@ -516,6 +516,7 @@ export async function render(page, { params, signal }) {
       run.tally_commit ? h('li', { dataset: { build: '' } }, `tally ${run.tally_version} (${run.tally_commit})`) : null,
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
+      h('li', {}, h('a', { href: `#/shader/${run.id}`, dataset: { shaderLink: '' } }, 'shaders: bytes per source line, draw and material')),
       app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
       tile(app ? 'GPU time per frame (under the layer)' : 'Frame time', fmt.ms(run.mean_frame_ms), 'frame-ms'),
