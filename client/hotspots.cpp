@@ -80,8 +80,8 @@ json hotspots(const json& all, const HotspotsArgs& args) {
         ++restRows;
       }
     }
-    // The draws the server summed beyond the 256 it keeps.
-    if (auto rest = serverRest.find(position); rest != serverRest.end()) {
+    // The draws the server summed beyond the 256 it keeps (materials already include them).
+    if (auto rest = serverRest.find(position); args.by == "draw" && rest != serverRest.end()) {
       restBytes += bytesOf(rest->second);
       covered += bytesOf(rest->second);
       restRows += rest->second.value("draws", int64_t{0});

@@ -21,6 +21,7 @@ import { after, before, describe, test } from 'node:test';
 import { chromium } from 'playwright-core';
 
 import { Daemon } from './daemon.mjs';
+import { viewPage } from './view_page.mjs';
 
 const env = process.env;
 const kViewMs = 30_000;
@@ -106,16 +107,7 @@ async function open(hash, viewport) {
     if (!name) return route.fulfill({ json: { run: Number(run), shaders: [{ name: kShader, hash: '0', length: text.length }] } });
     return route.fulfill({ json: { run: Number(run), name: decodeURIComponent(name), hash: '0', length: text.length, lines: text.split('\n').length, source: text } });
   });
-  const page = await context.newPage();
-  const errors = [];
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-  page.on('pageerror', (e) => errors.push(`uncaught: ${e.message}`));
-  await page.goto(`${daemon.url}/${hash}`);
-  await page.waitForFunction(() => {
-    const view = document.getElementById('view');
-    return view && !view.hasAttribute('aria-busy') && view.querySelector('.page');
-  }, null, { timeout: kViewMs });
-  assert.deepEqual(await page.locator('#view .panel.error').allTextContents(), [], 'the view shows an error');
+  const { page, errors } = await viewPage(context, `${daemon.url}/${hash}`, kViewMs);
   return { page, errors, close: () => context.close() };
 }
 
@@ -195,6 +187,7 @@ describe('shader view', () => {
             sum = 0;
           } else if (r.level === '2') sum += r.share;
         }
+        assert.doesNotMatch(await page.locator('#view').innerText(), /\bnull\b/, 'a value shows as null');
         const scroll = await page.evaluate(() => document.documentElement.scrollWidth - document.documentElement.clientWidth);
         assert.ok(scroll <= 1, `scrolls sideways by ${scroll} px`);
         await page.screenshot({ path: join(env.TALLY_SCREENSHOTS, `shader-${size}.png`), fullPage: true });

@@ -12,7 +12,7 @@
 // Requests: the run, its samples and shaders, the sample's sites (every
 // page), its draws or materials, and the shown shader's text.
 import { get, queryString } from '../api.js';
-import { h } from '../dom.js';
+import { append, h } from '../dom.js';
 import * as fmt from '../format.js';
 
 const kPage = 1000;     // rows per request: the API's most
@@ -113,7 +113,7 @@ function drawsTable(passes, items, rests, by) {
   return rows;
 }
 
-function rankedSection(passes, rows) {
+function rankedSection(rows) {
   return h('div', { class: 'table-wrap' }, h('table', { dataset: { ranked: '' } },
     h('thead', {}, h('tr', {}, ['Pass → resource → line', 'Bytes per frame', 'Share of pass', ''].map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, rows)));
@@ -271,8 +271,8 @@ export async function render(page, { params, query, signal }) {
     const draws = await allPages(`/samples/${sample.id}/draws`, { by }, by === 'material' ? 'materials' : 'draws', signal);
     rankedRows = drawsTable(passes, draws.rows, draws.rest, by);
   }
-  page.append(h('h2', {}, 'Where the bytes go'), h('p', { class: 'caption muted' }, `Sample #${sample.id}, per frame; shares of each pass's bytes (all its resource lines).`),
-    rankedRows.length ? rankedSection(passes, rankedRows) : h('div', { class: 'panel' }, `No ${by}s stored for this sample.`));
+  append(page, [h('h2', {}, 'Where the bytes go'), h('p', { class: 'caption muted' }, `Sample #${sample.id}, per frame; shares of each pass's bytes (all its resource lines).`),
+    rankedRows.length ? rankedSection(rankedRows) : h('div', { class: 'panel' }, `No ${by}s stored for this sample.`)]);
 
   // One shader's source in one pass.
   const used = ranked(sumBy(sites.filter((s) => s.line !== null), (s) => s.shader)).map(([name]) => name);
@@ -297,9 +297,9 @@ export async function render(page, { params, query, signal }) {
     h('form', { class: 'field', onsubmit: (e) => { e.preventDefault(); go(id, query, { against: againstInput.value.trim() }); } },
       h('label', {}, 'Compare with run ', againstInput), h('button', { type: 'submit' }, 'Compare'))));
   const unmapped = sites.filter((s) => s.shader === shader && s.pass_position === pass.position && s.line === null);
-  page.append(h('p', { class: 'caption muted' }, `${shader} in ${pass.name}: ${fmt.bytes(pass.bytes)} per frame in the pass; bars against its heaviest line.`),
+  append(page, [h('p', { class: 'caption muted' }, `${shader} in ${pass.name}: ${fmt.bytes(pass.bytes)} per frame in the pass; bars against its heaviest line.`),
     details, sourceTable(source.source, stats, pass.bytes, details),
-    unmapped.length ? [h('h3', {}, 'Sites without a source line'), h('ul', { dataset: { unmapped: '' } }, unmapped.map((s) => h('li', {}, h('code', {}, s.disassembly), ` ${resourceOf(s)}: ${fmt.bytes(s.bytes)}`)))] : null);
+    unmapped.length ? [h('h3', {}, 'Sites without a source line'), h('ul', { dataset: { unmapped: '' } }, unmapped.map((s) => h('li', {}, h('code', {}, s.disassembly), ` ${resourceOf(s)}: ${fmt.bytes(s.bytes)}`)))] : null]);
   if (against) {
     const other = await otherRun(against, shader, pass.name, signal);
     page.append(h('h2', {}, `Against run #${against}`),
