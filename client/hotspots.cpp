@@ -25,7 +25,10 @@ double bytesOf(const json& row) { return row.value("bytes", 0.0); }
 std::string lineLabel(const json& row) {
   std::string shader = row.value("shader", "");
   if (row.contains("line") && row["line"].is_number_integer()) return shader + ":" + std::to_string(row["line"].get<int64_t>());
-  return shader + " %" + std::to_string(row.value("instruction", int64_t{0}));
+  if (row.contains("instruction") && row["instruction"].is_number_integer()) {
+    return shader + " %" + std::to_string(row["instruction"].get<int64_t>());
+  }
+  return shader + " " + row.value("disassembly", std::string("(no line)"));
 }
 
 std::string label(const json& row, const std::string& by) {

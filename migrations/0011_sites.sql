@@ -8,7 +8,8 @@
 
 -- One access site (an image or buffer access instruction) of a pass's
 -- instrumented shaders. position: its order in the result. line is NULL where
--- the module carries no line information; disassembly is always there.
+-- the module carries no line information; instruction is NULL where the
+-- module's text gave none (an application's module without result ids).
 -- At most 4096 sites per pass (ingest refuses more).
 CREATE TABLE pass_sites (
   pass_id     INTEGER NOT NULL REFERENCES passes (id) ON DELETE CASCADE,
@@ -16,7 +17,7 @@ CREATE TABLE pass_sites (
   shader      TEXT NOT NULL,
   stage       TEXT NOT NULL,
   entry_point TEXT NOT NULL,
-  instruction INTEGER NOT NULL CHECK (instruction >= 0),
+  instruction INTEGER CHECK (instruction IS NULL OR instruction >= 0),
   opcode      TEXT NOT NULL,
   resource    TEXT NOT NULL,
   access      TEXT NOT NULL CHECK (access IN ('read', 'write')),

@@ -7,7 +7,8 @@
 
 -- One access site (an image or buffer access instruction) of a pass's
 -- instrumented shaders. position: its order in the result. line is NULL where
--- the module carries no line information; disassembly is always there.
+-- the module carries no line information; instruction is NULL where the
+-- module's text gave none (an application's module without result ids).
 -- At most 4096 sites per pass (ingest refuses more).
 CREATE TABLE pass_sites (
   pass_id     BIGINT NOT NULL REFERENCES passes (id) ON DELETE CASCADE,
@@ -15,7 +16,7 @@ CREATE TABLE pass_sites (
   shader      TEXT COLLATE "C" NOT NULL,
   stage       TEXT COLLATE "C" NOT NULL,
   entry_point TEXT COLLATE "C" NOT NULL,
-  instruction BIGINT NOT NULL CHECK (instruction >= 0),
+  instruction BIGINT CHECK (instruction IS NULL OR instruction >= 0),
   opcode      TEXT COLLATE "C" NOT NULL,
   resource    TEXT COLLATE "C" NOT NULL,
   access      TEXT COLLATE "C" NOT NULL CHECK (access IN ('read', 'write')),

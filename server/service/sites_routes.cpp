@@ -66,7 +66,7 @@ json siteJson(const store::SiteRow& s, const std::vector<store::PassBytes>& pass
           {"shader", s.shader},
           {"stage", s.stage},
           {"entry_point", s.entryPoint},
-          {"instruction", s.instruction},
+          {"instruction", opt(s.instruction)},
           {"opcode", s.opcode},
           {"resource", s.resource},
           {"access", s.access},

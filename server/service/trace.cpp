@@ -39,7 +39,7 @@ json topLinesJson(const std::vector<store::SiteRow>& lines, double passBytes) {
   for (const auto& line : lines) {
     out.push_back({{"shader", line.shader},
                    {"line", line.line ? json(*line.line) : json(nullptr)},
-                   {"instruction", line.instruction},
+                   {"instruction", line.instruction ? json(*line.instruction) : json(nullptr)},
                    {"bytes", line.bytes},
                    {"share", passBytes > 0 ? json(line.bytes / passBytes) : json(nullptr)},
                    {"resources", line.resources}});

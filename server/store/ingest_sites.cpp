@@ -28,16 +28,19 @@ std::string at(const std::string& path, const char* key, size_t i) {
   return path + "." + key + "[" + std::to_string(i) + "]";
 }
 
+// Text of at most `most` characters; empty where the result had nothing to
+// say (an application's module may name no shader or entry point).
 std::string text(const json& object, const char* key, const std::string& path, size_t most = kMaxName) {
   std::string value = kMembers.text(object, key, path);
-  if (value.empty()) bad(path + "." + key, "must not be empty");
   if (value.size() > most) bad(path + "." + key, "must be at most " + std::to_string(most) + " characters");
   return value;
 }
 
+// Absent, null or empty: none.
 std::optional<std::string> optText(const json& object, const char* key, const std::string& path) {
   if (!find(object, key)) return std::nullopt;
-  return text(object, key, path);
+  std::string value = text(object, key, path);
+  return value.empty() ? std::nullopt : std::optional<std::string>(value);
 }
 
 double amount(const json& object, const char* key, const std::string& path) {
@@ -79,12 +82,18 @@ const json& list(const json& pass, const char* key, const std::string& path, siz
 void insertSites(Connection* db, int64_t passId, const json& pass, const std::string& path) {
   const json& sites = list(pass, "sites", path, kMaxSitesPerPass, "sites");
   if (sites.empty()) return;
-  // The pass's counted lines: a site must name one, and a line's sites sum to its bytes.
-  std::map<std::pair<std::string, std::string>, std::pair<double, double>> lines;  // -> (line bytes, sites' sum)
+  // The pass's lines: a site must name one, and the sites of a counted line
+  // (not a derived one) sum to its bytes.
+  struct Line {
+    double bytes = 0, sites = 0;
+    bool counted = false;
+  };
+  std::map<std::pair<std::string, std::string>, Line> lines;
   for (const json& line : kMembers.array(pass, "resources", path)) {
-    if (line.is_object() && kMembers.optText(line, "source", path).value_or("counter") == "counter") {
-      lines[{kMembers.text(line, "name", path), kMembers.text(line, "access", path)}].first += kMembers.number(line, "bytes", path);
-    }
+    if (!line.is_object()) continue;
+    Line& entry = lines[{kMembers.text(line, "name", path), kMembers.text(line, "access", path)}];
+    entry.bytes += kMembers.number(line, "bytes", path);
+    entry.counted = entry.counted || kMembers.optText(line, "source", path).value_or("counter") == "counter";
   }
   Statement insert(db,
                    "INSERT INTO pass_sites (pass_id, position, shader, stage, entry_point, instruction, opcode, "
@@ -98,19 +107,20 @@ void insertSites(Connection* db, int64_t passId, const json& pass, const std::st
     std::string how = access(site, where);
     auto line = lines.find({resource, how});
     if (line == lines.end()) {
-      bad(where + ".resource", "\"" + resource + "\" (" + how + ") is not a counted resource line of this pass");
+      bad(where + ".resource", "\"" + resource + "\" (" + how + ") is not a resource line of this pass");
     }
-    std::optional<int64_t> sourceLine;
+    std::optional<int64_t> sourceLine, instruction;
     if (find(site, "line")) sourceLine = whole(site, "line", where, 1);
+    if (find(site, "instruction")) instruction = whole(site, "instruction", where, 0);
     double bytes = amount(site, "bytes", where);
-    line->second.second += bytes;
+    line->second.sites += bytes;
     insert.reset();
     insert.bind(1, passId)
         .bind(2, static_cast<int64_t>(i))
         .bind(3, text(site, "shader", where))
         .bind(4, text(site, "stage", where))
         .bind(5, text(site, "entry_point", where))
-        .bind(6, whole(site, "instruction", where, 0))
+        .bind(6, instruction)
         .bind(7, text(site, "opcode", where))
         .bind(8, resource)
         .bind(9, how)
@@ -122,10 +132,10 @@ void insertSites(Connection* db, int64_t passId, const json& pass, const std::st
         .bind(15, bytes)
         .run();
   }
-  for (const auto& [key, sums] : lines) {
-    if (sums.second > 0 && !same(sums.first, sums.second)) {
-      bad(path + ".sites", "the sites of \"" + key.first + "\" (" + key.second + ") sum to " + json(sums.second).dump() +
-                               " bytes, its resource line has " + json(sums.first).dump());
+  for (const auto& [key, line] : lines) {
+    if (line.counted && line.sites > 0 && !same(line.bytes, line.sites)) {
+      bad(path + ".sites", "the sites of \"" + key.first + "\" (" + key.second + ") sum to " + json(line.sites).dump() +
+                               " bytes, its resource line has " + json(line.bytes).dump());
     }
   }
 }

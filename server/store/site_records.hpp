@@ -42,7 +42,7 @@ struct SiteRow {
   int passPosition = 0;
   std::string pass;
   std::string shader, stage, entryPoint;
-  int64_t instruction = 0;  // by line: the heaviest site's
+  std::optional<int64_t> instruction;  // SPIR-V result id; absent where the result gave none. By line: the heaviest site's
   std::string opcode;       // by line: the heaviest site's
   std::string resource, access;  // by line: the heaviest site's
   std::optional<std::string> kind, file;

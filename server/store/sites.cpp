@@ -78,7 +78,7 @@ std::vector<SiteRow> readSites(Connection* db, int64_t sampleId, const std::opti
     site.shader = row.getText();
     site.stage = row.getText();
     site.entryPoint = row.getText();
-    site.instruction = row.getInt();
+    site.instruction = row.getOptInt();
     site.opcode = row.getText();
     site.resource = row.getText();
     site.access = row.getText();

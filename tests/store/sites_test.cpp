@@ -74,7 +74,7 @@ TEST_F(Sites, ReadBackAsTheyWentIn) {
         EXPECT_EQ(row.stage, "fragment");
         EXPECT_EQ(row.entryPoint, "main");
         EXPECT_EQ(row.opcode, "OpImageSampleImplicitLod");
-        got.insert(row.pass + "|" + row.shader + "|" + std::to_string(row.instruction) + "|" + row.resource + "|" + row.access +
+        got.insert(row.pass + "|" + row.shader + "|" + std::to_string(row.instruction.value_or(-1)) + "|" + row.resource + "|" + row.access +
                    "|" + (row.line ? std::to_string(*row.line) : "-") + "|" + row.disassembly + "|" + json(row.bytes).dump() +
                    "|" + json(row.count).dump());
       }
@@ -112,6 +112,27 @@ TEST_F(Sites, ReadBackAsTheyWentIn) {
   EXPECT_FALSE(none->has_value());
 }
 
+// As an application's module may give them: no instruction, an empty kind,
+// shader and entry point.
+TEST_F(Sites, SitesWithoutInstructionOrNames) {
+  Capture c = realisticCapture(8);
+  c.result = withSites(c.result);
+  json& site = c.result["runs"][0]["samples"][0]["passes"][1]["sites"][0];
+  site.erase("instruction");
+  site["kind"] = "";
+  site["shader"] = "";
+  site["entry_point"] = "";
+  double bytes = site["bytes"];
+  ingest(newJob(), c);
+  SitePage page = allSites(sampleIds().front(), SiteGrouping::Site, "opaque");
+  auto found = std::find_if(page.rows.begin(), page.rows.end(), [](const SiteRow& r) { return !r.instruction; });
+  ASSERT_NE(found, page.rows.end());
+  EXPECT_DOUBLE_EQ(found->bytes, bytes);
+  EXPECT_FALSE(found->kind);
+  EXPECT_EQ(found->shader, "");
+  EXPECT_EQ(std::count_if(page.rows.begin(), page.rows.end(), [](const SiteRow& r) { return !r.instruction; }), 1);
+}
+
 TEST_F(Sites, ByLineSumsTheSitesOfEachLine) {
   Capture c = realisticCapture(2);
   c.result = withSites(c.result);
@@ -129,7 +150,7 @@ TEST_F(Sites, ByLineSumsTheSitesOfEachLine) {
   EXPECT_EQ(page.total, static_cast<int64_t>(expected.size()));
   double sum = 0;
   for (const auto& row : page.rows) {
-    std::string key = row.line ? std::to_string(*row.line) : "#" + std::to_string(row.instruction);
+    std::string key = row.line ? std::to_string(*row.line) : "#" + std::to_string(row.instruction.value_or(-1));
     ASSERT_TRUE(expected.count(key)) << key;
     EXPECT_DOUBLE_EQ(row.bytes, expected[key].first) << key;
     EXPECT_EQ(row.sites, expected[key].second) << key;
@@ -256,7 +277,7 @@ TEST_F(Sites, BadFieldsAreRefusedNamingThem) {
   EXPECT_NE(with([&](json& r) { site(r)["line"] = 0; }).find("sites[3].line: must be at least 1"), std::string::npos);
   EXPECT_NE(with([&](json& r) { site(r).erase("disassembly"); }).find("sites[3].disassembly"), std::string::npos);
   EXPECT_NE(with([&](json& r) { site(r)["resource"] = "elsewhere"; })
-                .find("sites[3].resource: \"elsewhere\" (write) is not a counted resource line of this pass"),
+                .find("sites[3].resource: \"elsewhere\" (write) is not a resource line of this pass"),
             std::string::npos);
   // A site's bytes moved off its line: the line's sites no longer sum to it.
   EXPECT_NE(with([&](json& r) { site(r)["bytes"] = site(r)["bytes"].get<double>() + 1000; })

@@ -52,7 +52,7 @@ async function allPages(path, params, key, signal) {
   return { rows, passes: reply.passes, rest: reply.rest || [] };
 }
 
-const lineKey = (site) => (site.line === null ? `%${site.instruction}` : String(site.line));
+const lineKey = (site) => (site.line !== null ? String(site.line) : site.instruction !== null ? `%${site.instruction}` : site.disassembly || '(no line)');
 const resourceOf = (site) => `${site.resource} (${site.access})`;
 const sumBy = (rows, key) => {
   const out = new Map();
