@@ -274,6 +274,14 @@ Result<std::string> ApiClient::exportRuns(const std::string& format, const RunFi
   return raw->body;
 }
 
+Result<json> ApiClient::sampleRows(const std::string& sampleId, const std::string& what,
+                                   const std::vector<std::pair<std::string, std::string>>& params) {
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const auto& p : params)
+    if (!p.second.empty()) given.push_back(p);
+  return sendJson("GET", "/api/samples/" + pathId(sampleId) + "/" + what + query(given));
+}
+
 Result<std::string> ApiClient::sampleTrace(const std::string& sampleId) {
   auto raw = send("GET", "/api/samples/" + pathId(sampleId) + "/trace");
   if (!raw) return makeError(raw.error());

@@ -92,6 +92,9 @@ class ApiClient {
   Result<json> getSweep(const std::string& id);
   // The export body, verbatim.
   Result<std::string> exportRuns(const std::string& format, const RunFilters& filters);
+  // GET /api/samples/{id}/sites or /draws (what), with these query parameters (empty values left out).
+  Result<json> sampleRows(const std::string& sampleId, const std::string& what,
+                          const std::vector<std::pair<std::string, std::string>>& params);
   // GET /api/samples/{id}/trace: the sample as Chrome trace-event JSON, verbatim.
   Result<std::string> sampleTrace(const std::string& sampleId);
   // Baselines and alerts (docs/api.md, "Baselines and alerts").

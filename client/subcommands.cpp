@@ -1,6 +1,8 @@
 // The tally subcommands' flags and what each runs, by command group.
 #include "subcommands.hpp"
 
+#include "hotspots.hpp"
+
 namespace tally::client {
 namespace {
 
@@ -171,12 +173,32 @@ void addRunCommands(CLI::App& app, Subcommands& subcommands) {
       "Example:\n  tally heatmap 9 --renderer deferred --versus visbuffer\n"
       "  tally heatmap 9 --renderer deferred --metric bytes --yaw worst --json");
 
+  HotspotsArgs& hotspotsArgs = subcommands.hold<HotspotsArgs>();
+  auto* hotspotsCmd = app.add_subcommand(
+      "hotspots", "Where a run's bytes go per pass: by shader source line, draw or material, with shares of the pass");
+  hotspotsCmd->add_option("RUN", hotspotsArgs.run, "Run id (captured with \"sites\": true)")->required();
+  hotspotsCmd->add_option("--pass", hotspotsArgs.pass, "Only this pass (by name)");
+  hotspotsCmd->add_option("--by", hotspotsArgs.by, "line, draw or material")
+      ->check(CLI::IsMember({"line", "draw", "material"}))
+      ->capture_default_str();
+  hotspotsCmd->add_option("--top", hotspotsArgs.top, "Rows per pass; the rest summed")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  hotspotsCmd->add_option("--sample", hotspotsArgs.sample, "A sample id of the run (default: its first camera's)");
+  hotspotsCmd->footer(
+      "Bytes are per frame; SHARE is of the pass's bytes (all its resource lines), so each pass's rows, its rest\n"
+      "and what no row covers (lines without sites, such as derived depth writes; work outside any draw) sum\n"
+      "to 100 % (docs/api.md, \"Sites, draws and shaders\").\n"
+      "Example:\n  tally hotspots 12\n  tally hotspots 12 --pass lighting --by material --top 5\n"
+      "  tally hotspots 12 --by draw --json");
+
   subcommands.on(runsCmd, [&runs](ApiClient& api, Io& io) { return runRuns(api, runs, io); });
   subcommands.on(show, [&showId](ApiClient& api, Io& io) { return runShow(api, showId, io); });
   subcommands.on(compare, [&compareArgs](ApiClient& api, Io& io) { return runCompare(api, compareArgs, io); });
   subcommands.on(crossoverCmd,
                  [&crossoverArgs](ApiClient& api, Io& io) { return runCrossover(api, crossoverArgs, io); });
   subcommands.on(heatmapCmd, [&heatmapArgs](ApiClient& api, Io& io) { return runHeatmap(api, heatmapArgs, io); });
+  subcommands.on(hotspotsCmd, [&hotspotsArgs](ApiClient& api, Io& io) { return runHotspots(api, hotspotsArgs, io); });
 }
 
 void addSweepAndExportCommands(CLI::App& app, Subcommands& subcommands) {

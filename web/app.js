@@ -15,6 +15,7 @@ import * as heatmap from './views/heatmap.js';
 import * as hosts from './views/hosts.js';
 import * as run from './views/run.js';
 import * as runs from './views/runs.js';
+import * as shader from './views/shader.js';
 import * as sweep from './views/sweep.js';
 import * as sweeps from './views/sweeps.js';
 import * as trend from './views/trend.js';
@@ -23,6 +24,7 @@ import * as trend from './views/trend.js';
 const kRoutes = [
   ['/runs', runs, 'runs'],
   ['/runs/:id', run, 'runs'],
+  ['/shader/:id', shader, 'runs'],
   ['/compare', compare, 'compare'],
   ['/accuracy', accuracy, 'accuracy'],
   ['/sweeps', sweeps, 'sweeps'],

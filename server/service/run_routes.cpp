@@ -7,6 +7,7 @@
 #include "service/admission.hpp"
 #include "service/handlers.hpp"
 #include "service/routes.hpp"
+#include "service/sites_routes.hpp"
 #include "service/trace.hpp"
 
 namespace tally::service::detail {
@@ -125,7 +126,8 @@ Response getSampleTrace(ServiceContext& ctx, const Request& req) {
   if (!sample) missing("no sample " + std::to_string(id));
   auto run = check(store.runs().get(sample->row.runId));
   if (!run) missing("no run for sample " + std::to_string(id));
-  return Response::ok(sampleTrace(run->row, *sample));
+  constexpr int kTopLines = 5;  // per pass: enough to name the hot spots, few enough to read in the slice's args
+  return Response::ok(sampleTrace(run->row, *sample, topLinesPerPass(store, id, kTopLines)));
 }
 
 Response getScreenshot(ServiceContext& ctx, const Request& req) {

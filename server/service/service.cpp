@@ -6,6 +6,7 @@
 #include "service/errors.hpp"
 #include "service/handlers.hpp"
 #include "service/read_stores.hpp"
+#include "service/sites_routes.hpp"
 
 namespace tally::service {
 using namespace detail;
@@ -49,6 +50,7 @@ void addServiceRoutes(api::Router& router, ServiceContext& ctx) {
   router.get("/api/hosts", route(listHosts));
   router.get("/api/scenes", route(listScenes));
   addAlertRoutes(router, ctx);
+  addSiteRoutes(router, ctx);
 }
 
 }  // namespace tally::service

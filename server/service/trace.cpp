@@ -33,9 +33,24 @@ std::string processName(const store::RunRow& run) {
   return name;
 }
 
+// A pass's heaviest source lines, for its slice's args: where in the shader its bytes go.
+json topLinesJson(const std::vector<store::SiteRow>& lines, double passBytes) {
+  json out = json::array();
+  for (const auto& line : lines) {
+    out.push_back({{"shader", line.shader},
+                   {"line", line.line ? json(*line.line) : json(nullptr)},
+                   {"instruction", line.instruction ? json(*line.instruction) : json(nullptr)},
+                   {"bytes", line.bytes},
+                   {"share", passBytes > 0 ? json(line.bytes / passBytes) : json(nullptr)},
+                   {"resources", line.resources}});
+  }
+  return out;
+}
+
 }  // namespace
 
-json sampleTrace(const store::RunRow& run, const store::Sample& sample) {
+json sampleTrace(const store::RunRow& run, const store::Sample& sample,
+                 const std::map<int, std::vector<store::SiteRow>>& topLines) {
   const store::SampleRow& row = sample.row;
   // Frames: the stored per-frame times, else the sample's frame count at its median.
   size_t frames = row.frameMsFrames.size();
@@ -77,7 +92,8 @@ json sampleTrace(const store::RunRow& run, const store::Sample& sample) {
                       {"dur", micros(frameDur)},
                       {"args", {{"frame", f}, {"frame_ms", frameMs(f)}}}});
     int64_t passStart = frameStart;
-    for (const auto& pass : sample.passes) {
+    for (size_t p = 0; p < sample.passes.size(); ++p) {
+      const store::Pass& pass = sample.passes[p];
       double ms = passMs(pass, f);
       int64_t dur = nanos(ms);
       if (passStart + dur > frameEnd) {
@@ -86,6 +102,10 @@ json sampleTrace(const store::RunRow& run, const store::Sample& sample) {
       }
       double bytes = 0;
       for (const auto& counter : pass.counters) bytes += counter.bytes;
+      json args = {{"frame", f}, {"gpu_ms", ms}, {"bytes", bytes}};
+      if (auto lines = topLines.find(static_cast<int>(p)); lines != topLines.end()) {
+        args["top_lines"] = topLinesJson(lines->second, bytes);
+      }
       events.push_back({{"name", pass.name},
                         {"cat", "pass"},
                         {"ph", "X"},
@@ -93,7 +113,7 @@ json sampleTrace(const store::RunRow& run, const store::Sample& sample) {
                         {"tid", kGpuTid},
                         {"ts", micros(passStart)},
                         {"dur", micros(dur)},
-                        {"args", {{"frame", f}, {"gpu_ms", ms}, {"bytes", bytes}}}});
+                        {"args", std::move(args)}});
       passStart += dur;
     }
     for (const auto& resource : resources) {
@@ -126,6 +146,10 @@ json sampleTrace(const store::RunRow& run, const store::Sample& sample) {
                    {"clipped_passes", clipped},
                    {"bytes", "counter tracks: requested bytes per frame of each resource, read + write, "
                              "summed over passes (the counted frames' average, the same every frame)"}};
+  if (!topLines.empty()) {
+    metadata["top_lines"] = "pass slices' args.top_lines: the pass's heaviest source lines (shader, line, bytes per "
+                            "frame, share of the pass's bytes, resource lines), from its per-site counts";
+  }
   return {{"traceEvents", std::move(events)}, {"displayTimeUnit", "ms"}, {"metadata", std::move(metadata)}};
 }
 

@@ -14,7 +14,12 @@
 // Counter events ("C"), one series per resource, give its bytes per frame
 // (read + write, summed over passes) at each frame's start. Times are in
 // microseconds (whole nanoseconds, so nesting survives the conversion).
+// Where the sample has per-site counts, each pass slice's args carry
+// "top_lines": its heaviest source lines (topLines, by pass position).
 #pragma once
+
+#include <map>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +28,7 @@
 namespace tally::service {
 
 // {"traceEvents": [...], "displayTimeUnit": "ms", "metadata": {...}}.
-nlohmann::json sampleTrace(const store::RunRow& run, const store::Sample& sample);
+nlohmann::json sampleTrace(const store::RunRow& run, const store::Sample& sample,
+                           const std::map<int, std::vector<store::SiteRow>>& topLines = {});
 
 }  // namespace tally::service

@@ -8,10 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <tuple>
+#include <vector>
 
 #include "common/json_fields.hpp"
 #include "store/batch_insert.hpp"
 #include "store/ingest_input.hpp"
+#include "store/ingest_sites.hpp"
 #include "store/internal.hpp"
 
 namespace tally::store::detail {
@@ -113,6 +116,10 @@ struct CaptureRows {
   }
 
   Connection* db;
+  // Sites, draws and materials of each pass, and each run's shader sources
+  // (store/ingest_sites.hpp): written after the rows they refer to, in the
+  // same transaction.
+  std::vector<std::tuple<int64_t, const json*, std::string>> passSites, runShaders;
   Ids runIds, screenshotIds, sampleIds, passIds;
   BatchInsert runs, resources, screenshots, samples, passes, counters;
   Statement findScene, insertScene;
@@ -208,6 +215,7 @@ void addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const std:
         .add(kMembers.optNumber(pass, "compute_invocations_statistic", at))
         .add(optFrameTimes(pass, "gpu_ms_frames", at));
     addCounters(in, passId, pass, at);
+    in.passSites.emplace_back(passId, &pass, at);
   }
 }
 
@@ -443,6 +451,7 @@ void addRun(CaptureRows& in, const RunContext& context, const json& run, const s
       .add(footprintBlock)
       .add(context.host);
   addResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
+  in.runShaders.emplace_back(runId, &run, path);
   addSamples(in, runId, run, path, screenshots);
 }
 
@@ -476,6 +485,8 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
     addRun(in, context, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
   }
   in.write();
+  for (const auto& [runId, run, path] : in.runShaders) insertShaderSources(db, runId, *run, path);
+  for (const auto& [passId, pass, path] : in.passSites) insertPassSites(db, passId, *pass, path);
   return static_cast<int64_t>(runs->size());
 }
 

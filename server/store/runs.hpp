@@ -13,6 +13,7 @@
 #include "store/facet.hpp"
 #include "store/job_records.hpp"
 #include "store/run_records.hpp"
+#include "store/site_records.hpp"
 
 namespace tally::store {
 
@@ -77,6 +78,14 @@ class Runs : public Facet {
   Result<std::optional<Sweep>> sweep(int64_t sweepId);
   // The sweeps a job stored (one for a finished sweep job, none otherwise), by id.
   Result<std::vector<int64_t>> jobSweepIds(int64_t jobId);
+  // Sites, draws and materials of a sample (0011; sites.cpp): ranked by
+  // bytes and paged, with every pass's bytes for shares. Empty optional: no
+  // such sample. A query's pass that the sample lacks selects no row.
+  Result<std::optional<SitePage>> sites(int64_t sampleId, const SiteQuery& query);
+  Result<std::optional<DrawPage>> draws(int64_t sampleId, const DrawQuery& query);
+  // A run's shader sources by name, without their text; one with its text.
+  Result<std::vector<ShaderSource>> shaderSources(int64_t runId);
+  Result<std::optional<ShaderSource>> shaderSource(int64_t runId, const std::string& name);
   // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
   Result<std::vector<ExportRow>> exportRows(const RunFilter& filter);
 

@@ -801,6 +801,7 @@ TEST(CliHelp, EverySubcommandListsItsOptions) {
       {"compare", {"RUN"}},
       {"crossover", {"CAPTURE", "--metric"}},
       {"heatmap", {"CAPTURE", "--renderer", "--versus", "--metric", "--yaw"}},
+      {"hotspots", {"RUN", "--pass", "--by", "--top", "--sample"}},
       {"export", {"--format", "--runs", "--output"}},
   };
   for (const auto& f : filters) {

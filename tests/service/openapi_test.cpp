@@ -85,7 +85,8 @@ TEST_F(OpenApiTest, EveryRouteIsDocumented) {
       "/api/health",       "/api/openapi.json", "/api/renderers",         "/api/scenes",
       "/api/devices",      "/api/captures",     "/api/captures/{id}",     "/api/runs",
       "/api/runs/{id}",    "/api/runs/{id}/samples", "/api/samples/{id}", "/api/samples/{id}/screenshot.png",
-      "/api/samples/{id}/trace",
+      "/api/samples/{id}/trace", "/api/samples/{id}/sites", "/api/samples/{id}/draws",
+      "/api/runs/{id}/shaders", "/api/runs/{id}/shaders/{name}",
       "/api/compare",      "/api/export",       "/api/accuracy",          "/api/repeats",
       "/api/crossover",    "/api/heatmap",      "/api/heatmap/{id}/topdown.png",
       "/api/sweeps",       "/api/sweeps/{id}",  "/api/hosts",             "/metrics",
@@ -131,6 +132,16 @@ TEST_F(OpenApiTest, ResponsesMatchTheirSchemas) {
                       "/api/samples/{id}/trace", 200);
   EXPECT_EQ(trace["metadata"]["frame_times"], "measured");
   EXPECT_FALSE(trace["traceEvents"].empty());
+  // A capture without "sites": true stores none: empty pages, every pass listed.
+  std::string sampleId = std::to_string(sample["id"].get<int64_t>());
+  json sites = expect("GET", "/api/samples/" + sampleId + "/sites?by=line", "/api/samples/{id}/sites", 200);
+  EXPECT_EQ(sites["total"], 0);
+  EXPECT_EQ(sites["passes"].size(), sample["passes"].size());
+  expect("GET", "/api/samples/" + sampleId + "/draws?by=material", "/api/samples/{id}/draws", 200);
+  expect("GET", "/api/runs/" + a + "/shaders", "/api/runs/{id}/shaders", 200);
+  expect("GET", "/api/runs/" + a + "/shaders/forward.frag.glsl", "/api/runs/{id}/shaders/{name}", 404);
+  expect("GET", "/api/samples/987654/sites", "/api/samples/{id}/sites", 404);
+  expect("GET", "/api/samples/" + sampleId + "/draws?limit=0", "/api/samples/{id}/draws", 400);
   expect("GET", "/api/compare?runs=" + a + "," + b, "/api/compare", 200);
   json exported = expect("GET", "/api/export?format=json&capture=" + std::to_string(captureId_), "/api/export", 200);
   EXPECT_FALSE(exported["rows"].empty());

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the dashboard's browser tests (dashboard.test.mjs, application.test.mjs,
 # hosts.test.mjs, crossover.test.mjs, heatmap.test.mjs, alerts.test.mjs,
-# glance.test.mjs) with node's test runner. ctest calls it as:
+# glance.test.mjs, shader.test.mjs) with node's test runner. ctest calls it as:
 # run.sh TALLYD WEB_ROOT SCREENSHOT_DIR [FILE.test.mjs ...] (one file per ctest test; all without).
 # Without node, Chromium or the npm packages (scripts/setup.sh installs them)
 # it skips (exit 77), except where tests are strict (CI=true, or
@@ -25,6 +25,6 @@ fi
 cd "$here"
 files=("${@:4}")
 if [ ${#files[@]} -eq 0 ]; then
-  files=(dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs alerts.test.mjs glance.test.mjs)
+  files=(dashboard.test.mjs application.test.mjs hosts.test.mjs crossover.test.mjs heatmap.test.mjs alerts.test.mjs glance.test.mjs shader.test.mjs)
 fi
 exec node --test --test-reporter=spec "${files[@]}"

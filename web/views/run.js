@@ -425,6 +425,7 @@ export async function render(page, { params, signal }) {
       h('li', {}, h('a', { href: `#/runs?capture=${run.capture}` }, `capture #${run.capture}`)),
       run.notes && run.notes.heatmap ? h('li', {}, h('a', { href: `#/heatmap?capture=${run.capture}`, dataset: { heatmapLink: String(run.capture) } }, 'its camera heatmap')) : null,
       h('li', {}, h('a', { href: compareHref }, 'compare with other runs at this scene and resolution')),
+      h('li', {}, h('a', { href: `#/shader/${run.id}`, dataset: { shaderLink: '' } }, 'shaders: bytes per source line, draw and material')),
       app ? null : h('li', {}, baselineControl(run))),
     h('div', { class: 'tiles' },
       tile(app ? `GPU time per frame (under the layer, ${kStatisticText[time.statistic]})` : `Frame time (${kStatisticText[time.statistic]})`, fmt.ms(time.value), 'frame-ms'),
