@@ -538,6 +538,7 @@ renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const Render
   renderers::applyOptions(variant.options, ro);
   if (instrumented) ro.footprintBlockBytes = spec.footprintBlockBytes;
   ro.sites = instrumented && spec.sites;
+  ro.draws = ro.sites;  // "sites": true counts per draw and per material too
   return ro;
 }
 
