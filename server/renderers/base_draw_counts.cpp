@@ -9,6 +9,7 @@
 #include <cstring>
 #include <map>
 
+#include "renderers/material_split.hpp"
 #include "renderers/renderer_base.hpp"
 #include "shared.h"
 
@@ -109,35 +110,43 @@ void RendererBase::attributeDraws(uint32_t passIndex, PassResult& result,
 void RendererBase::splitMaterialMaps(uint32_t passIndex, PassResult& result, const PassCounts& counts) const {
   const Pass& p = passes_[passIndex];
   if (!countsDraws() || !p.drawsRecorded.empty()) return;
-  const auto bound = p.bindings.bindings.find({shaders::kSetMaterial, shaders::kBindingMaterialMaps});
+  const std::pair<int64_t, int64_t> maps = {shaders::kSetMaterial, shaders::kBindingMaterialMaps};
+  const auto bound = p.bindings.bindings.find(maps);
   const auto& users = scene_->indexedMapMaterials();
   if (bound == p.bindings.bindings.end() || bound->second.size() < 2 || users.empty()) return;
-  std::vector<uint32_t> drawsOf(scene_->materialCount() + 1, 0);
+  std::vector<std::string> names;
+  for (uint32_t m = 0; m < scene_->materialCount(); ++m) names.push_back(scene_->materialName(m));
+  std::vector<uint32_t> drawsOf(names.size(), 0);
   for (const auto& d : scene_->draws()) ++drawsOf[std::min<size_t>(d.material, drawsOf.size() - 1)];
-  std::map<std::string, MaterialCount> materials;
-  for (const auto& e : counts.elements) {
-    if (e.set != shaders::kSetMaterial || e.binding != shaders::kBindingMaterialMaps || e.count == 0) continue;
+  result.materials = materialMapSplit(counts.elements, maps, users, names, drawsOf, scenes::kMapSlotCount);
+}
+
+std::vector<MaterialCount> materialMapSplit(const std::vector<PassCounts::Element>& elements,
+                                            std::pair<int64_t, int64_t> binding,
+                                            const std::vector<std::vector<uint32_t>>& users,
+                                            const std::vector<std::string>& materialNames,
+                                            const std::vector<uint32_t>& drawsOf, uint32_t dummies) {
+  std::map<std::string, MaterialCount> byName;
+  for (const auto& e : elements) {
+    if (std::make_pair(e.set, e.binding) != binding || e.count == 0) continue;
     const std::vector<uint32_t> none;
     const auto& sampledBy = e.element < users.size() ? users[e.element] : none;
-    // A dummy serves every material without that map; a texture several
-    // materials share cannot be split among them: one entry names them all.
-    std::string name;
+    std::string name = e.element < dummies ? std::string("no ") + mapKindName(e.element) + " map" : "";
     uint32_t draws = 0;
-    if (e.element < scenes::kMapSlotCount) {
-      name = std::string("no ") + mapKindName(e.element) + " map";
-    }
     for (uint32_t m : sampledBy) {
-      if (e.element >= scenes::kMapSlotCount) name += (name.empty() ? "" : " + ") + scene_->materialName(m);
+      if (e.element >= dummies && m < materialNames.size()) name += (name.empty() ? "" : " + ") + materialNames[m];
       draws += m < drawsOf.size() ? drawsOf[m] : 0;
     }
-    if (name.empty()) name = "element " + std::to_string(e.element);
-    MaterialCount& m = materials[name];
+    if (name.empty()) name = "element " + std::to_string(e.element);  // bound, sampled by no material
+    MaterialCount& m = byName[name];
     m.material = name;
     m.draws = draws;
     m.count += e.count;
     (e.write ? m.bytesWritten : m.bytesRead) += e.bytes;
   }
-  for (auto& [name, m] : materials) result.materials.push_back(m);
+  std::vector<MaterialCount> out;
+  for (auto& [name, m] : byName) out.push_back(std::move(m));
+  return out;
 }
 
 }  // namespace tally::renderers

@@ -383,7 +383,9 @@ bool checkDrawsAndMaterials(const json& pass) {
     materialWritten += m["bytes_written"].get<double>();
   }
   if (pass.value("draws", json::array()).empty()) {
-    if (pass.contains("materials")) EXPECT_EQ(materialRead, mapRead);
+    if (pass.contains("materials")) {
+      EXPECT_EQ(materialRead, mapRead);
+    }
     return false;
   }
   EXPECT_EQ(drawRead, lineRead);
