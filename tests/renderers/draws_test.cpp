@@ -178,6 +178,31 @@ TEST(RendererDraws, DrawsBeyondTheCapShareOneCount) {
   EXPECT_GT(p.draws[0].bytesWritten, 0u);
 }
 
+// Shadows on: the shadow pass draws the scene too, each draw into its own
+// region, and its lines stay those of the frame without draws.
+TEST(RendererDraws, TheShadowPassCountsPerDraw) {
+  const VkExtent2D extent = {41, 23};
+  const nlohmann::json spec = planes(3, "back-to-front", 0.5);
+  for (const char* name : {"forward", "deferred"}) {
+    SCOPED_TRACE(name);
+    auto shadows = [](bool draws) {
+      return [=](RendererOptions& o) {
+        o.shadows.filter = ShadowFilter::Hard;
+        o.draws = draws;
+      };
+    };
+    Rendered with = render(name, spec, extent, shadows(true));
+    Rendered without = render(name, spec, extent, shadows(false));
+    ASSERT_TRUE(with.ok && without.ok) << with.error << without.error;
+    const PassResult& p = fixture::passNamed(with, "shadow");
+    expectLinesEqual(p, fixture::passNamed(without, "shadow"));
+    ASSERT_EQ(p.draws.size(), 3u);
+    EXPECT_EQ(drawSums(p), counterLines(p));
+    EXPECT_EQ(materialSums(p), counterLines(p));
+    for (const auto& d : p.draws) EXPECT_GT(d.count, 0u) << d.index;  // each quad's vertices, at least
+  }
+}
+
 // The visibility buffers' shading passes split their material-map reads
 // per material where each texture is an element of its own (descriptor
 // indexing): the split sums to the pass's material-map lines. On the map
