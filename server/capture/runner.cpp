@@ -537,7 +537,7 @@ renderers::RendererOptions rendererOptions(const CaptureSpec& spec, const Render
   renderers::RendererOptions ro{{res.width, res.height}, instrumented, mode, spec.lights};
   renderers::applyOptions(variant.options, ro);
   if (instrumented) ro.footprintBlockBytes = spec.footprintBlockBytes;
-  ro.sites = instrumented && spec.sites;
+  ro.sites = ro.draws = instrumented && spec.sites;  // per site, per draw and per material
   return ro;
 }
 

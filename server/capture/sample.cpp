@@ -29,7 +29,106 @@ void addSites(SampleMeasure& m, const renderers::PassResult& pass) {
   }
 }
 
+void addToLine(DrawLine& line, const renderers::DrawCount& d, uint32_t draws) {
+  line.draws = draws;
+  line.count += double(d.count);
+  line.bytesRead += double(d.bytesRead);
+  line.bytesWritten += double(d.bytesWritten);
+}
+
+void addDraws(SampleMeasure& m, const renderers::PassResult& pass) {
+  if (pass.draws.empty() && pass.drawsRest.draws == 0 && pass.materials.empty()) return;
+  ++m.drawFrames[pass.name];
+  for (const auto& d : pass.draws) {
+    auto [it, inserted] = m.draws[pass.name].try_emplace(d.index);
+    if (inserted) it->second.draw = d;
+    addToLine(it->second, d, d.draws);
+  }
+  if (pass.drawsRest.draws > 0) addToLine(m.drawsRest[pass.name], pass.drawsRest, pass.drawsRest.draws);
+  for (const auto& mc : pass.materials) {
+    renderers::DrawCount asDraw;
+    asDraw.material = mc.material;
+    asDraw.count = mc.count;
+    asDraw.bytesRead = mc.bytesRead;
+    asDraw.bytesWritten = mc.bytesWritten;
+    auto [it, inserted] = m.materials[pass.name].try_emplace(mc.material);
+    if (inserted) it->second.draw = asDraw;
+    addToLine(it->second, asDraw, mc.draws);
+  }
+}
+
+double lineBytes(const DrawLine& l) { return l.bytesRead + l.bytesWritten; }
+
+// A pass's draws, most bytes first (ties: scene order).
+std::vector<const DrawLine*> drawsByBytes(const SampleMeasure& m, const std::string& pass) {
+  std::vector<const DrawLine*> order;
+  auto found = m.draws.find(pass);
+  if (found == m.draws.end()) return order;
+  for (const auto& [index, line] : found->second) order.push_back(&line);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const DrawLine* a, const DrawLine* b) { return lineBytes(*a) > lineBytes(*b); });
+  return order;
+}
+
+double drawFrames(const SampleMeasure& m, const std::string& pass) {
+  auto it = m.drawFrames.find(pass);
+  return it != m.drawFrames.end() && it->second > 0 ? double(it->second) : 1.0;
+}
+
+json bytesFields(json entry, const DrawLine& l, double frames) {
+  entry["bytes_read"] = l.bytesRead / frames;
+  entry["bytes_written"] = l.bytesWritten / frames;
+  entry["bytes"] = lineBytes(l) / frames;
+  return entry;
+}
+
 }  // namespace
+
+json drawsJson(const SampleMeasure& m, const std::string& pass) {
+  json out = json::array();
+  const double frames = drawFrames(m, pass);
+  const auto order = drawsByBytes(m, pass);
+  for (size_t i = 0; i < order.size() && i < kMaxDraws; ++i) {
+    const renderers::DrawCount& d = order[i]->draw;
+    out.push_back(bytesFields({{"index", d.index},
+                               {"name", "mesh " + d.mesh + " \u00b7 " + d.material},
+                               {"mesh", d.mesh},
+                               {"material", d.material},
+                               {"count", order[i]->count / frames}},
+                              *order[i], frames));
+  }
+  return out;
+}
+
+json drawsRestJson(const SampleMeasure& m, const std::string& pass) {
+  DrawLine rest;
+  if (auto it = m.drawsRest.find(pass); it != m.drawsRest.end()) rest = it->second;
+  const auto order = drawsByBytes(m, pass);
+  for (size_t i = kMaxDraws; i < order.size(); ++i) {
+    rest.draws += order[i]->draws;
+    rest.count += order[i]->count;
+    rest.bytesRead += order[i]->bytesRead;
+    rest.bytesWritten += order[i]->bytesWritten;
+  }
+  if (rest.draws == 0) return nullptr;
+  const double frames = drawFrames(m, pass);
+  return bytesFields({{"draws", rest.draws}, {"count", rest.count / frames}}, rest, frames);
+}
+
+json materialsJson(const SampleMeasure& m, const std::string& pass) {
+  json out = json::array();
+  auto found = m.materials.find(pass);
+  if (found == m.materials.end()) return out;
+  std::vector<const DrawLine*> order;
+  for (const auto& [name, line] : found->second) order.push_back(&line);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const DrawLine* a, const DrawLine* b) { return lineBytes(*a) > lineBytes(*b); });
+  const double frames = drawFrames(m, pass);
+  for (const DrawLine* l : order) {
+    out.push_back(bytesFields({{"material", l->draw.material}, {"draws", l->draws}}, *l, frames));
+  }
+  return out;
+}
 
 json sitesJson(const SampleMeasure& m, const std::string& pass) {
   json out = json::array();
@@ -87,6 +186,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
       if (a.footprintBytes >= 0 && a.footprintClamped) ++it->second.footprintClampedFrames;
     }
     addSites(m, pass);
+    addDraws(m, pass);
   }
   m.instrumentedFrameMs.push_back(total);
 }
@@ -182,6 +282,11 @@ json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInf
     }
     pass["resources"] = std::move(lines);
     if (m.sites.count(name)) pass["sites"] = sitesJson(m, name);
+    if (m.drawFrames.count(name)) {
+      pass["draws"] = drawsJson(m, name);
+      if (json rest = drawsRestJson(m, name); !rest.is_null()) pass["draws_rest"] = std::move(rest);
+      pass["materials"] = materialsJson(m, name);
+    }
     pass["bytes"] = passBytes;                 // the immediate-mode model: every line
     pass["bytes_tile_model"] = passDram;       // the tile-memory model: lines not on chip
     if (passHasFootprint) {

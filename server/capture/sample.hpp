@@ -37,6 +37,18 @@ struct SiteLine {
   double count = 0, bytes = 0;  // summed over the frames
 };
 
+// Accumulates one draw's, the rest's or one material's share of a pass over
+// frames (RendererOptions::draws).
+struct DrawLine {
+  renderers::DrawCount draw;  // what it is (its first frame's; counts unused)
+  uint32_t draws = 0;         // draws it sums (the rest, a material), as last counted
+  double count = 0, bytesRead = 0, bytesWritten = 0;  // summed over the frames
+};
+
+// A sample keeps a pass's kMaxDraws draws with the most bytes; the others
+// are summed into its "draws_rest" (storage per sample stays bounded).
+constexpr size_t kMaxDraws = 256;
+
 // F instrumented frames: counts per frame; F uninstrumented frames: times.
 struct SampleMeasure {
   std::vector<std::string> passOrder;
@@ -53,6 +65,12 @@ struct SampleMeasure {
   // Per pass, its sites in first-seen order (key: shader, instruction, line).
   std::map<std::string, std::vector<SiteLine>> sites;
   std::map<std::string, std::map<std::string, size_t>> siteIndex;
+  // Per pass: its draws by scene draw index, the draws beyond the renderer's
+  // cap, its materials by name, and the frames that counted them.
+  std::map<std::string, std::map<uint32_t, DrawLine>> draws;
+  std::map<std::string, DrawLine> drawsRest;
+  std::map<std::string, std::map<std::string, DrawLine>> materials;
+  std::map<std::string, uint32_t> drawFrames;
 };
 
 // A counted frame: its lines' counts, bytes and footprints, its pass times.
@@ -73,6 +91,14 @@ void addTimes(SampleMeasure& m, const renderers::FrameResult& frame);
 // the frames divided by the frames its line was counted in, as the line's
 // own mean is), sorted by bytes, most first.
 nlohmann::json sitesJson(const SampleMeasure& m, const std::string& pass);
+
+// A pass's "draws" (the kMaxDraws with the most bytes, most first),
+// "draws_rest" (the others and the renderer's rest summed; null when none)
+// and "materials" (most bytes first), per frame: sums over the frames that
+// counted the pass's draws divided by their number.
+nlohmann::json drawsJson(const SampleMeasure& m, const std::string& pass);
+nlohmann::json drawsRestJson(const SampleMeasure& m, const std::string& pass);
+nlohmann::json materialsJson(const SampleMeasure& m, const std::string& pass);
 
 nlohmann::json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources,
                           uint32_t frames, uint32_t countedFrames);

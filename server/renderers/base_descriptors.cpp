@@ -69,12 +69,12 @@ void RendererBase::bindSetsAt(VkCommandBuffer cmd, VkPipelineBindPoint point, Vk
 
 void RendererBase::bindCounterSet(VkCommandBuffer cmd, VkPipelineBindPoint point, VkPipelineLayout layout) {
   if (counterDescriptorSet_ == VK_NULL_HANDLE) return;
-  if (!footprintOn()) {
-    vkCmdBindDescriptorSets(cmd, point, layout, counterSet_, 1, &counterDescriptorSet_, 0, nullptr);
-    return;
-  }
-  uint32_t offset = footprint_.bankOffset(footprintBank(point));
-  vkCmdBindDescriptorSets(cmd, point, layout, counterSet_, 1, &counterDescriptorSet_, 1, &offset);
+  // Dynamic offsets in binding order: the draw's counter region, the footprint bank.
+  uint32_t offsets[2] = {};
+  uint32_t dynamic = 0;
+  if (countsDraws()) offsets[dynamic++] = uint32_t(uint64_t(counterRegion_) * regionSlots_ * sizeof(uint64_t));
+  if (footprintOn()) offsets[dynamic++] = footprint_.bankOffset(footprintBank(point));
+  vkCmdBindDescriptorSets(cmd, point, layout, counterSet_, 1, &counterDescriptorSet_, dynamic, offsets);
 }
 
 VkDescriptorSet RendererBase::geometrySetWith(const gpu::Buffer& materials, const gpu::Buffer& materialExtras) {

@@ -62,17 +62,24 @@ void RendererBase::drawScene(VkCommandBuffer cmd, uint32_t passIndex, VkPipeline
     if (materialSets) {
       vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout, shaders::kSetMaterial, 1,
                               &materialSets_[d.material], 0, nullptr);
-      if (footprintOn()) {  // the draw's maps: its own bank of the footprint table
-        boundSets_[0][shaders::kSetMaterial] = materialSets_[d.material];
-        bindCounterSet(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout);
-      }
+      // the draw's maps: its own bank of the footprint table
+      if (footprintOn()) boundSets_[0][shaders::kSetMaterial] = materialSets_[d.material];
     }
+    if (countsDraws()) {  // the draw's own counter region (base_draw_counts.cpp)
+      counterRegion_ = drawRegion(i);
+      passes_[passIndex].drawsRecorded.push_back(i);
+    }
+    if (countsDraws() || (materialSets && footprintOn())) bindCounterSet(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout);
     shaders::DrawPush push = {i, d.material};
     vkCmdPushConstants(cmd, layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push,
                        &push);
     vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, 0);
     passes_[passIndex].indicesDrawn += d.indexCount;
     passes_[passIndex].indexRanges.emplace_back(d.firstIndex, d.indexCount);
+  }
+  if (countsDraws() && !order.empty()) {  // later work of the pass counts outside draws
+    counterRegion_ = 0;
+    bindCounterSet(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, layout);
   }
 }
 

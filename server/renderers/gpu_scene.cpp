@@ -164,6 +164,7 @@ Result<bool> GpuScene::upload(gpu::Context& ctx, const scenes::Scene& scene) {
   MaterialTables tables;
   uploadMaterials(ctx, scene, tables);
   buildIndexedMaps(ctx, scene, tables);
+  recordNames(scene);
   uploadMapArrays(ctx, scene, tables);
   uploadLightsAndSky(ctx, scene, tables.defaults);
   return true;

@@ -118,6 +118,13 @@ class GpuScene {
   const std::vector<std::string>& indexedMapNames() const { return indexedNames_; }
   // Materials whose maps[k] index indexedMapViews() (the materials buffer's index layers).
   const gpu::Buffer& indexedMaterialBuffer() const { return indexedMaterialBuffer_; }
+  // What counts per draw and per material are reported under
+  // (gpu_scene_names.cpp): draw d's mesh name (its index where unnamed),
+  // material m's name, and per element of indexedMapViews() the materials
+  // that sample it (a dummy: every material without that map).
+  const std::string& meshName(uint32_t draw) const { return meshNames_[draw]; }
+  const std::string& materialName(uint32_t material) const { return materialNames_[material]; }
+  const std::vector<std::vector<uint32_t>>& indexedMapMaterials() const { return indexedMapMaterials_; }
   VkImageView skyView() const { return sky_.view; }
   VkSampler sampler() const { return sampler_; }        // trilinear, repeat
   VkSampler skySampler() const { return skySampler_; }  // linear, clamp
@@ -163,6 +170,9 @@ class GpuScene {
   void buildIndexedMaps(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables);
   void uploadMapArrays(gpu::Context& ctx, const scenes::Scene& scene, const MaterialTables& tables);
   void uploadLightsAndSky(gpu::Context& ctx, const scenes::Scene& scene, const VkSamplerCreateInfo& defaults);
+  void recordNames(const scenes::Scene& scene);  // after buildIndexedMaps
+  std::vector<std::string> meshNames_, materialNames_;
+  std::vector<std::vector<uint32_t>> indexedMapMaterials_;
 
   gpu::Context* ctx_ = nullptr;
   scenes::Bounds bounds_;

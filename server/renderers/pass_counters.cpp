@@ -134,6 +134,7 @@ PassCounts attributeCounters(const std::vector<spirv::Site>& sites, const std::v
       }
       count(siteIndex, name, write, n, bytes, kindOf(site, name));
       noteSlot(n, name);
+      if (site.slotCount > 1) out.elements.push_back({site.set, site.binding, i, write, n, n * bytes});
     }
   }
   return out;

@@ -41,6 +41,15 @@ struct PassCounts {
   uint64_t maxSlotCount = 0;
   std::string maxSlotResource;
   std::vector<SiteCount> sites;  // with perSite: each site's share of the lines
+  // Every counted element of a dynamically indexed descriptor array (a
+  // site with several slots): what it added to its line, by element.
+  struct Element {
+    int64_t set = 0, binding = 0;
+    uint32_t element = 0;
+    bool write = false;
+    uint64_t count = 0, bytes = 0;
+  };
+  std::vector<Element> elements;
 };
 
 // The line names a site's slots count for: the attachment at an output's

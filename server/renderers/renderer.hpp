@@ -92,6 +92,26 @@ struct SiteCount {
   uint64_t count = 0, bytes = 0;
 };
 
+// One draw's share of a pass's counted lines (RendererOptions::draws): a
+// scene draw (one mesh primitive with its material), or with `draws` > 1 the
+// draws beyond RendererOptions::maxCountedDraws, which share one count.
+struct DrawCount {
+  uint32_t index = 0;          // the scene's draw (mesh) index; the first of the rest
+  std::string mesh, material;  // the mesh's name (its index where unnamed) and its material's
+  uint32_t draws = 1;
+  uint64_t count = 0, bytesRead = 0, bytesWritten = 0;
+};
+
+// One material's bytes in a pass: the sum over its draws (geometry passes),
+// or on the visibility buffers' shading passes its share of the material-map
+// reads (the textures only it samples; a texture several materials share is
+// one entry naming them all).
+struct MaterialCount {
+  std::string material;
+  uint32_t draws = 0;  // the draws summed; on shading passes the scene's draws with the material
+  uint64_t count = 0, bytesRead = 0, bytesWritten = 0;
+};
+
 struct PassResult {
   std::string name;        // part of the result format: "gbuffer", "lighting", ...
   double gpuMs = 0;        // from timestamps around the pass
@@ -112,6 +132,12 @@ struct PassResult {
   // RendererOptions::sites: every counted access site of the pass's shaders;
   // a line's count and bytes are the sums over its sites.
   std::vector<SiteCount> sites;
+  // RendererOptions::draws: every draw the pass recorded (its counted lines
+  // split per draw; they sum to the pass's counted lines), the rest beyond
+  // the cap (draws == 0: none), and the per-material sums.
+  std::vector<DrawCount> draws;
+  DrawCount drawsRest = {.draws = 0};
+  std::vector<MaterialCount> materials;
 };
 
 struct FrameResult {
@@ -291,6 +317,12 @@ struct RendererOptions {
   // Counts per access site (spirv::InstrumentOptions::perSite), shaders
   // compiled with line information: PassResult::sites. Needs instrumented.
   bool sites = false;
+  // Counts per draw and per material (PassResult::draws, ::materials): each
+  // scene draw counts into a counter region of its own, up to
+  // maxCountedDraws draws; the draws beyond share one more region. Needs
+  // instrumented.
+  bool draws = false;
+  uint32_t maxCountedDraws = 1024;
 };
 
 class Renderer {

@@ -49,10 +49,12 @@ void RendererBase::createSetLayouts(const GpuScene& scene, const RendererOptions
   geometryLayout_ = setLayout({ssbo, ssbo, ssbo, ssbo, ssbo, ssbo});
   emptyLayout_ = setLayout({});
   // The counters; with footprint, the table (a bank per binding of the set) and the bitmaps.
-  // Uninstrumented: no counter set at all.
+  // Uninstrumented: no counter set at all. With draws, the counters are a
+  // dynamic buffer: each draw binds its own region (base_draw_counts.cpp).
+  const T counters = options.instrumented && options.draws ? VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC : ssbo;
   counterLayout_ = !options.instrumented                 ? VK_NULL_HANDLE
-                   : options.footprintBlockBytes != 0 ? setLayout({ssbo, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
-                                                       : setLayout({ssbo});
+                   : options.footprintBlockBytes != 0 ? setLayout({counters, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, ssbo})
+                                                       : setLayout({counters});
   // The five maps; the emissive map at kBindingEmissiveMap where a material has one.
   const bool emissiveMaps = scene.features().emissiveMaps;
   materialLayout_ = emissiveMaps ? setLayout({image, image, image, image, image, image})
@@ -169,12 +171,17 @@ void RendererBase::addSharedResources(const GpuScene& scene) {
 void RendererBase::createCountersAndQueries(gpu::Context& ctx) {
   const VkDescriptorType ssbo = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   if (options_.instrumented) {
-    counters_ = gpu::createBuffer(ctx, VkDeviceSize(std::max(slotCount_, 1u)) * sizeof(uint64_t),
+    sizeCounterRegions();
+    counters_ = gpu::createBuffer(ctx, VkDeviceSize(regionSlots_) * regionCount_ * sizeof(uint64_t),
                                   VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                                       VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                   gpu::MemoryUse::DeviceLocal);
     counterDescriptorSet_ = allocateSet(counterLayout_);
     gpu::DescriptorWrite counterWrite = bufferWrite(0, ssbo, counters_);
+    if (countsDraws()) {  // one region, at the offset each bind gives
+      counterWrite.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
+      counterWrite.buffer.range = VkDeviceSize(regionSlots_) * sizeof(uint64_t);
+    }
     gpu::updateDescriptorSet(ctx, counterDescriptorSet_, {&counterWrite, 1});
   }
   if (ctx.timestamps) timestamps_ = gpu::createTimestampQueries(ctx, uint32_t(passes_.size()));
@@ -260,6 +267,7 @@ nlohmann::json RendererBase::frameExtras() {
 void RendererBase::recordAll(VkCommandBuffer cmd) {
   labelOpen_ = false;
   subpassLabelled_.clear();
+  counterRegion_ = 0;
   if (counters_.buffer != VK_NULL_HANDLE) {  // instrumented
     vkCmdFillBuffer(cmd, counters_.buffer, 0, VK_WHOLE_SIZE, 0);  // counters are per frame
     VkMemoryBarrier barrier = {VK_STRUCTURE_TYPE_MEMORY_BARRIER};
@@ -274,6 +282,7 @@ void RendererBase::recordAll(VkCommandBuffer cmd) {
   for (uint32_t i = 0; i < passes_.size(); ++i) {
     passes_[i].indicesDrawn = 0;
     passes_[i].indexRanges.clear();
+    passes_[i].drawsRecorded.clear();
     recordingPass_ = i;
     boundSets_ = {};
     if (timestamps_.pool != VK_NULL_HANDLE) gpu::writePassBegin(cmd, timestamps_, i);
@@ -314,12 +323,8 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
   std::vector<gpu::PipelineStatistics> stats;
   if (statistics_.pool != VK_NULL_HANDLE) stats = gpu::readStatistics(*ctx_, statistics_);
   std::vector<uint64_t> counters;
-  if (options_.instrumented && slotCount_ > 0) {
-    auto bytes = gpu::readBuffer(*ctx_, counters_, 0, VkDeviceSize(slotCount_) * sizeof(uint64_t));
-    counters.resize(slotCount_);
-    std::memcpy(counters.data(), bytes.data(), counters.size() * sizeof(uint64_t));  // little-endian hosts
-    for (const auto& layout : copyLayouts_) spirv::settleCounters(counters, layout);
-  }
+  std::vector<std::vector<uint64_t>> regions;  // per draw region, with options_.draws
+  if (options_.instrumented && slotCount_ > 0) counters = readCounters(regions);
   std::vector<uint32_t> bitmap;
   if (footprintReady_) bitmap = footprint_.read();
   frame.readbackSeconds = std::chrono::duration<double>(Clock::now() - waited).count();
@@ -342,6 +347,8 @@ FrameResult RendererBase::renderFrame(const scenes::Camera& camera) {
       r.maxSlotCount = counts.maxSlotCount;
       r.maxSlotResource = std::move(counts.maxSlotResource);
       r.sites = std::move(counts.sites);
+      attributeDraws(i, r, regions);
+      splitMaterialMaps(i, r, counts);
       if (footprintReady_) attributeFootprint(i, r.accesses, bitmap);
       if (!p.arithmetic.empty()) {
         r.arithmeticOps = 0;

@@ -89,6 +89,7 @@ class RendererBase : public Renderer {
     uint64_t indicesDrawn = 0;  // this frame, by drawScene
     std::vector<std::pair<uint32_t, uint32_t>> indexRanges;  // (first index, count) drawn this frame
     bool indexFetches = false;  // derive "indices" reads from indicesDrawn
+    std::vector<uint32_t> drawsRecorded;  // scene draws drawn this frame (options_.draws), in order
   };
 
   // Derived classes: create targets and pipelines, add passes (in order).
@@ -350,6 +351,22 @@ class RendererBase : public Renderer {
   uint32_t maxLayoutSets_ = 0;  // the most descriptor sets of a pipeline layout made since setup
   uint32_t slotCount_ = 0;                       // counter slots reserved, copies included
   std::vector<spirv::CopyLayout> copyLayouts_;   // striped modules, folded after readback
+  // Counts per draw (options_.draws; base_draw_counts.cpp): the counter
+  // buffer holds regionCount_ regions of regionSlots_ slots, each a whole
+  // copy of the slot space bound with a dynamic offset: region 0 for work
+  // outside draws, 1 + d for scene draw d below options_.maxCountedDraws,
+  // and one more shared by the draws beyond.
+  bool countsDraws() const { return options_.instrumented && options_.draws; }
+  uint32_t drawRegion(uint32_t draw) const;
+  void sizeCounterRegions();
+  // Reads the counters back and settles them: with draws, each region
+  // settled into `regions`; the result is the whole frame's (their sum).
+  std::vector<uint64_t> readCounters(std::vector<std::vector<uint64_t>>& regions);
+  // PassResult::draws, drawsRest and materials of pass `passIndex`.
+  void attributeDraws(uint32_t passIndex, PassResult& result, const std::vector<std::vector<uint64_t>>& regions) const;
+  void splitMaterialMaps(uint32_t passIndex, PassResult& result, const PassCounts& counts) const;
+  uint32_t countedDraws_ = 0;  // draws with a region of their own: maxCountedDraws, less where memory bounds it
+  uint32_t regionSlots_ = 0, regionCount_ = 1, counterRegion_ = 0;
   gpu::Buffer counters_, cameraBuffer_, lightingBuffer_;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSetLayout frameLayout_ = VK_NULL_HANDLE, geometryLayout_ = VK_NULL_HANDLE,

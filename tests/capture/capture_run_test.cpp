@@ -357,6 +357,44 @@ TEST_F(CaptureRun, RooflinePerPass) {
   }
 }
 
+// A pass's "draws" (with "draws_rest") sum to its counted lines and its
+// "materials" to its draws; on a shading pass without draws, "materials"
+// splits the material-map reads. Returns whether the pass had draws.
+bool checkDrawsAndMaterials(const json& pass) {
+  double lineRead = 0, lineWritten = 0, mapRead = 0;
+  for (const json& line : pass["resources"]) {
+    if (line["source"] != "counter") continue;
+    const double bytes = line["bytes"].get<double>();
+    (line["access"] == "write" ? lineWritten : lineRead) += bytes;
+    if (line["access"] == "read" && line["name"].get<std::string>().rfind("material_maps.", 0) == 0) mapRead += bytes;
+  }
+  double drawRead = 0, drawWritten = 0, materialRead = 0, materialWritten = 0;
+  for (const json& d : pass.value("draws", json::array())) {
+    drawRead += d["bytes_read"].get<double>();
+    drawWritten += d["bytes_written"].get<double>();
+    EXPECT_EQ(d["bytes"].get<double>(), d["bytes_read"].get<double>() + d["bytes_written"].get<double>());
+  }
+  if (pass.contains("draws_rest")) {
+    drawRead += pass["draws_rest"]["bytes_read"].get<double>();
+    drawWritten += pass["draws_rest"]["bytes_written"].get<double>();
+  }
+  for (const json& m : pass.value("materials", json::array())) {
+    materialRead += m["bytes_read"].get<double>();
+    materialWritten += m["bytes_written"].get<double>();
+  }
+  if (pass.value("draws", json::array()).empty()) {
+    if (pass.contains("materials")) {
+      EXPECT_EQ(materialRead, mapRead);
+    }
+    return false;
+  }
+  EXPECT_EQ(drawRead, lineRead);
+  EXPECT_EQ(drawWritten, lineWritten);
+  EXPECT_EQ(materialRead, drawRead);
+  EXPECT_EQ(materialWritten, drawWritten);
+  return true;
+}
+
 // Per-site counts ("sites": true) in every renderer, counting mode and with
 // footprint on: each counted line is the sum of its sites' counts and bytes;
 // every line, footprint included, equals the same capture's without sites
@@ -379,7 +417,7 @@ TEST_F(CaptureRun, SitesSumToTheirLinesAndChangeNoLine) {
   ASSERT_EQ(capture(spec, sitesOut.string()), 0) << test::readFile(dir_ / "err");
   json plain = json::parse(test::readFile(plainOut)), sites = json::parse(test::readFile(sitesOut));
   ASSERT_EQ(plain["runs"].size(), sites["runs"].size());
-  size_t counted = 0;
+  size_t counted = 0, drawPasses = 0;
   for (size_t r = 0; r < sites["runs"].size(); ++r) {
     const json& run = sites["runs"][r];
     SCOPED_TRACE(run["renderer"].get<std::string>() + " " + run["counting"].get<std::string>());
@@ -389,6 +427,7 @@ TEST_F(CaptureRun, SitesSumToTheirLinesAndChangeNoLine) {
       const json& before = plain["runs"][r]["samples"][0]["passes"][p];
       SCOPED_TRACE(pass["name"].get<std::string>());
       EXPECT_EQ(pass["resources"], before["resources"]);
+      drawPasses += checkDrawsAndMaterials(pass) ? 1 : 0;  // "sites" counts per draw too
       std::map<std::string, std::pair<double, double>> bySites;
       for (const json& site : pass.value("sites", json::array())) {
         bySites[site["resource"].get<std::string>() + "/" + site["access"].get<std::string>()].first += site["count"].get<double>();
@@ -410,6 +449,7 @@ TEST_F(CaptureRun, SitesSumToTheirLinesAndChangeNoLine) {
     }
   }
   EXPECT_GT(counted, 0u);
+  EXPECT_GT(drawPasses, 0u);
 }
 
 TEST_F(CaptureRun, BadSpecNamesTheFieldAndWritesNothing) {

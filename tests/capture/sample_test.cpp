@@ -138,5 +138,98 @@ TEST(SampleJson, PerFrameTimesAlignedWithTheFrames) {
   EXPECT_DOUBLE_EQ(sample["frame_ms"].get<double>(), 1.125);  // median of 0.5, 0.75, 1.5, 2.25
 }
 
+// Draws per pass: the kMaxDraws with the most bytes, most first; the others
+// summed into draws_rest with the renderer's own rest; materials summed from
+// every draw, most first; all per frame (sums over two frames, halved).
+TEST(SampleJson, TopDrawsTheRestSummedAndMaterialsPerFrame) {
+  const size_t total = kMaxDraws + 4;
+  auto drawFrame = [&](uint64_t scale) {
+    renderers::FrameResult f = frame({access("diffuse", false, 1, 4)}, {});
+    renderers::PassResult& g = f.passes[0];
+    for (size_t i = 0; i < total; ++i) {
+      renderers::DrawCount d;
+      d.index = uint32_t(i);
+      d.mesh = std::to_string(i);
+      d.material = i % 2 == 0 ? "even" : "odd";
+      d.count = scale * (i + 1);
+      d.bytesRead = scale * 4 * (i + 1);  // draw i: 4 (i + 1) bytes read, 2 (i + 1) written
+      d.bytesWritten = scale * 2 * (i + 1);
+      g.draws.push_back(d);
+    }
+    g.drawsRest = {.index = uint32_t(total), .draws = 7, .count = scale, .bytesRead = scale * 10, .bytesWritten = 0};
+    for (const char* material : {"even", "odd"}) {
+      renderers::MaterialCount m;
+      m.material = material;
+      for (const auto& d : g.draws) {
+        if (d.material != material) continue;
+        ++m.draws;
+        m.count += d.count;
+        m.bytesRead += d.bytesRead;
+        m.bytesWritten += d.bytesWritten;
+      }
+      g.materials.push_back(m);
+    }
+    return f;
+  };
+  SampleMeasure m;
+  addCounts(m, drawFrame(1));
+  addCounts(m, drawFrame(3));  // per frame: twice frame 1's
+  json sample = sampleJson(m, {}, 1, 2);
+  const json& gbuffer = passOf(sample, "gbuffer");
+  ASSERT_TRUE(gbuffer["draws"].is_array());
+  ASSERT_EQ(gbuffer["draws"].size(), kMaxDraws);
+  // Most bytes first: the last draw has the most.
+  for (size_t k = 0; k < kMaxDraws; ++k) {
+    const json& d = gbuffer["draws"][k];
+    const size_t i = total - 1 - k;
+    EXPECT_EQ(d["index"], i);
+    EXPECT_EQ(d["mesh"], std::to_string(i));
+    EXPECT_EQ(d["material"], i % 2 == 0 ? "even" : "odd");
+    EXPECT_EQ(d["name"], "mesh " + std::to_string(i) + " \u00b7 " + (i % 2 == 0 ? "even" : "odd"));
+    EXPECT_DOUBLE_EQ(d["count"].get<double>(), 2.0 * double(i + 1));
+    EXPECT_DOUBLE_EQ(d["bytes_read"].get<double>(), 8.0 * double(i + 1));
+    EXPECT_DOUBLE_EQ(d["bytes_written"].get<double>(), 4.0 * double(i + 1));
+    EXPECT_DOUBLE_EQ(d["bytes"].get<double>(), 12.0 * double(i + 1));
+  }
+  // The rest: draws 0..3 (1 + 2 + 3 + 4 = 10 units) and the renderer's 7.
+  const json& rest = gbuffer["draws_rest"];
+  ASSERT_TRUE(rest.is_object());
+  EXPECT_EQ(rest["draws"], 4 + 7);
+  EXPECT_DOUBLE_EQ(rest["count"].get<double>(), 2.0 * 10 + 2.0);
+  EXPECT_DOUBLE_EQ(rest["bytes_read"].get<double>(), 8.0 * 10 + 20.0);
+  EXPECT_DOUBLE_EQ(rest["bytes_written"].get<double>(), 4.0 * 10);
+  EXPECT_DOUBLE_EQ(rest["bytes"].get<double>(), 12.0 * 10 + 20.0);
+  // Materials: odd draws (i + 1 even) sum more than even ones.
+  ASSERT_EQ(gbuffer["materials"].size(), 2u);
+  EXPECT_EQ(gbuffer["materials"][0]["material"], "odd");
+  EXPECT_EQ(gbuffer["materials"][1]["material"], "even");
+  double oddUnits = 0, evenUnits = 0;
+  for (size_t i = 0; i < total; ++i) (i % 2 == 0 ? evenUnits : oddUnits) += double(i + 1);
+  EXPECT_EQ(gbuffer["materials"][0]["draws"], total / 2);
+  EXPECT_DOUBLE_EQ(gbuffer["materials"][0]["bytes"].get<double>(), 12.0 * oddUnits);
+  EXPECT_DOUBLE_EQ(gbuffer["materials"][1]["bytes_read"].get<double>(), 8.0 * evenUnits);
+  // A pass without draws has none of the fields.
+  EXPECT_FALSE(passOf(sample, "lighting").contains("draws"));
+  EXPECT_FALSE(passOf(sample, "lighting").contains("materials"));
+}
+
+// Fewer draws than the cap and no rest from the renderer: no draws_rest.
+TEST(SampleJson, NoDrawsRestWithoutARest) {
+  renderers::FrameResult f = frame({}, {});
+  renderers::DrawCount d;
+  d.mesh = "0";
+  d.material = "stone";
+  d.bytesRead = 16;
+  f.passes[0].draws = {d};
+  f.passes[0].materials = {{"stone", 1, 0, 16, 0}};
+  SampleMeasure m;
+  addCounts(m, f);
+  json sample = sampleJson(m, {}, 1, 1);
+  const json& gbuffer = passOf(sample, "gbuffer");
+  EXPECT_EQ(gbuffer["draws"].size(), 1u);
+  EXPECT_FALSE(gbuffer.contains("draws_rest"));
+  EXPECT_EQ(gbuffer["materials"][0]["bytes"], 16.0);
+}
+
 }  // namespace
 }  // namespace tally::capture
