@@ -256,7 +256,11 @@ std::string textHash(const std::string& text) {
 
 void insertPassSites(Connection* db, int64_t passId, const json& pass, const std::string& path) {
   if (find(pass, "sites")) insertSites(db, passId, pass, path);
-  if (find(pass, "draws") || find(pass, "draws_rest")) insertDraws(db, passId, pass, path);
+  // An application's pass has "draws" as its number of draw commands (an
+  // integer); the per-draw list is an array.
+  const json* draws = find(pass, "draws");
+  const bool drawList = draws != nullptr && !draws->is_number_integer();
+  if (drawList || find(pass, "draws_rest")) insertDraws(db, passId, pass, path);
   if (find(pass, "materials")) insertMaterials(db, passId, pass, path);
 }
 
