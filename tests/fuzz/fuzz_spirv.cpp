@@ -33,7 +33,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // One configuration per input (spirv-val runs twice per instrumentation,
   // so all of them per input would be seven times slower), picked by a hash
   // of the bytes: over the corpus every counting mode runs, with footprint
-  // on and off, counters as 64-bit atomics and as 32-bit pairs.
+  // on and off, counters as 64-bit atomics and as 32-bit pairs, slots per
+  // resource and per site.
   static constexpr const char* kModes[] = {
       "exact", "subgroup", "sampled:4", "accumulate", "accumulate:subgroup", "accumulate:lane"};
   uint32_t hash = 2166136261u;  // FNV-1a
@@ -44,6 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   options.countArithmetic = options.mode.kind == CountMode::Accumulate && (hash >> 12) % 2 == 0;
   if ((hash >> 13) % 2 == 0) options.width = CounterWidth::Uint32Pair;
   options.computeCopies = 1u << ((hash >> 14) % 5);
+  options.perSite = (hash >> 17) % 2 == 0;  // slots per site, each site's instruction disassembled
   check(*words, options);
   return 0;
 }
