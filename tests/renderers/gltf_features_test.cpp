@@ -416,12 +416,12 @@ TEST(GltfEmissive, EmissionIsAddedInEveryRenderer) {
 }
 
 // The visibility buffers' per-material split of their material-map reads,
-// derived by hand: a left half of material "left" (its own base colour
-// texture), a right half of "right" (its own base colour and normal
-// textures, and left's base colour texture as its emissive map). Each
-// covered pixel reads each of its material's maps once, so "left" reads its
-// texture once per left pixel, "right" its two own textures once per right
-// pixel each, and the shared texture's entry, "left + right", once per
+// derived by hand: a left half of material "left" (a base colour texture
+// and its own normal texture), a right half of "right" (its own base colour
+// and normal textures, and left's base colour texture as its emissive map).
+// Each covered pixel reads each of its material's maps once, so "left" reads
+// its own texture once per left pixel, "right" its two own textures once per
+// right pixel each, and the shared texture's entry, "left + right", once per
 // pixel of the view. Every covered pixel is shaded once (kLeftHalf each
 // side: the seam lies on a pixel edge). Only the descriptor-indexing path
 // counts per texture; on texture arrays (lavapipe) materials are layers of
@@ -431,7 +431,10 @@ TEST(GltfMaterialSplit, VisibilityShadingReadsSplitPerMaterialAsDerivedByHand) {
   const int leftBase = w.addTexture(8, 8, halves(8, 8, kWhite, kWhite));
   const int rightBase = w.addTexture(8, 8, halves(8, 8, kBlack, kWhite));
   const int rightNormal = w.addTexture(8, 8, halves(8, 8, glm::u8vec4(128, 128, 255, 255), glm::u8vec4(128, 128, 255, 255)));
-  const int left = w.addMaterial({{"name", "left"}, {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", leftBase}}}}}});
+  const int leftNormal = w.addTexture(4, 4, halves(4, 4, glm::u8vec4(128, 128, 255, 255), glm::u8vec4(128, 128, 255, 255)));
+  const int left = w.addMaterial({{"name", "left"},
+                                  {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", leftBase}}}}},
+                                  {"normalTexture", {{"index", leftNormal}}}});
   const int right = w.addMaterial({{"name", "right"},
                                    {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", rightBase}}}}},
                                    {"normalTexture", {{"index", rightNormal}}},
@@ -452,7 +455,12 @@ TEST(GltfMaterialSplit, VisibilityShadingReadsSplitPerMaterialAsDerivedByHand) {
         GTEST_SKIP() << "the device has no descriptor indexing: materials are layers of texture arrays";
       }
       std::map<std::string, uint64_t> reads;
-      for (const MaterialCount& m : passNamed(r, "shading").materials) reads[m.material] += m.count;
+      std::string entries;
+      for (const MaterialCount& m : passNamed(r, "shading").materials) {
+        reads[m.material] += m.count;
+        entries += " '" + m.material + "': " + std::to_string(m.count);
+      }
+      SCOPED_TRACE("entries:" + entries);
       EXPECT_EQ(reads["left"], kLeftHalf);
       EXPECT_EQ(reads["right"], 2 * kLeftHalf);
       EXPECT_EQ(reads["left + right"], kPixels);
