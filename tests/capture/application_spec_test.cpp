@@ -187,7 +187,7 @@ TEST(ApplicationSpec, ErrorsNameTheField) {
       {R"({"application": {"command": ["sh"], "fps": 3}})",
        "application.fps: unknown field (expected command, frames, skip_frames, frame_submits, env, display, name, "
        "timeout_s)"},
-      {R"({"application": {"command": ["sh"]}, "frames": 3})", "frames: unknown field (expected application, counting, sites)"},
+      {R"({"application": {"command": ["sh"]}, "frames": 3})", "frames: unknown field (expected application, counting, sites, draws)"},
       {R"({"application": {"command": ["sh"]}, "counting": "subgroup"})",
        "counting: must be \"accumulate\" or \"exact\" (the layer's modes), got \"subgroup\""},
       {R"({"application": {"command": ["sh"]}, "counting": ["exact"]})", "counting: must be \"accumulate\" or \"exact\""},
@@ -208,7 +208,7 @@ TEST(ApplicationSpec, ErrorsNameTheField) {
       {R"({"replay": "trace.gfxr", "timeout_s": 0})", "timeout_s: must be an integer between 1 and 3600, got 0"},
       {R"({"replay": "trace.gfxr", "env": {"TALLY_LAYER_COUNTING": "exact"}})", "env.TALLY_LAYER_COUNTING: is set by Tally"},
       {R"({"replay": "trace.gfxr", "name": "x"})",
-       "name: unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting, sites)"},
+       "name: unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting, sites, draws)"},
   };
   for (const auto& c : cases) {
     auto spec = parse(c.spec, dir.path);

@@ -366,36 +366,6 @@ void recordRenderingAndCompute(const App& app, const Scene& s, VkCommandBuffer c
   app.endLabel(cmd);
 }
 
-void submit(const App& app, VkCommandBuffer cmd, VkFence fence) {
-  VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  info.commandBufferCount = 1;
-  info.pCommandBuffers = &cmd;
-  check(vkQueueSubmit(app.queue, 1, &info, fence), "vkQueueSubmit");
-  check(vkWaitForFences(app.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-  vkResetFences(app.device, 1, &fence);
-}
-
-// Every image to GENERAL, once.
-void prepareImages(const App& app, VkCommandBuffer cmd, VkFence fence) {
-  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-  std::vector<VkImageMemoryBarrier> barriers;
-  for (const auto& [image, aspect] : app.images) {
-    VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    b.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
-    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    b.newLayout = kGeneral;
-    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.image = image;
-    b.subresourceRange = {aspect, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
-    barriers.push_back(b);
-  }
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0, nullptr, 0,
-                       nullptr, uint32_t(barriers.size()), barriers.data());
-  check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-  submit(app, cmd, fence);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -70,4 +70,9 @@ struct PipelineDesc {
 };
 VkPipeline pipeline(const App& app, const PipelineDesc& desc);
 
+// Submits `cmd` and waits for it.
+void submit(const App& app, VkCommandBuffer cmd, VkFence fence);
+// Every image to GENERAL, once (recorded into `cmd`, submitted, waited for).
+void prepareImages(const App& app, VkCommandBuffer cmd, VkFence fence);
+
 }  // namespace attribution
