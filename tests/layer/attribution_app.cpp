@@ -379,22 +379,13 @@ int main(int argc, char** argv) {
   createTargets(app, s);
   createDescriptors(app, s);
   createPipelines(app, s);
-  VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-  poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-  poolInfo.queueFamilyIndex = app.family;
-  check(vkCreateCommandPool(app.device, &poolInfo, nullptr, &s.pool), "vkCreateCommandPool");
-  VkCommandBufferAllocateInfo allocate = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  allocate.commandPool = s.pool;
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  allocate.commandBufferCount = 1;
-  check(vkAllocateCommandBuffers(app.device, &allocate, &s.primary), "vkAllocateCommandBuffers");
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_SECONDARY;
-  VkCommandBuffer* secondaries[] = {&s.left, &s.right, &s.rendering};
-  for (VkCommandBuffer* cmd : secondaries) check(vkAllocateCommandBuffers(app.device, &allocate, cmd), "secondary");
-  VkFenceCreateInfo fenceInfo = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence fence;
-  check(vkCreateFence(app.device, &fenceInfo, nullptr, &fence), "vkCreateFence");
-  prepareImages(app, s.primary, fence);
+  s.pool = commandPool(app);
+  s.primary = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_PRIMARY);
+  for (VkCommandBuffer* cmd : {&s.left, &s.right, &s.rendering}) {
+    *cmd = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_SECONDARY);
+  }
+  const VkFence done = fence(app);
+  prepareImages(app, s.primary, done);
   for (uint32_t frame = 0; frame < frames; ++frame) {
     recordSecondaries(s);
     VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
@@ -402,7 +393,7 @@ int main(int argc, char** argv) {
     recordRenderPasses(app, s, s.primary);
     recordRenderingAndCompute(app, s, s.primary);
     check(vkEndCommandBuffer(s.primary), "vkEndCommandBuffer");
-    submit(app, s.primary, fence);
+    submit(app, s.primary, done);
   }
   vkDeviceWaitIdle(app.device);
   std::printf("attribution_app: %u frames\n", frames);

@@ -270,6 +270,32 @@ VkPipeline pipeline(const App& app, const PipelineDesc& d) {
   return out;
 }
 
+VkCommandPool commandPool(const App& app) {
+  VkCommandPoolCreateInfo info = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  info.queueFamilyIndex = app.family;
+  VkCommandPool out;
+  check(vkCreateCommandPool(app.device, &info, nullptr, &out), "vkCreateCommandPool");
+  return out;
+}
+
+VkCommandBuffer commandBuffer(const App& app, VkCommandPool pool, VkCommandBufferLevel level) {
+  VkCommandBufferAllocateInfo info = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  info.commandPool = pool;
+  info.level = level;
+  info.commandBufferCount = 1;
+  VkCommandBuffer out;
+  check(vkAllocateCommandBuffers(app.device, &info, &out), "vkAllocateCommandBuffers");
+  return out;
+}
+
+VkFence fence(const App& app) {
+  VkFenceCreateInfo info = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence out;
+  check(vkCreateFence(app.device, &info, nullptr, &out), "vkCreateFence");
+  return out;
+}
+
 void submit(const App& app, VkCommandBuffer cmd, VkFence fence) {
   VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
   info.commandBufferCount = 1;

@@ -237,25 +237,15 @@ int main(int argc, char** argv) {
   createDevice(app);
   Scene s;
   createScene(app, s);
-  VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-  poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-  poolInfo.queueFamilyIndex = app.family;
-  check(vkCreateCommandPool(app.device, &poolInfo, nullptr, &s.pool), "vkCreateCommandPool");
-  VkCommandBufferAllocateInfo allocate = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  allocate.commandPool = s.pool;
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  allocate.commandBufferCount = 1;
-  check(vkAllocateCommandBuffers(app.device, &allocate, &s.primary), "vkAllocateCommandBuffers");
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_SECONDARY;
-  check(vkAllocateCommandBuffers(app.device, &allocate, &s.secondary), "vkAllocateCommandBuffers (secondary)");
-  VkFenceCreateInfo fenceInfo = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence fence;
-  check(vkCreateFence(app.device, &fenceInfo, nullptr, &fence), "vkCreateFence");
-  prepareImages(app, s.primary, fence);
+  s.pool = commandPool(app);
+  s.primary = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_PRIMARY);
+  s.secondary = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_SECONDARY);
+  const VkFence done = fence(app);
+  prepareImages(app, s.primary, done);
   for (uint32_t frame = 0; frame < frames; ++frame) {
     recordSecondary(app, s);
     recordFrame(app, s, many);
-    submit(app, s.primary, fence);
+    submit(app, s.primary, done);
   }
   vkDeviceWaitIdle(app.device);
   std::printf("draws_app: %u frames, %u draws in \"many\"\n", frames, many);
