@@ -12,13 +12,14 @@ RUN --by line` and `--by draw`. Relations from glmark2's source
 - `tally hotspots` ranks the same first line and draw.
 
 zink's modules carry no line information: a site names its instruction and
-its disassembly, not a source line (docs/layer.md, "Sites of an
-application")."""
+its disassembly, not a source line (docs/layer.md, "A shipped application,
+line by line and draw by draw")."""
 import json
 import os
 import shutil
 import subprocess
 import time
+from urllib.parse import quote
 
 import clients_relations as relations
 from clients_service import start_daemon
@@ -43,7 +44,7 @@ def check_sample(api, sample_id, failures):
     if not failures.check(len(passes) == 1, "%d passes draw, expected the cube's one" % len(passes)):
         return None
     p = passes[0]
-    sites = api.get("/api/samples/%d/sites?pass=%s&limit=1000" % (sample_id, p["name"]))["sites"]
+    sites = api.get("/api/samples/%d/sites?pass=%s&limit=1000" % (sample_id, quote(p["name"])))["sites"]
     lines = {(r["name"], r["access"]): r for r in p["resources"] if r["source"] == "counter"}
     sums = {}
     for s in sites:
@@ -60,9 +61,9 @@ def check_sample(api, sample_id, failures):
                    (top and (top["resource"], top["access"], top["count"]), [r["name"] for r in reads],
                     p["fragment_invocations"]))
     failures.check(top is not None and top["line"] is None and top["disassembly"] != "",
-                   "zink's module has no line information: the top site should name its disassembly, got %s" %
-                   (top and (top["line"], top["disassembly"])))
-    draws = api.get("/api/samples/%d/draws?pass=%s" % (sample_id, p["name"]))
+                   "zink's module has no line information: the top site should name its disassembly, got %r" %
+                   ((top and (top["line"], top["disassembly"])),))
+    draws = api.get("/api/samples/%d/draws?pass=%s" % (sample_id, quote(p["name"])))
     counted = sum(r["bytes"] for r in lines.values())
     failures.check(len(draws["draws"]) == 1 and not draws["rest"] and draws["draws"][0]["bytes"] == counted,
                    "draws %s, expected the cube's one draw of the pass's %s counted bytes" %
