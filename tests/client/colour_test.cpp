@@ -200,7 +200,8 @@ Output tallyWith(const std::string& env, const std::string& args) {
 TEST(ColourCli, PipedOutputIsPlainUnlessAsked) {
   FakeTallyd fake;
   const std::string server = "--server " + fake.url() + " ";
-  for (const char* cmd : {"runs", "compare 12 15", "alerts", "show 18", "crossover 7"}) {
+  for (const char* cmd : {"runs", "compare 12 15", "alerts", "show 18", "crossover 7",
+                          "heatmap 7 --renderer deferred --versus visbuffer"}) {
     Output piped = tallyWith("", server + cmd);
     ASSERT_EQ(piped.rc, 0) << cmd;
     EXPECT_EQ(piped.out.find('\x1b'), std::string::npos) << cmd;
@@ -243,6 +244,13 @@ TEST(ColourCli, RenderersInTheirColourChangesRedAndGreen) {
   EXPECT_NE(alerts.out.find(painted(palette["worse"], "slower")), std::string::npos) << alerts.out;
   EXPECT_NE(alerts.out.find(painted(palette["worse"], "changed")), std::string::npos) << alerts.out;
   EXPECT_EQ(alerts.out.find(truecolorEscapeOf(palette["better"])), std::string::npos) << alerts.out;
+
+  // A heatmap's significant cells: visbuffer lower (better) green, higher red;
+  // the cell that does not differ significantly uncoloured.
+  Output heatmap = tallyWith("COLORTERM=truecolor", server + "heatmap 7 --renderer deferred --versus visbuffer");
+  EXPECT_NE(heatmap.out.find(painted(palette["better"], "0.80*")), std::string::npos) << heatmap.out;
+  EXPECT_NE(heatmap.out.find(painted(palette["worse"], "1.25*")), std::string::npos) << heatmap.out;
+  EXPECT_NE(heatmap.out.find("   1.01"), std::string::npos) << heatmap.out;
 
   // A run's read and written bytes in the neutral colours.
   Output show = tallyWith("COLORTERM=truecolor", server + "show 12");
