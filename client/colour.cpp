@@ -34,7 +34,8 @@ const Palette& palette() {
   static const Palette p = [] {
     Palette out;
     const auto j = nlohmann::json::parse(kPaletteJson);
-    for (const auto& [label, hex] : j.at("pinned").items()) out.pinned[label] = colourAt("pinned." + label, hex);
+    for (const auto& [label, hex] : j.at("pinned").items())
+      out.pinned[label] = colourAt("pinned." + label, hex);
     for (size_t i = 0; i < j.at("series").size(); ++i)
       out.series.push_back(colourAt("series[" + std::to_string(i) + "]", j["series"][i]));
     if (out.series.empty()) throw std::logic_error("web/palette.json: series: empty");
@@ -61,11 +62,15 @@ std::optional<Rgb> parseHex(std::string_view hex) {
   if (hex.size() != 7 || hex[0] != '#') return std::nullopt;
   unsigned value = 0;
   for (char c : hex.substr(1)) {
-    int digit = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+    int digit = c >= '0' && c <= '9'   ? c - '0'
+                : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                       : -1;
     if (digit < 0) return std::nullopt;
     value = value * 16 + static_cast<unsigned>(digit);
   }
-  return Rgb{static_cast<uint8_t>(value >> 16), static_cast<uint8_t>(value >> 8), static_cast<uint8_t>(value)};
+  return Rgb{static_cast<uint8_t>(value >> 16), static_cast<uint8_t>(value >> 8),
+             static_cast<uint8_t>(value)};
 }
 
 std::optional<ColourMode> parseColourMode(std::string_view text) {
@@ -83,7 +88,8 @@ std::string Colour::paint(const std::string& text, std::optional<Rgb> rgb) const
 Colour decideColour(ColourMode mode, bool stdoutIsTerminal, const Getenv& env) {
   Colour c;
   const char* colorterm = env("COLORTERM");
-  c.truecolor = colorterm != nullptr && (std::string_view(colorterm) == "truecolor" || std::string_view(colorterm) == "24bit");
+  c.truecolor = colorterm != nullptr &&
+                (std::string_view(colorterm) == "truecolor" || std::string_view(colorterm) == "24bit");
   if (mode != ColourMode::Auto) {
     c.enabled = mode == ColourMode::Always;
     return c;

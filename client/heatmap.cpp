@@ -112,7 +112,8 @@ int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io) {
     const std::string b = body["versus"].get<std::string>(), a = body["renderer"].get<std::string>();
     io.out << "cells: " << io.colour.paint(b, labelColour(b)) << " / " << io.colour.paint(a, labelColour(a))
            << " (below 1: " << body["versus"].get<std::string>() << " lower); * the difference is significant"
-           << (metric == "frame_ms" ? " (Mann-Whitney, 95% ratio interval excludes 1)" : " (counts differ)") << "\n";
+           << (metric == "frame_ms" ? " (Mann-Whitney, 95% ratio interval excludes 1)" : " (counts differ)")
+           << "\n";
   } else {
     io.out << "cells: " << body["renderer"].get<std::string>() << ", "
            << (metric == "bytes" ? "MiB per frame" : "ms per frame") << "\n";

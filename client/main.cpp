@@ -33,9 +33,10 @@ int main(int argc, char** argv) {
   app.add_flag("--json", jsonOut, "Print the server's JSON instead of tables");
   app.add_option("--timeout", timeoutS, "Seconds to wait for a response")->check(CLI::PositiveNumber);
   app.add_flag("--version", version, "Print the client and API versions");
-  app.add_option("--color", colorMode,
-                 "Colour tables: auto (when stdout is a terminal and NO_COLOR is unset; CLICOLOR_FORCE forces), "
-                 "always or never")
+  app.add_option(
+         "--color", colorMode,
+         "Colour tables: auto (when stdout is a terminal and NO_COLOR is unset; CLICOLOR_FORCE forces), "
+         "always or never")
       ->check(CLI::IsMember({"auto", "always", "never"}))
       ->default_str("auto");
 

@@ -71,7 +71,8 @@ namespace {
 
 // The run's identity, device, ceilings and notes, above its samples.
 void printRunHeader(Io& io, const json& run, const RunView& r) {
-  io.out << "run " << r.id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " on " << r.scene << " at " << size(r) << '\n';
+  io.out << "run " << r.id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " on " << r.scene
+         << " at " << size(r) << '\n';
   if (!r.options.empty()) {
     io.out << "options:";
     for (const auto& [key, value] : r.options.items()) {
@@ -207,8 +208,9 @@ int printSampleTable(ApiClient& api, Io& io, const json& run, const RunView& r, 
                  {"FOOTPRINT/FRAME", Align::Right},
                  {"REUSE", Align::Right}});
     for (const auto& l : runLines(run)) {
-      lines.addRow({l.pass, l.resource, l.access, humanBytes(l.bytes), humanBytes(l.footprintBytes), ratio(l.reuse)},
-                   {std::nullopt, std::nullopt, accessColour(l.access)});
+      lines.addRow(
+          {l.pass, l.resource, l.access, humanBytes(l.bytes), humanBytes(l.footprintBytes), ratio(l.reuse)},
+          {std::nullopt, std::nullopt, accessColour(l.access)});
     }
     lines.print(io.out, io.colour);
   }
@@ -291,8 +293,9 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
     if (s.value("frame", json()).is_object()) {
       row("(frame)", s["frame"]);
     } else {
-      t.addRow({run, "(frame)", kMissing, kMissing, kMissing, kMissing, kMissing, s.value("frame_missing", "")},
-               {runPaint});
+      t.addRow(
+          {run, "(frame)", kMissing, kMissing, kMissing, kMissing, kMissing, s.value("frame_missing", "")},
+          {runPaint});
     }
     for (const auto& p : s.value("passes", json::array())) row(p.value("pass", ""), p);
     for (const auto& p : s.value("passes_missing", json::array())) {
@@ -338,8 +341,8 @@ int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
     names.push_back("#" + id);
     if (i < c.runs.size()) {
       const RunView& r = c.runs[i];
-      io.out << "#" << id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " " << r.scene << " " << size(r) << " on "
-             << orMissing(r.device) << '\n';
+      io.out << "#" << id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " " << r.scene
+             << " " << size(r) << " on " << orMissing(r.device) << '\n';
     }
   }
   io.out << '\n';
@@ -458,15 +461,15 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
     const json& fit = s.contains("fit") ? s["fit"] : json(nullptr);
     const Table::Paints variant = {labelColour(str(s, "variant"))};
     if (!fit.is_object()) {
-      fits.addRow({str(s, "variant"), str(s, "scene"), kMissing, kMissing, kMissing, kMissing, kMissing, kMissing,
-                   "none: " + orMissing(str(s, "error"))},
+      fits.addRow({str(s, "variant"), str(s, "scene"), kMissing, kMissing, kMissing, kMissing, kMissing,
+                   kMissing, "none: " + orMissing(str(s, "error"))},
                   variant);
       continue;
     }
-    fits.addRow({str(s, "variant"), str(s, "scene"), std::to_string(fit.value("n", 0)), metricFormat(num(fit, "a")),
-                 intervalText(fit["a_ci"], metricFormat), perPixelFormat(num(fit, "b")),
-                 intervalText(fit["b_ci"], perPixelFormat), fixed(num(fit, "r2"), 4),
-                 fit.value("poor_fit", false) ? "POOR (not linear)" : "ok"},
+    fits.addRow({str(s, "variant"), str(s, "scene"), std::to_string(fit.value("n", 0)),
+                 metricFormat(num(fit, "a")), intervalText(fit["a_ci"], metricFormat),
+                 perPixelFormat(num(fit, "b")), intervalText(fit["b_ci"], perPixelFormat),
+                 fixed(num(fit, "r2"), 4), fit.value("poor_fit", false) ? "POOR (not linear)" : "ok"},
                 variant);
     for (const auto& p : fit.value("points", json::array())) {
       std::string resolution = p.contains("width") ? std::to_string(p.value("width", 0)) + "x" +

@@ -187,9 +187,10 @@ Result<std::vector<RepeatRun>> repeatRunsFromResult(const json& result, const st
 }
 
 json toJson(const RepeatFigure& f) {
-  return {{"statistic", f.statistic}, {"per_run", f.perRun}, {"median", f.across.median}, {"q1", f.across.q1},   {"q3", f.across.q3},
-          {"iqr", f.across.iqr()}, {"min", f.across.min},     {"max", f.across.max}, {"noise_iqr", f.noise},
-          {"band_low", f.low},     {"band_high", f.high},     {"agrees", f.agrees}};
+  return {{"statistic", f.statistic}, {"per_run", f.perRun}, {"median", f.across.median},
+          {"q1", f.across.q1},        {"q3", f.across.q3},   {"iqr", f.across.iqr()},
+          {"min", f.across.min},      {"max", f.across.max}, {"noise_iqr", f.noise},
+          {"band_low", f.low},        {"band_high", f.high}, {"agrees", f.agrees}};
 }
 
 json frameMsJson(const RepeatGroup& g) {

@@ -52,7 +52,8 @@ RunFrameMs runFrameMs(const RepeatRun& run);
 
 // What a figure's per-run values are: the run statistic they repeat.
 inline constexpr const char* kFrameMsStatistic = "frame_ms_median";  // RunFrameMs, as /api/runs
-inline constexpr const char* kBytesStatistic = "mean_bytes";  // the mean over samples of their bytes per frame, as /api/runs
+inline constexpr const char* kBytesStatistic =
+    "mean_bytes";  // the mean over samples of their bytes per frame, as /api/runs
 
 // Runs are repeats of each other when these keys are equal: renderer, scene
 // and its parameters, resolution, device, counting mode, lights, and the same

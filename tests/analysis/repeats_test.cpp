@@ -240,13 +240,19 @@ TEST(Repeats, GroupUsesTheRunsFrameTime) {
 }
 
 TEST(Repeats, FromResultKeepsEveryFrame) {
-  nlohmann::json sample = {{"camera", {{"eye", {0, 1, 2}}}}, {"frames", 3}, {"frame_ms", 2.0},
-                           {"frame_ms_frames", {2.0, 1.0, 4.0}}, {"passes", nlohmann::json::array()}};
+  nlohmann::json sample = {{"camera", {{"eye", {0, 1, 2}}}},
+                           {"frames", 3},
+                           {"frame_ms", 2.0},
+                           {"frame_ms_frames", {2.0, 1.0, 4.0}},
+                           {"passes", nlohmann::json::array()}};
   nlohmann::json old = sample;
   old.erase("frame_ms_frames");
   nlohmann::json result = {{"device", {{"name", "llvmpipe"}}},
                            {"runs",
-                            {{{"renderer", "deferred"}, {"scene", "atrium"}, {"width", 64}, {"height", 36},
+                            {{{"renderer", "deferred"},
+                              {"scene", "atrium"},
+                              {"width", 64},
+                              {"height", 36},
                               {"samples", {sample, old}}}}}};
   auto runs = repeatRunsFromResult(result, "a.json");
   ASSERT_TRUE(runs) << runs.error();

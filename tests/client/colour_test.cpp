@@ -28,7 +28,9 @@ using nlohmann::json;
 using test::FakeTallyd;
 
 // The palette as the dashboard reads it, parsed without the client's code.
-json webPalette() { return json::parse(tally::test::readFile(fs::path(TALLY_SOURCE_DIR) / "web/palette.json")); }
+json webPalette() {
+  return json::parse(tally::test::readFile(fs::path(TALLY_SOURCE_DIR) / "web/palette.json"));
+}
 
 // "#rrggbb" -> the 24-bit foreground escape, written out by hand.
 std::string truecolorEscapeOf(const std::string& hex) {
@@ -37,7 +39,9 @@ std::string truecolorEscapeOf(const std::string& hex) {
   return "\x1b[38;2;" + std::to_string(r) + ";" + std::to_string(g) + ";" + std::to_string(b) + "m";
 }
 
-std::string stripEscapes(const std::string& text) { return std::regex_replace(text, std::regex("\x1b\\[[0-9;]*m"), ""); }
+std::string stripEscapes(const std::string& text) {
+  return std::regex_replace(text, std::regex("\x1b\\[[0-9;]*m"), "");
+}
 
 Colour decide(ColourMode mode, bool terminal, std::map<std::string, std::string> env) {
   return decideColour(mode, terminal, [&env](const char* name) -> const char* {
@@ -120,7 +124,8 @@ TEST(Colour, NearestXtermColourIsTheClosestOfAll) {
     long bestDistance = -1;
     for (int i = 16; i < 256; ++i) {
       auto c = rgbOf(i);
-      long d = (c[0] - rgb.r) * (c[0] - rgb.r) + (c[1] - rgb.g) * (c[1] - rgb.g) + (c[2] - rgb.b) * (c[2] - rgb.b);
+      long d =
+          (c[0] - rgb.r) * (c[0] - rgb.r) + (c[1] - rgb.g) * (c[1] - rgb.g) + (c[2] - rgb.b) * (c[2] - rgb.b);
       if (bestDistance < 0 || d < bestDistance) {
         best = i;
         bestDistance = d;
@@ -146,7 +151,8 @@ TEST(Colour, UnpinnedLabelsMatchTheDashboard) {
   fs::path dir = fs::temp_directory_path() / ("tally_colour_test_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "colours.mjs") << "import { labelColor } from '"
-                                     << "file://" + (fs::path(TALLY_SOURCE_DIR) / "web/palette.js").string() << "';\n"
+                                     << "file://" + (fs::path(TALLY_SOURCE_DIR) / "web/palette.js").string()
+                                     << "';\n"
                                      << "console.log(JSON.stringify(" << json(labels).dump()
                                      << ".map((l) => labelColor(l))));\n";
   std::string cmd = "node '" + (dir / "colours.mjs").string() + "' >'" + (dir / "out").string() + "' 2>'" +
@@ -174,7 +180,8 @@ TEST(Colour, PaintingKeepsColumnsAligned) {
   t.print(coloured, Colour{true, true});
   EXPECT_EQ(plain.str(), t.str());
   EXPECT_EQ(plain.str().find('\x1b'), std::string::npos);
-  EXPECT_NE(coloured.str().find(foregroundEscape(worseColour(), true) + "+12.50" + kResetEscape), std::string::npos);
+  EXPECT_NE(coloured.str().find(foregroundEscape(worseColour(), true) + "+12.50" + kResetEscape),
+            std::string::npos);
   EXPECT_EQ(stripEscapes(coloured.str()), plain.str());
 }
 
@@ -187,8 +194,9 @@ struct Output {
 
 Output tallyWith(const std::string& env, const std::string& args) {
   fs::path out = fs::temp_directory_path() / ("tally_colour_cli_" + std::to_string(::getpid()));
-  std::string cmd = "env -u TALLY_SERVER -u TALLY_TOKEN -u NO_COLOR -u CLICOLOR_FORCE -u COLORTERM TERM=xterm-256color " +
-                    env + " '" + std::string(TALLY_BIN) + "' " + args + " >'" + out.string() + "' 2>/dev/null";
+  std::string cmd =
+      "env -u TALLY_SERVER -u TALLY_TOKEN -u NO_COLOR -u CLICOLOR_FORCE -u COLORTERM TERM=xterm-256color " +
+      env + " '" + std::string(TALLY_BIN) + "' " + args + " >'" + out.string() + "' 2>/dev/null";
   Output r;
   int status = std::system(cmd.c_str());
   r.rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -222,21 +230,26 @@ TEST(ColourCli, RenderersInTheirColourChangesRedAndGreen) {
   const std::string server = "--server " + fake.url() + " --color always ";
   const json palette = webPalette();
   const std::string reset = kResetEscape;
-  auto painted = [&](const std::string& hex, const std::string& text) { return truecolorEscapeOf(hex) + text + reset; };
+  auto painted = [&](const std::string& hex, const std::string& text) {
+    return truecolorEscapeOf(hex) + text + reset;
+  };
 
   Output runs = tallyWith("COLORTERM=truecolor", server + "runs");
   EXPECT_NE(runs.out.find(painted(palette["pinned"]["deferred"], "deferred")), std::string::npos) << runs.out;
   // Without truecolor, the nearest 256-colour.
   Output runs256 = tallyWith("", server + "runs");
-  const std::string deferred256 = foregroundEscape(*parseHex(palette["pinned"]["deferred"].get<std::string>()), false);
+  const std::string deferred256 =
+      foregroundEscape(*parseHex(palette["pinned"]["deferred"].get<std::string>()), false);
   EXPECT_NE(runs256.out.find(deferred256 + "deferred" + reset), std::string::npos) << runs256.out;
 
   // Compare 12 -> 15: 2.0 ms -> 1.5 ms and half the bytes, both better (green).
   Output compare = tallyWith("COLORTERM=truecolor", server + "compare 12 15");
   EXPECT_NE(compare.out.find(painted(palette["better"], "-0.500")), std::string::npos) << compare.out;
   EXPECT_NE(compare.out.find(painted(palette["better"], "-2.00 MiB")), std::string::npos) << compare.out;
-  EXPECT_NE(compare.out.find(painted(palette["pinned"]["visbuffer"], "visbuffer")), std::string::npos) << compare.out;
-  EXPECT_NE(compare.out.find(painted(palette["written"], "gbuffer.normal (write)")), std::string::npos) << compare.out;
+  EXPECT_NE(compare.out.find(painted(palette["pinned"]["visbuffer"], "visbuffer")), std::string::npos)
+      << compare.out;
+  EXPECT_NE(compare.out.find(painted(palette["written"], "gbuffer.normal (write)")), std::string::npos)
+      << compare.out;
   EXPECT_EQ(compare.out.find(truecolorEscapeOf(palette["worse"])), std::string::npos) << compare.out;
 
   // Alerts: a slower frame time and doubled bytes, both worse (red).
@@ -247,7 +260,8 @@ TEST(ColourCli, RenderersInTheirColourChangesRedAndGreen) {
 
   // A heatmap's significant cells: visbuffer lower (better) green, higher red;
   // the cell that does not differ significantly uncoloured.
-  Output heatmap = tallyWith("COLORTERM=truecolor", server + "heatmap 7 --renderer deferred --versus visbuffer");
+  Output heatmap =
+      tallyWith("COLORTERM=truecolor", server + "heatmap 7 --renderer deferred --versus visbuffer");
   EXPECT_NE(heatmap.out.find(painted(palette["better"], "0.80*")), std::string::npos) << heatmap.out;
   EXPECT_NE(heatmap.out.find(painted(palette["worse"], "1.25*")), std::string::npos) << heatmap.out;
   EXPECT_NE(heatmap.out.find("   1.01"), std::string::npos) << heatmap.out;

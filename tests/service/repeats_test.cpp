@@ -99,8 +99,8 @@ Recomputed recompute(Daemon& d, int64_t runId) {
   return out;
 }
 
-void expectFigure(const json& figure, const std::vector<double>& perRun, const std::vector<std::vector<double>>& iqrs,
-                  double k, const std::string& what) {
+void expectFigure(const json& figure, const std::vector<double>& perRun,
+                  const std::vector<std::vector<double>>& iqrs, double k, const std::string& what) {
   std::vector<double> pooled;
   for (const auto& v : iqrs) pooled.insert(pooled.end(), v.begin(), v.end());
   ASSERT_EQ(figure["per_run"].size(), perRun.size()) << what;
@@ -175,9 +175,11 @@ TEST_F(RepeatsTest, SameSpecTwice) {
     for (size_t i = 0; i < runs.size(); ++i) {
       EXPECT_DOUBLE_EQ(percentile(runs[i].frames, 0.5), runMedians[i]) << what;
       EXPECT_DOUBLE_EQ(frame["per_run_lower"][i].get<double>(),
-                       *std::min_element(runs[i].frames.begin(), runs[i].frames.end())) << what;
+                       *std::min_element(runs[i].frames.begin(), runs[i].frames.end()))
+          << what;
       EXPECT_DOUBLE_EQ(frame["per_run_upper"][i].get<double>(),
-                       *std::max_element(runs[i].frames.begin(), runs[i].frames.end())) << what;
+                       *std::max_element(runs[i].frames.begin(), runs[i].frames.end()))
+          << what;
       EXPECT_EQ(frame["per_run_source"][i], "frames") << what;
     }
     expectFigure(frame, runMedians, {runs[0].frameIqr, runs[1].frameIqr}, k, "frame_ms " + what);
