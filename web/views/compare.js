@@ -243,7 +243,7 @@ async function repeats(page, c, signal) {
   }
   const spread = (f, format) => (f ? `${format(f.median)} [${format(f.q1)} – ${format(f.q3)}]` : '–');
   const headers = ['Run', 'Captures', 'Frame time (median of all frames): median over captures [IQR]', 'Each capture (95% interval)',
-    'Within-run noise (IQR)', 'Agrees', 'Bytes / frame (mean over cameras): median [IQR]', 'Counts'];
+    'Within-run noise (frame-to-frame IQR of a camera)', 'Agrees', 'Bytes / frame (mean over cameras): median [IQR]', 'Counts'];
   const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Repeated captures', dataset: { table: 'repeats' } },
     h('thead', {}, h('tr', {}, headers.map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, c.runs.map((r, i) => {
