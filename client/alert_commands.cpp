@@ -106,11 +106,24 @@ int runAlerts(ApiClient& api, const AlertsArgs& args, Io& io) {
         metric += " (" + idString(a["details"].value("changed", json(0))) + " lines)";
       }
       bool counts = a.value("kind", "") == "counts";
+      // Red for a regression, green for an improvement (web/views/alerts.js's
+      // alertClass): time by its verdict, counts by whether the bytes went up.
+      std::optional<Rgb> change = verdictColour(a.value("verdict", ""));
+      if (a.value("kind", "") != "time" && a.contains("ratio") && a["ratio"].is_number())
+        change = changeColour(a["ratio"].get<double>() - 1);
       t.addRow({idString(a.value("id", json())), a.value("status", ""), idString(a.value("baseline", json())),
-                idString(a.value("run", json())), metric, a.value("verdict", ""), numberCell(a, "ratio", 3), interval,
-                numberCell(a, "p_value", 4), counts ? humanBytes(a.value("value_a", json()).is_number() ? std::optional<double>(a["value_a"].get<double>()) : std::nullopt) : numberCell(a, "value_a", 3),
-                counts ? humanBytes(a.value("value_b", json()).is_number() ? std::optional<double>(a["value_b"].get<double>()) : std::nullopt) : numberCell(a, "value_b", 3),
-                a.value("created_at", "")});
+                idString(a.value("run", json())), metric, a.value("verdict", ""), numberCell(a, "ratio", 3),
+                interval, numberCell(a, "p_value", 4),
+                counts ? humanBytes(a.value("value_a", json()).is_number()
+                                        ? std::optional<double>(a["value_a"].get<double>())
+                                        : std::nullopt)
+                       : numberCell(a, "value_a", 3),
+                counts ? humanBytes(a.value("value_b", json()).is_number()
+                                        ? std::optional<double>(a["value_b"].get<double>())
+                                        : std::nullopt)
+                       : numberCell(a, "value_b", 3),
+                a.value("created_at", "")},
+               {std::nullopt, std::nullopt, std::nullopt, std::nullopt, std::nullopt, change, change});
     }
   });
   if (rc == 0 && res && !io.json && res->contains("counts") && (*res)["counts"].is_object()) {

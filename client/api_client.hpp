@@ -220,6 +220,7 @@ struct CompareRow {
   // compared run has a footprint), "count", "invocations"
   std::string pass, resource, metric;
   std::vector<ComparedView> values;    // one per run
+  std::string access;                  // a resource's "read" or "write"; empty for the rest
 };
 struct CompareView {
   std::vector<RunView> runs;

@@ -26,7 +26,7 @@ int printListing(Io& io, const Result<json>& res, bool all, const std::string& n
   }
   Table t(std::move(columns));
   addRows(*res, t);
-  t.print(io.out);
+  t.print(io.out, io.colour);
   if (!all && !nextCursor(*res).empty()) io.err << "more " << noun << ": add --all, or --limit N\n";
   return 0;
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "api_client.hpp"
+#include "colour.hpp"
 
 namespace tally::client {
 
@@ -17,6 +18,7 @@ struct Io {
   std::ostream& err;
   bool json = false;         // --json: print the server's JSON instead of tables
   bool progressTty = false;  // redraw the progress bar in place (stderr is a terminal)
+  Colour colour;             // of tables on out (--color; off: plain text)
 };
 
 struct CaptureArgs {

@@ -1,6 +1,7 @@
 // `tally heatmap`: GET /api/heatmap printed as a text grid, as the
 // dashboard draws it (rows along z top to bottom, columns along x; a sphere's
 // rows from north to south), with a summary underneath.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -48,6 +49,14 @@ std::string cellText(const json& cell, bool versus, const std::string& metric) {
 
 std::string pad(const std::string& s, size_t width) {
   return s.size() >= width ? s : std::string(width - s.size(), ' ') + s;
+}
+
+// A significant cell of B against A: green where B is lower (better), red
+// where higher; the rest uncoloured.
+std::optional<Rgb> cellColour(const json& cell, bool versus) {
+  if (!versus || !cell.is_object() || !cell["ratio"].is_number()) return std::nullopt;
+  if (!cell["significant"].is_boolean() || !cell["significant"].get<bool>()) return std::nullopt;
+  return changeColour(cell["ratio"].get<double>() - 1);
 }
 
 std::string where(const json& ref, const json& layout) {
@@ -100,9 +109,11 @@ int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io) {
          << (metric == "bytes" ? "bytes per frame" : "frame time") << ", yaw "
          << (body["yaw"].is_string() ? body["yaw"].get<std::string>() : body["yaw"].dump()) << "\n";
   if (versus) {
-    io.out << "cells: " << body["versus"].get<std::string>() << " / " << body["renderer"].get<std::string>()
+    const std::string b = body["versus"].get<std::string>(), a = body["renderer"].get<std::string>();
+    io.out << "cells: " << io.colour.paint(b, labelColour(b)) << " / " << io.colour.paint(a, labelColour(a))
            << " (below 1: " << body["versus"].get<std::string>() << " lower); * the difference is significant"
-           << (metric == "frame_ms" ? " (Mann-Whitney, 95% ratio interval excludes 1)" : " (counts differ)") << "\n";
+           << (metric == "frame_ms" ? " (Mann-Whitney, 95% ratio interval excludes 1)" : " (counts differ)")
+           << "\n";
   } else {
     io.out << "cells: " << body["renderer"].get<std::string>() << ", "
            << (metric == "bytes" ? "MiB per frame" : "ms per frame") << "\n";
@@ -126,7 +137,9 @@ int runHeatmap(ApiClient& api, const HeatmapArgs& args, Io& io) {
     std::string line = pad(std::to_string(r), 4) + " ";
     for (int c = 0; c < columns; ++c) {
       size_t k = size_t(r) * columns + c;
-      line += pad(k < cells.size() ? cellText(cells[k], versus, metric) : "?", width);
+      const std::string text = k < cells.size() ? cellText(cells[k], versus, metric) : "?";
+      line += pad("", width - std::min(width, text.size())) +
+              io.colour.paint(text, k < cells.size() ? cellColour(cells[k], versus) : std::nullopt);
     }
     io.out << line << "\n";
   }

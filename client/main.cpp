@@ -3,6 +3,7 @@
 // (commands.hpp); everything else lives there.
 #include <unistd.h>
 
+#include <cstdlib>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
@@ -25,13 +26,19 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   app.fallthrough();  // global flags may follow the subcommand: tally runs --json
 
-  std::string server;
+  std::string server, colorMode = "auto";
   bool jsonOut = false, version = false;
   int timeoutS = 60;
   app.add_option("--server", server, "tallyd base URL, e.g. http://127.0.0.1:8377");
   app.add_flag("--json", jsonOut, "Print the server's JSON instead of tables");
   app.add_option("--timeout", timeoutS, "Seconds to wait for a response")->check(CLI::PositiveNumber);
   app.add_flag("--version", version, "Print the client and API versions");
+  app.add_option(
+         "--color", colorMode,
+         "Colour tables: auto (when stdout is a terminal and NO_COLOR is unset; CLICOLOR_FORCE forces), "
+         "always or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->default_str("auto");
 
   Subcommands subcommands;
   addCaptureCommands(app, subcommands);
@@ -59,6 +66,8 @@ int main(int argc, char** argv) {
   options.readTimeoutS = timeoutS;
   ApiClient api(options);
   Io io{std::cout, std::cerr, jsonOut, ::isatty(STDERR_FILENO) != 0};
+  io.colour = decideColour(*parseColourMode(colorMode), ::isatty(STDOUT_FILENO) != 0,
+                           [](const char* name) { return std::getenv(name); });
 
   if (const auto* parsed = subcommands.parsed()) return parsed->run(api, io);
   std::cout << app.help();

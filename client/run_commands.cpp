@@ -60,7 +60,9 @@ int runRuns(ApiClient& api, const RunsArgs& args, Io& io) {
         row.push_back(ratio(r.reuse));
       }
       if (labels) row.push_back(orMissing(r.labels));
-      t.addRow(row);
+      Table::Paints paints(row.size());
+      paints[2] = labelColour(r.variant);  // RENDERER, before HOST may be inserted
+      t.addRow(row, paints);
     }
   });
 }
@@ -69,7 +71,8 @@ namespace {
 
 // The run's identity, device, ceilings and notes, above its samples.
 void printRunHeader(Io& io, const json& run, const RunView& r) {
-  io.out << "run " << r.id << ": " << r.variant << " on " << r.scene << " at " << size(r) << '\n';
+  io.out << "run " << r.id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " on " << r.scene
+         << " at " << size(r) << '\n';
   if (!r.options.empty()) {
     io.out << "options:";
     for (const auto& [key, value] : r.options.items()) {
@@ -182,15 +185,18 @@ int printSampleTable(ApiClient& api, Io& io, const json& run, const RunView& r, 
       if (s.hasVariantError && variant != kMissing) variant += " vs " + s.variantAgainst;
       row.push_back(variant);
     }
+    Table::Paints paints(row.size());
     row.push_back(humanBytes(read));
+    paints.push_back(readColour());
     row.push_back(humanBytes(written));
+    paints.push_back(writtenColour());
     if (footprint) {
       row.push_back(humanBytes(s.footprintBytes));
       row.push_back(ratio(s.reuse));
     }
-    t.addRow(row);
+    t.addRow(row, paints);
   }
-  t.print(io.out);
+  t.print(io.out, io.colour);
   if (footprint) {
     // Per line, averaged over the samples: what each pass asked for against
     // the distinct bytes it touched.
@@ -202,9 +208,11 @@ int printSampleTable(ApiClient& api, Io& io, const json& run, const RunView& r, 
                  {"FOOTPRINT/FRAME", Align::Right},
                  {"REUSE", Align::Right}});
     for (const auto& l : runLines(run)) {
-      lines.addRow({l.pass, l.resource, l.access, humanBytes(l.bytes), humanBytes(l.footprintBytes), ratio(l.reuse)});
+      lines.addRow(
+          {l.pass, l.resource, l.access, humanBytes(l.bytes), humanBytes(l.footprintBytes), ratio(l.reuse)},
+          {std::nullopt, std::nullopt, accessColour(l.access)});
     }
-    lines.print(io.out);
+    lines.print(io.out, io.colour);
   }
   return 0;
 }
@@ -239,7 +247,9 @@ std::string pText(double p) { return p < 1e-4 ? "<0.0001" : fixed(p, 4); }
 
 // Each later run against the first: one row per figure (frame, then passes),
 // then the counts.
-void printSignificance(const json& comparison, const std::vector<std::string>& names, Io& io) {
+// variants: each run's, for its colour.
+void printSignificance(const json& comparison, const std::vector<std::string>& names,
+                       const std::vector<std::string>& variants, Io& io) {
   const json& list = comparison.value("significance", json::array());
   if (!list.is_array() || list.empty()) return;
   double confidence = comparison.value("confidence", 0.95);
@@ -259,6 +269,8 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
   for (size_t i = 0; i < list.size(); ++i) {
     const json& s = list[i];
     std::string run = i + 1 < names.size() ? names[i + 1] : "#" + std::to_string(s.value("run_b", 0));
+    std::optional<Rgb> runPaint;
+    if (i + 1 < variants.size()) runPaint = labelColour(variants[i + 1]);
     if (s.contains("error")) {
       countLines.push_back(run + ": " + s.value("error", ""));
       continue;
@@ -271,14 +283,19 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
         std::string across = "widened " + fixed(widening, 1) + "x by repeated captures";
         note = note.empty() ? across : note + "; " + across;
       }
+      const std::string verdict = c.value("verdict", "");
       t.addRow({run, figure, ratio3(c.value("ratio", 1.0)), intervalText(interval),
                 pText(c.value("mann_whitney", json::object()).value("p", 1.0)),
-                signedFixed(c.value("cliffs_delta", json::object()).value("delta", 0.0), 2), c.value("verdict", ""), note});
+                signedFixed(c.value("cliffs_delta", json::object()).value("delta", 0.0), 2), verdict, note},
+               {runPaint, std::nullopt, verdictColour(verdict), std::nullopt, std::nullopt, std::nullopt,
+                verdictColour(verdict)});
     };
     if (s.value("frame", json()).is_object()) {
       row("(frame)", s["frame"]);
     } else {
-      t.addRow({run, "(frame)", kMissing, kMissing, kMissing, kMissing, kMissing, s.value("frame_missing", "")});
+      t.addRow(
+          {run, "(frame)", kMissing, kMissing, kMissing, kMissing, kMissing, s.value("frame_missing", "")},
+          {runPaint});
     }
     for (const auto& p : s.value("passes", json::array())) row(p.value("pass", ""), p);
     for (const auto& p : s.value("passes_missing", json::array())) {
@@ -303,7 +320,7 @@ void printSignificance(const json& comparison, const std::vector<std::string>& n
                            (bytes ? humanBytes(b) : fixed(b, 0)));
     }
   }
-  t.print(io.out);
+  t.print(io.out, io.colour);
   for (const auto& l : countLines) io.out << l << '\n';
 }
 
@@ -324,8 +341,8 @@ int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
     names.push_back("#" + id);
     if (i < c.runs.size()) {
       const RunView& r = c.runs[i];
-      io.out << "#" << id << ": " << r.variant << " " << r.scene << " " << size(r) << " on "
-             << orMissing(r.device) << '\n';
+      io.out << "#" << id << ": " << io.colour.paint(r.variant, labelColour(r.variant)) << " " << r.scene
+             << " " << size(r) << " on " << orMissing(r.device) << '\n';
     }
   }
   io.out << '\n';
@@ -349,17 +366,24 @@ int runCompare(ApiClient& api, const CompareArgs& args, Io& io) {
       return signedFixed(v, row.metric == "ms" ? 3 : row.metric == "reuse" ? 2 : 0);
     };
     std::vector<std::string> cells = {row.pass, row.resource, row.metric};
+    Table::Paints paints = {std::nullopt, accessColour(row.access), std::nullopt};
     for (size_t i = 0; i < names.size(); ++i)
       cells.push_back(value(i < row.values.size() ? row.values[i].value : std::nullopt));
+    paints.resize(cells.size());
+    // Red for worse, green for better, as the dashboard: lower is better but for reuse.
     for (size_t i = 1; i < names.size(); ++i) {
       bool has = i < row.values.size();
+      auto change = changeColour(has ? row.values[i].delta : std::nullopt, row.metric == "reuse");
       cells.push_back(delta(has ? row.values[i].delta : std::nullopt));
       cells.push_back(ratio(has ? row.values[i].ratio : std::nullopt));
+      paints.insert(paints.end(), {change, change});
     }
-    t.addRow(cells);
+    t.addRow(cells, paints);
   }
-  t.print(io.out);
-  printSignificance(*res, names, io);
+  t.print(io.out, io.colour);
+  std::vector<std::string> variants;
+  for (const auto& r : c.runs) variants.push_back(r.variant);
+  printSignificance(*res, names, variants, io);
   return 0;
 }
 
@@ -435,29 +459,33 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
                    {"RESIDUAL", Align::Right}, {"RUN", Align::Right}});
   for (const auto& s : series) {
     const json& fit = s.contains("fit") ? s["fit"] : json(nullptr);
+    const Table::Paints variant = {labelColour(str(s, "variant"))};
     if (!fit.is_object()) {
-      fits.addRow({str(s, "variant"), str(s, "scene"), kMissing, kMissing, kMissing, kMissing, kMissing, kMissing,
-                   "none: " + orMissing(str(s, "error"))});
+      fits.addRow({str(s, "variant"), str(s, "scene"), kMissing, kMissing, kMissing, kMissing, kMissing,
+                   kMissing, "none: " + orMissing(str(s, "error"))},
+                  variant);
       continue;
     }
-    fits.addRow({str(s, "variant"), str(s, "scene"), std::to_string(fit.value("n", 0)), metricFormat(num(fit, "a")),
-                 intervalText(fit["a_ci"], metricFormat), perPixelFormat(num(fit, "b")),
-                 intervalText(fit["b_ci"], perPixelFormat), fixed(num(fit, "r2"), 4),
-                 fit.value("poor_fit", false) ? "POOR (not linear)" : "ok"});
+    fits.addRow({str(s, "variant"), str(s, "scene"), std::to_string(fit.value("n", 0)),
+                 metricFormat(num(fit, "a")), intervalText(fit["a_ci"], metricFormat),
+                 perPixelFormat(num(fit, "b")), intervalText(fit["b_ci"], perPixelFormat),
+                 fixed(num(fit, "r2"), 4), fit.value("poor_fit", false) ? "POOR (not linear)" : "ok"},
+                variant);
     for (const auto& p : fit.value("points", json::array())) {
       std::string resolution = p.contains("width") ? std::to_string(p.value("width", 0)) + "x" +
                                                          std::to_string(p.value("height", 0))
                                                    : kMissing;
       residuals.addRow({str(s, "variant"), str(s, "scene"), resolution, pixelsText(num(p, "pixels")),
                         metricFormat(num(p, "value")), metricFormat(num(p, "residual")),
-                        p.contains("run") ? "#" + std::to_string(p.value("run", 0)) : kMissing});
+                        p.contains("run") ? "#" + std::to_string(p.value("run", 0)) : kMissing},
+                       variant);
     }
   }
   io.out << "FITS\n";
-  fits.print(io.out);
+  fits.print(io.out, io.colour);
   if (residuals.rows() > 0) {
     io.out << "\nRESIDUALS (value - fitted)\n";
-    residuals.print(io.out);
+    residuals.print(io.out, io.colour);
   }
   const json crossings = body.value("crossings", json::array());
   io.out << "\nCROSSINGS (pixels* = (a2 - a1) / (b1 - b2), Fieller " << ci << ")\n";
@@ -488,9 +516,10 @@ int runCrossover(ApiClient& api, const CrossoverArgs& args, Io& io) {
     }
     t.addRow({str(c, "first"), str(c, "second"), str(c, "scene"), result, pixelsText(num(c, "pixels")),
               intervalText(c.contains("pixels_ci") ? c["pixels_ci"] : json(nullptr), pixelsText),
-              resolutionText(c.contains("resolution") ? c["resolution"] : json(nullptr)), resCi, lower});
+              resolutionText(c.contains("resolution") ? c["resolution"] : json(nullptr)), resCi, lower},
+             {labelColour(str(c, "first")), labelColour(str(c, "second"))});
   }
-  t.print(io.out);
+  t.print(io.out, io.colour);
   return 0;
 }
 

@@ -7,30 +7,34 @@
 
 namespace tally::client {
 
-void Table::addRow(std::vector<std::string> cells) {
+void Table::addRow(std::vector<std::string> cells, Paints paints) {
   cells.resize(columns_.size());
+  paints.resize(columns_.size());
   rows_.push_back(std::move(cells));
+  paints_.push_back(std::move(paints));
 }
 
-void Table::print(std::ostream& out) const {
+void Table::print(std::ostream& out, const Colour& colour) const {
   std::vector<size_t> widths;
   for (const auto& c : columns_) widths.push_back(c.title.size());
   for (const auto& row : rows_)
     for (size_t i = 0; i < row.size(); ++i) widths[i] = std::max(widths[i], row[i].size());
-  auto line = [&](const std::vector<std::string>& cells) {
+  const Paints none(columns_.size());
+  auto line = [&](const std::vector<std::string>& cells, const Paints& paints) {
     std::string text;
     for (size_t i = 0; i < cells.size(); ++i) {
       std::string pad(widths[i] - cells[i].size(), ' ');
+      std::string shown = colour.paint(cells[i], paints[i]);
       if (i) text += "  ";
-      text += columns_[i].align == Align::Right ? pad + cells[i] : cells[i] + pad;
+      text += columns_[i].align == Align::Right ? pad + shown : shown + pad;
     }
     while (!text.empty() && text.back() == ' ') text.pop_back();
     out << text << '\n';
   };
   std::vector<std::string> titles;
   for (const auto& c : columns_) titles.push_back(c.title);
-  line(titles);
-  for (const auto& row : rows_) line(row);
+  line(titles, none);
+  for (size_t r = 0; r < rows_.size(); ++r) line(rows_[r], paints_[r]);
 }
 
 std::string Table::str() const {

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "colour.hpp"
+
 namespace tally::client {
 
 class Table {
@@ -16,16 +18,22 @@ class Table {
     Align align = Align::Left;
   };
   explicit Table(std::vector<Column> columns) : columns_(std::move(columns)) {}
-  // Short rows are padded with empty cells; extra cells are dropped.
-  void addRow(std::vector<std::string> cells);
+  using Paints = std::vector<std::optional<Rgb>>;
+  // Short rows are padded with empty cells; extra cells are dropped. paints[i]
+  // is cell i's colour (a renderer's, worse or better), drawn only when the
+  // table is printed with colour on.
+  void addRow(std::vector<std::string> cells, Paints paints = {});
   size_t rows() const { return rows_.size(); }
-  // Two spaces between columns; no trailing spaces.
-  void print(std::ostream& out) const;
+  // Two spaces between columns; no trailing spaces. Columns are aligned on
+  // the text, so colour changes no cell's place; with colour off the output
+  // is the plain text.
+  void print(std::ostream& out, const Colour& colour = {}) const;
   std::string str() const;
 
  private:
   std::vector<Column> columns_;
   std::vector<std::vector<std::string>> rows_;
+  std::vector<Paints> paints_;  // one per row, as long as columns_
 };
 
 inline constexpr const char* kMissing = "-";  // a value the server did not give

@@ -360,7 +360,7 @@ CompareView compareView(const json& comparison) {
   auto add = [&](std::string pass, std::string resource, std::string metric,
                  std::vector<ComparedView> values) {
     if (!values.empty())
-      v.rows.push_back({std::move(pass), std::move(resource), std::move(metric), std::move(values)});
+      v.rows.push_back({std::move(pass), std::move(resource), std::move(metric), std::move(values), {}});
   };
   // Footprint rows only where a compared run has a footprint anywhere; then
   // the bytes rows say which bytes they are: "requested" beside "footprint".
@@ -393,8 +393,10 @@ CompareView compareView(const json& comparison) {
     if (name.empty()) name = str(r, "name");
     std::string access = str(r, "access");
     std::string label = access.empty() ? name : name + " (" + access + ")";
+    const size_t first = v.rows.size();
     add("(all passes)", label, requested, comparedList(r, "bytes"));
     addFootprint("(all passes)", label, r);
+    for (size_t i = first; i < v.rows.size(); ++i) v.rows[i].access = access;
   }
   return v;
 }

@@ -24,10 +24,31 @@ std::string configurationKey(const RepeatRun& run) {
       .dump();
 }
 
-RepeatFigure repeatFigure(const std::vector<std::vector<double>>& valuesPerRun,
-                          const std::vector<std::vector<double>>& iqrsPerRun) {
+RunFrameMs runFrameMs(const RepeatRun& run) {
+  RunFrameMs out;
+  std::vector<double> times, medians;
+  bool everyFrame = !run.samples.empty();
+  for (const auto& s : run.samples) {
+    medians.push_back(s.frameMs);
+    everyFrame = everyFrame && !s.frameTimes.empty();
+    times.insert(times.end(), s.frameTimes.begin(), s.frameTimes.end());
+  }
+  const bool pooled = everyFrame;
+  MedianInterval m = medianInterval(pooled ? std::move(times) : std::move(medians));
+  if (!m.median) return out;
+  out.median = *m.median;
+  if (pooled) {
+    out.lower = m.lower;
+    out.upper = m.upper;
+    out.frames = m.n;
+  }
+  out.source = pooled ? "frames" : "samples";
+  return out;
+}
+
+RepeatFigure repeatFigure(std::vector<double> perRun, const std::vector<std::vector<double>>& iqrsPerRun) {
   RepeatFigure f;
-  for (const auto& values : valuesPerRun) f.perRun.push_back(spreadOf(values).median);
+  f.perRun = std::move(perRun);
   f.across = spreadOf(f.perRun);
   std::vector<double> iqrs;
   for (const auto& run : iqrsPerRun) iqrs.insert(iqrs.end(), run.begin(), run.end());
@@ -37,6 +58,19 @@ RepeatFigure repeatFigure(const std::vector<std::vector<double>>& valuesPerRun,
   f.agrees = !f.perRun.empty();
   for (double v : f.perRun) f.agrees = f.agrees && v >= f.low && v <= f.high;
   return f;
+}
+
+RepeatFigure repeatFigure(const std::vector<std::vector<double>>& valuesPerRun,
+                          const std::vector<std::vector<double>>& iqrsPerRun) {
+  std::vector<double> perRun;
+  for (const auto& values : valuesPerRun) perRun.push_back(spreadOf(values).median);
+  return repeatFigure(std::move(perRun), iqrsPerRun);
+}
+
+double runMeanBytes(const RepeatRun& run) {
+  double sum = 0;
+  for (const auto& s : run.samples) sum += s.bytes;
+  return run.samples.empty() ? 0 : sum / double(run.samples.size());
 }
 
 CountAgreement compareCounts(const std::vector<const RepeatRun*>& runs) {
@@ -95,21 +129,23 @@ std::vector<RepeatGroup> repeatGroups(const std::vector<RepeatRun>& runs) {
     if (members.size() < 2) continue;
     RepeatGroup g;
     g.runs = members;
-    std::vector<std::vector<double>> ms, msIqr, bytes, bytesIqr;
+    std::vector<std::vector<double>> msIqr, bytesIqr;
+    std::vector<double> ms, bytes;
     for (const RepeatRun* run : members) {
-      ms.emplace_back();
+      g.frameMsOfRuns.push_back(runFrameMs(*run));
+      ms.push_back(g.frameMsOfRuns.back().median);
+      bytes.push_back(runMeanBytes(*run));
       msIqr.emplace_back();
-      bytes.emplace_back();
       bytesIqr.emplace_back();
       for (const auto& s : run->samples) {
-        ms.back().push_back(s.frameMs);
         msIqr.back().push_back(s.frameMsIqr);
-        bytes.back().push_back(s.bytes);
         bytesIqr.back().push_back(s.bytesIqr);
       }
     }
-    g.frameMs = repeatFigure(ms, msIqr);
-    g.bytes = repeatFigure(bytes, bytesIqr);
+    g.frameMs = repeatFigure(std::move(ms), msIqr);
+    g.frameMs.statistic = kFrameMsStatistic;
+    g.bytes = repeatFigure(std::move(bytes), bytesIqr);
+    g.bytes.statistic = kBytesStatistic;
     g.counts = compareCounts(members);
     groups.push_back(std::move(g));
   }
@@ -130,6 +166,11 @@ Result<std::vector<RepeatRun>> repeatRunsFromResult(const json& result, const st
       sample.frames = s.value("frames", 0);
       sample.frameMs = s.value("frame_ms", 0.0);
       sample.frameMsIqr = iqrOf(s.value("frame_ms_spread", json()));
+      const json frames = s.value("frame_ms_frames", json::array());
+      if (frames.is_array()) {
+        for (const auto& t : frames)
+          if (t.is_number()) sample.frameTimes.push_back(t.get<double>());
+      }
       for (const auto& pass : s.value("passes", json::array())) {
         for (const auto& line : pass.value("resources", json::array())) {
           double count = line.value("count", 0.0), bytes = line.value("bytes", 0.0);
@@ -146,9 +187,25 @@ Result<std::vector<RepeatRun>> repeatRunsFromResult(const json& result, const st
 }
 
 json toJson(const RepeatFigure& f) {
-  return {{"per_run", f.perRun}, {"median", f.across.median}, {"q1", f.across.q1},   {"q3", f.across.q3},
-          {"iqr", f.across.iqr()}, {"min", f.across.min},     {"max", f.across.max}, {"noise_iqr", f.noise},
-          {"band_low", f.low},     {"band_high", f.high},     {"agrees", f.agrees}};
+  return {{"statistic", f.statistic}, {"per_run", f.perRun}, {"median", f.across.median},
+          {"q1", f.across.q1},        {"q3", f.across.q3},   {"iqr", f.across.iqr()},
+          {"min", f.across.min},      {"max", f.across.max}, {"noise_iqr", f.noise},
+          {"band_low", f.low},        {"band_high", f.high}, {"agrees", f.agrees}};
+}
+
+json frameMsJson(const RepeatGroup& g) {
+  json out = toJson(g.frameMs);
+  json lower = json::array(), upper = json::array(), source = json::array();
+  auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
+  for (const auto& run : g.frameMsOfRuns) {
+    lower.push_back(opt(run.lower));
+    upper.push_back(opt(run.upper));
+    source.push_back(run.source);
+  }
+  out["per_run_lower"] = std::move(lower);
+  out["per_run_upper"] = std::move(upper);
+  out["per_run_source"] = std::move(source);
+  return out;
 }
 
 json toJson(const CountAgreement& c) {

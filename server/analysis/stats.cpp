@@ -1,6 +1,7 @@
 #include "analysis/stats.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 namespace tally::analysis {
@@ -26,6 +27,21 @@ Spread spreadOf(std::vector<double> values) {
   s.q3 = percentile(values, 0.75);
   s.mean = std::accumulate(values.begin(), values.end(), 0.0) / double(values.size());
   return s;
+}
+
+MedianInterval medianInterval(std::vector<double> values) {
+  MedianInterval out;
+  if (values.empty()) return out;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  out.median = n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
+  out.n = n;
+  const double k = std::floor(n / 2.0 - 0.98 * std::sqrt(static_cast<double>(n)));
+  if (k >= 1) {
+    out.lower = values[static_cast<size_t>(k) - 1];
+    out.upper = values[n - static_cast<size_t>(k)];
+  }
+  return out;
 }
 
 nlohmann::json toJson(const Spread& s) {

@@ -39,7 +39,7 @@ int runRepeats(const RepeatsArgs& args) {
                      {"height", first.height},
                      {"counting", first.counting},
                      {"cameras", first.samples.size()},
-                     {"frame_ms", analysis::toJson(g.frameMs)},
+                     {"frame_ms", analysis::frameMsJson(g)},
                      {"bytes", analysis::toJson(g.bytes)},
                      {"counts", analysis::toJson(g.counts)}});
     }
@@ -51,8 +51,9 @@ int runRepeats(const RepeatsArgs& args) {
   // the within-run noise and band; then bytes and counts.
   std::printf("band: across-capture median -/+ %.1f x within-run IQR (docs/measurement.md, Repeatability)\n",
               analysis::kRepeatBandIqrs);
-  std::printf("%-18s %-10s %-9s %-7s %4s  %-44s %9s %7s  %-14s %s\n", "renderer", "scene", "resolution", "mode", "runs",
-              "frame ms per run", "median", "IQR", "within IQR", "agrees  bytes  counts");
+  std::printf("%-18s %-10s %-9s %-7s %4s  %-44s %9s %7s  %-14s %s\n", "renderer", "scene", "resolution",
+              "mode", "runs", "frame_ms_median per run", "median", "IQR", "within IQR",
+              "agrees  bytes  counts");
   for (const auto& g : groups) {
     const auto& first = *g.runs.front();
     std::string perRun;

@@ -1,7 +1,6 @@
 #include "reports/frame_time.hpp"
 
-#include <algorithm>
-#include <cmath>
+#include "analysis/stats.hpp"
 
 namespace tally::reports {
 
@@ -9,17 +8,13 @@ using nlohmann::json;
 
 RunFrameTime medianOfFrames(std::vector<double> times) {
   RunFrameTime out;
-  if (times.empty()) return out;
-  std::sort(times.begin(), times.end());
-  const size_t n = times.size();
-  out.median = n % 2 ? times[n / 2] : (times[n / 2 - 1] + times[n / 2]) / 2;
-  out.frames = n;
+  const analysis::MedianInterval m = analysis::medianInterval(std::move(times));
+  if (!m.median) return out;
+  out.median = m.median;
+  out.lower = m.lower;
+  out.upper = m.upper;
+  out.frames = m.n;
   out.source = "frames";
-  const double k = std::floor(n / 2.0 - 0.98 * std::sqrt(static_cast<double>(n)));
-  if (k >= 1) {
-    out.lower = times[static_cast<size_t>(k) - 1];
-    out.upper = times[n - static_cast<size_t>(k)];
-  }
   return out;
 }
 

@@ -27,6 +27,7 @@ Result<analysis::RepeatRun> load(store::Store& store, const store::RunRow& r) {
     s.frames = row.frames.value_or(0);
     s.frameMs = row.frameMs;
     s.frameMsIqr = analysis::iqrOf(row.frameMsSpread);
+    s.frameTimes = (*sample)->row.frameMsFrames;
     s.bytes = row.bytes;
     for (const auto& pass : (*sample)->passes) {
       for (const auto& c : pass.counters) {
@@ -88,7 +89,7 @@ Result<json> repeatGroups(store::Store& store, const store::RunFilter& filter) {
                       {"lights", first.lights},
                       {"cameras", g.runs.front()->samples.size()},
                       {"frames", frames},
-                      {"frame_ms", analysis::toJson(g.frameMs)},
+                      {"frame_ms", analysis::frameMsJson(g)},
                       {"bytes", analysis::toJson(g.bytes)},
                       {"counts", analysis::toJson(g.counts)}});
   }

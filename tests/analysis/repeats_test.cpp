@@ -57,7 +57,7 @@ TEST(Repeats, FiguresAndBand) {
   EXPECT_EQ(g.frameMs.low, 1.75);
   EXPECT_EQ(g.frameMs.high, 2.25);
   EXPECT_TRUE(g.frameMs.agrees);
-  // Bytes: per-run median of {1000, 2000, 3000} = 2000 in every run, no noise:
+  // Bytes: per-run mean of {1000, 2000, 3000} = 2000 in every run, no noise:
   // they agree because they are equal.
   EXPECT_EQ(g.bytes.perRun, (std::vector<double>{2000, 2000, 2000}));
   EXPECT_EQ(g.bytes.noise, 0);
@@ -85,7 +85,7 @@ TEST(Repeats, BytesDisagreeWithoutNoise) {
   runs[1].samples[0].bytes += 1;
   auto groups = repeatGroups(runs);
   ASSERT_EQ(groups.size(), 1u);
-  // Per run: median of {1000, 2000} = 1500 and of {1001, 2001} = 1501; median 1500.5.
+  // Per run: mean of {1000, 2000} = 1500 and of {1001, 2001} = 1501; median 1500.5.
   EXPECT_EQ(groups[0].bytes.perRun, (std::vector<double>{1500, 1501}));
   EXPECT_EQ(groups[0].bytes.across.median, 1500.5);
   EXPECT_FALSE(groups[0].bytes.agrees);
@@ -162,6 +162,102 @@ TEST(Repeats, FromResult) {
   twice.insert(twice.end(), runs->begin(), runs->end());
   EXPECT_EQ(repeatGroups(twice).size(), 2u);
   EXPECT_FALSE(repeatRunsFromResult(nlohmann::json::object(), "x"));
+}
+
+// A run's frame time is the median of all its frames (frame_ms_median, as
+// every view shows it), not the median of its cameras' medians.
+// Camera 0: {1, 2, 3} (median 2); camera 1: {4, 8, 9, 10, 11} (median 9).
+// Their medians' median is 5.5; the eight frames sorted are
+// {1, 2, 3, 4, 8, 9, 10, 11}: median (4 + 8) / 2 = 6. With n = 8,
+// k = floor(4 - 0.98 sqrt 8) = floor(1.228) = 1: the interval is the 1st and
+// 8th order statistics, [1, 11].
+TEST(Repeats, RunFrameTimeIsTheMedianOfAllFrames) {
+  RepeatRun run = makeRun("a", {2, 9}, {1, 2});
+  run.samples[0].frameTimes = {3, 1, 2};
+  run.samples[1].frameTimes = {10, 4, 11, 9, 8};
+  RunFrameMs t = runFrameMs(run);
+  EXPECT_EQ(t.source, "frames");
+  EXPECT_EQ(t.median, 6);
+  EXPECT_EQ(t.frames, 8u);
+  EXPECT_EQ(t.lower, 1);
+  EXPECT_EQ(t.upper, 11);
+
+  // Seven frames: k = floor(3.5 - 0.98 sqrt 7) = 0, no interval.
+  run.samples[1].frameTimes = {10, 4, 11, 9};
+  t = runFrameMs(run);
+  EXPECT_EQ(t.median, 4);
+  EXPECT_EQ(t.frames, 7u);
+  EXPECT_FALSE(t.lower);
+  EXPECT_FALSE(t.upper);
+
+  // A camera without per-frame times (a run stored before they were kept):
+  // the median of the cameras' medians, (2 + 9) / 2, without an interval.
+  run.samples[1].frameTimes.clear();
+  t = runFrameMs(run);
+  EXPECT_EQ(t.source, "samples");
+  EXPECT_EQ(t.median, 5.5);
+  EXPECT_EQ(t.frames, 0u);
+  EXPECT_FALSE(t.lower);
+  EXPECT_EQ(runFrameMs(makeRun("none", {}, {})).source, "none");
+}
+
+// The group's per-run frame time is each run's median of all frames; the
+// spread and band are over those values. Run a as above (6, interval [1, 11]);
+// run b: camera 0 {2, 2, 3}, camera 1 {6, 6, 7, 7, 7}: sorted
+// {2, 2, 3, 6, 6, 7, 7, 7}, median 6, interval [2, 7]. Per-sample IQRs
+// {1, 2} and {0.5, 0.5}: noise median 0.75, band [5.25, 6.75].
+TEST(Repeats, GroupUsesTheRunsFrameTime) {
+  std::vector<RepeatRun> runs = {makeRun("a", {2, 9}, {1, 2}), makeRun("b", {2, 7}, {0.5, 0.5})};
+  runs[0].samples[0].frameTimes = {3, 1, 2};
+  runs[0].samples[1].frameTimes = {10, 4, 11, 9, 8};
+  runs[1].samples[0].frameTimes = {2, 2, 3};
+  runs[1].samples[1].frameTimes = {6, 6, 7, 7, 7};
+  auto groups = repeatGroups(runs);
+  ASSERT_EQ(groups.size(), 1u);
+  const auto& g = groups[0];
+  EXPECT_EQ(g.frameMs.statistic, "frame_ms_median");
+  EXPECT_EQ(g.frameMs.perRun, (std::vector<double>{6, 6}));
+  EXPECT_EQ(g.frameMs.across.median, 6);
+  EXPECT_EQ(g.frameMs.noise, 0.75);
+  EXPECT_EQ(g.frameMs.low, 5.25);
+  EXPECT_EQ(g.frameMs.high, 6.75);
+  EXPECT_TRUE(g.frameMs.agrees);
+  nlohmann::json j = frameMsJson(g);
+  EXPECT_EQ(j["statistic"], "frame_ms_median");
+  EXPECT_EQ(j["per_run"], (nlohmann::json{6.0, 6.0}));
+  EXPECT_EQ(j["per_run_lower"], (nlohmann::json{1.0, 2.0}));
+  EXPECT_EQ(j["per_run_upper"], (nlohmann::json{11.0, 7.0}));
+  EXPECT_EQ(j["per_run_source"], (nlohmann::json{"frames", "frames"}));
+  EXPECT_EQ(toJson(g.bytes)["statistic"], "mean_bytes");
+
+  // Without per-frame times, the cameras' medians: a (2 + 9) / 2, b (2 + 7) / 2.
+  for (auto& run : runs)
+    for (auto& sample : run.samples) sample.frameTimes.clear();
+  groups = repeatGroups(runs);
+  EXPECT_EQ(groups[0].frameMs.perRun, (std::vector<double>{5.5, 4.5}));
+  EXPECT_EQ(frameMsJson(groups[0])["per_run_lower"], (nlohmann::json{nullptr, nullptr}));
+  EXPECT_EQ(frameMsJson(groups[0])["per_run_source"], (nlohmann::json{"samples", "samples"}));
+}
+
+TEST(Repeats, FromResultKeepsEveryFrame) {
+  nlohmann::json sample = {{"camera", {{"eye", {0, 1, 2}}}},
+                           {"frames", 3},
+                           {"frame_ms", 2.0},
+                           {"frame_ms_frames", {2.0, 1.0, 4.0}},
+                           {"passes", nlohmann::json::array()}};
+  nlohmann::json old = sample;
+  old.erase("frame_ms_frames");
+  nlohmann::json result = {{"device", {{"name", "llvmpipe"}}},
+                           {"runs",
+                            {{{"renderer", "deferred"},
+                              {"scene", "atrium"},
+                              {"width", 64},
+                              {"height", 36},
+                              {"samples", {sample, old}}}}}};
+  auto runs = repeatRunsFromResult(result, "a.json");
+  ASSERT_TRUE(runs) << runs.error();
+  EXPECT_EQ((*runs)[0].samples.at(0).frameTimes, (std::vector<double>{2, 1, 4}));
+  EXPECT_TRUE((*runs)[0].samples.at(1).frameTimes.empty());
 }
 
 }  // namespace

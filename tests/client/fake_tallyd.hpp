@@ -2,7 +2,8 @@
 // 127.0.0.1 (ephemeral port) serving canned JSON for every route the client
 // calls. Capture 7 goes queued -> running -> running -> done over successive
 // polls; capture 8 fails; run 404 and compare of run 99 give API errors;
-// /api/crossover answers for capture 7 only (crossoverJson).
+// /api/crossover answers for capture 7 only (crossoverJson); /api/heatmap
+// gives one 3x1 grid of visbuffer against deferred.
 // A fleet: /api/hosts lists three hosts (kHostsJson); capture 9 is queued
 // with a waiting reason after a lost attempt, capture 10 runs on gpu-a on
 // its second attempt, capture 11 (a spec with "waits") waits, then runs to
@@ -434,6 +435,45 @@ class FakeTallyd {
                      {"access", "write"},
                      {"count", c(57600, 0)},
                      {"bytes", json::array({{{"value", 460800.0}}, {{"value", nullptr}}})}}}}});
+    });
+    // A 3x1 sphere heatmap of visbuffer against deferred: visbuffer
+    // significantly lower in cell 0 (0.80), higher in cell 1 (1.25), not
+    // significantly different in cell 2.
+    server_.Get("/api/heatmap", [reply](const httplib::Request&, httplib::Response& res) {
+      auto cell = [](double ratio, bool significant) {
+        return json{
+            {"value_a", 2.0}, {"value_b", 2.0 * ratio}, {"ratio", ratio}, {"significant", significant}};
+      };
+      json at = {{"row", 0}, {"column", 0}, {"value", 0.8}};
+      reply(res, {{"scene", "atrium"},
+                  {"width", 64},
+                  {"height", 36},
+                  {"device", "llvmpipe"},
+                  {"renderer", "deferred"},
+                  {"versus", "visbuffer"},
+                  {"metric", "frame_ms"},
+                  {"yaw", "mean"},
+                  {"layout",
+                   {{"layout", "sphere"},
+                    {"columns", 3},
+                    {"rows", 1},
+                    {"latitudes_deg", {0.0}},
+                    {"longitudes_deg", {-120.0, 0.0, 120.0}}}},
+                  {"cells", {cell(0.8, true), cell(1.25, true), cell(1.01, false)}},
+                  {"summary",
+                   {{"cells", 3},
+                    {"cells_measured", 3},
+                    {"cells_empty", 0},
+                    {"cells_incomplete", 0},
+                    {"ratio",
+                     {{"median", 1.01},
+                      {"geometric_mean", 1.0},
+                      {"min", at},
+                      {"max", {{"row", 0}, {"column", 1}, {"value", 1.25}}}}},
+                    {"significant", 2},
+                    {"b_lower", 1},
+                    {"b_higher", 1},
+                    {"b_best_significant", at}}}});
     });
     server_.Get("/api/crossover", [reply](const httplib::Request& req, httplib::Response& res) {
       std::string capture = req.get_param_value("capture");

@@ -1,7 +1,8 @@
 // GET /api/repeats end to end: one spec captured twice on lavapipe. Each
 // renderer's two runs form one group, their counts are identical, and every
 // figure equals the one recomputed here from /api/runs/{id}/samples and
-// /api/samples/{id}. Nothing here asserts that the timings agree: the machine
+// /api/samples/{id}; each run's frame time is its frame_ms_median, the one
+// every other view shows. Nothing here asserts that the timings agree: the machine
 // is shared and noisy (docs/accuracy.md, "Repeatability", reports it).
 #include <signal.h>
 
@@ -66,6 +67,7 @@ json spec(int frames) {
 // One run's per-sample figures, from the API's sample routes.
 struct Recomputed {
   std::vector<double> frameMs, frameIqr, bytes, bytesIqr;
+  std::vector<double> frames;  // every frame of every sample
   std::vector<std::map<std::string, double>> counts;
 };
 
@@ -77,6 +79,7 @@ Recomputed recompute(Daemon& d, int64_t runId) {
     out.frameIqr.push_back(s["frame_ms_spread"]["q3"].get<double>() - s["frame_ms_spread"]["q1"].get<double>());
     out.bytes.push_back(s["bytes"].get<double>());
     json sample = d.request("GET", "/api/samples/" + std::to_string(s["id"].get<int64_t>())).j();
+    for (const auto& t : sample["frame_ms_frames"]) out.frames.push_back(t.get<double>());
     double noise = 0;
     std::map<std::string, double> counts;
     for (const auto& pass : sample["passes"]) {
@@ -96,10 +99,9 @@ Recomputed recompute(Daemon& d, int64_t runId) {
   return out;
 }
 
-void expectFigure(const json& figure, const std::vector<std::vector<double>>& values,
+void expectFigure(const json& figure, const std::vector<double>& perRun,
                   const std::vector<std::vector<double>>& iqrs, double k, const std::string& what) {
-  std::vector<double> perRun, pooled;
-  for (const auto& v : values) perRun.push_back(percentile(v, 0.5));
+  std::vector<double> pooled;
   for (const auto& v : iqrs) pooled.insert(pooled.end(), v.begin(), v.end());
   ASSERT_EQ(figure["per_run"].size(), perRun.size()) << what;
   for (size_t i = 0; i < perRun.size(); ++i) EXPECT_DOUBLE_EQ(figure["per_run"][i].get<double>(), perRun[i]) << what;
@@ -118,8 +120,8 @@ void expectFigure(const json& figure, const std::vector<std::vector<double>>& va
 }
 
 TEST_F(RepeatsTest, SameSpecTwice) {
-  int64_t first = capture(spec(3));
-  int64_t second = capture(spec(3));
+  int64_t first = capture(spec(4));  // 8 frames a run: enough for a median's interval
+  int64_t second = capture(spec(4));
   int64_t other = capture(spec(2));  // other frame count: a different configuration
 
   Reply r = daemon_->request("GET", "/api/repeats");
@@ -141,14 +143,17 @@ TEST_F(RepeatsTest, SameSpecTwice) {
     EXPECT_EQ(g["height"], 36);
     EXPECT_EQ(g["counting"], "accumulate");  // the default
     EXPECT_EQ(g["cameras"], 2);
-    EXPECT_EQ(g["frames"], (json{3, 3}));
+    EXPECT_EQ(g["frames"], (json{4, 4}));
     std::vector<Recomputed> runs;
+    std::vector<double> runMedians;
     for (const auto& id : g["runs"]) {
       json run = daemon_->request("GET", "/api/runs/" + std::to_string(id.get<int64_t>())).j();
       EXPECT_EQ(run["renderer"], g["renderer"]) << what;
       EXPECT_NE(run["capture"], other) << what;
       runs.push_back(recompute(*daemon_, id.get<int64_t>()));
       ASSERT_EQ(runs.back().frameMs.size(), 2u) << what;
+      ASSERT_EQ(runs.back().frames.size(), 8u) << what;
+      runMedians.push_back(run["frame_ms_median"].get<double>());
     }
     // Exact counting is deterministic: every counter of every camera is equal.
     EXPECT_EQ(runs[0].counts, runs[1].counts) << what;
@@ -162,9 +167,31 @@ TEST_F(RepeatsTest, SameSpecTwice) {
     EXPECT_EQ(g["bytes"]["agrees"], true) << what;
     EXPECT_EQ(g["bytes"]["noise_iqr"], 0.0) << what;
 
-    expectFigure(g["frame_ms"], {runs[0].frameMs, runs[1].frameMs}, {runs[0].frameIqr, runs[1].frameIqr}, k,
-                 "frame_ms " + what);
-    expectFigure(g["bytes"], {runs[0].bytes, runs[1].bytes}, {runs[0].bytesIqr, runs[1].bytesIqr}, k, "bytes " + what);
+    // Frame time: each run's median of all 8 frames, as /api/runs gives it,
+    // with the interval of its 1st and 8th order statistics (k = floor(4 -
+    // 0.98 sqrt 8) = 1, docs/statistics.md).
+    const json& frame = g["frame_ms"];
+    EXPECT_EQ(frame["statistic"], "frame_ms_median") << what;
+    for (size_t i = 0; i < runs.size(); ++i) {
+      EXPECT_DOUBLE_EQ(percentile(runs[i].frames, 0.5), runMedians[i]) << what;
+      EXPECT_DOUBLE_EQ(frame["per_run_lower"][i].get<double>(),
+                       *std::min_element(runs[i].frames.begin(), runs[i].frames.end()))
+          << what;
+      EXPECT_DOUBLE_EQ(frame["per_run_upper"][i].get<double>(),
+                       *std::max_element(runs[i].frames.begin(), runs[i].frames.end()))
+          << what;
+      EXPECT_EQ(frame["per_run_source"][i], "frames") << what;
+    }
+    expectFigure(frame, runMedians, {runs[0].frameIqr, runs[1].frameIqr}, k, "frame_ms " + what);
+    // Bytes: each run's mean over its cameras, its mean_bytes.
+    EXPECT_EQ(g["bytes"]["statistic"], "mean_bytes") << what;
+    std::vector<double> meanBytes;
+    for (size_t i = 0; i < runs.size(); ++i) {
+      meanBytes.push_back((runs[i].bytes[0] + runs[i].bytes[1]) / 2);
+      json run = daemon_->request("GET", "/api/runs/" + g["runs"][i].dump()).j();
+      EXPECT_DOUBLE_EQ(run["mean_bytes"].get<double>(), meanBytes.back()) << what;
+    }
+    expectFigure(g["bytes"], meanBytes, {runs[0].bytesIqr, runs[1].bytesIqr}, k, "bytes " + what);
   }
   EXPECT_EQ(renderers["forward"], 1);
   EXPECT_EQ(renderers["deferred"], 1);

@@ -349,16 +349,34 @@ describe('dashboard', () => {
 
     // Across repeated captures: visbuffer-lean was captured twice with one
     // configuration, the others once. The table and the chart give the API's
-    // group median and IQR for it, and nothing for the others.
+    // group median and IQR for it, and nothing for the others. Each capture's
+    // value is its run's frame_ms_median, the frame time of every other view,
+    // shown with its interval where the API gives one.
     const { groups } = await daemon.get(`/repeats?renderer=visbuffer-lean&width=128&height=72`);
     const group = groups.find((g) => g.runs.includes(ids[2]));
     assert.ok(group, 'the repeated visbuffer-lean capture forms a group');
     assert.equal(group.runs.length, 2);
+    assert.equal(group.frame_ms.statistic, 'frame_ms_median');
+    const groupRuns = group.runs.map((id) => data.runs.find((r) => r.id === id));
+    assert.deepEqual(group.frame_ms.per_run, groupRuns.map((r) => r.frame_ms_median));
+    assert.deepEqual(group.bytes.per_run, groupRuns.map((r) => r.mean_bytes));
     const rows = page.locator('[data-table="repeats"] tbody tr');
     await rows.first().waitFor({ timeout: kViewMs });
     assert.deepEqual(await rows.evaluateAll((trs) => trs.map((tr) => Number(tr.dataset.captures))), [1, 1, 2]);
     const leanRow = page.locator(`[data-table="repeats"] tr[data-run="${ids[2]}"]`);
     for (const key of ['median', 'q1', 'q3']) assert.equal(Number(await leanRow.getAttribute(`data-${key}`)), group.frame_ms[key], key);
+    assert.equal(await leanRow.getAttribute('data-statistic'), 'frame_ms_median');
+    assert.match(await page.locator('[data-table="repeats"] thead').innerText(), /median of all frames/);
+    const captureCells = leanRow.locator('[data-cell="captures"] [data-capture]');
+    assert.deepEqual(await captureCells.evaluateAll((divs) => divs.map((d) => [Number(d.dataset.capture), Number(d.dataset.value)])),
+      group.runs.map((id, k) => [id, group.frame_ms.per_run[k]]));
+    for (let k = 0; k < group.runs.length; ++k) {
+      const text = await captureCells.nth(k).innerText();
+      const lower = group.frame_ms.per_run_lower[k];
+      assert.ok(text.includes(`#${group.runs[k]}: `), text);
+      // An interval appears exactly where the API gives one (20 frames: it does).
+      assert.equal(text.includes('['), lower !== null, text);
+    }
     const repeated = await chart(page, 'compare-repeats-ms');
     assert.deepEqual(repeated.datasets[0].data, [null, null, group.frame_ms.median]);
     assert.deepEqual(repeated.datasets[0].whiskers, [null, null, [group.frame_ms.q1, group.frame_ms.q3]]);

@@ -219,9 +219,20 @@ async function repeatGroups(runs, signal) {
   }));
 }
 
+// One capture's frame time with its 95% interval: "1.234 ms [1.200–1.270]",
+// or the value alone where the run has no interval (below 8 frames, or stored
+// before per-frame times were kept).
+function captureFrameMs(f, i) {
+  const lower = f.per_run_lower?.[i], upper = f.per_run_upper?.[i];
+  const interval = lower === null || lower === undefined || upper === null || upper === undefined ? '' : ` [${fmt.ms(lower)}–${fmt.ms(upper)}]`;
+  return `${fmt.ms(f.per_run[i])}${interval}`;
+}
+
 // Across-capture median and IQR of frame time and bytes beside the within-run
 // noise: is a difference between compared runs larger than what repeating one
-// capture gives?
+// capture gives? Each capture's value is the statistic every other view shows
+// (the run's median of all frames, its mean bytes), so the spread here is of
+// the same numbers as the runs list and the totals above.
 async function repeats(page, c, signal) {
   page.append(h('h2', {}, 'Across repeated captures'));
   const groups = await repeatGroups(c.runs, signal);
@@ -231,14 +242,17 @@ async function repeats(page, c, signal) {
     return;
   }
   const spread = (f, format) => (f ? `${format(f.median)} [${format(f.q1)} – ${format(f.q3)}]` : '–');
+  const headers = ['Run', 'Captures', 'Frame time (median of all frames): median over captures [IQR]', 'Each capture (95% interval)',
+    'Within-run noise (frame-to-frame IQR of a camera)', 'Agrees', 'Bytes / frame (mean over cameras): median [IQR]', 'Counts'];
   const table = h('div', { class: 'table-wrap' }, h('table', { 'aria-label': 'Repeated captures', dataset: { table: 'repeats' } },
-    h('thead', {}, h('tr', {}, ['Run', 'Captures', 'Frame time: median [IQR]', 'Within-run noise (IQR)', 'Agrees', 'Bytes: median [IQR]', 'Counts'].map((t) => h('th', { scope: 'col' }, t)))),
+    h('thead', {}, h('tr', {}, headers.map((t) => h('th', { scope: 'col' }, t)))),
     h('tbody', {}, c.runs.map((r, i) => {
       const g = groups[i];
-      return h('tr', { dataset: { run: r.id, captures: g ? g.runs.length : 1, median: g ? g.frame_ms.median : '', q1: g ? g.frame_ms.q1 : '', q3: g ? g.frame_ms.q3 : '' } },
+      return h('tr', { dataset: { run: r.id, captures: g ? g.runs.length : 1, statistic: g ? g.frame_ms.statistic : '', median: g ? g.frame_ms.median : '', q1: g ? g.frame_ms.q1 : '', q3: g ? g.frame_ms.q3 : '' } },
         h('th', { scope: 'row' }, fmt.runLabel(r)),
         h('td', { class: 'num' }, g ? String(g.runs.length) : '1'),
         h('td', { class: 'num' }, g ? spread(g.frame_ms, fmt.ms) : 'captured once'),
+        h('td', { class: 'num', dataset: { cell: 'captures' } }, g ? g.runs.map((id, k) => h('div', { dataset: { capture: id, value: g.frame_ms.per_run[k] } }, `#${id}: ${captureFrameMs(g.frame_ms, k)}`)) : '–'),
         h('td', { class: 'num' }, g ? fmt.ms(g.frame_ms.noise_iqr) : '–'),
         h('td', {}, g ? (g.frame_ms.agrees ? 'yes' : 'no: outside the noise band') : '–'),
         h('td', { class: 'num' }, g ? spread(g.bytes, fmt.bytes) : '–'),
@@ -247,7 +261,7 @@ async function repeats(page, c, signal) {
   const box = h('div', { class: 'charts' });
   page.append(box);
   barChart(box, {
-    id: 'compare-repeats-ms', title: 'Frame time across repeated captures', caption: 'median of the captures, whiskers q1–q3; runs captured once have no bar',
+    id: 'compare-repeats-ms', title: 'Frame time across repeated captures', caption: 'each capture\'s frame time is its median of all frames, as everywhere; bar: the median over captures, whiskers q1–q3; runs captured once have no bar',
     labels: c.runs.map((r) => `${fmt.variant(r)} #${r.id}`), labelHeader: 'Run', format: fmt.ms,
     datasets: [{ label: 'median over captures', data: groups.map((g) => (g ? g.frame_ms.median : null)), whiskers: groups.map((g) => (g ? [g.frame_ms.q1, g.frame_ms.q3] : null)) }],
   });
