@@ -20,7 +20,7 @@ namespace tally::reports {
 
 struct RunFrameTime {
   std::optional<double> median;        // absent: the run has no sample
-  std::optional<double> lower, upper;  // the median's 95% interval; absent below 6 frames or without per-frame times
+  std::optional<double> lower, upper;  // the median's 95% interval; absent below 8 frames or without per-frame times
   size_t frames = 0;                   // per-frame times the median is over; 0 when source is "samples"
   // "frames": every per-frame time of every sample; "samples": the median of
   // the samples' own medians, where a sample has no per-frame times stored
