@@ -473,7 +473,8 @@ PFN_vkVoidFunction interceptedDevice(std::string_view name) {
   TALLY_INTERCEPT_ALIAS(QueueSubmit2KHR, QueueSubmit2)
   TALLY_INTERCEPT(QueuePresentKHR)
   for (auto intercepted : {interceptedResources, interceptedDescriptors, interceptedPipelines, interceptedCommands,
-                           interceptedDraws, interceptedDynamicState, interceptedUncounted}) {
+                           interceptedDraws, interceptedDynamicState, interceptedShaderObjects,
+                           interceptedUncounted}) {
     if (PFN_vkVoidFunction f = intercepted(name)) return f;
   }
   return nullptr;

@@ -1,0 +1,141 @@
+// Shader objects (VK_EXT_shader_object), counted as shader modules are
+// (docs/layer.md, "Shader objects"). Each SPIR-V shader the application
+// creates gets a twin: the same create info with the stage instrumented and
+// the counter set appended to its set layouts. The application's handle is
+// its own shader; the twin is bound in its place only in command buffers
+// recorded for counting. The shaders bound at a draw make up its
+// "pipeline": their sites, in one region of the counter buffer.
+//
+// Slots: unlinked shaders of different stages may be bound in any
+// combination, so a shader's slots cannot depend on the others'. Each stage
+// counts in a band of its own (slotBand), fragment shaders last and without a
+// bound of their own; a draw's region spans the bands of the stages bound,
+// and the counter set is bound that many bytes before it (regionShift).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan.h>
+
+#include "state.hpp"
+
+// The extension is newer than the Vulkan headers the layer is built with
+// (1.3.239): its types and calls as the registry defines them (1.3.246).
+#ifndef VK_EXT_shader_object
+#define VK_EXT_shader_object 1
+VK_DEFINE_NON_DISPATCHABLE_HANDLE(VkShaderEXT)
+#define VK_EXT_SHADER_OBJECT_EXTENSION_NAME "VK_EXT_shader_object"
+constexpr VkStructureType VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_OBJECT_FEATURES_EXT = VkStructureType(1000482000);
+constexpr VkStructureType VK_STRUCTURE_TYPE_SHADER_CREATE_INFO_EXT = VkStructureType(1000482002);
+constexpr VkObjectType VK_OBJECT_TYPE_SHADER_EXT = VkObjectType(1000482000);
+constexpr VkResult VK_INCOMPATIBLE_SHADER_BINARY_EXT = VkResult(1000482000);
+typedef enum VkShaderCodeTypeEXT {
+  VK_SHADER_CODE_TYPE_BINARY_EXT = 0,
+  VK_SHADER_CODE_TYPE_SPIRV_EXT = 1,
+  VK_SHADER_CODE_TYPE_MAX_ENUM_EXT = 0x7FFFFFFF
+} VkShaderCodeTypeEXT;
+typedef VkFlags VkShaderCreateFlagsEXT;
+constexpr VkShaderCreateFlagsEXT VK_SHADER_CREATE_LINK_STAGE_BIT_EXT = 0x00000001;
+typedef struct VkShaderCreateInfoEXT {
+  VkStructureType sType;
+  const void* pNext;
+  VkShaderCreateFlagsEXT flags;
+  VkShaderStageFlagBits stage;
+  VkShaderStageFlags nextStage;
+  VkShaderCodeTypeEXT codeType;
+  size_t codeSize;
+  const void* pCode;
+  const char* pName;
+  uint32_t setLayoutCount;
+  const VkDescriptorSetLayout* pSetLayouts;
+  uint32_t pushConstantRangeCount;
+  const VkPushConstantRange* pPushConstantRanges;
+  const VkSpecializationInfo* pSpecializationInfo;
+} VkShaderCreateInfoEXT;
+typedef struct VkPhysicalDeviceShaderObjectFeaturesEXT {
+  VkStructureType sType;
+  void* pNext;
+  VkBool32 shaderObject;
+} VkPhysicalDeviceShaderObjectFeaturesEXT;
+typedef VkResult(VKAPI_PTR* PFN_vkCreateShadersEXT)(VkDevice device, uint32_t createInfoCount,
+                                                     const VkShaderCreateInfoEXT* pCreateInfos,
+                                                     const VkAllocationCallbacks* pAllocator, VkShaderEXT* pShaders);
+typedef void(VKAPI_PTR* PFN_vkDestroyShaderEXT)(VkDevice device, VkShaderEXT shader,
+                                                const VkAllocationCallbacks* pAllocator);
+typedef void(VKAPI_PTR* PFN_vkCmdBindShadersEXT)(VkCommandBuffer commandBuffer, uint32_t stageCount,
+                                                 const VkShaderStageFlagBits* pStages, const VkShaderEXT* pShaders);
+#endif
+
+namespace tally::layer {
+
+// CommandBufferState::shaders, by stage: vertex, tessellation control and
+// evaluation, geometry, fragment, task, mesh, compute. -1: not a shader stage.
+int shaderStageIndex(VkShaderStageFlagBits stage);
+constexpr size_t kComputeShaderIndex = 7;
+spirv::Stage shaderStage(VkShaderStageFlagBits stage);
+
+// The slots a stage's shader objects count in: [first, limit).
+struct SlotBand {
+  uint32_t first = 0, limit = 0;
+};
+// Pre-rasterization stages hold 512 slots each (4 KiB of a region): a
+// vertex shader and a fragment shader, the usual pair, span 4 KiB more than
+// their slots. Vertex and mesh shaders share a band (they are never bound
+// together), as do tessellation control and task shaders.
+constexpr uint32_t kShaderBandSlots = 512;
+SlotBand slotBand(VkShaderStageFlagBits stage, uint32_t maxSlots);
+
+// Why a shader object cannot be instrumented ("" where it can): binary code,
+// a stage the device cannot store from, or set layouts that reach the
+// layer's counter set.
+std::string shaderRefusal(const VkShaderCreateInfoEXT& info, uint32_t counterSet, bool fragmentStores,
+                          bool vertexStores);
+
+// The twin's set layouts: the application's, then `empty` up to the counter
+// set, then `counter` (as pipeline layouts are extended, pipelines.cpp).
+std::vector<VkDescriptorSetLayout> twinSetLayouts(const VkShaderCreateInfoEXT& info, uint32_t counterSet,
+                                                  VkDescriptorSetLayout empty, VkDescriptorSetLayout counter);
+
+struct ShaderObject {
+  uint64_t handle = 0;           // the application's shader, created as it asked
+  VkShaderEXT twin = VK_NULL_HANDLE;  // instrumented; null where the shader is not counted
+  VkShaderStageFlagBits stage = VK_SHADER_STAGE_VERTEX_BIT;
+  // Its sites and fold layouts, slots absolute (in the stage's band), and
+  // the layout through which the counter set is bound (the twin's set
+  // layouts and the application's push constant ranges).
+  PipelineInfo counted;
+  uint32_t firstSlot = 0;
+  uint64_t linkGroup = 0;  // shaders created linked (VK_SHADER_CREATE_LINK_STAGE_BIT_EXT): their call's number
+};
+
+// The "pipeline" of the shaders bound at one bind point: the counted ones'
+// sites with slots relative to the region (shifted by the lowest band
+// bound), the regionShift that undoes it, every state a shader object
+// leaves to dynamic state read from the command buffer, and the layout of
+// the first counted shader. Null when none is counted.
+std::shared_ptr<PipelineInfo> combineShaders(const std::vector<const ShaderObject*>& bound);
+
+// The device's shader objects.
+struct ShaderObjects {
+  PFN_vkCreateShadersEXT create = nullptr;
+  PFN_vkDestroyShaderEXT destroy = nullptr;
+  PFN_vkCmdBindShadersEXT bind = nullptr;
+  std::map<uint64_t, std::shared_ptr<ShaderObject>> shaders;
+  // Combinations seen bound, by their shaders (0 where a stage has none):
+  // the same combination keeps one identity, so draws share regions.
+  std::map<std::array<uint64_t, kComputeShaderIndex + 1>, std::shared_ptr<PipelineInfo>> combinations;
+  uint64_t nextLinkGroup = 1;
+  uint32_t created = 0, counted = 0;
+};
+
+// vkCmdBindPipeline: a pipeline replaces the shader objects bound at its bind
+// point (graphics: every graphics stage).
+void unbindShaderObjects(CommandBufferState& cb, bool compute);
+
+}  // namespace tally::layer
