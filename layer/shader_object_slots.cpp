@@ -76,6 +76,36 @@ std::vector<VkDescriptorSetLayout> twinSetLayouts(const VkShaderCreateInfoEXT& i
   return sets;
 }
 
+std::string instrumentShaderObject(const std::vector<uint32_t>& words, spirv::InstrumentOptions options,
+                                   uint32_t maxSlots, const std::string& name, ShaderObject& object,
+                                   std::vector<uint32_t>& out, std::vector<std::string>& notes) {
+  const SlotBand band = slotBand(object.stage, maxSlots);
+  options.firstSlot = band.first;
+  // Alpha to coverage is dynamic state for shader objects, and the layer has
+  // no early-tests twin of a fragment shader object to bind while it is off:
+  // late tests, right whatever it is set to.
+  options.earlyFragmentTests = false;
+  auto result = spirv::instrument(words, options);
+  if (!result) return result.error();
+  const uint32_t reserved = result->layout().reserved();
+  if (band.first + reserved > band.limit) {
+    return "needs " + std::to_string(reserved) + " counter slots; a shader object of its stage holds " +
+           std::to_string(band.limit - band.first);
+  }
+  object.firstSlot = band.first;
+  object.counted.slots = band.first + reserved;
+  object.counted.counted = true;
+  object.counted.hasFragment = object.stage == VK_SHADER_STAGE_FRAGMENT_BIT;
+  if (result->layout().needsSettling()) object.counted.foldLayouts.push_back(result->layout());
+  for (auto& site : result->sites) {
+    site.shader = name;
+    object.counted.sites.push_back(std::move(site));
+  }
+  notes = std::move(result->notes);
+  out = std::move(result->words);
+  return "";
+}
+
 std::shared_ptr<PipelineInfo> combineShaders(const std::vector<const ShaderObject*>& bound) {
   uint32_t shift = UINT32_MAX, end = 0;
   const ShaderObject* first = nullptr;

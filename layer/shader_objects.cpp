@@ -41,39 +41,18 @@ struct Batch {
   std::vector<bool> instrumented;
 };
 
-// Instruments `words` into `object` (slots in its stage's band); the
-// reason it cannot be counted, or "".
+// Instruments `words` into `object` with the device's options; the reason
+// it cannot be counted, or "".
 std::string instrumentStage(DeviceState& dev, const std::vector<uint32_t>& words, ShaderObject& object,
                             const std::string& name, std::vector<uint32_t>& out) {
-  const uint32_t maxSlots = uint32_t(dev.regionRange / 8);
-  const SlotBand band = slotBand(object.stage, maxSlots);
   spirv::InstrumentOptions options = dev.instrumentOptions;
-  options.firstSlot = band.first;
   options.perSite = dev.config.sites;
-  // Alpha to coverage is dynamic state for shader objects, and the layer has
-  // no early-tests twin of a fragment shader object to bind while it is off:
-  // late tests, right whatever it is set to.
-  options.earlyFragmentTests = false;
+  // Lavapipe cannot compile the subgroup flush in modules that demote (as pipelines.cpp).
   if (dev.llvmpipe && spirv::usesDemote(words)) options.subgroupStages &= ~spirv::stageBit(spirv::Stage::Fragment);
-  auto result = spirv::instrument(words, options);
-  if (!result) return result.error();
-  const uint32_t reserved = result->layout().reserved();
-  if (band.first + reserved > band.limit) {
-    return "needs " + std::to_string(reserved) + " counter slots; a shader object of its stage holds " +
-           std::to_string(band.limit - band.first);
-  }
-  object.firstSlot = band.first;
-  object.counted.slots = band.first + reserved;
-  object.counted.counted = true;
-  object.counted.hasFragment = object.stage == VK_SHADER_STAGE_FRAGMENT_BIT;
-  if (result->layout().needsSettling()) object.counted.foldLayouts.push_back(result->layout());
-  for (auto& site : result->sites) {
-    site.shader = name;
-    object.counted.sites.push_back(std::move(site));
-  }
-  for (const auto& note : result->notes) dev.notes.insert(note);
-  out = std::move(result->words);
-  return "";
+  std::vector<std::string> notes;
+  std::string why = instrumentShaderObject(words, options, uint32_t(dev.regionRange / 8), name, object, out, notes);
+  for (const auto& note : notes) dev.notes.insert(note);
+  return why;
 }
 
 // Under dev.mutex: each shader's twin create info, instrumented where it can be.

@@ -68,6 +68,13 @@ struct ShaderObject {
   uint64_t linkGroup = 0;  // shaders created linked (VK_SHADER_CREATE_LINK_STAGE_BIT_EXT): their call's number
 };
 
+// Instruments a shader object's SPIR-V with the device's `options` in its
+// stage's band, filling `object` (sites named `name`) and `out` (the twin's
+// code), or gives the reason it cannot be counted ("" where it can).
+std::string instrumentShaderObject(const std::vector<uint32_t>& words, spirv::InstrumentOptions options,
+                                   uint32_t maxSlots, const std::string& name, ShaderObject& object,
+                                   std::vector<uint32_t>& out, std::vector<std::string>& notes);
+
 // The "pipeline" of the shaders bound at one bind point: the counted ones'
 // sites with slots relative to the region (shifted by the lowest band
 // bound), the regionShift that undoes it, every state a shader object
