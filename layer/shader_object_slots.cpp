@@ -78,12 +78,13 @@ std::vector<VkDescriptorSetLayout> twinSetLayouts(const VkShaderCreateInfoEXT& i
 
 std::string instrumentShaderObject(const std::vector<uint32_t>& words, spirv::InstrumentOptions options,
                                    uint32_t maxSlots, const std::string& name, ShaderObject& object,
-                                   std::vector<uint32_t>& out, std::vector<std::string>& notes) {
+                                   std::vector<uint32_t>& out, std::vector<std::string>& notes,
+                                   std::vector<uint32_t>* early) {
   const SlotBand band = slotBand(object.stage, maxSlots);
   options.firstSlot = band.first;
-  // Alpha to coverage is dynamic state for shader objects, and the layer has
-  // no early-tests twin of a fragment shader object to bind while it is off:
-  // late tests, right whatever it is set to.
+  // Alpha to coverage is dynamic state for shader objects: the twin keeps
+  // late tests, right whatever it is set to; `early` gets the copy with early
+  // tests, bound while it is off (as pipelines' early-tests twins).
   options.earlyFragmentTests = false;
   auto result = spirv::instrument(words, options);
   if (!result) return result.error();
@@ -102,6 +103,16 @@ std::string instrumentShaderObject(const std::vector<uint32_t>& words, spirv::In
     object.counted.sites.push_back(std::move(site));
   }
   notes = std::move(result->notes);
+  if (early != nullptr && object.stage == VK_SHADER_STAGE_FRAGMENT_BIT) {
+    options.earlyFragmentTests = true;
+    auto withEarly = spirv::instrument(words, options);
+    // Bound in the twin's place, it must count into the same slots.
+    if (withEarly && withEarly->earlyTestsAdded && withEarly->sites.size() == result->sites.size() &&
+        withEarly->layout().reserved() == reserved && withEarly->derived == result->derived) {
+      *early = std::move(withEarly->words);
+      notes = std::move(withEarly->notes);
+    }
+  }
   out = std::move(result->words);
   return "";
 }

@@ -35,7 +35,7 @@ ShaderObjects& objectsOf(DeviceState& dev) {
 // create infos and what they point to, and each shader's bookkeeping.
 struct Batch {
   std::vector<VkShaderCreateInfoEXT> infos;
-  std::vector<std::vector<uint32_t>> code;
+  std::vector<std::vector<uint32_t>> code, earlyCode;
   std::vector<std::vector<VkDescriptorSetLayout>> sets;
   std::vector<std::shared_ptr<ShaderObject>> objects;
   std::vector<bool> instrumented;
@@ -44,13 +44,14 @@ struct Batch {
 // Instruments `words` into `object` with the device's options; the reason
 // it cannot be counted, or "".
 std::string instrumentStage(DeviceState& dev, const std::vector<uint32_t>& words, ShaderObject& object,
-                            const std::string& name, std::vector<uint32_t>& out) {
+                            const std::string& name, std::vector<uint32_t>& out, std::vector<uint32_t>* early) {
   spirv::InstrumentOptions options = dev.instrumentOptions;
   options.perSite = dev.config.sites;
   // Lavapipe cannot compile the subgroup flush in modules that demote (as pipelines.cpp).
   if (dev.llvmpipe && spirv::usesDemote(words)) options.subgroupStages &= ~spirv::stageBit(spirv::Stage::Fragment);
   std::vector<std::string> notes;
-  std::string why = instrumentShaderObject(words, options, uint32_t(dev.regionRange / 8), name, object, out, notes);
+  std::string why =
+      instrumentShaderObject(words, options, uint32_t(dev.regionRange / 8), name, object, out, notes, early);
   for (const auto& note : notes) dev.notes.insert(note);
   return why;
 }
@@ -60,6 +61,7 @@ Batch planBatch(DeviceState& dev, uint32_t count, const VkShaderCreateInfoEXT* i
   Batch batch;
   batch.infos.assign(infos, infos + count);
   batch.code.resize(count);
+  batch.earlyCode.resize(count);
   batch.sets.resize(count);
   batch.instrumented.assign(count, false);
   ShaderObjects& objects = objectsOf(dev);
@@ -75,8 +77,10 @@ Batch planBatch(DeviceState& dev, uint32_t count, const VkShaderCreateInfoEXT* i
     std::string why = shaderRefusal(infos[i], dev.counterSet, dev.fragmentStores, dev.vertexStores);
     if (why.empty()) {
       const auto* words = static_cast<const uint32_t*>(infos[i].pCode);
+      // Linked shaders are bound together: a fragment one has no early-tests twin to swap in.
+      const bool linked = object->linkGroup != 0;
       why = instrumentStage(dev, std::vector<uint32_t>(words, words + infos[i].codeSize / 4), *object, name,
-                            batch.code[i]);
+                            batch.code[i], linked ? nullptr : &batch.earlyCode[i]);
     }
     if (why.empty()) {
       batch.infos[i].pCode = batch.code[i].data();
@@ -127,6 +131,12 @@ void createTwins(DeviceState& dev, ShaderObjects& objects, Batch& batch) {
     } else if (batch.instrumented[i]) {
       VkShaderEXT twin = VK_NULL_HANDLE;
       if (objects.create(dev.device, 1, &batch.infos[i], nullptr, &twin) == VK_SUCCESS) batch.objects[i]->twin = twin;
+      if (twin != VK_NULL_HANDLE && !batch.earlyCode[i].empty()) {
+        VkShaderCreateInfoEXT early = batch.infos[i];
+        early.pCode = batch.earlyCode[i].data();
+        early.codeSize = batch.earlyCode[i].size() * 4;
+        if (objects.create(dev.device, 1, &early, nullptr, &twin) == VK_SUCCESS) batch.objects[i]->earlyTwin = twin;
+      }
     }
   }
   if (!linked.empty() && linkedCounted && linkedComplete) {
@@ -178,6 +188,10 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateShadersEXT(VkDevice device, uint32_t count,
     ++objects->created;
     objects->counted += object.counted.counted ? 1 : 0;
     objects->shaders[object.handle] = batch.objects[i];
+    if (object.earlyTwin != VK_NULL_HANDLE) {
+      dev->notes.insert("a fragment shader object runs with early tests while alpha to coverage is off, with late "
+                        "tests while it is on (rejected fragments counted then)");
+    }
   }
   if (refused > 0) {
     dev->notes.insert("the driver refused an instrumented shader object: the application's own runs there, uncounted");
@@ -211,6 +225,7 @@ VKAPI_ATTR void VKAPI_CALL DestroyShaderEXT(VkDevice device, VkShaderEXT shader,
     forgetCombinations(*objects, u64(shader));
   }
   if (object && object->twin != VK_NULL_HANDLE) objects->destroy(device, object->twin, nullptr);
+  if (object && object->earlyTwin != VK_NULL_HANDLE) objects->destroy(device, object->earlyTwin, nullptr);
   if (object && object->counted.layout != VK_NULL_HANDLE) {
     dev->d.DestroyPipelineLayout(device, object->counted.layout, nullptr);
   }
@@ -258,6 +273,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBindShadersEXT(VkCommandBuffer cmd, uint32_t count
     const int index = shaderStageIndex(stages[i]);
     if (index < 0) continue;
     cb->shaders[size_t(index)] = shaders == nullptr ? 0 : u64(shaders[i]);
+    if (size_t(index) == kFragmentShaderIndex) cb->coverage.twinBound = false;  // the late-tests twin, as bound
     (size_t(index) == kComputeShaderIndex ? compute : graphics) = true;
   }
   for (const bool isCompute : {false, true}) {
@@ -278,6 +294,18 @@ VKAPI_ATTR void VKAPI_CALL CmdBindShadersEXT(VkCommandBuffer cmd, uint32_t count
 }
 
 }  // namespace
+
+void bindShadersForCoverage(DeviceState& dev, CommandBufferState& cb) {
+  if (!cb.counted || !dev.counting || !dev.config.counts || !dev.shaderObjects) return;
+  ShaderObjects& objects = *dev.shaderObjects;
+  auto it = objects.shaders.find(cb.shaders[kFragmentShaderIndex]);
+  if (it == objects.shaders.end() || it->second->earlyTwin == VK_NULL_HANDLE) return;
+  const bool early = cb.coverage.known && !cb.coverage.alphaToCoverage;
+  if (early == cb.coverage.twinBound) return;
+  const VkShaderStageFlagBits stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  objects.bind(cb.handle, 1, &stage, early ? &it->second->earlyTwin : &it->second->twin);
+  cb.coverage.twinBound = early;
+}
 
 PFN_vkVoidFunction interceptedShaderObjects(std::string_view name) {
   TALLY_INTERCEPT(CreateShadersEXT)

@@ -31,7 +31,7 @@ namespace tally::layer {
 // CommandBufferState::shaders, by stage: vertex, tessellation control and
 // evaluation, geometry, fragment, task, mesh, compute. -1: not a shader stage.
 int shaderStageIndex(VkShaderStageFlagBits stage);
-constexpr size_t kComputeShaderIndex = 7;
+constexpr size_t kFragmentShaderIndex = 4, kComputeShaderIndex = 7;
 spirv::Stage shaderStage(VkShaderStageFlagBits stage);
 
 // The slots a stage's shader objects count in: [first, limit).
@@ -59,6 +59,10 @@ std::vector<VkDescriptorSetLayout> twinSetLayouts(const VkShaderCreateInfoEXT& i
 struct ShaderObject {
   uint64_t handle = 0;           // the application's shader, created as it asked
   VkShaderEXT twin = VK_NULL_HANDLE;  // instrumented; null where the shader is not counted
+  // Fragment shaders: the twin with early tests, bound in its place while
+  // alpha to coverage is off (bindShadersForCoverage). Null where the
+  // shader cannot have them, or was created linked.
+  VkShaderEXT earlyTwin = VK_NULL_HANDLE;
   VkShaderStageFlagBits stage = VK_SHADER_STAGE_VERTEX_BIT;
   // Its sites and fold layouts, slots absolute (in the stage's band), and
   // the layout through which the counter set is bound (the twin's set
@@ -70,10 +74,13 @@ struct ShaderObject {
 
 // Instruments a shader object's SPIR-V with the device's `options` in its
 // stage's band, filling `object` (sites named `name`) and `out` (the twin's
-// code), or gives the reason it cannot be counted ("" where it can).
+// code, late fragment tests), or gives the reason it cannot be counted (""
+// where it can). `early`, where given, gets a fragment shader's copy with
+// early tests (same sites, same slots) where the shader may have them.
 std::string instrumentShaderObject(const std::vector<uint32_t>& words, spirv::InstrumentOptions options,
                                    uint32_t maxSlots, const std::string& name, ShaderObject& object,
-                                   std::vector<uint32_t>& out, std::vector<std::string>& notes);
+                                   std::vector<uint32_t>& out, std::vector<std::string>& notes,
+                                   std::vector<uint32_t>* early = nullptr);
 
 // The "pipeline" of the shaders bound at one bind point: the counted ones'
 // sites with slots relative to the region (shifted by the lowest band
@@ -98,5 +105,10 @@ struct ShaderObjects {
 // vkCmdBindPipeline: a pipeline replaces the shader objects bound at its bind
 // point (graphics: every graphics stage).
 void unbindShaderObjects(CommandBufferState& cb, bool compute);
+
+// Before a draw, and where alpha to coverage is set: the bound fragment
+// shader's early-tests twin while alpha to coverage is off, its late-tests
+// twin otherwise. Under the device's mutex.
+void bindShadersForCoverage(DeviceState& dev, CommandBufferState& cb);
 
 }  // namespace tally::layer

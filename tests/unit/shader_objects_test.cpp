@@ -138,6 +138,30 @@ TEST(ShaderObjects, AStageIsInstrumentedInItsBandWithTheCounterSet) {
   EXPECT_NE(test::disassemble(out).find("DescriptorSet 7"), std::string::npos);
 }
 
+TEST(ShaderObjects, AFragmentShaderGetsACopyWithEarlyTestsCountingInTheSameSlots) {
+  ShaderObject late;
+  late.stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  std::vector<uint32_t> out, early;
+  std::vector<std::string> notes;
+  const auto words = test::compileGlsl(kFragment, spirv::Stage::Fragment);
+  ASSERT_EQ(instrumentShaderObject(words, {}, kMaxSlots, "f", late, out, notes, &early), "");
+  EXPECT_EQ(test::disassemble(out).find("EarlyFragmentTests"), std::string::npos);
+  EXPECT_NE(test::disassemble(early).find("EarlyFragmentTests"), std::string::npos);
+  // The late twin's note (rejected fragments counted) is the early copy's to drop.
+  for (const auto& note : notes) EXPECT_EQ(note.find("early_fragment_tests"), std::string::npos) << note;
+  // A shader that discards keeps late tests only.
+  const auto discards = test::compileGlsl(R"(#version 450
+layout(set = 0, binding = 1) uniform Tint { vec4 tint; };
+layout(location = 0) out vec4 color;
+void main() { if (tint.a < 0.5) discard; color = tint; }
+)", spirv::Stage::Fragment);
+  ShaderObject other;
+  other.stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  std::vector<uint32_t> none;
+  ASSERT_EQ(instrumentShaderObject(discards, {}, kMaxSlots, "d", other, out, notes, &none), "");
+  EXPECT_TRUE(none.empty());
+}
+
 TEST(ShaderObjects, AStageThatNeedsMoreThanItsBandIsRefused) {
   const SlotBand vertex = slotBand(VK_SHADER_STAGE_VERTEX_BIT, kMaxSlots);
   EXPECT_EQ(vertex.limit - vertex.first, kShaderBandSlots);
