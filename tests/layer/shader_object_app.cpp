@@ -125,13 +125,9 @@ app::Device createDevice(app::Instance& instance) {
   return out;
 }
 
-// The extension's calls and the dynamic state shader objects leave to the
-// command buffer that Vulkan 1.3's core does not hold.
-struct Calls {
-  PFN_vkCreateShadersEXT createShaders = nullptr;
-  PFN_vkDestroyShaderEXT destroyShader = nullptr;
-  PFN_vkGetShaderBinaryDataEXT binaryData = nullptr;
-  PFN_vkCmdBindShadersEXT bindShaders = nullptr;
+// The dynamic state shader objects leave to the command buffer that Vulkan
+// 1.3's core does not hold.
+struct StateCalls {
   PFN_vkCmdSetVertexInputEXT vertexInput = nullptr;
   PFN_vkCmdSetPolygonModeEXT polygonMode = nullptr;
   PFN_vkCmdSetRasterizationSamplesEXT samples = nullptr;
@@ -139,6 +135,15 @@ struct Calls {
   PFN_vkCmdSetAlphaToCoverageEnableEXT alphaToCoverage = nullptr;
   PFN_vkCmdSetColorBlendEnableEXT blendEnable = nullptr;
   PFN_vkCmdSetColorWriteMaskEXT writeMask = nullptr;
+};
+
+// The extension's calls, and that state.
+struct Calls {
+  PFN_vkCreateShadersEXT createShaders = nullptr;
+  PFN_vkDestroyShaderEXT destroyShader = nullptr;
+  PFN_vkGetShaderBinaryDataEXT binaryData = nullptr;
+  PFN_vkCmdBindShadersEXT bindShaders = nullptr;
+  StateCalls state;
 };
 
 Calls loadCalls(VkDevice device) {
@@ -154,13 +159,13 @@ Calls loadCalls(VkDevice device) {
   load(c.destroyShader, "vkDestroyShaderEXT");
   load(c.binaryData, "vkGetShaderBinaryDataEXT");
   load(c.bindShaders, "vkCmdBindShadersEXT");
-  load(c.vertexInput, "vkCmdSetVertexInputEXT");
-  load(c.polygonMode, "vkCmdSetPolygonModeEXT");
-  load(c.samples, "vkCmdSetRasterizationSamplesEXT");
-  load(c.sampleMask, "vkCmdSetSampleMaskEXT");
-  load(c.alphaToCoverage, "vkCmdSetAlphaToCoverageEnableEXT");
-  load(c.blendEnable, "vkCmdSetColorBlendEnableEXT");
-  load(c.writeMask, "vkCmdSetColorWriteMaskEXT");
+  load(c.state.vertexInput, "vkCmdSetVertexInputEXT");
+  load(c.state.polygonMode, "vkCmdSetPolygonModeEXT");
+  load(c.state.samples, "vkCmdSetRasterizationSamplesEXT");
+  load(c.state.sampleMask, "vkCmdSetSampleMaskEXT");
+  load(c.state.alphaToCoverage, "vkCmdSetAlphaToCoverageEnableEXT");
+  load(c.state.blendEnable, "vkCmdSetColorBlendEnableEXT");
+  load(c.state.writeMask, "vkCmdSetColorWriteMaskEXT");
   return c;
 }
 
@@ -260,14 +265,9 @@ Target createTarget(const app::Device& device) {
 
 void imageBarrier(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to, VkAccessFlags src,
                   VkAccessFlags dst, VkPipelineStageFlags srcStage, VkPipelineStageFlags dstStage) {
-  VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-  b.srcAccessMask = src;
-  b.dstAccessMask = dst;
-  b.oldLayout = from;
-  b.newLayout = to;
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image;
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  const VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER, nullptr, src, dst, from, to,
+                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, image,
+                                  {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}};
   vkCmdPipelineBarrier(cmd, srcStage, dstStage, 0, 0, nullptr, 0, nullptr, 1, &b);
 }
 
@@ -287,16 +287,16 @@ void setDrawState(VkCommandBuffer cmd, const Calls& calls) {
   vkCmdSetStencilTestEnable(cmd, VK_FALSE);
   vkCmdSetPrimitiveTopology(cmd, VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST);
   vkCmdSetPrimitiveRestartEnable(cmd, VK_FALSE);
-  calls.vertexInput(cmd, 0, nullptr, 0, nullptr);
-  calls.polygonMode(cmd, VK_POLYGON_MODE_FILL);
-  calls.samples(cmd, VK_SAMPLE_COUNT_1_BIT);
+  calls.state.vertexInput(cmd, 0, nullptr, 0, nullptr);
+  calls.state.polygonMode(cmd, VK_POLYGON_MODE_FILL);
+  calls.state.samples(cmd, VK_SAMPLE_COUNT_1_BIT);
   const VkSampleMask mask = ~0u;
-  calls.sampleMask(cmd, VK_SAMPLE_COUNT_1_BIT, &mask);
-  calls.alphaToCoverage(cmd, VK_FALSE);
+  calls.state.sampleMask(cmd, VK_SAMPLE_COUNT_1_BIT, &mask);
+  calls.state.alphaToCoverage(cmd, VK_FALSE);
   const VkBool32 blend = VK_FALSE;
-  calls.blendEnable(cmd, 0, 1, &blend);
+  calls.state.blendEnable(cmd, 0, 1, &blend);
   const VkColorComponentFlags all = 0xF;
-  calls.writeMask(cmd, 0, 1, &all);
+  calls.state.writeMask(cmd, 0, 1, &all);
 }
 
 struct Scene {

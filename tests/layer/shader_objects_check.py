@@ -14,7 +14,8 @@ Each frame of the window has the app's two passes:
             which the layer cannot instrument: no line, no invocation, and the
             shader reported with the reason.
 The pipeline statistics (queried by the layer around each pass, independent
-of its counters) must equal the fragment and compute counts.
+of its counters) must equal the compute count and bracket the fragment count
+from above (helper lanes).
 """
 import argparse
 import json
@@ -59,8 +60,11 @@ def check_shaded(p):
         fail("shaded: %d draws, expected 1" % p["draws"])
     if p["fragment_invocations"] != FRAGMENTS:
         fail("shaded: %d fragment invocations counted, expected %d" % (p["fragment_invocations"], FRAGMENTS))
-    if statistic(p, "fragment_invocations_statistic") != FRAGMENTS:
-        fail("shaded: fragment statistic %d, expected %d" % (p["fragment_invocations_statistic"], FRAGMENTS))
+    # The statistic may count the helper lanes of the quads the triangles'
+    # shared edge cuts (as on lavapipe): it brackets the count from above.
+    stat = statistic(p, "fragment_invocations_statistic")
+    if not FRAGMENTS <= stat <= FRAGMENTS * 1.25:
+        fail("shaded: fragment statistic %d does not bracket %d counted" % (stat, FRAGMENTS))
     if p["vertex_invocations"] != VERTICES:
         fail("shaded: %d vertex invocations counted, expected %d" % (p["vertex_invocations"], VERTICES))
     expect_lines(p, {
