@@ -14,6 +14,7 @@
 #include "intercepts.hpp"
 #include "libraries.hpp"
 #include "names.hpp"
+#include "shader_objects.hpp"
 #include "shader_options.hpp"
 #include "state.hpp"
 #include "uncounted.hpp"
@@ -307,6 +308,7 @@ VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCall
   {
     std::lock_guard lock(dev->mutex);
     finish(*dev, false);
+    destroyShaderObjects(*dev);
     destroyCounting(*dev);
   }
   PFN_vkDestroyDevice destroy = dev->d.DestroyDevice;

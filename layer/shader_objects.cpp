@@ -307,6 +307,18 @@ void bindShadersForCoverage(DeviceState& dev, CommandBufferState& cb) {
   cb.coverage.twinBound = early;
 }
 
+void destroyShaderObjects(DeviceState& dev) {
+  if (!dev.shaderObjects) return;
+  ShaderObjects& objects = *dev.shaderObjects;
+  for (const auto& [handle, object] : objects.shaders) {
+    if (object->twin != VK_NULL_HANDLE) objects.destroy(dev.device, object->twin, nullptr);
+    if (object->earlyTwin != VK_NULL_HANDLE) objects.destroy(dev.device, object->earlyTwin, nullptr);
+    if (object->counted.layout != VK_NULL_HANDLE) dev.d.DestroyPipelineLayout(dev.device, object->counted.layout, nullptr);
+  }
+  objects.shaders.clear();
+  objects.combinations.clear();
+}
+
 PFN_vkVoidFunction interceptedShaderObjects(std::string_view name) {
   TALLY_INTERCEPT(CreateShadersEXT)
   TALLY_INTERCEPT(DestroyShaderEXT)

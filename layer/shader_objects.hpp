@@ -111,4 +111,8 @@ void unbindShaderObjects(CommandBufferState& cb, bool compute);
 // twin otherwise. Under the device's mutex.
 void bindShadersForCoverage(DeviceState& dev, CommandBufferState& cb);
 
+// vkDestroyDevice: the twins and layouts of shader objects the application
+// left undestroyed, so that the layer leaks nothing of its own.
+void destroyShaderObjects(DeviceState& dev);
+
 }  // namespace tally::layer
