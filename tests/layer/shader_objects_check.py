@@ -117,6 +117,11 @@ def main():
         fail("%d frames written, expected %d" % (len(result["frames"]), args.frames))
     binary = args.case == "binary"
     check_shaders(result, binary)
+    # Created: vertex, fragment, compute, and in the binary case the shader
+    # made from the compute shader's binary, which gets no twin.
+    created = (result["layer"]["shader_objects"], result["layer"]["shader_objects_counted"])
+    if created != ((4, 3) if binary else (3, 3)):
+        fail("shader objects created, counted: %s, expected %s" % (created, (4, 3) if binary else (3, 3)))
     for frame in result["frames"]:
         names = [p["name"] for p in frame["passes"]]
         if names != ["shaded", "fill"]:
