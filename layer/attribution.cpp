@@ -62,6 +62,7 @@ bool depthOrStencil(VkFormat format) {
 void join(PassRecord& into, const PassRecord& p) {
   into.gpuMs += p.gpuMs;
   into.timed = into.timed || p.timed;
+  joinDraws(into, p, into.draws);
   into.draws += p.draws;
   into.dispatches += p.dispatches;
   into.fragmentInvocations += p.fragmentInvocations;

@@ -116,6 +116,7 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.indirectDraws.clear();
   cb.indirectUsed = 0;
   cb.work = cb.uncountedSecondaries = false;
+  cb.drawCommands = cb.drawRegions = 0;
 }
 
 VKAPI_ATTR VkResult VKAPI_CALL BeginCommandBuffer(VkCommandBuffer cmd, const VkCommandBufferBeginInfo* info) {

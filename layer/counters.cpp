@@ -96,6 +96,16 @@ Config Config::fromEnvironment() {
       error = "TALLY_LAYER_SITES: '" + value + "' is not 0 or 1";
     }
   }
+  if (const char* draws = std::getenv("TALLY_LAYER_DRAWS"); draws != nullptr && *draws != '\0' && error.empty()) {
+    const std::string value = draws;
+    if (value == "1") {
+      c.draws = true;
+    } else if (value != "0") {
+      error = "TALLY_LAYER_DRAWS: '" + value + "' is not 0 or 1";
+    }
+  }
+  // Per-site counts come with per-draw ones, as a spec's "sites" gives both built in.
+  c.draws = c.draws || c.sites;
   if (const char* timing = std::getenv("TALLY_LAYER_TIMING"); timing != nullptr && *timing != '\0' && error.empty()) {
     const std::string value = timing;
     if (value == "timestamps") {
@@ -308,7 +318,7 @@ VkDeviceSize allocateRegion(DeviceState& dev, CommandBufferState& cb, VkDeviceSi
 
 }  // namespace
 
-void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch) {
+void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch, uint32_t draw) {
   auto& bp = cb.bind[bindPointIndex];
   if (!bp.pipeline || !bp.pipeline->counted) return;
   const PipelineInfo& pipeline = *bp.pipeline;
@@ -329,10 +339,21 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
     }
   }
   const uint32_t pass = cb.secondary ? 0 : uint32_t(std::max(cb.currentPass, 0));
+  // Config::draws: a region per draw command, up to kMaxDrawRegions a
+  // recording; the draws beyond share regions as without it.
+  if (draw != kNoDraw) {
+    if (cb.drawRegions < kMaxDrawRegions) {
+      ++cb.drawRegions;
+    } else {
+      draw = kRestDraws;
+    }
+    key.push_back(draw);
+  }
   auto index = std::make_tuple(pass, pipeline.handle, std::move(key));
   VkDeviceSize offset = 0;
   if (auto it = cb.regionIndex.find(index); it != cb.regionIndex.end()) {
     offset = cb.regions[it->second].offset;
+    cb.regions[it->second].drawCommands += draw == kRestDraws ? 1 : 0;
   } else {
     const VkDeviceSize bytes = (VkDeviceSize(pipeline.slots) * 8 + dev.alignment - 1) / dev.alignment * dev.alignment;
     offset = allocateRegion(dev, cb, bytes);
@@ -346,6 +367,9 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       region.pipeline = bp.pipeline;
       region.slotResources = std::move(slots);
       region.pass = pass;
+      region.draw = draw;
+      region.drawCommands = draw == kNoDraw ? 0 : 1;
+      region.label = draw != kNoDraw && !cb.labels.empty() ? cb.labels.back() : "";
       cb.regions.push_back(std::move(region));
       cb.regionIndex.emplace(std::move(index), cb.regions.size() - 1);
     }

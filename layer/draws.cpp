@@ -110,6 +110,10 @@ void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t 
   if (cb == nullptr || !dev.counting) return;
   cb->work = true;
   if (!cb->counted) return;
+  // A draw's place: in its pass (a secondary's: in the secondary, numbered
+  // on from the executing pass's draws at vkCmdExecuteCommands).
+  uint32_t draw = dispatch ? kNoDraw : cb->drawCommands;
+  if (!dispatch) ++cb->drawCommands;
   if (!cb->secondary) {
     if (dispatch) {
       const std::string label = cb->labels.empty() ? "" : cb->labels.back();
@@ -121,11 +125,12 @@ void prepareDraw(DeviceState& dev, VkCommandBuffer cmd, bool dispatch, uint64_t 
       return;  // a draw outside any pass cannot happen in valid usage
     }
     PassScope& pass = cb->passes[size_t(cb->currentPass)];
+    if (!dispatch) draw = pass.draws;
     (dispatch ? pass.dispatches : pass.draws) += 1;
     if (indices > 0) pass.indexReads[{cb->indexBuffer, cb->indexBytes}] += indices;
   }
   if (!dispatch) bindForCoverage(dev, *cb);
-  beforeDraw(dev, *cb, dispatch ? 1 : 0, dispatch);
+  beforeDraw(dev, *cb, dispatch ? 1 : 0, dispatch, dev.config.draws ? draw : kNoDraw);
 }
 
 VKAPI_ATTR void VKAPI_CALL CmdDraw(VkCommandBuffer cmd, uint32_t vertices, uint32_t instances, uint32_t firstVertex,
@@ -279,6 +284,7 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
   // executed twice in one primary is read back once.
   std::set<VkDeviceSize> have;
   for (const auto& r : cb->regions) have.insert(r.offset);
+  PassScope& pass = cb->passes[size_t(cb->currentPass)];
   for (uint32_t i = 0; i < count; ++i) {
     CommandBufferState* s = cbState(*dev, secondaries[i]);
     if (s == nullptr) continue;
@@ -287,9 +293,13 @@ VKAPI_ATTR void VKAPI_CALL CmdExecuteCommands(VkCommandBuffer cmd, uint32_t coun
       if (!have.insert(r.offset).second) continue;
       resolveInherited(*cb, r);
       r.pass = uint32_t(cb->currentPass);
+      if (r.draw < kRestDraws) {
+        r.draw += pass.draws;
+        if (r.label.empty() && !cb->labels.empty()) r.label = cb->labels.back();
+      }
       cb->regions.push_back(std::move(r));
     }
-    cb->passes[size_t(cb->currentPass)].draws += uint32_t(s->regions.size());
+    pass.draws += s->drawCommands;
   }
   if (!cb->inRenderPass) {
     closePass(*dev, *cb);

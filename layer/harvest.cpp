@@ -85,6 +85,7 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         continue;
       }
       addLine(pass, name, write, "counter", n, bytes, kind, format);
+      addDrawCount(dev, region, write, n, bytes, pass);
       if (dev.config.sites) {
         auto [at, inserted] = pass.sites.try_emplace({site.shader, site.instruction, name, write});
         if (inserted) {
@@ -162,6 +163,7 @@ void processHarvest(DeviceState& dev, Harvest& h) {
       std::vector<uint64_t> counters(region.pipeline->slots);
       std::memcpy(counters.data(), base + part.regionAt[r], counters.size() * 8);
       if (first + region.pass < frame->second.passes.size()) {
+        noteDraw(dev, region, frame->second.passes[first + region.pass]);
         attributeRegion(dev, region, std::move(counters), frame->second.passes[first + region.pass]);
       }
     }

@@ -55,6 +55,9 @@ nlohmann::json framesJson(const DeviceState& dev, std::map<std::string, const Re
                         {"compute_invocations_statistic", p.computeStatistic},
                         {"resources", std::move(resources)}});
       if (!sites.empty()) passes.back()["sites"] = std::move(sites);
+      // "draws" stays the number of draw commands; the per-draw list is apart.
+      if (dev.config.draws && p.draws > 0) passes.back()["draw_list"] = drawListJson(p);
+      if (nlohmann::json rest = drawsRestJson(p); !rest.is_null()) passes.back()["draws_rest"] = std::move(rest);
     }
     frames.push_back({{"index", index}, {"submissions", frame.submissions}, {"frame_ms", frameMs}, {"passes", passes}});
   }
@@ -86,6 +89,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"version", "0.1.0"},
         {"counting", dev.config.counts ? spirv::toString(dev.config.mode) : "off"},
         {"sites", dev.config.sites},
+        {"draws", dev.config.draws},
         {"timing", dev.config.statistics ? "all" : dev.config.timestamps ? "timestamps" : "none"},
         {"counter_bits", dev.int64Atomics ? 64 : 32},
         {"statistics_frames", dev.config.statisticsFrames == UINT32_MAX ? json("all") : json(dev.config.statisticsFrames)},

@@ -121,6 +121,10 @@ VKAPI_ATTR VkResult VKAPI_CALL SetDebugUtilsObjectNameEXT(VkDevice device, const
   const std::string name = info->pObjectName != nullptr ? info->pObjectName : "";
   if (auto it = dev->resources.find(info->objectHandle); it != dev->resources.end()) it->second.name = name;
   if (auto it = dev->shaders.find(info->objectHandle); it != dev->shaders.end()) it->second.name = name;
+  // A pipeline's name names its draws (TALLY_LAYER_DRAWS).
+  if (info->objectType == VK_OBJECT_TYPE_PIPELINE) {
+    if (auto it = dev->pipelines.find(info->objectHandle); it != dev->pipelines.end()) it->second->name = name;
+  }
   return result;
 }
 

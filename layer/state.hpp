@@ -56,6 +56,9 @@ struct Config {
   // TALLY_LAYER_SITES=1: counter slots per access site, and each pass's
   // "sites" (bytes per shader source line) in the output.
   bool sites = false;
+  // TALLY_LAYER_DRAWS=1 (TALLY_LAYER_SITES=1 turns it on too): a counter
+  // region per draw command, and each pass's bytes per draw in the output.
+  bool draws = false;
   std::string error;           // a variable that did not parse: the layer counts nothing and says so
   static Config fromEnvironment();
 };
@@ -152,6 +155,7 @@ struct DescriptorSetState {
 // pipeline's region of the counter buffer.
 struct PipelineInfo {
   uint64_t handle = 0;  // the application's pipeline, created as it asked
+  std::string name;     // vkSetDebugUtilsObjectNameEXT's, "" for none: names its draws
   VkPipeline instrumented = VK_NULL_HANDLE;  // its twin with counters, bound only in command buffers that count
   bool inPlace = false;  // libraries and pipelines linked from them: the application's handle is instrumented
   VkPipelineLayout layout = VK_NULL_HANDLE;
@@ -190,6 +194,12 @@ struct IndirectDraw {
   bool copied = false;        // its copy is recorded
 };
 
+// Region::draw of a dispatch's region, or of any region without
+// Config::draws; and of the regions that the draws beyond
+// kMaxDrawRegions of one recording share (draw_counts.cpp).
+constexpr uint32_t kNoDraw = UINT32_MAX, kRestDraws = UINT32_MAX - 1;
+constexpr uint32_t kMaxDrawRegions = 1024;
+
 // The resource behind each slot of a region, resolved at the draw.
 struct Region {
   VkDeviceSize offset = 0;
@@ -197,6 +207,12 @@ struct Region {
   std::shared_ptr<PipelineInfo> pipeline;
   std::vector<Bound> slotResources;  // per slot: what it counts
   uint32_t pass = 0;                 // index into the command buffer's passes
+  // Config::draws: the draw command's place in its pass (kRestDraws: shared
+  // by the draws beyond the cap, `drawCommands` of them), and the innermost
+  // debug label open at it.
+  uint32_t draw = kNoDraw;
+  uint32_t drawCommands = 0;
+  std::string label;
 };
 
 // A stretch of the counter arena: a recording's chunk, or what one readback
@@ -230,6 +246,8 @@ struct CommandBufferState {
   // pipelines and nothing of the layer's.
   bool counted = false;
   bool statistics = false;  // this recording queries pipeline statistics (Config::statisticsFrames)
+  uint32_t drawCommands = 0;  // draw commands recorded (a secondary's draws are numbered by it)
+  uint32_t drawRegions = 0;   // Config::draws: regions of one draw each, at most kMaxDrawRegions
   bool work = false;  // a draw, a dispatch, a render pass or secondaries recorded (a frame's work)
   bool uncountedSecondaries = false;  // executes secondaries with work recorded outside the window
   uint32_t recordings = 0;            // vkBeginCommandBuffer calls so far
@@ -337,6 +355,15 @@ struct PassRecord {
   };
   // (shader, instruction, resource name, write)
   std::map<std::tuple<std::string, uint32_t, std::string, bool>, SiteLine> sites;
+  // Config::draws: each draw command's share of the counted lines, by its
+  // place in the pass; `drawsRest` those beyond kMaxDrawRegions.
+  struct DrawLine {
+    std::string label, pipeline;
+    uint32_t commands = 0;
+    uint64_t count = 0, bytesRead = 0, bytesWritten = 0;
+  };
+  std::map<uint32_t, DrawLine> drawLines;
+  DrawLine drawsRest;
 };
 struct FrameRecord {
   uint64_t index = 0;
@@ -449,7 +476,9 @@ CommandBufferState* commandBufferOf(DeviceState& dev, VkCommandBuffer cb);
 void setupCounting(DeviceState& dev);
 void destroyCounting(DeviceState& dev);
 // Finds (or allocates) the region of this draw and binds the counter set at it.
-void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch);
+// `draw`: the draw command's place in its pass (Config::draws), else kNoDraw.
+void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch,
+                uint32_t draw = kNoDraw);
 void releaseRegions(DeviceState& dev, CommandBufferState& cb);
 
 // readback.cpp: readbacks after submissions, frames, the output file.
@@ -467,6 +496,19 @@ void processHarvest(DeviceState& dev, Harvest& h);
 
 // output.cpp
 nlohmann::json outputJson(DeviceState& dev, bool complete);
+
+// draw_counts.cpp: Config::draws, a pass's bytes per draw command.
+// A region read back: its draw listed (with no bytes yet), or its draw
+// commands added to the rest.
+void noteDraw(const DeviceState& dev, const Region& region, PassRecord& pass);
+// Adds one counted line's share of a region to its draw (or to the rest).
+void addDrawCount(const DeviceState& dev, const Region& region, bool write, uint64_t count, uint64_t bytes,
+                  PassRecord& pass);
+// A later subpass's draws into its first's, numbered after the `before` draws it had.
+void joinDraws(PassRecord& into, const PassRecord& p, uint32_t before);
+// The pass's "draw_list" (the kMaxDrawsListed with the most bytes) and "draws_rest" (null: none).
+nlohmann::json drawListJson(const PassRecord& pass);
+nlohmann::json drawsRestJson(const PassRecord& pass);
 
 void log(const std::string& line);  // layer.cpp: a line on stderr
 

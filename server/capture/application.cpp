@@ -115,6 +115,7 @@ std::vector<std::pair<std::string, std::string>> layerEnvironment(const Applicat
       {"TALLY_LAYER_FRAME_SUBMITS", std::to_string(spec.frameSubmits)},
       {"TALLY_LAYER_COUNTING", spec.counting},
       {"TALLY_LAYER_SITES", spec.sites ? "1" : "0"},
+      {"TALLY_LAYER_DRAWS", spec.draws || spec.sites ? "1" : "0"},
       // Every stored frame keeps its statistic, the check on its counts.
       {"TALLY_LAYER_STATISTICS_FRAMES", "all"},
   };

@@ -89,6 +89,40 @@ json sitesOf(const json& sites, const std::string& path) {
   return out;
 }
 
+// A draw's bytes as the built-in renderers' captures give them (capture/sample.cpp).
+json drawAmounts(json entry, const json& draw, const std::string& where) {
+  const double count = kMembers.number(draw, "count", where), read = kMembers.number(draw, "bytes_read", where),
+               written = kMembers.number(draw, "bytes_written", where);
+  if (count < 0 || read < 0 || written < 0) malformed(where, "count and bytes must not be negative");
+  entry["count"] = count;
+  entry["bytes_read"] = read;
+  entry["bytes_written"] = written;
+  entry["bytes"] = read + written;
+  return entry;
+}
+
+// The layer's "draw_list" (TALLY_LAYER_DRAWS) as the pass's "draws", and its
+// "draws_rest": the shape of the built-in renderers' per-draw counts.
+void drawsOf(const json& pass, const std::string& path, json& out) {
+  json draws = json::array();
+  const json& list = kMembers.array(pass, "draw_list", path);
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string where = item(path, "draw_list", i);
+    if (!list[i].is_object()) malformed(where, "must be an object");
+    const auto index = kMembers.integer(list[i], "index", where);
+    if (index < 0) malformed(at(where, "index"), "must not be negative");
+    draws.push_back(drawAmounts({{"index", index}, {"name", kMembers.text(list[i], "name", where)}}, list[i], where));
+  }
+  out["draws"] = std::move(draws);
+  if (const json* rest = find(pass, "draws_rest")) {
+    const std::string where = at(path, "draws_rest");
+    if (!rest->is_object()) malformed(where, "must be an object");
+    const auto commands = kMembers.integer(*rest, "draws", where);
+    if (commands < 1) malformed(at(where, "draws"), "must be at least 1");
+    out["draws_rest"] = drawAmounts({{"draws", commands}}, *rest, where);
+  }
+}
+
 // A pass as the capture result has it. gpu_ms is -1 where the device has no
 // timestamps (0 here, and the run says so); a statistic of -1 was not queried
 // (left out).
@@ -102,7 +136,9 @@ json passOf(const json& pass, const std::string& path, bool& untimed) {
   json out = {{"name", kMembers.text(pass, "name", path)}, {"gpu_ms", gpuMs}};
   const auto draws = kMembers.optInteger(pass, "draws", path),
              dispatches = kMembers.optInteger(pass, "dispatches", path);
-  if (draws) out["draws"] = *draws;
+  // "draw_count": the draw commands; "draws" too, unless the per-draw list takes its place.
+  if (draws) out["draws"] = out["draw_count"] = *draws;
+  if (find(pass, "draw_list")) drawsOf(pass, path, out);
   if (dispatches) out["dispatches"] = *dispatches;
   for (const char* key : {"fragment_invocations", "vertex_invocations"}) {
     if (auto v = kMembers.optNumber(pass, key, path)) out[key] = *v;

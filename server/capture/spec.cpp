@@ -485,7 +485,7 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
   if (replay) {
     if (auto e = json_fields::unknownKey(j, "",
                                          {"replay", "frames", "skip_frames", "frame_submits", "env",
-                                          "display", "timeout_s", "counting", "sites"})) {
+                                          "display", "timeout_s", "counting", "sites", "draws"})) {
       return *e;
     }
     for (const auto& [key, value] : j.items()) {
@@ -502,7 +502,7 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (std::ifstream in(path, std::ios::binary); !in) return fieldError("replay", path.string() + ": cannot be read");
     spec.replayFile = path.string();
   } else {
-    if (auto e = json_fields::unknownKey(j, "", {"application", "counting", "sites"})) return *e;
+    if (auto e = json_fields::unknownKey(j, "", {"application", "counting", "sites", "draws"})) return *e;
     const auto& app = j["application"];
     if (!app.is_object()) {
       return fieldError("application", "must be an object with \"command\", got " + show(app));
@@ -567,10 +567,11 @@ Result<ApplicationSpec> parseApplicationSpec(const nlohmann::json& j, const fs::
     if (!counting) return counting.failure();
     spec.counting = *counting;
   }
-  if (j.contains("sites")) {
-    auto sites = json_fields::boolean(j["sites"], "sites");
-    if (!sites) return sites.failure();
-    spec.sites = *sites;
+  for (auto [key, field] : {std::pair{"sites", &spec.sites}, std::pair{"draws", &spec.draws}}) {
+    if (!j.contains(key)) continue;
+    auto on = json_fields::boolean(j[key], key);
+    if (!on) return on.failure();
+    *field = *on;
   }
   return spec;
 }

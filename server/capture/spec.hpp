@@ -191,7 +191,8 @@ struct ApplicationSpec {
   Display display = Display::None;
   uint32_t timeoutSeconds = kDefaultApplicationTimeoutSeconds;
   std::string counting = "accumulate";  // the layer's modes: accumulate or exact
-  bool sites = false;  // the spec's "sites": counts per access site (TALLY_LAYER_SITES)
+  bool sites = false;  // the spec's "sites": counts per access site (TALLY_LAYER_SITES), and per draw
+  bool draws = false;  // the spec's "draws": counts per draw command alone (TALLY_LAYER_DRAWS)
   nlohmann::json source;                // the spec as given
 
   // "application." for an application (its fields live in that object), "" for a replay.

@@ -319,7 +319,12 @@ class Scanner {
         line = inst.word(2);
         continue;
       }
-      if (op == spv::Op::OpNoLine || op == spv::Op::OpLabel) {
+      // A block keeps the position of the block before it (in module order)
+      // until it sets its own. SPIR-V ends OpLine at a block's end, but
+      // glslang emits a position only when it changes: the merge block of a
+      // `c ? a : b` inside a call carries on the call's line without saying
+      // it again, and its accesses would otherwise have no line at all.
+      if (op == spv::Op::OpNoLine) {
         file.clear();
         line = 0;
         continue;

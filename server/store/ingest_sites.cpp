@@ -257,7 +257,8 @@ std::string textHash(const std::string& text) {
 void insertPassSites(Connection* db, int64_t passId, const json& pass, const std::string& path) {
   if (find(pass, "sites")) insertSites(db, passId, pass, path);
   // An application's pass has "draws" as its number of draw commands (an
-  // integer); the per-draw list is an array.
+  // integer, also its "draw_count") unless the layer counted per draw: then
+  // "draws" is the per-draw list, an array, as the built-in renderers'.
   const json* draws = find(pass, "draws");
   const bool drawList = draws != nullptr && !draws->is_number_integer();
   if (drawList || find(pass, "draws_rest")) insertDraws(db, passId, pass, path);

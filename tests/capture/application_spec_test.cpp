@@ -187,7 +187,7 @@ TEST(ApplicationSpec, ErrorsNameTheField) {
       {R"({"application": {"command": ["sh"], "fps": 3}})",
        "application.fps: unknown field (expected command, frames, skip_frames, frame_submits, env, display, name, "
        "timeout_s)"},
-      {R"({"application": {"command": ["sh"]}, "frames": 3})", "frames: unknown field (expected application, counting, sites)"},
+      {R"({"application": {"command": ["sh"]}, "frames": 3})", "frames: unknown field (expected application, counting, sites, draws)"},
       {R"({"application": {"command": ["sh"]}, "counting": "subgroup"})",
        "counting: must be \"accumulate\" or \"exact\" (the layer's modes), got \"subgroup\""},
       {R"({"application": {"command": ["sh"]}, "counting": ["exact"]})", "counting: must be \"accumulate\" or \"exact\""},
@@ -208,7 +208,7 @@ TEST(ApplicationSpec, ErrorsNameTheField) {
       {R"({"replay": "trace.gfxr", "timeout_s": 0})", "timeout_s: must be an integer between 1 and 3600, got 0"},
       {R"({"replay": "trace.gfxr", "env": {"TALLY_LAYER_COUNTING": "exact"}})", "env.TALLY_LAYER_COUNTING: is set by Tally"},
       {R"({"replay": "trace.gfxr", "name": "x"})",
-       "name: unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting, sites)"},
+       "name: unknown field (expected replay, frames, skip_frames, frame_submits, env, display, timeout_s, counting, sites, draws)"},
   };
   for (const auto& c : cases) {
     auto spec = parse(c.spec, dir.path);
@@ -289,6 +289,7 @@ TEST(LayerEnvironment, LoaderLayerAndSpec) {
   EXPECT_EQ(m["TALLY_LAYER_SKIP_FRAMES"], "7");
   EXPECT_EQ(m["TALLY_LAYER_FRAME_SUBMITS"], "2");
   EXPECT_EQ(m["TALLY_LAYER_COUNTING"], "exact");
+  EXPECT_EQ(m["TALLY_LAYER_DRAWS"], "0");
   EXPECT_EQ(m["MY_VAR"], "x");
   EXPECT_EQ(env.back(), (std::pair<std::string, std::string>{"MY_VAR", "x"}));  // the spec's last
 }
@@ -453,6 +454,55 @@ TEST(ApplicationResult, MalformedOutputIsNamed) {
     EXPECT_EQ(result.error().rfind("the layer's output is malformed: ", 0), 0u) << result.error();
     EXPECT_NE(result.error().find(c.error), std::string::npos) << result.error() << "\n  expected: " << c.error;
   }
+}
+
+// TALLY_LAYER_DRAWS from the spec's "draws", and from its "sites" (which counts per draw too).
+TEST(LayerEnvironment, DrawsFromDrawsOrSites) {
+  for (const auto& [fields, draws] : std::vector<std::pair<std::string, std::string>>{
+           {R"("draws": true)", "1"}, {R"("sites": true)", "1"}, {R"("draws": false)", "0"}}) {
+    auto spec = parse(R"({"application": {"command": ["sh"]}, )" + fields + "}");
+    ASSERT_TRUE(spec.ok()) << spec.error();
+    auto env = layerEnvironment(*spec, "/layers", "/tmp/out.json");
+    std::map<std::string, std::string> m(env.begin(), env.end());
+    EXPECT_EQ(m["TALLY_LAYER_DRAWS"], draws) << fields;
+  }
+  auto bad = parse(R"({"application": {"command": ["sh"]}, "draws": 1})");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().rfind("draws: must be true or false", 0), 0u) << bad.error();
+}
+
+// The layer's per-draw list becomes the pass's "draws" in the built-in
+// renderers' shape, its rest "draws_rest"; the draw commands stay in "draw_count".
+TEST(ApplicationResult, DrawListIsThePassDraws) {
+  json output = layerOutput(1);
+  json& pass = output["frames"][0]["passes"][0];
+  pass["draw_list"] = {{{"index", 0}, {"name", "cube \u00b7 textured"}, {"label", "cube"}, {"pipeline", "textured"},
+                        {"count", 200036}, {"bytes_read", 2304}, {"bytes_written", 800000}, {"bytes", 802304}}};
+  pass["draws_rest"] = {{"draws", 2}, {"count", 0}, {"bytes_read", 0}, {"bytes_written", 0}, {"bytes", 0}};
+  auto result = applicationResult(cubeSpec(1), output);
+  ASSERT_TRUE(result.ok()) << result.error();
+  const json& p = (*result)["runs"][0]["samples"][0]["passes"][0];
+  EXPECT_EQ(p["draw_count"], 1);
+  ASSERT_TRUE(p["draws"].is_array());
+  EXPECT_EQ(p["draws"][0], json({{"index", 0}, {"name", "cube \u00b7 textured"}, {"count", 200036.0},
+                                 {"bytes_read", 2304.0}, {"bytes_written", 800000.0}, {"bytes", 802304.0}}));
+  EXPECT_EQ(p["draws_rest"]["draws"], 2);
+  // Without the list, "draws" stays the number of draw commands.
+  auto plain = applicationResult(cubeSpec(1), layerOutput(1));
+  ASSERT_TRUE(plain.ok()) << plain.error();
+  EXPECT_EQ((*plain)["runs"][0]["samples"][0]["passes"][0]["draws"], 1);
+
+  pass["draw_list"][0]["bytes_read"] = -1;
+  auto negative = applicationResult(cubeSpec(1), output);
+  ASSERT_FALSE(negative.ok());
+  EXPECT_NE(negative.error().find("frames[0].passes[0].draw_list[0]: count and bytes must not be negative"),
+            std::string::npos) << negative.error();
+  pass["draw_list"][0]["bytes_read"] = 1;
+  pass["draws_rest"]["draws"] = 0;
+  auto noRest = applicationResult(cubeSpec(1), output);
+  ASSERT_FALSE(noRest.ok());
+  EXPECT_NE(noRest.error().find("frames[0].passes[0].draws_rest.draws: must be at least 1"), std::string::npos)
+      << noRest.error();
 }
 
 }  // namespace

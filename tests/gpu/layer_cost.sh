@@ -113,9 +113,15 @@ if [ "${LAYER_COST_ZINK:-1}" = 1 ]; then
   for lib in "$x/usr/lib/x86_64-linux-gnu/dri/zink_dri.so" "$x/usr/lib/x86_64-linux-gnu/libGLX_mesa.so.0" "$x/usr/bin/glmark2"; do
     echo "== $lib"; LD_LIBRARY_PATH="$xlibs" ldd "$lib" | grep -E "not found|=> /(usr/)?lib" || true
   done > "$logs/zink-libraries.txt" 2>&1
+  # Mesa 22.3's zink on the GPU (tests/gpu/diag/zink_probe.sh): without
+  # LIBGL_ALWAYS_SOFTWARE, which makes zink take CPU devices only (lavapipe),
+  # and without kopper, whose Vulkan swapchain on Xvfb crashes: frames go
+  # to the X server by the software path, so zink never calls
+  # vkQueuePresentKHR, and a frame is a submission.
   zink_env=(DISPLAY=:78 LIBGL_DEBUG=verbose XDG_RUNTIME_DIR=/tmp LD_LIBRARY_PATH="$xlibs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
             LIBGL_DRIVERS_PATH="$x/usr/lib/x86_64-linux-gnu/dri" __GLX_VENDOR_LIBRARY_NAME=mesa
-            LIBGL_ALWAYS_SOFTWARE=1 GALLIUM_DRIVER=zink MESA_LOADER_DRIVER_OVERRIDE=zink)
+            GALLIUM_DRIVER=zink MESA_LOADER_DRIVER_OVERRIDE=zink LIBGL_KOPPER_DISABLE=true
+            TALLY_LAYER_FRAME_SUBMITS=1)
   size="${ZINK_SIZE:-1920x1080}"
   seconds="${ZINK_SECONDS:-5}"
   for scene in ${ZINK_SCENES:-texture terrain}; do

@@ -114,6 +114,7 @@ TEST(SitesPerLine, FragmentReadsInAndOutOfLoopsCountAsDerivedByHand) {
       EXPECT_EQ(countOnLine(run, Stage::Fragment, file, markedLine(file, "fixed"), where), 3 * all) << where;
       EXPECT_EQ(countOnLine(run, Stage::Fragment, file, markedLine(file, "varied"), where), varied) << where;
       EXPECT_EQ(countOnLine(run, Stage::Fragment, file, markedLine(file, "branch"), where), even) << where;
+      EXPECT_EQ(countOnLine(run, Stage::Fragment, file, markedLine(file, "merge"), where), all) << where;
     });
   }
 }

@@ -366,36 +366,6 @@ void recordRenderingAndCompute(const App& app, const Scene& s, VkCommandBuffer c
   app.endLabel(cmd);
 }
 
-void submit(const App& app, VkCommandBuffer cmd, VkFence fence) {
-  VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  info.commandBufferCount = 1;
-  info.pCommandBuffers = &cmd;
-  check(vkQueueSubmit(app.queue, 1, &info, fence), "vkQueueSubmit");
-  check(vkWaitForFences(app.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-  vkResetFences(app.device, 1, &fence);
-}
-
-// Every image to GENERAL, once.
-void prepareImages(const App& app, VkCommandBuffer cmd, VkFence fence) {
-  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-  std::vector<VkImageMemoryBarrier> barriers;
-  for (const auto& [image, aspect] : app.images) {
-    VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    b.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
-    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    b.newLayout = kGeneral;
-    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.image = image;
-    b.subresourceRange = {aspect, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
-    barriers.push_back(b);
-  }
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0, nullptr, 0,
-                       nullptr, uint32_t(barriers.size()), barriers.data());
-  check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-  submit(app, cmd, fence);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -409,22 +379,13 @@ int main(int argc, char** argv) {
   createTargets(app, s);
   createDescriptors(app, s);
   createPipelines(app, s);
-  VkCommandPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-  poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-  poolInfo.queueFamilyIndex = app.family;
-  check(vkCreateCommandPool(app.device, &poolInfo, nullptr, &s.pool), "vkCreateCommandPool");
-  VkCommandBufferAllocateInfo allocate = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  allocate.commandPool = s.pool;
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  allocate.commandBufferCount = 1;
-  check(vkAllocateCommandBuffers(app.device, &allocate, &s.primary), "vkAllocateCommandBuffers");
-  allocate.level = VK_COMMAND_BUFFER_LEVEL_SECONDARY;
-  VkCommandBuffer* secondaries[] = {&s.left, &s.right, &s.rendering};
-  for (VkCommandBuffer* cmd : secondaries) check(vkAllocateCommandBuffers(app.device, &allocate, cmd), "secondary");
-  VkFenceCreateInfo fenceInfo = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence fence;
-  check(vkCreateFence(app.device, &fenceInfo, nullptr, &fence), "vkCreateFence");
-  prepareImages(app, s.primary, fence);
+  s.pool = commandPool(app);
+  s.primary = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_PRIMARY);
+  for (VkCommandBuffer* cmd : {&s.left, &s.right, &s.rendering}) {
+    *cmd = commandBuffer(app, s.pool, VK_COMMAND_BUFFER_LEVEL_SECONDARY);
+  }
+  const VkFence done = fence(app);
+  prepareImages(app, s.primary, done);
   for (uint32_t frame = 0; frame < frames; ++frame) {
     recordSecondaries(s);
     VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
@@ -432,7 +393,7 @@ int main(int argc, char** argv) {
     recordRenderPasses(app, s, s.primary);
     recordRenderingAndCompute(app, s, s.primary);
     check(vkEndCommandBuffer(s.primary), "vkEndCommandBuffer");
-    submit(app, s.primary, fence);
+    submit(app, s.primary, done);
   }
   vkDeviceWaitIdle(app.device);
   std::printf("attribution_app: %u frames\n", frames);

@@ -70,4 +70,13 @@ struct PipelineDesc {
 };
 VkPipeline pipeline(const App& app, const PipelineDesc& desc);
 
+// A resettable command pool of the app's queue family, a command buffer from it, an unsignalled fence.
+VkCommandPool commandPool(const App& app);
+VkCommandBuffer commandBuffer(const App& app, VkCommandPool pool, VkCommandBufferLevel level);
+VkFence fence(const App& app);
+// Submits `cmd` and waits for it.
+void submit(const App& app, VkCommandBuffer cmd, VkFence fence);
+// Every image to GENERAL, once (recorded into `cmd`, submitted, waited for).
+void prepareImages(const App& app, VkCommandBuffer cmd, VkFence fence);
+
 }  // namespace attribution

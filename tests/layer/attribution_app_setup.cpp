@@ -145,6 +145,7 @@ void createDevice(App& app) {
   v11.multiview = VK_TRUE;
   VkPhysicalDeviceFeatures2 features = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &v11};
   features.features.independentBlend = VK_TRUE;  // the write masks differ per attachment
+  features.features.multiDrawIndirect = VK_TRUE;  // draws_app: one indirect command of two draws
   const char* extensions[] = {VK_EXT_VERTEX_INPUT_DYNAMIC_STATE_EXTENSION_NAME, VK_EXT_COLOR_WRITE_ENABLE_EXTENSION_NAME,
                               VK_EXT_EXTENDED_DYNAMIC_STATE_3_EXTENSION_NAME};
   VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &features};
@@ -152,8 +153,9 @@ void createDevice(App& app) {
   dci.pQueueCreateInfos = &qci;
   dci.enabledExtensionCount = 3;
   dci.ppEnabledExtensionNames = extensions;
-  check(vkCreateDevice(app.physical, &dci, nullptr, &app.device), "vkCreateDevice (dynamic rendering, multiview, "
-        "vertex input dynamic state, color write enable, extended dynamic state 3)");
+  check(vkCreateDevice(app.physical, &dci, nullptr, &app.device),
+        "vkCreateDevice (dynamic rendering, multiview, multi-draw indirect, vertex input dynamic state, color write "
+        "enable, extended dynamic state 3)");
   vkGetDeviceQueue(app.device, app.family, 0, &app.queue);
   auto load = [&](const char* name) { return vkGetDeviceProcAddr(app.device, name); };
   app.setName = reinterpret_cast<PFN_vkSetDebugUtilsObjectNameEXT>(load("vkSetDebugUtilsObjectNameEXT"));
@@ -266,6 +268,62 @@ VkPipeline pipeline(const App& app, const PipelineDesc& d) {
   VkPipeline out;
   check(vkCreateGraphicsPipelines(app.device, VK_NULL_HANDLE, 1, &info, nullptr, &out), "vkCreateGraphicsPipelines");
   return out;
+}
+
+VkCommandPool commandPool(const App& app) {
+  VkCommandPoolCreateInfo info = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  info.queueFamilyIndex = app.family;
+  VkCommandPool out;
+  check(vkCreateCommandPool(app.device, &info, nullptr, &out), "vkCreateCommandPool");
+  return out;
+}
+
+VkCommandBuffer commandBuffer(const App& app, VkCommandPool pool, VkCommandBufferLevel level) {
+  VkCommandBufferAllocateInfo info = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  info.commandPool = pool;
+  info.level = level;
+  info.commandBufferCount = 1;
+  VkCommandBuffer out;
+  check(vkAllocateCommandBuffers(app.device, &info, &out), "vkAllocateCommandBuffers");
+  return out;
+}
+
+VkFence fence(const App& app) {
+  VkFenceCreateInfo info = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence out;
+  check(vkCreateFence(app.device, &info, nullptr, &out), "vkCreateFence");
+  return out;
+}
+
+void submit(const App& app, VkCommandBuffer cmd, VkFence fence) {
+  VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  info.commandBufferCount = 1;
+  info.pCommandBuffers = &cmd;
+  check(vkQueueSubmit(app.queue, 1, &info, fence), "vkQueueSubmit");
+  check(vkWaitForFences(app.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  vkResetFences(app.device, 1, &fence);
+}
+
+// Every image to GENERAL, once.
+void prepareImages(const App& app, VkCommandBuffer cmd, VkFence fence) {
+  VkCommandBufferBeginInfo begin = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  std::vector<VkImageMemoryBarrier> barriers;
+  for (const auto& [image, aspect] : app.images) {
+    VkImageMemoryBarrier b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+    b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    b.newLayout = kGeneral;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image;
+    b.subresourceRange = {aspect, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
+    barriers.push_back(b);
+  }
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 0, nullptr, 0,
+                       nullptr, uint32_t(barriers.size()), barriers.data());
+  check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+  submit(app, cmd, fence);
 }
 
 }  // namespace attribution

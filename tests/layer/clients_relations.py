@@ -18,8 +18,11 @@ LARGE_TRIANGLES = 1.25
 
 
 def works(p, count, statistic):
-    """Whether a pass draws (or dispatches): the layer's count of them, or
+    """Whether a pass draws (or dispatches): the layer's count of them (a
+    result's "draw_count": with per-draw counts "draws" is their list), or
     where the store keeps none, the pass's invocations statistic."""
+    if count == "draws" and "draw_count" in p:
+        count = "draw_count"
     return p[count] > 0 if count in p else (p.get(statistic) or 0) > 0
 
 

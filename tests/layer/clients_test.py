@@ -8,6 +8,8 @@ derived from the application's own source, never from the layer:
 - ffmpeg's Vulkan compute filters, headless, a frame per submission:
   avgblur_vulkan and scale_vulkan on yuv420p 320x240 test frames;
 - two of them stored and served through the daemon (`service`);
+- glmark2's texture scene with per-site and per-draw counts, stored, served
+  and ranked by `tally hotspots` (`sites`, clients_sites.py);
 
 and every application also run under the Khronos validation layer alone,
 then stacked with Tally's in both orders (validation.py): a message only a
@@ -229,11 +231,11 @@ def main():
     args.tallyd = os.path.abspath(args.tallyd)
     args.layer_dir = os.path.join(os.path.abspath(args.build), "layer")
     needs = {"glmark2": ["glmark2", "Xvfb"], "ffmpeg": ["ffmpeg"], "vkcube": ["vkcube", "Xvfb"], "play": [],
-             "service": ["glmark2", "ffmpeg"]}[args.case.split("-")[0]]
+             "service": ["glmark2", "ffmpeg"], "sites": ["glmark2"]}[args.case.split("-")[0]]
     for tool in needs:
         if shutil.which(tool) is None:
             skip_or_fail(tool + " is not installed (scripts/setup.sh installs glmark2-x11, ffmpeg, xvfb, vulkan-tools)")
-    if validation.manifest_folder(validation.VALIDATION) is None and args.case != "service":
+    if validation.manifest_folder(validation.VALIDATION) is None and args.case not in ("service", "sites"):
         skip_or_fail("the Khronos validation layer is not installed (scripts/setup.sh: vulkan-validationlayers)")
     with tempfile.TemporaryDirectory(prefix="tally-clients-") as tmp:
         kind, _, name = args.case.partition("-")
@@ -248,6 +250,9 @@ def main():
         elif args.case == "service":
             import clients_service
             clients_service.run(args, tmp, glmark2_spec("texture"), ffmpeg_spec("avgblur"), Failures("service"))
+        elif args.case == "sites":
+            import clients_sites
+            clients_sites.run(args, tmp, glmark2_spec("texture"), Failures("glmark2 texture, sites"))
         else:
             parser.error("unknown case " + args.case)
 

@@ -78,6 +78,44 @@ def check_sites(builtin_passes, layer_passes):
     return problems
 
 
+def draw_counts(p, key):
+    """A pass's per-draw counts, sorted, zeros left out (a draw that counts
+    nothing has no bytes to compare), and its rest's: None where it has none."""
+    draws = p.get(key)
+    if not isinstance(draws, list):
+        return None
+    rest = p.get("draws_rest")
+    return sorted(d["count"] for d in draws if d["count"] > 0), (rest["draws"], rest["count"]) if rest else None
+
+
+def check_draws(builtin_passes, layer_passes):
+    """With --sites: each pass the built-in renderer counts per draw has the
+    same per-draw counts under the layer (its scene draws are the play's draw
+    commands: one each, recorded in scene order), and the layer's draws sum
+    to its pass's counted lines."""
+    problems = []
+    layer = {p["name"]: p for p in layer_passes}
+    compared = 0
+    for p in builtin_passes:
+        want = draw_counts(p, "draws")
+        if want is None or p["name"] not in layer:
+            continue
+        got = draw_counts(layer[p["name"]], "draw_list")
+        compared += 1
+        if got != want:
+            problems.append("draws of %s: built-in %s, layer %s" % (p["name"], want, got))
+    for p in layer_passes:
+        if "draw_list" not in p:
+            continue
+        lines = sum(r["count"] for r in p["resources"] if r["source"] == "counter")
+        draws = sum(d["count"] for d in p["draw_list"]) + p.get("draws_rest", {}).get("count", 0)
+        if lines != draws:
+            problems.append("layer pass %s: draws sum to %s, counted lines to %s" % (p["name"], draws, lines))
+    if compared == 0:
+        problems.append("no pass with draws on both sides")
+    return problems
+
+
 def line_kinds(passes):
     """{(pass, resource, access, source): kind}."""
     return {(p["name"], r["name"], r["access"], r["source"]): r["kind"] for p in passes for r in p["resources"]}
@@ -155,6 +193,7 @@ def compare(args, renderer, tmp, builtin_run):
         incomplete.append("%d frames in the layer's output, %d asked for" % (len(layer["frames"]), args.layer_frames))
     if args.sites:
         incomplete += check_sites(builtin_run["samples"][0]["passes"], frame["passes"])
+        incomplete += check_draws(builtin_run["samples"][0]["passes"], frame["passes"])
     if sorted(passes_builtin) != sorted(passes_layer):
         incomplete.append("passes differ: built-in %s, layer %s" % (passes_builtin, passes_layer))
     times = {p["name"]: p["gpu_ms"] for p in frame["passes"]}
@@ -199,7 +238,8 @@ def main():
     parser.add_argument("--min-lines-per-pass", type=int, default=1,
                         help="equal lines with a non-zero count each pass must have")
     parser.add_argument("--sites", action="store_true",
-                        help="count per access site on both sides: lines are their sites' sums, sites agree")
+                        help="count per access site and per draw on both sides: lines are their sites' sums, "
+                             "sites and draws agree")
     parser.add_argument("--out", default="")
     args = parser.parse_args()
     args.layer_dir = os.path.abspath(args.layer_dir)

@@ -13,6 +13,7 @@
 // then splits the image at the centre column.
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -410,6 +411,64 @@ TEST(GltfEmissive, EmissionIsAddedInEveryRenderer) {
       // The emission travels in its own G-buffer target, written and read once per covered pixel.
       EXPECT_EQ(counted(passNamed(r, "gbuffer"), "gbuffer.emissive", true), kPixels);
       EXPECT_EQ(counted(passNamed(r, "lighting"), "gbuffer.emissive", false), kPixels);
+    }
+  }
+}
+
+// The visibility buffers' per-material split of their material-map reads,
+// derived by hand: a left half of material "left" (a base colour texture
+// and its own normal texture), a right half of "right" (its own base colour
+// and normal textures, and left's base colour texture as its emissive map).
+// Each covered pixel reads each of its material's maps once, so "left" reads
+// its own texture once per left pixel, "right" its two own textures once per
+// right pixel each, and the shared texture's entry, "left + right", once per
+// pixel of the view. Every covered pixel is shaded once (kLeftHalf each
+// side: the seam lies on a pixel edge). Only the descriptor-indexing path
+// counts per texture; on texture arrays (lavapipe) materials are layers of
+// one array and the split is not counted (a device property: skipped).
+TEST(GltfMaterialSplit, VisibilityShadingReadsSplitPerMaterialAsDerivedByHand) {
+  GltfWriter w;
+  const int leftBase = w.addTexture(8, 8, halves(8, 8, kWhite, kWhite));
+  const int rightBase = w.addTexture(8, 8, halves(8, 8, kBlack, kWhite));
+  const int rightNormal = w.addTexture(8, 8, halves(8, 8, glm::u8vec4(128, 128, 255, 255), glm::u8vec4(128, 128, 255, 255)));
+  const int leftNormal = w.addTexture(4, 4, halves(4, 4, glm::u8vec4(128, 128, 255, 255), glm::u8vec4(128, 128, 255, 255)));
+  const int left = w.addMaterial({{"name", "left"},
+                                  {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", leftBase}}}}},
+                                  {"normalTexture", {{"index", leftNormal}}}});
+  const int right = w.addMaterial({{"name", "right"},
+                                   {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", rightBase}}}}},
+                                   {"normalTexture", {{"index", rightNormal}}},
+                                   {"emissiveFactor", {0.1, 0.1, 0.1}},
+                                   {"emissiveTexture", {{"index", leftBase}}}});
+  w.addQuad(quadFacingCamera(-kHalfWidth, -kHalfHeight, 0.0f, kHalfHeight, 0.0f, left));
+  w.addQuad(quadFacingCamera(0.0f, -kHalfHeight, kHalfWidth, kHalfHeight, 0.0f, right));
+  const nlohmann::json spec = sceneOf(w, "material_split");
+  for (const char* name : {"visbuffer", "visbuffer-lean"}) {
+    for (bool compute : {false, true}) {
+      SCOPED_TRACE(std::string(name) + (compute ? " compute" : " fragment"));
+      Rendered r = render(name, spec, kExtent, [&](RendererOptions& o) {
+        o.draws = true;
+        o.computeShading = compute;
+      });
+      ASSERT_TRUE(r.ok) << r.error;
+      if (r.notes.value("material_maps", "") != "descriptor_indexing") {
+        GTEST_SKIP() << "the device has no descriptor indexing: materials are layers of texture arrays";
+      }
+      std::map<std::string, uint64_t> reads;
+      std::string entries;
+      for (const MaterialCount& m : passNamed(r, "shading").materials) {
+        reads[m.material] += m.count;
+        entries += " '" + m.material + "': " + std::to_string(m.count);
+      }
+      SCOPED_TRACE("entries:" + entries);
+      EXPECT_EQ(reads["left"], kLeftHalf);
+      EXPECT_EQ(reads["right"], 2 * kLeftHalf);
+      EXPECT_EQ(reads["left + right"], kPixels);
+      // The visibility pass's own per-draw counts, a second mechanism: each
+      // draw writes one visibility value per pixel it covers.
+      const PassResult& visibility = passNamed(r, "visibility");
+      ASSERT_EQ(visibility.draws.size(), 2u);
+      EXPECT_EQ(visibility.draws[0].bytesWritten, visibility.draws[1].bytesWritten);
     }
   }
 }

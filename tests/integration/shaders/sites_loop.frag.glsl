@@ -5,6 +5,8 @@
 //  - [fixed]  detail, in a loop of 3 trips: 3*W*H
 //  - [varied] mask, in a loop of (x mod 4) trips: H * sum over x of (x mod 4)
 //  - [branch] albedo again, only where x is even: ceil(W/2)*H
+//  - [merge]  detail at a coordinate chosen by `?:`: W*H. The read sits in
+//    the selection's merge block, which glslang gives no line of its own
 layout(set = 0, binding = 0) uniform sampler2D albedo;
 layout(set = 0, binding = 1) uniform sampler2D detail;
 layout(set = 0, binding = 2) uniform sampler2D mask;
@@ -24,5 +26,6 @@ void main() {
   if (int(gl_FragCoord.x) % 2 == 0) {
     sum += texture(albedo, uv.yx);  // [branch]
   }
+  sum += texture(detail, int(gl_FragCoord.x) % 3 == 0 ? uv : uv.yx);  // [merge]
   color = sum * 0.125;
 }
