@@ -3,6 +3,7 @@
 // at a draw (shader_objects.hpp).
 #include <algorithm>
 
+#include "names.hpp"
 #include "shader_objects.hpp"
 
 namespace tally::layer {
@@ -133,6 +134,11 @@ std::shared_ptr<PipelineInfo> combineShaders(const std::vector<const ShaderObjec
   info->slots = end - shift;
   info->regionShift = VkDeviceSize(shift) * 8;
   info->counted = true;
+  // Named in per-draw lines by its shaders, as `shaders` names them.
+  info->name = "shader objects";
+  for (const ShaderObject* s : bound) {
+    if (s != nullptr && s->twin != VK_NULL_HANDLE && s->counted.counted) info->name += " " + hexHandle(s->handle);
+  }
   // Shader objects leave all this state to the command buffer.
   FixedFunction& fixed = info->fixed;
   fixed.dynamicWriteMask = fixed.dynamicWriteEnable = fixed.dynamicDiscard = fixed.dynamicVertexInput = true;

@@ -40,6 +40,7 @@ VkShaderCreateInfoEXT spirvInfo(VkShaderStageFlagBits stage, const std::vector<u
 ShaderObject instrumented(VkShaderStageFlagBits stage, const char* source, spirv::Stage glslStage) {
   ShaderObject object;
   object.stage = stage;
+  object.handle = 0x2000 + stage;
   object.twin = reinterpret_cast<VkShaderEXT>(uintptr_t(0x1000 + stage));
   std::vector<uint32_t> out;
   std::vector<std::string> notes;
@@ -189,6 +190,7 @@ TEST(ShaderObjects, TheBoundCombinationCountsFromItsLowestBand) {
   EXPECT_EQ(combined->sites.front().slot, vertex.counted.sites.front().slot - vertex.firstSlot);
   EXPECT_EQ(combined->sites.back().slot, fragment.counted.sites.back().slot - vertex.firstSlot);
   EXPECT_TRUE(combined->hasFragment);
+  EXPECT_EQ(combined->name, "shader objects 0x2001 0x2010");  // per-draw lines name the shaders
   EXPECT_EQ(combined->handle, reinterpret_cast<uint64_t>(combined.get()));
   const FixedFunction& fixed = combined->fixed;
   EXPECT_TRUE(fixed.dynamicWriteMask && fixed.dynamicWriteEnable && fixed.dynamicDiscard && fixed.dynamicVertexInput);
