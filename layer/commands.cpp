@@ -108,6 +108,7 @@ void resetRecording(DeviceState& dev, CommandBufferState& cb) {
   cb.secondaryContents = cb.suspending = false;
   cb.owedEnd = -1;
   cb.bind = {};
+  cb.shaders = {};
   cb.coverage = {};
   cb.vertexBuffers.clear();
   cb.indexBuffer = 0;

@@ -375,7 +375,8 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
     }
   }
   if (bp.dirty || bp.boundOffset != offset) {
-    const uint32_t dynamicOffset = uint32_t(offset);
+    // The sink (0) holds every slot: shader objects' bands land inside it unshifted.
+    const uint32_t dynamicOffset = uint32_t(offset == 0 ? 0 : offset - pipeline.regionShift);
     dev.d.CmdBindDescriptorSets(cb.handle, isDispatch ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
                                 pipeline.layout, dev.counterSet, 1, &dev.counterDescriptorSet, 1, &dynamicOffset);
     bp.boundOffset = offset;

@@ -11,6 +11,7 @@
 #include "intercepts.hpp"
 #include "libraries.hpp"
 #include "names.hpp"
+#include "shader_objects.hpp"
 #include "shader_options.hpp"
 #include "state.hpp"
 #include "uncounted.hpp"
@@ -46,6 +47,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
   }
   bp.pipeline = info;
   bp.dirty = true;
+  unbindShaderObjects(*cb, point == VK_PIPELINE_BIND_POINT_COMPUTE);
   // A counted pipeline always finds the counter set bound: at the sink (never
   // read) until a draw the layer sees binds the draw's region, so a draw
   // command the layer does not intercept runs uncounted, not unbound.

@@ -1,5 +1,7 @@
 #include "early_tests_twin.hpp"
 
+#include "shader_objects.hpp"
+
 namespace tally::layer {
 
 EarlyTestsPlan earlyTestsPlan(const VkGraphicsPipelineCreateInfo& info) {
@@ -64,6 +66,7 @@ void createEarlyTestsTwins(DeviceState& dev, VkPipelineCache cache, const std::v
 }
 
 void bindForCoverage(DeviceState& dev, CommandBufferState& cb) {
+  if (cb.shaders[kFragmentShaderIndex] != 0) return bindShadersForCoverage(dev, cb);  // a fragment shader object
   const auto& pipeline = cb.bind[0].pipeline;
   if (!pipeline || pipeline->earlyTestsTwin == VK_NULL_HANDLE) return;
   const bool twin = cb.coverage.known && !cb.coverage.alphaToCoverage;

@@ -22,6 +22,7 @@ PFN_vkVoidFunction interceptedDescriptors(std::string_view name);  // descriptor
 PFN_vkVoidFunction interceptedPipelines(std::string_view name);    // pipelines.cpp
 PFN_vkVoidFunction interceptedCommands(std::string_view name);     // commands.cpp
 PFN_vkVoidFunction interceptedDraws(std::string_view name);        // draws.cpp
+PFN_vkVoidFunction interceptedShaderObjects(std::string_view name);  // shader_objects.cpp
 
 // Shared between areas.
 Bound boundImage(DeviceState& dev, VkImageView view);        // descriptors.cpp: what a view names

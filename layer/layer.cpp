@@ -14,6 +14,7 @@
 #include "intercepts.hpp"
 #include "libraries.hpp"
 #include "names.hpp"
+#include "shader_objects.hpp"
 #include "shader_options.hpp"
 #include "state.hpp"
 #include "uncounted.hpp"
@@ -307,6 +308,7 @@ VKAPI_ATTR void VKAPI_CALL DestroyDevice(VkDevice device, const VkAllocationCall
   {
     std::lock_guard lock(dev->mutex);
     finish(*dev, false);
+    destroyShaderObjects(*dev);
     destroyCounting(*dev);
   }
   PFN_vkDestroyDevice destroy = dev->d.DestroyDevice;
@@ -473,7 +475,8 @@ PFN_vkVoidFunction interceptedDevice(std::string_view name) {
   TALLY_INTERCEPT_ALIAS(QueueSubmit2KHR, QueueSubmit2)
   TALLY_INTERCEPT(QueuePresentKHR)
   for (auto intercepted : {interceptedResources, interceptedDescriptors, interceptedPipelines, interceptedCommands,
-                           interceptedDraws, interceptedDynamicState, interceptedUncounted}) {
+                           interceptedDraws, interceptedDynamicState, interceptedShaderObjects,
+                           interceptedUncounted}) {
     if (PFN_vkVoidFunction f = intercepted(name)) return f;
   }
   return nullptr;

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "names.hpp"
+#include "shader_objects.hpp"
 #include "state.hpp"
 
 namespace tally::layer {
@@ -101,6 +102,8 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"pipelines_counted", dev.pipelinesCounted},
         {"pipeline_libraries", dev.librariesCreated},
         {"pipelines_linked", dev.pipelinesLinked},
+        {"shader_objects", dev.shaderObjects ? dev.shaderObjects->created : 0},
+        {"shader_objects_counted", dev.shaderObjects ? dev.shaderObjects->counted : 0},
         {"layouts_refused", dev.layoutsRefused},
         {"spirv_validation", spirv::describe(dev.instrumentOptions.target)},
         {"not_counting", dev.notCounting},

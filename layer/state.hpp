@@ -174,6 +174,9 @@ struct PipelineInfo {
   // shader was given early tests: bound in the application's pipeline's
   // place while alpha to coverage is off (early_tests_twin.hpp).
   VkPipeline earlyTestsTwin = VK_NULL_HANDLE;
+  // Shader objects: bytes the counter set is bound before the region, so that
+  // the lowest slot band bound lands at its start (shader_objects.hpp).
+  VkDeviceSize regionShift = 0;
 };
 
 // An indexed indirect draw whose parameters the layer copies, after the
@@ -285,6 +288,7 @@ struct CommandBufferState {
     std::map<uint32_t, DescriptorSetState> pushed;  // push descriptor sets, by set number
   };
   std::array<BindPoint, 2> bind;  // graphics, compute
+  std::array<uint64_t, 8> shaders{};  // vkCmdBindShadersEXT: each stage's shader object (shader_objects.hpp)
   std::map<uint32_t, uint64_t> vertexBuffers;
   uint64_t indexBuffer = 0;
   uint32_t indexBytes = 4;
@@ -375,6 +379,8 @@ struct ShaderInfo {
   std::string name;
 };
 
+struct ShaderObjects;  // shader_objects.hpp
+
 struct DeviceState {
   VkDevice device = VK_NULL_HANDLE;
   VkPhysicalDevice physical = VK_NULL_HANDLE;
@@ -419,6 +425,7 @@ struct DeviceState {
   std::unordered_map<uint64_t, std::pair<VkPipelineBindPoint, std::vector<VkDescriptorUpdateTemplateEntry>>>
       pushTemplates;  // templates of push descriptors: their bind point and entries
   std::unordered_map<uint64_t, std::shared_ptr<PipelineInfo>> libraries;  // graphics pipeline libraries
+  std::shared_ptr<ShaderObjects> shaderObjects;  // VK_EXT_shader_object, from the first vkCreateShadersEXT
   std::unordered_map<uint64_t, Resource> resources;  // destroyed ones stay: their counts may still be read back
   std::unordered_map<uint64_t, ImageView> views;
   std::unordered_map<uint64_t, uint64_t> bufferViews;  // view -> buffer

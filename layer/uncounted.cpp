@@ -7,15 +7,6 @@
 namespace tally::layer {
 namespace {
 
-// VK_EXT_shader_object is newer than the Vulkan headers the layer is built
-// with (1.3.239): its two calls are declared here by their registry
-// signatures. The layer reads none of their structures.
-using ShaderHandle = uint64_t;
-using PFN_CreateShaders = VkResult(VKAPI_PTR*)(VkDevice, uint32_t, const void*, const VkAllocationCallbacks*,
-                                                ShaderHandle*);
-using PFN_CmdBindShaders = void(VKAPI_PTR*)(VkCommandBuffer, uint32_t, const VkShaderStageFlagBits*,
-                                            const ShaderHandle*);
-
 template <class F>
 F next(DeviceState& dev, const char* name) {
   return reinterpret_cast<F>(dev.d.GetDeviceProcAddr(dev.device, name));
@@ -54,38 +45,6 @@ VKAPI_ATTR void VKAPI_CALL DestroyDescriptorSetLayout(VkDevice device, VkDescrip
     dev->descriptorBufferLayouts.erase(u64(layout));  // a later layout may reuse the handle
   }
   dev->d.DestroyDescriptorSetLayout(device, layout, alloc);
-}
-
-// ---------------------------------------------------------------- shader objects
-
-VKAPI_ATTR VkResult VKAPI_CALL CreateShadersEXT(VkDevice device, uint32_t count, const void* infos,
-                                                const VkAllocationCallbacks* alloc, ShaderHandle* shaders) {
-  DeviceState* dev = deviceOf(device);
-  auto down = next<PFN_CreateShaders>(*dev, "vkCreateShadersEXT");
-  VkResult result = down(device, count, infos, alloc, shaders);
-  const std::string why =
-      "shader objects (VK_EXT_shader_object) are not instrumented: draws through them run uncounted";
-  note(*dev, why);
-  for (uint32_t i = 0; i < count; ++i) {
-    if (shaders[i] != 0) report(*dev, "shader object", "shader object " + hexHandle(shaders[i]), why);
-  }
-  return result;
-}
-
-VKAPI_ATTR void VKAPI_CALL CmdBindShadersEXT(VkCommandBuffer cmd, uint32_t count, const VkShaderStageFlagBits* stages,
-                                             const ShaderHandle* shaders) {
-  DeviceState* dev = deviceOf(cmd);
-  next<PFN_CmdBindShaders>(*dev, "vkCmdBindShadersEXT")(cmd, count, stages, shaders);
-  // Binding shader objects replaces the pipeline at that bind point: later
-  // draws there are not the pipeline's and must not count into its region.
-  std::lock_guard lock(dev->mutex);
-  CommandBufferState* cb = commandBufferOf(*dev, cmd);
-  if (cb == nullptr) return;
-  for (uint32_t i = 0; i < count; ++i) {
-    auto& bp = cb->bind[stages[i] == VK_SHADER_STAGE_COMPUTE_BIT ? 1 : 0];
-    bp.pipeline = nullptr;
-    bp.dirty = true;
-  }
 }
 
 // ---------------------------------------------------------------- ray tracing
@@ -128,8 +87,6 @@ std::string layoutRefusal(const DeviceState& dev, const VkPipelineLayoutCreateIn
 PFN_vkVoidFunction interceptedUncounted(std::string_view n) {
   if (n == "vkCreateDescriptorSetLayout") return reinterpret_cast<PFN_vkVoidFunction>(CreateDescriptorSetLayout);
   if (n == "vkDestroyDescriptorSetLayout") return reinterpret_cast<PFN_vkVoidFunction>(DestroyDescriptorSetLayout);
-  if (n == "vkCreateShadersEXT") return reinterpret_cast<PFN_vkVoidFunction>(CreateShadersEXT);
-  if (n == "vkCmdBindShadersEXT") return reinterpret_cast<PFN_vkVoidFunction>(CmdBindShadersEXT);
   if (n == "vkCreateRayTracingPipelinesKHR") {
     return reinterpret_cast<PFN_vkVoidFunction>(CreateRayTracingPipelinesKHR);
   }

@@ -1,9 +1,9 @@
 // What the layer lets pass without counting, and says so: descriptor
-// buffers, shader objects and ray-tracing pipelines. Each is noted in the
-// output (`notes`, and `shaders` for the shaders it could not instrument);
-// none may be half-handled, because a pipeline layout extended with the
-// counter set is invalid for descriptor-buffer pipelines, and a draw through
-// shader objects must not be attributed to the pipeline bound before them.
+// buffers and ray-tracing pipelines (shader objects are counted:
+// shader_objects.hpp). Each is noted in the output (`notes`, and `shaders`
+// for the shaders it could not instrument); none may be half-handled,
+// because a pipeline layout extended with the counter set is invalid for
+// descriptor-buffer pipelines.
 #pragma once
 
 #include <string>
@@ -13,7 +13,7 @@
 
 namespace tally::layer {
 
-// The entry points below, by name ("vkCreateShadersEXT"); null for others.
+// The entry points below, by name ("vkCreateRayTracingPipelinesKHR"); null for others.
 PFN_vkVoidFunction interceptedUncounted(std::string_view name);
 
 // Why a pipeline layout must be created as the application asked, or "" when
