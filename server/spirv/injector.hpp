@@ -287,8 +287,21 @@ class Injector : public ModuleBuilder {
   uint32_t tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t dynamicOffset);
 
   // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
-  // the scratch bit past the bitmap.
+  // the scratch bit past the bitmap (footprint_marks.cpp).
   uint32_t fpMarkFn();
+
+  // Whether marks combine across the subgroup (InstrumentOptions::footprintDedup);
+  // records the dedup the marks use in result_.
+  bool footprintSubgroup(const SiteScan& scan);
+
+  // if this invocation marked the word's bit already: return; else remember it.
+  void fpSkipCached(Body& b, uint32_t word, uint32_t bit);
+
+  // bitmap[word] |= bits, the atomic only where a bit is new.
+  void fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit);
+
+  // The same, once for all the lanes of the subgroup that mark one word.
+  void fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit);
 
   // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
   // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
@@ -383,6 +396,8 @@ class Injector : public ModuleBuilder {
   std::map<Stage, uint32_t> derivedSites_;          // sites derived from the invocation count
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
+  Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup
+  uint32_t fpCache_[4] = {};       // the cache's Private registers: word0, bits0, word1, bits1
   uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
 };
 
