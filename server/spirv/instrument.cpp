@@ -287,12 +287,15 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (options.footprintBlockBytes == 0 || options.footprintDedup) return run(words, options, true);
   InstrumentOptions resolved = options;
   resolved.footprintDedup = FootprintDedup{};
-  if (const char* env = std::getenv("TALLY_FOOTPRINT_DEDUP"); env != nullptr && *env != '\0') {
-    auto dedup = parseFootprintDedup(env);
-    if (!dedup) return makeError("TALLY_FOOTPRINT_DEDUP: " + dedup.error());
-    resolved.footprintDedup = *dedup;
-  }
-  return run(words, resolved, true);
+  const char* env = std::getenv("TALLY_FOOTPRINT_DEDUP");
+  if (env == nullptr || *env == '\0') return run(words, resolved, true);
+  auto dedup = parseFootprintDedup(env);
+  if (!dedup) return makeError("TALLY_FOOTPRINT_DEDUP: " + dedup.error());
+  resolved.footprintDedup = *dedup;
+  auto result = run(words, resolved, true);
+  // A capture's runs then say which choice their costs were measured with.
+  if (result) result->notes.push_back("footprint: marks dedup '" + toString(*dedup) + "', from TALLY_FOOTPRINT_DEDUP");
+  return result;
 }
 
 Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options) {

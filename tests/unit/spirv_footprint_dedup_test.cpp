@@ -1,6 +1,7 @@
 // What footprint marks skip (InstrumentOptions::footprintDedup): the names,
 // the environment's choice, and the code each choice adds to tally_fp_mark.
 // That the choices change no count is footprint_dedup_test.cpp's, on a device.
+#include <algorithm>
 #include <cstdlib>
 #include <optional>
 #include <string>
@@ -106,7 +107,10 @@ TEST(FootprintDedup, TheEnvironmentChoosesWhereTheOptionsDoNot) {
   }
   {
     DedupEnvironment env("subgroup");
-    EXPECT_EQ(toString(*instrumentOk(words, withFootprint(std::nullopt)).footprintDedup), "subgroup");
+    auto r = instrumentOk(words, withFootprint(std::nullopt));
+    EXPECT_EQ(toString(*r.footprintDedup), "subgroup");
+    EXPECT_NE(std::find(r.notes.begin(), r.notes.end(), "footprint: marks dedup 'subgroup', from TALLY_FOOTPRINT_DEDUP"),
+              r.notes.end());
     EXPECT_EQ(toString(*instrumentOk(words, withFootprint(*parseFootprintDedup("none"))).footprintDedup), "none");
   }
   {
