@@ -86,30 +86,9 @@ void Injector::fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit) {
   // Helper lanes take part in subgroup operations, but an atomic from one
   // has no effect: one elected would lose the others' bits.
   uint32_t end = fpStage_ == Stage::Fragment ? skipHelperLanes(b, fpStage_) : 0;
-  uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
-  uint32_t take = m_.newId(), took = m_.newId(), set = m_.newId(), skip = m_.newId();
-  branch(b, header);
-  label(b, header);
-  opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
-  branch(b, loop);
-  label(b, loop);
-  uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, u, {scope, word});
-  uint32_t mine = op(b, spv::Op::OpIEqual, tBool(), {word, first});
-  selection(b, mine, take, skip, skip);
-  label(b, take);
-  uint32_t bits = op(b, spv::Op::OpGroupNonUniformBitwiseOr, u, {scope, kGroupReduce, bit});
-  uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
-  selection(b, elected, set, took, took);
-  label(b, set);
-  fpSetBits(b, first, bits, false);
-  branch(b, took);
-  label(b, took);
-  branch(b, skip);
-  label(b, skip);
-  branch(b, cont);
-  label(b, cont);
-  opNoResult(b, spv::Op::OpBranchConditional, {mine, exit, header});
-  label(b, exit);
+  waterfall(
+      b, word, [&](Body& bb) { return op(bb, spv::Op::OpGroupNonUniformBitwiseOr, u, {scope, kGroupReduce, bit}); },
+      [&](Body& bb, uint32_t first, uint32_t bits) { fpSetBits(bb, first, bits, false); });
   if (end != 0) {
     branch(b, end);
     label(b, end);

@@ -140,6 +140,39 @@ class ModuleBuilder {
 
   uint32_t fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args);
 
+  // The waterfall loop over the distinct values of the u32 `key` among the
+  // active lanes: each pass takes the lanes whose key equals the first
+  // active lane's, reduces across exactly those (reduce(b) returns the
+  // reduction), lets one of them apply(b, key, reduced), and lets them leave.
+  template <class Reduce, class Apply>
+  void waterfall(Body& b, uint32_t key, Reduce&& reduce, Apply&& apply) {
+    uint32_t scope = constantU32(kScopeSubgroup);
+    uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
+    uint32_t take = m_.newId(), took = m_.newId(), one = m_.newId(), skip = m_.newId();
+    branch(b, header);
+    label(b, header);
+    opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
+    branch(b, loop);
+    label(b, loop);
+    uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, tU32(), {scope, key});
+    uint32_t mine = op(b, spv::Op::OpIEqual, tBool(), {key, first});
+    selection(b, mine, take, skip, skip);
+    label(b, take);
+    uint32_t reduced = reduce(b);
+    uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
+    selection(b, elected, one, took, took);
+    label(b, one);
+    apply(b, first, reduced);
+    branch(b, took);
+    label(b, took);
+    branch(b, skip);
+    label(b, skip);
+    branch(b, cont);
+    label(b, cont);
+    opNoResult(b, spv::Op::OpBranchConditional, {mine, exit, header});
+    label(b, exit);
+  }
+
   // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
   uint32_t intAs(Body& b, uint32_t value, bool asSigned);
   uint32_t intOfType(Body& b, uint32_t value, uint32_t type, bool asSigned);
