@@ -293,7 +293,7 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (!dedup) return makeError("TALLY_FOOTPRINT_DEDUP: " + dedup.error());
   resolved.footprintDedup = *dedup;
   auto result = run(words, resolved, true);
-  // A capture's runs then say which choice their costs were measured with.
+  // The module's notes then say what its marks were instrumented with, whatever the caller asked.
   if (result) result->notes.push_back("footprint: marks dedup '" + toString(*dedup) + "', from TALLY_FOOTPRINT_DEDUP");
   return result;
 }
