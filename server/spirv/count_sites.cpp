@@ -226,30 +226,9 @@ uint32_t Injector::helperFunction(Helper h, Stage stage) {
       }
       // Waterfall: each pass takes the lanes whose slot equals the first
       // active lane's, adds their count in one atomic, and lets them leave.
-      uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
-      uint32_t take = m_.newId(), took = m_.newId(), add = m_.newId(), skip = m_.newId();
-      branch(b, header);
-      label(b, header);
-      opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
-      branch(b, loop);
-      label(b, loop);
-      uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, tU32(), {scope, slot});
-      uint32_t mine = op(b, spv::Op::OpIEqual, tBool(), {slot, first});
-      selection(b, mine, take, skip, skip);
-      label(b, take);
-      uint32_t count = op(b, spv::Op::OpGroupNonUniformIAdd, tU32(), {scope, kGroupReduce, one});
-      uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
-      selection(b, elected, add, took, took);
-      label(b, add);
-      emitAdd(b, first, count);
-      branch(b, took);
-      label(b, took);
-      branch(b, skip);
-      label(b, skip);
-      branch(b, cont);
-      label(b, cont);
-      opNoResult(b, spv::Op::OpBranchConditional, {mine, exit, header});
-      label(b, exit);
+      waterfall(
+          b, slot, [&](Body& bb) { return op(bb, spv::Op::OpGroupNonUniformIAdd, tU32(), {scope, kGroupReduce, one}); },
+          [&](Body& bb, uint32_t first, uint32_t count) { emitAdd(bb, first, count); });
       if (end != 0) {
         branch(b, end);
         label(b, end);

@@ -48,29 +48,6 @@ uint32_t Injector::tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t 
   return op(b, spv::Op::OpLoad, tU32(), {ptr});
 }
 
-// tally_fp_mark(base, capacity, block): sets the bit, block clamped into
-// the scratch bit past the bitmap.
-uint32_t Injector::fpMarkFn() {
-  if (fpMark_ != 0) return fpMark_;
-  uint32_t u = tU32();
-  auto f = beginFunction({u, u, u});
-  Body b{f->fn.insts};
-  uint32_t base = f->params[0], cap = f->params[1], block = f->params[2];
-  uint32_t inside = op(b, spv::Op::OpULessThan, tBool(), {block, cap});
-  block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
-  uint32_t word = op(b, spv::Op::OpIAdd, u, {base, op(b, spv::Op::OpShiftRightLogical, u, {block, constantU32(5)})});
-  uint32_t bit = op(b, spv::Op::OpShiftLeftLogical, u,
-                    {constantU32(1), op(b, spv::Op::OpBitwiseAnd, u, {block, constantU32(31)})});
-  uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpBitmap_, constantU32(0), word});
-  uint32_t old = op(b, spv::Op::OpLoad, u, {ptr});
-  uint32_t clear = op(b, spv::Op::OpIEqual, tBool(), {op(b, spv::Op::OpBitwiseAnd, u, {old, bit}), constantU32(0)});
-  when(b, clear, [&](Body& bb) {
-    op(bb, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bit});
-  });
-  fpMark_ = endFunction(std::move(f), "tally_fp_mark");
-  return fpMark_;
-}
-
 // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
 // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
 uint32_t Injector::fpBytesFn(bool shortRange) {

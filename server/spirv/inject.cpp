@@ -15,7 +15,7 @@ TileShape sampledTileShape(uint32_t n) {
 Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& slots) {
   // Which helper each stage uses decides the capabilities and version.
   const bool accumulate = options_.mode.kind == CountMode::Accumulate;
-  bool subgroup = false;
+  bool subgroup = footprintSubgroup(scan);
   for (const auto& ep : scan.entryPoints) {
     if (accumulate) {
       if (accumulates(ep.stage) && subgroupFlush(ep.stage)) subgroup = true;

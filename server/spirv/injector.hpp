@@ -140,6 +140,39 @@ class ModuleBuilder {
 
   uint32_t fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args);
 
+  // The waterfall loop over the distinct values of the u32 `key` among the
+  // active lanes: each pass takes the lanes whose key equals the first
+  // active lane's, reduces across exactly those (reduce(b) returns the
+  // reduction), lets one of them apply(b, key, reduced), and lets them leave.
+  template <class Reduce, class Apply>
+  void waterfall(Body& b, uint32_t key, Reduce&& reduce, Apply&& apply) {
+    uint32_t scope = constantU32(kScopeSubgroup);
+    uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
+    uint32_t take = m_.newId(), took = m_.newId(), one = m_.newId(), skip = m_.newId();
+    branch(b, header);
+    label(b, header);
+    opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
+    branch(b, loop);
+    label(b, loop);
+    uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, tU32(), {scope, key});
+    uint32_t mine = op(b, spv::Op::OpIEqual, tBool(), {key, first});
+    selection(b, mine, take, skip, skip);
+    label(b, take);
+    uint32_t reduced = reduce(b);
+    uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, tBool(), {scope});
+    selection(b, elected, one, took, took);
+    label(b, one);
+    apply(b, first, reduced);
+    branch(b, took);
+    label(b, took);
+    branch(b, skip);
+    label(b, skip);
+    branch(b, cont);
+    label(b, cont);
+    opNoResult(b, spv::Op::OpBranchConditional, {mine, exit, header});
+    label(b, exit);
+  }
+
   // A u32 (or i32 with `asSigned`) from an integer value of any width and signedness.
   uint32_t intAs(Body& b, uint32_t value, bool asSigned);
   uint32_t intOfType(Body& b, uint32_t value, uint32_t type, bool asSigned);
@@ -287,8 +320,21 @@ class Injector : public ModuleBuilder {
   uint32_t tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t dynamicOffset);
 
   // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
-  // the scratch bit past the bitmap.
+  // the scratch bit past the bitmap (footprint_marks.cpp).
   uint32_t fpMarkFn();
+
+  // Whether marks combine across the subgroup (InstrumentOptions::footprintDedup);
+  // records the dedup the marks use in result_.
+  bool footprintSubgroup(const SiteScan& scan);
+
+  // if this invocation marked the word's bit already: return; else remember it.
+  void fpSkipCached(Body& b, uint32_t word, uint32_t bit);
+
+  // bitmap[word] |= bits, the atomic only where a bit is new.
+  void fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit);
+
+  // The same, once for all the lanes of the subgroup that mark one word.
+  void fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit);
 
   // tally_fp_bytes(entry, offset, bytes): the blocks of bytes [offset, offset + bytes)
   // of a Buffer entry, or of vertex `offset` (the vertex index) of a VertexInput entry.
@@ -383,6 +429,8 @@ class Injector : public ModuleBuilder {
   std::map<Stage, uint32_t> derivedSites_;          // sites derived from the invocation count
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
+  Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup
+  uint32_t fpCache_[4] = {};       // the cache's Private registers: word0, bits0, word1, bits1
   uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
 };
 

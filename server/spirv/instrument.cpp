@@ -1,6 +1,7 @@
 #include "spirv/instrument.hpp"
 
 #include <charconv>
+#include <cstdlib>
 #include <map>
 #include <tuple>
 
@@ -105,6 +106,19 @@ std::string toString(const Mode& mode) {
       return mode.flush == Flush::Lane ? "accumulate:lane" : mode.flush == Flush::Subgroup ? "accumulate:subgroup" : "accumulate";
   }
   return "exact";
+}
+
+Result<FootprintDedup> parseFootprintDedup(std::string_view text) {
+  if (text == "none") return FootprintDedup{false, false};
+  if (text == "subgroup") return FootprintDedup{true, false};
+  if (text == "cache") return FootprintDedup{false, true};
+  if (text == "all") return FootprintDedup{true, true};
+  return makeError("unknown footprint dedup '" + std::string(text) + "' (expected none, subgroup, cache or all)");
+}
+
+std::string toString(const FootprintDedup& dedup) {
+  if (dedup.subgroup) return dedup.cache ? "all" : "subgroup";
+  return dedup.cache ? "cache" : "none";
 }
 
 Result<std::vector<uint32_t>> wordsFromBytes(std::span<const uint8_t> bytes) {
@@ -270,7 +284,18 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (c == 0 || c > 256 || (c & (c - 1)) != 0) {
     return makeError("compute counter copies must be a power of two from 1 to 256, not " + std::to_string(c));
   }
-  return run(words, options, true);
+  if (options.footprintBlockBytes == 0 || options.footprintDedup) return run(words, options, true);
+  InstrumentOptions resolved = options;
+  resolved.footprintDedup = FootprintDedup{};
+  const char* env = std::getenv("TALLY_FOOTPRINT_DEDUP");
+  if (env == nullptr || *env == '\0') return run(words, resolved, true);
+  auto dedup = parseFootprintDedup(env);
+  if (!dedup) return makeError("TALLY_FOOTPRINT_DEDUP: " + dedup.error());
+  resolved.footprintDedup = *dedup;
+  auto result = run(words, resolved, true);
+  // The module's notes then say what its marks were instrumented with, whatever the caller asked.
+  if (result) result->notes.push_back("footprint: marks dedup '" + toString(*dedup) + "', from TALLY_FOOTPRINT_DEDUP");
+  return result;
 }
 
 Result<Instrumented> analyze(std::span<const uint32_t> words, const InstrumentOptions& options) {
@@ -379,7 +404,8 @@ nlohmann::json toJson(const Instrumented& r, const InstrumentOptions& options) {
            : nlohmann::json{{"block_bytes", options.footprintBlockBytes},
                             {"table_binding", options.footprintTableBinding},
                             {"bitmap_binding", options.footprintBitmapBinding},
-                            {"entry_words", footprint::kEntryWords}}},
+                            {"entry_words", footprint::kEntryWords},
+                            {"dedup", toString(r.footprintDedup.value_or(FootprintDedup{}))}}},
       {"counters",
        {{"set", options.set},
         {"binding", options.binding},

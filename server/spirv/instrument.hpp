@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -41,6 +42,22 @@ struct Mode {
 Result<Mode> parseMode(std::string_view text);
 std::string toString(const Mode& mode);
 
+// What footprint marks skip before the bitmap's atomic OR (docs/measurement.md,
+// "Footprint"). Each choice leaves the bits set, and so every count, unchanged.
+struct FootprintDedup {
+  // Lanes of a subgroup marking the same bitmap word combine their bits and
+  // one of them marks for all, in stages with subgroup arithmetic.
+  bool subgroup = false;
+  // Each invocation remembers the last two words it marked and their bits,
+  // and skips a block it marked already.
+  bool cache = true;
+  bool operator==(const FootprintDedup&) const = default;
+};
+
+// "none", "subgroup", "cache" or "all".
+Result<FootprintDedup> parseFootprintDedup(std::string_view text);
+std::string toString(const FootprintDedup& dedup);
+
 // How a 64-bit counter is incremented.
 enum class CounterWidth {
   Int64,       // OpAtomicIAdd on uint64 (needs shaderInt64 + shaderBufferInt64Atomics)
@@ -78,6 +95,9 @@ struct InstrumentOptions {
   uint32_t footprintBlockBytes = 0;
   uint32_t footprintTableBinding = 1;
   uint32_t footprintBitmapBinding = 2;
+  // Unset: $TALLY_FOOTPRINT_DEDUP where set (none, subgroup, cache or all),
+  // so that one capture's spec compares the choices; else FootprintDedup's defaults.
+  std::optional<FootprintDedup> footprintDedup;
   // accumulate mode: sites that run exactly once in every invocation are
   // derived from the entry point's invocation counter (Instrumented::derived)
   // instead of counted in the shader. Off, every site adds in the shader:
@@ -162,6 +182,8 @@ struct Instrumented {
   int64_t arithmeticSlot = -1;
   // accumulate mode: counts the reader derives from invocation counters (settleCounters).
   std::vector<DerivedCount> derived;
+  // Footprint on: what its marks skip (the subgroup's only where the stage has subgroup arithmetic).
+  std::optional<FootprintDedup> footprintDedup;
 
   CopyLayout layout() const { return {firstSlot, slotCount, copies, copyStride, derived}; }
 };

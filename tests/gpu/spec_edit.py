@@ -39,6 +39,7 @@ def main():
     ap.add_argument("--cameras", type=int, default=2)
     ap.add_argument("--counting", help="comma-separated counting modes")
     ap.add_argument("--sites", action="store_true", help="count per access site (the spec's \"sites\")")
+    ap.add_argument("--footprint", type=int, help="footprint block bytes (the spec's \"footprint\")")
     args = ap.parse_args()
 
     with open(args.spec) as f:
@@ -62,6 +63,8 @@ def main():
         spec["counting"] = [m for m in args.counting.split(",") if m]
     if args.sites:
         spec["sites"] = True
+    if args.footprint:
+        spec["footprint"] = args.footprint
     if args.frames:
         # A spec that counts every frame keeps doing so; one that counts
         # fewer keeps its count, within the new frames.

@@ -418,7 +418,8 @@ struct DigestCase {
 // The corpus test's variants, each with and without early fragment tests,
 // and the settings the corpus test leaves at their defaults: no subgroup
 // stages, every flush per lane or none, unstriped compute copies, the
-// footprint at every block size and a moved counter binding.
+// footprint at every block size and with each of its dedups, and a moved
+// counter binding.
 std::vector<DigestCase> digestCases() {
   std::vector<DigestCase> out;
   for (const auto& variant : variants()) {
@@ -465,6 +466,16 @@ std::vector<DigestCase> digestCases() {
     o.mode = *spirv::parseMode("sampled:16");
     o.footprintBlockBytes = 64;
     o.earlyFragmentTests = true;
+  });
+  // What footprint marks skip: both ways (the subgroup's in every stage), and neither.
+  add("accumulate/footprint:64+dedup:all", [](auto& o) {
+    o.footprintBlockBytes = 64;
+    o.footprintDedup = *spirv::parseFootprintDedup("all");
+  });
+  add("exact/footprint:32+dedup:none", [](auto& o) {
+    o.mode = *spirv::parseMode("exact");
+    o.footprintBlockBytes = 32;
+    o.footprintDedup = *spirv::parseFootprintDedup("none");
   });
   add("exact/set:6/binding:3/first:40", [](auto& o) {
     o.mode = *spirv::parseMode("exact");

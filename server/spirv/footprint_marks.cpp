@@ -1,0 +1,122 @@
+// Footprint: tally_fp_mark, where every block an access covers is set in
+// its bitmap, and what it skips before the atomic OR (InstrumentOptions::
+// footprintDedup). Every mark is a word index and a bit; a bit once set
+// stays set for the pass, so skipping a mark whose bit is known to be set,
+// or letting one lane set the bits of others, leaves the bitmap, and every
+// count read from it, as it was.
+//
+// - The cache: each invocation keeps the last two words it marked and the
+//   bits it set in them (Private registers). A loop over a texture, or a
+//   bilinear filter's four texels, mostly lands in blocks marked already;
+//   those then cost two compares instead of a load from the bitmap.
+// - The subgroup: lanes usually touch the same block. A waterfall loop takes
+//   the word of the first active lane, ORs the bits of the lanes marking
+//   that word, and one of them loads and, where a bit is new, sets them all;
+//   the others leave with it, and the loop goes on with the lanes left.
+
+#include "spirv/injector.hpp"
+
+#include <algorithm>
+
+namespace tally::spirv {
+
+// The subgroup form needs one stage (helper lanes are a fragment builtin)
+// with subgroup arithmetic and ballots (options_.subgroupStages, as for
+// accumulate's reduced flush).
+bool Injector::footprintSubgroup(const SiteScan& scan) {
+  if (!footprintOn()) return false;
+  FootprintDedup dedup = options_.footprintDedup.value_or(FootprintDedup{});
+  result_.footprintDedup = dedup;
+  if (!dedup.subgroup || scan.entryPoints.empty()) return false;
+  Stage stage = scan.entryPoints.front().stage;
+  bool oneStage = std::all_of(scan.entryPoints.begin(), scan.entryPoints.end(),
+                              [&](const EntryPoint& ep) { return ep.stage == stage; });
+  if (!oneStage || stage == Stage::Other || (options_.subgroupStages & stageBit(stage)) == 0) {
+    result_.footprintDedup->subgroup = false;
+    noteOnce(std::string("footprint: marks not combined across the subgroup: ") +
+             (oneStage ? "no subgroup arithmetic in the " + std::string(toString(stage)) + " stage"
+                       : "entry points of several stages"));
+    return false;
+  }
+  fpStage_ = stage;
+  return true;
+}
+
+// if the bit is among the bits this invocation marked in the word: return;
+// else remember it. Registers: (word0, bits0) the last word marked, (word1,
+// bits1) the one before.
+void Injector::fpSkipCached(Body& b, uint32_t word, uint32_t bit) {
+  uint32_t u = tU32(), bo = tBool();
+  if (fpCache_[0] == 0) {
+    const char* names[] = {"tally_fp_word0", "tally_fp_bits0", "tally_fp_word1", "tally_fp_bits1"};
+    for (int k = 0; k < 4; ++k) fpCache_[k] = privateVariable(u, constantU32(0), names[k]);
+  }
+  uint32_t word0 = op(b, spv::Op::OpLoad, u, {fpCache_[0]}), bits0 = op(b, spv::Op::OpLoad, u, {fpCache_[1]});
+  uint32_t word1 = op(b, spv::Op::OpLoad, u, {fpCache_[2]}), bits1 = op(b, spv::Op::OpLoad, u, {fpCache_[3]});
+  uint32_t hit0 = op(b, spv::Op::OpIEqual, bo, {word0, word});
+  uint32_t hit1 = op(b, spv::Op::OpIEqual, bo, {word1, word});
+  // Registers start at word 0 with no bits: a hit on them knows no block.
+  uint32_t known = op(b, spv::Op::OpSelect, u, {hit0, bits0, op(b, spv::Op::OpSelect, u, {hit1, bits1, constantU32(0)})});
+  // The word marked now goes first; the other entry keeps the older word.
+  opNoResult(b, spv::Op::OpStore, {fpCache_[0], word});
+  opNoResult(b, spv::Op::OpStore, {fpCache_[1], op(b, spv::Op::OpBitwiseOr, u, {known, bit})});
+  opNoResult(b, spv::Op::OpStore, {fpCache_[2], op(b, spv::Op::OpSelect, u, {hit0, word1, word0})});
+  opNoResult(b, spv::Op::OpStore, {fpCache_[3], op(b, spv::Op::OpSelect, u, {hit0, bits1, bits0})});
+  returnIf(b, op(b, spv::Op::OpINotEqual, bo, {op(b, spv::Op::OpBitwiseAnd, u, {known, bit}), constantU32(0)}));
+}
+
+// bitmap[word] |= bits, with a load first: the atomic only where a bit is new
+// (`oneBit`: where the one bit is clear).
+void Injector::fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit) {
+  uint32_t u = tU32();
+  uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpBitmap_, constantU32(0), word});
+  uint32_t old = op(b, spv::Op::OpLoad, u, {ptr});
+  uint32_t present = op(b, spv::Op::OpBitwiseAnd, u, {old, bits});
+  uint32_t fresh = oneBit ? op(b, spv::Op::OpIEqual, tBool(), {present, constantU32(0)})
+                          : op(b, spv::Op::OpINotEqual, tBool(), {present, bits});
+  when(b, fresh, [&](Body& bb) {
+    op(bb, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bits});
+  });
+}
+
+// The waterfall over the words of the active lanes (count_sites.cpp's over
+// slots, with bits ORed instead of counts added).
+void Injector::fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit) {
+  uint32_t u = tU32(), scope = constantU32(kScopeSubgroup);
+  // Helper lanes take part in subgroup operations, but an atomic from one
+  // has no effect: one elected would lose the others' bits.
+  uint32_t end = fpStage_ == Stage::Fragment ? skipHelperLanes(b, fpStage_) : 0;
+  waterfall(
+      b, word, [&](Body& bb) { return op(bb, spv::Op::OpGroupNonUniformBitwiseOr, u, {scope, kGroupReduce, bit}); },
+      [&](Body& bb, uint32_t first, uint32_t bits) { fpSetBits(bb, first, bits, false); });
+  if (end != 0) {
+    branch(b, end);
+    label(b, end);
+  }
+}
+
+// tally_fp_mark(base, capacity, block): sets the bit, block clamped into
+// the scratch bit past the bitmap.
+uint32_t Injector::fpMarkFn() {
+  if (fpMark_ != 0) return fpMark_;
+  uint32_t u = tU32();
+  auto f = beginFunction({u, u, u});
+  Body b{f->fn.insts};
+  uint32_t base = f->params[0], cap = f->params[1], block = f->params[2];
+  uint32_t inside = op(b, spv::Op::OpULessThan, tBool(), {block, cap});
+  block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
+  uint32_t word = op(b, spv::Op::OpIAdd, u, {base, op(b, spv::Op::OpShiftRightLogical, u, {block, constantU32(5)})});
+  uint32_t bit = op(b, spv::Op::OpShiftLeftLogical, u,
+                    {constantU32(1), op(b, spv::Op::OpBitwiseAnd, u, {block, constantU32(31)})});
+  const FootprintDedup& dedup = *result_.footprintDedup;
+  if (dedup.cache) fpSkipCached(b, word, bit);
+  if (dedup.subgroup) {
+    fpSetBitsOfSubgroup(b, word, bit);
+  } else {
+    fpSetBits(b, word, bit, true);
+  }
+  fpMark_ = endFunction(std::move(f), "tally_fp_mark");
+  return fpMark_;
+}
+
+}  // namespace tally::spirv

@@ -1,0 +1,202 @@
+// What footprint marks skip (InstrumentOptions::footprintDedup: the
+// subgroup's combined marks, each invocation's cache of the words it
+// marked) changes no count: on passes whose blocks are derived here by
+// hand, every choice gives those blocks, in every counting mode and at
+// every block size; on a trilinear pass, every choice gives what marking
+// without either gives.
+#include <gtest/gtest.h>
+
+#include "strict.hpp"
+
+#include <string>
+#include <vector>
+
+#include "footprint_pass.hpp"
+#include "gpu_fixture.hpp"
+
+namespace tally::test {
+namespace {
+
+const spirv::FootprintDedup kNone{false, false}, kSubgroup{true, false}, kCache{false, true}, kAll{true, true};
+
+struct Choice {
+  const char* mode;
+  spirv::FootprintDedup dedup;
+};
+
+std::vector<Choice> everyChoice() {
+  std::vector<Choice> out;
+  for (const char* mode : {"exact", "subgroup", "accumulate"}) {
+    for (const auto& dedup : {kNone, kSubgroup, kCache, kAll}) out.push_back({mode, dedup});
+  }
+  return out;
+}
+
+// A compute dispatch of 64 x 64 invocations (8 x 8 workgroups), i its
+// index: reads `read` (an expression of i and of k, the loop counter, in
+// uint words of binding 0) `trips` times, writes dst.data[i] once.
+std::string computeShader(const std::string& read, int trips) {
+  return "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+         "layout(set = 0, binding = 0) readonly buffer In { uint data[]; } src;\n"
+         "layout(set = 0, binding = 1) writeonly buffer Out { uint data[]; } dst;\n"
+         "void main() {\n"
+         "  uint i = gl_GlobalInvocationID.y * 64u + gl_GlobalInvocationID.x;\n"
+         "  uint sum = 0u;\n"
+         "  for (uint k = 0u; k < " + std::to_string(trips) + "u; ++k) sum += src.data[" + read + "];\n"
+         "  dst.data[i] = sum;\n"
+         "}\n";
+}
+
+// A full-screen fragment pass over 64 x 64 pixels, i the pixel's index:
+// reads src.data[`read`] and writes the target.
+std::string fragmentShader(const std::string& read) {
+  return "#version 450\n"
+         "layout(set = 0, binding = 0) readonly buffer In { uint data[]; } src;\n"
+         "layout(location = 0) out vec4 color;\n"
+         "void main() {\n"
+         "  uint i = uint(gl_FragCoord.y) * 64u + uint(gl_FragCoord.x);\n"
+         "  color = vec4(float(src.data[" + read + "]));\n"
+         "}\n";
+}
+
+class FootprintDedup : public ::testing::TestWithParam<uint32_t> {
+ protected:
+  void SetUp() override {
+    std::string error;
+    ctx_ = testContext(&error);
+    if (ctx_ == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device: " << error);
+  }
+
+  // Runs `d` with the choice; the marks of its own stage's module skip what
+  // was asked (the subgroup's only where the stage has subgroup arithmetic).
+  Result<PassResult> run(PassDesc d, const Choice& c) {
+    d.blockBytes = GetParam();
+    auto mode = spirv::parseMode(c.mode);
+    if (!mode) return makeError(mode.error());
+    d.mode = *mode;
+    d.dedup = c.dedup;
+    auto r = FootprintPass(*ctx_).run(d);
+    if (!r) return r;
+    spirv::FootprintDedup expected = c.dedup;
+    const spirv::Stage stage = d.compute ? spirv::Stage::Compute : spirv::Stage::Fragment;
+    expected.subgroup = expected.subgroup && (ctx_->subgroupStages & spirv::stageBit(stage)) != 0;
+    EXPECT_FALSE(r->dedup.empty()) << "no module says what its marks skip";
+    if (!r->dedup.empty()) {
+      EXPECT_EQ(spirv::toString(r->dedup.front()), spirv::toString(expected)) << "the marks skip another choice";
+    }
+    return r;
+  }
+
+  static std::string name(const Choice& c) { return std::string(c.mode) + ", dedup " + spirv::toString(c.dedup); }
+
+  const gpu::Context* ctx_ = nullptr;
+};
+
+// Every invocation reads word 0 (bytes 0..3): one block, whichever its
+// size; the writes cover dst's 64 x 64 x 4 bytes, 16384 / B blocks.
+TEST_P(FootprintDedup, EveryLaneMarksTheSameBlock) {
+  PassDesc d;
+  d.compute = true;
+  d.buffers = {256, 64 * 64 * 4};
+  d.source = computeShader("0u", 1);
+  for (const Choice& c : everyChoice()) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, 1u);
+    EXPECT_EQ(r->lines["binding 0 read"].requestedBytes, 64u * 64 * 4);
+    EXPECT_EQ(r->lines["binding 1 write"].blocks, 64u * 64 * 4 / GetParam());
+  }
+}
+
+// The same in a fragment shader, where helper lanes must not mark for
+// others: every pixel reads word 0, one block; the target's 64 x 64 RGBA8
+// texels are all written.
+TEST_P(FootprintDedup, EveryPixelMarksTheSameBlock) {
+  PassDesc d;
+  d.buffers = {256};
+  d.source = fragmentShader("0u");
+  for (const Choice& c : everyChoice()) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, 1u);
+    EXPECT_EQ(r->lines["target write"].blocks, rgba8Blocks(64, 64, GetParam()));
+  }
+}
+
+// Invocation i reads word 32 i: bytes 128 i .. 128 i + 3, in a block of
+// its own at every block size up to 128 bytes: 4096 blocks.
+TEST_P(FootprintDedup, EveryLaneMarksABlockOfItsOwn) {
+  PassDesc d;
+  d.compute = true;
+  d.buffers = {64 * 64 * 128, 64 * 64 * 4};
+  d.source = computeShader("i * 32u", 1);
+  for (const Choice& c : everyChoice()) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, 64u * 64);
+  }
+}
+
+// The same per pixel: 4096 blocks.
+TEST_P(FootprintDedup, EveryPixelMarksABlockOfItsOwn) {
+  PassDesc d;
+  d.buffers = {64 * 64 * 128};
+  d.source = fragmentShader("i * 32u");
+  for (const Choice& c : everyChoice()) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, 64u * 64);
+  }
+}
+
+// A loop of 64 trips reads words 8 (i % 64) + k % 8: the 32 bytes from
+// 32 (i % 64), one block at every block size, marked again each trip.
+// Together the invocations cover bytes 0..2047: 2048 / B blocks.
+TEST_P(FootprintDedup, ALoopMarksOneBlockAgainAndAgain) {
+  PassDesc d;
+  d.compute = true;
+  d.buffers = {4096, 64 * 64 * 4};
+  d.source = computeShader("(i % 64u) * 8u + k % 8u", 64);
+  for (const Choice& c : everyChoice()) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, 2048u / GetParam());
+    EXPECT_EQ(r->lines["binding 0 read"].requestedBytes, 64u * 64 * 64 * 4);
+  }
+}
+
+// Trilinear minification (both levels, a 2 x 2 filter on each), every
+// choice against marks that skip nothing.
+TEST_P(FootprintDedup, TrilinearReadsAsWithoutDedup) {
+  PassDesc d;
+  d.source = "#version 450\n"
+             "layout(set = 0, binding = 0) uniform sampler2D tex;\n"
+             "layout(location = 0) out vec4 color;\n"
+             "void main() { color = texture(tex, gl_FragCoord.xy / vec2(64.0) * 2.7 + 0.13); }\n";
+  d.textures = {{128}};
+  std::vector<Choice> choices = everyChoice();
+  auto reference = run(d, choices.front());
+  ASSERT_TRUE(reference.ok()) << reference.error();
+  const Line& want = reference->lines["binding 0 read"];
+  ASSERT_GT(want.blocks, 0u);
+  for (const Choice& c : choices) {
+    SCOPED_TRACE(name(c));
+    auto r = run(d, c);
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_EQ(r->lines["binding 0 read"].blocks, want.blocks);
+    EXPECT_EQ(r->lines["target write"].blocks, rgba8Blocks(64, 64, GetParam()));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(BlockBytes, FootprintDedup, ::testing::Values(32u, 64u, 128u),
+                         [](const ::testing::TestParamInfo<uint32_t>& block) {
+                           return std::to_string(block.param) + "B";
+                         });
+
+}  // namespace
+}  // namespace tally::test
