@@ -49,8 +49,10 @@ struct FootprintDedup {
   // one of them marks for all, in stages with subgroup arithmetic.
   bool subgroup = false;
   // Each invocation remembers the last two words it marked and their bits,
-  // and skips a block it marked already.
-  bool cache = true;
+  // and skips a block it marked already. Off by default: on the H200 it
+  // made Sponza's footprint frames slower, x3.01-3.29 of plain against
+  // x2.74-2.90 without (docs/measurement.md, "What a mark skips").
+  bool cache = false;
   bool operator==(const FootprintDedup&) const = default;
 };
 
