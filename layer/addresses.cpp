@@ -23,7 +23,8 @@ bool bufferDeviceAddressEnabled(const VkDeviceCreateInfo& info) {
         if (reinterpret_cast<const VkPhysicalDeviceVulkan12Features*>(p)->bufferDeviceAddress) return true;
         break;
       case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES:
-        if (reinterpret_cast<const VkPhysicalDeviceBufferDeviceAddressFeatures*>(p)->bufferDeviceAddress) return true;
+        if (reinterpret_cast<const VkPhysicalDeviceBufferDeviceAddressFeatures*>(p)->bufferDeviceAddress)
+          return true;
         break;
       case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES_EXT:
         if (reinterpret_cast<const VkPhysicalDeviceBufferDeviceAddressFeaturesEXT*>(p)->bufferDeviceAddress) {
@@ -81,7 +82,8 @@ void learn(DeviceState& dev, uint64_t buffer, uint64_t address, bool bound) {
 
 // vkGetBufferDeviceAddress, its KHR and EXT names: each calls down its own.
 template <size_t Which>
-VKAPI_ATTR VkDeviceAddress VKAPI_CALL GetBufferDeviceAddress(VkDevice device, const VkBufferDeviceAddressInfo* info) {
+VKAPI_ATTR VkDeviceAddress VKAPI_CALL GetBufferDeviceAddress(VkDevice device,
+                                                             const VkBufferDeviceAddressInfo* info) {
   DeviceState* dev = deviceOf(device);
   const VkDeviceAddress address = dev->addresses.getAddressBy[Which](device, info);
   if (address != 0 && dev->addresses.enabled) {
@@ -103,7 +105,8 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer
 }
 
 template <size_t Which>
-VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory2(VkDevice device, uint32_t count, const VkBindBufferMemoryInfo* infos) {
+VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory2(VkDevice device, uint32_t count,
+                                                 const VkBindBufferMemoryInfo* infos) {
   DeviceState* dev = deviceOf(device);
   const VkResult result = dev->addresses.bindMemory2By[Which](device, count, infos);
   if (result == VK_SUCCESS && dev->addresses.enabled) {
@@ -128,8 +131,9 @@ void enableAddresses(DeviceState& dev, const VkDeviceCreateInfo& info) {
   book.updateBuffer = reinterpret_cast<PFN_vkCmdUpdateBuffer>(load("vkCmdUpdateBuffer"));
   if (dev.config.output.empty() || !dev.config.error.empty() || !bufferDeviceAddressEnabled(info)) return;
   if (!dev.int64Atomics) {
-    dev.notes.insert("buffer device address: accesses are counted per access width, not by buffer: the layer "
-                     "could not enable 64-bit integers and atomics (shaderInt64, shaderBufferInt64Atomics)");
+    dev.notes.insert(
+        "buffer device address: accesses are counted per access width, not by buffer: the layer "
+        "could not enable 64-bit integers and atomics (shaderInt64, shaderBufferInt64Atomics)");
     return;
   }
   book.enabled = book.updateBuffer != nullptr;
@@ -142,8 +146,9 @@ bool setupAddressTable(DeviceState& dev, VkDescriptorSet set, uint32_t binding) 
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, 0,
                     VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, book.table, book.tableMemory)) {
     book.enabled = false;
-    dev.notes.insert("buffer device address: accesses are counted per access width, not by buffer: the layer "
-                     "could not allocate its address table");
+    dev.notes.insert(
+        "buffer device address: accesses are counted per access width, not by buffer: the layer "
+        "could not allocate its address table");
     return false;
   }
   VkDescriptorBufferInfo bufferInfo = {book.table, 0, VK_WHOLE_SIZE};
@@ -196,7 +201,9 @@ AddressBook::Upload* freeUpload(DeviceState& dev, VkCommandPool pool) {
 
 void uploadAddresses(DeviceState& dev, VkQueue queue) {
   auto& book = dev.addresses;
-  if (!dev.counting || book.table == VK_NULL_HANDLE || book.version == book.uploaded) return;
+  // Outside the window nothing searches the table: the application's submissions go alone.
+  if (!dev.counting || book.table == VK_NULL_HANDLE || book.version == book.uploaded || !windowAhead(dev))
+    return;
   auto family = dev.queueFamilies.find(queue);
   if (family == dev.queueFamilies.end()) return;
   std::vector<std::pair<uint64_t, spirv::AddressRange>> learnt;
@@ -209,7 +216,8 @@ void uploadAddresses(DeviceState& dev, VkQueue queue) {
   const spirv::AddressTable table = spirv::buildAddressTable(ranges);
   if (table.dropped != 0) {
     dev.notes.insert("buffer device address: more buffer ranges than the address table's " +
-                     std::to_string(spirv::kAddressSegments) + " segments; accesses to the rest count as unknown address");
+                     std::to_string(spirv::kAddressSegments) +
+                     " segments; accesses to the rest count as unknown address");
   }
   AddressBook::Upload* up = freeUpload(dev, ownPool(dev, family->second));
   if (up == nullptr) return;
@@ -240,7 +248,8 @@ void forgetAddress(DeviceState& dev, uint64_t buffer) {
   if (it == book.buffers.end()) return;
   if (it->second.address != 0 && it->second.bound) {
     ++book.version;
-    if (it->second.slot >= spirv::kAddressFirstBufferSlot) book.retiring.push_back({it->second.slot, dev.nextHarvest});
+    if (it->second.slot >= spirv::kAddressFirstBufferSlot)
+      book.retiring.push_back({it->second.slot, dev.nextHarvest});
   }
   book.buffers.erase(it);
 }

@@ -39,8 +39,8 @@ struct AddressBook {
   struct Tracked {
     uint64_t address = 0;  // 0: not taken yet
     uint64_t size = 0;
-    bool bound = false;    // vkBindBufferMemory[2]
-    uint64_t learnt = 0;   // when its range entered the table: earlier wins where ranges start together
+    bool bound = false;   // vkBindBufferMemory[2]
+    uint64_t learnt = 0;  // when its range entered the table: earlier wins where ranges start together
     uint32_t slot = spirv::kAddressUnknownSlot;  // while in the table
   };
   std::map<uint64_t, Tracked> buffers;  // by buffer handle

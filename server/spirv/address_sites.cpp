@@ -31,14 +31,17 @@ void Injector::declareAddressTable() {
   newGlobals_.emplace_back(spv::Op::OpTypeStruct, std::vector<uint32_t>{block, array});
   const bool storageBuffer = storageClass_ == spv::StorageClass::StorageBuffer;
   decorate(block, storageBuffer ? spv::Decoration::Block : spv::Decoration::BufferBlock);
-  newAnnotations_.emplace_back(spv::Op::OpMemberDecorate,
-                               std::vector<uint32_t>{block, 0, static_cast<uint32_t>(spv::Decoration::Offset), 0});
+  newAnnotations_.emplace_back(
+      spv::Op::OpMemberDecorate,
+      std::vector<uint32_t>{block, 0, static_cast<uint32_t>(spv::Decoration::Offset), 0});
   // Read only: no stage needs stores for it.
-  newAnnotations_.emplace_back(spv::Op::OpMemberDecorate,
-                               std::vector<uint32_t>{block, 0, static_cast<uint32_t>(spv::Decoration::NonWritable)});
+  newAnnotations_.emplace_back(
+      spv::Op::OpMemberDecorate,
+      std::vector<uint32_t>{block, 0, static_cast<uint32_t>(spv::Decoration::NonWritable)});
   addressTable_ = m_.newId();
-  newGlobals_.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(storageClass_, block), addressTable_,
-                                                                      static_cast<uint32_t>(storageClass_)});
+  newGlobals_.emplace_back(
+      spv::Op::OpVariable,
+      std::vector<uint32_t>{tPtr(storageClass_, block), addressTable_, static_cast<uint32_t>(storageClass_)});
   decorate(addressTable_, spv::Decoration::DescriptorSet, {options_.set});
   decorate(addressTable_, spv::Decoration::Binding, {options_.addressTableBinding});
   name(block, "TallyAddresses");
@@ -59,17 +62,20 @@ uint32_t Injector::addressSlotFn() {
   const uint32_t varType = tPtr(spv::StorageClass::Function, u);
   uint32_t lo = m_.newId(), hi = m_.newId();
   for (uint32_t var : {lo, hi}) {
-    b.insts.emplace_back(spv::Op::OpVariable,
-                         std::vector<uint32_t>{varType, var, static_cast<uint32_t>(spv::StorageClass::Function)});
+    b.insts.emplace_back(
+        spv::Op::OpVariable,
+        std::vector<uint32_t>{varType, var, static_cast<uint32_t>(spv::StorageClass::Function)});
   }
   const uint32_t zero = constantU32(0), one = constantU32(1), stride = constantU32(kAddressWordsPerSegment);
   auto word = [&](Body& bb, uint32_t index) {
-    return op(bb, spv::Op::OpLoad, u64, {op(bb, spv::Op::OpAccessChain, addressWordPtr_, {addressTable_, zero, index})});
+    return op(bb, spv::Op::OpLoad, u64,
+              {op(bb, spv::Op::OpAccessChain, addressWordPtr_, {addressTable_, zero, index})});
   };
   // The count, within the table's capacity (a table is never longer).
   uint32_t count = op(b, spv::Op::OpUConvert, u, {word(b, zero)});
   uint32_t capacity = constantU32(kAddressSegments);
-  count = op(b, spv::Op::OpSelect, u, {op(b, spv::Op::OpULessThan, boolean, {count, capacity}), count, capacity});
+  count =
+      op(b, spv::Op::OpSelect, u, {op(b, spv::Op::OpULessThan, boolean, {count, capacity}), count, capacity});
   opNoResult(b, spv::Op::OpStore, {lo, zero});
   opNoResult(b, spv::Op::OpStore, {hi, count});
   uint32_t header = m_.newId(), test = m_.newId(), body = m_.newId(), cont = m_.newId(), exit = m_.newId();
@@ -84,7 +90,8 @@ uint32_t Injector::addressSlotFn() {
   uint32_t mid = op(b, spv::Op::OpShiftRightLogical, u, {op(b, spv::Op::OpIAdd, u, {l, h}), one});
   uint32_t start = word(b, op(b, spv::Op::OpIAdd, u, {op(b, spv::Op::OpIMul, u, {mid, stride}), one}));
   uint32_t below = op(b, spv::Op::OpULessThanEqual, boolean, {start, address});
-  opNoResult(b, spv::Op::OpStore, {lo, op(b, spv::Op::OpSelect, u, {below, op(b, spv::Op::OpIAdd, u, {mid, one}), l})});
+  opNoResult(b, spv::Op::OpStore,
+             {lo, op(b, spv::Op::OpSelect, u, {below, op(b, spv::Op::OpIAdd, u, {mid, one}), l})});
   opNoResult(b, spv::Op::OpStore, {hi, op(b, spv::Op::OpSelect, u, {below, h, mid})});
   branch(b, cont);
   label(b, cont);
@@ -97,7 +104,8 @@ uint32_t Injector::addressSlotFn() {
   uint32_t at = op(b, spv::Op::OpIAdd, u, {op(b, spv::Op::OpIMul, u, {segment, stride}), one});
   uint32_t end = word(b, op(b, spv::Op::OpIAdd, u, {at, one}));
   uint32_t slot = op(b, spv::Op::OpUConvert, u, {word(b, op(b, spv::Op::OpIAdd, u, {at, constantU32(2)}))});
-  uint32_t inside = op(b, spv::Op::OpLogicalAnd, boolean, {any, op(b, spv::Op::OpULessThan, boolean, {address, end})});
+  uint32_t inside =
+      op(b, spv::Op::OpLogicalAnd, boolean, {any, op(b, spv::Op::OpULessThan, boolean, {address, end})});
   inside = op(b, spv::Op::OpLogicalAnd, boolean,
               {inside, op(b, spv::Op::OpULessThan, boolean, {slot, constantU32(kAddressSlots)})});
   uint32_t result = op(b, spv::Op::OpSelect, u, {inside, slot, constantU32(kAddressUnknownSlot)});

@@ -33,7 +33,9 @@ constexpr uint32_t kAddressSegments = 4096;
 // Layout, in 64-bit words: [0] the segment count, then per segment its
 // start, its end (exclusive) and its slot.
 constexpr uint32_t kAddressWordsPerSegment = 3;
-constexpr size_t addressTableBytes(uint32_t segments) { return 8 * (1 + size_t(kAddressWordsPerSegment) * segments); }
+constexpr size_t addressTableBytes(uint32_t segments) {
+  return 8 * (1 + size_t(kAddressWordsPerSegment) * segments);
+}
 
 struct AddressRange {
   uint64_t start = 0, end = 0;  // [start, end)

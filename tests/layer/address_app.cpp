@@ -106,7 +106,8 @@ app::Device createDevice(const app::Instance& instance) {
 }
 
 // A host-visible buffer reached by address; `bind2`: bound with vkBindBufferMemory2.
-app::Buffer addressed(const app::Device& device, const std::string& text, bool bind2, VkDeviceAddress& address) {
+app::Buffer addressed(const app::Device& device, const std::string& text, bool bind2,
+                      VkDeviceAddress& address) {
   app::Buffer out;
   VkBufferCreateInfo bci = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
   bci.size = kWords * 4;
@@ -129,8 +130,9 @@ app::Buffer addressed(const app::Device& device, const std::string& text, bool b
   } else {
     app::check(vkBindBufferMemory(device.device, out.buffer, out.memory, 0), "vkBindBufferMemory");
   }
-  app::check(vkMapMemory(device.device, out.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&out.mapped)),
-             "vkMapMemory");
+  app::check(
+      vkMapMemory(device.device, out.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&out.mapped)),
+      "vkMapMemory");
   std::memset(out.mapped, 0, kWords * 4);
   VkBufferDeviceAddressInfo info = {VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO};
   info.buffer = out.buffer;
@@ -213,7 +215,8 @@ int main(int argc, char** argv) {
     app::wait(device, fence);
     for (uint32_t i = 0; i < kWords && ok; ++i) {
       const uint32_t v = i + 1, middle = i < 64 ? i + 129 : 0;
-      ok = expect(dst.mapped[i], 2 * v, "written", i) && expect(both.mapped[i], (frame + 1) * (v + middle), "read-write", i) &&
+      ok = expect(dst.mapped[i], 2 * v, "written", i) &&
+           expect(both.mapped[i], (frame + 1) * (v + middle), "read-write", i) &&
            expect(scratch.mapped[i], i < 64 ? i : 0, "scratch", i);
     }
     app::destroyBuffer(device, scratch);
