@@ -18,9 +18,10 @@ Each frame is one compute pass of 256 invocations, 4-byte words, so by hand:
 
 No "unknown address" line: every address the application uses lies in a
 buffer whose address it took (lavapipe has neither sparse binding nor
-capture replay, the paths by which a legitimate address escapes the layer;
-tests/unit/spirv_address_test.cpp covers the unknown slot with hand-built
-tables). The lines sum to the accesses a single physical-storage-buffer
+capture replay, the paths by which a legitimate address escapes the layer:
+address_search.cpp runs the instrumented search on the device with a
+hand-built table that leaves buffers out, and tests/unit/spirv_address_test.cpp
+the host's table). The lines sum to the accesses a single physical-storage-buffer
 line per width would count. Both counting modes; and the run under the
 Khronos validation layer, stacked with Tally's both ways, gives no message
 that validation alone does not.
