@@ -345,7 +345,7 @@ std::vector<VkCommandBuffer> collectBuffers(uint32_t count, const VkSubmitInfo* 
 
 VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const VkSubmitInfo* submits, VkFence fence) {
   DeviceState* dev = deviceOf(queue);
-  {
+  if (dev->addresses.enabled) {
     std::lock_guard lock(dev->mutex);
     uploadAddresses(*dev, queue);
   }
@@ -358,7 +358,7 @@ VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const 
 
 VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit2(VkQueue queue, uint32_t count, const VkSubmitInfo2* submits, VkFence fence) {
   DeviceState* dev = deviceOf(queue);
-  {
+  if (dev->addresses.enabled) {
     std::lock_guard lock(dev->mutex);
     uploadAddresses(*dev, queue);
   }
