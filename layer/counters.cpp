@@ -170,17 +170,22 @@ void setupCounting(DeviceState& dev) {
   binding.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
   binding.descriptorCount = 1;
   binding.stageFlags = VK_SHADER_STAGE_ALL;
+  // Buffer device addresses: the table the accesses search, one binding more (addresses.hpp).
+  const VkDescriptorSetLayoutBinding bindings[2] = {
+      binding, {kAddressTableBinding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_ALL, nullptr}};
+  const uint32_t bindingCount = dev.addresses.enabled ? 2 : 1;
   VkDescriptorSetLayoutCreateInfo layoutInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  layoutInfo.bindingCount = 1;
-  layoutInfo.pBindings = &binding;
+  layoutInfo.bindingCount = bindingCount;
+  layoutInfo.pBindings = bindings;
   dev.d.CreateDescriptorSetLayout(dev.device, &layoutInfo, nullptr, &dev.counterSetLayout);
   VkDescriptorSetLayoutCreateInfo emptyInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   dev.d.CreateDescriptorSetLayout(dev.device, &emptyInfo, nullptr, &dev.emptySetLayout);
-  VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 1};
+  const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC, 1},
+                                         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}};
   VkDescriptorPoolCreateInfo poolInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   poolInfo.maxSets = 1;
-  poolInfo.poolSizeCount = 1;
-  poolInfo.pPoolSizes = &size;
+  poolInfo.poolSizeCount = bindingCount;
+  poolInfo.pPoolSizes = sizes;
   dev.d.CreateDescriptorPool(dev.device, &poolInfo, nullptr, &dev.descriptorPool);
   VkDescriptorSetAllocateInfo setInfo = {VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   setInfo.descriptorPool = dev.descriptorPool;
@@ -210,6 +215,8 @@ void setupCounting(DeviceState& dev) {
   write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
   write.pBufferInfo = &bufferInfo;
   dev.d.UpdateDescriptorSets(dev.device, 1, &write, 0, nullptr);
+  o.addressTable = setupAddressTable(dev, dev.counterDescriptorSet, kAddressTableBinding) && dev.addresses.enabled;
+  o.addressTableBinding = kAddressTableBinding;
 
   // Counters start at zero.
   auto [queue, family] = *dev.queueFamilies.begin();
@@ -251,6 +258,7 @@ void destroyCounting(DeviceState& dev) {
   dev.retiringPools.clear();
   dev.freeTimestampPools.clear();
   dev.freeStatisticsPools.clear();
+  destroyAddressTable(dev);
   for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
   if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
   if (dev.counterMemory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, dev.counterMemory, nullptr);

@@ -51,7 +51,10 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
       const uint32_t slot = site.slot + i;
       const uint64_t n = value(slot);
       if (n == 0 && site.slotCount > 1) continue;
-      const Bound bound = slot < region.slotResources.size() ? region.slotResources[slot] : Bound{};
+      // An access by address: the buffer the address table gave this slot (addresses.hpp).
+      const Bound bound = site.byAddress                          ? Bound{addressedResource(dev, i)}
+                          : slot < region.slotResources.size() ? region.slotResources[slot]
+                                                                : Bound{};
       // An output with no attachment, or masked: its counter ran, nothing was written.
       if (site.kind == SiteKind::OutputWrite && bound.resource == kNotWritten) continue;
       auto r = dev.resources.find(bound.resource);
@@ -71,6 +74,8 @@ void attributeRegion(DeviceState& dev, const Region& region, std::vector<uint64_
         }
       } else if (site.kind == SiteKind::OutputWrite) {
         name = "output " + std::to_string(site.location.value_or(0));
+      } else if (site.byAddress) {
+        name = bound.resource == kOtherBuffers ? "other buffers" : "unknown address";
       } else if (site.location) {
         name = "vertex input " + std::to_string(*site.location);
       } else {

@@ -277,6 +277,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   loadDispatch(dev.get(), gipa, gdpa);
   describeDevice(dev.get(), *info, enabled);
   dev->int64Atomics = int64Atomics;
+  enableAddresses(*dev, *info);
   // A queue the application asked for, for the layer's own set-up work.
   VkQueue setupQueue = VK_NULL_HANDLE;
   uint32_t setupFamily = 0;
@@ -346,6 +347,10 @@ std::vector<VkCommandBuffer> collectBuffers(uint32_t count, const VkSubmitInfo* 
 
 VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const VkSubmitInfo* submits, VkFence fence) {
   DeviceState* dev = deviceOf(queue);
+  if (dev->addresses.enabled) {
+    std::lock_guard lock(dev->mutex);
+    uploadAddresses(*dev, queue);
+  }
   VkResult result = dev->d.QueueSubmit(queue, count, submits, fence);
   if (result != VK_SUCCESS) return result;
   std::lock_guard lock(dev->mutex);
@@ -355,6 +360,10 @@ VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const 
 
 VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit2(VkQueue queue, uint32_t count, const VkSubmitInfo2* submits, VkFence fence) {
   DeviceState* dev = deviceOf(queue);
+  if (dev->addresses.enabled) {
+    std::lock_guard lock(dev->mutex);
+    uploadAddresses(*dev, queue);
+  }
   VkResult result = dev->d.QueueSubmit2(queue, count, submits, fence);
   if (result != VK_SUCCESS) return result;
   std::vector<VkCommandBuffer> buffers;
@@ -476,7 +485,7 @@ PFN_vkVoidFunction interceptedDevice(std::string_view name) {
   TALLY_INTERCEPT(QueuePresentKHR)
   for (auto intercepted : {interceptedResources, interceptedDescriptors, interceptedPipelines, interceptedCommands,
                            interceptedDraws, interceptedDynamicState, interceptedShaderObjects,
-                           interceptedUncounted}) {
+                           interceptedUncounted, interceptedAddresses}) {
     if (PFN_vkVoidFunction f = intercepted(name)) return f;
   }
   return nullptr;

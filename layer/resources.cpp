@@ -97,7 +97,11 @@ VKAPI_ATTR void VKAPI_CALL DestroyImage(VkDevice device, VkImage image, const Vk
   destroyObject(device, image, retireResource, [&](DeviceState& dev) { dev.d.DestroyImage(device, image, alloc); });
 }
 VKAPI_ATTR void VKAPI_CALL DestroyBuffer(VkDevice device, VkBuffer buffer, const VkAllocationCallbacks* alloc) {
-  destroyObject(device, buffer, retireResource, [&](DeviceState& dev) { dev.d.DestroyBuffer(device, buffer, alloc); });
+  auto forget = [](DeviceState& dev, uint64_t handle) {
+    forgetAddress(dev, handle);
+    retireResource(dev, handle);
+  };
+  destroyObject(device, buffer, forget, [&](DeviceState& dev) { dev.d.DestroyBuffer(device, buffer, alloc); });
 }
 VKAPI_ATTR void VKAPI_CALL DestroyImageView(VkDevice device, VkImageView view, const VkAllocationCallbacks* alloc) {
   destroyObject(device, view, [](DeviceState& dev, uint64_t h) { dev.views.erase(h); },

@@ -20,6 +20,7 @@
 #include <vulkan/vk_layer.h>
 #include <nlohmann/json.hpp>
 
+#include "addresses.hpp"
 #include "attribution.hpp"
 #include "spirv/instrument.hpp"
 
@@ -434,6 +435,7 @@ struct DeviceState {
   std::unordered_map<uint64_t, std::vector<uint32_t>> subpassViewMasks;  // render passes with multiview: per subpass
   std::unordered_map<uint64_t, uint32_t> poolFamilies;  // command pool -> queue family
   std::unordered_map<VkCommandBuffer, std::unique_ptr<CommandBufferState>> commandBuffers;
+  AddressBook addresses;  // buffer device addresses (addresses.hpp)
   std::unordered_map<VkQueue, uint32_t> queueFamilies;
   std::unordered_map<uint64_t, std::pair<VkFormat, VkExtent2D>> swapchains;
   VkExtent2D extent{0, 0};

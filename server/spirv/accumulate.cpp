@@ -113,7 +113,7 @@ void Injector::findInvocationSlots(const SiteScan& scan, const std::vector<uint3
 }
 
 bool Injector::deriveSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot) {
-  if (s.site.kind == SiteKind::Invocation || s.dynamicIndex != 0) return false;
+  if (s.site.kind == SiteKind::Invocation || dynamicSlot(s)) return false;
   auto invocations = invocationSlot_.find(s.entryIndex);
   if (invocations == invocationSlot_.end() || !runsExactlyOnce(s, ep)) return false;
   ++derivedSites_[ep.stage];
@@ -133,6 +133,10 @@ bool Injector::accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t
                     std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
   if (!accumulates(ep.stage)) {
     noteOnce("accumulate mode: " + std::string(toString(ep.stage)) + " stage is counted per access");
+    return false;
+  }
+  if (addressed(s)) {
+    noteOnce("accumulate mode: buffer device address accesses (a slot per buffer) are counted per access");
     return false;
   }
   uint32_t length = s.dynamicIndex == 0 ? 1 : (s.arrayLength != 0 ? s.arrayLength : kRuntimeArraySlots);

@@ -265,10 +265,9 @@ uint32_t Injector::clampedIndex(Body& b, const FoundSite& s, uint32_t length) {
 // The slot argument: a constant, or base + min(index, length - 1) for a
 // run-time descriptor index (emitted into `list`, before the call).
 uint32_t Injector::slotValue(const FoundSite& s, uint32_t base, std::vector<Instruction>& list) {
-  if (s.dynamicIndex == 0) return constantU32(base);
+  if (!dynamicSlot(s)) return constantU32(base);
   Body b{list};
-  uint32_t length = s.arrayLength != 0 ? s.arrayLength : kRuntimeArraySlots;
-  return op(b, spv::Op::OpIAdd, tU32(), {constantU32(base), clampedIndex(b, s, length)});
+  return op(b, spv::Op::OpIAdd, tU32(), {constantU32(base), slotIndex(b, s, dynamicSlots(s))});
 }
 
 }  // namespace tally::spirv

@@ -450,7 +450,10 @@ class Scanner {
           s.arrayLength = r.arrayLength;
         }
         break;
-      case Resource::Kind::Physical: s.site.resource = "physical_storage_buffer"; break;
+      case Resource::Kind::Physical:
+        s.site.resource = "physical_storage_buffer";
+        s.address = r.address;
+        break;
       case Resource::Kind::Unknown:
         s.site.resource = "unresolved";
         if (!r.needsInline) scan_.notes.push_back("unresolved " + std::string(toString(s.site.kind)) + ": " + r.reason);

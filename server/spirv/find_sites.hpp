@@ -27,6 +27,7 @@ struct FoundSite {
   uint32_t entryIndex = 0;   // index into EntryPoints
   uint32_t dynamicIndex = 0; // id of the run-time descriptor index, 0 if none
   uint32_t arrayLength = 0;  // descriptor array length for dynamic indices (0: runtime-sized)
+  uint32_t address = 0;      // a PhysicalStorageBuffer access: the pointer whose address picks the slot
   // The instruction a reader is shown (Site::instruction): the access, or
   // for an output write the first store to the output; function -1: none.
   int shownFunction = -1;

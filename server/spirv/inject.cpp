@@ -40,6 +40,9 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
   }
   declareCounters();
   if (footprintOn()) declareFootprint();
+  if (std::any_of(scan.sites.begin(), scan.sites.end(), [&](const FoundSite& s) { return addressed(s); })) {
+    declareAddressTable();
+  }
 
   // Per-function insertions, keyed by instruction index.
   std::vector<std::map<size_t, std::vector<Instruction>>> after(m_.functions.size());
@@ -52,8 +55,8 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
     if (accumulate && deriveSite(s, ep, slots[i])) continue;
     if (accumulate && accumulateSite(s, ep, slots[i], after, before)) continue;
     Helper kind = helperFor(ep.stage);
-    if (s.dynamicIndex == 0 && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
-    if (s.dynamicIndex == 0 && kind == Helper::SubgroupFragment) kind = Helper::SubgroupUniformFragment;
+    if (!dynamicSlot(s) && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;
+    if (!dynamicSlot(s) && kind == Helper::SubgroupFragment) kind = Helper::SubgroupUniformFragment;
     uint32_t helper = helperFunction(kind, ep.stage);
     const auto& insts = m_.functions[s.function].insts;
     switch (s.placement) {
@@ -97,6 +100,7 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
     if (m_.version >= kVersion14) {
       add.insert(counters_);
       if (footprintOn()) add.insert({fpTable_, fpBitmap_});
+      if (addressTable_ != 0) add.insert(addressTable_);
       add.insert(accumulators_.begin(), accumulators_.end());
     }
     Instruction& inst = m_.entryPoints[ep.instIndex];

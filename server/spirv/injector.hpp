@@ -257,6 +257,20 @@ class Injector : public ModuleBuilder {
   // min(index, length - 1) of a run-time descriptor index, as a u32.
   uint32_t clampedIndex(Body& b, const FoundSite& s, uint32_t length);
 
+  // Buffer device addresses (address_sites.cpp): a physical-storage-buffer
+  // access whose slot its address picks in the host's table.
+  bool addressed(const FoundSite& s) const { return options_.addressTable && s.address != 0; }
+  // Whether the site's slot is chosen at run time: a descriptor index or an address.
+  bool dynamicSlot(const FoundSite& s) const { return s.dynamicIndex != 0 || addressed(s); }
+  // The slots such a site has from its first.
+  uint32_t dynamicSlots(const FoundSite& s) const;
+  // The index of the slot from the site's first: clampedIndex, or the address's slot in the table.
+  uint32_t slotIndex(Body& b, const FoundSite& s, uint32_t length);
+  // The table: u64 words at options_.addressTableBinding (spirv/address_table.hpp).
+  void declareAddressTable();
+  // tally_address_slot(u64 address) -> u32: the binary search over the table.
+  uint32_t addressSlotFn();
+
   // Whether the site runs at most once per invocation of its entry point:
   // counted at entry or at the return, or outside every loop of a function
   // that runs once.
@@ -409,6 +423,7 @@ class Injector : public ModuleBuilder {
 
   uint32_t counters_ = 0;
   uint32_t elementPtr_ = 0;
+  uint32_t addressTable_ = 0, addressWordPtr_ = 0, addressSlot_ = 0;
   std::map<std::pair<Helper, Stage>, uint32_t> helpers_;
   // accumulate mode
   struct FlushSlots {

@@ -5,6 +5,7 @@
 #include <map>
 #include <tuple>
 
+#include "spirv/address_table.hpp"
 #include "spirv/early_tests.hpp"
 #include "spirv/find_sites.hpp"
 #include "spirv/inject.hpp"
@@ -186,6 +187,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
         needed.push_back({options.footprintTableBinding, "the footprint table"});
         needed.push_back({options.footprintBitmapBinding, "the footprint bitmaps"});
       }
+      if (options.addressTable) needed.push_back({options.addressTableBinding, "the address table lookups"});
       for (const auto& [b, what] : needed) {
         if (set != options.set || binding != b) continue;
         std::string name = defs.name(inst.resultId());
@@ -230,6 +232,8 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
   for (const auto& found : scan->sites) {
     uint32_t count = 1;
     if (found.site.dynamicIndex) count = found.arrayLength != 0 ? found.arrayLength : kRuntimeArraySlots;
+    const bool byAddress = options.addressTable && found.address != 0;
+    if (byAddress) count = kAddressSlots;
     auto key = slotKey(found.site, options.perSite ? int64_t(result.sites.size()) : -1);
     auto it = slotOf.find(key);
     if (it == slotOf.end()) {
@@ -240,6 +244,7 @@ Result<Instrumented> run(std::span<const uint32_t> input, const InstrumentOption
     Site site = found.site;
     site.slot = it->second.first;
     site.slotCount = it->second.second;
+    site.byAddress = byAddress;
     result.sites.push_back(std::move(site));
   }
   if (options.perSite) describeSites(module, *defs, scan->sites, result.sites);
@@ -335,6 +340,7 @@ nlohmann::json toJson(const Site& s) {
   nlohmann::json j;
   j["slot"] = s.slot;
   if (s.slotCount != 1) j["slots"] = s.slotCount;
+  if (s.byAddress) j["by_address"] = true;
   j["stage"] = toString(s.stage);
   j["entry_point"] = s.entryPoint;
   j["kind"] = toString(s.kind);

@@ -100,6 +100,13 @@ struct InstrumentOptions {
   // Unset: $TALLY_FOOTPRINT_DEDUP where set (none, subgroup, cache or all),
   // so that one capture's spec compares the choices; else FootprintDedup's defaults.
   std::optional<FootprintDedup> footprintDedup;
+  // Buffer device addresses: a physical-storage-buffer access counts into
+  // the slot of the buffer whose address range holds its address, found in
+  // the host's table (spirv/address_table.hpp) at addressTableBinding of
+  // `set`; kAddressSlots slots per site (Site::byAddress). Needs the
+  // device's shaderInt64. Off, such accesses share one slot per width.
+  bool addressTable = false;
+  uint32_t addressTableBinding = 3;
   // accumulate mode: sites that run exactly once in every invocation are
   // derived from the entry point's invocation counter (Instrumented::derived)
   // instead of counted in the shader. Off, every site adds in the shader:

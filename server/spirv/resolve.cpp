@@ -100,6 +100,7 @@ Resource Resolver::pointer(uint32_t pointerId, int depth) const {
   if (types_.storageClassOfValue(pointerId) == spv::StorageClass::PhysicalStorageBuffer) {
     Resource r;
     r.kind = Resource::Kind::Physical;
+    if (depth == 0) r.address = pointerId;
     return r;
   }
   const Instruction* d = defs_.def(pointerId);

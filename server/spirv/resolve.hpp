@@ -26,6 +26,7 @@ struct Resource {
   uint32_t arrayLength = 0;    // 0: runtime-sized
   std::optional<uint32_t> constIndex;
   uint32_t dynamicIndex = 0;   // id of the run-time index value
+  uint32_t address = 0;        // Physical: the pointer accessed
   bool needsInline = false;    // only inlining can resolve it (see reason)
   std::string reason;          // why Unknown / why inlining is needed
 

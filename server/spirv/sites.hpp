@@ -48,6 +48,11 @@ struct Site {
   int64_t binding = -1;
   std::optional<uint32_t> index;  // constant descriptor array index
   bool dynamicIndex = false;      // index known only at run time (slot + index)
+  // A physical-storage-buffer access counted by address
+  // (InstrumentOptions::addressTable): slot + spirv::kAddressUnknownSlot
+  // for an address in no known range, + kAddressOtherSlot for buffers
+  // beyond those with slots of their own, then one slot per such buffer.
+  bool byAddress = false;
   std::string resource;           // OpName of the variable, or "physical_storage_buffer"
   std::optional<uint32_t> location;  // output_write: the fragment output Location
   // Element accessed, where known: for buffers the loaded/stored type, for
