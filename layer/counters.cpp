@@ -10,6 +10,7 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "descriptor_buffers_layer.hpp"
 #include "device_objects.hpp"
 #include "names.hpp"
 #include "state.hpp"
@@ -198,7 +199,7 @@ void setupCounting(DeviceState& dev) {
   dev.arenaBytes = 64u << 20;
   if (!createBuffer(dev, dev.arenaBytes + dev.regionRange,
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                        VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        VK_BUFFER_USAGE_TRANSFER_DST_BIT | counterBufferAddressUsage(dev),
                     0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, dev.counterBuffer, dev.counterMemory)) {
     return refuse("could not allocate the counter buffer");
   }
@@ -210,6 +211,7 @@ void setupCounting(DeviceState& dev) {
   write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER_DYNAMIC;
   write.pBufferInfo = &bufferInfo;
   dev.d.UpdateDescriptorSets(dev.device, 1, &write, 0, nullptr);
+  setupDescriptorBuffers(dev);
 
   // Counters start at zero.
   auto [queue, family] = *dev.queueFamilies.begin();
@@ -251,6 +253,7 @@ void destroyCounting(DeviceState& dev) {
   dev.retiringPools.clear();
   dev.freeTimestampPools.clear();
   dev.freeStatisticsPools.clear();
+  destroyDescriptorBuffers(dev);
   for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
   if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
   if (dev.counterMemory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, dev.counterMemory, nullptr);
@@ -320,12 +323,13 @@ VkDeviceSize allocateRegion(DeviceState& dev, CommandBufferState& cb, VkDeviceSi
 
 void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch, uint32_t draw) {
   auto& bp = cb.bind[bindPointIndex];
-  if (!bp.pipeline || !bp.pipeline->counted) return;
+  if (!bp.pipeline || !bp.pipeline->counted || !descriptorBuffersReady(dev, cb, bindPointIndex)) return;
   const PipelineInfo& pipeline = *bp.pipeline;
   std::vector<Bound> slots(pipeline.slots);
   std::vector<uint64_t> key;
   key.reserve(pipeline.slots * 2);
   std::vector<bool> seen(pipeline.slots, false);
+  std::vector<std::pair<uint32_t, uint64_t>> descriptorAt;
   for (const auto& site : pipeline.sites) {
     if (site.kind == spirv::SiteKind::Invocation) continue;
     for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
@@ -333,8 +337,12 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       if (slot >= slots.size() || seen[slot]) continue;
       seen[slot] = true;
       slots[slot] = resolveSlot(dev, cb, bp, pipeline, site, i);
+      // A descriptor buffer's bytes are named at submission: the region is the descriptor's place.
+      const auto at = slots[slot].resource == 0 ? descriptorBufferAddress(dev, cb, bindPointIndex, pipeline, site, i)
+                                                : std::nullopt;
+      if (at) descriptorAt.emplace_back(slot, *at);
       key.push_back(slot);
-      key.push_back(slots[slot].resource);
+      key.push_back(at ? ~*at : slots[slot].resource);
       key.push_back(uint64_t(slots[slot].format) << 32 | slots[slot].aspect);
     }
   }
@@ -366,6 +374,7 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       region.bytes = bytes;
       region.pipeline = bp.pipeline;
       region.slotResources = std::move(slots);
+      region.descriptorAt = std::move(descriptorAt);
       region.pass = pass;
       region.draw = draw;
       region.drawCommands = draw == kNoDraw ? 0 : 1;
@@ -374,7 +383,10 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       cb.regionIndex.emplace(std::move(index), cb.regions.size() - 1);
     }
   }
-  if (bp.dirty || bp.boundOffset != offset) {
+  if ((bp.dirty || bp.boundOffset != offset) && bindCounterDescriptor(dev, cb, bindPointIndex, pipeline, offset)) {
+    bp.boundOffset = offset;
+    bp.dirty = false;
+  } else if (bp.dirty || bp.boundOffset != offset) {
     const uint32_t dynamicOffset = uint32_t(offset);
     dev.d.CmdBindDescriptorSets(cb.handle, isDispatch ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
                                 pipeline.layout, dev.counterSet, 1, &dev.counterDescriptorSet, 1, &dynamicOffset);

@@ -25,6 +25,8 @@
 
 namespace tally::layer {
 
+struct DescriptorBufferDevice;  // descriptor_buffers_layer.cpp
+
 // The loader's dispatch table pointer: the same for an instance and its
 // physical devices, and for a device, its queues and command buffers.
 inline void* dispatchKey(const void* handle) { return *static_cast<void* const*>(handle); }
@@ -203,6 +205,8 @@ struct Region {
   VkDeviceSize bytes = 0;
   std::shared_ptr<PipelineInfo> pipeline;
   std::vector<Bound> slotResources;  // per slot: what it counts
+  // Descriptor buffers: slot -> the address of the descriptor it reads, named at each submission.
+  std::vector<std::pair<uint32_t, uint64_t>> descriptorAt;
   uint32_t pass = 0;                 // index into the command buffer's passes
   // Config::draws: the draw command's place in its pass (kRestDraws: shared
   // by the draws beyond the cap, `drawCommands` of them), and the innermost
@@ -408,6 +412,7 @@ struct DeviceState {
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
   std::set<uint64_t> descriptorBufferLayouts;  // set layouts made for descriptor buffers (uncounted.cpp)
+  std::shared_ptr<DescriptorBufferDevice> descriptorBuffers;  // descriptor_buffers_layer.hpp
   std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
   // Independent-sets layouts (null between the application's sets and the
   // counter set) -> their twin with empty sets there, for complete pipelines.
