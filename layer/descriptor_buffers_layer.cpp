@@ -1,5 +1,6 @@
 #include "descriptor_buffers_layer.hpp"
 
+#include <algorithm>
 #include <array>
 #include <unordered_map>
 
@@ -40,7 +41,8 @@ struct DescriptorBufferDevice {
   VkDeviceAddress address = 0, counterAddress = 0;
   VkDeviceSize slotBytes = 0, bindingOffset0 = 0;
   std::unordered_map<VkDeviceSize, uint32_t> slotOf;  // region offset -> slot
-  static constexpr uint32_t kSlots = 16384;
+  static constexpr uint32_t kMostSlots = 16384;  // regions are reused: a recording's few hundred, a frame's few thousand
+  uint32_t slots = 0;  // within maxResourceDescriptorBufferRange
 
   // Per command buffer: the application's bound buffers and set offsets.
   struct Binds {
@@ -319,8 +321,11 @@ void setupDescriptorBuffers(DeviceState& dev) {
   s->layoutSize(dev.device, s->counterLayout, &layoutBytes);
   s->bindingOffset(dev.device, s->counterLayout, 0, &s->bindingOffset0);
   const VkDeviceSize align = std::max<VkDeviceSize>(s->props.descriptorBufferOffsetAlignment, 1);
-  s->slotBytes = (layoutBytes + align - 1) / align * align;
-  if (!createBuffer(dev, s->slotBytes * DescriptorBufferDevice::kSlots,
+  s->slotBytes = std::max<VkDeviceSize>((layoutBytes + align - 1) / align * align, align);
+  s->slots = uint32_t(std::min<VkDeviceSize>(DescriptorBufferDevice::kMostSlots,
+                                             s->props.maxResourceDescriptorBufferRange / s->slotBytes));
+  if (s->slots == 0) return refuse("the device's descriptor buffers cannot hold the layer's counter descriptor");
+  if (!createBuffer(dev, s->slotBytes * s->slots,
                     VK_BUFFER_USAGE_RESOURCE_DESCRIPTOR_BUFFER_BIT_EXT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
                     VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
                     VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, s->buffer, s->memory)) {
@@ -466,7 +471,7 @@ bool bindCounterDescriptor(DeviceState& dev, CommandBufferState& cb, uint32_t bi
   if (!binds.counterBound) return true;  // descriptorBuffersReady kept the draw uncounted
   auto slot = s->slotOf.find(offset);
   if (slot == s->slotOf.end()) {
-    if (s->slotOf.size() >= DescriptorBufferDevice::kSlots) {
+    if (s->slotOf.size() >= s->slots) {
       note(dev, "descriptor buffers: the layer's descriptor buffer is full: later regions count into its first");
       slot = s->slotOf.begin();
     } else {
