@@ -256,6 +256,10 @@ PFN_vkVoidFunction interceptedDescriptorBuffers(std::string_view name) {
 
 // ---------------------------------------------------------------- set-up
 
+namespace {
+uint32_t counterSlot(DeviceState& dev, DescriptorBufferDevice& s, VkDeviceSize offset);  // below
+}  // namespace
+
 void prepareDescriptorBuffers(DeviceState& dev, const VkDeviceCreateInfo& info) {
   auto s = std::make_shared<DescriptorBufferDevice>();
   dev.descriptorBuffers = s;
@@ -344,6 +348,7 @@ void setupDescriptorBuffers(DeviceState& dev) {
   s->address = s->bufferAddress(dev.device, &at);
   at.buffer = dev.counterBuffer;
   s->counterAddress = s->bufferAddress(dev.device, &at);
+  counterSlot(dev, *s, 0);  // the sink's, slot 0
 }
 
 void destroyDescriptorBuffers(DeviceState& dev) {
@@ -463,32 +468,41 @@ bool descriptorBuffersReady(DeviceState& dev, CommandBufferState& cb, uint32_t b
   return true;
 }
 
+namespace {
+
+// The slot of the descriptor of the counters at `offset`, written the first
+// time: a region's offset keeps its slot. Slot 0 is the arena's sink (offset
+// 0), where regions count once the slots run out, as when the arena is full.
+uint32_t counterSlot(DeviceState& dev, DescriptorBufferDevice& s, VkDeviceSize offset) {
+  if (auto slot = s.slotOf.find(offset); slot != s.slotOf.end()) return slot->second;
+  if (s.slotOf.size() >= s.slots) {
+    note(dev, "descriptor buffers: the layer's descriptor buffer is full: some draws were not counted");
+    return 0;
+  }
+  const uint32_t slot = uint32_t(s.slotOf.size());
+  s.slotOf.emplace(offset, slot);
+  VkDescriptorAddressInfoEXT range = {VK_STRUCTURE_TYPE_DESCRIPTOR_ADDRESS_INFO_EXT};
+  range.address = s.counterAddress + offset;
+  range.range = dev.regionRange;
+  VkDescriptorGetInfoEXT info = {VK_STRUCTURE_TYPE_DESCRIPTOR_GET_INFO_EXT};
+  info.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  info.data.pStorageBuffer = &range;
+  const size_t size = s.robust ? s.props.robustStorageBufferDescriptorSize : s.props.storageBufferDescriptorSize;
+  s.getDescriptor(dev.device, &info, size, s.mapped + slot * s.slotBytes + s.bindingOffset0);
+  return slot;
+}
+
+}  // namespace
+
 bool bindCounterDescriptor(DeviceState& dev, CommandBufferState& cb, uint32_t bindPoint, const PipelineInfo& pipeline,
                            VkDeviceSize offset) {
   DescriptorBufferDevice* s = state(dev);
   if (s == nullptr || s->pipelineLayouts.count(u64(pipeline.layout)) == 0) return false;
   auto& binds = s->commandBuffers[cb.handle];
   if (!binds.counterBound) return true;  // descriptorBuffersReady kept the draw uncounted
-  auto slot = s->slotOf.find(offset);
-  if (slot == s->slotOf.end()) {
-    if (s->slotOf.size() >= s->slots) {
-      note(dev, "descriptor buffers: the layer's descriptor buffer is full: later regions count into its first");
-      slot = s->slotOf.begin();
-    } else {
-      slot = s->slotOf.emplace(offset, uint32_t(s->slotOf.size())).first;
-      // The descriptor of this region's counters, written once: a region's offset keeps its slot.
-      VkDescriptorAddressInfoEXT range = {VK_STRUCTURE_TYPE_DESCRIPTOR_ADDRESS_INFO_EXT};
-      range.address = s->counterAddress + offset;
-      range.range = dev.regionRange;
-      VkDescriptorGetInfoEXT info = {VK_STRUCTURE_TYPE_DESCRIPTOR_GET_INFO_EXT};
-      info.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      info.data.pStorageBuffer = &range;
-      const size_t size = s->robust ? s->props.robustStorageBufferDescriptorSize : s->props.storageBufferDescriptorSize;
-      s->getDescriptor(dev.device, &info, size, s->mapped + slot->second * s->slotBytes + s->bindingOffset0);
-    }
-  }
+  const uint32_t slot = counterSlot(dev, *s, offset);
   const uint32_t index = uint32_t(binds.buffers.size());
-  const VkDeviceSize at = slot->second * s->slotBytes;
+  const VkDeviceSize at = slot * s->slotBytes;
   s->setOffsets(cb.handle, bindPoint == 1 ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
                 pipeline.layout, dev.counterSet, 1, &index, &at);
   return true;
