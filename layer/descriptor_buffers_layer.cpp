@@ -60,6 +60,13 @@ namespace {
 
 DescriptorBufferDevice* state(const DeviceState& dev) { return dev.descriptorBuffers.get(); }
 
+// Whether the layer counts descriptor-buffer pipelines: the bookkeeping
+// below is kept only then, so an application that is not counted pays nothing.
+bool active(const DeviceState& dev) {
+  const DescriptorBufferDevice* s = state(dev);
+  return s != nullptr && s->buffer != VK_NULL_HANDLE;
+}
+
 template <class T>
 const T* findChained(const void* next, VkStructureType type) {
   for (auto* p = static_cast<const VkBaseInStructure*>(next); p != nullptr; p = p->pNext) {
@@ -110,6 +117,7 @@ VKAPI_ATTR void VKAPI_CALL GetDescriptorEXT(VkDevice device, const VkDescriptorG
   DeviceState* dev = deviceOf(device);
   DescriptorBufferDevice* s = state(*dev);
   s->getDescriptor(device, info, size, descriptor);
+  if (!active(*dev)) return;
   std::lock_guard lock(dev->mutex);
   s->seenSizes[info->type] = size;
   if (auto target = describedTarget(*dev, *info)) s->catalog.remember(descriptor, size, *target);
@@ -130,7 +138,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer
                                                 VkDeviceSize offset) {
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.BindBufferMemory(device, buffer, memory, offset);
-  if (result != VK_SUCCESS || !state(*dev)->enabled) return result;
+  if (result != VK_SUCCESS || !active(*dev)) return result;
   std::lock_guard lock(dev->mutex);
   placeBuffer(*dev, buffer, memory, offset);
   return result;
@@ -139,7 +147,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer
 VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory2(VkDevice device, uint32_t count, const VkBindBufferMemoryInfo* infos) {
   DeviceState* dev = deviceOf(device);
   VkResult result = state(*dev)->bindMemory2(device, count, infos);
-  if (result != VK_SUCCESS || !state(*dev)->enabled) return result;
+  if (result != VK_SUCCESS || !active(*dev)) return result;
   std::lock_guard lock(dev->mutex);
   for (uint32_t i = 0; i < count; ++i) placeBuffer(*dev, infos[i].buffer, infos[i].memory, infos[i].memoryOffset);
   return result;
@@ -149,7 +157,7 @@ VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice device, VkDeviceMemory memory,
                                          VkDeviceSize size, VkMemoryMapFlags flags, void** data) {
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.MapMemory(device, memory, offset, size, flags, data);
-  if (result != VK_SUCCESS || !state(*dev)->enabled) return result;
+  if (result != VK_SUCCESS || !active(*dev)) return result;
   std::lock_guard lock(dev->mutex);
   state(*dev)->places.mapped(memory, offset, size == VK_WHOLE_SIZE ? ~VkDeviceSize(0) - offset : size, *data);
   return result;
@@ -157,7 +165,7 @@ VKAPI_ATTR VkResult VKAPI_CALL MapMemory(VkDevice device, VkDeviceMemory memory,
 
 VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice device, VkDeviceMemory memory) {
   DeviceState* dev = deviceOf(device);
-  {
+  if (active(*dev)) {
     std::lock_guard lock(dev->mutex);
     state(*dev)->places.unmapped(memory);
   }
@@ -166,7 +174,7 @@ VKAPI_ATTR void VKAPI_CALL UnmapMemory(VkDevice device, VkDeviceMemory memory) {
 
 VKAPI_ATTR void VKAPI_CALL FreeMemory(VkDevice device, VkDeviceMemory memory, const VkAllocationCallbacks* alloc) {
   DeviceState* dev = deviceOf(device);
-  {
+  if (active(*dev)) {
     std::lock_guard lock(dev->mutex);
     state(*dev)->places.freed(memory);
   }
@@ -179,6 +187,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorBuffersEXT(VkCommandBuffer cmd, uint
                                                        const VkDescriptorBufferBindingInfoEXT* infos) {
   DeviceState* dev = deviceOf(cmd);
   DescriptorBufferDevice* s = state(*dev);
+  if (!active(*dev)) return s->bindBuffers(cmd, count, infos);
   std::vector<VkDescriptorBufferBindingInfoEXT> all(infos, infos + count);
   {
     std::lock_guard lock(dev->mutex);
@@ -215,7 +224,7 @@ VKAPI_ATTR void VKAPI_CALL CmdSetDescriptorBufferOffsetsEXT(VkCommandBuffer cmd,
   DeviceState* dev = deviceOf(cmd);
   DescriptorBufferDevice* s = state(*dev);
   s->setOffsets(cmd, point, layout, first, count, indices, offsets);
-  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  if (!active(*dev) || (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE)) return;
   std::lock_guard lock(dev->mutex);
   const uint32_t bindPoint = point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0;
   auto& binds = s->commandBuffers[cmd];
@@ -231,7 +240,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorBufferEmbeddedSamplersEXT(VkCommandB
                                                                       VkPipelineLayout layout, uint32_t set) {
   DeviceState* dev = deviceOf(cmd);
   state(*dev)->embeddedSamplers(cmd, point, layout, set);
-  if (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE) return;
+  if (!active(*dev) || (point != VK_PIPELINE_BIND_POINT_GRAPHICS && point != VK_PIPELINE_BIND_POINT_COMPUTE)) return;
   std::lock_guard lock(dev->mutex);
   const uint32_t bindPoint = point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0;
   if (set < 32) state(*dev)->commandBuffers[cmd].offsetsSet[bindPoint] &= ~(1u << set);
@@ -370,7 +379,7 @@ void noteDescriptorSetLayout(DeviceState& dev, VkDescriptorSetLayout layout, con
   if (s == nullptr) return;
   DescriptorSetLayoutOffsets offsets;
   const bool forBuffers = (info.flags & VK_DESCRIPTOR_SET_LAYOUT_CREATE_DESCRIPTOR_BUFFER_BIT_EXT) != 0;
-  if (forBuffers && s->enabled) {
+  if (forBuffers && active(dev)) {
     for (uint32_t i = 0; i < info.bindingCount; ++i) {
       const auto& b = info.pBindings[i];
       DescriptorBinding entry{0, b.descriptorType, b.descriptorCount};
@@ -389,15 +398,12 @@ void noteDescriptorSetLayout(DeviceState& dev, VkDescriptorSetLayout layout, con
 
 void noteBufferUsage(DeviceState& dev, VkBuffer buffer, VkBufferUsageFlags usage) {
   DescriptorBufferDevice* s = state(dev);
-  if (s == nullptr || !s->enabled) return;
+  if (!active(dev)) return;
   s->places.remove(u64(buffer));
   s->bufferUsage[u64(buffer)] = usage;
 }
 
-bool countsDescriptorBuffers(const DeviceState& dev) {
-  const DescriptorBufferDevice* s = state(dev);
-  return s != nullptr && s->enabled && s->buffer != VK_NULL_HANDLE;
-}
+bool countsDescriptorBuffers(const DeviceState& dev) { return active(dev); }
 
 bool descriptorBufferLayouts(const DeviceState& dev, const VkPipelineLayoutCreateInfo& info,
                              VkDescriptorSetLayout& counter, VkDescriptorSetLayout& empty) {
