@@ -329,7 +329,7 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
   std::vector<uint64_t> key;
   key.reserve(pipeline.slots * 2);
   std::vector<bool> seen(pipeline.slots, false);
-  std::vector<std::pair<uint32_t, uint64_t>> descriptorAt;
+  std::vector<DescriptorPlace> descriptorAt;
   for (const auto& site : pipeline.sites) {
     if (site.kind == spirv::SiteKind::Invocation) continue;
     for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
@@ -340,9 +340,9 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       // A descriptor buffer's bytes are named at submission: the region is the descriptor's place.
       const auto at = slots[slot].resource == 0 ? descriptorBufferAddress(dev, cb, bindPointIndex, pipeline, site, i)
                                                 : std::nullopt;
-      if (at) descriptorAt.emplace_back(slot, *at);
+      if (at) descriptorAt.push_back({slot, at->address, at->type});
       key.push_back(slot);
-      key.push_back(at ? ~*at : slots[slot].resource);
+      key.push_back(at ? ~at->address : slots[slot].resource);
       key.push_back(uint64_t(slots[slot].format) << 32 | slots[slot].aspect);
     }
   }

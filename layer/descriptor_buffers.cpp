@@ -4,26 +4,48 @@
 
 namespace tally::layer {
 
-void DescriptorCatalog::remember(const void* bytes, size_t size, const DescriptorTarget& target) {
+namespace {
+
+// The catalog's key: the type's 4 bytes, then the descriptor's.
+std::string key(VkDescriptorType type, const void* bytes, size_t size) {
+  const int32_t t = int32_t(type);
+  std::string k(reinterpret_cast<const char*>(&t), sizeof t);
+  k.append(static_cast<const char*>(bytes), size);
+  return k;
+}
+
+VkDescriptorType typeOf(const std::string& key) {
+  int32_t t = 0;
+  key.copy(reinterpret_cast<char*>(&t), sizeof t);
+  return VkDescriptorType(t);
+}
+
+}  // namespace
+
+void DescriptorCatalog::remember(VkDescriptorType type, const void* bytes, size_t size,
+                                 const DescriptorTarget& target) {
   if (size == 0) return;
-  std::string key(static_cast<const char*>(bytes), size);
-  auto [it, added] = named_.insert_or_assign(key, target);
+  std::string k = key(type, bytes, size);
+  auto [it, added] = named_.insert_or_assign(k, target);
   if (!added) return;
-  order_.push_back(std::move(key));
-  ++sizes_[size];
+  order_.push_back(std::move(k));
+  ++sizes_[type][size];
   if (named_.size() <= kMaxDescriptors) return;
   const std::string& oldest = order_.front();
-  if (auto s = sizes_.find(oldest.size()); s != sizes_.end() && --s->second == 0) sizes_.erase(s);
+  auto& sizes = sizes_[typeOf(oldest)];
+  if (auto s = sizes.find(oldest.size() - sizeof(int32_t)); s != sizes.end() && --s->second == 0) sizes.erase(s);
   named_.erase(oldest);
   order_.pop_front();
   forgot_ = true;
 }
 
-std::optional<DescriptorTarget> DescriptorCatalog::lookup(const uint8_t* bytes, size_t available) const {
-  if (bytes == nullptr) return std::nullopt;
-  for (const auto& [size, count] : sizes_) {
+std::optional<DescriptorTarget> DescriptorCatalog::lookup(VkDescriptorType type, const uint8_t* bytes,
+                                                          size_t available) const {
+  auto sizes = sizes_.find(type);
+  if (bytes == nullptr || sizes == sizes_.end()) return std::nullopt;
+  for (const auto& [size, count] : sizes->second) {
     if (size > available) continue;
-    auto it = named_.find(std::string(reinterpret_cast<const char*>(bytes), size));
+    auto it = named_.find(key(type, bytes, size));
     if (it != named_.end()) return it->second;
   }
   return std::nullopt;

@@ -30,25 +30,27 @@ struct DescriptorTarget {
   bool operator==(const DescriptorTarget&) const = default;
 };
 
-// Descriptor bytes -> what they name. Bounded: an application that makes a
-// descriptor per transient buffer range would otherwise grow it without end;
-// past the bound the oldest are forgotten (their lines fall back to "set S
-// binding B", with a note).
+// Descriptor bytes of a type -> what they name. By type, because a driver's
+// descriptors may be small handles (NVIDIA's images are 4 bytes) that
+// repeat across types. Bounded: an application that makes a descriptor per
+// transient buffer range would otherwise grow it without end; past the
+// bound the oldest are forgotten (their lines fall back to "set S binding
+// B", with a note).
 class DescriptorCatalog {
  public:
   static constexpr size_t kMaxDescriptors = 1u << 18;
-  void remember(const void* bytes, size_t size, const DescriptorTarget& target);
-  // The descriptor starting at `bytes`, `available` of them readable: the
-  // longest known descriptor size that matches wins (sizes differ by type,
-  // and a shorter descriptor may be a prefix of nothing else).
-  std::optional<DescriptorTarget> lookup(const uint8_t* bytes, size_t available) const;
+  void remember(VkDescriptorType type, const void* bytes, size_t size, const DescriptorTarget& target);
+  // The descriptor of `type` starting at `bytes`, `available` of them
+  // readable, by the sizes vkGetDescriptorEXT was asked for with that type
+  // (the longest first).
+  std::optional<DescriptorTarget> lookup(VkDescriptorType type, const uint8_t* bytes, size_t available) const;
   size_t size() const { return named_.size(); }
   bool forgotSome() const { return forgot_; }
 
  private:
   std::unordered_map<std::string, DescriptorTarget> named_;
   std::deque<std::string> order_;
-  std::map<size_t, size_t, std::greater<>> sizes_;  // descriptor size -> descriptors of it
+  std::map<VkDescriptorType, std::map<size_t, size_t, std::greater<>>> sizes_;  // type -> size -> descriptors of it
   bool forgot_ = false;
 };
 

@@ -120,7 +120,7 @@ VKAPI_ATTR void VKAPI_CALL GetDescriptorEXT(VkDevice device, const VkDescriptorG
   if (!active(*dev)) return;
   std::lock_guard lock(dev->mutex);
   s->seenSizes[info->type] = size;
-  if (auto target = describedTarget(*dev, *info)) s->catalog.remember(descriptor, size, *target);
+  if (auto target = describedTarget(*dev, *info)) s->catalog.remember(info->type, descriptor, size, *target);
 }
 
 // Buffers whose address a descriptor may hold: where their memory lies.
@@ -434,9 +434,9 @@ void notePipelineLayout(DeviceState& dev, VkPipelineLayout layout, const VkPipel
 
 // ---------------------------------------------------------------- draws
 
-std::optional<uint64_t> descriptorBufferAddress(const DeviceState& dev, const CommandBufferState& cb,
-                                                uint32_t bindPoint, const PipelineInfo& pipeline,
-                                                const spirv::Site& site, uint32_t element) {
+std::optional<DescriptorPlace> descriptorBufferAddress(const DeviceState& dev, const CommandBufferState& cb,
+                                                       uint32_t bindPoint, const PipelineInfo& pipeline,
+                                                       const spirv::Site& site, uint32_t element) {
   const DescriptorBufferDevice* s = state(dev);
   if (s == nullptr || site.set < 0 || site.set >= 32 || site.binding < 0) return std::nullopt;
   auto layout = s->pipelineLayouts.find(u64(pipeline.layout));
@@ -450,7 +450,9 @@ std::optional<uint64_t> descriptorBufferAddress(const DeviceState& dev, const Co
   const auto [index, offset] = binds->second.offsets[bindPoint][size_t(site.set)];
   const uint32_t at = site.slotCount > 1 ? element : site.index.value_or(0);
   const VkDeviceSize size = descriptorSize(s->props, s->robust, s->seenSizes, binding->second.type);
-  return descriptorAddress(binds->second.buffers, index, offset, binding->second, at, size);
+  auto address = descriptorAddress(binds->second.buffers, index, offset, binding->second, at, size);
+  if (!address) return std::nullopt;
+  return DescriptorPlace{0, *address, binding->second.type};
 }
 
 bool descriptorBuffersReady(DeviceState& dev, CommandBufferState& cb, uint32_t bindPoint) {
@@ -520,16 +522,16 @@ void nameDescriptorBufferSlots(DeviceState& dev, std::vector<Region>& regions) {
   DescriptorBufferDevice* s = state(dev);
   if (s == nullptr) return;
   for (Region& region : regions) {
-    for (const auto& [slot, address] : region.descriptorAt) {
-      if (slot >= region.slotResources.size()) continue;
+    for (const DescriptorPlace& place : region.descriptorAt) {
+      if (place.slot >= region.slotResources.size()) continue;
       size_t available = 0;
-      const uint8_t* bytes = s->places.host(address, available);
+      const uint8_t* bytes = s->places.host(place.address, available);
       if (bytes == nullptr) {
         note(dev, "descriptor buffers: a descriptor lies in memory the application has not mapped, which the "
                   "layer cannot read: its line is named by set and binding");
         continue;
       }
-      auto target = s->catalog.lookup(bytes, available);
+      auto target = s->catalog.lookup(place.type, bytes, available);
       if (!target) {
         note(dev, std::string("descriptor buffers: a descriptor's bytes match none that vkGetDescriptorEXT "
                               "returned while the layer was loaded") +
@@ -537,7 +539,7 @@ void nameDescriptorBufferSlots(DeviceState& dev, std::vector<Region>& regions) {
                       ": its line is named by set and binding");
         continue;
       }
-      region.slotResources[slot] = {target->resource, target->format, target->aspect};
+      region.slotResources[place.slot] = {target->resource, target->format, target->aspect};
     }
   }
 }

@@ -38,10 +38,10 @@ bool countsDescriptorBuffers(const DeviceState& dev);
 void notePipelineLayout(DeviceState& dev, VkPipelineLayout layout, const VkPipelineLayoutCreateInfo& info);
 
 // At a draw, under dev.mutex: the device address of the descriptor a site's
-// element reads where its set lives in a descriptor buffer (none otherwise).
-std::optional<uint64_t> descriptorBufferAddress(const DeviceState& dev, const CommandBufferState& cb,
-                                                uint32_t bindPoint, const PipelineInfo& pipeline,
-                                                const spirv::Site& site, uint32_t element);
+// element reads where its set lives in a descriptor buffer, and its type (none otherwise).
+std::optional<DescriptorPlace> descriptorBufferAddress(const DeviceState& dev, const CommandBufferState& cb,
+                                                       uint32_t bindPoint, const PipelineInfo& pipeline,
+                                                       const spirv::Site& site, uint32_t element);
 // Binds the counter set at `offset` where the pipeline's layout is a
 // descriptor-buffer one: false when it is not (the ordinary set is bound).
 bool bindCounterDescriptor(DeviceState& dev, CommandBufferState& cb, uint32_t bindPoint, const PipelineInfo& pipeline,

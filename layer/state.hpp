@@ -199,14 +199,20 @@ struct IndirectDraw {
 constexpr uint32_t kNoDraw = UINT32_MAX, kRestDraws = UINT32_MAX - 1;
 constexpr uint32_t kMaxDrawRegions = 1024;
 
+// Descriptor buffers: where the descriptor a slot reads lies, named at each submission.
+struct DescriptorPlace {
+  uint32_t slot = 0;
+  uint64_t address = 0;
+  VkDescriptorType type = VK_DESCRIPTOR_TYPE_MAX_ENUM;
+};
+
 // The resource behind each slot of a region, resolved at the draw.
 struct Region {
   VkDeviceSize offset = 0;
   VkDeviceSize bytes = 0;
   std::shared_ptr<PipelineInfo> pipeline;
   std::vector<Bound> slotResources;  // per slot: what it counts
-  // Descriptor buffers: slot -> the address of the descriptor it reads, named at each submission.
-  std::vector<std::pair<uint32_t, uint64_t>> descriptorAt;
+  std::vector<DescriptorPlace> descriptorAt;
   uint32_t pass = 0;                 // index into the command buffer's passes
   // Config::draws: the draw command's place in its pass (kRestDraws: shared
   // by the draws beyond the cap, `drawCommands` of them), and the innermost

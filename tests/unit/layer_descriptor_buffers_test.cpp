@@ -15,42 +15,56 @@ TEST(DescriptorCatalog, NamesTheResourceWhoseDescriptorWasWritten) {
   DescriptorCatalog catalog;
   const std::array<uint8_t, 16> texture = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16};
   const std::array<uint8_t, 8> buffer = {1, 2, 3, 4, 5, 6, 7, 9};
-  catalog.remember(texture.data(), texture.size(), {0x100, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_ASPECT_COLOR_BIT});
-  catalog.remember(buffer.data(), buffer.size(), {0x200});
+  catalog.remember(VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, texture.data(), texture.size(),
+                   {0x100, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_ASPECT_COLOR_BIT});
+  catalog.remember(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, buffer.data(), buffer.size(), {0x200});
   // A copy of the bytes, as the application writes them into its buffer, with more descriptors after.
   std::vector<uint8_t> memory(texture.begin(), texture.end());
   memory.insert(memory.end(), buffer.begin(), buffer.end());
   memory.resize(64, 0xEE);
-  auto first = catalog.lookup(memory.data(), memory.size());
+  auto first = catalog.lookup(VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, memory.data(), memory.size());
   ASSERT_TRUE(first);
   EXPECT_EQ(first->resource, 0x100u);
   EXPECT_EQ(first->format, VK_FORMAT_R8G8B8A8_UNORM);
-  auto second = catalog.lookup(memory.data() + 16, memory.size() - 16);
+  auto second = catalog.lookup(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, memory.data() + 16, memory.size() - 16);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->resource, 0x200u);
-  // The texture's first 8 bytes are not the buffer's descriptor: no false match.
-  EXPECT_FALSE(catalog.lookup(memory.data() + 32, memory.size() - 32));
-  // Fewer bytes readable than the descriptor: the longer size is not tried.
-  EXPECT_FALSE(catalog.lookup(memory.data(), 12));
+  // Past the written descriptors: no false match.
+  EXPECT_FALSE(catalog.lookup(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, memory.data() + 32, memory.size() - 32));
+  // Fewer bytes readable than the descriptor.
+  EXPECT_FALSE(catalog.lookup(VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, memory.data(), 12));
+  // The same bytes read as another type name nothing: a storage image is not the sampled one.
+  EXPECT_FALSE(catalog.lookup(VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, memory.data(), memory.size()));
+}
+
+TEST(DescriptorCatalog, SmallHandlesOfDifferentTypesStayApart) {
+  DescriptorCatalog catalog;
+  const uint32_t handle = 5;  // as a driver with 4-byte image descriptors may give for two types
+  catalog.remember(VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, &handle, 4, {0xA});
+  catalog.remember(VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, &handle, 4, {0xB});
+  const auto* bytes = reinterpret_cast<const uint8_t*>(&handle);
+  EXPECT_EQ(catalog.lookup(VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE, bytes, 4)->resource, 0xAu);
+  EXPECT_EQ(catalog.lookup(VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, bytes, 4)->resource, 0xBu);
 }
 
 TEST(DescriptorCatalog, RewrittenBytesNameTheLatestResource) {
   DescriptorCatalog catalog;
   const std::array<uint8_t, 4> bytes = {9, 9, 9, 9};
-  catalog.remember(bytes.data(), bytes.size(), {0x1});
-  catalog.remember(bytes.data(), bytes.size(), {0x2});
+  catalog.remember(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bytes.data(), bytes.size(), {0x1});
+  catalog.remember(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bytes.data(), bytes.size(), {0x2});
   EXPECT_EQ(catalog.size(), 1u);
-  EXPECT_EQ(catalog.lookup(bytes.data(), 4)->resource, 0x2u);
+  EXPECT_EQ(catalog.lookup(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, bytes.data(), 4)->resource, 0x2u);
 }
 
 TEST(DescriptorCatalog, ForgetsTheOldestPastItsBound) {
   DescriptorCatalog catalog;
-  for (uint32_t i = 0; i <= DescriptorCatalog::kMaxDescriptors; ++i) catalog.remember(&i, sizeof i, {i + 1});
+  constexpr auto kType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+  for (uint32_t i = 0; i <= DescriptorCatalog::kMaxDescriptors; ++i) catalog.remember(kType, &i, sizeof i, {i + 1});
   EXPECT_EQ(catalog.size(), DescriptorCatalog::kMaxDescriptors);
   EXPECT_TRUE(catalog.forgotSome());
   const uint32_t oldest = 0, newest = DescriptorCatalog::kMaxDescriptors;
-  EXPECT_FALSE(catalog.lookup(reinterpret_cast<const uint8_t*>(&oldest), 4));
-  EXPECT_EQ(catalog.lookup(reinterpret_cast<const uint8_t*>(&newest), 4)->resource, newest + 1);
+  EXPECT_FALSE(catalog.lookup(kType, reinterpret_cast<const uint8_t*>(&oldest), 4));
+  EXPECT_EQ(catalog.lookup(kType, reinterpret_cast<const uint8_t*>(&newest), 4)->resource, newest + 1);
 }
 
 TEST(AddressPlaces, ReadsThroughTheApplicationsMapping) {
