@@ -60,6 +60,10 @@ namespace {
 
 DescriptorBufferDevice* state(const DeviceState& dev) { return dev.descriptorBuffers.get(); }
 
+// The layer's descriptor buffer's creation usage, which its binding repeats.
+constexpr VkBufferUsageFlags kOwnBufferUsage =
+    VK_BUFFER_USAGE_RESOURCE_DESCRIPTOR_BUFFER_BIT_EXT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+
 // Whether the layer counts descriptor-buffer pipelines: the bookkeeping
 // below is kept only then, so an application that is not counted pays nothing.
 bool active(const DeviceState& dev) {
@@ -204,7 +208,7 @@ VKAPI_ATTR void VKAPI_CALL CmdBindDescriptorBuffersEXT(VkCommandBuffer cmd, uint
     if (cb != nullptr && cb->counted && s->buffer != VK_NULL_HANDLE) {
       if (roomForCounterBuffer(s->props, count, resource)) {
         all.push_back({VK_STRUCTURE_TYPE_DESCRIPTOR_BUFFER_BINDING_INFO_EXT, nullptr, s->address,
-                       VK_BUFFER_USAGE_RESOURCE_DESCRIPTOR_BUFFER_BIT_EXT});
+                       kOwnBufferUsage});
         binds.counterBound = true;
       } else {
         binds.noRoom = true;
@@ -338,8 +342,7 @@ void setupDescriptorBuffers(DeviceState& dev) {
   s->slots = uint32_t(std::min<VkDeviceSize>(DescriptorBufferDevice::kMostSlots,
                                              s->props.maxResourceDescriptorBufferRange / s->slotBytes));
   if (s->slots == 0) return refuse("the device's descriptor buffers cannot hold the layer's counter descriptor");
-  if (!createBuffer(dev, s->slotBytes * s->slots,
-                    VK_BUFFER_USAGE_RESOURCE_DESCRIPTOR_BUFFER_BIT_EXT | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT,
+  if (!createBuffer(dev, s->slotBytes * s->slots, kOwnBufferUsage,
                     VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
                     VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, s->buffer, s->memory)) {
     return refuse("the layer's descriptor buffer could not be allocated");

@@ -78,6 +78,7 @@ struct Buffer {
   uint8_t* mapped = nullptr;
   VkDeviceAddress address = 0;
   VkDeviceSize size = 0;
+  VkBufferUsageFlags usage = 0;  // as created: a descriptor buffer's binding repeats it
 };
 
 struct App {
@@ -117,7 +118,7 @@ struct App {
     b.size = size;
     VkBufferCreateInfo info = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     info.size = size;
-    info.usage = usage | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
+    info.usage = b.usage = usage | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
     check(vkCreateBuffer(device, &info, nullptr, &b.buffer), "vkCreateBuffer");
     name(VK_OBJECT_TYPE_BUFFER, reinterpret_cast<uint64_t>(b.buffer), label);
     VkMemoryRequirements req;
@@ -439,10 +440,8 @@ void record(const App& app, const Scene& s, VkCommandBuffer cmd, bool first) {
   layoutBarrier(cmd, s.target, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                 VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
   const VkDescriptorBufferBindingInfoEXT buffers[2] = {
-      {VK_STRUCTURE_TYPE_DESCRIPTOR_BUFFER_BINDING_INFO_EXT, nullptr, s.resources.address,
-       VK_BUFFER_USAGE_RESOURCE_DESCRIPTOR_BUFFER_BIT_EXT},
-      {VK_STRUCTURE_TYPE_DESCRIPTOR_BUFFER_BINDING_INFO_EXT, nullptr, s.samplers.address,
-       VK_BUFFER_USAGE_SAMPLER_DESCRIPTOR_BUFFER_BIT_EXT}};
+      {VK_STRUCTURE_TYPE_DESCRIPTOR_BUFFER_BINDING_INFO_EXT, nullptr, s.resources.address, s.resources.usage},
+      {VK_STRUCTURE_TYPE_DESCRIPTOR_BUFFER_BINDING_INFO_EXT, nullptr, s.samplers.address, s.samplers.usage}};
   app.bindBuffers(cmd, 2, buffers);
 
   VkDebugUtilsLabelEXT label = {VK_STRUCTURE_TYPE_DEBUG_UTILS_LABEL_EXT, nullptr, "draw", {}};
