@@ -67,6 +67,8 @@ def check_output(out):
         fail("the layer's output is incomplete: %d frames" % len(out["frames"]))
     if not out["layer"]["counting_enabled"]:
         fail("the layer did not count: %s" % out["layer"]["not_counting"])
+    if out["layer"]["layouts_refused"] != 0:
+        fail("%d pipeline layouts refused: %s" % (out["layer"]["layouts_refused"], out["notes"]))
     bad = [n for n in out["notes"] if "descriptor buffer" in n]
     if bad:
         fail("notes about descriptor buffers: %s" % bad)
@@ -79,9 +81,10 @@ def check_output(out):
         draw, double = passes["draw"], passes["double"]
         if draw["fragment_invocations"] != FRAGMENTS:
             fail("draw: %d fragments counted, expected %d" % (draw["fragment_invocations"], FRAGMENTS))
+        # The statistic brackets the count: a device may count helper invocations in it.
         statistic = draw.get("fragment_invocations_statistic", -1)
-        if statistic is not None and statistic >= 0 and statistic != FRAGMENTS:
-            fail("draw: fragment statistic %d, expected %d" % (statistic, FRAGMENTS))
+        if statistic is not None and statistic >= 0 and statistic < FRAGMENTS:
+            fail("draw: fragment statistic %d, below the %d fragments counted" % (statistic, FRAGMENTS))
         if double["compute_invocations"] != INVOCATIONS:
             fail("double: %d invocations counted, expected %d" % (double["compute_invocations"], INVOCATIONS))
         check_pass("draw", draw)
