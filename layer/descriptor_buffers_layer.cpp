@@ -127,24 +127,13 @@ VKAPI_ATTR void VKAPI_CALL GetDescriptorEXT(VkDevice device, const VkDescriptorG
   if (auto target = describedTarget(*dev, *info)) s->catalog.remember(info->type, descriptor, size, *target);
 }
 
-// Buffers whose address a descriptor may hold: where their memory lies.
-void placeBuffer(DeviceState& dev, VkBuffer buffer, VkDeviceMemory memory, VkDeviceSize offset) {
-  DescriptorBufferDevice* s = state(dev);
-  auto usage = s->bufferUsage.find(u64(buffer));
-  if (usage == s->bufferUsage.end() || !(usage->second & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT)) return;
-  auto resource = dev.resources.find(u64(buffer));
-  if (resource == dev.resources.end()) return;
-  VkBufferDeviceAddressInfo info = {VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO, nullptr, buffer};
-  s->places.add(s->bufferAddress(dev.device, &info), {u64(buffer), resource->second.size, memory, offset});
-}
-
 VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer, VkDeviceMemory memory,
                                                 VkDeviceSize offset) {
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.BindBufferMemory(device, buffer, memory, offset);
   if (result != VK_SUCCESS || !active(*dev)) return result;
   std::lock_guard lock(dev->mutex);
-  placeBuffer(*dev, buffer, memory, offset);
+  noteBufferMemory(*dev, buffer, memory, offset);
   return result;
 }
 
@@ -153,7 +142,7 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory2(VkDevice device, uint32_t count
   VkResult result = state(*dev)->bindMemory2(device, count, infos);
   if (result != VK_SUCCESS || !active(*dev)) return result;
   std::lock_guard lock(dev->mutex);
-  for (uint32_t i = 0; i < count; ++i) placeBuffer(*dev, infos[i].buffer, infos[i].memory, infos[i].memoryOffset);
+  for (uint32_t i = 0; i < count; ++i) noteBufferMemory(*dev, infos[i].buffer, infos[i].memory, infos[i].memoryOffset);
   return result;
 }
 
@@ -376,6 +365,18 @@ void destroyDescriptorBuffers(DeviceState& dev) {
 }
 
 // ---------------------------------------------------------------- layouts
+
+void noteBufferMemory(DeviceState& dev, VkBuffer buffer, VkDeviceMemory memory, VkDeviceSize offset) {
+  DescriptorBufferDevice* s = state(dev);
+  if (!active(dev)) return;
+  auto usage = s->bufferUsage.find(u64(buffer));
+  if (usage == s->bufferUsage.end() || !(usage->second & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT)) return;
+  auto resource = dev.resources.find(u64(buffer));
+  if (resource == dev.resources.end()) return;
+  VkBufferDeviceAddressInfo info = {VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO, nullptr, buffer};
+  s->places.add(s->bufferAddress(dev.device, &info), {u64(buffer), resource->second.size, memory, offset});
+}
+
 
 void noteDescriptorSetLayout(DeviceState& dev, VkDescriptorSetLayout layout, const VkDescriptorSetLayoutCreateInfo& info) {
   DescriptorBufferDevice* s = state(dev);

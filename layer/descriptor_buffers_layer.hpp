@@ -29,6 +29,10 @@ void destroyDescriptorBuffers(DeviceState& dev);
 // A set layout was created (outside dev.mutex): its binding offsets, where it is for descriptor buffers.
 void noteDescriptorSetLayout(DeviceState& dev, VkDescriptorSetLayout layout, const VkDescriptorSetLayoutCreateInfo& info);
 void noteBufferUsage(DeviceState& dev, VkBuffer buffer, VkBufferUsageFlags usage);  // under dev.mutex
+// Memory bound to a buffer (under dev.mutex): where a buffer whose address
+// a descriptor may hold lies. vkBindBufferMemory[2] here call it; another
+// area that intercepts them too must call it as well.
+void noteBufferMemory(DeviceState& dev, VkBuffer buffer, VkDeviceMemory memory, VkDeviceSize offset);
 // Pipeline layouts, under dev.mutex: whether `info` is a descriptor-buffer
 // layout the layer counts (its counter and padding set layouts in `counter`
 // and `empty`); a created layout's sets remembered.
