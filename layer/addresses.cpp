@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "descriptor_buffers_layer.hpp"
 #include "device_objects.hpp"
 #include "intercepts.hpp"
 #include "state.hpp"
@@ -97,9 +98,11 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory(VkDevice device, VkBuffer buffer
                                                 VkDeviceSize offset) {
   DeviceState* dev = deviceOf(device);
   const VkResult result = dev->d.BindBufferMemory(device, buffer, memory, offset);
-  if (result == VK_SUCCESS && dev->addresses.enabled) {
+  if (result == VK_SUCCESS) {
     std::lock_guard lock(dev->mutex);
-    learn(*dev, u64(buffer), 0, true);
+    if (dev->addresses.enabled) learn(*dev, u64(buffer), 0, true);
+    // Descriptor buffers read descriptors through the memory a buffer is bound to.
+    noteBufferMemory(*dev, buffer, memory, offset);
   }
   return result;
 }
@@ -109,9 +112,12 @@ VKAPI_ATTR VkResult VKAPI_CALL BindBufferMemory2(VkDevice device, uint32_t count
                                                  const VkBindBufferMemoryInfo* infos) {
   DeviceState* dev = deviceOf(device);
   const VkResult result = dev->addresses.bindMemory2By[Which](device, count, infos);
-  if (result == VK_SUCCESS && dev->addresses.enabled) {
+  if (result == VK_SUCCESS) {
     std::lock_guard lock(dev->mutex);
-    for (uint32_t i = 0; i < count; ++i) learn(*dev, u64(infos[i].buffer), 0, true);
+    for (uint32_t i = 0; i < count; ++i) {
+      if (dev->addresses.enabled) learn(*dev, u64(infos[i].buffer), 0, true);
+      noteBufferMemory(*dev, infos[i].buffer, infos[i].memory, infos[i].memoryOffset);
+    }
   }
   return result;
 }

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "descriptor_buffers_layer.hpp"
 #include "device_objects.hpp"
 #include "names.hpp"
 #include "state.hpp"
@@ -203,7 +204,7 @@ void setupCounting(DeviceState& dev) {
   dev.arenaBytes = 64u << 20;
   if (!createBuffer(dev, dev.arenaBytes + dev.regionRange,
                     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                        VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        VK_BUFFER_USAGE_TRANSFER_DST_BIT | counterBufferAddressUsage(dev),
                     0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, dev.counterBuffer, dev.counterMemory)) {
     return refuse("could not allocate the counter buffer");
   }
@@ -217,6 +218,7 @@ void setupCounting(DeviceState& dev) {
   dev.d.UpdateDescriptorSets(dev.device, 1, &write, 0, nullptr);
   o.addressTable = setupAddressTable(dev, dev.counterDescriptorSet, kAddressTableBinding) && dev.addresses.enabled;
   o.addressTableBinding = kAddressTableBinding;
+  setupDescriptorBuffers(dev);
 
   // Counters start at zero.
   auto [queue, family] = *dev.queueFamilies.begin();
@@ -259,6 +261,7 @@ void destroyCounting(DeviceState& dev) {
   dev.freeTimestampPools.clear();
   dev.freeStatisticsPools.clear();
   destroyAddressTable(dev);
+  destroyDescriptorBuffers(dev);
   for (auto& [family, pool] : dev.ownPools) dev.d.DestroyCommandPool(dev.device, pool, nullptr);
   if (dev.counterBuffer != VK_NULL_HANDLE) dev.d.DestroyBuffer(dev.device, dev.counterBuffer, nullptr);
   if (dev.counterMemory != VK_NULL_HANDLE) dev.d.FreeMemory(dev.device, dev.counterMemory, nullptr);
@@ -328,12 +331,13 @@ VkDeviceSize allocateRegion(DeviceState& dev, CommandBufferState& cb, VkDeviceSi
 
 void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointIndex, bool isDispatch, uint32_t draw) {
   auto& bp = cb.bind[bindPointIndex];
-  if (!bp.pipeline || !bp.pipeline->counted) return;
+  if (!bp.pipeline || !bp.pipeline->counted || !descriptorBuffersReady(dev, cb, bindPointIndex)) return;
   const PipelineInfo& pipeline = *bp.pipeline;
   std::vector<Bound> slots(pipeline.slots);
   std::vector<uint64_t> key;
   key.reserve(pipeline.slots * 2);
   std::vector<bool> seen(pipeline.slots, false);
+  std::vector<DescriptorPlace> descriptorAt;
   for (const auto& site : pipeline.sites) {
     if (site.kind == spirv::SiteKind::Invocation) continue;
     for (uint32_t i = 0; i < std::max(site.slotCount, 1u); ++i) {
@@ -341,8 +345,12 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       if (slot >= slots.size() || seen[slot]) continue;
       seen[slot] = true;
       slots[slot] = resolveSlot(dev, cb, bp, pipeline, site, i);
+      // A descriptor buffer's bytes are named at submission: the region is the descriptor's place.
+      const auto at = slots[slot].resource == 0 ? descriptorBufferAddress(dev, cb, bindPointIndex, pipeline, site, i)
+                                                : std::nullopt;
+      if (at) descriptorAt.push_back({slot, at->address, at->type});
       key.push_back(slot);
-      key.push_back(slots[slot].resource);
+      key.push_back(at ? ~at->address : slots[slot].resource);
       key.push_back(uint64_t(slots[slot].format) << 32 | slots[slot].aspect);
     }
   }
@@ -374,6 +382,7 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
       region.bytes = bytes;
       region.pipeline = bp.pipeline;
       region.slotResources = std::move(slots);
+      region.descriptorAt = std::move(descriptorAt);
       region.pass = pass;
       region.draw = draw;
       region.drawCommands = draw == kNoDraw ? 0 : 1;
@@ -384,9 +393,12 @@ void beforeDraw(DeviceState& dev, CommandBufferState& cb, uint32_t bindPointInde
   }
   if (bp.dirty || bp.boundOffset != offset) {
     // The sink (0) holds every slot: shader objects' bands land inside it unshifted.
-    const uint32_t dynamicOffset = uint32_t(offset == 0 ? 0 : offset - pipeline.regionShift);
-    dev.d.CmdBindDescriptorSets(cb.handle, isDispatch ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
-                                pipeline.layout, dev.counterSet, 1, &dev.counterDescriptorSet, 1, &dynamicOffset);
+    const VkDeviceSize shifted = offset == 0 ? 0 : offset - pipeline.regionShift;
+    if (!bindCounterDescriptor(dev, cb, bindPointIndex, pipeline, shifted)) {
+      const uint32_t dynamicOffset = uint32_t(shifted);
+      dev.d.CmdBindDescriptorSets(cb.handle, isDispatch ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_GRAPHICS,
+                                  pipeline.layout, dev.counterSet, 1, &dev.counterDescriptorSet, 1, &dynamicOffset);
+    }
     bp.boundOffset = offset;
     bp.dirty = false;
   }

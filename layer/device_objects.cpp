@@ -27,6 +27,10 @@ bool createBuffer(DeviceState& dev, VkDeviceSize size, VkBufferUsageFlags usage,
   VkMemoryAllocateInfo alloc = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = memoryType(dev, req.memoryTypeBits, required, preferred);
+  // A buffer whose device address is taken needs memory allocated for it (descriptor buffers).
+  VkMemoryAllocateFlagsInfo flags = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO};
+  flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+  if (usage & VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT) alloc.pNext = &flags;
   if (alloc.memoryTypeIndex == UINT32_MAX || dev.d.AllocateMemory(dev.device, &alloc, nullptr, &memory) != VK_SUCCESS) {
     dev.d.DestroyBuffer(dev.device, buffer, nullptr);
     buffer = VK_NULL_HANDLE;

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <utility>
 
+#include "descriptor_buffers_layer.hpp"
 #include "early_tests_twin.hpp"
 #include "intercepts.hpp"
 #include "libraries.hpp"
@@ -278,6 +279,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDevice(VkPhysicalDevice physical, const VkD
   describeDevice(dev.get(), *info, enabled);
   dev->int64Atomics = int64Atomics;
   enableAddresses(*dev, *info);
+  prepareDescriptorBuffers(*dev, *info);
   // A queue the application asked for, for the layer's own set-up work.
   VkQueue setupQueue = VK_NULL_HANDLE;
   uint32_t setupFamily = 0;
@@ -485,7 +487,7 @@ PFN_vkVoidFunction interceptedDevice(std::string_view name) {
   TALLY_INTERCEPT(QueuePresentKHR)
   for (auto intercepted : {interceptedResources, interceptedDescriptors, interceptedPipelines, interceptedCommands,
                            interceptedDraws, interceptedDynamicState, interceptedShaderObjects,
-                           interceptedUncounted, interceptedAddresses}) {
+                           interceptedUncounted, interceptedAddresses, interceptedDescriptorBuffers}) {
     if (PFN_vkVoidFunction f = intercepted(name)) return f;
   }
   return nullptr;

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <utility>
 
+#include "descriptor_buffers_layer.hpp"
 #include "early_tests_twin.hpp"
 #include "intercepts.hpp"
 #include "libraries.hpp"
@@ -51,9 +52,12 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
       if (dev->notes.insert(uncounted).second) log(uncounted);
       ++dev->layoutsRefused;
     } else if (dev->counting && info->setLayoutCount <= dev->counterSet) {
+      // Descriptor buffers: every set of the layout is one, the layer's too.
+      VkDescriptorSetLayout counter = dev->counterSetLayout, empty = dev->emptySetLayout;
+      descriptorBufferLayouts(*dev, *info, counter, empty);
       sets.assign(info->pSetLayouts, info->pSetLayouts + info->setLayoutCount);
-      sets.resize(dev->counterSet, dev->emptySetLayout);
-      sets.push_back(dev->counterSetLayout);
+      sets.resize(dev->counterSet, empty);
+      sets.push_back(counter);
     } else if (dev->counting) {
       const std::string refused = "a pipeline layout uses " + std::to_string(info->setLayoutCount) +
                                   " descriptor sets; the device allows " +
@@ -65,7 +69,12 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
       log(refused);
     }
   }
-  if (sets.empty()) return dev->d.CreatePipelineLayout(device, info, alloc, layout);
+  if (sets.empty()) {
+    VkResult result = dev->d.CreatePipelineLayout(device, info, alloc, layout);
+    std::lock_guard lock(dev->mutex);
+    if (result == VK_SUCCESS) notePipelineLayout(*dev, *layout, *info);
+    return result;
+  }
   VkPipelineLayoutCreateInfo extended = *info;
   extended.setLayoutCount = uint32_t(sets.size());
   extended.pSetLayouts = sets.data();
@@ -86,7 +95,9 @@ VKAPI_ATTR VkResult VKAPI_CALL CreatePipelineLayout(VkDevice device, const VkPip
   }
   std::lock_guard lock(dev->mutex);
   dev->countedLayouts.insert(u64(*layout));
+  notePipelineLayout(*dev, *layout, *info);
   if (twin != VK_NULL_HANDLE) {
+    notePipelineLayout(*dev, twin, *info);
     dev->countedLayouts.insert(u64(twin));
     dev->completeLayouts[u64(*layout)] = twin;
   }
@@ -159,6 +170,9 @@ void instrumentStages(DeviceState& dev, std::vector<VkPipelineShaderStageCreateI
       spirv::InstrumentOptions options = dev.instrumentOptions;
       options.firstSlot = next;
       options.perSite = dev.config.sites;
+      // The descriptor-buffer counter set holds the counters only: addresses
+      // are counted per access width there (docs/layer.md, "Limits").
+      if (isDescriptorBufferLayout(dev, info.layout)) options.addressTable = false;
       if (s == spirv::Stage::Fragment && plan != nullptr && !plan->early()) options.earlyFragmentTests = false;
       // Lavapipe cannot compile the subgroup flush in modules that demote
       // (as gpu::instrumentOptionsFor): those flush per lane there.

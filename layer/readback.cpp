@@ -10,6 +10,7 @@
 #include <fstream>
 #include <unistd.h>
 
+#include "descriptor_buffers_layer.hpp"
 #include "device_objects.hpp"
 #include "names.hpp"
 #include "state.hpp"
@@ -299,6 +300,7 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     Harvest::Part part;
     part.passes = cb.passes;
     part.regions = cb.regions;
+    nameDescriptorBufferSlots(dev, part.regions);
     at = placeRegions(part, at);
     part.timestampsAt = at;
     part.timestamps = cb.timestampsUsed;

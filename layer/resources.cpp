@@ -7,6 +7,7 @@
 #include <string_view>
 #include <utility>
 
+#include "descriptor_buffers_layer.hpp"
 #include "early_tests_twin.hpp"
 #include "intercepts.hpp"
 #include "libraries.hpp"
@@ -57,6 +58,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateBuffer(VkDevice device, const VkBufferCreat
   r.usage = bufferUsageName(info->usage);
   std::lock_guard lock(dev->mutex);
   dev->resources[r.handle] = r;
+  noteBufferUsage(*dev, *buffer, info->usage);
   return result;
 }
 

@@ -26,6 +26,8 @@
 
 namespace tally::layer {
 
+struct DescriptorBufferDevice;  // descriptor_buffers_layer.cpp
+
 // The loader's dispatch table pointer: the same for an instance and its
 // physical devices, and for a device, its queues and command buffers.
 inline void* dispatchKey(const void* handle) { return *static_cast<void* const*>(handle); }
@@ -201,12 +203,20 @@ struct IndirectDraw {
 constexpr uint32_t kNoDraw = UINT32_MAX, kRestDraws = UINT32_MAX - 1;
 constexpr uint32_t kMaxDrawRegions = 1024;
 
+// Descriptor buffers: where the descriptor a slot reads lies, named at each submission.
+struct DescriptorPlace {
+  uint32_t slot = 0;
+  uint64_t address = 0;
+  VkDescriptorType type = VK_DESCRIPTOR_TYPE_MAX_ENUM;
+};
+
 // The resource behind each slot of a region, resolved at the draw.
 struct Region {
   VkDeviceSize offset = 0;
   VkDeviceSize bytes = 0;
   std::shared_ptr<PipelineInfo> pipeline;
   std::vector<Bound> slotResources;  // per slot: what it counts
+  std::vector<DescriptorPlace> descriptorAt;
   uint32_t pass = 0;                 // index into the command buffer's passes
   // Config::draws: the draw command's place in its pass (kRestDraws: shared
   // by the draws beyond the cap, `drawCommands` of them), and the innermost
@@ -415,6 +425,7 @@ struct DeviceState {
   // What the application created.
   std::unordered_map<uint64_t, ShaderInfo> shaders;
   std::set<uint64_t> descriptorBufferLayouts;  // set layouts made for descriptor buffers (uncounted.cpp)
+  std::shared_ptr<DescriptorBufferDevice> descriptorBuffers;  // descriptor_buffers_layer.hpp
   std::set<uint64_t> countedLayouts;  // pipeline layouts extended with the counter set (the handles the application holds)
   // Independent-sets layouts (null between the application's sets and the
   // counter set) -> their twin with empty sets there, for complete pipelines.

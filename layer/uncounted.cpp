@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "descriptor_buffers_layer.hpp"
 #include "names.hpp"
 
 namespace tally::layer {
@@ -30,6 +31,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateDescriptorSetLayout(VkDevice device, const 
                                                          VkDescriptorSetLayout* layout) {
   DeviceState* dev = deviceOf(device);
   VkResult result = dev->d.CreateDescriptorSetLayout(device, info, alloc, layout);
+  if (result == VK_SUCCESS) noteDescriptorSetLayout(*dev, *layout, *info);
   if (result == VK_SUCCESS && (info->flags & VK_DESCRIPTOR_SET_LAYOUT_CREATE_DESCRIPTOR_BUFFER_BIT_EXT) != 0) {
     std::lock_guard lock(dev->mutex);
     dev->descriptorBufferLayouts.insert(u64(*layout));
@@ -74,6 +76,7 @@ VKAPI_ATTR VkResult VKAPI_CALL CreateRayTracingPipelinesKHR(VkDevice device, VkD
 }  // namespace
 
 std::string layoutRefusal(const DeviceState& dev, const VkPipelineLayoutCreateInfo& info) {
+  if (countsDescriptorBuffers(dev)) return "";  // the counter set in the layer's descriptor buffer
   for (uint32_t i = 0; i < info.setLayoutCount; ++i) {
     if (dev.descriptorBufferLayouts.count(u64(info.pSetLayouts[i])) > 0) {
       return "a pipeline layout uses descriptor buffers (VK_EXT_descriptor_buffer): the layer's counter set is "

@@ -8,7 +8,7 @@
 #   tests/gpu/build.sh            -> build-gpu/tests/integration/{tally_exactness_tests,shaders/},
 #                                    build-gpu/tests/renderers/tally_renderer_tests, build-gpu/server/tallyd,
 #                                    build-gpu/layer/ (the Vulkan layer and its manifest),
-#                                    build-gpu/tests/layer/tally_layer_{compute,shader_object}_app
+#                                    build-gpu/tests/layer/tally_layer_{compute,shader_object,descriptor_buffer}_app
 #   BUILD_DIR=out tests/gpu/build.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -19,12 +19,13 @@ cmake -S . -B "$build" -G Ninja \
   -DCMAKE_EXE_LINKER_FLAGS="-static-libstdc++ -static-libgcc" \
   -DCMAKE_MODULE_LINKER_FLAGS="-static-libstdc++ -static-libgcc" >/dev/null
 cmake --build "$build" --target tally_exactness_tests tally_renderer_tests tallyd VkLayer_tally_counters \
-  tally_layer_compute_app tally_layer_shader_object_app -j"$(nproc)"
+  tally_layer_compute_app tally_layer_shader_object_app tally_layer_descriptor_buffer_app -j"$(nproc)"
 
 dir="$build/tests/integration"
 strip "$dir/tally_exactness_tests" "$build/tests/renderers/tally_renderer_tests" "$build/server/tallyd" \
   "$build/layer/libVkLayer_tally_counters.so" "$build/tests/layer/tally_layer_compute_app" \
-  "$build/tests/layer/tally_layer_shader_object_app"
+  "$build/tests/layer/tally_layer_shader_object_app" \
+  "$build/tests/layer/tally_layer_descriptor_buffer_app"
 rm -rf "$dir/shaders"
 cp -r tests/integration/shaders "$dir/shaders"
 # tinygltf, stb, cpp-httplib, SQLite (and what they pull in: OpenSSL, zlib,
