@@ -7,6 +7,7 @@
 #include <string_view>
 #include <utility>
 
+#include "descriptor_buffers_layer.hpp"
 #include "early_tests_twin.hpp"
 #include "intercepts.hpp"
 #include "libraries.hpp"
@@ -51,10 +52,15 @@ VKAPI_ATTR void VKAPI_CALL CmdBindPipeline(VkCommandBuffer cmd, VkPipelineBindPo
   // A counted pipeline always finds the counter set bound: at the sink (never
   // read) until a draw the layer sees binds the draw's region, so a draw
   // command the layer does not intercept runs uncounted, not unbound.
-  if (bp.pipeline && bp.pipeline->counted && dev->counting) {
+  // A descriptor-buffer pipeline's counter set lives in the layer's
+  // descriptor buffer: its sink is set by offset, not bound as a set.
+  if (bp.pipeline && bp.pipeline->counted && dev->counting &&
+      !bindCounterDescriptor(*dev, *cb, point == VK_PIPELINE_BIND_POINT_COMPUTE ? 1 : 0, *bp.pipeline, 0)) {
     const uint32_t sink = 0;
     dev->d.CmdBindDescriptorSets(cmd, point, bp.pipeline->layout, dev->counterSet, 1, &dev->counterDescriptorSet, 1,
                                  &sink);
+    bp.boundOffset = 0;
+  } else if (bp.pipeline && bp.pipeline->counted && dev->counting) {
     bp.boundOffset = 0;
   }
 }

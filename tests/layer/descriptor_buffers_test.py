@@ -132,7 +132,7 @@ def main():
     parser.add_argument("--validation", choices=["auto", "yes", "no"], default="auto",
                         help="auto: stack the Khronos validation layer where it is installed")
     args = parser.parse_args()
-    app = os.path.join(args.build, "tests", "layer", "tally_layer_descriptor_buffer_app")
+    app = os.path.abspath(os.path.join(args.build, "tests", "layer", "tally_layer_descriptor_buffer_app"))
     layer_dir = os.path.abspath(os.path.join(args.build, "layer"))
     plain = subprocess.run([app, "--frames", "2"], capture_output=True, text=True, timeout=120)
     if plain.returncode == NO_EXTENSION:
