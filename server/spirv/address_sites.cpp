@@ -78,25 +78,23 @@ uint32_t Injector::addressSlotFn() {
       op(b, spv::Op::OpSelect, u, {op(b, spv::Op::OpULessThan, boolean, {count, capacity}), count, capacity});
   opNoResult(b, spv::Op::OpStore, {lo, zero});
   opNoResult(b, spv::Op::OpStore, {hi, count});
-  uint32_t header = m_.newId(), test = m_.newId(), body = m_.newId(), cont = m_.newId(), exit = m_.newId();
-  branch(b, header);
-  label(b, header);
-  opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
-  branch(b, test);
-  label(b, test);
-  uint32_t l = op(b, spv::Op::OpLoad, u, {lo}), h = op(b, spv::Op::OpLoad, u, {hi});
-  opNoResult(b, spv::Op::OpBranchConditional, {op(b, spv::Op::OpULessThan, boolean, {l, h}), body, exit});
-  label(b, body);
-  uint32_t mid = op(b, spv::Op::OpShiftRightLogical, u, {op(b, spv::Op::OpIAdd, u, {l, h}), one});
-  uint32_t start = word(b, op(b, spv::Op::OpIAdd, u, {op(b, spv::Op::OpIMul, u, {mid, stride}), one}));
-  uint32_t below = op(b, spv::Op::OpULessThanEqual, boolean, {start, address});
-  opNoResult(b, spv::Op::OpStore,
-             {lo, op(b, spv::Op::OpSelect, u, {below, op(b, spv::Op::OpIAdd, u, {mid, one}), l})});
-  opNoResult(b, spv::Op::OpStore, {hi, op(b, spv::Op::OpSelect, u, {below, h, mid})});
-  branch(b, cont);
-  label(b, cont);
-  branch(b, header);
-  label(b, exit);
+  uint32_t l = 0, h = 0;
+  whileLoop(
+      b,
+      [&](Body& bb) {
+        l = op(bb, spv::Op::OpLoad, u, {lo});
+        h = op(bb, spv::Op::OpLoad, u, {hi});
+        return op(bb, spv::Op::OpULessThan, boolean, {l, h});
+      },
+      [&](Body& bb) {
+        uint32_t mid = op(bb, spv::Op::OpShiftRightLogical, u, {op(bb, spv::Op::OpIAdd, u, {l, h}), one});
+        uint32_t start = word(bb, op(bb, spv::Op::OpIAdd, u, {op(bb, spv::Op::OpIMul, u, {mid, stride}), one}));
+        uint32_t below = op(bb, spv::Op::OpULessThanEqual, boolean, {start, address});
+        opNoResult(bb, spv::Op::OpStore,
+                   {lo, op(bb, spv::Op::OpSelect, u, {below, op(bb, spv::Op::OpIAdd, u, {mid, one}), l})});
+        opNoResult(bb, spv::Op::OpStore, {hi, op(bb, spv::Op::OpSelect, u, {below, h, mid})});
+      },
+      [](Body&) {});
   // The segment before `lo` holds the address if any does.
   uint32_t after = op(b, spv::Op::OpLoad, u, {lo});
   uint32_t any = op(b, spv::Op::OpUGreaterThan, boolean, {after, zero});

@@ -89,21 +89,15 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
     return cached;
   }
   opNoResult(b, spv::Op::OpStore, {counter, first});
-  uint32_t header = m_.newId(), test = m_.newId(), body = m_.newId(), cont = m_.newId(), exit = m_.newId();
-  branch(b, header);
-  label(b, header);
-  opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
-  branch(b, test);
-  label(b, test);
-  uint32_t i = op(b, spv::Op::OpLoad, u, {counter});
-  opNoResult(b, spv::Op::OpBranchConditional, {op(b, spv::Op::OpULessThanEqual, tBool(), {i, last}), body, exit});
-  label(b, body);
-  fnCall(b, fpMarkFn(), {base, cap, i});
-  branch(b, cont);
-  label(b, cont);
-  opNoResult(b, spv::Op::OpStore, {counter, op(b, spv::Op::OpIAdd, u, {i, constantU32(1)})});
-  branch(b, header);
-  label(b, exit);
+  uint32_t i = 0;
+  whileLoop(
+      b,
+      [&](Body& bb) {
+        i = op(bb, spv::Op::OpLoad, u, {counter});
+        return op(bb, spv::Op::OpULessThanEqual, tBool(), {i, last});
+      },
+      [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, i}); },
+      [&](Body& bb) { opNoResult(bb, spv::Op::OpStore, {counter, op(bb, spv::Op::OpIAdd, u, {i, constantU32(1)})}); });
   cached = endFunction(std::move(f), "tally_fp_bytes");
   return cached;
 }

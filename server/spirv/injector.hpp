@@ -140,6 +140,27 @@ class ModuleBuilder {
 
   uint32_t fnCall(Body& b, uint32_t fn, std::vector<uint32_t> args);
 
+  // while (cond(b)) { body(b); step(b); } as a structured loop: cond(b)
+  // emits the test in the loop's test block and returns its bool, which (and
+  // what it loaded) dominates body(b); step(b) is the continue block.
+  template <class Cond, class Do, class Step>
+  void whileLoop(Body& b, Cond&& cond, Do&& body, Step&& step) {
+    uint32_t header = m_.newId(), test = m_.newId(), inside = m_.newId(), cont = m_.newId(), exit = m_.newId();
+    branch(b, header);
+    label(b, header);
+    opNoResult(b, spv::Op::OpLoopMerge, {exit, cont, 0});
+    branch(b, test);
+    label(b, test);
+    opNoResult(b, spv::Op::OpBranchConditional, {cond(b), inside, exit});
+    label(b, inside);
+    body(b);
+    branch(b, cont);
+    label(b, cont);
+    step(b);
+    branch(b, header);
+    label(b, exit);
+  }
+
   // The waterfall loop over the distinct values of the u32 `key` among the
   // active lanes: each pass takes the lanes whose key equals the first
   // active lane's, reduces across exactly those (reduce(b) returns the
