@@ -19,7 +19,7 @@ nlohmann::json framesJson(const DeviceState& dev, std::map<std::string, const Re
   using nlohmann::json;
   json frames = json::array();
   for (const auto& [index, frame] : dev.frames) {
-    if (!frame.closed || frame.pendingHarvests > 0 || frame.leftOut) continue;
+    if (!frame.done()) continue;
     // Later subpasses join their render pass instance's pass; passes that share a label stay apart, numbered.
     const std::vector<PassRecord> merged = distinctPasses(frame.passes);
     json passes = json::array();

@@ -47,7 +47,7 @@ void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
       if (status != VK_NOT_READY) {  // device lost: nothing more will arrive
         dev.notes.insert("a readback failed (VkResult " + std::to_string(int(status)) + ")");
         if (auto f = dev.frames.find(h.frame); f != dev.frames.end() && f->second.pendingHarvests > 0) {
-          --f->second.pendingHarvests;
+          changeFrame(dev, f->second, [](FrameRecord& r) { --r.pendingHarvests; });
         }
         dev.idle.push_back(std::move(*it));
         it = dev.pending.erase(it);
@@ -58,7 +58,7 @@ void collect(DeviceState& dev, std::optional<uint64_t> waitFrame) {
     }
     processHarvest(dev, h);
     if (auto f = dev.frames.find(h.frame); f != dev.frames.end() && f->second.pendingHarvests > 0) {
-      --f->second.pendingHarvests;
+      changeFrame(dev, f->second, [](FrameRecord& r) { --r.pendingHarvests; });
     }
     h.parts.clear();
     dev.idle.push_back(std::move(*it));
@@ -221,7 +221,7 @@ void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> 
     auto& frame = dev.frames[dev.frame];
     frame.index = dev.frame;
     frame.submissions += 1;
-    frame.pendingHarvests += 1;
+    changeFrame(dev, frame, [](FrameRecord& r) { ++r.pendingHarvests; });
   }
 }
 
@@ -241,7 +241,7 @@ void leaveOut(DeviceState& dev, uint64_t index) {
   auto& frame = dev.frames[index];
   frame.index = index;
   if (frame.leftOut) return;
-  frame.leftOut = true;
+  changeFrame(dev, frame, [](FrameRecord& r) { r.leftOut = true; });
   ++dev.framesLeftOut;
 }
 
@@ -367,7 +367,9 @@ VkQueryPool takeQueryPool(DeviceState& dev, bool statistics) {
 
 void endFrame(DeviceState& dev) {
   if (!dev.counting) return;
-  if (auto f = dev.frames.find(dev.frame); f != dev.frames.end()) f->second.closed = true;
+  if (auto f = dev.frames.find(dev.frame); f != dev.frames.end()) {
+    changeFrame(dev, f->second, [](FrameRecord& r) { r.closed = true; });
+  }
   ++dev.frame;
   dev.frameWorkSubmits = 0;
   pollReadbacks(dev);
@@ -377,7 +379,8 @@ void finish(DeviceState& dev, bool complete) {
   if (!dev.counting && dev.config.output.empty()) return;
   collect(dev, UINT64_MAX);
   if (auto f = dev.frames.find(dev.frame); f != dev.frames.end() && dev.config.frameSubmits == 0) {
-    f->second.closed = true;  // the last frame, cut short by the application's end
+    // the last frame, cut short by the application's end
+    changeFrame(dev, f->second, [](FrameRecord& r) { r.closed = true; });
   }
   if (dev.written) return;
   writeOutput(dev, complete || framesCounted(dev) >= dev.config.frames);

@@ -55,10 +55,6 @@ void assignOutput(DeviceState& dev) {
   dev.config.output = path.string() + ".device" + std::to_string(dev.index) + extension;
 }
 
-uint32_t framesCounted(const DeviceState& dev) {
-  uint32_t n = 0;
-  for (const auto& [index, f] : dev.frames) n += f.closed && f.pendingHarvests == 0 && !f.leftOut ? 1 : 0;
-  return n;
-}
+uint32_t framesCounted(const DeviceState& dev) { return dev.framesDone; }
 
 }  // namespace tally::layer
