@@ -9,10 +9,9 @@
 //   bits it set in them (Private registers). A loop over a texture, or a
 //   bilinear filter's four texels, mostly lands in blocks marked already;
 //   those then cost two compares instead of a load from the bitmap.
-// - The subgroup: lanes usually touch the same block. A waterfall loop takes
-//   the word of the first active lane, ORs the bits of the lanes marking
-//   that word, and one of them loads and, where a bit is new, sets them all;
-//   the others leave with it, and the loop goes on with the lanes left.
+// - The subgroup: lanes usually touch the same block. The lanes marking the
+//   first active lane's word OR their bits, and one of them loads and, where
+//   a bit is new, sets them all; lanes marking other words set their own.
 
 #include "spirv/injector.hpp"
 
@@ -79,16 +78,26 @@ void Injector::fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit) {
   });
 }
 
-// The waterfall over the words of the active lanes (count_sites.cpp's over
-// slots, with bits ORed instead of counts added).
+// One round of a waterfall: the lanes marking the first active lane's word
+// OR their bits, and that lane (the one elected) sets them all; lanes
+// marking other words set their own bit as without the subgroup. Where the
+// lanes share a word (a full-screen pass: neighbouring pixels in one block)
+// the word gets one atomic instead of one per lane, for a fixed cost; the
+// full waterfall, a loop over every distinct word, cost more than it saved
+// (docs/measurement.md, "What a mark skips").
 void Injector::fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit) {
-  uint32_t u = tU32(), scope = constantU32(kScopeSubgroup);
+  uint32_t u = tU32(), bo = tBool(), scope = constantU32(kScopeSubgroup);
   // Helper lanes take part in subgroup operations, but an atomic from one
   // has no effect: one elected would lose the others' bits.
   uint32_t end = fpStage_ == Stage::Fragment ? skipHelperLanes(b, fpStage_) : 0;
-  waterfall(
-      b, word, [&](Body& bb) { return op(bb, spv::Op::OpGroupNonUniformBitwiseOr, u, {scope, kGroupReduce, bit}); },
-      [&](Body& bb, uint32_t first, uint32_t bits) { fpSetBits(bb, first, bits, false); });
+  uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, u, {scope, word});
+  uint32_t same = op(b, spv::Op::OpIEqual, bo, {word, first});
+  uint32_t mine = op(b, spv::Op::OpSelect, u, {same, bit, constantU32(0)});
+  uint32_t bits = op(b, spv::Op::OpGroupNonUniformBitwiseOr, u, {scope, kGroupReduce, mine});
+  // Elect and BroadcastFirst both pick the active lane of lowest id.
+  uint32_t elected = op(b, spv::Op::OpGroupNonUniformElect, bo, {scope});
+  when(b, elected, [&](Body& bb) { fpSetBits(bb, first, bits, false); });
+  when(b, op(b, spv::Op::OpLogicalNot, bo, {same}), [&](Body& bb) { fpSetBits(bb, word, bit, true); });
   if (end != 0) {
     branch(b, end);
     label(b, end);
