@@ -347,11 +347,43 @@ std::vector<VkCommandBuffer> collectBuffers(uint32_t count, const VkSubmitInfo* 
   return out;
 }
 
+// A submission without a fence of its own carries the readback in its last
+// batch, with the readback's fence: one submission where there were two, for
+// applications that never pass a fence (zink waits on timeline semaphores).
+// The batch's signal semaphores then signal after the readback's copies, a
+// few microseconds later. A batch whose extensions count its command buffers
+// (device groups) or that is protected keeps the readback to itself.
+bool readbackRides(VkFence fence, uint32_t count, const void* next) {
+  if (fence != VK_NULL_HANDLE || count == 0) return false;
+  for (auto* s = static_cast<const VkBaseInStructure*>(next); s != nullptr; s = s->pNext) {
+    if (s->sType != VK_STRUCTURE_TYPE_TIMELINE_SEMAPHORE_SUBMIT_INFO) return false;
+  }
+  return true;
+}
+
 VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit(VkQueue queue, uint32_t count, const VkSubmitInfo* submits, VkFence fence) {
   DeviceState* dev = deviceOf(queue);
   if (dev->addresses.enabled) {
     std::lock_guard lock(dev->mutex);
     uploadAddresses(*dev, queue);
+  }
+  if (dev->counting && readbackRides(fence, count, submits[count - 1].pNext)) {
+    std::lock_guard lock(dev->mutex);
+    PreparedSubmit prepared = prepareSubmit(*dev, queue, collectBuffers(count, submits));
+    if (prepared.readback == nullptr) {
+      VkResult result = dev->d.QueueSubmit(queue, count, submits, fence);
+      if (result == VK_SUCCESS) finishSubmit(*dev, queue, prepared, VK_SUCCESS);
+      return result;
+    }
+    std::vector<VkSubmitInfo> batches(submits, submits + count);
+    VkSubmitInfo& last = batches.back();
+    std::vector<VkCommandBuffer> buffers(last.pCommandBuffers, last.pCommandBuffers + last.commandBufferCount);
+    buffers.push_back(prepared.readback->cmd);
+    last.commandBufferCount = uint32_t(buffers.size());
+    last.pCommandBuffers = buffers.data();
+    VkResult result = dev->d.QueueSubmit(queue, count, batches.data(), prepared.readback->fence);
+    finishSubmit(*dev, queue, prepared, result == VK_SUCCESS ? VK_SUCCESS : VK_ERROR_UNKNOWN);
+    return result;
   }
   VkResult result = dev->d.QueueSubmit(queue, count, submits, fence);
   if (result != VK_SUCCESS) return result;
@@ -366,14 +398,34 @@ VKAPI_ATTR VkResult VKAPI_CALL QueueSubmit2(VkQueue queue, uint32_t count, const
     std::lock_guard lock(dev->mutex);
     uploadAddresses(*dev, queue);
   }
-  VkResult result = dev->d.QueueSubmit2(queue, count, submits, fence);
-  if (result != VK_SUCCESS) return result;
   std::vector<VkCommandBuffer> buffers;
   for (uint32_t i = 0; i < count; ++i) {
     for (uint32_t c = 0; c < submits[i].commandBufferInfoCount; ++c) {
       buffers.push_back(submits[i].pCommandBufferInfos[c].commandBuffer);
     }
   }
+  // VkSubmitInfo2 carries timeline values in its semaphore infos; a
+  // protected batch (flags) keeps the readback to itself.
+  if (dev->counting && readbackRides(fence, count, submits[count - 1].pNext) && submits[count - 1].flags == 0) {
+    std::lock_guard lock(dev->mutex);
+    PreparedSubmit prepared = prepareSubmit(*dev, queue, buffers);
+    if (prepared.readback == nullptr) {
+      VkResult result = dev->d.QueueSubmit2(queue, count, submits, fence);
+      if (result == VK_SUCCESS) finishSubmit(*dev, queue, prepared, VK_SUCCESS);
+      return result;
+    }
+    std::vector<VkSubmitInfo2> batches(submits, submits + count);
+    VkSubmitInfo2& last = batches.back();
+    std::vector<VkCommandBufferSubmitInfo> infos(last.pCommandBufferInfos, last.pCommandBufferInfos + last.commandBufferInfoCount);
+    infos.push_back({VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, nullptr, prepared.readback->cmd, 0});
+    last.commandBufferInfoCount = uint32_t(infos.size());
+    last.pCommandBufferInfos = infos.data();
+    VkResult result = dev->d.QueueSubmit2(queue, count, batches.data(), prepared.readback->fence);
+    finishSubmit(*dev, queue, prepared, result == VK_SUCCESS ? VK_SUCCESS : VK_ERROR_UNKNOWN);
+    return result;
+  }
+  VkResult result = dev->d.QueueSubmit2(queue, count, submits, fence);
+  if (result != VK_SUCCESS) return result;
   std::lock_guard lock(dev->mutex);
   afterSubmit(*dev, queue, buffers);
   return result;

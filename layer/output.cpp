@@ -111,6 +111,7 @@ nlohmann::json outputJson(DeviceState& dev, bool complete) {
         {"frames_counted", framesCounted(dev)},
         {"frames_left_out", dev.framesLeftOut},
         {"readbacks", dev.nextHarvest},
+        {"readbacks_riding", dev.readbacksRiding},
         {"readback_waits", dev.readbackWaits},
         {"query_pools", dev.queryPoolsCreated},
         {"pipeline_creation_ms",

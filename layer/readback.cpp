@@ -144,16 +144,17 @@ Harvest* takeHarvest(DeviceState& dev, VkDeviceSize bytes, uint32_t family) {
 
 namespace {
 
-// One more submission after the application's: it copies the submitted
+// The readback of a submission: a command buffer that copies the submitted
 // command buffers' counter regions and query results into a host-visible
-// buffer of the ring, zeroes the regions and signals the harvest's fence.
-void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> parts,
-                    const std::vector<const CommandBufferState*>& sources, VkDeviceSize at) {
+// buffer of the ring and zeroes the regions; its harvest's fence signals
+// when it has run. Recorded here, submitted by sendReadback.
+Harvest* recordReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> parts,
+                        const std::vector<const CommandBufferState*>& sources, VkDeviceSize at) {
   auto family = dev.queueFamilies.find(queue);
   Harvest* h = family == dev.queueFamilies.end() ? nullptr : takeHarvest(dev, std::max<VkDeviceSize>(at, 8), family->second);
   if (h == nullptr) {
     dev.notes.insert("a submission's counters could not be read back (no readback buffer)");
-    return;
+    return nullptr;
   }
   h->frame = dev.frame;
   h->serial = dev.nextHarvest++;
@@ -207,16 +208,22 @@ void submitReadback(DeviceState& dev, VkQueue queue, std::vector<Harvest::Part> 
     if (parts[p].statistics > 0) h->queryPools.push_back(sources[p]->statisticsPool);
     if (!parts[p].indirectDraws.empty()) h->indirectBuffers.push_back(sources[p]->indirectBuffer);
   }
-  VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  submit.commandBufferCount = 1;
-  submit.pCommandBuffers = &h->cmd;
-  if (dev.d.QueueSubmit(queue, 1, &submit, h->fence) != VK_SUCCESS) {
+  h->parts = std::move(parts);
+  return h;
+}
+
+// After the readback was submitted (`submitted`), or its submission failed.
+void readbackSent(DeviceState& dev, Harvest* h, bool submitted) {
+  if (!submitted) {
     dev.notes.insert("a readback submission failed");
-    dev.idle.push_back(std::move(dev.pending.back()));
-    dev.pending.pop_back();
+    auto it = std::find_if(dev.pending.begin(), dev.pending.end(), [&](const auto& p) { return p.get() == h; });
+    if (it != dev.pending.end()) {
+      (*it)->parts.clear();
+      dev.idle.push_back(std::move(*it));
+      dev.pending.erase(it);
+    }
     return;
   }
-  h->parts = std::move(parts);
   if (inWindow(dev, dev.frame)) {
     auto& frame = dev.frames[dev.frame];
     frame.index = dev.frame;
@@ -281,8 +288,9 @@ void afterIdle(DeviceState& dev) {
   if (dev.counting) pollReadbacks(dev);
 }
 
-void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
-  if (!dev.counting) return;
+PreparedSubmit prepareSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
+  PreparedSubmit prepared;
+  if (!dev.counting) return prepared;
   pollReadbacks(dev);
   std::vector<Harvest::Part> parts;
   VkDeviceSize at = 0;
@@ -317,9 +325,31 @@ void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuf
     sources.push_back(&cb);
   }
   if (uncounted && inWindow(dev, dev.frame)) leaveOut(dev, dev.frame);
-  if (!parts.empty()) submitReadback(dev, queue, std::move(parts), sources, at);
+  if (!parts.empty()) prepared.readback = recordReadback(dev, queue, std::move(parts), sources, at);
+  prepared.work = work;
+  return prepared;
+}
+
+void finishSubmit(DeviceState& dev, VkQueue queue, const PreparedSubmit& prepared, VkResult rodeAlong) {
+  if (!dev.counting) return;
+  if (prepared.readback != nullptr) {
+    bool sent = rodeAlong == VK_SUCCESS;
+    if (sent) ++dev.readbacksRiding;
+    if (rodeAlong == VK_NOT_READY) {  // not in the application's submission: one of its own
+      VkSubmitInfo submit = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+      submit.commandBufferCount = 1;
+      submit.pCommandBuffers = &prepared.readback->cmd;
+      sent = dev.d.QueueSubmit(queue, 1, &submit, prepared.readback->fence) == VK_SUCCESS;
+    }
+    readbackSent(dev, prepared.readback, sent);
+  }
+  if (rodeAlong != VK_SUCCESS && rodeAlong != VK_NOT_READY) return;  // the application's submission failed
   // Submissions without a draw, a dispatch or a pass (uploads) are no frame's work.
-  if (work && dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
+  if (prepared.work && dev.config.frameSubmits > 0 && ++dev.frameWorkSubmits >= dev.config.frameSubmits) endFrame(dev);
+}
+
+void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted) {
+  finishSubmit(dev, queue, prepareSubmit(dev, queue, submitted), VK_NOT_READY);
 }
 
 

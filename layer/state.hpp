@@ -471,6 +471,7 @@ struct DeviceState {
   std::map<uint64_t, FrameRecord> frames;
   uint32_t framesLeftOut = 0;     // frames of the window that ran uncounted work: each extends it by one
   uint32_t framesDone = 0;        // frames whose done() holds, kept by changeFrame
+  uint64_t readbacksRiding = 0;   // readbacks submitted in the application's own submission (QueueSubmit)
   uint64_t readbackWaits = 0;     // blocking waits for a readback before the end (ring full, indirect buffer freed)
   uint64_t queryPoolsCreated = 0;  // the rest of the command buffers' pools are used again
   double pipelineMsApplication = 0, pipelineMsInstrumented = 0;  // creation time: the application's, the twins'
@@ -497,6 +498,16 @@ void releaseRegions(DeviceState& dev, CommandBufferState& cb);
 
 // readback.cpp: readbacks after submissions, frames, the output file.
 void afterSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted);
+// afterSubmit in two steps, for a readback that rides in the application's
+// own submission (layer.cpp, QueueSubmit): prepareSubmit records it (after
+// the bookkeeping of the submitted command buffers); finishSubmit takes the
+// result of the submission it rode in, or VK_NOT_READY to submit it alone.
+struct PreparedSubmit {
+  Harvest* readback = nullptr;  // recorded, not yet submitted
+  bool work = false;            // the submission drew or dispatched
+};
+PreparedSubmit prepareSubmit(DeviceState& dev, VkQueue queue, const std::vector<VkCommandBuffer>& submitted);
+void finishSubmit(DeviceState& dev, VkQueue queue, const PreparedSubmit& prepared, VkResult rodeAlong);
 void afterIdle(DeviceState& dev);  // the device or a queue is idle: reads what arrived
 void endFrame(DeviceState& dev);
 void finish(DeviceState& dev, bool complete);  // waits for every harvest and writes the output

@@ -15,6 +15,11 @@ resolve, on lavapipe:
   debug-names       compute_app calls vkSetDebugUtilsObjectNameEXT without
                     enabling VK_EXT_debug_utils: the validation layer reports
                     it as often alone as with this layer above or below it.
+  submissions       graphics_app submitting with vkQueueSubmit and
+                    vkQueueSubmit2, with a fence and without one: the same
+                    lines in every frame, as W x H fragments dictate; without
+                    a fence every readback rides in the application's own
+                    submission, with one none does.
   libplacebo        ffmpeg's libplacebo filter, which pushes its planes with
                     vkCmdPushDescriptorSetWithTemplateKHR: every line named by
                     a resource, none by its set and binding.
@@ -160,6 +165,28 @@ def case_indirect(build, tmp):
           (indices, spec))
 
 
+def case_submissions(build, tmp):
+    reference = None
+    for how in ("fence", "none", "submit2-fence", "submit2-none"):
+        out, image = graphics(build, tmp, "submit-" + how, "--submit", how)
+        passes = draw_passes(out, how)
+        if len(passes) != 2:  # layer_env's window
+            fail("%s: %d frames counted, expected 2" % (how, len(passes)))
+        for p in passes:
+            check_quad(p, "--submit " + how)
+        if reference is None:
+            reference = image
+        elif image != reference:
+            fail("%s: the image differs from the fenced submission's (%s, %s)" % (how, image, reference))
+        layer = out["layer"]
+        riding = 0 if how.endswith("fence") else layer["readbacks"]
+        if layer["readbacks"] < 2 or layer["readbacks_riding"] != riding:
+            fail("%s: %d of %d readbacks rode in the application's submissions, expected %d" %
+                 (how, layer["readbacks_riding"], layer["readbacks"], riding))
+    print("submissions: vkQueueSubmit and vkQueueSubmit2, fenced or not, count %d fragments a frame alike" %
+          (WIDTH * HEIGHT))
+
+
 def loader_stack(stderr):
     """The device's layers, application side first, as the loader reports them."""
     stack = stderr.split("vkCreateDevice layer callstack setup to:")[-1]
@@ -240,13 +267,14 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--build", required=True)
     parser.add_argument("--case", required=True,
-                        choices=["push-descriptors", "pipeline-library", "indirect", "debug-names", "libplacebo"])
+                        choices=["push-descriptors", "pipeline-library", "indirect", "debug-names", "libplacebo",
+                                 "submissions"])
     args = parser.parse_args()
     build = os.path.abspath(args.build)
     with tempfile.TemporaryDirectory(prefix="tally-layer-features-") as tmp:
         {"push-descriptors": case_push_descriptors, "pipeline-library": case_pipeline_library,
          "indirect": case_indirect, "debug-names": case_debug_names,
-         "libplacebo": case_libplacebo}[args.case](build, tmp)
+         "libplacebo": case_libplacebo, "submissions": case_submissions}[args.case](build, tmp)
 
 
 if __name__ == "__main__":

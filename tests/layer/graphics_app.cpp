@@ -133,6 +133,7 @@ Context createContext() {
   enabled.features.multiDrawIndirect = VK_TRUE;
   v13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES, &gpl};
   v13.dynamicRendering = VK_TRUE;
+  v13.synchronization2 = v13.synchronization2 ? VK_TRUE : VK_FALSE;  // for --submit submit2-*
   gpl.graphicsPipelineLibrary = VK_TRUE;
   const char* extensions[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME, VK_KHR_PIPELINE_LIBRARY_EXTENSION_NAME,
                               VK_EXT_GRAPHICS_PIPELINE_LIBRARY_EXTENSION_NAME};
@@ -263,6 +264,33 @@ VkPipelineLayout pipelineLayout(const Context& c, std::vector<VkDescriptorSetLay
   VkPipelineLayout layout;
   check(vkCreatePipelineLayout(c.device, &info, nullptr, &layout), "vkCreatePipelineLayout");
   return layout;
+}
+
+// One submission of `cmd`, as --submit says: vkQueueSubmit or
+// vkQueueSubmit2, with a fence waited for, or with none and the queue waited
+// for (as applications that wait on semaphores do: the layer's readback then
+// rides in the submission).
+void submit(const Context& c, const std::string& how, VkCommandBuffer cmd, VkFence fence) {
+  const bool fenced = how == "fence" || how == "submit2-fence";
+  if (how == "fence" || how == "none") {
+    VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    info.commandBufferCount = 1;
+    info.pCommandBuffers = &cmd;
+    check(vkQueueSubmit(c.queue, 1, &info, fenced ? fence : VK_NULL_HANDLE), "vkQueueSubmit");
+  } else {
+    VkCommandBufferSubmitInfo buffer = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
+    buffer.commandBuffer = cmd;
+    VkSubmitInfo2 info = {VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
+    info.commandBufferInfoCount = 1;
+    info.pCommandBufferInfos = &buffer;
+    check(vkQueueSubmit2(c.queue, 1, &info, fenced ? fence : VK_NULL_HANDLE), "vkQueueSubmit2");
+  }
+  if (fenced) {
+    check(vkWaitForFences(c.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    vkResetFences(c.device, 1, &fence);
+  } else {
+    check(vkQueueWaitIdle(c.queue), "vkQueueWaitIdle");
+  }
 }
 
 }  // namespace
@@ -556,12 +584,7 @@ int main(int argc, char** argv) {
     if (frame == 0) upload(cmd, scene);
     else recordFrame(c, o, scene, bindings, cmd);
     check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
-    VkSubmitInfo info = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
-    info.commandBufferCount = 1;
-    info.pCommandBuffers = &cmd;
-    check(vkQueueSubmit(c.queue, 1, &info, fence), "vkQueueSubmit");
-    check(vkWaitForFences(c.device, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
-    vkResetFences(c.device, 1, &fence);
+    submit(c, o.submit, cmd, fence);
   }
   // FNV-1a of the last frame's pixels.
   uint64_t hash = 1469598103934665603ull;

@@ -11,7 +11,7 @@
 
 struct Options {
   uint32_t frames = 3, width = 96, height = 64, pushSet = 0;
-  std::string pipeline = "monolithic", descriptors = "sets", draw = "direct";
+  std::string pipeline = "monolithic", descriptors = "sets", draw = "direct", submit = "fence";
   std::vector<std::pair<uint32_t, uint32_t>> indirect = {{6, 1}, {3, 2}};  // (indexCount, instanceCount)
 };
 

@@ -31,6 +31,7 @@ Options parseOptions(int argc, char** argv) {
     else if (flag == "--pipeline") o.pipeline = value;
     else if (flag == "--descriptors") o.descriptors = value;
     else if (flag == "--draw") o.draw = value;
+    else if (flag == "--submit") o.submit = value;
     else if (flag == "--indirect-draws") {
       o.indirect.clear();
       for (size_t at = 0; at < value.size();) {
@@ -54,6 +55,9 @@ Options parseOptions(int argc, char** argv) {
   }
   if (o.draw != "direct" && o.draw != "indirect" && o.draw != "indirect-count") {
     refuse("--draw: direct, indirect or indirect-count");
+  }
+  if (o.submit != "fence" && o.submit != "none" && o.submit != "submit2-fence" && o.submit != "submit2-none") {
+    refuse("--submit: fence, none, submit2-fence or submit2-none");
   }
   return o;
 }
