@@ -12,15 +12,25 @@ namespace tally::spirv {
 // Executed arithmetic: at the top of every block of every function an
 // accumulating entry point reaches, the block's operations (arith.hpp)
 // added to one register, flushed by each stage into the arithmetic slot.
+// Blocks that run exactly once in every invocation (as sites are derived:
+// accumulate.cpp) add nothing in the shader: where the module has one
+// accumulating entry point with an invocation counter, their operations are
+// derived from it (Instrumented::derived, times = their sum), and only the
+// blocks of branches and loops keep a register add.
 void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
   const uint32_t slot = static_cast<uint32_t>(result_.arithmeticSlot);
   const auto weights = arithmeticPerInstruction(m_);
   std::map<uint32_t, int> byId;
   for (size_t f = 0; f < m_.functions.size(); ++f) byId[m_.functions[f].id()] = static_cast<int>(f);
   std::set<int> reached;
+  std::vector<uint32_t> accumulating;  // entry indices
+  for (uint32_t e = 0; e < scan.entryPoints.size(); ++e) {
+    if (accumulates(scan.entryPoints[e].stage)) accumulating.push_back(e);
+  }
+  const bool derive = accumulating.size() == 1 && invocationSlot_.count(accumulating.front()) != 0;
+  uint64_t derivedOps = 0;
   for (const auto& ep : scan.entryPoints) {
     if (!accumulates(ep.stage)) continue;
-    flushSlots_[ep.stage].scalars.insert(slot);
     std::vector<int> work = {ep.functionIndex};
     while (!work.empty()) {
       int f = work.back();
@@ -33,7 +43,14 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
       }
     }
   }
-  const uint32_t acc = scalarAccumulator(slot);
+  // The register, and each stage's flush of it, only where a block adds to it.
+  uint32_t acc = 0;
+  auto accumulator = [&] {
+    if (acc != 0) return acc;
+    for (uint32_t e : accumulating) flushSlots_[scan.entryPoints[e].stage].scalars.insert(slot);
+    acc = scalarAccumulator(slot);
+    return acc;
+  };
   for (int f : reached) {
     const auto& insts = m_.functions[f].insts;
     for (size_t at = 0; at < insts.size(); ++at) {
@@ -42,16 +59,30 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
       size_t end = at + 1;
       for (; end < insts.size() && insts[end].opcode() != spv::Op::OpLabel; ++end) ops += weights[f][end];
       if (ops == 0) continue;
+      if (derive) {
+        FoundSite block;  // a probe at the block's label: where a site there would run
+        block.function = f;
+        block.instruction = at;
+        block.entryIndex = accumulating.front();
+        if (runsExactlyOnce(block, scan.entryPoints[block.entryIndex])) {
+          derivedOps += ops;
+          continue;
+        }
+      }
       size_t into = at + 1;
       while (into < end && (insts[into].opcode() == spv::Op::OpPhi || insts[into].opcode() == spv::Op::OpVariable ||
                             insts[into].opcode() == spv::Op::OpLine || insts[into].opcode() == spv::Op::OpNoLine)) {
         ++into;
       }
       Body b{before[f][into]};
-      uint32_t v = op(b, spv::Op::OpLoad, tU32(), {acc});
+      uint32_t v = op(b, spv::Op::OpLoad, tU32(), {accumulator()});
       uint32_t w = op(b, spv::Op::OpIAdd, tU32(), {v, constantU32(static_cast<uint32_t>(std::min<uint64_t>(ops, 0xffffffffu)))});
       opNoResult(b, spv::Op::OpStore, {acc, w});
     }
+  }
+  if (derivedOps > 0) {
+    result_.derived.push_back({invocationSlot_.at(accumulating.front()), slot,
+                               static_cast<uint32_t>(std::min<uint64_t>(derivedOps, 0xffffffffu))});
   }
 }
 

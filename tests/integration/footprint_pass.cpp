@@ -64,6 +64,7 @@ Result<PassResult> FootprintPass::run(const PassDesc& d) {
     options.footprintDedup = d.dedup;
     options.footprintBlockBytes = d.blockBytes;
     options.countArithmetic = d.countArithmetic;
+    options.deriveOnceSites = d.deriveOnceSites;
     if (auto why = gpu::unsupportedReason(ctx_, s, options); !why.empty()) return makeError(why);
     auto r = spirv::instrument(w, options);
     if (!r) return makeError(r.error());
@@ -73,6 +74,7 @@ Result<PassResult> FootprintPass::run(const PassDesc& d) {
     if (r->footprintDedup) out.dedup.push_back(*r->footprintDedup);
     layouts.push_back(r->layout());
     if (r->arithmeticSlot >= 0) arithmeticSlots.push_back(uint32_t(r->arithmeticSlot));
+    out.derived += r->derived.size();
     slots += r->layout().reserved();
   }
   counterSet_ = gpu::instrumentOptionsFor(ctx_, {}).set;

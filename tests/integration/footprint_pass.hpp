@@ -38,6 +38,7 @@ struct PassDesc {
   std::vector<VkDeviceSize> buffers;       // then: storage buffers of these sizes
   uint32_t blockBytes = 64;
   bool countArithmetic = false;  // InstrumentOptions::countArithmetic
+  bool deriveOnceSites = true;   // InstrumentOptions::deriveOnceSites
   spirv::Mode mode{spirv::CountMode::Accumulate};
   std::optional<spirv::FootprintDedup> dedup;  // InstrumentOptions::footprintDedup
 };
@@ -51,6 +52,7 @@ struct PassResult {
   std::map<std::string, Line> lines;
   std::vector<std::string> notes;
   uint64_t arithmetic = 0;  // the arithmetic slots, summed (countArithmetic)
+  size_t derived = 0;       // the modules' derived counts (Instrumented::derived)
   std::vector<spirv::FootprintDedup> dedup;  // what each module's marks skip (Instrumented::footprintDedup)
 };
 

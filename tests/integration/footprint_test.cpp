@@ -198,6 +198,59 @@ TEST(ExecutedArithmetic, LoopTripsTimesTheBody) {
   EXPECT_EQ(counted[1] - counted[0], uint64_t(trips[1] - trips[0]) * 3 * 32 * 32);
 }
 
+// The blocks that run once in every invocation are derived from the
+// invocation count, the rest counted by a register: the same total as
+// counting every block, in a fragment shader and a compute one, with a
+// branch taken by some invocations only, a loop, and a function called once.
+TEST(ExecutedArithmetic, DerivedBlocksCountAsCountedOnes) {
+  std::string error;
+  const gpu::Context* ctx = testContext(&error);
+  if (ctx == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device: " << error);
+  const std::string body =
+      "float shade(float v) { return v * 0.25 + 1.0; }\n"
+      "float work(uint i) {\n"
+      "  float x = float(i) * 2.0 + 1.0;\n"
+      "  if ((i % 3u) == 0u) x = x * x - 3.0;\n"
+      "  for (uint k = 0u; k < (i % 5u); ++k) x = x * 1.5 + float(k);\n"
+      "  return shade(x) / 7.0;\n"
+      "}\n";
+  for (bool compute : {false, true}) {
+    PassDesc d;
+    d.compute = compute;
+    d.width = d.height = 32;
+    d.buffers = {32 * 32 * 4};
+    d.textures = {};
+    d.source = compute ? "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n"
+                         "layout(set = 0, binding = 0) writeonly buffer Out { float data[]; } dst;\n" + body +
+                         "void main() {\n"
+                         "  uint i = gl_GlobalInvocationID.y * 32u + gl_GlobalInvocationID.x;\n"
+                         "  dst.data[i] = work(i);\n"
+                         "}\n"
+                       : "#version 450\n"
+                         "layout(set = 0, binding = 0) writeonly buffer Out { float data[]; } dst;\n"
+                         "layout(location = 0) out vec4 color;\n" + body +
+                         "void main() {\n"
+                         "  uint i = uint(gl_FragCoord.y) * 32u + uint(gl_FragCoord.x);\n"
+                         "  color = vec4(work(i));\n"
+                         "}\n";
+    d.countArithmetic = true;
+    uint64_t counted[2] = {0, 0};
+    size_t derived[2] = {0, 0};
+    for (int derive = 0; derive < 2; ++derive) {
+      d.deriveOnceSites = derive == 1;
+      auto r = FootprintPass(*ctx).run(d);
+      ASSERT_TRUE(r.ok()) << r.error();
+      counted[derive] = r->arithmetic;
+      derived[derive] = r->derived;
+    }
+    SCOPED_TRACE(compute ? "compute" : "fragment");
+    EXPECT_EQ(derived[0], 0u);
+    EXPECT_GT(derived[1], 0u) << "the straight-line blocks are derived";
+    EXPECT_GT(counted[0], uint64_t(32 * 32) * 4) << "at least the straight-line operations";
+    EXPECT_EQ(counted[1], counted[0]);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(BlockBytes, Footprint, ::testing::Values(32u, 64u, 128u),
                          [](const ::testing::TestParamInfo<uint32_t>& block) {
                            return std::to_string(block.param) + "B";
