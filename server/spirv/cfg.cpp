@@ -30,12 +30,7 @@ void successors(const Instruction& inst, const DefIndex& defs, std::vector<uint3
   }
 }
 
-// A function's blocks, numbered in order, with their successors.
-struct BlockGraph {
-  std::vector<int> blockAt;             // per instruction, its block (-1 before the first label)
-  std::vector<std::vector<int>> next;   // per block, its successors
-  std::vector<bool> returns;            // per block, whether it ends in OpReturn or OpReturnValue
-};
+}  // namespace
 
 BlockGraph blockGraph(const Function& f, const DefIndex& defs) {
   const auto& insts = f.insts;
@@ -64,7 +59,6 @@ BlockGraph blockGraph(const Function& f, const DefIndex& defs) {
   return g;
 }
 
-}  // namespace
 
 std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs) {
   const auto& insts = f.insts;
