@@ -212,6 +212,42 @@ std::vector<std::pair<int, size_t>> storesIn(const FunctionGraph& fg, const std:
   return out;
 }
 
+// Whether pointer parameter `param` is only ever loaded, and every call
+// passes it a Function variable of the caller that no other argument of the
+// call names: then nothing the function does can change what it points to
+// (glslang passes every parameter so, through a copy of its own).
+bool unaliasedParameter(const FunctionGraph& fg, uint32_t param) {
+  size_t position = 0;
+  bool found = false;
+  for (const auto& inst : fg.f.insts) {
+    if (inst.opcode() == spv::Op::OpFunctionParameter) {
+      if (inst.resultId() == param) found = true;
+      if (!found) ++position;
+      continue;
+    }
+    for (size_t w = 1; w < inst.size(); ++w) {
+      if (inst.word(w) == param && !(inst.opcode() == spv::Op::OpLoad && w == 3) && inst.opcode() != spv::Op::OpLine) {
+        return false;
+      }
+    }
+  }
+  for (const auto& caller : fg.m.functions) {
+    for (const auto& call : caller.insts) {
+      if (call.opcode() != spv::Op::OpFunctionCall || call.word(3) != fg.f.id()) continue;
+      const uint32_t arg = call.word(4 + position);
+      const Instruction* v = fg.defs.def(arg);
+      if (v == nullptr || v->opcode() != spv::Op::OpVariable ||
+          static_cast<spv::StorageClass>(v->word(3)) != spv::StorageClass::Function) {
+        return false;
+      }
+      for (size_t w = 4; w < call.size(); ++w) {
+        if (w != 4 + position && call.word(w) == arg) return false;
+      }
+    }
+  }
+  return found;
+}
+
 // Whether `id` holds the same value everywhere in the loop and can be had
 // at its entry: a constant, a parameter, a value defined before the loop,
 // or (returned as `load`) a load, inside the loop, from memory the loop
@@ -239,11 +275,15 @@ bool invariant(const FunctionGraph& fg, const std::vector<bool>& in, int header,
     p = fg.defs.def(p->word(3));
     if (p == nullptr) return false;
   }
+  if (p->opcode() == spv::Op::OpFunctionParameter && p->resultId() == pointer) {
+    if (!unaliasedParameter(fg, pointer)) return false;
+    load = at;
+    return true;
+  }
   if (p->opcode() != spv::Op::OpVariable) return false;
   const auto sc = static_cast<spv::StorageClass>(p->word(3));
-  bool unchanging = sc == spv::StorageClass::PushConstant ||
-                    (sc == spv::StorageClass::Uniform && fg.defs.def(pointer) == p);
-  if (sc == spv::StorageClass::Uniform && !unchanging) {
+  bool unchanging = sc == spv::StorageClass::PushConstant;
+  if (sc == spv::StorageClass::Uniform) {
     // A uniform block's member (not a BufferBlock: that is a storage buffer).
     const Instruction* ptrType = fg.defs.def(p->resultType());
     const Instruction* block = ptrType != nullptr ? fg.defs.def(ptrType->word(3)) : nullptr;
