@@ -523,6 +523,8 @@ FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function) {
       size_t term = fg.labelAt[p];
       while (term + 1 < f.insts.size() && fg.g.blockAt[term + 1] == p) ++term;
       entries = entries && f.insts[term].opcode() == spv::Op::OpBranch;
+      // An outer loop's header branching straight in: its OpLoopMerge must stay last but one.
+      if (term > 0 && f.insts[term - 1].opcode() == spv::Op::OpLoopMerge) --term;
       loop.entries.push_back({term, 0});
     }
     if (loop.everyIteration >= 0 && entries) loop.counted = countedLoop(fg, in, loop, test, body);
