@@ -18,6 +18,11 @@ struct BlockGraph {
 
 BlockGraph blockGraph(const Function& f, const DefIndex& defs);
 
+// Immediate dominators of a graph from `entry` (Cooper, Harvey and
+// Kennedy's iterative algorithm over reverse postorder); the entry is its
+// own, -1 where unreachable.
+std::vector<int> immediateDominators(const std::vector<std::vector<int>>& next, int entry);
+
 // For each instruction of `f`, whether its block lies on a cycle of the
 // function's control-flow graph (a loop, structured or not).
 std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs);

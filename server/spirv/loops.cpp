@@ -11,59 +11,6 @@ namespace tally::spirv {
 
 namespace {
 
-// Immediate dominators of a graph from `entry` (Cooper, Harvey and
-// Kennedy's iterative algorithm over reverse postorder); -1 where unreachable.
-std::vector<int> immediateDominators(const std::vector<std::vector<int>>& next, int entry) {
-  const int n = static_cast<int>(next.size());
-  std::vector<int> postorder, order(n, -1);
-  std::vector<std::pair<int, size_t>> work = {{entry, 0}};
-  std::vector<bool> seen(n, false);
-  seen[entry] = true;
-  while (!work.empty()) {
-    auto& [v, edge] = work.back();
-    if (edge < next[v].size()) {
-      int w = next[v][edge++];
-      if (!seen[w]) {
-        seen[w] = true;
-        work.push_back({w, 0});
-      }
-      continue;
-    }
-    order[v] = static_cast<int>(postorder.size());
-    postorder.push_back(v);
-    work.pop_back();
-  }
-  std::vector<std::vector<int>> preds(n);
-  for (int b = 0; b < n; ++b) {
-    if (!seen[b]) continue;
-    for (int w : next[b]) preds[w].push_back(b);
-  }
-  std::vector<int> idom(n, -1);
-  idom[entry] = entry;
-  auto intersect = [&](int a, int b) {
-    while (a != b) {
-      while (order[a] < order[b]) a = idom[a];
-      while (order[b] < order[a]) b = idom[b];
-    }
-    return a;
-  };
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (auto it = postorder.rbegin(); it != postorder.rend(); ++it) {
-      int v = *it, dom = -1;
-      if (v == entry) continue;
-      for (int p : preds[v]) {
-        if (idom[p] >= 0) dom = dom < 0 ? p : intersect(p, dom);
-      }
-      if (dom != idom[v]) {
-        idom[v] = dom;
-        changed = true;
-      }
-    }
-  }
-  return idom;
-}
-
 bool dominates(const std::vector<int>& idom, int a, int b) {
   if (b < 0 || idom[b] < 0) return false;
   for (;; b = idom[b]) {
