@@ -10,8 +10,10 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -20,6 +22,7 @@
 namespace tally::spirv {
 
 struct CountedLoop;
+struct FunctionLoops;
 
 // Scope and semantics words (SPIR-V spec 3.27, 3.25).
 constexpr uint32_t kScopeDevice = 1;
@@ -318,6 +321,9 @@ class Injector : public ModuleBuilder {
   void countLoops(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before,
                   const std::vector<uint32_t>& slots);
   uint32_t tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue);
+  std::optional<uint32_t> constantTrips(const Function& f, const CountedLoop& c, size_t branch, uint32_t phiValue) const;
+  std::optional<uint32_t> entryParent(const FunctionLoops& fl, size_t self, uint32_t entry, int function, size_t branch,
+                                      const EntryPoint& ep);
 
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
@@ -473,9 +479,11 @@ class Injector : public ModuleBuilder {
   std::map<Stage, uint32_t> derivedSites_;          // sites derived from the invocation count
   std::set<size_t> loopDerived_;                    // sites derived from a loop's trip counter
   struct LoopNote {
-    uint32_t sites = 0, counters = 0, counted = 0;
+    uint32_t sites = 0, counters = 0, counted = 0, fromEnclosing = 0;
   };
   std::map<Stage, LoopNote> loopNotes_;
+  using TripKey = std::tuple<uint32_t, int, size_t, int>;  // entry point, function, loop, class
+  std::map<TripKey, uint32_t> tripSlots_;                  // -> its trip counter's slot
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
   Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup

@@ -23,7 +23,7 @@ using spirv::Stage;
 uint64_t loopShapeLoads(uint32_t width, uint32_t index) {
   const uint64_t bits = std::bit_width(index);
   return 10 + width % 7 + 0 + 5 + 12 + 6 + 4 + 4 + 2 * bits + 2 * std::max(1u, index & 3u) +
-         (2 * (index % 4) + 1) + 9 + (3 + 2 * 3) + 2 * (3 + index % 5);
+         (2 * (index % 4) + 1) + 9 + (3 + 2 * 3) + 7 * (width % 7) + 2 * (3 + index % 5);
 }
 
 bool noteContains(const PassRun& run, const std::string& part) {
@@ -67,6 +67,7 @@ TEST(LoopShapes, EveryShapeCountsAsByHandAndAsExact) {
           // Live: loops derived, and counted loops added once at their entry.
           EXPECT_TRUE(noteContains(*run, "compute sites in loops derived from")) << where;
           EXPECT_FALSE(noteContains(*run, "(0 added once")) << where;
+          EXPECT_TRUE(noteContains(*run, "1 of those adds derived from an enclosing count")) << where;
         }
       }
     }

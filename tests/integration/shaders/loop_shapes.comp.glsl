@@ -13,6 +13,7 @@
 //  - break at i == index % 4 of 6: (index % 4 + 1) loads before it, index % 4 after;
 //  - continue on even i of 6: 6 loads before it, 3 after;
 //  - nested: 3 outer (1 load each) x i inner (2 loads each): 3 + 2 x 3;
+//    and W % 7 outer (1 load) x 3 inner (2 loads): 7 x (W % 7);
 //  - in a called function, 2 loads per trip, called with 3 and index % 5 trips.
 // The buffer write once; invocations ceil(W/8)*8 x ceil(H/8)*8.
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -44,6 +45,10 @@ void main() {
   for (uint i = 0u; i < 5u; ++i) s += inputBuffer.values[(index + i) % n] * inputBuffer.values[(index + 3u * i) % n];
   uint pushed = size.extent.x % 7u;
   for (uint i = 0u; i < pushed; ++i) s += inputBuffer.values[(index * 3u + i) % n];
+  for (uint i = 0u; i < pushed; ++i) {
+    s += inputBuffer.values[(index + 17u * i) % n];
+    for (int k = 0; k < 3; ++k) s += inputBuffer.values[(index + uint(k)) % n] & inputBuffer.values[(i + uint(k)) % n];
+  }
   for (int i = 4; i < int(id.x % 3u); ++i) s += inputBuffer.values[(index + uint(i)) % n];
   for (uint i = 1u; i < 10u; i += 2u) s ^= inputBuffer.values[(index + i) % n];
   for (int i = -3; i <= 2; ++i) s += inputBuffer.values[(index + uint(i + 3)) % n] - inputBuffer.values[(index + 7u) % n];
