@@ -22,7 +22,8 @@ using spirv::Stage;
 // Buffer loads of one in-bounds invocation of loop_shapes.comp.glsl (its header).
 uint64_t loopShapeLoads(uint32_t width, uint32_t index) {
   const uint64_t bits = std::bit_width(index);
-  return 10 + width % 7 + 0 + 5 + 12 + 6 + 4 + 4 + 2 * bits + 2 * std::max(1u, index & 3u) +
+  const uint32_t pushed = width % 7;
+  return 10 + pushed + 0 + (pushed > 5 ? pushed - 5 : 0) + 1 + (7 * index + 1) % 4 + 5 + 12 + 6 + 4 + 4 + 2 * bits + 2 * std::max(1u, index & 3u) +
          (2 * (index % 4) + 1) + 9 + (3 + 2 * 3) + 7 * (width % 7) + 2 * (3 + index % 5);
 }
 

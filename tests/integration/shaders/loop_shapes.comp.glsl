@@ -6,6 +6,9 @@
 //  - constant bound, 2 loads x 5;                   - a bound read from the
 //    push constants (W % 7), 1 load x (W % 7);      - a bound below the
 //    start (signed, 4 < x % 3: never), 0;           - step 2 (1..9), 5;
+//  - counted from 5 to W % 7 (none where W % 7 <= 5): max(0, W % 7 - 5);
+//  - a bound read from the buffer before the loop (values[i] = 7i + 1):
+//    1 + (7 index + 1) % 4;
 //  - <= from -3 to 2 (signed), 2 loads x 6;         - down by 1 (8 > 2), 6;
 //  - down by 3 with >= (10, 7, 4, 1), 4;            - != 4, 4;
 //  - while (k > 0) k >>= 1 from index: its bit length, 2 loads each;
@@ -50,6 +53,9 @@ void main() {
     for (int k = 0; k < 3; ++k) s += inputBuffer.values[(index + uint(k)) % n] & inputBuffer.values[(i + uint(k)) % n];
   }
   for (int i = 4; i < int(id.x % 3u); ++i) s += inputBuffer.values[(index + uint(i)) % n];
+  for (uint i = 5u; i < pushed; ++i) s += inputBuffer.values[(index + 2u * i) % n];
+  uint fromBuffer = inputBuffer.values[index % n] % 4u;
+  for (uint i = 0u; i < fromBuffer; ++i) s += inputBuffer.values[(index + 19u * i) % n];
   for (uint i = 1u; i < 10u; i += 2u) s ^= inputBuffer.values[(index + i) % n];
   for (int i = -3; i <= 2; ++i) s += inputBuffer.values[(index + uint(i + 3)) % n] - inputBuffer.values[(index + 7u) % n];
   for (uint i = 8u; i > 2u; --i) s += inputBuffer.values[(index * i) % n];
