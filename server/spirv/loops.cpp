@@ -254,7 +254,9 @@ std::optional<CountedLoop> countedLoop(const FunctionGraph& fg, const std::vecto
   if (cmp == nullptr || !isIntCompare(cmp->opcode())) return std::nullopt;
   CountedLoop c;
   c.compare = cmp->opcode();
-  if (fg.blockOfLabel.at(cond.word(2)) != body) c.compare = negated(c.compare);
+  auto taken = fg.blockOfLabel.find(cond.word(2));
+  if (taken == fg.blockOfLabel.end()) return std::nullopt;
+  if (taken->second != body) c.compare = negated(c.compare);
   // The induction variable: the header's OpPhi, or a plain variable loaded in the test.
   auto isPhi = [&](uint32_t id) {
     auto at = fg.indexOf.find(id);
@@ -479,7 +481,8 @@ FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function) {
       const Instruction& phi = f.insts[fg.indexOf.at(loop.counted->phi)];
       for (auto& [term, value] : loop.entries) {
         for (size_t w = 3; w + 1 < phi.size(); w += 2) {
-          if (fg.blockOfLabel.at(phi.word(w + 1)) == fg.g.blockAt[term]) value = phi.word(w);
+          auto from = fg.blockOfLabel.find(phi.word(w + 1));
+          if (from != fg.blockOfLabel.end() && from->second == fg.g.blockAt[term]) value = phi.word(w);
         }
         if (value == 0) loop.counted.reset();
       }
