@@ -8,7 +8,9 @@
 // block, and the reader derives each site's count from it
 // (Instrumented::derived: counters[site] += times * counters[trip]).
 // Where the loop is counted (CountedLoop) the class that runs in every
-// iteration adds the trip count once, before the loop, and nothing inside.
+// iteration adds the trip count once, before the loop, and nothing inside;
+// a constant trip count at an entry that runs as often as the enclosing
+// loop's class or the invocation is itself derived from that count.
 // A trip slot is no site: readers, which go through sites, never show it.
 
 #include "spirv/injector.hpp"
