@@ -30,12 +30,7 @@ void successors(const Instruction& inst, const DefIndex& defs, std::vector<uint3
   }
 }
 
-// A function's blocks, numbered in order, with their successors.
-struct BlockGraph {
-  std::vector<int> blockAt;             // per instruction, its block (-1 before the first label)
-  std::vector<std::vector<int>> next;   // per block, its successors
-  std::vector<bool> returns;            // per block, whether it ends in OpReturn or OpReturnValue
-};
+}  // namespace
 
 BlockGraph blockGraph(const Function& f, const DefIndex& defs) {
   const auto& insts = f.insts;
@@ -64,7 +59,57 @@ BlockGraph blockGraph(const Function& f, const DefIndex& defs) {
   return g;
 }
 
-}  // namespace
+
+std::vector<int> immediateDominators(const std::vector<std::vector<int>>& next, int entry) {
+  const int n = static_cast<int>(next.size());
+  std::vector<int> postorder, order(n, -1);
+  std::vector<std::pair<int, size_t>> work = {{entry, 0}};
+  std::vector<bool> seen(n, false);
+  seen[entry] = true;
+  while (!work.empty()) {
+    auto& [v, edge] = work.back();
+    if (edge < next[v].size()) {
+      int w = next[v][edge++];
+      if (!seen[w]) {
+        seen[w] = true;
+        work.push_back({w, 0});
+      }
+      continue;
+    }
+    order[v] = static_cast<int>(postorder.size());
+    postorder.push_back(v);
+    work.pop_back();
+  }
+  std::vector<std::vector<int>> preds(n);
+  for (int b = 0; b < n; ++b) {
+    if (!seen[b]) continue;
+    for (int w : next[b]) preds[w].push_back(b);
+  }
+  std::vector<int> idom(n, -1);
+  idom[entry] = entry;
+  auto intersect = [&](int a, int b) {
+    while (a != b) {
+      while (order[a] < order[b]) a = idom[a];
+      while (order[b] < order[a]) b = idom[b];
+    }
+    return a;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (auto it = postorder.rbegin(); it != postorder.rend(); ++it) {
+      int v = *it, dom = -1;
+      if (v == entry) continue;
+      for (int p : preds[v]) {
+        if (idom[p] >= 0) dom = dom < 0 ? p : intersect(p, dom);
+      }
+      if (dom != idom[v]) {
+        idom[v] = dom;
+        changed = true;
+      }
+    }
+  }
+  return idom;
+}
 
 std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs) {
   const auto& insts = f.insts;
@@ -177,55 +222,8 @@ std::vector<bool> instructionsOnEveryReturnPath(const Function& f, const DefInde
   for (int b = 0; b < blocks; ++b) {
     if (g.returns[b]) next[b].push_back(exit);
   }
-  std::vector<int> postorder, order(blocks + 1, -1);
-  std::vector<std::pair<int, size_t>> work = {{0, 0}};
-  std::vector<bool> seen(blocks + 1, false);
-  seen[0] = true;
-  while (!work.empty()) {
-    auto& [v, edge] = work.back();
-    if (edge < next[v].size()) {
-      int w = next[v][edge++];
-      if (!seen[w]) {
-        seen[w] = true;
-        work.push_back({w, 0});
-      }
-      continue;
-    }
-    order[v] = static_cast<int>(postorder.size());
-    postorder.push_back(v);
-    work.pop_back();
-  }
-  if (!seen[exit]) return out;
-  std::vector<std::vector<int>> preds(blocks + 1);
-  for (int b = 0; b <= blocks; ++b) {
-    if (!seen[b]) continue;
-    for (int w : next[b]) preds[w].push_back(b);
-  }
-  std::vector<int> idom(blocks + 1, -1);
-  idom[0] = 0;
-  auto intersect = [&](int a, int b) {
-    while (a != b) {
-      while (order[a] < order[b]) a = idom[a];
-      while (order[b] < order[a]) b = idom[b];
-    }
-    return a;
-  };
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (auto it = postorder.rbegin(); it != postorder.rend(); ++it) {
-      int v = *it;
-      if (v == 0) continue;
-      int dom = -1;
-      for (int p : preds[v]) {
-        if (idom[p] < 0) continue;
-        dom = dom < 0 ? p : intersect(p, dom);
-      }
-      if (dom != idom[v]) {
-        idom[v] = dom;
-        changed = true;
-      }
-    }
-  }
+  std::vector<int> idom = immediateDominators(next, 0);
+  if (idom[exit] < 0) return out;
   std::vector<bool> onChain(blocks, false);
   for (int v = idom[exit];; v = idom[v]) {
     onChain[v] = true;

@@ -9,6 +9,20 @@
 
 namespace tally::spirv {
 
+// A function's blocks, numbered in order, with their successors.
+struct BlockGraph {
+  std::vector<int> blockAt;             // per instruction, its block (-1 before the first label)
+  std::vector<std::vector<int>> next;   // per block, its successors
+  std::vector<bool> returns;            // per block, whether it ends in OpReturn or OpReturnValue
+};
+
+BlockGraph blockGraph(const Function& f, const DefIndex& defs);
+
+// Immediate dominators of a graph from `entry` (Cooper, Harvey and
+// Kennedy's iterative algorithm over reverse postorder); the entry is its
+// own, -1 where unreachable.
+std::vector<int> immediateDominators(const std::vector<std::vector<int>>& next, int entry);
+
 // For each instruction of `f`, whether its block lies on a cycle of the
 // function's control-flow graph (a loop, structured or not).
 std::vector<bool> instructionsInCycles(const Function& f, const DefIndex& defs);

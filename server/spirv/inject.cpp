@@ -48,11 +48,13 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
   std::vector<std::map<size_t, std::vector<Instruction>>> after(m_.functions.size());
   std::vector<std::map<size_t, std::vector<Instruction>>> before(m_.functions.size());
   if (accumulate) findInvocationSlots(scan, slots);
+  if (accumulate) countLoops(scan, before, slots);
   for (size_t i = 0; i < scan.sites.size(); ++i) {
     const FoundSite& s = scan.sites[i];
     const EntryPoint& ep = scan.entryPoints[s.entryIndex];
     if (footprintOn()) footprintSite(i, s, ep, slots[i], after, before);
     if (accumulate && deriveSite(s, ep, slots[i])) continue;
+    if (accumulate && loopDerived_.count(i)) continue;
     if (accumulate && accumulateSite(s, ep, slots[i], after, before)) continue;
     Helper kind = helperFor(ep.stage);
     if (!dynamicSlot(s) && kind == Helper::Subgroup) kind = Helper::SubgroupUniform;

@@ -10,14 +10,19 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include "spirv/inject.hpp"
 
 namespace tally::spirv {
+
+struct CountedLoop;
+struct FunctionLoops;
 
 // Scope and semantics words (SPIR-V spec 3.27, 3.25).
 constexpr uint32_t kScopeDevice = 1;
@@ -311,6 +316,15 @@ class Injector : public ModuleBuilder {
   // (Instrumented::derived) where it runs exactly once; false otherwise.
   bool deriveSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot);
 
+  // Sites that run once per loop iteration (accumulate_loops.cpp): derived
+  // from a trip counter per loop and class, added once before a counted loop.
+  void countLoops(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before,
+                  const std::vector<uint32_t>& slots);
+  uint32_t tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue);
+  std::optional<uint32_t> constantTrips(const Function& f, const CountedLoop& c, size_t branch, uint32_t phiValue) const;
+  std::optional<uint32_t> entryParent(const FunctionLoops& fl, size_t self, uint32_t entry, int function, size_t branch,
+                                      const EntryPoint& ep);
+
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
                       std::vector<std::map<size_t, std::vector<Instruction>>>& after,
@@ -463,6 +477,13 @@ class Injector : public ModuleBuilder {
   std::map<uint32_t, std::vector<bool>> runsExactly_;  // entry index -> functions that run exactly once
   std::map<int, std::vector<bool>> everyPath_;      // function -> instructions on every return path
   std::map<Stage, uint32_t> derivedSites_;          // sites derived from the invocation count
+  std::set<size_t> loopDerived_;                    // sites derived from a loop's trip counter
+  struct LoopNote {
+    uint32_t sites = 0, counters = 0, counted = 0, fromEnclosing = 0;
+  };
+  std::map<Stage, LoopNote> loopNotes_;
+  using TripKey = std::tuple<uint32_t, int, size_t, int>;  // entry point, function, loop, class
+  std::map<TripKey, uint32_t> tripSlots_;                  // -> its trip counter's slot
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
   Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup

@@ -109,7 +109,9 @@ struct InstrumentOptions {
   uint32_t addressTableBinding = 3;
   // accumulate mode: sites that run exactly once in every invocation are
   // derived from the entry point's invocation counter (Instrumented::derived)
-  // instead of counted in the shader. Off, every site adds in the shader:
+  // instead of counted in the shader, and so are sites that run once per
+  // loop iteration, from a trip counter per loop (spirv/loops.hpp). Off,
+  // every site adds in the shader:
   // for tests of the shader's own adds (counter overflow).
   bool deriveOnceSites = true;
   // Each access site gets counter slots of its own (Site::slot), and its
@@ -140,7 +142,9 @@ struct InstrumentOptions {
 // once in every invocation of its entry point (on every path to a return,
 // outside loops, in an entry point that cannot end other than by
 // returning) by the entry point's invocation counter, `from`: `times` such
-// sites share slot `to`.
+// sites share slot `to`. A site that runs once in every iteration of a loop
+// is counted by the loop's trip counter, `from`: a slot of its own after
+// the sites' (within slotCount), which no site names.
 struct DerivedCount {
   uint32_t from = 0;
   uint32_t to = 0;

@@ -117,7 +117,8 @@ void foldStriped(const InstrumentedModules& modules, PassRun& run) {
         }
       }
     }
-    run.copiesWritten = std::max(run.copiesWritten, written);
+    // A module of one copy that only needs its derived counts is not striped.
+    if (l.copies > 1) run.copiesWritten = std::max(run.copiesWritten, written);
     spirv::settleCounters(run.counters, l);
   }
 }
