@@ -141,8 +141,9 @@ bool Injector::accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t
   }
   uint32_t length = s.dynamicIndex == 0 ? 1 : (s.arrayLength != 0 ? s.arrayLength : kRuntimeArraySlots);
   if (s.dynamicIndex != 0 && length > kAccumulateArrayMax) {
+    if (accumulateCachedArray(s, ep, slot, length, after)) return true;
     noteOnce("accumulate mode: descriptor arrays of more than " + std::to_string(kAccumulateArrayMax) +
-             " elements indexed at run time are counted per access");
+             " elements indexed at run time are counted per access in stages without subgroup arithmetic");
     return false;
   }
   // A site that runs at most once per invocation saves nothing by
@@ -295,6 +296,7 @@ uint32_t Injector::flushFunction(Stage stage) {
       flushOne(b, stage, element, base + i, copyOffset);
     }
   }
+  for (size_t cache : slots.cached) flushCachedArray(b, cachedArrays_[cache], copyOffset);
   if (end != 0) {
     branch(b, end);
     label(b, end);

@@ -325,6 +325,15 @@ class Injector : public ModuleBuilder {
   std::optional<uint32_t> entryParent(const FunctionLoops& fl, size_t self, uint32_t entry, int function, size_t branch,
                                       const EntryPoint& ep);
 
+  // Descriptor arrays past kAccumulateArrayMax (accumulate_arrays.cpp): a
+  // one-entry cache per site, flushed per element across the subgroup.
+  struct CachedArray {
+    uint32_t base, length, element, count;  // first slot, elements, the two Private registers
+  };
+  bool accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, uint32_t slot, uint32_t length,
+                             std::vector<std::map<size_t, std::vector<Instruction>>>& after);
+  void flushCachedArray(Body& b, const CachedArray& cache, uint32_t copyOffset);
+
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
                       std::vector<std::map<size_t, std::vector<Instruction>>>& after,
@@ -464,7 +473,9 @@ class Injector : public ModuleBuilder {
   struct FlushSlots {
     std::set<uint32_t> scalars;
     std::set<std::pair<uint32_t, uint32_t>> arrays;  // (first slot, length)
+    std::vector<size_t> cached;                      // into cachedArrays_
   };
+  std::vector<CachedArray> cachedArrays_;
   std::map<Stage, FlushSlots> flushSlots_;
   std::map<uint32_t, uint32_t> scalarAcc_;  // slot -> Private u32
   std::vector<std::pair<uint32_t, ArrayAccumulator>> arrayAcc_;

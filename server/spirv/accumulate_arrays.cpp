@@ -1,0 +1,72 @@
+// Accumulate: descriptor arrays too long for a register per element (more
+// than kAccumulateArrayMax, or runtime-sized: the lean visibility buffer's
+// material maps) are accumulated in a one-entry cache per site.
+//
+// Each such site keeps, per invocation, the last element it counted and how
+// many times (two Private u32 registers). An access to the same element adds
+// 1; an access to another element first adds the count so far to that
+// element's counter (one atomic, rare: a site reading one material's map
+// per invocation never does) and starts again at 1. The stage's flush adds
+// what is left, combined across the subgroup: a waterfall over the lanes'
+// elements, one atomic per distinct element, where lanes shading one
+// material share it. Counts are the per-access ones, element by element.
+
+#include "spirv/injector.hpp"
+
+namespace tally::spirv {
+
+bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, uint32_t slot, uint32_t length,
+                                     std::vector<std::map<size_t, std::vector<Instruction>>>& after) {
+  // Without subgroup arithmetic the flush adds per lane: an atomic per
+  // invocation, what counting per access costs a site that runs once.
+  if (s.placement != Placement::AfterInstruction || !subgroupFlush(ep.stage)) return false;
+  uint32_t u = tU32(), bo = tBool();
+  std::string prefix = "tally_cache_" + std::to_string(slot) + "_" + std::to_string(cachedArrays_.size());
+  CachedArray cache{slot, length, privateVariable(u, constantU32(0), prefix + "_element"),
+                    privateVariable(u, constantU32(0), prefix + "_count")};
+  Body b{after[s.function][s.instruction]};
+  uint32_t element = clampedIndex(b, s, length);
+  uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
+  uint32_t cached = op(b, spv::Op::OpLoad, u, {cache.element});
+  uint32_t same = op(b, spv::Op::OpIEqual, bo, {cached, element});
+  uint32_t held = op(b, spv::Op::OpINotEqual, bo, {count, constantU32(0)});
+  when(b, op(b, spv::Op::OpLogicalAnd, bo, {held, op(b, spv::Op::OpLogicalNot, bo, {same})}), [&](Body& bb) {
+    // The reader sums a striped slot's copies: the first copy takes it.
+    emitAdd(bb, op(bb, spv::Op::OpIAdd, u, {constantU32(slot), cached}), count);
+  });
+  // An empty cache holds element 0 with no count: 1 either way.
+  uint32_t next = op(b, spv::Op::OpSelect, u,
+                     {same, op(b, spv::Op::OpIAdd, u, {count, constantU32(1)}), constantU32(1)});
+  opNoResult(b, spv::Op::OpStore, {cache.element, element});
+  opNoResult(b, spv::Op::OpStore, {cache.count, next});
+  flushSlots_[ep.stage].cached.push_back(cachedArrays_.size());
+  cachedArrays_.push_back(cache);
+  return true;
+}
+
+// In the stage's flush (helper lanes already out): lanes holding a count
+// combine per element, lo and hi 16 bits apart as flushOne's sums.
+void Injector::flushCachedArray(Body& b, const CachedArray& cache, uint32_t copyOffset) {
+  uint32_t u = tU32(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
+  uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
+  uint32_t element = op(b, spv::Op::OpLoad, u, {cache.element});
+  opNoResult(b, spv::Op::OpStore, {cache.count, zero});
+  when(b, op(b, spv::Op::OpINotEqual, tBool(), {count, zero}), [&](Body& bb) {
+    uint32_t sumHi = 0;
+    waterfall(
+        bb, element,
+        [&](Body& r) {
+          uint32_t lo = op(r, spv::Op::OpBitwiseAnd, u, {count, constantU32(0xffffu)});
+          uint32_t hi = op(r, spv::Op::OpShiftRightLogical, u, {count, constantU32(16)});
+          sumHi = op(r, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, hi});
+          return op(r, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, lo});
+        },
+        [&](Body& a, uint32_t first, uint32_t sumLo) {
+          uint32_t slotId = op(a, spv::Op::OpIAdd, u, {constantU32(cache.base), first});
+          if (copyOffset != 0) slotId = op(a, spv::Op::OpIAdd, u, {slotId, copyOffset});
+          emitAddWide(a, slotId, sumLo, sumHi);
+        });
+  });
+}
+
+}  // namespace tally::spirv
