@@ -169,7 +169,7 @@ Error missing(const std::string& field, const std::string& hint) {
   return fieldError(field, hint.empty() ? "required" : "required" + hint);
 }
 
-const json* find(const json& object, const std::string& key) {
+const json* find(const json& object, std::string_view key) {
   auto it = object.find(key);
   return it == object.end() || it->is_null() ? nullptr : &*it;
 }
@@ -191,16 +191,30 @@ const json& Members::present(const json& object, const char* key, const std::str
   return *v;
 }
 
+// The getters take the value as it is where it is what they want, and build
+// the field's path (a string) only for the error: a result file reads
+// thousands of members, and building each path was a large part of reading.
 double Members::number(const json& object, const char* key, const std::string& path) const {
-  return get(finite(present(object, key, path), member(path, key)));
+  const json& v = present(object, key, path);
+  if (v.is_number()) {
+    double x = v.get<double>();
+    if (std::isfinite(x)) return x;
+  }
+  return get(finite(v, member(path, key)));
 }
 
 int64_t Members::integer(const json& object, const char* key, const std::string& path) const {
-  return get(anyInteger(present(object, key, path), member(path, key)));
+  const json& v = present(object, key, path);
+  if (v.is_number_integer()) {
+    if (auto x = asInt64(v)) return *x;
+  }
+  return get(anyInteger(v, member(path, key)));
 }
 
 std::string Members::text(const json& object, const char* key, const std::string& path) const {
-  return get(json_fields::text(present(object, key, path), member(path, key)));
+  const json& v = present(object, key, path);
+  if (v.is_string()) return v.get<std::string>();
+  return get(json_fields::text(v, member(path, key)));
 }
 
 const json& Members::array(const json& object, const char* key, const std::string& path) const {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -79,7 +80,7 @@ Result<Resolution> resolution(const nlohmann::json& r, const std::string& field,
 Error missing(const std::string& field, const std::string& hint = "");
 
 // The member `key` of `object`, or nullptr where it is absent or null.
-const nlohmann::json* find(const nlohmann::json& object, const std::string& key);
+const nlohmann::json* find(const nlohmann::json& object, std::string_view key);
 
 // Members of a document that must be whole (a result file, the layer's
 // output), read where any fault ends the reading: each getter calls `fail`,
