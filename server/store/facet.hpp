@@ -17,6 +17,10 @@ struct Shared {
   Connection* db;
   std::string location;  // as given to Store::open: the job queue's wake-ups are keyed by it
   std::mutex mutex;  // one call at a time on this connection
+  // PostgreSQL: samples this Store ingested since it last analysed the
+  // growing tables, and the samples the database held then (Runs::ingestCapture).
+  int64_t samplesSinceAnalyze = 0;
+  int64_t samplesAtAnalyze = 0;
 };
 
 // A facet is a view of its Store's connection: the Store makes it, and it
@@ -27,11 +31,13 @@ class Facet {
   Facet& operator=(const Facet&) = delete;
 
  protected:
-  explicit Facet(Shared& shared) : db_(shared.db), mutex_(shared.mutex), location_(shared.location) {}
+  explicit Facet(Shared& shared)
+      : db_(shared.db), mutex_(shared.mutex), location_(shared.location), shared_(shared) {}
   ~Facet() = default;
   Connection* db_;
   std::mutex& mutex_;
   const std::string& location_;
+  Shared& shared_;
 };
 
 }  // namespace tally::store

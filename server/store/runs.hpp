@@ -92,6 +92,7 @@ class Runs : public Facet {
  private:
   friend class Store;
   explicit Runs(Shared& shared) : Facet(shared) {}
+  void keepStatisticsCurrent(const nlohmann::json& result);
 };
 
 }  // namespace tally::store

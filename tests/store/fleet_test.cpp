@@ -338,6 +338,37 @@ TEST(Engines, MigrationsBuildTheSameSchema) {
 
 // The PostgreSQL statement: every type through a bind and back, named and
 // numbered parameters, errors with the SQLSTATE, rollback by default.
+// A young PostgreSQL database grown by ingests faster than autovacuum looks
+// at it gets its statistics from the store (Runs::keepStatisticsCurrent): no
+// analyse after a small result, one (pg_stat_user_tables.last_analyze, which
+// autovacuum's own analyses leave alone) once 5,000 samples are stored.
+TEST(Engines, IngestsKeepPostgresStatisticsCurrent) {
+  if (!postgresServer()) GTEST_SKIP() << "runs in store.postgresql (TALLY_TEST_STORE=postgres)";
+  TempDb db;
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  auto analysed = [&] {
+    Statement s(store->connection(), "SELECT last_analyze IS NOT NULL FROM pg_stat_user_tables WHERE relname = 'counters'");
+    return s.step() && s.getInt(0) != 0;
+  };
+  auto ingest = [&](int samples) {
+    std::vector<json> list;
+    for (int i = 0; i < samples; ++i) {
+      list.push_back(makeSample(i, 1.0, {makePass("opaque", 0.5, 100, {makeCounter("albedo", "read", 100, 400)})}));
+    }
+    json result = makeCapture({makeRun("forward", "atrium", 320, 180, std::move(list))});
+    json spec = {{"renderers", {"forward"}}};
+    auto job = store->jobs().create(spec, std::nullopt, 1);
+    ASSERT_TRUE(job) << job.error();
+    auto stored = store->runs().ingestCapture(job->job.id, result, {});
+    ASSERT_TRUE(stored) << stored.error();
+  };
+  ingest(10);
+  EXPECT_FALSE(analysed()) << "10 samples are below the first analyse";
+  ingest(5000);
+  EXPECT_TRUE(analysed()) << "5,010 samples stored and no analyse";
+}
+
 TEST(Engines, PostgresStatementsBindAndReadEveryType) {
   if (!postgresServer()) GTEST_SKIP() << "runs in store.postgresql (TALLY_TEST_STORE=postgres)";
   TempDb db;
