@@ -296,7 +296,7 @@ uint32_t Injector::flushFunction(Stage stage) {
       flushOne(b, stage, element, base + i, copyOffset);
     }
   }
-  for (size_t cache : slots.cached) flushCachedArray(b, cachedArrays_[cache], copyOffset);
+  for (size_t cache : slots.cached) flushCachedArray(b, stage, cachedArrays_[cache], copyOffset);
   if (end != 0) {
     branch(b, end);
     label(b, end);

@@ -17,9 +17,12 @@ namespace tally::spirv {
 
 bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, uint32_t slot, uint32_t length,
                                      std::vector<std::map<size_t, std::vector<Instruction>>>& after) {
-  // Without subgroup arithmetic the flush adds per lane: an atomic per
-  // invocation, what counting per access costs a site that runs once.
-  if (s.placement != Placement::AfterInstruction || !subgroupFlush(ep.stage)) return false;
+  // The cache pays only through the waterfall at the flush, which needs
+  // subgroup arithmetic in the stage; without it each lane would add per
+  // element, what counting per access costs a site that runs once. It
+  // combines lanes whichever flush the stage's scalars take (on NVIDIA,
+  // per lane in fragment shaders: "Which flush").
+  if (s.placement != Placement::AfterInstruction || (options_.subgroupStages & stageBit(ep.stage)) == 0) return false;
   uint32_t u = tU32(), bo = tBool();
   std::string prefix = "tally_cache_" + std::to_string(slot) + "_" + std::to_string(cachedArrays_.size());
   CachedArray cache{slot, length, privateVariable(u, constantU32(0), prefix + "_element"),
@@ -44,9 +47,20 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
   return true;
 }
 
-// In the stage's flush (helper lanes already out): lanes holding a count
-// combine per element, lo and hi 16 bits apart as flushOne's sums.
-void Injector::flushCachedArray(Body& b, const CachedArray& cache, uint32_t copyOffset) {
+// In the stage's flush: lanes holding a count combine per element, lo and
+// hi 16 bits apart as flushOne's sums. Helper lanes stay out (one elected
+// would add nothing): the flush keeps them out where its scalars reduce too,
+// this where they do not.
+void Injector::flushCachedArray(Body& b, Stage stage, const CachedArray& cache, uint32_t copyOffset) {
+  uint32_t end = stage == Stage::Fragment && !subgroupFlush(stage) ? skipHelperLanes(b, stage) : 0;
+  flushCachedElements(b, cache, copyOffset);
+  if (end != 0) {
+    branch(b, end);
+    label(b, end);
+  }
+}
+
+void Injector::flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset) {
   uint32_t u = tU32(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
   uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
   uint32_t element = op(b, spv::Op::OpLoad, u, {cache.element});

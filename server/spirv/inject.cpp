@@ -16,6 +16,13 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
   // Which helper each stage uses decides the capabilities and version.
   const bool accumulate = options_.mode.kind == CountMode::Accumulate;
   bool subgroup = footprintSubgroup(scan);
+  for (const FoundSite& s : scan.sites) {  // a cached array's flush (accumulate_arrays.cpp) reduces whatever the policy
+    Stage stage = scan.entryPoints[s.entryIndex].stage;
+    if (accumulate && accumulates(stage) && s.dynamicIndex != 0 && (s.arrayLength == 0 || s.arrayLength > kAccumulateArrayMax) &&
+        (options_.subgroupStages & stageBit(stage)) != 0) {
+      subgroup = true;
+    }
+  }
   for (const auto& ep : scan.entryPoints) {
     if (accumulate) {
       if (accumulates(ep.stage) && subgroupFlush(ep.stage)) subgroup = true;

@@ -332,7 +332,8 @@ class Injector : public ModuleBuilder {
   };
   bool accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, uint32_t slot, uint32_t length,
                              std::vector<std::map<size_t, std::vector<Instruction>>>& after);
-  void flushCachedArray(Body& b, const CachedArray& cache, uint32_t copyOffset);
+  void flushCachedArray(Body& b, Stage stage, const CachedArray& cache, uint32_t copyOffset);
+  void flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset);
 
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
