@@ -158,7 +158,8 @@ void setupCounting(DeviceState& dev) {
     VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &subgroup};
     dev.instance->getProperties2(dev.physical, &props2);
     constexpr VkSubgroupFeatureFlags kNeeded =
-        VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+        VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT |
+        VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
     o.subgroupStages = (subgroup.supportedOperations & kNeeded) == kNeeded ? stageMask(subgroup.supportedStages) : 0;
   }
   // As the built-in renderers choose (gpu::instrumentOptionsFor): per lane in

@@ -196,10 +196,12 @@ void recordCapabilities(Context& ctx, const Supported& s, const Enabled& e) {
   ctx.bufferDeviceAddress = bda;
   ctx.descriptorIndexing = indexing;
   ctx.subgroupSize = subgroup.subgroupSize;
-  // Subgroup counting elects a lane (basic), groups lanes by slot (ballot)
-  // and adds lane counts (arithmetic).
+  // Subgroup counting elects a lane (basic), groups lanes by slot (ballot),
+  // adds lane counts (arithmetic) and asks whether one reduction holds a
+  // flush's sums (vote).
   constexpr VkSubgroupFeatureFlags kNeeded =
-      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_VOTE_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT |
+      VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
   ctx.subgroupArithmetic = (subgroup.supportedOperations & kNeeded) == kNeeded;
   ctx.subgroupStages = ctx.subgroupArithmetic ? toStageMask(subgroup.supportedStages) : 0;
   // Not known to be fixed in a later Mesa: applies to every llvmpipe until checked.

@@ -156,7 +156,7 @@ bool Injector::accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t
   }
   const auto& insts = m_.functions[s.function].insts;
   auto emitInto = [&](std::vector<Instruction>& list) {
-    Body b{list};
+    Body b{addsInto(list)};
     uint32_t pointer;
     if (s.dynamicIndex == 0) {
       pointer = scalarAccumulator(slot);
@@ -279,24 +279,55 @@ uint32_t Injector::flushFunction(Stage stage) {
   Function fn;
   Body b{fn.insts};
   uint32_t id = m_.newId();
-  b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, 0, fnType});
+  uint32_t control = (options_.study & kStudyInlineFlush) != 0 ? uint32_t(spv::FunctionControlMask::Inline) : 0;
+  b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, control, fnType});
   label(b, m_.newId());
   // Helper lanes stay out of the flush altogether: were one the elected
   // lane, its atomic would have no effect and the subgroup's count would
   // be lost (NVIDIA elects them: found by the analytic suite on an H100).
+  // Registers are flushed together (accumulate_rounds.cpp) wherever they
+  // reduce across the subgroup; one at a time only for the study of what
+  // that flush cost before.
+  const uint32_t before = kStudyElectedAdds | kStudySplitReductions;
+  const bool together = subgroupFlush(stage) && (options_.study & before) != before;
+  const FlushSlots& slots = flushSlots_[stage];
+  // Caches share one waterfall where the registers reduce too (on NVIDIA
+  // compute; its fragment stage flushes registers per lane and keeps a
+  // waterfall per cache, as measured there).
+  const bool cachesTogether =
+      !slots.cached.empty() && subgroupFlush(stage) && (options_.study & kStudyWaterfallEach) == 0;
+  uint32_t counter = 0;
+  if ((together && (options_.study & kStudyElectedAdds) == 0) || cachesTogether) {
+    counter = m_.newId();
+    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, tU32()), counter,
+                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+  }
   uint32_t end = 0;
   if (stage == Stage::Fragment && subgroupFlush(stage)) end = skipHelperLanes(b, stage);
   uint32_t copyOffset = stripes(stage) ? copyOffsetOf(b, stage) : 0;
-  const FlushSlots& slots = flushSlots_[stage];
-  for (uint32_t slot : slots.scalars) flushOne(b, stage, scalarAccumulator(slot), slot, copyOffset);
+  std::vector<std::pair<uint32_t, uint32_t>> registers;  // (Private pointer, slot), when flushed together
+  auto flush = [&](uint32_t pointer, uint32_t slot) {
+    if (together) {
+      registers.emplace_back(pointer, slot);
+    } else {
+      flushOne(b, stage, pointer, slot, copyOffset);
+    }
+  };
+  for (uint32_t slot : slots.scalars) flush(scalarAccumulator(slot), slot);
   for (const auto& [base, length] : slots.arrays) {
     uint32_t array = arrayAccumulator(base, length);
     for (uint32_t i = 0; i < length; ++i) {
-      uint32_t element = op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()), {array, constantU32(i)});
-      flushOne(b, stage, element, base + i, copyOffset);
+      flush(op(b, spv::Op::OpAccessChain, tPtr(spv::StorageClass::Private, tU32()), {array, constantU32(i)}), base + i);
     }
   }
-  for (size_t cache : slots.cached) flushCachedArray(b, stage, cachedArrays_[cache], copyOffset);
+  if (together) flushInRounds(b, registers, copyOffset, counter);
+  if (cachesTogether) {
+    std::vector<CachedArray> caches;
+    for (size_t cache : slots.cached) caches.push_back(cachedArrays_[cache]);
+    flushCachesTogether(b, caches, copyOffset, counter);  // helper lanes are out already (above)
+  } else {
+    for (size_t cache : slots.cached) flushCachedArray(b, stage, cachedArrays_[cache], copyOffset);
+  }
   if (end != 0) {
     branch(b, end);
     label(b, end);
@@ -311,6 +342,7 @@ uint32_t Injector::flushFunction(Stage stage) {
 
 // Calls each stage's flush where its invocations end.
 void Injector::insertFlushes(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
+  if ((options_.study & kStudyNoFlush) != 0) return;
   // Functions by id, and the stage of the entry points that reach each.
   std::map<uint32_t, int> byId;
   for (size_t f = 0; f < m_.functions.size(); ++f) byId[m_.functions[f].id()] = static_cast<int>(f);

@@ -27,7 +27,7 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
   std::string prefix = "tally_cache_" + std::to_string(slot) + "_" + std::to_string(cachedArrays_.size());
   CachedArray cache{slot, length, privateVariable(u, constantU32(0), prefix + "_element"),
                     privateVariable(u, constantU32(0), prefix + "_count")};
-  Body b{after[s.function][s.instruction]};
+  Body b{addsInto(after[s.function][s.instruction])};
   uint32_t element = clampedIndex(b, s, length);
   uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
   uint32_t cached = op(b, spv::Op::OpLoad, u, {cache.element});
@@ -61,7 +61,7 @@ void Injector::flushCachedArray(Body& b, Stage stage, const CachedArray& cache, 
 }
 
 void Injector::flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset) {
-  uint32_t u = tU32(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
+  uint32_t u = tU32(), zero = constantU32(0);
   uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
   uint32_t element = op(b, spv::Op::OpLoad, u, {cache.element});
   opNoResult(b, spv::Op::OpStore, {cache.count, zero});
@@ -70,10 +70,10 @@ void Injector::flushCachedElements(Body& b, const CachedArray& cache, uint32_t c
     waterfall(
         bb, element,
         [&](Body& r) {
-          uint32_t lo = op(r, spv::Op::OpBitwiseAnd, u, {count, constantU32(0xffffu)});
-          uint32_t hi = op(r, spv::Op::OpShiftRightLogical, u, {count, constantU32(16)});
-          sumHi = op(r, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, hi});
-          return op(r, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, lo});
+          std::vector<uint32_t> lo, hi;
+          reduceAll(r, {count}, lo, hi);
+          sumHi = hi[0];
+          return lo[0];
         },
         [&](Body& a, uint32_t first, uint32_t sumLo) {
           uint32_t slotId = op(a, spv::Op::OpIAdd, u, {constantU32(cache.base), first});

@@ -191,7 +191,7 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
     LoopNote& note = loopNotes_[ep.stage];
     bool code = false;
     if (!(loop.counted && cls == loop.everyIteration)) {
-      Body b{before[function][blockStart(f, fl.labelAt[cls])]};
+      Body b{addsInto(before[function][blockStart(f, fl.labelAt[cls])])};
       increment(b, scalarAccumulator(trip));
       code = true;
     } else {
@@ -205,7 +205,7 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
           ++note.fromEnclosing;
           continue;
         }
-        Body b{before[function][branch]};
+        Body b{addsInto(before[function][branch])};
         uint32_t amount = trips ? constantU32(*trips) : tripCount(b, f, *loop.counted, phiValue);
         uint32_t pointer = scalarAccumulator(trip);
         uint32_t v = op(b, spv::Op::OpLoad, tU32(), {pointer});

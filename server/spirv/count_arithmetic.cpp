@@ -74,7 +74,7 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
                             insts[into].opcode() == spv::Op::OpLine || insts[into].opcode() == spv::Op::OpNoLine)) {
         ++into;
       }
-      Body b{before[f][into]};
+      Body b{addsInto(before[f][into])};
       uint32_t v = op(b, spv::Op::OpLoad, tU32(), {accumulator()});
       uint32_t w = op(b, spv::Op::OpIAdd, tU32(), {v, constantU32(static_cast<uint32_t>(std::min<uint64_t>(ops, 0xffffffffu)))});
       opNoResult(b, spv::Op::OpStore, {acc, w});

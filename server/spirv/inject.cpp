@@ -44,6 +44,7 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
     addCapability(spv::Capability::GroupNonUniform);
     addCapability(spv::Capability::GroupNonUniformArithmetic);
     addCapability(spv::Capability::GroupNonUniformBallot);
+    if (accumulate && (options_.study & kStudySplitReductions) == 0) addCapability(spv::Capability::GroupNonUniformVote);
   }
   declareCounters();
   if (footprintOn()) declareFootprint();

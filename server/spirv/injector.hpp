@@ -228,6 +228,7 @@ class ModuleBuilder {
   std::map<Stage, std::set<uint32_t>> stageBuiltins_;
   // What the transformations add, placed into the module at the end of Injector::run.
   std::vector<Instruction> newGlobals_, newAnnotations_, newNames_;
+  std::vector<Instruction> ablated_;  // code left out (addsInto)
   std::vector<Function> newFunctions_;
   uint32_t glsl_ = 0;  // the GLSL.std.450 import
 };
@@ -334,6 +335,7 @@ class Injector : public ModuleBuilder {
                              std::vector<std::map<size_t, std::vector<Instruction>>>& after);
   void flushCachedArray(Body& b, Stage stage, const CachedArray& cache, uint32_t copyOffset);
   void flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset);
+  void flushCachesTogether(Body& b, const std::vector<CachedArray>& caches, uint32_t copyOffset, uint32_t counter);
 
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
@@ -346,6 +348,13 @@ class Injector : public ModuleBuilder {
   // Flushes one accumulator (a Private u32 pointer) into counter `slot` (of
   // this invocation's copy), then zeroes it.
   void flushOne(Body& b, Stage stage, uint32_t pointer, uint32_t slot, uint32_t copyOffset);
+  // Every (Private pointer, slot) reduced first, then added together
+  // (accumulate_rounds.cpp); `counter` a Function u32 for the rounds.
+  void flushInRounds(Body& b, const std::vector<std::pair<uint32_t, uint32_t>>& registers, uint32_t copyOffset,
+                     uint32_t counter);
+  void reduceAll(Body& b, const std::vector<uint32_t>& values, std::vector<uint32_t>& lo, std::vector<uint32_t>& hi);
+  void addInRounds(Body& b, const std::vector<uint32_t>& slots, const std::vector<uint32_t>& lo,
+                   const std::vector<uint32_t>& hi, uint32_t counter);
 
   // Compute flushes stripe each slot over result_.copies copies: every
   // workgroup (and subgroup) of a dispatch flushing into one address
@@ -370,6 +379,13 @@ class Injector : public ModuleBuilder {
   void insertFlushes(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before);
 
   bool footprintOn() const { return options_.footprintBlockBytes != 0; }
+  // Where the accumulate mode's adds go: `list`, or nowhere when they are
+  // left out for the study of their cost (InstrumentOptions::study).
+  std::vector<Instruction>& addsInto(std::vector<Instruction>& list) {
+    if ((options_.study & kStudyNoAdds) == 0) return list;
+    ablated_.clear();
+    return ablated_;
+  }
 
   // Two u32 runtime-array buffers: the table and the bitmaps.
   void declareFootprint();

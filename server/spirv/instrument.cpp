@@ -109,6 +109,31 @@ std::string toString(const Mode& mode) {
   return "exact";
 }
 
+Result<uint32_t> parseStudy(std::string_view text) {
+  uint32_t bits = 0;
+  while (!text.empty()) {
+    size_t comma = text.find(',');
+    std::string_view word = text.substr(0, comma);
+    if (word == "no-adds") {
+      bits |= kStudyNoAdds;
+    } else if (word == "no-flush") {
+      bits |= kStudyNoFlush;
+    } else if (word == "inline-flush") {
+      bits |= kStudyInlineFlush;
+    } else if (word == "elected-adds") {
+      bits |= kStudyElectedAdds;
+    } else if (word == "split-reductions") {
+      bits |= kStudySplitReductions;
+    } else if (word == "waterfall-each") {
+      bits |= kStudyWaterfallEach;
+    } else {
+      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions or waterfall-each, comma-separated)");
+    }
+    text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
+  }
+  return bits;
+}
+
 Result<FootprintDedup> parseFootprintDedup(std::string_view text) {
   if (text == "none") return FootprintDedup{false, false};
   if (text == "subgroup") return FootprintDedup{true, false};
@@ -289,15 +314,30 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   if (c == 0 || c > 256 || (c & (c - 1)) != 0) {
     return makeError("compute counter copies must be a power of two from 1 to 256, not " + std::to_string(c));
   }
-  if (options.footprintBlockBytes == 0 || options.footprintDedup) return run(words, options, true);
   InstrumentOptions resolved = options;
+  if (const char* study = std::getenv("TALLY_ACCUMULATE_STUDY");
+      resolved.study == 0 && study != nullptr && *study != '\0' && options.mode.kind == CountMode::Accumulate) {
+    auto bits = parseStudy(study);
+    if (!bits) return makeError("TALLY_ACCUMULATE_STUDY: " + bits.error());
+    resolved.study = *bits;
+  }
+  auto noted = [&](Result<Instrumented> result) {
+    if (result && (resolved.study & (kStudyNoAdds | kStudyNoFlush)) != 0) {
+      result->notes.push_back(std::string("accumulate mode: ") +
+                              ((resolved.study & kStudyNoAdds) != 0 ? "the adds " : "") +
+                              ((resolved.study & kStudyNoFlush) != 0 ? "the flush " : "") +
+                              "left out for the study of their cost: these counts are not the mode's");
+    }
+    return result;
+  };
+  if (options.footprintBlockBytes == 0 || options.footprintDedup) return noted(run(words, resolved, true));
   resolved.footprintDedup = FootprintDedup{};
   const char* env = std::getenv("TALLY_FOOTPRINT_DEDUP");
-  if (env == nullptr || *env == '\0') return run(words, resolved, true);
+  if (env == nullptr || *env == '\0') return noted(run(words, resolved, true));
   auto dedup = parseFootprintDedup(env);
   if (!dedup) return makeError("TALLY_FOOTPRINT_DEDUP: " + dedup.error());
   resolved.footprintDedup = *dedup;
-  auto result = run(words, resolved, true);
+  auto result = noted(run(words, resolved, true));
   // The module's notes then say what its marks were instrumented with, whatever the caller asked.
   if (result) result->notes.push_back("footprint: marks dedup '" + toString(*dedup) + "', from TALLY_FOOTPRINT_DEDUP");
   return result;

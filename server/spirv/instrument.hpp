@@ -60,6 +60,10 @@ struct FootprintDedup {
 Result<FootprintDedup> parseFootprintDedup(std::string_view text);
 std::string toString(const FootprintDedup& dedup);
 
+constexpr uint32_t kStudyNoAdds = 1, kStudyNoFlush = 2, kStudyInlineFlush = 4, kStudyElectedAdds = 8,
+                   kStudySplitReductions = 16, kStudyWaterfallEach = 32;
+Result<uint32_t> parseStudy(std::string_view text);
+
 // How a 64-bit counter is incremented.
 enum class CounterWidth {
   Int64,       // OpAtomicIAdd on uint64 (needs shaderInt64 + shaderBufferInt64Atomics)
@@ -88,6 +92,20 @@ struct InstrumentOptions {
   // accumulate mode: compute flushes stripe each slot over this many copies
   // (a power of two in [1, 256]; 1 turns striping off). See CopyLayout.
   uint32_t computeCopies = 16;
+  // accumulate mode, for the study of what its parts cost (docs/measurement.md,
+  // "The accumulate mode's cost, part by part"): kStudyNoAdds leaves out
+  // every add in the shader (sites, trip counters, cached arrays, executed
+  // arithmetic), kStudyNoFlush every flush (the counts are then not the
+  // mode's, and the module's notes say so); kStudyInlineFlush asks the
+  // driver to inline the flush function; kStudyElectedAdds flushes as before
+  // the flush in rounds (one elected lane adds each register in turn), and
+  // kStudySplitReductions reduces every register in two 16-bit halves, as
+  // before the one-reduction flush, and kStudyWaterfallEach flushes each
+  // cached descriptor array in a waterfall of its own, as before they shared
+  // one (accumulate_rounds.cpp). 0 here: $TALLY_ACCUMULATE_STUDY where set
+  // (no-adds, no-flush, inline-flush, elected-adds, split-reductions,
+  // waterfall-each, comma-separated).
+  uint32_t study = 0;
   // Footprint (spirv/footprint.hpp, docs/measurement.md): 0 off, else the
   // block size in bytes (32, 64 or 128). Every access also marks the blocks
   // it covers in the bitmap of its slot's resource; the table at

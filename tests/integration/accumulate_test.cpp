@@ -5,7 +5,11 @@
 //  - discard_left / demote_left: the left 100 columns end (OpKill) or turn
 //    into helpers (OpDemoteToHelperInvocation) after two of five reads;
 //  - long_loop: 70008 buffer loads per invocation, both 16-bit halves of the
-//    flush's reduction non-zero where every load adds in the shader.
+//    flush's reduction non-zero where every load adds in the shader;
+//  - cached_arrays: reads through a 20-element descriptor array, cached per
+//    site and flushed in one waterfall, against counts per element by hand.
+#include <array>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -154,6 +158,46 @@ TEST(StripedCopies, FoldToTheCountsOfOneCopy) {
       EXPECT_GT(sumKind(single->sites, single->counters, SiteKind::BufferRead, Stage::Compute), 0u) << where;
     }
   }
+}
+
+// A descriptor array longer than the registers hold: each element's count,
+// from both sites, against the same sum done here over the in-bounds
+// invocations (cached_arrays.comp.glsl's header). At 37 x 21 the 5 x 3
+// workgroups' edges are partial, so flushes run with fewer lanes than a
+// subgroup, and both caches change elements within one invocation.
+TEST(CachedArrays, EveryElementCountsAsByHand) {
+  std::string why;
+  const gpu::Context* ctx = deviceOrSkip(why);
+  ASSERT_NE(ctx, nullptr) << why;
+  constexpr uint32_t w = 37, h = 21;
+  std::array<uint64_t, kComputeBufferArray> expected{};
+  for (uint32_t y = 0; y < h; ++y) {
+    for (uint32_t x = 0; x < w; ++x) {
+      const uint32_t gx = x / kComputeWorkgroupSize, gy = y / kComputeWorkgroupSize;
+      for (uint32_t i = 0; i < 9; ++i) {
+        ++expected[(gx + gy + i / 3) % kComputeBufferArray];
+        ++expected[(2 * gx + i) % kComputeBufferArray];
+      }
+    }
+  }
+  ComputePass pass(*ctx, w, h, "cached_arrays.comp.glsl");
+  forEachExactMode(*ctx, pass, [&](const PassRun& run, const std::string& where) {
+    std::set<uint32_t> bases;  // the two sites may share their resource's slots
+    for (const auto& s : run.sites) {
+      if (s.kind == SiteKind::BufferRead && s.slotCount == kComputeBufferArray) bases.insert(s.slot);
+    }
+    ASSERT_FALSE(bases.empty()) << where << ": no site reads the array";
+    for (uint32_t e = 0; e < kComputeBufferArray; ++e) {
+      uint64_t counted = 0;
+      for (uint32_t base : bases) counted += run.counters.at(base + e);
+      EXPECT_EQ(counted, expected[e]) << where << ": element " << e;
+    }
+    EXPECT_EQ(sumKind(run.sites, run.counters, SiteKind::BufferWrite, Stage::Compute), uint64_t(w) * h) << where;
+    // Where compute has subgroup arithmetic the reads go through the caches, not an atomic each.
+    if (where.starts_with("accumulate") && (ctx->subgroupStages & spirv::stageBit(Stage::Compute)) != 0) {
+      for (const auto& note : run.notes) EXPECT_EQ(note.find("descriptor arrays of more than"), std::string::npos) << where << ": " << note;
+    }
+  });
 }
 
 }  // namespace

@@ -409,7 +409,9 @@ ComputePass::ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t heigh
       binding(2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT),
       binding(3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT),
       binding(4, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, VK_SHADER_STAGE_COMPUTE_BIT),
+      binding(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT),
   };
+  sceneBindings[5].descriptorCount = kComputeBufferArray;
   sceneLayout_ = gpu::createDescriptorSetLayout(ctx, sceneBindings);
   emptyLayout_ = gpu::createDescriptorSetLayout(ctx, {});
   auto counterBinding = binding(0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_COMPUTE_BIT);
@@ -419,10 +421,10 @@ ComputePass::ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t heigh
 
   VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1},
                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 2},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3}};
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3 + kComputeBufferArray}};
   pool_ = gpu::createDescriptorPool(ctx, 2, sizes);
   sceneSet_ = gpu::allocateDescriptorSet(ctx, pool_, sceneLayout_);
-  gpu::DescriptorWrite writes[5];
+  gpu::DescriptorWrite writes[5 + kComputeBufferArray];
   writes[0].binding = 0;
   writes[0].type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
   writes[0].image = {sampler_, source_.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
@@ -438,6 +440,12 @@ ComputePass::ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t heigh
   writes[4].binding = 4;
   writes[4].type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
   writes[4].image = {VK_NULL_HANDLE, outputImage_.view, VK_IMAGE_LAYOUT_GENERAL};
+  for (uint32_t i = 0; i < kComputeBufferArray; ++i) {  // every element the input buffer
+    writes[5 + i].binding = 5;
+    writes[5 + i].arrayElement = i;
+    writes[5 + i].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[5 + i].buffer = {inputBuffer_.buffer, 0, VK_WHOLE_SIZE};
+  }
   gpu::updateDescriptorSet(ctx, sceneSet_, writes);
 }
 

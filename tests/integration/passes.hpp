@@ -90,9 +90,13 @@ class FragmentPass {
   uint32_t counterSet_ = 0;
 };
 
+// Binding 5 of ComputePass's set: an array of this many storage buffers, each
+// the input buffer (more than the 16 elements accumulate keeps in registers).
+constexpr uint32_t kComputeBufferArray = 20;
+
 class ComputePass {
  public:
-  // `shader`: a compute shader of shaders/ with mixed_reads' bindings.
+  // `shader`: a compute shader of shaders/ with mixed_reads' bindings (and binding 5).
   ComputePass(const gpu::Context& ctx, uint32_t width, uint32_t height,
               const std::string& shader = "mixed_reads.comp.glsl");
   ~ComputePass();
