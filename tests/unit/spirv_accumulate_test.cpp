@@ -272,5 +272,46 @@ TEST(Accumulate, FoldSumsEveryCopyIntoItsSlot) {
   }
 }
 
+// The flush as read off the module: reduced first, one vote for whole sums,
+// adds in rounds (a ballot's rank and count) and no elected lane; the
+// study's words take each part back, or leave adds and flushes out (then
+// the notes say the counts are not the mode's).
+TEST(Accumulate, FlushReducesFirstAndAddsInRoundsUnlessStudied) {
+  const auto words = compileGlsl(kComputeLoop, Stage::Compute);
+  std::string now = disassemble(instrumentOk(words, accumulate("accumulate")).words);
+  EXPECT_TRUE(contains(now, "OpGroupNonUniformAll")) << now;
+  EXPECT_TRUE(contains(now, "OpGroupNonUniformBallotBitCount")) << now;
+  EXPECT_FALSE(contains(now, "OpGroupNonUniformElect")) << now;
+  InstrumentOptions before = accumulate("accumulate");
+  before.study = kStudyElectedAdds | kStudySplitReductions | kStudyWaterfallEach;
+  std::string was = disassemble(instrumentOk(words, before).words);
+  EXPECT_TRUE(contains(was, "OpGroupNonUniformElect")) << was;
+  EXPECT_FALSE(contains(was, "OpGroupNonUniformAll")) << was;
+  EXPECT_FALSE(contains(was, "OpGroupNonUniformBallotBitCount")) << was;
+
+  InstrumentOptions noFlush = accumulate("accumulate");
+  noFlush.study = kStudyNoFlush;
+  auto quiet = instrumentOk(words, noFlush);
+  EXPECT_FALSE(contains(disassemble(quiet.words), "OpFunctionCall %void %tally_flush"));
+  bool said = false;
+  for (const auto& note : quiet.notes) said = said || contains(note, "not the mode's");
+  EXPECT_TRUE(said);
+  EXPECT_TRUE(contains(now, "OpFunctionCall %void %tally_flush")) << now;
+}
+
+TEST(Accumulate, StudyWordsParseOrNameTheBadOne) {
+  auto both = parseStudy("no-adds,no-flush");
+  ASSERT_TRUE(both.ok()) << both.error();
+  EXPECT_EQ(*both, kStudyNoAdds | kStudyNoFlush);
+  EXPECT_EQ(*parseStudy("elected-adds,split-reductions,waterfall-each"),
+            kStudyElectedAdds | kStudySplitReductions | kStudyWaterfallEach);
+  EXPECT_EQ(*parseStudy("inline-flush"), kStudyInlineFlush);
+  for (const char* bad : {"no-add", "no-adds,,no-flush", "fast"}) {
+    auto r = parseStudy(bad);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_TRUE(contains(r.error(), "unknown variant")) << r.error();
+  }
+}
+
 }  // namespace
 }  // namespace tally::spirv
