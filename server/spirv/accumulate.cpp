@@ -282,9 +282,6 @@ uint32_t Injector::flushFunction(Stage stage) {
   uint32_t control = (options_.study & kStudyInlineFlush) != 0 ? uint32_t(spv::FunctionControlMask::Inline) : 0;
   b.insts.emplace_back(spv::Op::OpFunction, std::vector<uint32_t>{tVoid(), id, control, fnType});
   label(b, m_.newId());
-  // Helper lanes stay out of the flush altogether: were one the elected
-  // lane, its atomic would have no effect and the subgroup's count would
-  // be lost (NVIDIA elects them: found by the analytic suite on an H100).
   // Registers are flushed together (accumulate_rounds.cpp) wherever they
   // reduce across the subgroup; one at a time only for the study of what
   // that flush cost before.
@@ -302,6 +299,9 @@ uint32_t Injector::flushFunction(Stage stage) {
     b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, tU32()), counter,
                                                                      static_cast<uint32_t>(spv::StorageClass::Function)});
   }
+  // Helper lanes stay out of the flush altogether: were one the elected
+  // lane, its atomic would have no effect and the subgroup's count would
+  // be lost (NVIDIA elects them: found by the analytic suite on an H100).
   uint32_t end = 0;
   if (stage == Stage::Fragment && subgroupFlush(stage)) end = skipHelperLanes(b, stage);
   uint32_t copyOffset = stripes(stage) ? copyOffsetOf(b, stage) : 0;
