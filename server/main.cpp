@@ -28,6 +28,9 @@ CLI::App* addInstrument(CLI::App& app, tally::cli::InstrumentArgs& args) {
                          "also mark the blocks each access touches, in blocks of this many bytes (32, 64 or 128; "
                          "0: off); the table and bitmaps bind at --binding + 1 and + 2")
       ->capture_default_str();
+  instrument->add_flag("--partitioned", args.partitioned,
+                       "accumulate: flush long descriptor arrays' caches by partitioning each subgroup by element "
+                       "(for a device with VK_NV_shader_subgroup_partitioned)");
   instrument->add_flag("--analyze", args.analyzeOnly, "Print the site table without rewriting");
   instrument->add_flag("--sites", args.perSite,
                        "Give every access site counter slots of its own, and print its function, instruction and disassembly");

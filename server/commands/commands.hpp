@@ -16,6 +16,7 @@ struct InstrumentArgs {
   uint32_t firstSlot = 0;
   std::string width = "int64";
   uint32_t computeCopies = 16;
+  bool partitioned = false;
   uint32_t footprintBlockBytes = 0;  // 0 off; 32, 64 or 128
   bool analyzeOnly = false;
   bool perSite = false;  // counter slots per access site, with each site's instruction

@@ -59,6 +59,7 @@ int runInstrument(const InstrumentArgs& args) {
   options.binding = args.binding;
   options.firstSlot = args.firstSlot;
   options.computeCopies = args.computeCopies;
+  options.partitionedStages = args.partitioned ? spirv::kAllStages : 0;
   options.footprintBlockBytes = args.footprintBlockBytes;
   options.perSite = args.perSite;
   options.footprintTableBinding = args.binding + 1;

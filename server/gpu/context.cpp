@@ -378,6 +378,7 @@ nlohmann::json describe(const Context& ctx) {
        {{"int64Atomics", ctx.int64Atomics},
         {"subgroupArithmetic", ctx.subgroupArithmetic},
         {"subgroupStages", ctx.subgroupStages},
+        {"subgroupPartitionedStages", ctx.subgroupPartitionedStages},
         {"fragmentBarycentric", ctx.fragmentBarycentric},
         {"pipelineExecutableInfo", ctx.pipelineExecutableInfo},
         {"pipelineStatistics", ctx.pipelineStatistics},

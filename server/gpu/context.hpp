@@ -69,6 +69,7 @@ struct Context {
   bool subgroupArithmetic = false;  // arithmetic + ballot + basic in subgroupStages
   uint32_t subgroupSize = 0;
   uint32_t subgroupStages = 0;               // tally::spirv::stageBit mask; 0 without subgroupArithmetic
+  uint32_t subgroupPartitionedStages = 0;    // those of subgroupStages that partition (VK_NV_shader_subgroup_partitioned)
   bool shaderSubgroupExtendedTypes = false;  // 64-bit subgroup arithmetic
   bool fragmentBarycentric = false;          // VK_KHR_fragment_shader_barycentric enabled
   // VK_KHR_pipeline_executable_properties enabled: pipelines are created with

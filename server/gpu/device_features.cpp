@@ -49,6 +49,7 @@ void querySupport(Context& ctx, Supported& s) {
   s.hasExecutableProps = hasExtension(available, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
   s.hasAtomicInt64Ext = !v12 && hasExtension(available, VK_KHR_SHADER_ATOMIC_INT64_EXTENSION_NAME);
   s.hasDriverPropsExt = !v12 && hasExtension(available, VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
+  s.hasPartitioned = hasExtension(available, VK_NV_SHADER_SUBGROUP_PARTITIONED_EXTENSION_NAME);
   const bool hasBarycentric = s.hasBarycentric, hasExecutableProps = s.hasExecutableProps;
   const bool hasAtomicInt64Ext = s.hasAtomicInt64Ext, hasDriverPropsExt = s.hasDriverPropsExt;
 
@@ -168,6 +169,8 @@ void enableFeatures(Context& ctx, const Supported& s, Enabled& e) {
     ctx.fragmentBarycentric = true;
   }
   if (hasDriverPropsExt) ctx.enabledExtensions.push_back(VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME);
+  // Accumulate partitions a subgroup by descriptor index where it can (spirv::InstrumentOptions::partitionedStages).
+  if (s.hasPartitioned) ctx.enabledExtensions.push_back(VK_NV_SHADER_SUBGROUP_PARTITIONED_EXTENSION_NAME);
   if (hasExecutableProps && haveExec.pipelineExecutableInfo) {
     wantExec.pipelineExecutableInfo = VK_TRUE;
     append(wantExec);
@@ -204,6 +207,9 @@ void recordCapabilities(Context& ctx, const Supported& s, const Enabled& e) {
       VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
   ctx.subgroupArithmetic = (subgroup.supportedOperations & kNeeded) == kNeeded;
   ctx.subgroupStages = ctx.subgroupArithmetic ? toStageMask(subgroup.supportedStages) : 0;
+  ctx.subgroupPartitionedStages =
+      s.hasPartitioned && (subgroup.supportedOperations & VK_SUBGROUP_FEATURE_PARTITIONED_BIT_NV) != 0 ? ctx.subgroupStages
+                                                                                                        : 0;
   // Not known to be fixed in a later Mesa: applies to every llvmpipe until checked.
   ctx.volatileHelperInvocationCrashes = ctx.driverID == VK_DRIVER_ID_MESA_LLVMPIPE;
 }

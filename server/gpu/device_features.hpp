@@ -38,6 +38,7 @@ struct Supported {
   bool hasExecutableProps = false;
   bool hasAtomicInt64Ext = false;
   bool hasDriverPropsExt = false;
+  bool hasPartitioned = false;  // VK_NV_shader_subgroup_partitioned
   VkPhysicalDeviceProperties2 props2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   VkPhysicalDeviceSubgroupProperties subgroup = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceDriverProperties driver = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};

@@ -36,6 +36,7 @@ spirv::InstrumentOptions instrumentOptionsFor(const Context& ctx, spirv::Mode mo
   options.firstSlot = firstSlot;
   options.width = ctx.int64Atomics ? spirv::CounterWidth::Int64 : spirv::CounterWidth::Uint32Pair;
   options.subgroupStages = ctx.subgroupStages;
+  options.partitionedStages = ctx.subgroupPartitionedStages;
   // NVIDIA combines a warp's same-address atomics in the graphics stages,
   // where an explicit reduction costs more (H200: tonemap x2.2 reduced, x1.5
   // per lane); lavapipe does not (tonemap x2.0 reduced, x6.4 per lane), nor

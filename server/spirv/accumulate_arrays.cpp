@@ -47,13 +47,18 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
   return true;
 }
 
-// In the stage's flush: lanes holding a count combine per element, lo and
-// hi 16 bits apart as flushOne's sums. Helper lanes stay out (one elected
-// would add nothing): the flush keeps them out where its scalars reduce too,
-// this where they do not.
-void Injector::flushCachedArray(Body& b, Stage stage, const CachedArray& cache, uint32_t copyOffset) {
+// In the stage's flush: lanes holding a count combine per element (every
+// cache of the stage in one partition where the device partitions, else one
+// waterfall each). Helper lanes stay out (one elected would add nothing):
+// the flush keeps them out where its scalars reduce too, this where they
+// do not.
+void Injector::flushCachedArrays(Body& b, Stage stage, const std::vector<CachedArray>& caches, uint32_t copyOffset) {
   uint32_t end = stage == Stage::Fragment && !subgroupFlush(stage) ? skipHelperLanes(b, stage) : 0;
-  flushCachedElements(b, cache, copyOffset);
+  if (partitioned(stage)) {
+    flushCachesPartitioned(b, caches, copyOffset);
+  } else {
+    for (const CachedArray& cache : caches) flushCachedElements(b, cache, copyOffset);
+  }
   if (end != 0) {
     branch(b, end);
     label(b, end);

@@ -16,22 +16,25 @@
 namespace tally::spirv {
 
 constexpr uint32_t kGroupExclusiveScan = 2;
+constexpr uint32_t kGroupPartitionedReduce = 6, kGroupPartitionedExclusiveScan = 8;  // SPV_NV_shader_subgroup_partitioned
 
 // The subgroup's sums of each of `values`, as (lo[j], hi[j]) with the sum
 // hi[j] * 65536 + lo[j]: whole in lo where every lane's every value is
 // below 2^24, else 16 bits apart (kStudySplitReductions: always apart).
 void Injector::reduceAll(Body& b, const std::vector<uint32_t>& values, std::vector<uint32_t>& lo,
-                         std::vector<uint32_t>& hi) {
+                         std::vector<uint32_t>& hi, uint32_t partition) {
   const size_t n = values.size();
   uint32_t u = tU32(), bo = tBool(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
   lo.assign(n, 0);
   hi.assign(n, 0);
+  auto sum = [&](Body& s, uint32_t value) {
+    if (partition == 0) return op(s, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, value});
+    return op(s, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupPartitionedReduce, value, partition});
+  };
   auto split = [&](Body& s, std::vector<uint32_t>& los, std::vector<uint32_t>& his) {
     for (size_t j = 0; j < n; ++j) {
-      los[j] = op(s, spv::Op::OpGroupNonUniformIAdd, u,
-                  {scope, kGroupReduce, op(s, spv::Op::OpBitwiseAnd, u, {values[j], constantU32(0xffffu)})});
-      his[j] = op(s, spv::Op::OpGroupNonUniformIAdd, u,
-                  {scope, kGroupReduce, op(s, spv::Op::OpShiftRightLogical, u, {values[j], constantU32(16)})});
+      los[j] = sum(s, op(s, spv::Op::OpBitwiseAnd, u, {values[j], constantU32(0xffffu)}));
+      his[j] = sum(s, op(s, spv::Op::OpShiftRightLogical, u, {values[j], constantU32(16)}));
     }
   };
   if ((options_.study & kStudySplitReductions) != 0) {
@@ -46,7 +49,7 @@ void Injector::reduceAll(Body& b, const std::vector<uint32_t>& values, std::vect
   selection(b, small, whole, parts, merge);
   label(b, whole);
   std::vector<uint32_t> sums(n), partLo(n), partHi(n);
-  for (size_t j = 0; j < n; ++j) sums[j] = op(b, spv::Op::OpGroupNonUniformIAdd, u, {scope, kGroupReduce, values[j]});
+  for (size_t j = 0; j < n; ++j) sums[j] = sum(b, values[j]);
   branch(b, merge);
   label(b, parts);
   split(b, partLo, partHi);
@@ -125,26 +128,42 @@ void Injector::addInRounds(Body& b, const std::vector<uint32_t>& slots, const st
       });
 }
 
-// Every cached array of the stage in one waterfall (accumulate_arrays.cpp has
-// one per cache): each pass takes the lanes whose elements, in every cache
-// that holds a count, equal the first active lane's (one pass per distinct
-// material, say, where each cache is one of its maps), reduces each cache's
-// count across them and adds the sums in rounds.
-void Injector::flushCachesTogether(Body& b, const std::vector<CachedArray>& caches, uint32_t copyOffset,
-                                   uint32_t counter) {
+// Each cache's count and key (its element, or ~0 where it holds no count,
+// which matches only other caches without one), zeroing the count; returns
+// whether the lane holds any count.
+uint32_t Injector::loadCacheKeys(Body& b, const std::vector<CachedArray>& caches, std::vector<uint32_t>& counts,
+                                 std::vector<uint32_t>& keys) {
   const size_t n = caches.size();
-  uint32_t u = tU32(), bo = tBool(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
-  std::vector<uint32_t> counts(n), keys(n);
+  uint32_t u = tU32(), bo = tBool(), zero = constantU32(0);
+  counts.assign(n, 0);
+  keys.assign(n, 0);
   uint32_t held = 0;
   for (size_t j = 0; j < n; ++j) {
     counts[j] = op(b, spv::Op::OpLoad, u, {caches[j].count});
     uint32_t element = op(b, spv::Op::OpLoad, u, {caches[j].element});
     opNoResult(b, spv::Op::OpStore, {caches[j].count, zero});
     uint32_t has = op(b, spv::Op::OpINotEqual, bo, {counts[j], zero});
-    // A cache without a count matches only others without one.
     keys[j] = op(b, spv::Op::OpSelect, u, {has, element, constantU32(0xffffffffu)});
     held = held == 0 ? has : op(b, spv::Op::OpLogicalOr, bo, {held, has});
   }
+  return held;
+}
+
+// Every cached array of the stage in one waterfall (accumulate_arrays.cpp has
+// one per cache): each pass takes the lanes whose elements, in every cache
+// that holds a count, equal the first active lane's (one pass per distinct
+// material, say, where each cache is one of its maps), reduces each cache's
+// count across them and adds the sums in rounds.
+void Injector::flushCachesTogether(Body& b, Stage stage, const std::vector<CachedArray>& caches, uint32_t copyOffset,
+                                   uint32_t counter) {
+  if (partitioned(stage)) {
+    flushCachesPartitioned(b, caches, copyOffset);
+    return;
+  }
+  const size_t n = caches.size();
+  uint32_t u = tU32(), bo = tBool(), scope = constantU32(kScopeSubgroup);
+  std::vector<uint32_t> counts, keys;
+  uint32_t held = loadCacheKeys(b, caches, counts, keys);
   when(b, held, [&](Body& w) {
     uint32_t header = m_.newId(), loop = m_.newId(), cont = m_.newId(), exit = m_.newId();
     uint32_t take = m_.newId(), skip = m_.newId();
@@ -175,6 +194,45 @@ void Injector::flushCachesTogether(Body& b, const std::vector<CachedArray>& cach
     label(w, cont);
     opNoResult(w, spv::Op::OpBranchConditional, {mine, exit, header});
     label(w, exit);
+  });
+}
+
+bool Injector::partitioned(Stage stage) const {
+  const uint32_t bit = stageBit(stage);
+  return (options_.partitionedStages & options_.subgroupStages & bit) != 0 && (options_.study & kStudyWaterfall) == 0;
+}
+
+// Where the device partitions a subgroup by value: the lanes holding a count
+// split into parts of equal elements in every cache (the partitions by each
+// cache's key, intersected), each cache's count is reduced within each part,
+// and the part's first lane adds the sums: every part at once, where the
+// waterfall took one pass per distinct element.
+void Injector::flushCachesPartitioned(Body& b, const std::vector<CachedArray>& caches, uint32_t copyOffset) {
+  addCapability(spv::Capability::GroupNonUniformPartitionedNV);
+  addExtension("SPV_NV_shader_subgroup_partitioned");
+  const size_t n = caches.size();
+  uint32_t u = tU32(), bo = tBool(), zero = constantU32(0), scope = constantU32(kScopeSubgroup);
+  uint32_t ballot = tVec(u, 4);
+  std::vector<uint32_t> counts, keys;
+  uint32_t held = loadCacheKeys(b, caches, counts, keys);
+  when(b, held, [&](Body& w) {
+    uint32_t part = 0;
+    for (size_t j = 0; j < n; ++j) {
+      uint32_t p = op(w, spv::Op::OpGroupNonUniformPartitionNV, ballot, {keys[j]});
+      part = part == 0 ? p : op(w, spv::Op::OpBitwiseAnd, ballot, {part, p});
+    }
+    std::vector<uint32_t> lo, hi;
+    reduceAll(w, counts, lo, hi, part);
+    uint32_t before = op(w, spv::Op::OpGroupNonUniformIAdd, u,
+                         {scope, kGroupPartitionedExclusiveScan, constantU32(1), part});
+    when(w, op(w, spv::Op::OpIEqual, bo, {before, zero}), [&](Body& first) {
+      for (size_t j = 0; j < n; ++j) {
+        uint32_t slot = op(first, spv::Op::OpIAdd, u, {constantU32(caches[j].base), keys[j]});
+        if (copyOffset != 0) slot = op(first, spv::Op::OpIAdd, u, {slot, copyOffset});
+        uint32_t nonZero = op(first, spv::Op::OpINotEqual, bo, {op(first, spv::Op::OpBitwiseOr, u, {lo[j], hi[j]}), zero});
+        when(first, nonZero, [&](Body& a) { emitAddWide(a, slot, lo[j], hi[j]); });
+      }
+    });
   });
 }
 

@@ -77,6 +77,7 @@ class ModuleBuilder {
   uint32_t constantU32(uint32_t v) { return constant(tU32(), {v}); }
 
   void addCapability(spv::Capability cap);
+  void addExtension(const std::string& extension);
 
   void decorate(uint32_t id, spv::Decoration d, std::vector<uint32_t> extra = {});
 
@@ -333,9 +334,17 @@ class Injector : public ModuleBuilder {
   };
   bool accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, uint32_t slot, uint32_t length,
                              std::vector<std::map<size_t, std::vector<Instruction>>>& after);
-  void flushCachedArray(Body& b, Stage stage, const CachedArray& cache, uint32_t copyOffset);
+  void flushCachedArrays(Body& b, Stage stage, const std::vector<CachedArray>& caches, uint32_t copyOffset);
   void flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset);
-  void flushCachesTogether(Body& b, const std::vector<CachedArray>& caches, uint32_t copyOffset, uint32_t counter);
+  void flushCachesTogether(Body& b, Stage stage, const std::vector<CachedArray>& caches, uint32_t copyOffset,
+                           uint32_t counter);
+  uint32_t loadCacheKeys(Body& b, const std::vector<CachedArray>& caches, std::vector<uint32_t>& counts,
+                         std::vector<uint32_t>& keys);
+  // Where the device partitions a subgroup by value (options_.partitionedStages):
+  // no waterfall, one partition of the lanes by every cache's element,
+  // reduced within each part and added by its lowest lane.
+  bool partitioned(Stage stage) const;
+  void flushCachesPartitioned(Body& b, const std::vector<CachedArray>& caches, uint32_t copyOffset);
 
   // Emits the site's increment; false when the site is counted per access instead.
   bool accumulateSite(const FoundSite& s, const EntryPoint& ep, uint32_t slot,
@@ -352,7 +361,9 @@ class Injector : public ModuleBuilder {
   // (accumulate_rounds.cpp); `counter` a Function u32 for the rounds.
   void flushInRounds(Body& b, const std::vector<std::pair<uint32_t, uint32_t>>& registers, uint32_t copyOffset,
                      uint32_t counter);
-  void reduceAll(Body& b, const std::vector<uint32_t>& values, std::vector<uint32_t>& lo, std::vector<uint32_t>& hi);
+  // `partition` (a ballot of OpGroupNonUniformPartitionNV) or 0: the whole subgroup.
+  void reduceAll(Body& b, const std::vector<uint32_t>& values, std::vector<uint32_t>& lo, std::vector<uint32_t>& hi,
+                 uint32_t partition = 0);
   void addInRounds(Body& b, const std::vector<uint32_t>& slots, const std::vector<uint32_t>& lo,
                    const std::vector<uint32_t>& hi, uint32_t counter);
 

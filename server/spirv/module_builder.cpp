@@ -72,6 +72,13 @@ void ModuleBuilder::addCapability(spv::Capability cap) {
   m_.capabilities.emplace_back(spv::Op::OpCapability, std::vector<uint32_t>{static_cast<uint32_t>(cap)});
 }
 
+void ModuleBuilder::addExtension(const std::string& extension) {
+  for (const auto& e : m_.extensions) {
+    if (e.literalString(1) == extension) return;
+  }
+  m_.extensions.emplace_back(spv::Op::OpExtension, stringWords(extension));
+}
+
 void ModuleBuilder::decorate(uint32_t id, spv::Decoration d, std::vector<uint32_t> extra) {
   std::vector<uint32_t> operands = {id, static_cast<uint32_t>(d)};
   operands.insert(operands.end(), extra.begin(), extra.end());

@@ -14,6 +14,7 @@
 #   COUNTING_FRAMES=N        replaces the 10 frames per sample
 #   COUNTING_SPECS="sponza compute"
 #   COUNTING_MODES=a,b       replaces the specs' counting modes (e.g. exact,accumulate)
+#   COUNTING_RENDERERS=a,b   keeps only these renderers and workloads of the specs (e.g. visbuffer-lean)
 #   COUNTING_SITES=1         also runs each spec with per-site counts ("sites": true): counting-<name>-sites.*
 #   COUNTING_FOOTPRINT=B     footprint on, B-byte blocks (32, 64 or 128); TALLY_FOOTPRINT_DEDUP chooses
 #                            what its marks skip (docs/measurement.md, "What a mark skips")
@@ -37,6 +38,7 @@ for name in "${names[@]}"; do
   spec="$out/counting-$name-spec.json"
   python3 tests/gpu/spec_edit.py "tests/gpu/counting/${name%-sites}.json" --sponza "$sponza" \
     --resolution "${width}x${height}" --frames "$frames" ${COUNTING_MODES:+--counting "$COUNTING_MODES"} \
+    ${COUNTING_RENDERERS:+--renderers "$COUNTING_RENDERERS"} \
     ${COUNTING_FOOTPRINT:+--footprint "$COUNTING_FOOTPRINT"} \
     $([ "$name" != "${name%-sites}" ] && echo --sites) > "$spec" || { status=2; continue; }
   tally_timed_capture "counting $name ${width}x${height}" "$spec" "$out/counting-$name.json" \

@@ -6,6 +6,7 @@ techniques.sh) all shrink or redirect their checked-in specs the same way:
 
   spec_edit.py SPEC [--resolution WxH] [--frames N] [--sponza PATH]
                [--scene NAME [--cameras N]] [--counting MODE,MODE...]
+               [--renderers NAME,NAME...]
 
   --resolution  a sweep's "resolution", or a capture's "resolutions" (one entry)
   --frames      a capture's "frames"
@@ -15,6 +16,8 @@ techniques.sh) all shrink or redirect their checked-in specs the same way:
                 no "cameras", the first N (--cameras, default 2) of
                 tests/gpu/accuracy-<scene>.json, which frame that scene
   --counting    a capture's "counting" modes, comma-separated
+  --renderers   keep only these of a capture's "renderers" and "workloads"
+                (names, comma-separated); the others are left out
 """
 import argparse
 import json
@@ -38,6 +41,7 @@ def main():
     ap.add_argument("--scene")
     ap.add_argument("--cameras", type=int, default=2)
     ap.add_argument("--counting", help="comma-separated counting modes")
+    ap.add_argument("--renderers", help="comma-separated renderer and workload names to keep")
     ap.add_argument("--sites", action="store_true", help="count per access site (the spec's \"sites\")")
     ap.add_argument("--footprint", type=int, help="footprint block bytes (the spec's \"footprint\")")
     args = ap.parse_args()
@@ -61,6 +65,17 @@ def main():
             spec["resolutions"] = [args.resolution]
     if args.counting:
         spec["counting"] = [m for m in args.counting.split(",") if m]
+    if args.renderers:
+        keep = {n for n in args.renderers.split(",") if n}
+        def named(entry, key):
+            return entry if isinstance(entry, str) else entry.get(key)
+        for key, field in (("renderers", "renderer"), ("workloads", "workload")):
+            if key in spec:
+                spec[key] = [e for e in spec[key] if named(e, field) in keep]
+                if not spec[key]:
+                    del spec[key]
+        if not spec.get("renderers") and not spec.get("workloads"):
+            sys.exit(f"--renderers {args.renderers}: the spec has none of these")
     if args.sites:
         spec["sites"] = True
     if args.footprint:

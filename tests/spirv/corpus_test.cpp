@@ -444,6 +444,13 @@ std::vector<DigestCase> digestCases() {
   add("accumulate/auto-lane-everywhere", [](auto& o) { o.autoLaneStages = spirv::kAllStages; });
   add("accumulate/auto-lane-nowhere", [](auto& o) { o.autoLaneStages = 0; });
   add("accumulate/copies:1", [](auto& o) { o.computeCopies = 1; });
+  // Long descriptor arrays' caches flushed by partitioning the subgroup
+  // (VK_NV_shader_subgroup_partitioned), in the reduced and per-lane flushes.
+  add("accumulate/partitioned", [](auto& o) { o.partitionedStages = spirv::kAllStages; });
+  add("accumulate/partitioned+auto-lane-nowhere", [](auto& o) {
+    o.partitionedStages = spirv::kAllStages;
+    o.autoLaneStages = 0;
+  });
   add("accumulate/copies:256/uint32_pair", [](auto& o) {
     o.computeCopies = 256;
     o.width = CounterWidth::Uint32Pair;

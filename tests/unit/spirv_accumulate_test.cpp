@@ -306,11 +306,73 @@ TEST(Accumulate, StudyWordsParseOrNameTheBadOne) {
   EXPECT_EQ(*parseStudy("elected-adds,split-reductions,waterfall-each"),
             kStudyElectedAdds | kStudySplitReductions | kStudyWaterfallEach);
   EXPECT_EQ(*parseStudy("inline-flush"), kStudyInlineFlush);
+  EXPECT_EQ(*parseStudy("waterfall"), kStudyWaterfall);
   for (const char* bad : {"no-add", "no-adds,,no-flush", "fast"}) {
     auto r = parseStudy(bad);
     ASSERT_FALSE(r.ok()) << bad;
     EXPECT_TRUE(contains(r.error(), "unknown variant")) << r.error();
   }
+}
+
+// Two runtime-sized arrays read with indices that differ between lanes:
+// each site's cache flushes per element, in a waterfall or, where the
+// device partitions a subgroup by value, in one partition of the lanes.
+const char* kMaterialMaps = R"(#version 450
+#extension GL_EXT_nonuniform_qualifier : require
+layout(local_size_x = 64) in;
+layout(set = 0, binding = 0) uniform sampler2D albedo[];
+layout(set = 0, binding = 1) uniform sampler2D normals[];
+layout(set = 0, binding = 2) readonly buffer Ids { uint material[]; };
+layout(set = 0, binding = 3) writeonly buffer Out { vec4 o[]; };
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  uint m = material[i];
+  vec2 uv = vec2(i) / 64.0;
+  o[i] = texture(albedo[nonuniformEXT(m)], uv) + texture(normals[nonuniformEXT(m / 2u)], uv);
+}
+)";
+
+TEST(Accumulate, CachedArraysPartitionTheSubgroupWhereTheDeviceCan) {
+  const auto words = compileGlsl(kMaterialMaps, Stage::Compute);
+  InstrumentOptions options = accumulate("accumulate");
+  std::string waterfall = disassemble(instrumentOk(words, options).words);
+  EXPECT_TRUE(contains(waterfall, "OpGroupNonUniformBroadcastFirst")) << waterfall;
+  EXPECT_FALSE(contains(waterfall, "OpGroupNonUniformPartitionNV")) << waterfall;
+
+  options.partitionedStages = stageBit(Stage::Compute);
+  std::string parts = disassemble(instrumentOk(words, options).words);
+  EXPECT_TRUE(contains(parts, "OpCapability GroupNonUniformPartitionedNV")) << parts;
+  EXPECT_TRUE(contains(parts, "OpExtension \"SPV_NV_shader_subgroup_partitioned\"")) << parts;
+  // One partition per cache, intersected; each count reduced within a part,
+  // and the parts' first lanes found by a partitioned scan. No waterfall.
+  EXPECT_EQ(countOf(parts, "OpGroupNonUniformPartitionNV"), 2u) << parts;
+  EXPECT_TRUE(contains(parts, "PartitionedReduceNV")) << parts;
+  EXPECT_TRUE(contains(parts, "PartitionedExclusiveScanNV")) << parts;
+  EXPECT_FALSE(contains(parts, "OpGroupNonUniformBroadcastFirst")) << parts;
+
+  // The study's word takes the waterfall back; so does a stage the device
+  // has no subgroup operations in.
+  options.study = kStudyWaterfall;
+  EXPECT_EQ(disassemble(instrumentOk(words, options).words), waterfall);
+  options.study = 0;
+  options.subgroupStages = stageBit(Stage::Fragment);
+  EXPECT_FALSE(contains(disassemble(instrumentOk(words, options).words), "OpGroupNonUniformPartitionNV"));
+}
+
+TEST(Accumulate, PerLaneFragmentCachesPartitionToo) {
+  std::string fragment = kMaterialMaps;
+  fragment.replace(fragment.find("layout(local_size_x = 64) in;"), 29,
+                   "layout(location = 0) flat in uint m;\nlayout(location = 0) out vec4 color;");
+  fragment.replace(fragment.find("void main() {"), std::string::npos,
+                   "void main() {\n  vec2 uv = gl_FragCoord.xy;\n  color = texture(albedo[nonuniformEXT(m)], uv);\n}\n");
+  const auto words = compileGlsl(fragment.c_str(), Stage::Fragment);
+  InstrumentOptions options = accumulate("accumulate:lane");
+  options.partitionedStages = kAllStages;
+  std::string parts = disassemble(instrumentOk(words, options).words);
+  EXPECT_EQ(countOf(parts, "OpGroupNonUniformPartitionNV"), 1u) << parts;
+  EXPECT_FALSE(contains(parts, "OpGroupNonUniformBroadcastFirst")) << parts;
+  // Helper lanes stay out of the flush, as in the waterfall.
+  EXPECT_TRUE(contains(parts, "HelperInvocation")) << parts;
 }
 
 }  // namespace
