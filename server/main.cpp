@@ -30,7 +30,7 @@ CLI::App* addInstrument(CLI::App& app, tally::cli::InstrumentArgs& args) {
       ->capture_default_str();
   instrument->add_flag("--partitioned", args.partitioned,
                        "accumulate: flush long descriptor arrays' caches by partitioning each subgroup by element "
-                       "(for a device with VK_NV_shader_subgroup_partitioned)");
+                       "(for a device with VK_NV_shader_subgroup_partitioned; the study's 'partitioned')");
   instrument->add_flag("--analyze", args.analyzeOnly, "Print the site table without rewriting");
   instrument->add_flag("--sites", args.perSite,
                        "Give every access site counter slots of its own, and print its function, instruction and disassembly");

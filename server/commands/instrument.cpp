@@ -59,7 +59,10 @@ int runInstrument(const InstrumentArgs& args) {
   options.binding = args.binding;
   options.firstSlot = args.firstSlot;
   options.computeCopies = args.computeCopies;
-  options.partitionedStages = args.partitioned ? spirv::kAllStages : 0;
+  if (args.partitioned) {
+    options.partitionedStages = spirv::kAllStages;
+    options.study |= spirv::kStudyPartitioned;
+  }
   options.footprintBlockBytes = args.footprintBlockBytes;
   options.perSite = args.perSite;
   options.footprintTableBinding = args.binding + 1;

@@ -199,7 +199,7 @@ void Injector::flushCachesTogether(Body& b, Stage stage, const std::vector<Cache
 
 bool Injector::partitioned(Stage stage) const {
   const uint32_t bit = stageBit(stage);
-  return (options_.partitionedStages & options_.subgroupStages & bit) != 0 && (options_.study & kStudyWaterfall) == 0;
+  return (options_.partitionedStages & options_.subgroupStages & bit) != 0 && (options_.study & kStudyPartitioned) != 0;
 }
 
 // Where the device partitions a subgroup by value: the lanes holding a count

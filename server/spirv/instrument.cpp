@@ -126,10 +126,10 @@ Result<uint32_t> parseStudy(std::string_view text) {
       bits |= kStudySplitReductions;
     } else if (word == "waterfall-each") {
       bits |= kStudyWaterfallEach;
-    } else if (word == "waterfall") {
-      bits |= kStudyWaterfall;
+    } else if (word == "partitioned") {
+      bits |= kStudyPartitioned;
     } else {
-      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each or waterfall, comma-separated)");
+      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each or partitioned, comma-separated)");
     }
     text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
   }

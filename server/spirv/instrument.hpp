@@ -61,7 +61,7 @@ Result<FootprintDedup> parseFootprintDedup(std::string_view text);
 std::string toString(const FootprintDedup& dedup);
 
 constexpr uint32_t kStudyNoAdds = 1, kStudyNoFlush = 2, kStudyInlineFlush = 4, kStudyElectedAdds = 8,
-                   kStudySplitReductions = 16, kStudyWaterfallEach = 32, kStudyWaterfall = 64;
+                   kStudySplitReductions = 16, kStudyWaterfallEach = 32, kStudyPartitioned = 64;
 Result<uint32_t> parseStudy(std::string_view text);
 
 // How a 64-bit counter is incremented.
@@ -102,17 +102,18 @@ struct InstrumentOptions {
   // kStudySplitReductions reduces every register in two 16-bit halves, as
   // before the one-reduction flush, and kStudyWaterfallEach flushes each
   // cached descriptor array in a waterfall of its own, as before they shared
-  // one (accumulate_rounds.cpp); kStudyWaterfall flushes cached arrays in a
-  // waterfall where partitionedStages would partition the subgroup instead.
+  // one (accumulate_rounds.cpp); kStudyPartitioned flushes cached arrays by
+  // partitioning the subgroup instead of a waterfall, in partitionedStages.
   // 0 here: $TALLY_ACCUMULATE_STUDY where set (no-adds, no-flush,
-  // inline-flush, elected-adds, split-reductions, waterfall-each, waterfall,
-  // comma-separated).
+  // inline-flush, elected-adds, split-reductions, waterfall-each,
+  // partitioned, comma-separated).
   uint32_t study = 0;
   // Stages whose subgroups the device can partition by value
-  // (VK_NV_shader_subgroup_partitioned, enabled on the device): accumulate
-  // then flushes long descriptor arrays' caches with one partition of the
-  // lanes by element instead of a waterfall over the distinct elements.
-  // Only within subgroupStages.
+  // (VK_NV_shader_subgroup_partitioned, enabled on the device), for
+  // kStudyPartitioned: long descriptor arrays' caches then flush with one
+  // partition of the lanes by element instead of a waterfall over the
+  // distinct elements. Only within subgroupStages. Not the default: on the
+  // H200 it cost more than the waterfall (docs/accuracy.md).
   uint32_t partitionedStages = 0;
   // Footprint (spirv/footprint.hpp, docs/measurement.md): 0 off, else the
   // block size in bytes (32, 64 or 128). Every access also marks the blocks

@@ -445,10 +445,14 @@ std::vector<DigestCase> digestCases() {
   add("accumulate/auto-lane-nowhere", [](auto& o) { o.autoLaneStages = 0; });
   add("accumulate/copies:1", [](auto& o) { o.computeCopies = 1; });
   // Long descriptor arrays' caches flushed by partitioning the subgroup
-  // (VK_NV_shader_subgroup_partitioned), in the reduced and per-lane flushes.
-  add("accumulate/partitioned", [](auto& o) { o.partitionedStages = spirv::kAllStages; });
+  // (VK_NV_shader_subgroup_partitioned, the study's), in the per-lane and reduced flushes.
+  add("accumulate/partitioned", [](auto& o) {
+    o.partitionedStages = spirv::kAllStages;
+    o.study = spirv::kStudyPartitioned;
+  });
   add("accumulate/partitioned+auto-lane-nowhere", [](auto& o) {
     o.partitionedStages = spirv::kAllStages;
+    o.study = spirv::kStudyPartitioned;
     o.autoLaneStages = 0;
   });
   add("accumulate/copies:256/uint32_pair", [](auto& o) {

@@ -306,7 +306,7 @@ TEST(Accumulate, StudyWordsParseOrNameTheBadOne) {
   EXPECT_EQ(*parseStudy("elected-adds,split-reductions,waterfall-each"),
             kStudyElectedAdds | kStudySplitReductions | kStudyWaterfallEach);
   EXPECT_EQ(*parseStudy("inline-flush"), kStudyInlineFlush);
-  EXPECT_EQ(*parseStudy("waterfall"), kStudyWaterfall);
+  EXPECT_EQ(*parseStudy("partitioned"), kStudyPartitioned);
   for (const char* bad : {"no-add", "no-adds,,no-flush", "fast"}) {
     auto r = parseStudy(bad);
     ASSERT_FALSE(r.ok()) << bad;
@@ -316,7 +316,8 @@ TEST(Accumulate, StudyWordsParseOrNameTheBadOne) {
 
 // Two runtime-sized arrays read with indices that differ between lanes:
 // each site's cache flushes per element, in a waterfall or, where the
-// device partitions a subgroup by value, in one partition of the lanes.
+// device partitions a subgroup by value and the study asks, in one
+// partition of the lanes.
 const char* kMaterialMaps = R"(#version 450
 #extension GL_EXT_nonuniform_qualifier : require
 layout(local_size_x = 64) in;
@@ -340,6 +341,8 @@ TEST(Accumulate, CachedArraysPartitionTheSubgroupWhereTheDeviceCan) {
   EXPECT_FALSE(contains(waterfall, "OpGroupNonUniformPartitionNV")) << waterfall;
 
   options.partitionedStages = stageBit(Stage::Compute);
+  EXPECT_EQ(disassemble(instrumentOk(words, options).words), waterfall);  // the device can: not enough
+  options.study = kStudyPartitioned;
   std::string parts = disassemble(instrumentOk(words, options).words);
   EXPECT_TRUE(contains(parts, "OpCapability GroupNonUniformPartitionedNV")) << parts;
   EXPECT_TRUE(contains(parts, "OpExtension \"SPV_NV_shader_subgroup_partitioned\"")) << parts;
@@ -350,11 +353,7 @@ TEST(Accumulate, CachedArraysPartitionTheSubgroupWhereTheDeviceCan) {
   EXPECT_TRUE(contains(parts, "PartitionedExclusiveScanNV")) << parts;
   EXPECT_FALSE(contains(parts, "OpGroupNonUniformBroadcastFirst")) << parts;
 
-  // The study's word takes the waterfall back; so does a stage the device
-  // has no subgroup operations in.
-  options.study = kStudyWaterfall;
-  EXPECT_EQ(disassemble(instrumentOk(words, options).words), waterfall);
-  options.study = 0;
+  // Not in a stage the device has no subgroup operations in.
   options.subgroupStages = stageBit(Stage::Fragment);
   EXPECT_FALSE(contains(disassemble(instrumentOk(words, options).words), "OpGroupNonUniformPartitionNV"));
 }
@@ -368,6 +367,7 @@ TEST(Accumulate, PerLaneFragmentCachesPartitionToo) {
   const auto words = compileGlsl(fragment.c_str(), Stage::Fragment);
   InstrumentOptions options = accumulate("accumulate:lane");
   options.partitionedStages = kAllStages;
+  options.study = kStudyPartitioned;
   std::string parts = disassemble(instrumentOk(words, options).words);
   EXPECT_EQ(countOf(parts, "OpGroupNonUniformPartitionNV"), 1u) << parts;
   EXPECT_FALSE(contains(parts, "OpGroupNonUniformBroadcastFirst")) << parts;
