@@ -44,6 +44,17 @@ Result<RunFrameTime> runFrameTime(store::Store& store, int64_t runId) {
   return runFrameTime(*samples);
 }
 
+Result<std::map<int64_t, RunFrameTime>> runFrameTimes(store::Store& store, std::span<const int64_t> runIds) {
+  auto samples = store.runs().sampleFrameTimes(runIds);
+  if (!samples) return makeError(samples.error());
+  std::map<int64_t, RunFrameTime> out;
+  for (int64_t id : runIds) {
+    auto it = samples->find(id);
+    out[id] = it == samples->end() ? RunFrameTime{} : runFrameTime(it->second);
+  }
+  return out;
+}
+
 json toJson(const RunFrameTime& t) {
   auto opt = [](const std::optional<double>& v) { return v ? json(*v) : json(nullptr); };
   return {{"median", opt(t.median)},

@@ -7,7 +7,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,9 @@ struct RunFrameTime {
 // From each sample's frame_ms and per-frame times (store::SampleFrameTimes).
 RunFrameTime runFrameTime(const std::vector<store::SampleFrameTimes>& samples);
 Result<RunFrameTime> runFrameTime(store::Store& store, int64_t runId);
+// Each of many runs' (a listing's page) from one statement, by run id; every
+// id has an entry ("none" where the run has no sample).
+Result<std::map<int64_t, RunFrameTime>> runFrameTimes(store::Store& store, std::span<const int64_t> runIds);
 
 // The median and its interval of sorted times: order statistics k and
 // n + 1 - k, k = floor(n/2 - 0.98 sqrt(n)) from the normal approximation to

@@ -171,8 +171,12 @@ Response trend(ServiceContext& ctx, const Request& req) {
     alertsByRun[a.runId].push_back(a.id);
     alertList.push_back(alertJson(a));
   }
+  auto configurationRuns = check(store.alerts().configurationRuns(*id, limit));
+  std::vector<int64_t> ids;
+  for (const auto& r : configurationRuns) ids.push_back(r.id);
+  auto frameTimes = check(reports::runFrameTimes(store, ids));
   json runs = json::array();
-  for (const auto& r : check(store.alerts().configurationRuns(*id, limit))) {
+  for (const auto& r : configurationRuns) {
     runs.push_back({{"id", r.id},
                     {"capture", r.jobId},
                     {"created_at", r.createdAt},
@@ -180,7 +184,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
                     {"lights", r.lights},
                     {"host", opt(r.host)},
                     {"tally_commit", opt(r.tallyCommit)},
-                    {"frame_ms", reports::toJson(check(reports::runFrameTime(store, r.id)))},
+                    {"frame_ms", reports::toJson(frameTimes[r.id])},
                     {"mean_bytes", opt(r.meanBytes)},
                     {"baseline", r.id == baseline->runId},
                     {"alerts", alertsByRun.count(r.id) ? alertsByRun[r.id] : json::array()}});

@@ -68,8 +68,9 @@ Response compare(ServiceContext& ctx, const Request& req) {
   // store's frame_ms (the mean of the samples' medians), against the first.
   json medians = json::array();
   std::optional<double> first;
+  auto frameTimes = check(reports::runFrameTimes(store, ids));
   for (size_t i = 0; i < ids.size(); ++i) {
-    auto t = check(reports::runFrameTime(store, ids[i]));
+    const reports::RunFrameTime& t = frameTimes[ids[i]];
     reports::addFrameMedian(t, out["runs"][i]);
     if (i == 0) first = t.median;
     bool against = first && t.median && *first != 0;

@@ -22,10 +22,14 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
   auto filter = queryFilter(req);
   auto& store = reader(ctx);
   auto page = check(store.runs().list(filter, queryPage(req)));
+  // The page's frame times in one statement: the listing is two, whatever the page size.
+  std::vector<int64_t> ids;
+  for (const auto& r : page.runs) ids.push_back(r.id);
+  auto frameTimes = check(reports::runFrameTimes(store, ids));
   json runs = json::array();
   for (const auto& r : page.runs) {
     runs.push_back(runRowJson(r));
-    reports::addFrameMedian(check(reports::runFrameTime(store, r.id)), runs.back());
+    reports::addFrameMedian(frameTimes[r.id], runs.back());
   }
   return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
 }

@@ -333,18 +333,35 @@ Result<std::vector<SampleRow>> Runs::samples(int64_t runId) {
 }
 
 Result<std::vector<SampleFrameTimes>> Runs::sampleFrameTimes(int64_t runId) {
+  auto byRun = sampleFrameTimes(std::span<const int64_t>(&runId, 1));
+  if (!byRun) return makeError(byRun.error());
+  return std::move((*byRun)[runId]);
+}
+
+Result<std::map<int64_t, std::vector<SampleFrameTimes>>> Runs::sampleFrameTimes(std::span<const int64_t> runIds) {
+  using ByRun = std::map<int64_t, std::vector<SampleFrameTimes>>;
   std::lock_guard lock(mutex_);
-  return guarded<std::vector<SampleFrameTimes>>("sampleFrameTimes", [&]() -> Result<std::vector<SampleFrameTimes>> {
-    Statement query(db_, "SELECT frame_ms, frame_ms_frames FROM samples WHERE run_id = ?1 ORDER BY camera_index");
-    query.bind(1, runId);
-    std::vector<SampleFrameTimes> out;
-    while (query.step()) {
-      RowReader row(query);
-      SampleFrameTimes s;
-      s.frameMs = row.getDouble();
-      s.frames = frameTimes(row);
-      row.end();
-      out.push_back(std::move(s));
+  return guarded<ByRun>("sampleFrameTimes", [&]() -> Result<ByRun> {
+    ByRun out;
+    // At most kChunk ids a statement (SQLite binds at most 32,766 values; a
+    // listing's page is at most 1,000 runs, one statement).
+    constexpr size_t kChunk = 1000;
+    for (size_t first = 0; first < runIds.size(); first += kChunk) {
+      auto chunk = runIds.subspan(first, std::min(kChunk, runIds.size() - first));
+      std::string sql = "SELECT run_id, frame_ms, frame_ms_frames FROM samples WHERE run_id IN (?";
+      for (size_t i = 1; i < chunk.size(); ++i) sql += ", ?";  // placeholders only
+      sql += ") ORDER BY run_id, camera_index";
+      Statement query(db_, sql);
+      for (size_t i = 0; i < chunk.size(); ++i) query.bind(static_cast<int>(i + 1), chunk[i]);
+      while (query.step()) {
+        RowReader row(query);
+        int64_t run = row.getInt();
+        SampleFrameTimes s;
+        s.frameMs = row.getDouble();
+        s.frames = frameTimes(row);
+        row.end();
+        out[run].push_back(std::move(s));
+      }
     }
     return out;
   });

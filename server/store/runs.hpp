@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -64,6 +65,9 @@ class Runs : public Facet {
   // (a run's frame-time statistics, reports/frame_time.hpp). Empty for an
   // unknown run or one without samples.
   Result<std::vector<SampleFrameTimes>> sampleFrameTimes(int64_t runId);
+  // The same for many runs in one statement (a listing's page), by run id;
+  // a run without samples has no entry.
+  Result<std::map<int64_t, std::vector<SampleFrameTimes>>> sampleFrameTimes(std::span<const int64_t> runIds);
   // A run's passes and per-resource counters, per frame, averaged over its
   // samples as compare() does (a sample without a pass or counter counts as
   // 0; overhead ratios are the mean of the samples that have one); spreads

@@ -417,6 +417,45 @@ TEST_F(Ingest, PerFrameTimesRoundTrip) {
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM samples WHERE frame_ms_frames IS NOT NULL"), 1);
 }
 
+// A listing's page reads its runs' frame times in one statement: per run,
+// what the one-run read gives, in camera order; a run with no sample, or an
+// id with no run, has no entry.
+TEST_F(Ingest, FrameTimesOfManyRunsAreEachRunsOwn) {
+  int64_t jobId = newJob();
+  Capture c = realisticCapture();
+  c.result["runs"][0]["samples"][0]["frame_ms_frames"] = {1.5, 1.25, 2.0};
+  c.result["runs"][0]["samples"][1]["frame_ms_frames"] = {3.0, 4.0};
+  c.result["runs"][1]["samples"][1]["frame_ms_frames"] = {0.5};
+  ASSERT_EQ(ingest(jobId, c), 2);
+  auto page = store_->runs().list({.jobId = jobId}, {});
+  ASSERT_TRUE(page) << page.error();
+  ASSERT_EQ(page->runs.size(), 2u);
+  const int64_t missingRun = page->runs[0].id + 1000;
+  std::vector<int64_t> ids = {page->runs[0].id, missingRun, page->runs[1].id};
+  auto many = store_->runs().sampleFrameTimes(ids);
+  ASSERT_TRUE(many) << many.error();
+  EXPECT_EQ(many->size(), 2u);
+  EXPECT_EQ(many->count(missingRun), 0u);
+  for (int64_t id : {page->runs[0].id, page->runs[1].id}) {
+    auto one = store_->runs().sampleFrameTimes(id);
+    ASSERT_TRUE(one) << one.error();
+    ASSERT_EQ(one->size(), 2u) << id;
+    ASSERT_EQ((*many)[id].size(), one->size()) << id;
+    for (size_t i = 0; i < one->size(); ++i) {
+      EXPECT_EQ((*many)[id][i].frameMs, (*one)[i].frameMs) << id << " " << i;
+      EXPECT_EQ((*many)[id][i].frames, (*one)[i].frames) << id << " " << i;
+    }
+  }
+  // Forward, stored first, is the later page entry: its cameras in order.
+  EXPECT_EQ((*many)[page->runs[1].id][0].frames, (std::vector<double>{1.5, 1.25, 2.0}));
+  EXPECT_EQ((*many)[page->runs[1].id][1].frames, (std::vector<double>{3.0, 4.0}));
+  EXPECT_TRUE((*many)[page->runs[0].id][0].frames.empty());
+  EXPECT_EQ((*many)[page->runs[0].id][1].frames, (std::vector<double>{0.5}));
+  auto none = store_->runs().sampleFrameTimes(std::span<const int64_t>());
+  ASSERT_TRUE(none) << none.error();
+  EXPECT_TRUE(none->empty());
+}
+
 TEST_F(Ingest, BadPerFrameTimesNameTheEntry) {
   const std::vector<BadInput> cases = {
       {"frame times not an array",
