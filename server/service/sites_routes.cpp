@@ -32,13 +32,15 @@ json share(double bytes, int position, const std::vector<store::PassBytes>& pass
   return nullptr;
 }
 
-// The query's pass: one the sample has, else 404 naming the ones it has.
-std::optional<std::string> passOf(const Request& req, int64_t sampleId, const std::vector<store::PassBytes>& passes) {
-  auto pass = queryString(req, "pass");
-  if (!pass) return pass;
+// A 404 naming the sample's passes where the request names one it does not
+// have. The store
+// reads every pass of the sample whatever the filter, so one query both
+// answers and checks the name.
+void checkPass(const std::optional<std::string>& pass, int64_t sampleId, const std::vector<store::PassBytes>& passes) {
+  if (!pass) return;
   std::string names;
   for (const auto& p : passes) {
-    if (p.name == *pass) return pass;
+    if (p.name == *pass) return;
     names += (names.empty() ? "" : ", ") + p.name;
   }
   missing("sample " + std::to_string(sampleId) + " has no pass \"" + *pass + "\" (its passes: " +
@@ -88,14 +90,11 @@ Response getSites(ServiceContext& ctx, const Request& req) {
   if (by != "site" && by != "line") invalid("by", "must be site or line");
   Paging page = paging(req);
   auto& store = reader(ctx);
-  store::SiteQuery query{std::nullopt, by == "line" ? store::SiteGrouping::Line : store::SiteGrouping::Site, 1, 0};
-  auto probe = check(store.runs().sites(id, query));
-  if (!probe) missing("no sample " + std::to_string(id));
-  query.pass = passOf(req, id, probe->passes);
-  query.limit = page.limit;
-  query.offset = page.offset;
+  store::SiteQuery query{queryString(req, "pass"), by == "line" ? store::SiteGrouping::Line : store::SiteGrouping::Site,
+                         page.limit, page.offset};
   auto result = check(store.runs().sites(id, query));
   if (!result) missing("no sample " + std::to_string(id));
+  checkPass(query.pass, id, result->passes);
   json rows = json::array();
   for (const auto& s : result->rows) rows.push_back(siteJson(s, result->passes));
   json out = {{"sample", id}, {"by", by}, {"passes", passesJson(result->passes)}, {"sites", rows}};
@@ -110,14 +109,10 @@ Response getDraws(ServiceContext& ctx, const Request& req) {
   if (by != "draw" && by != "material") invalid("by", "must be draw or material");
   Paging page = paging(req);
   auto& store = reader(ctx);
-  store::DrawQuery query{std::nullopt, by == "material", 1, 0};
-  auto probe = check(store.runs().draws(id, query));
-  if (!probe) missing("no sample " + std::to_string(id));
-  query.pass = passOf(req, id, probe->passes);
-  query.limit = page.limit;
-  query.offset = page.offset;
+  store::DrawQuery query{queryString(req, "pass"), by == "material", page.limit, page.offset};
   auto result = check(store.runs().draws(id, query));
   if (!result) missing("no sample " + std::to_string(id));
+  checkPass(query.pass, id, result->passes);
   const auto& passes = result->passes;
   json draws = json::array(), materials = json::array(), rest = json::array();
   for (const auto& d : result->draws) {
