@@ -33,9 +33,8 @@ json share(double bytes, int position, const std::vector<store::PassBytes>& pass
 }
 
 // A 404 naming the sample's passes where the request names one it does not
-// have. The store
-// reads every pass of the sample whatever the filter, so one query both
-// answers and checks the name.
+// have. The store reads every pass of the sample whatever the filter, so one
+// query both answers and checks the name.
 void checkPass(const std::optional<std::string>& pass, int64_t sampleId, const std::vector<store::PassBytes>& passes) {
   if (!pass) return;
   std::string names;

@@ -325,12 +325,10 @@ uint32_t Injector::flushFunction(Stage stage) {
     std::vector<CachedArray> caches;
     for (size_t cache : slots.cached) caches.push_back(cachedArrays_[cache]);
     flushCachesTogether(b, stage, caches, copyOffset, counter);  // helper lanes are out already (above)
-  } else if (!slots.cached.empty() && partitioned(stage)) {
+  } else if (!slots.cached.empty()) {
     std::vector<CachedArray> caches;
     for (size_t cache : slots.cached) caches.push_back(cachedArrays_[cache]);
     flushCachedArrays(b, stage, caches, copyOffset);
-  } else {
-    for (size_t cache : slots.cached) flushCachedArrays(b, stage, {cachedArrays_[cache]}, copyOffset);
   }
   if (end != 0) {
     branch(b, end);

@@ -48,21 +48,24 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
 }
 
 // In the stage's flush: lanes holding a count combine per element (every
-// cache of the stage in one partition where the device partitions, else one
+// cache of the stage in one partition where the device partitions, else a
 // waterfall each). Helper lanes stay out (one elected would add nothing):
 // the flush keeps them out where its scalars reduce too, this where they
 // do not.
 void Injector::flushCachedArrays(Body& b, Stage stage, const std::vector<CachedArray>& caches, uint32_t copyOffset) {
-  uint32_t end = stage == Stage::Fragment && !subgroupFlush(stage) ? skipHelperLanes(b, stage) : 0;
+  auto withoutHelpers = [&](auto&& flush) {
+    uint32_t end = stage == Stage::Fragment && !subgroupFlush(stage) ? skipHelperLanes(b, stage) : 0;
+    flush();
+    if (end != 0) {
+      branch(b, end);
+      label(b, end);
+    }
+  };
   if (partitioned(stage)) {
-    flushCachesPartitioned(b, caches, copyOffset);
-  } else {
-    for (const CachedArray& cache : caches) flushCachedElements(b, cache, copyOffset);
+    withoutHelpers([&] { flushCachesPartitioned(b, caches, copyOffset); });
+    return;
   }
-  if (end != 0) {
-    branch(b, end);
-    label(b, end);
-  }
+  for (const CachedArray& cache : caches) withoutHelpers([&] { flushCachedElements(b, cache, copyOffset); });
 }
 
 void Injector::flushCachedElements(Body& b, const CachedArray& cache, uint32_t copyOffset) {

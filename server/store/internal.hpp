@@ -70,6 +70,8 @@ RunRow readRunRow(const Statement& row);
 // "WHERE"-less clause list for a RunFilter (" AND ..." each, positional "?"),
 // and binding its values from parameter index `first`; returns the next index.
 std::string runFilterSql(const RunFilter& filter);
+// "?, ?, ..., ?": n parameters for an IN list (n >= 1); values are bound, never written into SQL.
+std::string parameterList(size_t n);
 int bindRunFilter(Statement& statement, const RunFilter& filter, int first);
 
 }  // namespace tally::store::detail

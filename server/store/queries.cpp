@@ -94,6 +94,12 @@ Device readDevice(RowReader& row) {
 }
 
 // Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
+std::string parameterList(size_t n) {
+  std::string out = "?";
+  for (size_t i = 1; i < n; ++i) out += ", ?";
+  return out;
+}
+
 std::string runFilterSql(const RunFilter& f) {
   std::string sql;
   if (f.renderer) sql += " AND r.renderer = ?";
@@ -108,11 +114,7 @@ std::string runFilterSql(const RunFilter& f) {
   for (size_t i = 0; i < f.labels.size(); ++i) {
     sql += " AND r.job_id IN (SELECT job_id FROM job_labels WHERE name = ? AND value = ?)";  // placeholders only
   }
-  if (!f.runIds.empty()) {
-    sql += " AND r.id IN (?";
-    for (size_t i = 1; i < f.runIds.size(); ++i) sql += ", ?";  // placeholders only
-    sql += ")";
-  }
+  if (!f.runIds.empty()) sql += " AND r.id IN (" + parameterList(f.runIds.size()) + ")";
   if (f.createdSince) sql += " AND r.created_at >= ?";
   if (f.createdUntil) sql += " AND substr(r.created_at, 1, ?) <= ?";
   return sql;
@@ -348,10 +350,8 @@ Result<std::map<int64_t, std::vector<SampleFrameTimes>>> Runs::sampleFrameTimes(
     constexpr size_t kChunk = 1000;
     for (size_t first = 0; first < runIds.size(); first += kChunk) {
       auto chunk = runIds.subspan(first, std::min(kChunk, runIds.size() - first));
-      std::string sql = "SELECT run_id, frame_ms, frame_ms_frames FROM samples WHERE run_id IN (?";
-      for (size_t i = 1; i < chunk.size(); ++i) sql += ", ?";  // placeholders only
-      sql += ") ORDER BY run_id, camera_index";
-      Statement query(db_, sql);
+      Statement query(db_, "SELECT run_id, frame_ms, frame_ms_frames FROM samples WHERE run_id IN (" +
+                               detail::parameterList(chunk.size()) + ") ORDER BY run_id, camera_index");
       for (size_t i = 0; i < chunk.size(); ++i) query.bind(static_cast<int>(i + 1), chunk[i]);
       while (query.step()) {
         RowReader row(query);
