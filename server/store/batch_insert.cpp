@@ -9,14 +9,18 @@ namespace {
 
 // COPY's text format: backslash, and the row and column separators, escaped.
 void appendCopyText(std::string& out, std::string_view text) {
-  for (char c : text) {
-    switch (c) {
+  // Runs without a character to escape go in whole.
+  for (size_t at = 0; at < text.size();) {
+    size_t special = std::min(text.find_first_of("\\\n\r\t", at), text.size());
+    out.append(text, at, special - at);
+    if (special == text.size()) break;
+    switch (text[special]) {
       case '\\': out += "\\\\"; break;
       case '\n': out += "\\n"; break;
       case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default: out += c;
+      default: out += "\\t"; break;
     }
+    at = special + 1;
   }
 }
 
@@ -126,6 +130,43 @@ void BatchInsert::flushPostgres() {
     data += (k + 1) % width == 0 ? '\n' : '\t';
   }
   db_->copyIn(copy, data);
+}
+
+ArrayLiteral& ArrayLiteral::add(std::string_view text) {
+  separate();
+  text_ += '"';
+  for (size_t at = 0; at < text.size();) {
+    size_t special = std::min(text.find_first_of("\"\\", at), text.size());
+    text_.append(text, at, special - at);
+    if (special == text.size()) break;
+    text_ += '\\';
+    text_ += text[special];
+    at = special + 1;
+  }
+  text_ += '"';
+  return *this;
+}
+
+ArrayLiteral& ArrayLiteral::add(double value) {
+  separate();
+  text_ += postgresDoubleText(value);
+  return *this;
+}
+
+ArrayLiteral& ArrayLiteral::add(std::nullptr_t) {
+  separate();
+  text_ += "NULL";
+  return *this;
+}
+
+ArrayLiteral& ArrayLiteral::add(const nlohmann::json& value) {
+  return add(std::string_view(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)));
+}
+
+std::string ArrayLiteral::take() {
+  std::string out = text_.empty() ? std::string("{}") : std::move(text_) + '}';
+  text_.clear();
+  return out;
 }
 
 std::vector<int64_t> reserveIds(Connection* db, std::string_view table, size_t count) {

@@ -48,6 +48,7 @@ class BatchInsert {
   // Borrowed: the bytes must outlive flush().
   BatchInsert& add(std::span<const uint8_t> blob) { return put(blob); }
   BatchInsert& add(const nlohmann::json& value);  // compact JSON text, as Statement::bind
+  BatchInsert& add(const nlohmann::json* value) { return value ? add(*value) : add(nullptr); }  // null: NULL
   template <class T>
   BatchInsert& add(const std::optional<T>& value) {
     return value ? add(*value) : add(nullptr);
@@ -74,6 +75,29 @@ class BatchInsert {
   std::vector<std::string> columns_;
   std::vector<Cell> cells_;
   std::optional<Statement> full_;  // SQLite: the statement of a full chunk, prepared once
+};
+
+// A PostgreSQL array literal ({"a",NULL,1.5}), built element by element, for
+// an array column written through BatchInsert::add(std::string): the
+// literal's own quoting here, COPY's escaping there.
+class ArrayLiteral {
+ public:
+  ArrayLiteral& add(std::string_view text);  // quoted: any character round-trips
+  ArrayLiteral& add(const std::string& text) { return add(std::string_view(text)); }
+  ArrayLiteral& add(double value);
+  ArrayLiteral& add(std::nullptr_t);
+  ArrayLiteral& add(const nlohmann::json& value);  // compact JSON text, as BatchInsert::add
+  ArrayLiteral& add(const nlohmann::json* value) { return value ? add(*value) : add(nullptr); }  // null: NULL
+  template <class T>
+  ArrayLiteral& add(const std::optional<T>& value) {
+    return value ? add(*value) : add(nullptr);
+  }
+  // "{...}"; the literal is empty again afterwards.
+  std::string take();
+
+ private:
+  void separate() { text_ += text_.empty() ? '{' : ','; }
+  std::string text_;
 };
 
 // `count` new ids of `table`'s id column, ascending; no other writer gets them.

@@ -136,7 +136,7 @@ Result<int64_t> Runs::ingestSweep(const Lease& lease, const json& result) {
 // refreshes at most once a minute. Ingests that grow a young database many
 // times over within that minute leave it planning for nearly empty tables:
 // 20,000 samples stored in 10 s into a new database, and a run's samples
-// took 1.1 s a request (sequential scans of counters) until the statistics
+// took 1.1 s a request (sequential scans of the counters table it had then) until the statistics
 // caught up, 1 ms after. So the store analyses the growing tables itself
 // whenever the samples it stored since it last did reach the samples the
 // database held then, and at least kAnalyzeEvery: a few times while a
@@ -156,7 +156,7 @@ void Runs::keepStatisticsCurrent(const json& result) {
   // The result is committed: a failure here costs plans, not data, and the
   // next ingest tries again.
   try {
-    db_->exec("ANALYZE runs, samples, passes, counters, run_resources, screenshots");
+    db_->exec("ANALYZE runs, samples, passes, run_resources, screenshots");  // counters: a view of passes
     Statement held(*db_, "SELECT reltuples::bigint FROM pg_class WHERE oid = 'samples'::regclass");
     shared_.samplesAtAnalyze = held.step() ? held.getInt(0) : 0;
     shared_.samplesSinceAnalyze = 0;

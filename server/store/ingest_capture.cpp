@@ -76,6 +76,21 @@ RowCounts countRows(const json& runs) {
   return n;
 }
 
+// The arrays that hold a pass's counters on PostgreSQL, in the order
+// addCounters writes them.
+constexpr const char* kCounterArrays[] = {"counter_resources", "counter_kinds",   "counter_formats",
+                                          "counter_accesses",  "counter_counts",  "counter_bytes",
+                                          "counter_spreads",   "counter_sources", "counter_footprints"};
+
+std::vector<std::string> passColumns(bool counterArrays) {
+  std::vector<std::string> columns = {"id", "sample_id", "position", "name", "gpu_ms", "gpu_ms_spread",
+                                      "gpu_ms_instrumented", "overhead_ratio", "fragment_invocations",
+                                      "fragment_invocations_statistic", "compute_invocations",
+                                      "compute_invocations_statistic", "gpu_ms_frames"};
+  if (counterArrays) columns.insert(columns.end(), std::begin(kCounterArrays), std::end(kCounterArrays));
+  return columns;
+}
+
 // Every row of one capture, by table, and the ids reserved for them. Write
 // order (write()) is the foreign keys' order.
 struct CaptureRows {
@@ -99,10 +114,8 @@ struct CaptureRows {
                  "image_identical", "psnr", "max_abs", "mean_abs", "screenshot_id", "extras", "variant_against",
                  "variant_identical", "variant_psnr", "variant_max_abs", "variant_mean_abs", "frame_ms_frames",
                  "bytes", "footprint_bytes", "footprint_requested_bytes"}),
-        passes(db, "passes",
-               {"id", "sample_id", "position", "name", "gpu_ms", "gpu_ms_spread", "gpu_ms_instrumented",
-                "overhead_ratio", "fragment_invocations", "fragment_invocations_statistic", "compute_invocations",
-                "compute_invocations_statistic", "gpu_ms_frames"}),
+        counterArrays(db->engine() == Engine::Postgres),
+        passes(db, "passes", passColumns(counterArrays)),
         counters(db, "counters",
                  {"pass_id", "position", "resource", "kind", "format", "access", "count", "bytes", "count_spread",
                   "source", "footprint_bytes"}),
@@ -121,7 +134,11 @@ struct CaptureRows {
   // same transaction.
   std::vector<std::tuple<int64_t, const json*, std::string>> passSites, runShaders;
   Ids runIds, screenshotIds, sampleIds, passIds;
-  BatchInsert runs, resources, screenshots, samples, passes, counters;
+  BatchInsert runs, resources, screenshots, samples;
+  // PostgreSQL: a pass's counters are arrays on its row (migration 0012), and
+  // `counters` (no rows written) is the view over them; SQLite: rows of counters.
+  bool counterArrays;
+  BatchInsert passes, counters;
   Statement findScene, insertScene;
   std::map<std::pair<std::string, std::string>, int64_t> sceneIds;  // by name and compact params
   json ceilings;  // the capture's device.ceilings (null when not measured)
@@ -133,10 +150,8 @@ struct CaptureRows {
   } sums;
 };
 
-std::optional<json> optJson(const json& object, const char* key) {
-  const json* value = find(object, key);
-  return value ? std::optional<json>(*value) : std::nullopt;
-}
+// The member, not copied (null when absent), for BatchInsert::add(const json*).
+const json* optJson(const json& object, const char* key) { return find(object, key); }
 
 // Per-frame times (frame_ms_frames, gpu_ms_frames): absent (or null), or an
 // array of finite, non-negative milliseconds; errors name the entry.
@@ -156,8 +171,11 @@ std::optional<json> optFrameTimes(const json& object, const char* key, const std
   return *value;
 }
 
+// The pass's counters: rows of counters, or (in.counterArrays) the arrays
+// that end the pass's row, which addPasses has begun.
 void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::string& path) {
   const json& counters = kMembers.array(pass, "resources", path);
+  ArrayLiteral resources, kinds, formats, accesses, counts, bytesArray, spreads, sources, footprints;
   for (size_t c = 0; c < counters.size(); ++c) {
     std::string at = path + ".resources[" + std::to_string(c) + "]";
     const json& counter = counters[c];
@@ -173,22 +191,42 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
     auto format = kMembers.optText(counter, "format", at);
     double count = kMembers.number(counter, "count", at);
     double bytes = kMembers.number(counter, "bytes", at);
-    in.counters.row()
-        .add(passId)
-        .add(static_cast<int64_t>(c))
-        .add(std::move(resource))
-        .add(kind)
-        .add(format)
-        .add(std::move(access))
-        .add(count)
-        .add(bytes)
-        .add(optJson(counter, "count_spread"))
-        .add(kMembers.text(counter, "source", at))
-        .add(footprint);
+    const json* spread = optJson(counter, "count_spread");
+    std::string source = kMembers.text(counter, "source", at);
+    if (in.counterArrays) {
+      resources.add(resource);
+      kinds.add(kind);
+      formats.add(format);
+      accesses.add(access);
+      counts.add(count);
+      bytesArray.add(bytes);
+      spreads.add(spread);
+      sources.add(source);
+      footprints.add(footprint);
+    } else {
+      in.counters.row()
+          .add(passId)
+          .add(static_cast<int64_t>(c))
+          .add(std::move(resource))
+          .add(kind)
+          .add(format)
+          .add(std::move(access))
+          .add(count)
+          .add(bytes)
+          .add(spread)
+          .add(std::move(source))
+          .add(footprint);
+    }
     in.sums.bytes += bytes;
     if (footprint) {
       in.sums.footprint = in.sums.footprint.value_or(0) + *footprint;
       in.sums.footprintRequested = in.sums.footprintRequested.value_or(0) + bytes;
+    }
+  }
+  if (in.counterArrays) {
+    for (ArrayLiteral* array :
+         {&resources, &kinds, &formats, &accesses, &counts, &bytesArray, &spreads, &sources, &footprints}) {
+      in.passes.add(array->take());
     }
   }
 }

@@ -287,10 +287,15 @@ TEST(Engines, MigrationsBuildTheSameSchema) {
   auto lite = openStore(file);
   ASSERT_NE(lite, nullptr);
   EXPECT_EQ(lite->schemaVersion(), pg->schemaVersion());
-  auto kind = [](std::string type) {
+  // PostgreSQL arrays come as their element type's name after "_" (udt_name).
+  std::function<std::string(std::string)> kind = [&kind](std::string type) {
     for (auto& c : type) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (type.rfind("_", 0) == 0) return kind(type.substr(1)) + "[]";
     if (type.find("int") != std::string::npos) return std::string("integer");
-    if (type.find("real") != std::string::npos || type.find("double") != std::string::npos) return std::string("real");
+    if (type.find("real") != std::string::npos || type.find("double") != std::string::npos ||
+        type.find("float") != std::string::npos) {
+      return std::string("real");
+    }
     if (type.find("blob") != std::string::npos || type.find("bytea") != std::string::npos) return std::string("blob");
     return std::string("text");
   };
@@ -311,7 +316,8 @@ TEST(Engines, MigrationsBuildTheSameSchema) {
   }
   {
     Statement columns(pg->connection(),
-                      "SELECT table_name, column_name, data_type, is_nullable FROM information_schema.columns "
+                      "SELECT table_name, column_name, CASE data_type WHEN 'ARRAY' THEN udt_name ELSE data_type END, "
+                      "is_nullable FROM information_schema.columns "
                       "WHERE table_schema = current_schema() AND table_name <> 'tally_schema_version' "
                       "ORDER BY table_name, ordinal_position");
     while (columns.step()) {
@@ -319,6 +325,39 @@ TEST(Engines, MigrationsBuildTheSameSchema) {
                                               (columns.getText(3) == "NO" ? " not null" : ""));
     }
   }
+  // The one planned difference (migration 0012): on PostgreSQL a pass's
+  // counters are arrays on its row, and counters is a view with the table's
+  // columns but id (a view's columns all read as nullable).
+  std::vector<std::string> arrays;
+  for (auto it = pgColumns["passes"].begin(); it != pgColumns["passes"].end();) {
+    if (it->rfind("counter_", 0) == 0) {
+      arrays.push_back(*it);
+      it = pgColumns["passes"].erase(it);
+    } else {
+      ++it;
+    }
+  }
+  EXPECT_EQ(arrays, (std::vector<std::string>{
+                        "counter_resources text[] not null", "counter_kinds text[] not null",
+                        "counter_formats text[] not null", "counter_accesses text[] not null",
+                        "counter_counts real[] not null", "counter_bytes real[] not null",
+                        "counter_spreads text[] not null", "counter_sources text[] not null",
+                        "counter_footprints real[] not null"}));
+  {
+    Statement view(pg->connection(), "SELECT table_type FROM information_schema.tables WHERE table_name = 'counters'");
+    ASSERT_TRUE(view.step());
+    EXPECT_EQ(view.getText(0), "VIEW");
+  }
+  std::vector<std::string> tableCounters;
+  for (std::string column : sqliteColumns["counters"]) {
+    if (column.rfind("id ", 0) == 0) continue;
+    if (auto at = column.find(" not null"); at != std::string::npos) column.erase(at);
+    tableCounters.push_back(column);
+  }
+  EXPECT_EQ(pgColumns["counters"], tableCounters);
+  EXPECT_EQ(tableCounters.size(), 11u);
+  sqliteColumns.erase("counters");
+  pgColumns.erase("counters");
   EXPECT_EQ(sqliteColumns, pgColumns);
   EXPECT_GE(sqliteColumns.size(), 11u);
   std::set<std::string> sqliteIndexes, pgIndexes;
@@ -348,7 +387,7 @@ TEST(Engines, IngestsKeepPostgresStatisticsCurrent) {
   auto store = openStore(db.path());
   ASSERT_NE(store, nullptr);
   auto analysed = [&] {
-    Statement s(store->connection(), "SELECT last_analyze IS NOT NULL FROM pg_stat_user_tables WHERE relname = 'counters'");
+    Statement s(store->connection(), "SELECT last_analyze IS NOT NULL FROM pg_stat_user_tables WHERE relname = 'passes'");
     return s.step() && s.getInt(0) != 0;
   };
   auto ingest = [&](int samples) {
@@ -423,6 +462,79 @@ TEST(Engines, PostgresStatementsBindAndReadEveryType) {
   Statement all(c, "SELECT string_agg(x::text, ',') FROM u");
   ASSERT_TRUE(all.step());
   EXPECT_EQ(all.getText(0), "2");
+}
+
+// Migration 0012 on PostgreSQL: a database of schema 11 with counter rows
+// (out of order, with NULLs, quotes and a pass without counters) upgrades to
+// arrays on the passes; the view returns every row as it was, in position
+// order, and the arrays' check refuses a pass whose arrays disagree.
+TEST(Engines, CounterRowsBecomeArraysOnTheirPassKeepingEveryValue) {
+  if (!postgresServer()) GTEST_SKIP() << "runs in store.postgresql (TALLY_TEST_STORE=postgres)";
+  TempDb db;
+  {
+    auto c = openPostgres(db.path());
+    auto eleven = migrate(*c, embeddedMigrations(Engine::Postgres).first(11));
+    ASSERT_TRUE(eleven) << eleven.error();
+    ASSERT_EQ(*eleven, 11);
+    c->exec(
+        "INSERT INTO devices (id, fingerprint, name, vendor, driver, api_version) "
+        "VALUES (1, 'llvmpipe', 'llvmpipe', '0x10005', 'Mesa', '1.3');"
+        "INSERT INTO scenes (id, name, params) VALUES (1, 'atrium', '{}');"
+        "INSERT INTO jobs (id, status, spec, idempotency_key) VALUES (1, 'done', '{}', 'k');"
+        "INSERT INTO runs (id, job_id, device_id, renderer, scene_id, width, height, counting, lights) "
+        "VALUES (1, 1, 1, 'forward', 1, 64, 36, 'exact', 4);"
+        "INSERT INTO samples (id, run_id, camera_index, camera, frame_ms, bytes) VALUES (1, 1, 0, '{}', 1.5, 96);"
+        "INSERT INTO passes (id, sample_id, position, name, gpu_ms) VALUES (1, 1, 0, 'opaque', 1.25), "
+        "(2, 1, 1, 'none', 0.5), (3, 1, 2, 'tonemap', 0.25);"
+        "INSERT INTO counters (pass_id, position, resource, kind, format, access, count, bytes, count_spread, "
+        "source, footprint_bytes) VALUES "
+        "(1, 2, 'b\"ack\\{x,y}', NULL, 'D32', 'read', 3, 12, NULL, 'derived', 0), "
+        "(1, 0, 'depth', 'depth', NULL, 'write', 24, 96, '{\"n\": 20}', 'counter', NULL), "
+        "(1, 1, 'NULL', 'texture', 'R8', 'read', 0.1, 0.4, '[1, \"{}\"]', 'counter', 7.5), "
+        "(3, 0, 'hdr', 'attachment', 'R16G16B16A16_SFLOAT', 'read', 1e-300, 1.7976931348623157e308, NULL, "
+        "'counter', NULL)");
+  }
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  EXPECT_EQ(store->schemaVersion(), 12);
+  auto& c = store->connection();
+  Statement rows(c,
+                 "SELECT pass_id, position, resource, COALESCE(kind, '-'), COALESCE(format, '-'), access, count, "
+                 "bytes, COALESCE(count_spread, '-'), source, COALESCE(footprint_bytes, -1) FROM counters "
+                 "ORDER BY pass_id, position");
+  std::vector<std::string> got;
+  while (rows.step()) {
+    std::string row;
+    for (int k = 0; k < 11; ++k) {
+      row += (k ? "|" : "") + (k == 6 || k == 7 || k == 10 ? postgresDoubleText(rows.getDouble(k)) : rows.getText(k));
+    }
+    got.push_back(row);
+  }
+  EXPECT_EQ(got, (std::vector<std::string>{
+                     "1|0|depth|depth|-|write|24|96|{\"n\": 20}|counter|-1",
+                     "1|1|NULL|texture|R8|read|0.1|0.4|[1, \"{}\"]|counter|7.5",
+                     "1|2|b\"ack\\{x,y}|-|D32|read|3|12|-|derived|0",
+                     "3|0|hdr|attachment|R16G16B16A16_SFLOAT|read|1e-300|1.7976931348623157e+308|-|counter|-1"}));
+  auto passes = store->runs().passes(1);
+  ASSERT_TRUE(passes) << passes.error();
+  ASSERT_EQ(passes->size(), 3u);
+  EXPECT_EQ((*passes)[0].counters.size(), 3u);
+  EXPECT_TRUE((*passes)[1].counters.empty());
+  EXPECT_EQ((*passes)[2].counters.size(), 1u);
+  // The check: arrays of different lengths or dimensions, a NULL resource,
+  // count or source, an unknown access and a negative footprint are refused.
+  for (const char* set : {"counter_kinds = '{}'", "counter_bytes = '{1, 2}'", "counter_formats = '{{a}}'",
+                          "counter_resources[1] = NULL", "counter_counts[1] = NULL", "counter_sources[1] = NULL",
+                          "counter_accesses[1] = 'both'", "counter_footprints[1] = -1"}) {
+    SCOPED_TRACE(set);
+    try {
+      c.exec(std::string("UPDATE passes SET ") + set + " WHERE id = 3");
+      ADD_FAILURE() << "accepted";
+    } catch (const DbError& e) {
+      EXPECT_EQ(e.sqlState(), "23514") << e.what();
+    }
+  }
+  c.exec("UPDATE passes SET counter_footprints[1] = 0, counter_kinds[1] = NULL WHERE id = 3");  // still valid
 }
 
 // Daemons of a fleet start together: each opens the store and migrates; one

@@ -153,6 +153,66 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM screenshots WHERE width = 320 AND height = 180"), 4);
 }
 
+// A pass's counters come back exactly as they went in, in order, on both
+// engines: names with the characters that COPY and PostgreSQL's array
+// literals quote, absent kinds, formats, spreads and footprints, extreme
+// numbers, and a pass with no counters (on PostgreSQL they travel as arrays
+// on the pass's row, migration 0012).
+TEST_F(Ingest, CounterTextsAndAbsentValuesRoundTripExactly) {
+  std::vector<json> counters;
+  const std::vector<std::string> names = {"quote\"d",  "back\\slash\\",  "{braces},comma", "tab\there",
+                                          "new\nline", "NULL",           "  padded  ",     "caf\u00e9 \u2713",
+                                          "",          "\\\"{,}\\N"};
+  const std::vector<double> numbers = {0.1, 1e-300, 1.7976931348623157e308, 0, 123456789.125, 5e-324,
+                                       3.0,  2.5e15,  7.25,                   1.0 / 3};
+  for (size_t k = 0; k < names.size(); ++k) {
+    json counter = makeCounter(names[k], k % 2 ? "write" : "read", numbers[k], numbers[(k + 3) % numbers.size()]);
+    if (k % 3 == 0) counter.erase("kind");
+    if (k % 3 == 1) counter["format"] = nullptr;
+    counter["count_spread"] = spread(1.5);  // the count's own could overflow to infinity
+    if (k % 4 == 0) counter.erase("count_spread");
+    if (k % 4 == 1) counter["count_spread"] = {{"note", "a \"quoted\" \\ {spread}"}, {"n", 3}};
+    if (k % 2 == 0) counter["footprint_bytes"] = numbers[(k + 5) % numbers.size()];
+    counters.push_back(std::move(counter));
+  }
+  json withCounters = makePass("odd", 1.0, 10, counters);
+  json without = makePass("empty", 0.5, 0, {});
+  Capture c;
+  c.result = makeCapture({makeRun("forward", "atrium", 64, 36, {makeSample(0, 2.0, {withCounters, without})})});
+  int64_t jobId = newJob();
+  ASSERT_EQ(ingest(jobId, c), 1);
+  auto page = store_->runs().list({.jobId = jobId}, {});
+  ASSERT_TRUE(page && page->runs.size() == 1u);
+  auto samples = store_->runs().samples(page->runs[0].id);
+  ASSERT_TRUE(samples && samples->size() == 1u);
+  auto got = store_->runs().sample((*samples)[0].id);
+  ASSERT_TRUE(got && got->has_value());
+  const Sample& sample = **got;
+  ASSERT_EQ(sample.passes.size(), 2u);
+  EXPECT_TRUE(sample.passes[1].counters.empty());
+  ASSERT_EQ(sample.passes[0].counters.size(), counters.size());
+  for (size_t k = 0; k < counters.size(); ++k) {
+    SCOPED_TRACE("counter " + std::to_string(k));
+    const json& in = counters[k];
+    const Counter& out = sample.passes[0].counters[k];
+    EXPECT_EQ(out.resource, names[k]);
+    EXPECT_EQ(out.access, in["access"]);
+    EXPECT_EQ(out.kind, in.contains("kind") ? std::optional<std::string>(in["kind"]) : std::nullopt);
+    EXPECT_EQ(out.format, in["format"].is_null() ? std::nullopt : std::optional<std::string>(in["format"]));
+    EXPECT_EQ(out.count, in["count"].get<double>());  // bit for bit
+    EXPECT_EQ(out.bytes, in["bytes"].get<double>());
+    EXPECT_EQ(out.countSpread, in.contains("count_spread") ? in["count_spread"] : json(nullptr));
+    EXPECT_EQ(out.source, "counter");
+    EXPECT_EQ(out.footprintBytes,
+              in.contains("footprint_bytes") ? std::optional<double>(in["footprint_bytes"]) : std::nullopt);
+  }
+  // The run's per-pass averages read the same counters.
+  auto passes = store_->runs().passes(page->runs[0].id);
+  ASSERT_TRUE(passes && passes->size() == 2u);
+  EXPECT_EQ((*passes)[0].counters.size(), counters.size());
+  EXPECT_TRUE((*passes)[1].counters.empty());
+}
+
 TEST_F(Ingest, MissingThingsAreEmptyNotErrors) {
   auto run = store_->runs().get(424242);
   ASSERT_TRUE(run);
