@@ -52,10 +52,12 @@ RunTotals totalsOf(Connection* db, int64_t runId) {
   totals.end();
   Statement passes(db,
                    "SELECT p.name, SUM(p.gpu_ms), SUM(p.fragment_invocations), "
-                   "SUM((SELECT COALESCE(SUM(c.bytes), 0) FROM counters c WHERE c.pass_id = p.id)), "
-                   "SUM((SELECT SUM(c.footprint_bytes) FROM counters c WHERE c.pass_id = p.id)), "
-                   "SUM((SELECT SUM(c.bytes) FROM counters c WHERE c.pass_id = p.id AND c.footprint_bytes IS NOT NULL)) "
-                   "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
+                   "SUM((SELECT COALESCE(SUM(c.bytes), 0) FROM " + detail::countersOfPass(*db, {"bytes"}) + ")), " +
+                       "SUM((SELECT SUM(c.footprint_bytes) FROM " + detail::countersOfPass(*db, {"footprint_bytes"}) +
+                       ")), " + "SUM((SELECT SUM(c.bytes) FROM " +
+                       detail::countersOfPass(*db, {"bytes", "footprint_bytes"}) +
+                       " AND c.footprint_bytes IS NOT NULL)) "
+                       "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
                    "GROUP BY p.name ORDER BY MIN(p.position), p.name");
   passes.bind(1, runId);
   while (passes.step()) {
@@ -72,9 +74,10 @@ RunTotals totalsOf(Connection* db, int64_t runId) {
   }
   Statement resources(db,
                       "SELECT c.resource, c.access, SUM(c.count), SUM(c.bytes), SUM(c.footprint_bytes), "
-                      "SUM(CASE WHEN c.footprint_bytes IS NOT NULL THEN c.bytes END) FROM counters c "
-                      "JOIN passes p ON p.id = c.pass_id JOIN samples s ON s.id = p.sample_id "
-                      "WHERE s.run_id = ?1 GROUP BY c.resource, c.access");
+                      "SUM(CASE WHEN c.footprint_bytes IS NOT NULL THEN c.bytes END) "
+                      "FROM samples s JOIN passes p ON p.sample_id = s.id" +
+                          detail::joinPassCounters(*db, {"resource", "access", "count", "bytes", "footprint_bytes"}) +
+                          " WHERE s.run_id = ?1 GROUP BY c.resource, c.access");
   resources.bind(1, runId);
   while (resources.step()) {
     RowReader row(resources);
@@ -239,8 +242,10 @@ Result<std::vector<Pass>> Runs::passes(int64_t runId) {
     }
     Statement counters(db_,
                        "SELECT p.name, c.resource, MIN(c.kind), MIN(c.format), c.access, SUM(c.count), SUM(c.bytes), "
-                       "c.source, SUM(c.footprint_bytes) FROM counters c JOIN passes p ON p.id = c.pass_id "
-                       "JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
+                       "c.source, SUM(c.footprint_bytes) FROM samples s JOIN passes p ON p.sample_id = s.id" +
+                           detail::joinPassCounters(*db_, {"resource", "kind", "format", "access", "count", "bytes",
+                                                           "source", "footprint_bytes"}) +
+                           " WHERE s.run_id = ?1 "
                        "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
     counters.bind(1, runId);
     while (counters.step()) {
@@ -269,9 +274,9 @@ Result<std::vector<ExportRow>> Runs::exportRows(const RunFilter& filter) {
         "SUM(CASE WHEN c.footprint_bytes IS NOT NULL THEN c.bytes END) / "
         "(SELECT COUNT(*) FROM samples s2 WHERE s2.run_id = r.id) "
         "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
-        "JOIN samples s ON s.run_id = r.id JOIN passes p ON p.sample_id = s.id JOIN counters c ON c.pass_id "
-        "= p.id "
-        "WHERE TRUE" +
+        "JOIN samples s ON s.run_id = r.id JOIN passes p ON p.sample_id = s.id" +
+        detail::joinPassCounters(*db_, {"resource", "access", "count", "bytes", "footprint_bytes"}) +
+        " WHERE TRUE" +
         detail::runFilterSql(filter) +
         " GROUP BY r.id, sc.name, d.name, p.name, c.resource, c.access ORDER BY r.id, MIN(p.position), c.resource, c.access";
     Statement query(db_, sql);

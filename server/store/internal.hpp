@@ -2,6 +2,7 @@
 #pragma once
 
 #include <exception>
+#include <initializer_list>
 #include <mutex>
 #include <string>
 #include <string_view>
@@ -73,5 +74,21 @@ std::string runFilterSql(const RunFilter& filter);
 // "?, ?, ..., ?": n parameters for an IN list (n >= 1); values are bound, never written into SQL.
 std::string parameterList(size_t n);
 int bindRunFilter(Statement& statement, const RunFilter& filter, int first);
+
+// A pass's counters, where the engines keep them differently (migration
+// 0012): rows of the counters table on SQLite; arrays on the pass's row on
+// PostgreSQL, read here by unnesting only the arrays of the columns named,
+// instead of through the counters view (which reads the pass again and
+// every array). Both name the pass `p` and its counters `c`, with the
+// counters table's column names; c.position orders them (0-based on
+// SQLite, 1-based on PostgreSQL: use it to order, not as a value).
+//
+// After "FROM passes p": " JOIN counters c ON c.pass_id = p.id", or the
+// arrays of p unnested as c.
+std::string joinPassCounters(const Connection& db, std::initializer_list<std::string_view> columns);
+// For a subquery over the counters of an outer query's pass p: "counters c
+// WHERE c.pass_id = p.id", or "<p's arrays> AS c WHERE TRUE"; append
+// " AND ..." for more conditions.
+std::string countersOfPass(const Connection& db, std::initializer_list<std::string_view> columns);
 
 }  // namespace tally::store::detail

@@ -1,6 +1,9 @@
 // Read queries: runs (filtered, cursor-paginated), samples with passes and
 // counters, screenshots. Multi-statement reads run in one read transaction,
 // so a concurrent re-ingest is seen entirely or not at all.
+#include <map>
+#include <stdexcept>
+
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -94,6 +97,36 @@ Device readDevice(RowReader& row) {
 }
 
 // Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
+namespace {
+
+// "unnest(p.counter_bytes, ...) WITH ORDINALITY AS c(bytes, ..., position)".
+std::string unnestedCounters(std::initializer_list<std::string_view> columns) {
+  static const std::map<std::string_view, std::string_view> kArrays = {
+      {"resource", "counter_resources"}, {"kind", "counter_kinds"},          {"format", "counter_formats"},
+      {"access", "counter_accesses"},    {"count", "counter_counts"},        {"bytes", "counter_bytes"},
+      {"count_spread", "counter_spreads"}, {"source", "counter_sources"}, {"footprint_bytes", "counter_footprints"}};
+  std::string arrays, names;
+  for (std::string_view column : columns) {
+    auto it = kArrays.find(column);
+    if (it == kArrays.end()) throw std::logic_error("no counter array for column " + std::string(column));
+    arrays += (arrays.empty() ? "p." : ", p.") + std::string(it->second);
+    names += std::string(column) + ", ";
+  }
+  return "unnest(" + arrays + ") WITH ORDINALITY AS c(" + names + "position)";
+}
+
+}  // namespace
+
+std::string joinPassCounters(const Connection& db, std::initializer_list<std::string_view> columns) {
+  if (db.engine() == Engine::Sqlite) return " JOIN counters c ON c.pass_id = p.id";
+  return " CROSS JOIN LATERAL " + unnestedCounters(columns);
+}
+
+std::string countersOfPass(const Connection& db, std::initializer_list<std::string_view> columns) {
+  if (db.engine() == Engine::Sqlite) return "counters c WHERE c.pass_id = p.id";
+  return unnestedCounters(columns) + " WHERE TRUE";
+}
+
 std::string parameterList(size_t n) {
   std::string out = "?";
   for (size_t i = 1; i < n; ++i) out += ", ?";
@@ -148,17 +181,19 @@ int bindRunFilter(Statement& statement, const RunFilter& f, int first) {
 
 namespace {
 
-const char* const kSampleColumns =
-    "id, run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, frame_ms, "
-    "frame_ms_spread, "
-    "frame_ms_instrumented, overhead_ratio, bytes, image_against, image_identical, psnr, max_abs, mean_abs, "
-    "screenshot_id IS NOT NULL, "
-    "(SELECT COALESCE(SUM(c.bytes), 0) FROM passes p JOIN counters c ON c.pass_id = p.id "
-    "WHERE p.sample_id = samples.id AND c.access = 'read'), "
-    "(SELECT COALESCE(SUM(c.bytes), 0) FROM passes p JOIN counters c ON c.pass_id = p.id "
-    "WHERE p.sample_id = samples.id AND c.access = 'write'), "
-    "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs, "
-    "footprint_bytes, footprint_requested_bytes";
+std::string sampleColumns(const Connection& db) {
+  std::string bytesOf = "(SELECT COALESCE(SUM(c.bytes), 0) FROM passes p" +
+                        detail::joinPassCounters(db, {"bytes", "access"}) +
+                        " WHERE p.sample_id = samples.id AND c.access = ";
+  return "id, run_id, camera_index, camera, sky_fraction, sky_fraction_estimate, frames, frame_ms, "
+         "frame_ms_spread, "
+         "frame_ms_instrumented, overhead_ratio, bytes, image_against, image_identical, psnr, max_abs, mean_abs, "
+         "screenshot_id IS NOT NULL, " +
+         bytesOf + "'read'), " + bytesOf +
+         "'write'), "
+         "extras, variant_against, variant_identical, variant_psnr, variant_max_abs, variant_mean_abs, "
+         "footprint_bytes, footprint_requested_bytes";
+}
 
 // An image error's five columns (against, identical, psnr, max_abs,
 // mean_abs), all read; empty when there is no error (against is NULL).
@@ -174,7 +209,7 @@ std::optional<ImageError> readImageError(RowReader& row) {
   return e;
 }
 
-// Reads kSampleColumns; the caller reads whatever its query adds after them.
+// Reads sampleColumns(); the caller reads whatever its query adds after them.
 SampleRow readSampleRow(RowReader& row) {
   SampleRow s;
   s.id = row.getInt();
@@ -321,7 +356,7 @@ Result<std::optional<Run>> Runs::get(int64_t runId) {
 Result<std::vector<SampleRow>> Runs::samples(int64_t runId) {
   std::lock_guard lock(mutex_);
   return guarded<std::vector<SampleRow>>("listSamples", [&]() -> Result<std::vector<SampleRow>> {
-    Statement query(db_, std::string("SELECT ") + kSampleColumns +
+    Statement query(db_, "SELECT " + sampleColumns(*db_) +
                              " FROM samples WHERE run_id = ?1 ORDER BY camera_index");
     query.bind(1, runId);
     std::vector<SampleRow> rows;
@@ -371,8 +406,8 @@ Result<std::optional<Sample>> Runs::sample(int64_t sampleId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Sample>>("getSample", [&]() -> Result<std::optional<Sample>> {
     Transaction tx(db_, Transaction::Kind::Read);
-    // frame_ms_frames comes after kSampleColumns: only this query reads it.
-    Statement query(db_, std::string("SELECT ") + kSampleColumns + ", frame_ms_frames FROM samples WHERE id = ?1");
+    // frame_ms_frames comes after sampleColumns(): only this query reads it.
+    Statement query(db_, "SELECT " + sampleColumns(*db_) + ", frame_ms_frames FROM samples WHERE id = ?1");
     query.bind(1, sampleId);
     if (!query.step()) return std::optional<Sample>();
     Sample sample;
@@ -405,9 +440,11 @@ Result<std::optional<Sample>> Runs::sample(int64_t sampleId) {
     }
     Statement counters(
         db_,
-        "SELECT c.pass_id, c.resource, c.kind, c.format, c.access, c.count, c.bytes, c.count_spread, "
-        "c.source, c.footprint_bytes FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = ?1 "
-        "ORDER BY p.position, c.position");
+        "SELECT p.id, c.resource, c.kind, c.format, c.access, c.count, c.bytes, c.count_spread, c.source, "
+        "c.footprint_bytes FROM passes p" +
+            detail::joinPassCounters(*db_, {"resource", "kind", "format", "access", "count", "bytes", "count_spread",
+                                            "source", "footprint_bytes"}) +
+            " WHERE p.sample_id = ?1 ORDER BY p.position, c.position");
     counters.bind(1, sampleId);
     while (counters.step()) {
       RowReader counter(counters);

@@ -24,7 +24,8 @@ bool sampleExists(Connection* db, int64_t sampleId) {
 // Every pass of the sample with its lines' bytes and its stored rows.
 std::vector<PassBytes> passBytes(Connection* db, int64_t sampleId) {
   Statement query(db,
-                  "SELECT p.position, p.name, COALESCE((SELECT SUM(c.bytes) FROM counters c WHERE c.pass_id = p.id), 0), "
+                  "SELECT p.position, p.name, COALESCE((SELECT SUM(c.bytes) FROM " +
+                      detail::countersOfPass(*db, {"bytes"}) + "), 0), "
                   "(SELECT COUNT(*) FROM pass_sites s WHERE s.pass_id = p.id), "
                   "(SELECT COUNT(*) FROM pass_draws d WHERE d.pass_id = p.id), "
                   "(SELECT COUNT(*) FROM pass_materials m WHERE m.pass_id = p.id) "
