@@ -128,8 +128,10 @@ Result<uint32_t> parseStudy(std::string_view text) {
       bits |= kStudyWaterfallEach;
     } else if (word == "partitioned") {
       bits |= kStudyPartitioned;
+    } else if (word == "evict-always") {
+      bits |= kStudyEvictAlways;
     } else {
-      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each or partitioned, comma-separated)");
+      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each, partitioned or evict-always, comma-separated)");
     }
     text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
   }

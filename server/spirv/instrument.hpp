@@ -61,7 +61,8 @@ Result<FootprintDedup> parseFootprintDedup(std::string_view text);
 std::string toString(const FootprintDedup& dedup);
 
 constexpr uint32_t kStudyNoAdds = 1, kStudyNoFlush = 2, kStudyInlineFlush = 4, kStudyElectedAdds = 8,
-                   kStudySplitReductions = 16, kStudyWaterfallEach = 32, kStudyPartitioned = 64;
+                   kStudySplitReductions = 16, kStudyWaterfallEach = 32, kStudyPartitioned = 64,
+                   kStudyEvictAlways = 128;
 Result<uint32_t> parseStudy(std::string_view text);
 
 // How a 64-bit counter is incremented.

@@ -307,6 +307,7 @@ TEST(Accumulate, StudyWordsParseOrNameTheBadOne) {
             kStudyElectedAdds | kStudySplitReductions | kStudyWaterfallEach);
   EXPECT_EQ(*parseStudy("inline-flush"), kStudyInlineFlush);
   EXPECT_EQ(*parseStudy("partitioned"), kStudyPartitioned);
+  EXPECT_EQ(*parseStudy("evict-always,partitioned"), kStudyEvictAlways | kStudyPartitioned);
   for (const char* bad : {"no-add", "no-adds,,no-flush", "fast"}) {
     auto r = parseStudy(bad);
     ASSERT_FALSE(r.ok()) << bad;
@@ -356,6 +357,29 @@ TEST(Accumulate, CachedArraysPartitionTheSubgroupWhereTheDeviceCan) {
   // Not in a stage the device has no subgroup operations in.
   options.subgroupStages = stageBit(Stage::Fragment);
   EXPECT_FALSE(contains(disassemble(instrumentOk(words, options).words), "OpGroupNonUniformPartitionNV"));
+}
+
+// A cached site that runs at most once per invocation never finds its cache
+// holding another element: it stores the element and a count of 1, with no
+// eviction (a branch and an atomic) beside the access. In a loop it keeps
+// the eviction: an atomic per cache beside the flush's.
+TEST(Accumulate, CachedArraysThatRunOnceNeverEvict) {
+  std::string looped = kMaterialMaps;
+  looped.replace(looped.find("void main() {"), std::string::npos,
+                 "void main() {\n  uint i = gl_GlobalInvocationID.x;\n  vec4 sum = vec4(0.0);\n"
+                 "  for (uint k = 0u; k < material[0]; ++k) {\n    uint m = material[i + k];\n"
+                 "    sum += texture(albedo[nonuniformEXT(m)], vec2(0.5)) + texture(normals[nonuniformEXT(m / 2u)], "
+                 "vec2(0.5));\n  }\n  o[i] = sum;\n}\n");
+  InstrumentOptions options = accumulate("accumulate");
+  std::string once = disassemble(instrumentOk(compileGlsl(kMaterialMaps, Stage::Compute), options).words);
+  std::string loop = disassemble(instrumentOk(compileGlsl(looped.c_str(), Stage::Compute), options).words);
+  // Both flush the two caches in one waterfall; only the loop's sites evict.
+  EXPECT_TRUE(contains(once, "OpGroupNonUniformBroadcastFirst")) << once;
+  EXPECT_EQ(countOf(loop, "OpAtomicIAdd"), countOf(once, "OpAtomicIAdd") + 2) << once << loop;
+  // The study word that keeps the eviction where it cannot happen (for timing it).
+  options.study = kStudyEvictAlways;
+  std::string evicting = disassemble(instrumentOk(compileGlsl(kMaterialMaps, Stage::Compute), options).words);
+  EXPECT_EQ(countOf(evicting, "OpAtomicIAdd"), countOf(once, "OpAtomicIAdd") + 2) << evicting;
 }
 
 TEST(Accumulate, PerLaneFragmentCachesPartitionToo) {
