@@ -31,6 +31,7 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
                     privateVariable(u, constantU32(0), prefix + "_count")};
   Body b{addsInto(after[s.function][s.instruction])};
   uint32_t element = clampedIndex(b, s, length);
+  uint32_t next;
   if (runsOnce(s, ep) && subgroupFlush(ep.stage) && (options_.study & kStudyEvictAlways) == 0) {
     // At most once per invocation: the cache is empty whenever the site
     // runs, so it takes the element with a count of 1, and nothing is ever
@@ -39,23 +40,19 @@ bool Injector::accumulateCachedArray(const FoundSite& s, const EntryPoint& ep, u
     // reduces across the subgroup: where it flushes per lane (NVIDIA's
     // fragment stage) the same took Sponza's lean fragment shading from
     // x1.030 to x1.050 (docs/accuracy.md, "Cached sites that run once").
-    opNoResult(b, spv::Op::OpStore, {cache.element, element});
-    opNoResult(b, spv::Op::OpStore, {cache.count, constantU32(1)});
-    flushSlots_[ep.stage].cached.push_back(cachedArrays_.size());
-    cachedArrays_.push_back(cache);
-    return true;
+    next = constantU32(1);
+  } else {
+    uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
+    uint32_t cached = op(b, spv::Op::OpLoad, u, {cache.element});
+    uint32_t same = op(b, spv::Op::OpIEqual, bo, {cached, element});
+    uint32_t held = op(b, spv::Op::OpINotEqual, bo, {count, constantU32(0)});
+    when(b, op(b, spv::Op::OpLogicalAnd, bo, {held, op(b, spv::Op::OpLogicalNot, bo, {same})}), [&](Body& bb) {
+      // The reader sums a striped slot's copies: the first copy takes it.
+      emitAdd(bb, op(bb, spv::Op::OpIAdd, u, {constantU32(slot), cached}), count);
+    });
+    // An empty cache holds element 0 with no count: 1 either way.
+    next = op(b, spv::Op::OpSelect, u, {same, op(b, spv::Op::OpIAdd, u, {count, constantU32(1)}), constantU32(1)});
   }
-  uint32_t count = op(b, spv::Op::OpLoad, u, {cache.count});
-  uint32_t cached = op(b, spv::Op::OpLoad, u, {cache.element});
-  uint32_t same = op(b, spv::Op::OpIEqual, bo, {cached, element});
-  uint32_t held = op(b, spv::Op::OpINotEqual, bo, {count, constantU32(0)});
-  when(b, op(b, spv::Op::OpLogicalAnd, bo, {held, op(b, spv::Op::OpLogicalNot, bo, {same})}), [&](Body& bb) {
-    // The reader sums a striped slot's copies: the first copy takes it.
-    emitAdd(bb, op(bb, spv::Op::OpIAdd, u, {constantU32(slot), cached}), count);
-  });
-  // An empty cache holds element 0 with no count: 1 either way.
-  uint32_t next = op(b, spv::Op::OpSelect, u,
-                     {same, op(b, spv::Op::OpIAdd, u, {count, constantU32(1)}), constantU32(1)});
   opNoResult(b, spv::Op::OpStore, {cache.element, element});
   opNoResult(b, spv::Op::OpStore, {cache.count, next});
   flushSlots_[ep.stage].cached.push_back(cachedArrays_.size());

@@ -136,8 +136,8 @@ Result<int64_t> Runs::ingestSweep(const Lease& lease, const json& result) {
 // refreshes at most once a minute. Ingests that grow a young database many
 // times over within that minute leave it planning for nearly empty tables:
 // 20,000 samples stored in 10 s into a new database, and a run's samples
-// took 1.1 s a request (sequential scans of the counters table it had then) until the statistics
-// caught up, 1 ms after. So the store analyses the growing tables itself
+// took 1.1 s a request (sequential scans of the counters table it had then)
+// until the statistics caught up, 1 ms after. So the store analyses the growing tables itself
 // whenever the samples it stored since it last did reach the samples the
 // database held then, and at least kAnalyzeEvery: a few times while a
 // database grows from nothing, rarely after (a doubling each time).

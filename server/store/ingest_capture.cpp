@@ -76,18 +76,16 @@ RowCounts countRows(const json& runs) {
   return n;
 }
 
-// The arrays that hold a pass's counters on PostgreSQL, in the order
-// addCounters writes them.
-constexpr const char* kCounterArrays[] = {"counter_resources", "counter_kinds",   "counter_formats",
-                                          "counter_accesses",  "counter_counts",  "counter_bytes",
-                                          "counter_spreads",   "counter_sources", "counter_footprints"};
-
+// The passes' columns; on PostgreSQL the counters' arrays (kCounterArrays,
+// in the order addCounters writes them) end the row.
 std::vector<std::string> passColumns(bool counterArrays) {
   std::vector<std::string> columns = {"id", "sample_id", "position", "name", "gpu_ms", "gpu_ms_spread",
                                       "gpu_ms_instrumented", "overhead_ratio", "fragment_invocations",
                                       "fragment_invocations_statistic", "compute_invocations",
                                       "compute_invocations_statistic", "gpu_ms_frames"};
-  if (counterArrays) columns.insert(columns.end(), std::begin(kCounterArrays), std::end(kCounterArrays));
+  if (counterArrays) {
+    for (const CounterArray& a : kCounterArrays) columns.emplace_back(a.array);
+  }
   return columns;
 }
 

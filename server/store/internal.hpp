@@ -75,6 +75,16 @@ std::string runFilterSql(const RunFilter& filter);
 std::string parameterList(size_t n);
 int bindRunFilter(Statement& statement, const RunFilter& filter, int first);
 
+// Each counters column and the pass's array that holds it on PostgreSQL
+// (migration 0012), in the order ingest writes them.
+struct CounterArray {
+  std::string_view column, array;
+};
+inline constexpr CounterArray kCounterArrays[] = {
+    {"resource", "counter_resources"}, {"kind", "counter_kinds"},     {"format", "counter_formats"},
+    {"access", "counter_accesses"},    {"count", "counter_counts"},   {"bytes", "counter_bytes"},
+    {"count_spread", "counter_spreads"}, {"source", "counter_sources"}, {"footprint_bytes", "counter_footprints"}};
+
 // A pass's counters, where the engines keep them differently (migration
 // 0012): rows of the counters table on SQLite; arrays on the pass's row on
 // PostgreSQL, read here by unnesting only the arrays of the columns named,

@@ -1,7 +1,7 @@
 // Read queries: runs (filtered, cursor-paginated), samples with passes and
 // counters, screenshots. Multi-statement reads run in one read transaction,
 // so a concurrent re-ingest is seen entirely or not at all.
-#include <map>
+#include <algorithm>
 #include <stdexcept>
 
 #include "store/internal.hpp"
@@ -96,20 +96,16 @@ Device readDevice(RowReader& row) {
                 row.getText(), row.getJson(), row.getJson()};
 }
 
-// Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
 namespace {
 
 // "unnest(p.counter_bytes, ...) WITH ORDINALITY AS c(bytes, ..., position)".
 std::string unnestedCounters(std::initializer_list<std::string_view> columns) {
-  static const std::map<std::string_view, std::string_view> kArrays = {
-      {"resource", "counter_resources"}, {"kind", "counter_kinds"},          {"format", "counter_formats"},
-      {"access", "counter_accesses"},    {"count", "counter_counts"},        {"bytes", "counter_bytes"},
-      {"count_spread", "counter_spreads"}, {"source", "counter_sources"}, {"footprint_bytes", "counter_footprints"}};
   std::string arrays, names;
   for (std::string_view column : columns) {
-    auto it = kArrays.find(column);
-    if (it == kArrays.end()) throw std::logic_error("no counter array for column " + std::string(column));
-    arrays += (arrays.empty() ? "p." : ", p.") + std::string(it->second);
+    auto it = std::find_if(std::begin(kCounterArrays), std::end(kCounterArrays),
+                           [&](const CounterArray& a) { return a.column == column; });
+    if (it == std::end(kCounterArrays)) throw std::logic_error("no counter array for column " + std::string(column));
+    arrays += (arrays.empty() ? "p." : ", p.") + std::string(it->array);
     names += std::string(column) + ", ";
   }
   return "unnest(" + arrays + ") WITH ORDINALITY AS c(" + names + "position)";
@@ -133,6 +129,7 @@ std::string parameterList(size_t n) {
   return out;
 }
 
+// Fixed SQL fragments only; the values are bound by bindRunFilter in the same order.
 std::string runFilterSql(const RunFilter& f) {
   std::string sql;
   if (f.renderer) sql += " AND r.renderer = ?";
