@@ -27,6 +27,20 @@ bool inclusive(spv::Op o) {
 
 }  // namespace
 
+// The load at instruction `at` of `f` (from memory the loop cannot change:
+// invariantIn), made again where the loop is entered, its access chain too.
+uint32_t Injector::repeatLoad(Body& b, const Function& f, size_t at) {
+  const Instruction& load = f.insts[at];
+  uint32_t pointer = load.word(3);
+  const Instruction* chain = defs_.def(pointer);
+  if (chain != nullptr && defs_.functionOf(pointer) >= 0 &&
+      (chain->opcode() == spv::Op::OpAccessChain || chain->opcode() == spv::Op::OpInBoundsAccessChain)) {
+    std::vector<uint32_t> operands(chain->words.begin() + 3, chain->words.end());
+    pointer = op(b, chain->opcode(), chain->resultType(), operands);
+  }
+  return op(b, spv::Op::OpLoad, load.resultType(), {pointer});
+}
+
 // The loop's trip count, computed where it is entered: u32, 0 where the test fails at once.
 uint32_t Injector::tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue) {
   uint32_t u = tU32();
@@ -35,18 +49,7 @@ uint32_t Injector::tripCount(Body& b, const Function& f, const CountedLoop& c, u
     const Instruction* pointerType = defs_.def(defs_.def(c.variable)->resultType());
     start = op(b, spv::Op::OpLoad, pointerType->word(3), {c.variable});
   }
-  uint32_t bound = c.bound;
-  if (c.boundLoad != kNever) {
-    const Instruction& load = f.insts[c.boundLoad];
-    uint32_t pointer = load.word(3);
-    const Instruction* chain = defs_.def(pointer);
-    if (chain != nullptr && defs_.functionOf(pointer) >= 0 &&
-        (chain->opcode() == spv::Op::OpAccessChain || chain->opcode() == spv::Op::OpInBoundsAccessChain)) {
-      std::vector<uint32_t> operands(chain->words.begin() + 3, chain->words.end());
-      pointer = op(b, chain->opcode(), chain->resultType(), operands);
-    }
-    bound = op(b, spv::Op::OpLoad, load.resultType(), {pointer});
-  }
+  uint32_t bound = c.boundLoad != kNever ? repeatLoad(b, f, c.boundLoad) : c.bound;
   const bool up = c.step > 0;
   const uint32_t magnitude = up ? uint32_t(c.step) : uint32_t(-int64_t(c.step));
   uint32_t diff = up ? op(b, spv::Op::OpISub, u, {bound, start}) : op(b, spv::Op::OpISub, u, {start, bound});

@@ -16,10 +16,10 @@
 
 namespace tally::spirv {
 
-// The byte offset of a buffer pointer from the start of its descriptor's
-// buffer (the element of a descriptor array), as straight-line code; 0
-// with `why` set where the chain cannot be followed.
-uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::string& why) {
+// The terms of a buffer pointer's byte offset from the start of its
+// descriptor's buffer (the element of a descriptor array); nullopt with
+// `why` set where the chain cannot be followed.
+std::optional<Injector::OffsetTerms> Injector::offsetTerms(uint32_t pointer, int function, std::string& why) {
   std::vector<const Instruction*> chain;
   uint32_t variable = 0;
   for (int depth = 0; depth < 64 && variable == 0; ++depth) {
@@ -31,7 +31,7 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
       case spv::Op::OpInBoundsAccessChain:
         if (defs_.functionOf(pointer) != function) {
           why = "buffer accesses through pointers made in another function";
-          return 0;
+          return std::nullopt;
         }
         chain.push_back(d);
         pointer = d->word(3);
@@ -40,28 +40,24 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
       default:
         why = std::string("buffer accesses through ") +
               (d->opcode() == spv::Op::OpFunctionParameter ? "function parameters" : "pointer arithmetic");
-        return 0;
+        return std::nullopt;
     }
   }
   if (variable == 0) {
     why = "buffer accesses whose pointer has no variable";
-    return 0;
+    return std::nullopt;
   }
   std::reverse(chain.begin(), chain.end());
-  uint32_t u = tU32();
   uint32_t type = types_.pointee(defs_.def(variable)->resultType());
   bool descriptorArray = false;
   if (const Instruction* t = defs_.def(type); t && (t->opcode() == spv::Op::OpTypeArray || t->opcode() == spv::Op::OpTypeRuntimeArray)) {
     descriptorArray = !defs_.decorationValue(type, spv::Decoration::ArrayStride).has_value();
   }
-  uint64_t constantPart = 0;
-  uint32_t dynamicPart = 0;
+  OffsetTerms terms;
+  uint64_t& constantPart = terms.constant;
   std::optional<uint32_t> matrixStride;
   bool rowMajor = false;
-  auto addDynamic = [&](uint32_t index, uint32_t stride) {
-    uint32_t term = op(b, spv::Op::OpIMul, u, {intAs(b, index, false), constantU32(stride)});
-    dynamicPart = dynamicPart == 0 ? term : op(b, spv::Op::OpIAdd, u, {dynamicPart, term});
-  };
+  auto addDynamic = [&](uint32_t index, uint32_t stride) { terms.dynamic.push_back({index, stride}); };
   bool first = true;
   for (const Instruction* ac : chain) {
     for (size_t w = 4; w < ac->size(); ++w) {
@@ -69,7 +65,7 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
       const Instruction* t = defs_.def(type);
       if (t == nullptr) {
         why = "buffer accesses into an unknown type";
-        return 0;
+        return std::nullopt;
       }
       auto constIndex = types_.constantValue(index);
       if (first && descriptorArray) {  // the descriptor, not a byte offset
@@ -82,7 +78,7 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
         case spv::Op::OpTypeStruct: {
           if (!constIndex) {
             why = "buffer accesses with a run-time struct member";
-            return 0;
+            return std::nullopt;
           }
           uint32_t m = static_cast<uint32_t>(*constIndex);
           constantPart += defs_.memberDecorationValue(type, m, spv::Decoration::Offset).value_or(0);
@@ -99,7 +95,7 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
           auto stride = defs_.decorationValue(type, spv::Decoration::ArrayStride);
           if (!stride) {
             why = "buffer accesses into arrays without an ArrayStride";
-            return 0;
+            return std::nullopt;
           }
           if (constIndex) constantPart += *constIndex * *stride; else addDynamic(index, *stride);
           type = t->word(2);
@@ -108,7 +104,7 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
         case spv::Op::OpTypeMatrix: {
           if (!matrixStride || rowMajor) {
             why = "buffer accesses to columns of row-major matrices";
-            return 0;
+            return std::nullopt;
           }
           if (constIndex) constantPart += *constIndex * *matrixStride; else addDynamic(index, *matrixStride);
           type = t->word(2);
@@ -122,12 +118,38 @@ uint32_t Injector::byteOffset(Body& b, uint32_t pointer, int function, std::stri
         }
         default:
           why = "buffer accesses into an unknown type";
-          return 0;
+          return std::nullopt;
       }
     }
   }
-  uint32_t offset = constantU32(static_cast<uint32_t>(constantPart));
+  return terms;
+}
+
+// The offset as straight-line code; an index found in `replace` is replaced
+// by its value there.
+uint32_t Injector::emitOffset(Body& b, const OffsetTerms& terms, const std::map<uint32_t, uint32_t>& replace) {
+  uint32_t u = tU32();
+  uint32_t dynamicPart = 0;
+  for (auto [index, stride] : terms.dynamic) {
+    auto r = replace.find(index);
+    uint32_t value = intAs(b, r != replace.end() ? r->second : index, false);
+    uint32_t term = op(b, spv::Op::OpIMul, u, {value, constantU32(stride)});
+    dynamicPart = dynamicPart == 0 ? term : op(b, spv::Op::OpIAdd, u, {dynamicPart, term});
+  }
+  uint32_t offset = constantU32(static_cast<uint32_t>(terms.constant));
   return dynamicPart == 0 ? offset : op(b, spv::Op::OpIAdd, u, {dynamicPart, offset});
+}
+
+// The pointer a buffer site accesses.
+uint32_t Injector::sitePointer(const FoundSite& s) const {
+  const Instruction& inst = m_.functions[s.function].insts[s.instruction];
+  spv::Op o = inst.opcode();
+  if (o == spv::Op::OpLoad) return inst.word(3);
+  if (o == spv::Op::OpStore || o == spv::Op::OpAtomicStore) return inst.word(1);
+  if (o == spv::Op::OpCopyMemory || o == spv::Op::OpCopyMemorySized) {
+    return s.site.kind == SiteKind::BufferRead ? inst.word(2) : inst.word(1);
+  }
+  return inst.word(3);  // the other atomics
 }
 
 // The pixel of a fragment invocation: floor(FragCoord.xy) as i32.
@@ -191,27 +213,20 @@ bool Injector::emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage 
       return false;
     }
     uint32_t vertex = loadIntAsU32(b, builtin(stage, spv::BuiltIn::VertexIndex, tI32(), true));
-    fnCall(b, fpBytesFn(site.elementBytes <= 2 * options_.footprintBlockBytes + 1), {entry, vertex, constantU32(site.elementBytes)});
+    fnCall(b, fpBytesFn(shortBytes(site.elementBytes)), {entry, vertex, constantU32(site.elementBytes)});
     return true;
   }
-  const Instruction& inst = m_.functions[s.function].insts[s.instruction];
-  spv::Op o = inst.opcode();
   if (site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite) {
     if (site.elementBytes == 0) {
       why = "buffer accesses of unknown size";
       return false;
     }
-    uint32_t pointer = 0;
-    if (o == spv::Op::OpLoad) pointer = inst.word(3);
-    else if (o == spv::Op::OpStore || o == spv::Op::OpAtomicStore) pointer = inst.word(1);
-    else if (o == spv::Op::OpCopyMemory || o == spv::Op::OpCopyMemorySized)
-      pointer = site.kind == SiteKind::BufferRead ? inst.word(2) : inst.word(1);
-    else pointer = inst.word(3);  // the other atomics
-    uint32_t offset = byteOffset(b, pointer, s.function, why);
-    if (offset == 0) return false;
-    fnCall(b, fpBytesFn(site.elementBytes <= 2 * options_.footprintBlockBytes + 1), {entry, offset, constantU32(site.elementBytes)});
+    auto terms = offsetTerms(sitePointer(s), s.function, why);
+    if (!terms) return false;
+    fnCall(b, fpBytesFn(shortBytes(site.elementBytes)), {entry, emitOffset(b, *terms), constantU32(site.elementBytes)});
     return true;
   }
+  const Instruction& inst = m_.functions[s.function].insts[s.instruction];
   return emitImageFootprint(b, s, inst, entry, stage, why);
 }
 
@@ -369,6 +384,11 @@ void Injector::footprintSite(size_t index, const FoundSite& s, const EntryPoint&
   if (s.site.kind == SiteKind::Invocation) return;
   if (s.site.set < 0 && !s.site.location && s.site.kind != SiteKind::OutputWrite) {
     noteOnce("footprint: " + std::string(toString(s.site.kind)) + " of " + s.site.resource + " not measured");
+    return;
+  }
+  if (footprintLoopRange(s, slotBase, before)) {
+    result_.sites[index].footprint = true;
+    ++fpLoopSites_[ep.stage];
     return;
   }
   const auto& insts = m_.functions[s.function].insts;

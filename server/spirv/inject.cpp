@@ -87,6 +87,11 @@ Result<bool> Injector::run(const SiteScan& scan, const std::vector<uint32_t>& sl
     }
   }
 
+  for (const auto& [stage, sites] : fpLoopSites_) {
+    notes_.push_back("footprint: " + std::to_string(sites) + " " + std::string(toString(stage)) + " buffer site" +
+                     (sites == 1 ? "" : "s") + " in counted loops marked once where the loop is entered, " +
+                     "as the range of blocks the iterations cover");
+  }
   if (accumulate && result_.arithmeticSlot >= 0) countExecutedArithmetic(scan, before);
   if (accumulate && flushSlots_.count(Stage::Compute) && options_.computeCopies > 1) {
     result_.copies = options_.computeCopies;

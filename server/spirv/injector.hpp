@@ -18,11 +18,9 @@
 #include <vector>
 
 #include "spirv/inject.hpp"
+#include "spirv/loops.hpp"
 
 namespace tally::spirv {
-
-struct CountedLoop;
-struct FunctionLoops;
 
 // Scope and semantics words (SPIR-V spec 3.27, 3.25).
 constexpr uint32_t kScopeDevice = 1;
@@ -323,6 +321,7 @@ class Injector : public ModuleBuilder {
   void countLoops(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before,
                   const std::vector<uint32_t>& slots);
   uint32_t tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue);
+  uint32_t repeatLoad(Body& b, const Function& f, size_t at);
   std::optional<uint32_t> constantTrips(const Function& f, const CountedLoop& c, size_t branch, uint32_t phiValue) const;
   std::optional<uint32_t> entryParent(const FunctionLoops& fl, size_t self, uint32_t entry, int function, size_t branch,
                                       const EntryPoint& ep);
@@ -456,9 +455,31 @@ class Injector : public ModuleBuilder {
   uint32_t fpSampleFn();
 
   // The byte offset of a buffer pointer from the start of its descriptor's
-  // buffer (the element of a descriptor array), as straight-line code; 0
-  // with `why` set where the chain cannot be followed.
-  uint32_t byteOffset(Body& b, uint32_t pointer, int function, std::string& why);
+  // buffer (the element of a descriptor array): a constant, and each
+  // run-time index of the access chains times its stride, in their order.
+  struct OffsetTerms {
+    uint64_t constant = 0;
+    std::vector<std::pair<uint32_t, uint32_t>> dynamic;  // (index id, stride)
+  };
+  // nullopt with `why` set where the chain cannot be followed.
+  std::optional<OffsetTerms> offsetTerms(uint32_t pointer, int function, std::string& why);
+  // The offset as straight-line code, an index in `replace` replaced by its value there.
+  uint32_t emitOffset(Body& b, const OffsetTerms& terms, const std::map<uint32_t, uint32_t>& replace = {});
+  // The pointer a buffer site accesses.
+  uint32_t sitePointer(const FoundSite& s) const;
+  // Whether an access of `bytes` covers at most three blocks (tally_fp_bytes_short).
+  bool shortBytes(uint32_t bytes) const { return bytes <= 2 * options_.footprintBlockBytes + 1; }
+
+  // tally_fp_range(entry, first, step, trips, bytes): what a buffer access of
+  // `bytes` at offsets first + k step, k in [0, trips), marks with
+  // tally_fp_bytes, as one range of blocks where |step| <= a block
+  // (footprint_loops.cpp).
+  uint32_t fpRangeFn(bool shortRange);
+
+  // Marks a buffer site of a counted loop once where the loop is entered,
+  // the range of its iterations; false where the site does not qualify.
+  bool footprintLoopRange(const FoundSite& s, uint32_t slotBase,
+                          std::vector<std::map<size_t, std::vector<Instruction>>>& before);
 
   // The pixel of a fragment invocation: floor(FragCoord.xy) as i32.
   std::pair<uint32_t, uint32_t> fragmentPixel(Body& b, Stage stage);
@@ -528,6 +549,9 @@ class Injector : public ModuleBuilder {
   Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup
   uint32_t fpCache_[4] = {};       // the cache's Private registers: word0, bits0, word1, bits1
   uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
+  uint32_t fpRange_ = 0, fpRangeShort_ = 0;
+  std::map<int, FunctionLoops> fpLoops_;  // function -> its loops, for footprintLoopRange
+  std::map<Stage, uint32_t> fpLoopSites_; // sites marked once per loop entry
 };
 
 }  // namespace tally::spirv

@@ -139,16 +139,29 @@ Result<uint32_t> parseStudy(std::string_view text) {
 }
 
 Result<FootprintDedup> parseFootprintDedup(std::string_view text) {
-  if (text == "none") return FootprintDedup{false, false};
-  if (text == "subgroup") return FootprintDedup{true, false};
-  if (text == "cache") return FootprintDedup{false, true};
-  if (text == "all") return FootprintDedup{true, true};
-  return makeError("unknown footprint dedup '" + std::string(text) + "' (expected none, subgroup, cache or all)");
+  if (text == "none") return FootprintDedup{false, false, false};
+  if (text == "all") return FootprintDedup{true, true, true};
+  FootprintDedup d{false, false, false};
+  for (std::string_view rest = text;;) {
+    size_t comma = rest.find(',');
+    std::string_view word = rest.substr(0, comma);
+    bool* flag = word == "subgroup" ? &d.subgroup : word == "cache" ? &d.cache : word == "loops" ? &d.loops : nullptr;
+    if (flag == nullptr || *flag) break;
+    *flag = true;
+    if (comma == std::string_view::npos) return d;
+    rest = rest.substr(comma + 1);
+  }
+  return makeError("unknown footprint dedup '" + std::string(text) +
+                   "' (expected none, all, or a list of subgroup, cache and loops, each once, joined by commas)");
 }
 
 std::string toString(const FootprintDedup& dedup) {
-  if (dedup.subgroup) return dedup.cache ? "all" : "subgroup";
-  return dedup.cache ? "cache" : "none";
+  if (dedup.subgroup && dedup.cache && dedup.loops) return "all";
+  std::string out;
+  for (auto [on, word] : {std::pair{dedup.subgroup, "subgroup"}, {dedup.cache, "cache"}, {dedup.loops, "loops"}}) {
+    if (on) out += (out.empty() ? "" : ",") + std::string(word);
+  }
+  return out.empty() ? "none" : out;
 }
 
 Result<std::vector<uint32_t>> wordsFromBytes(std::span<const uint8_t> bytes) {

@@ -53,10 +53,15 @@ struct FootprintDedup {
   // made Sponza's footprint frames slower, x3.01-3.29 of plain against
   // x2.74-2.90 without (docs/measurement.md, "What a mark skips").
   bool cache = false;
+  // A buffer access in a counted loop whose offset moves by at most a block
+  // each iteration marks, where the loop is entered, the range of blocks
+  // its iterations cover, and nothing inside the loop (docs/measurement.md,
+  // "Loops: one range instead of a mark per iteration").
+  bool loops = true;
   bool operator==(const FootprintDedup&) const = default;
 };
 
-// "none", "subgroup", "cache" or "all".
+// "none", "all", or a comma-separated list of "subgroup", "cache" and "loops".
 Result<FootprintDedup> parseFootprintDedup(std::string_view text);
 std::string toString(const FootprintDedup& dedup);
 
@@ -125,7 +130,7 @@ struct InstrumentOptions {
   uint32_t footprintBlockBytes = 0;
   uint32_t footprintTableBinding = 1;
   uint32_t footprintBitmapBinding = 2;
-  // Unset: $TALLY_FOOTPRINT_DEDUP where set (none, subgroup, cache or all),
+  // Unset: $TALLY_FOOTPRINT_DEDUP where set (parseFootprintDedup),
   // so that one capture's spec compares the choices; else FootprintDedup's defaults.
   std::optional<FootprintDedup> footprintDedup;
   // Buffer device addresses: a physical-storage-buffer access counts into

@@ -4,22 +4,15 @@
 #include <climits>
 #include <functional>
 #include <map>
+#include <memory>
 
 #include "spirv/cfg.hpp"
 
 namespace tally::spirv {
 
-namespace {
-
-bool dominates(const std::vector<int>& idom, int a, int b) {
-  if (b < 0 || idom[b] < 0) return false;
-  for (;; b = idom[b]) {
-    if (b == a) return true;
-    if (idom[b] == b) return false;
-  }
-}
-
 // What findLoops shares between its steps for one function.
+namespace detail {
+
 struct FunctionGraph {
   const Module& m;
   const DefIndex& defs;
@@ -31,6 +24,20 @@ struct FunctionGraph {
   std::vector<std::vector<int>> preds;
   std::map<uint32_t, size_t> indexOf;   // result id -> its instruction
 };
+
+}  // namespace detail
+
+bool dominates(const std::vector<int>& idom, int a, int b) {
+  if (b < 0 || idom[b] < 0) return false;
+  for (;; b = idom[b]) {
+    if (b == a) return true;
+    if (idom[b] == b) return false;
+  }
+}
+
+namespace {
+
+using detail::FunctionGraph;
 
 // Blocks on a cycle through `header`: reached backwards from the edges into it
 // from blocks it dominates, without passing it.
@@ -309,6 +316,7 @@ std::optional<CountedLoop> countedLoop(const FunctionGraph& fg, const std::vecto
     });
     if (!step) return std::nullopt;
     c.step = *step;
+    c.stepStore = stores[0].second;
   }
   // Which shapes have a trip count by formula (docs/measurement.md).
   const spv::Op o = c.compare;
@@ -392,7 +400,8 @@ void classify(const FunctionGraph& fg, const std::vector<bool>& in, const std::v
 
 FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function) {
   const Function& f = m.functions[function];
-  FunctionGraph fg{m, defs, f, blockGraph(f, defs), {}, {}, {}, {}, {}};
+  auto graph = std::make_shared<FunctionGraph>(FunctionGraph{m, defs, f, blockGraph(f, defs), {}, {}, {}, {}, {}});
+  FunctionGraph& fg = *graph;
   const int n = static_cast<int>(fg.g.next.size());
   FunctionLoops out;
   out.blockAt = fg.g.blockAt;
@@ -433,6 +442,8 @@ FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function) {
     }
     std::vector<int> iterIdom, iterPdom;
     classify(fg, in, nested, loop, iterIdom, iterPdom);
+    loop.in = in;
+    loop.iterIdom = iterIdom;
     // The exit test: the end of the header's chain of unconditional branches;
     // the loop's only way out, to its merge block.
     int test = loop.header;
@@ -490,7 +501,13 @@ FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function) {
     loops.push_back(std::move(loop));
   }
   out.labelAt = fg.labelAt;
+  out.graph = graph;
   return out;
+}
+
+bool invariantIn(const FunctionLoops& fl, const Loop& loop, uint32_t id, size_t& load) {
+  load = kNever;
+  return fl.graph != nullptr && !loop.in.empty() && invariant(*fl.graph, loop.in, loop.header, id, load);
 }
 
 size_t blockStart(const Function& f, size_t labelIndex) {

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -26,6 +27,7 @@ struct CountedLoop {
   uint32_t variable = 0;  // a Function variable, read at the loop's entry
   uint32_t bound = 0;     // the bound: an id available at the loop's entry, or
   size_t boundLoad = kNever;  // the instruction index of a load to repeat there
+  size_t stepStore = kNever;  // the variable's one store in the loop (variable = load + step)
 };
 
 struct Loop {
@@ -43,19 +45,36 @@ struct Loop {
   // when the loop is counted (-1 otherwise).
   int everyIteration = -1;
   std::optional<CountedLoop> counted;
+  std::vector<bool> in;        // per block: on the loop's cycle (nested loops' blocks too)
+  std::vector<int> iterIdom;   // per block: its immediate dominator within one iteration
   // Each entry into the loop from outside: the instruction index of the
   // OpBranch to the header, and the OpPhi's value for it (counted.phi).
   std::vector<std::pair<size_t, uint32_t>> entries;
 };
 
+namespace detail {
+struct FunctionGraph;  // the function's blocks, dominators and definitions (loops.cpp)
+}
+
 struct FunctionLoops {
   std::vector<int> blockAt;     // per instruction, its block (-1 before the first label)
   std::vector<size_t> labelAt;  // per block, its OpLabel's index
   std::vector<Loop> loops;
+  std::shared_ptr<const detail::FunctionGraph> graph;
 };
 
 // The structured loops (OpLoopMerge) of function `function` of `m`.
 FunctionLoops findLoops(const Module& m, const DefIndex& defs, int function);
+
+// Whether `id` holds the same value in every iteration of `loop` and can be
+// had at its entry: a constant, a parameter, a value defined before the
+// loop, or (returned as `load`, the instruction index of a load to repeat
+// there) a load inside the loop from memory the loop cannot change: a
+// Function variable it never stores, a push constant, a uniform block.
+bool invariantIn(const FunctionLoops& fl, const Loop& loop, uint32_t id, size_t& load);
+
+// Whether block `a` dominates block `b` in the dominator tree `idom`.
+bool dominates(const std::vector<int>& idom, int a, int b);
 
 // Where code that runs at the start of block `block` goes: after its label and OpPhis.
 size_t blockStart(const Function& f, size_t labelIndex);

@@ -17,7 +17,8 @@
 namespace tally::test {
 namespace {
 
-const spirv::FootprintDedup kNone{false, false}, kSubgroup{true, false}, kCache{false, true}, kAll{true, true};
+const spirv::FootprintDedup kNone{false, false, false}, kSubgroup{true, false, false}, kCache{false, true, false},
+    kLoops{false, false, true}, kAll{true, true, true};
 
 struct Choice {
   const char* mode;
@@ -27,7 +28,7 @@ struct Choice {
 std::vector<Choice> everyChoice() {
   std::vector<Choice> out;
   for (const char* mode : {"exact", "subgroup", "accumulate"}) {
-    for (const auto& dedup : {kNone, kSubgroup, kCache, kAll}) out.push_back({mode, dedup});
+    for (const auto& dedup : {kNone, kSubgroup, kCache, kLoops, kAll}) out.push_back({mode, dedup});
   }
   return out;
 }

@@ -4,6 +4,8 @@
 #include <functional>
 #include <set>
 
+#include <spirv-tools/optimizer.hpp>
+
 #include "gpu/footprint.hpp"
 #include "gpu/pipelines.hpp"
 #include "gpu/resources.hpp"
@@ -43,6 +45,18 @@ Result<PassResult> FootprintPass::run(const PassDesc& d) {
   compile.target = gpu::glslTarget(ctx_);
   auto main = glsl::compile(d.source, stage, compile);
   if (!main) return makeError(main.error());
+  if (d.optimize) {
+    const uint32_t minor = ((*main)[1] >> 8) & 0xff;
+    spvtools::Optimizer optimizer(minor >= 6   ? SPV_ENV_VULKAN_1_3
+                                  : minor == 5 ? SPV_ENV_VULKAN_1_2
+                                  : minor == 4 ? SPV_ENV_VULKAN_1_1_SPIRV_1_4
+                                  : minor == 3 ? SPV_ENV_VULKAN_1_1
+                                               : SPV_ENV_VULKAN_1_0);
+    optimizer.RegisterPerformancePasses();
+    std::vector<uint32_t> out;
+    if (!optimizer.Run(main->data(), main->size(), &out)) return makeError("the optimizer refused the module");
+    *main = std::move(out);
+  }
   std::vector<std::pair<spirv::Stage, std::vector<uint32_t>>> modules = {{stage, *main}};
   if (!d.compute) {
     auto vert = glsl::compile(

@@ -41,6 +41,7 @@ struct PassDesc {
   bool deriveOnceSites = true;   // InstrumentOptions::deriveOnceSites
   spirv::Mode mode{spirv::CountMode::Accumulate};
   std::optional<spirv::FootprintDedup> dedup;  // InstrumentOptions::footprintDedup
+  bool optimize = false;  // the main stage through SPIRV-Tools' performance passes (loops in SSA form)
 };
 
 // One line per (binding or "target", read or write).

@@ -53,16 +53,21 @@ InstrumentOptions withFootprint(std::optional<FootprintDedup> dedup) {
 }
 
 TEST(FootprintDedup, NamesReadBack) {
-  for (const char* name : {"none", "subgroup", "cache", "all"}) {
+  for (const char* name : {"none", "subgroup", "cache", "loops", "subgroup,cache", "subgroup,loops", "cache,loops", "all"}) {
     auto d = parseFootprintDedup(name);
     ASSERT_TRUE(d.ok()) << name << ": " << d.error();
     EXPECT_EQ(toString(*d), name);
   }
-  EXPECT_TRUE(parseFootprintDedup("all")->subgroup && parseFootprintDedup("all")->cache);
-  EXPECT_FALSE(parseFootprintDedup("none")->subgroup || parseFootprintDedup("none")->cache);
-  auto bad = parseFootprintDedup("both");
-  ASSERT_FALSE(bad.ok());
-  EXPECT_EQ(bad.error(), "unknown footprint dedup 'both' (expected none, subgroup, cache or all)");
+  EXPECT_EQ(*parseFootprintDedup("all"), (FootprintDedup{true, true, true}));
+  EXPECT_EQ(*parseFootprintDedup("none"), (FootprintDedup{false, false, false}));
+  EXPECT_EQ(*parseFootprintDedup("loops,subgroup"), (FootprintDedup{true, false, true}));
+  EXPECT_EQ(toString(FootprintDedup{}), "loops") << "the default";
+  for (const char* bad : {"both", "", "loops,", ",loops", "loops,loops", "subgroup,none", "all,cache"}) {
+    auto r = parseFootprintDedup(bad);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_EQ(r.error(), "unknown footprint dedup '" + std::string(bad) +
+                             "' (expected none, all, or a list of subgroup, cache and loops, each once, joined by commas)");
+  }
 }
 
 // Each choice's code in tally_fp_mark: the cache's registers, the
@@ -89,7 +94,7 @@ TEST(FootprintDedup, NoSubgroupArithmeticNoCombining) {
   options.subgroupStages = stageBit(Stage::Fragment);
   auto r = instrumentOk(compileGlsl(kLoop, Stage::Compute), options);
   ASSERT_TRUE(r.footprintDedup.has_value());
-  EXPECT_EQ(toString(*r.footprintDedup), "cache");
+  EXPECT_EQ(toString(*r.footprintDedup), "cache,loops");
   EXPECT_FALSE(contains(disassemble(r.words), "OpGroupNonUniformBitwiseOr"));
   bool noted = false;
   for (const auto& n : r.notes) noted |= n == "footprint: marks not combined across the subgroup: no subgroup arithmetic in the compute stage";
@@ -117,7 +122,8 @@ TEST(FootprintDedup, TheEnvironmentChoosesWhereTheOptionsDoNot) {
     DedupEnvironment env("fast");
     auto r = instrument(words, withFootprint(std::nullopt));
     ASSERT_FALSE(r.ok());
-    EXPECT_EQ(r.error(), "TALLY_FOOTPRINT_DEDUP: unknown footprint dedup 'fast' (expected none, subgroup, cache or all)");
+    EXPECT_EQ(r.error(), "TALLY_FOOTPRINT_DEDUP: unknown footprint dedup 'fast' (expected none, all, or a list of "
+                         "subgroup, cache and loops, each once, joined by commas)");
     InstrumentOptions off;
     EXPECT_TRUE(instrument(words, off).ok()) << "read with footprint off";
   }
