@@ -15,8 +15,10 @@ namespace tally::spirv {
 // Blocks that run exactly once in every invocation (as sites are derived:
 // accumulate.cpp) add nothing in the shader: where the module has one
 // accumulating entry point with an invocation counter, their operations are
-// derived from it (Instrumented::derived, times = their sum), and only the
-// blocks of branches and loops keep a register add.
+// derived from it (Instrumented::derived, times = their sum). Blocks of a
+// loop whose class of blocks has a trip counter (accumulate_loops.cpp) are
+// derived from that counter the same way; only the other blocks of branches
+// and loops keep a register add.
 void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before) {
   const uint32_t slot = static_cast<uint32_t>(result_.arithmeticSlot);
   const auto weights = arithmeticPerInstruction(m_);
@@ -51,6 +53,23 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
     acc = scalarAccumulator(slot);
     return acc;
   };
+  // The trip counter a block's class has, where one entry point accumulates.
+  std::map<int, FunctionLoops> loopsOf;
+  std::map<uint32_t, uint64_t> fromTrips;  // trip slot -> operations derived from it
+  size_t tripBlocks = 0;
+  auto tripOf = [&](int f, size_t label) -> std::optional<uint32_t> {
+    if (accumulating.size() != 1) return std::nullopt;
+    auto [at, fresh] = loopsOf.try_emplace(f);
+    if (fresh) at->second = findLoops(m_, defs_, f);
+    const int block = at->second.blockAt[label];
+    for (size_t l = 0; l < at->second.loops.size() && block >= 0; ++l) {
+      const int cls = at->second.loops[l].classOf[block];
+      if (cls < 0) continue;
+      auto trip = tripSlots_.find({accumulating.front(), f, l, cls});
+      if (trip != tripSlots_.end()) return trip->second;
+    }
+    return std::nullopt;
+  };
   for (int f : reached) {
     const auto& insts = m_.functions[f].insts;
     for (size_t at = 0; at < insts.size(); ++at) {
@@ -69,6 +88,11 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
           continue;
         }
       }
+      if (auto trip = tripOf(f, at)) {
+        fromTrips[*trip] += ops;
+        ++tripBlocks;
+        continue;
+      }
       size_t into = at + 1;
       while (into < end && (insts[into].opcode() == spv::Op::OpPhi || insts[into].opcode() == spv::Op::OpVariable ||
                             insts[into].opcode() == spv::Op::OpLine || insts[into].opcode() == spv::Op::OpNoLine)) {
@@ -79,6 +103,13 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
       uint32_t w = op(b, spv::Op::OpIAdd, tU32(), {v, constantU32(static_cast<uint32_t>(std::min<uint64_t>(ops, 0xffffffffu)))});
       opNoResult(b, spv::Op::OpStore, {acc, w});
     }
+  }
+  for (auto [trip, ops] : fromTrips) {
+    result_.derived.push_back({trip, slot, static_cast<uint32_t>(std::min<uint64_t>(ops, 0xffffffffu))});
+  }
+  if (tripBlocks > 0) {
+    notes_.push_back("accumulate mode: executed arithmetic of " + std::to_string(tripBlocks) + " block" +
+                     (tripBlocks == 1 ? "" : "s") + " in loops derived from their trip counters");
   }
   if (derivedOps > 0) {
     result_.derived.push_back({invocationSlot_.at(accumulating.front()), slot,

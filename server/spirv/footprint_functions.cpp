@@ -81,10 +81,13 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
     // At most three blocks (bytes <= 2 x block + 1): first, the next, last;
     // no loop, which compilers (lavapipe's LLVM) analyse far faster inside
     // the shader's own loops.
+    // A block marked again is skipped: most accesses lie in one block.
     uint32_t second = ext(b, u, UMin, {op(b, spv::Op::OpIAdd, u, {first, constantU32(1)}), last});
     fnCall(b, fpMarkFn(), {base, cap, first});
-    fnCall(b, fpMarkFn(), {base, cap, second});
-    fnCall(b, fpMarkFn(), {base, cap, last});
+    when(b, op(b, spv::Op::OpINotEqual, tBool(), {second, first}),
+         [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, second}); });
+    when(b, op(b, spv::Op::OpINotEqual, tBool(), {last, second}),
+         [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, last}); });
     cached = endFunction(std::move(f), "tally_fp_bytes_short");
     return cached;
   }
@@ -102,34 +105,50 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
   return cached;
 }
 
+Injector::LevelBlocks Injector::levelBlocks(Body& b, uint32_t entry, uint32_t level, uint32_t layer) {
+  uint32_t u = tU32(), i = tI32();
+  LevelBlocks g{};
+  auto size = [&](uint32_t word) {
+    return ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, word), level}), constantU32(1)});
+  };
+  g.width = size(footprint::kWidth);
+  g.height = size(footprint::kHeight);
+  uint32_t tw = tableWord(b, entry, footprint::kTileWidth), th = tableWord(b, entry, footprint::kTileHeight);
+  g.shiftX = ext(b, u, FindILsb, {tw});
+  g.shiftY = ext(b, u, FindILsb, {th});
+  g.tilesX = op(b, spv::Op::OpShiftRightLogical, u,
+                {op(b, spv::Op::OpIAdd, u, {g.width, op(b, spv::Op::OpISub, u, {tw, constantU32(1)})}), g.shiftX});
+  uint32_t lastLayer = op(b, spv::Op::OpBitcast, i, {op(b, spv::Op::OpISub, u, {tableWord(b, entry, footprint::kLayers),
+                                                                             constantU32(1)})});
+  uint32_t ul = op(b, spv::Op::OpBitcast, u, {ext(b, i, SClamp, {layer, constantI32(0), lastLayer})});
+  g.first = op(b, spv::Op::OpIMul, u, {ul, tableWord(b, entry, footprint::kLayerBlocks)});
+  g.first = op(b, spv::Op::OpIAdd, u, {g.first, tableWordAt(b, entry, footprint::kLevelStart, level)});
+  g.cap = tableWord(b, entry, footprint::kCapacity);
+  g.base = tableWord(b, entry, footprint::kBase);
+  return g;
+}
+
+uint32_t Injector::blockOf(Body& b, const LevelBlocks& g, uint32_t x, uint32_t y) {
+  uint32_t u = tU32(), bo = tBool();
+  uint32_t ux = op(b, spv::Op::OpBitcast, u, {x}), uy = op(b, spv::Op::OpBitcast, u, {y});
+  uint32_t inside = op(b, spv::Op::OpLogicalAnd, bo,
+                       {op(b, spv::Op::OpULessThan, bo, {ux, g.width}), op(b, spv::Op::OpULessThan, bo, {uy, g.height})});
+  uint32_t row = op(b, spv::Op::OpIMul, u, {op(b, spv::Op::OpShiftRightLogical, u, {uy, g.shiftY}), g.tilesX});
+  uint32_t block = op(b, spv::Op::OpIAdd, u, {g.first, op(b, spv::Op::OpIAdd, u, {row, op(b, spv::Op::OpShiftRightLogical, u, {ux, g.shiftX})})});
+  return op(b, spv::Op::OpSelect, u, {inside, block, g.cap});
+}
+
 // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
 // Image entry; coordinates outside the level mark nothing.
 uint32_t Injector::fpTexelLevelFn() {
   if (fpTexelLevel_ != 0) return fpTexelLevel_;
-  uint32_t u = tU32(), i = tI32(), bo = tBool();
+  uint32_t u = tU32(), i = tI32();
   auto f = beginFunction({u, i, i, i, u});
   Body b{f->fn.insts};
-  uint32_t entry = f->params[0], x = f->params[1], y = f->params[2], layer = f->params[3];
+  uint32_t entry = f->params[0];
   uint32_t level = ext(b, u, UMin, {f->params[4], constantU32(footprint::kMaxLevels - 1)});
-  uint32_t wl = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, footprint::kWidth), level}),
-                                 constantU32(1)});
-  uint32_t hl = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, footprint::kHeight), level}),
-                                 constantU32(1)});
-  uint32_t ux = op(b, spv::Op::OpBitcast, u, {x}), uy = op(b, spv::Op::OpBitcast, u, {y});
-  uint32_t inside = op(b, spv::Op::OpLogicalAnd, bo,
-                       {op(b, spv::Op::OpULessThan, bo, {ux, wl}), op(b, spv::Op::OpULessThan, bo, {uy, hl})});
-  uint32_t tw = tableWord(b, entry, footprint::kTileWidth), th = tableWord(b, entry, footprint::kTileHeight);
-  uint32_t tilesX = op(b, spv::Op::OpUDiv, u, {op(b, spv::Op::OpIAdd, u, {wl, op(b, spv::Op::OpISub, u, {tw, constantU32(1)})}), tw});
-  uint32_t layers = tableWord(b, entry, footprint::kLayers);
-  uint32_t lastLayer = op(b, spv::Op::OpBitcast, i, {op(b, spv::Op::OpISub, u, {layers, constantU32(1)})});
-  uint32_t ul = op(b, spv::Op::OpBitcast, u, {ext(b, i, SClamp, {layer, constantI32(0), lastLayer})});
-  uint32_t block = op(b, spv::Op::OpIMul, u, {ul, tableWord(b, entry, footprint::kLayerBlocks)});
-  block = op(b, spv::Op::OpIAdd, u, {block, tableWordAt(b, entry, footprint::kLevelStart, level)});
-  uint32_t row = op(b, spv::Op::OpIMul, u, {op(b, spv::Op::OpUDiv, u, {uy, th}), tilesX});
-  block = op(b, spv::Op::OpIAdd, u, {block, op(b, spv::Op::OpIAdd, u, {row, op(b, spv::Op::OpUDiv, u, {ux, tw})})});
-  uint32_t cap = tableWord(b, entry, footprint::kCapacity);
-  block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
-  fnCall(b, fpMarkFn(), {tableWord(b, entry, footprint::kBase), cap, block});
+  LevelBlocks g = levelBlocks(b, entry, level, f->params[3]);
+  fnCall(b, fpMarkFn(), {g.base, g.cap, blockOf(b, g, f->params[1], f->params[2])});
   fpTexelLevel_ = endFunction(std::move(f), "tally_fp_texel_level");
   return fpTexelLevel_;
 }
@@ -153,64 +172,87 @@ uint32_t Injector::fpTexelFn() {
 }
 
 // The texel coordinate after the sampler's address mode; -1 (nothing)
-// outside a clamp-to-border image.
-uint32_t Injector::wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode) {
+// outside a clamp-to-border image. The mode is the same for every lane (it
+// is the bound sampler's), so each mode's arithmetic sits in a branch of its
+// own: the integer remainders of the repeating modes cost only where used.
+uint32_t Injector::wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode, uint32_t result) {
   uint32_t i = tI32(), bo = tBool();
   uint32_t n = op(b, spv::Op::OpBitcast, i, {size});
   uint32_t last = op(b, spv::Op::OpISub, i, {n, constantI32(1)});
-  uint32_t repeat = op(b, spv::Op::OpSMod, i, {c, n});
-  uint32_t twice = op(b, spv::Op::OpIMul, i, {n, constantI32(2)});
-  uint32_t t = op(b, spv::Op::OpSMod, i, {c, twice});
-  uint32_t mirrored = op(b, spv::Op::OpSelect, i,
-                         {op(b, spv::Op::OpSLessThan, bo, {t, n}), t,
-                          op(b, spv::Op::OpISub, i, {op(b, spv::Op::OpISub, i, {twice, constantI32(1)}), t})});
-  uint32_t clamped = ext(b, i, SClamp, {c, constantI32(0), last});
-  uint32_t inside = op(b, spv::Op::OpLogicalAnd, bo,
-                       {op(b, spv::Op::OpSGreaterThanEqual, bo, {c, constantI32(0)}), op(b, spv::Op::OpSLessThan, bo, {c, n})});
-  uint32_t border = op(b, spv::Op::OpSelect, i, {inside, c, constantI32(-1)});
-  uint32_t negative = op(b, spv::Op::OpSLessThan, bo, {c, constantI32(0)});
-  uint32_t folded = op(b, spv::Op::OpSelect, i, {negative, op(b, spv::Op::OpISub, i, {constantI32(-1), c}), c});
-  uint32_t mirrorClamp = ext(b, i, SClamp, {folded, constantI32(0), last});
+  opNoResult(b, spv::Op::OpStore, {result, ext(b, i, SClamp, {c, constantI32(0), last})});
   auto is = [&](uint32_t m) { return op(b, spv::Op::OpIEqual, bo, {mode, constantU32(m)}); };
-  uint32_t r = clamped;
-  r = op(b, spv::Op::OpSelect, i, {is(footprint::kRepeat), repeat, r});
-  r = op(b, spv::Op::OpSelect, i, {is(footprint::kMirroredRepeat), mirrored, r});
-  r = op(b, spv::Op::OpSelect, i, {is(footprint::kClampToBorder), border, r});
-  r = op(b, spv::Op::OpSelect, i, {is(footprint::kMirrorClampToEdge), mirrorClamp, r});
-  return r;
+  when(b, is(footprint::kRepeat), [&](Body& t) { opNoResult(t, spv::Op::OpStore, {result, op(t, spv::Op::OpSMod, i, {c, n})}); });
+  when(b, is(footprint::kMirroredRepeat), [&](Body& t) {
+    uint32_t twice = op(t, spv::Op::OpIMul, i, {n, constantI32(2)});
+    uint32_t m = op(t, spv::Op::OpSMod, i, {c, twice});
+    uint32_t mirrored = op(t, spv::Op::OpSelect, i,
+                           {op(t, spv::Op::OpSLessThan, bo, {m, n}), m,
+                            op(t, spv::Op::OpISub, i, {op(t, spv::Op::OpISub, i, {twice, constantI32(1)}), m})});
+    opNoResult(t, spv::Op::OpStore, {result, mirrored});
+  });
+  when(b, is(footprint::kClampToBorder), [&](Body& t) {
+    uint32_t inside = op(t, spv::Op::OpLogicalAnd, bo,
+                         {op(t, spv::Op::OpSGreaterThanEqual, bo, {c, constantI32(0)}), op(t, spv::Op::OpSLessThan, bo, {c, n})});
+    opNoResult(t, spv::Op::OpStore, {result, op(t, spv::Op::OpSelect, i, {inside, c, constantI32(-1)})});
+  });
+  when(b, is(footprint::kMirrorClampToEdge), [&](Body& t) {
+    uint32_t negative = op(t, spv::Op::OpSLessThan, bo, {c, constantI32(0)});
+    uint32_t folded = op(t, spv::Op::OpSelect, i, {negative, op(t, spv::Op::OpISub, i, {constantI32(-1), c}), c});
+    opNoResult(t, spv::Op::OpStore, {result, ext(t, i, SClamp, {folded, constantI32(0), last})});
+  });
+  return op(b, spv::Op::OpLoad, i, {result});
 }
 
 // tally_fp_sample_level(entry, imageLevel, u, v, layer, linear, offsetX, offsetY):
 // the texels a nearest (1) or bilinear (2 x 2) filter reads at one level.
+// The level's geometry is read once; each of the 2 x 2 texels' blocks is
+// marked unless one of the others before it is the same block (a bilinear
+// footprint mostly lies in one).
 uint32_t Injector::fpSampleLevelFn() {
   if (fpSampleLevel_ != 0) return fpSampleLevel_;
   uint32_t u = tU32(), i = tI32(), fl = tF32(), bo = tBool();
   auto f = beginFunction({u, u, fl, fl, i, bo, i, i});
   Body b{f->fn.insts};
+  uint32_t wrapped[4];  // the wrapped coordinates, Function variables declared first
+  for (uint32_t& v : wrapped) {
+    v = m_.newId();
+    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, i), v,
+                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+  }
   uint32_t entry = f->params[0], level = ext(b, u, UMin, {f->params[1], constantU32(footprint::kMaxLevels - 1)});
   uint32_t linear = f->params[5];
   uint32_t sampler = tableWord(b, entry, footprint::kSampler);
-  auto axis = [&](uint32_t coord, uint32_t sizeWord, uint32_t shift, uint32_t offset) {
-    uint32_t size = ext(b, u, UMax, {op(b, spv::Op::OpShiftRightLogical, u, {tableWord(b, entry, sizeWord), level}),
-                                     constantU32(1)});
+  LevelBlocks g = levelBlocks(b, entry, level, f->params[4]);
+  auto axis = [&](uint32_t coord, uint32_t size, uint32_t shift, uint32_t offset, const uint32_t* into) {
     uint32_t scaled = op(b, spv::Op::OpFMul, fl, {coord, op(b, spv::Op::OpConvertUToF, fl, {size})});
     scaled = op(b, spv::Op::OpFSub, fl, {scaled, op(b, spv::Op::OpSelect, fl, {linear, constantF32(0.5f), constantF32(0.0f)})});
     uint32_t c0 = op(b, spv::Op::OpIAdd, i, {op(b, spv::Op::OpConvertFToS, i, {ext(b, fl, Floor, {scaled})}), offset});
     uint32_t c1 = op(b, spv::Op::OpIAdd, i, {c0, op(b, spv::Op::OpSelect, i, {linear, constantI32(1), constantI32(0)})});
     uint32_t mode = op(b, spv::Op::OpBitwiseAnd, u,
                        {op(b, spv::Op::OpShiftRightLogical, u, {sampler, constantU32(shift)}), constantU32(7)});
-    return std::make_pair(wrap(b, c0, size, mode), wrap(b, c1, size, mode));
+    uint32_t w0 = wrap(b, c0, size, mode, into[0]);
+    return std::make_pair(w0, wrap(b, c1, size, mode, into[1]));
   };
   // Not structured bindings: clang before 16 cannot capture them in the lambda below.
-  std::pair<uint32_t, uint32_t> xs = axis(f->params[2], footprint::kWidth, footprint::kAddressUShift, f->params[6]);
-  std::pair<uint32_t, uint32_t> ys = axis(f->params[3], footprint::kHeight, footprint::kAddressVShift, f->params[7]);
+  std::pair<uint32_t, uint32_t> xs = axis(f->params[2], g.width, footprint::kAddressUShift, f->params[6], &wrapped[0]);
+  std::pair<uint32_t, uint32_t> ys = axis(f->params[3], g.height, footprint::kAddressVShift, f->params[7], &wrapped[2]);
   uint32_t x0 = xs.first, x1 = xs.second, y0 = ys.first, y1 = ys.second;
-  uint32_t texel = fpTexelLevelFn(), layer = f->params[4];
-  fnCall(b, texel, {entry, x0, y0, layer, level});
+  uint32_t b00 = blockOf(b, g, x0, y0);
+  uint32_t mark = fpMarkFn();
+  fnCall(b, mark, {g.base, g.cap, b00});
   when(b, linear, [&](Body& bb) {
-    fnCall(bb, texel, {entry, x1, y0, layer, level});
-    fnCall(bb, texel, {entry, x0, y1, layer, level});
-    fnCall(bb, texel, {entry, x1, y1, layer, level});
+    uint32_t b10 = blockOf(bb, g, x1, y0), b01 = blockOf(bb, g, x0, y1), b11 = blockOf(bb, g, x1, y1);
+    auto differs = [&](uint32_t block, std::initializer_list<uint32_t> before) {
+      uint32_t all = 0;
+      for (uint32_t other : before) {
+        uint32_t ne = op(bb, spv::Op::OpINotEqual, bo, {block, other});
+        all = all == 0 ? ne : op(bb, spv::Op::OpLogicalAnd, bo, {all, ne});
+      }
+      return all;
+    };
+    when(bb, differs(b10, {b00}), [&](Body& t) { fnCall(t, mark, {g.base, g.cap, b10}); });
+    when(bb, differs(b01, {b00, b10}), [&](Body& t) { fnCall(t, mark, {g.base, g.cap, b01}); });
+    when(bb, differs(b11, {b00, b10, b01}), [&](Body& t) { fnCall(t, mark, {g.base, g.cap, b11}); });
   });
   fpSampleLevel_ = endFunction(std::move(f), "tally_fp_sample_level");
   return fpSampleLevel_;

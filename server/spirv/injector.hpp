@@ -113,7 +113,7 @@ class ModuleBuilder {
   uint32_t glslImport();
 
   // GLSL.std.450 instruction numbers.
-  enum Glsl : uint32_t { RoundEven = 2, Floor = 8, Ceil = 9, Log2 = 30, UMin = 38, FMax = 40, UMax = 41,
+  enum Glsl : uint32_t { RoundEven = 2, Floor = 8, Ceil = 9, Log2 = 30, UMin = 38, FMax = 40, UMax = 41, FindILsb = 73,
                          FClamp = 43, SClamp = 45, Length = 66 };
   uint32_t ext(Body& b, uint32_t resultType, Glsl inst, std::vector<uint32_t> args);
 
@@ -434,8 +434,18 @@ class Injector : public ModuleBuilder {
   uint32_t fpTexelFn();
 
   // The texel coordinate after the sampler's address mode; -1 (nothing)
-  // outside a clamp-to-border image.
-  uint32_t wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode);
+  // outside a clamp-to-border image. `result` is an i32 Function variable
+  // of the function being built: only the mode's own arithmetic runs.
+  uint32_t wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode, uint32_t result);
+
+  // One level and layer of an Image entry: its size, and where its blocks
+  // start, with the tile's shifts (tiles are powers of two: tileFor).
+  struct LevelBlocks {
+    uint32_t width, height, shiftX, shiftY, tilesX, first, cap, base;
+  };
+  LevelBlocks levelBlocks(Body& b, uint32_t entry, uint32_t level, uint32_t layer);
+  // The block of texel (x, y) (i32) of the level; the scratch block outside it.
+  uint32_t blockOf(Body& b, const LevelBlocks& g, uint32_t x, uint32_t y);
 
   // tally_fp_sample_level(entry, imageLevel, u, v, layer, linear, offsetX, offsetY):
   // the texels a nearest (1) or bilinear (2 x 2) filter reads at one level.

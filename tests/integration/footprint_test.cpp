@@ -251,6 +251,60 @@ TEST(ExecutedArithmetic, DerivedBlocksCountAsCountedOnes) {
   }
 }
 
+// Blocks in loops whose class has a trip counter (a counted loop's body,
+// counted once where it is entered; an uncounted loop with two reads, its
+// counter added each trip) are derived from that counter: the same total
+// as a register add in every block, with a branch inside the loops too.
+TEST(ExecutedArithmetic, LoopBlocksDerivedFromTripCountersCountAsCountedOnes) {
+  std::string error;
+  const gpu::Context* ctx = testContext(&error);
+  if (ctx == nullptr) TALLY_SKIP_UNLESS_STRICT("no Vulkan device: " << error);
+  for (bool compute : {false, true}) {
+    PassDesc d;
+    d.compute = compute;
+    d.width = d.height = 32;
+    d.buffers = {64 * 4, 32 * 32 * 4};
+    const std::string body =
+        "layout(set = 0, binding = 0) readonly buffer In { uint data[]; } src;\n"
+        "float work(uint i) {\n"
+        "  float x = float(i) * 2.0 + 1.0;\n"
+        "  for (uint k = 0u; k < 16u; ++k) x = x * 1.0001 + float(src.data[k] & 7u);\n"
+        "  uint n = i % 7u;\n"
+        "  for (uint k = 0u; k < n; ++k) {\n"
+        "    x += float(src.data[k] & 3u);\n"
+        "    if ((k & 1u) == 0u) x = x * 0.5 + 1.0;\n"
+        "  }\n"
+        "  uint m = 0u;\n"
+        "  while (x < 900.0 && m < 9u) { x = x * 1.7 + float(src.data[m] & 1u) + float(src.data[m + 1u] & 1u); ++m; }\n"
+        "  return x;\n"
+        "}\n";
+    d.source = compute ? "#version 450\nlayout(local_size_x = 8, local_size_y = 8) in;\n" + body +
+                             "layout(set = 0, binding = 1) writeonly buffer Out { float data[]; } dst;\n"
+                             "void main() {\n"
+                             "  uint i = gl_GlobalInvocationID.y * 32u + gl_GlobalInvocationID.x;\n"
+                             "  dst.data[i] = work(i);\n"
+                             "}\n"
+                       : "#version 450\nlayout(location = 0) out vec4 color;\n" + body +
+                             "void main() { color = vec4(work(uint(gl_FragCoord.y) * 32u + uint(gl_FragCoord.x))); }\n";
+    if (!compute) d.buffers = {64 * 4};
+    d.countArithmetic = true;
+    uint64_t counted[2] = {0, 0};
+    bool fromTrips[2] = {false, false};
+    for (int derive = 0; derive < 2; ++derive) {
+      d.deriveOnceSites = derive == 1;
+      auto r = FootprintPass(*ctx).run(d);
+      ASSERT_TRUE(r.ok()) << r.error();
+      counted[derive] = r->arithmetic;
+      for (const auto& n : r->notes) fromTrips[derive] = fromTrips[derive] || n.find("derived from their trip counters") != std::string::npos;
+    }
+    SCOPED_TRACE(compute ? "compute" : "fragment");
+    EXPECT_FALSE(fromTrips[0]);
+    EXPECT_TRUE(fromTrips[1]) << "blocks of the loops are derived from their trip counters";
+    EXPECT_GT(counted[0], uint64_t(32 * 32) * 16 * 3) << "at least the counted loop's operations";
+    EXPECT_EQ(counted[1], counted[0]);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(BlockBytes, Footprint, ::testing::Values(32u, 64u, 128u),
                          [](const ::testing::TestParamInfo<uint32_t>& block) {
                            return std::to_string(block.param) + "B";
