@@ -181,10 +181,26 @@ uint32_t Injector::wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode, uint3
   uint32_t last = op(b, spv::Op::OpISub, i, {n, constantI32(1)});
   opNoResult(b, spv::Op::OpStore, {result, ext(b, i, SClamp, {c, constantI32(0), last})});
   auto is = [&](uint32_t m) { return op(b, spv::Op::OpIEqual, bo, {mode, constantU32(m)}); };
-  when(b, is(footprint::kRepeat), [&](Body& t) { opNoResult(t, spv::Op::OpStore, {result, op(t, spv::Op::OpSMod, i, {c, n})}); });
+  // c mod d (d > 0, the result in [0, d)): a mask where d is a power of two,
+  // as texture sizes mostly are, else OpSRem moved up by d where negative
+  // (OpSMod gave wrong results for negative c on lavapipe: the address-mode
+  // test at a 12-texel size failed with it and passes with this).
+  auto modulo = [&](Body& t, uint32_t d) {
+    uint32_t mask = op(t, spv::Op::OpISub, i, {d, constantI32(1)});
+    uint32_t pow2 = op(t, spv::Op::OpIEqual, bo, {op(t, spv::Op::OpBitwiseAnd, i, {d, mask}), constantI32(0)});
+    when(t, pow2, [&](Body& y) { opNoResult(y, spv::Op::OpStore, {result, op(y, spv::Op::OpBitwiseAnd, i, {c, mask})}); });
+    when(t, op(t, spv::Op::OpLogicalNot, bo, {pow2}),
+         [&](Body& y) {
+           uint32_t r = op(y, spv::Op::OpSRem, i, {c, d});
+           r = op(y, spv::Op::OpSelect, i, {op(y, spv::Op::OpSLessThan, bo, {r, constantI32(0)}), op(y, spv::Op::OpIAdd, i, {r, d}), r});
+           opNoResult(y, spv::Op::OpStore, {result, r});
+         });
+    return op(t, spv::Op::OpLoad, i, {result});
+  };
+  when(b, is(footprint::kRepeat), [&](Body& t) { modulo(t, n); });
   when(b, is(footprint::kMirroredRepeat), [&](Body& t) {
     uint32_t twice = op(t, spv::Op::OpIMul, i, {n, constantI32(2)});
-    uint32_t m = op(t, spv::Op::OpSMod, i, {c, twice});
+    uint32_t m = modulo(t, twice);
     uint32_t mirrored = op(t, spv::Op::OpSelect, i,
                            {op(t, spv::Op::OpSLessThan, bo, {m, n}), m,
                             op(t, spv::Op::OpISub, i, {op(t, spv::Op::OpISub, i, {twice, constantI32(1)}), m})});

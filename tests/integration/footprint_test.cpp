@@ -6,6 +6,8 @@
 
 #include "strict.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <set>
 #include <string>
@@ -110,6 +112,58 @@ TEST_P(Footprint, VisiblePartOfAMagnifiedTexture) {
   ASSERT_TRUE(r.ok()) << r.error();
   EXPECT_EQ(r->lines["binding 0 read"].blocks, rgba8Blocks(17, 17, GetParam()));
   expectBounded(*r);
+}
+
+// Bilinear magnification across the texture's edges in every address mode
+// (mirror clamp to edge needs a feature: left out), on a power-of-two and a
+// non-power-of-two texture: the blocks of the 2 x 2 texels each pixel reads,
+// derived here from u = pixel centre / 64 x scale + offset (and v alike), the
+// texel pairs floor(u x size - 0.5) + {0, 1}, and the mode's wrapping. Over
+// u in [-0.6, 2.1] every mode but the border reaches every texel; over
+// [-0.3, 0.2] each mode reaches texels of its own.
+TEST_P(Footprint, AddressModesWrapTheBilinearTexels) {
+  const uint32_t block = GetParam();
+  const TileDims tile = rgba8Tile(block);
+  for (auto [scale, offset] : {std::pair{2.7, -0.6}, std::pair{0.5, -0.3}})
+  for (uint32_t size : {16u, 12u}) {
+    for (VkSamplerAddressMode mode : {VK_SAMPLER_ADDRESS_MODE_REPEAT, VK_SAMPLER_ADDRESS_MODE_MIRRORED_REPEAT,
+                                      VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER}) {
+      SCOPED_TRACE("u from " + std::to_string(offset) + ", size " + std::to_string(size) + ", address mode " +
+                   std::to_string(int(mode)));
+      const int n = int(size);
+      auto wrapped = [&](int c) {  // the texel, or -1 for none (the border)
+        switch (mode) {
+          case VK_SAMPLER_ADDRESS_MODE_REPEAT: return ((c % n) + n) % n;
+          case VK_SAMPLER_ADDRESS_MODE_MIRRORED_REPEAT: {
+            int m = ((c % (2 * n)) + 2 * n) % (2 * n);
+            return m < n ? m : 2 * n - 1 - m;
+          }
+          case VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE: return std::clamp(c, 0, n - 1);
+          default: return c >= 0 && c < n ? c : -1;
+        }
+      };
+      std::set<std::pair<int, int>> blocks;  // (tile column, tile row)
+      for (int p = 0; p < 64; ++p) {
+        for (int q = 0; q < 64; ++q) {
+          double x = ((p + 0.5) / 64.0 * scale + offset) * n - 0.5, y = ((q + 0.5) / 64.0 * scale + offset) * n - 0.5;
+          ASSERT_GT(std::abs(x - std::round(x)), 1e-3) << "a texel boundary: float rounding could go either way";
+          ASSERT_GT(std::abs(y - std::round(y)), 1e-3) << "a texel boundary: float rounding could go either way";
+          int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+          for (int tx : {wrapped(x0), wrapped(x0 + 1)}) {
+            for (int ty : {wrapped(y0), wrapped(y0 + 1)}) {
+              if (tx >= 0 && ty >= 0) blocks.insert({tx / int(tile.w), ty / int(tile.h)});
+            }
+          }
+        }
+      }
+      PassDesc d;
+      d.source = sampleShader(scale, offset);
+      d.textures = {{size, VK_FILTER_LINEAR, mode}};
+      auto r = run(d);
+      ASSERT_TRUE(r.ok()) << r.error();
+      EXPECT_EQ(r->lines["binding 0 read"].blocks, blocks.size());
+    }
+  }
 }
 
 TEST_P(Footprint, BufferReadAtAStride) {
