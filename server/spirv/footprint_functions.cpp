@@ -182,18 +182,24 @@ uint32_t Injector::wrap(Body& b, uint32_t c, uint32_t size, uint32_t mode, uint3
   opNoResult(b, spv::Op::OpStore, {result, ext(b, i, SClamp, {c, constantI32(0), last})});
   auto is = [&](uint32_t m) { return op(b, spv::Op::OpIEqual, bo, {mode, constantU32(m)}); };
   // c mod d (d > 0, the result in [0, d)): a mask where d is a power of two,
-  // as texture sizes mostly are, else OpSRem moved up by d where negative
-  // (OpSMod gave wrong results for negative c on lavapipe: the address-mode
-  // test at a 12-texel size failed with it and passes with this).
+  // as texture sizes mostly are, else in unsigned arithmetic (OpSMod gave
+  // wrong results for negative c on lavapipe, and OpSRem corrected by d on
+  // the H200: the address-mode test at a 12-texel size failed with each).
   auto modulo = [&](Body& t, uint32_t d) {
     uint32_t mask = op(t, spv::Op::OpISub, i, {d, constantI32(1)});
     uint32_t pow2 = op(t, spv::Op::OpIEqual, bo, {op(t, spv::Op::OpBitwiseAnd, i, {d, mask}), constantI32(0)});
     when(t, pow2, [&](Body& y) { opNoResult(y, spv::Op::OpStore, {result, op(y, spv::Op::OpBitwiseAnd, i, {c, mask})}); });
     when(t, op(t, spv::Op::OpLogicalNot, bo, {pow2}),
          [&](Body& y) {
-           uint32_t r = op(y, spv::Op::OpSRem, i, {c, d});
-           r = op(y, spv::Op::OpSelect, i, {op(y, spv::Op::OpSLessThan, bo, {r, constantI32(0)}), op(y, spv::Op::OpIAdd, i, {r, d}), r});
-           opNoResult(y, spv::Op::OpStore, {result, r});
+           // In unsigned arithmetic: c mod d for c >= 0, else d - 1 - (-c - 1) mod d.
+           uint32_t u = tU32();
+           uint32_t negative = op(y, spv::Op::OpSLessThan, bo, {c, constantI32(0)});
+           uint32_t magnitude = op(y, spv::Op::OpBitcast, u,
+                                   {op(y, spv::Op::OpSelect, i, {negative, op(y, spv::Op::OpISub, i, {constantI32(-1), c}), c})});
+           uint32_t ud = op(y, spv::Op::OpBitcast, u, {d});
+           uint32_t r = op(y, spv::Op::OpUMod, u, {magnitude, ud});
+           r = op(y, spv::Op::OpSelect, u, {negative, op(y, spv::Op::OpISub, u, {op(y, spv::Op::OpISub, u, {ud, constantU32(1)}), r}), r});
+           opNoResult(y, spv::Op::OpStore, {result, op(y, spv::Op::OpBitcast, i, {r})});
          });
     return op(t, spv::Op::OpLoad, i, {result});
   };
