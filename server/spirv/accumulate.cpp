@@ -295,9 +295,7 @@ uint32_t Injector::flushFunction(Stage stage) {
       !slots.cached.empty() && subgroupFlush(stage) && (options_.study & kStudyWaterfallEach) == 0;
   uint32_t counter = 0;
   if ((together && (options_.study & kStudyElectedAdds) == 0) || cachesTogether) {
-    counter = m_.newId();
-    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, tU32()), counter,
-                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+    counter = functionVariable(b, tU32());
   }
   // Helper lanes stay out of the flush altogether: were one the elected
   // lane, its atomic would have no effect and the subgroup's count would

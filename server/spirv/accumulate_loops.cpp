@@ -41,14 +41,22 @@ uint32_t Injector::repeatLoad(Body& b, const Function& f, size_t at) {
   return op(b, spv::Op::OpLoad, load.resultType(), {pointer});
 }
 
+const FunctionLoops& Injector::loopsOf(int function) {
+  auto [at, fresh] = loops_.try_emplace(function);
+  if (fresh) at->second = findLoops(m_, defs_, function);
+  return at->second;
+}
+
+uint32_t Injector::inductionStart(Body& b, const CountedLoop& c, uint32_t phiValue) {
+  if (c.variable == 0) return phiValue;
+  const Instruction* pointerType = defs_.def(defs_.def(c.variable)->resultType());
+  return op(b, spv::Op::OpLoad, pointerType->word(3), {c.variable});
+}
+
 // The loop's trip count, computed where it is entered: u32, 0 where the test fails at once.
 uint32_t Injector::tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue) {
   uint32_t u = tU32();
-  uint32_t start = phiValue;
-  if (c.variable != 0) {
-    const Instruction* pointerType = defs_.def(defs_.def(c.variable)->resultType());
-    start = op(b, spv::Op::OpLoad, pointerType->word(3), {c.variable});
-  }
+  uint32_t start = inductionStart(b, c, phiValue);
   uint32_t bound = c.boundLoad != kNever ? repeatLoad(b, f, c.boundLoad) : c.bound;
   const bool up = c.step > 0;
   const uint32_t magnitude = up ? uint32_t(c.step) : uint32_t(-int64_t(c.step));
@@ -137,7 +145,6 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
   if (!options_.deriveOnceSites) return;
   // (entry point, function, loop, class) -> the sites there that can be derived.
   std::map<TripKey, std::vector<size_t>> groups;
-  std::map<int, FunctionLoops> loopsOf;
   for (size_t i = 0; i < scan.sites.size(); ++i) {
     const FoundSite& s = scan.sites[i];
     const EntryPoint& ep = scan.entryPoints[s.entryIndex];
@@ -145,9 +152,7 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
         s.site.kind == SiteKind::Invocation || s.function < 0) {
       continue;
     }
-    auto [at, fresh] = loopsOf.try_emplace(s.function);
-    if (fresh) at->second = findLoops(m_, defs_, s.function);
-    const FunctionLoops& fl = at->second;
+    const FunctionLoops& fl = loopsOf(s.function);
     const int block = s.instruction < fl.blockAt.size() ? fl.blockAt[s.instruction] : -1;
     if (block < 0) continue;
     for (size_t l = 0; l < fl.loops.size(); ++l) {
@@ -168,7 +173,7 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
   };
   for (const auto& [key, sites] : groups) {
     const auto& [entry, function, l, cls] = key;
-    const Loop& loop = loopsOf[function].loops[l];
+    const Loop& loop = loopsOf(function).loops[l];
     // One site gains nothing from a counter of its own unless it is counted at the entry.
     if (!(loop.counted && cls == loop.everyIteration) && sites.size() < 2) continue;
     const uint32_t trip = result_.firstSlot + result_.slotCount++;
@@ -187,7 +192,7 @@ void Injector::countLoops(const SiteScan& scan, std::vector<std::map<size_t, std
   std::map<uint32_t, uint32_t> parentOf;
   for (const auto& [key, trip] : tripSlots_) {
     const auto& [entry, function, l, cls] = key;
-    const FunctionLoops& fl = loopsOf[function];
+    const FunctionLoops& fl = loopsOf(function);
     const Loop& loop = fl.loops[l];
     const EntryPoint& ep = scan.entryPoints[entry];
     const Function& f = m_.functions[function];

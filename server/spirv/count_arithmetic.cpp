@@ -54,16 +54,14 @@ void Injector::countExecutedArithmetic(const SiteScan& scan, std::vector<std::ma
     return acc;
   };
   // The trip counter a block's class has, where one entry point accumulates.
-  std::map<int, FunctionLoops> loopsOf;
   std::map<uint32_t, uint64_t> fromTrips;  // trip slot -> operations derived from it
   size_t tripBlocks = 0;
   auto tripOf = [&](int f, size_t label) -> std::optional<uint32_t> {
     if (accumulating.size() != 1) return std::nullopt;
-    auto [at, fresh] = loopsOf.try_emplace(f);
-    if (fresh) at->second = findLoops(m_, defs_, f);
-    const int block = at->second.blockAt[label];
-    for (size_t l = 0; l < at->second.loops.size() && block >= 0; ++l) {
-      const int cls = at->second.loops[l].classOf[block];
+    const FunctionLoops& fl = loopsOf(f);
+    const int block = fl.blockAt[label];
+    for (size_t l = 0; l < fl.loops.size() && block >= 0; ++l) {
+      const int cls = fl.loops[l].classOf[block];
       if (cls < 0) continue;
       auto trip = tripSlots_.find({accumulating.front(), f, l, cls});
       if (trip != tripSlots_.end()) return trip->second;

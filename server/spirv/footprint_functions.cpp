@@ -60,9 +60,7 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
   // The loop counter: a Function variable, declared first.
   uint32_t counter = 0;
   if (!shortRange) {
-    counter = m_.newId();
-    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, u), counter,
-                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+    counter = functionVariable(b, u);
   }
   uint32_t kind = tableWord(b, entry, footprint::kKind);
   uint32_t isBuffer = op(b, spv::Op::OpIEqual, tBool(), {kind, constantU32(uint32_t(footprint::EntryKind::Buffer))});
@@ -236,11 +234,7 @@ uint32_t Injector::fpSampleLevelFn() {
   auto f = beginFunction({u, u, fl, fl, i, bo, i, i});
   Body b{f->fn.insts};
   uint32_t wrapped[4];  // the wrapped coordinates, Function variables declared first
-  for (uint32_t& v : wrapped) {
-    v = m_.newId();
-    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, i), v,
-                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
-  }
+  for (uint32_t& v : wrapped) v = functionVariable(b, i);
   uint32_t entry = f->params[0], level = ext(b, u, UMin, {f->params[1], constantU32(footprint::kMaxLevels - 1)});
   uint32_t linear = f->params[5];
   uint32_t sampler = tableWord(b, entry, footprint::kSampler);

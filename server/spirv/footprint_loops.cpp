@@ -30,9 +30,7 @@ bool Injector::footprintLoopRange(const FoundSite& s, uint32_t slotBase,
       site.elementBytes == 0 || s.placement != Placement::AfterInstruction || s.function < 0 || dynamicSlot(s)) {
     return false;
   }
-  auto [at, fresh] = fpLoops_.try_emplace(s.function);
-  if (fresh) at->second = findLoops(m_, defs_, s.function);
-  const FunctionLoops& fl = at->second;
+  const FunctionLoops& fl = loopsOf(s.function);
   const int block = s.instruction < fl.blockAt.size() ? fl.blockAt[s.instruction] : -1;
   if (block < 0) return false;
   const Loop* loop = nullptr;
@@ -83,11 +81,7 @@ bool Injector::footprintLoopRange(const FoundSite& s, uint32_t slotBase,
 
   for (const auto& [branch, phiValue] : loop->entries) {
     Body b{before[s.function][branch]};
-    uint32_t start = phiValue;
-    if (c.variable != 0) {
-      const Instruction* pointerType = defs_.def(defs_.def(c.variable)->resultType());
-      start = op(b, spv::Op::OpLoad, pointerType->word(3), {c.variable});
-    }
+    uint32_t start = inductionStart(b, c, phiValue);
     auto constant = constantTrips(f, c, branch, phiValue);
     uint32_t trips = constant ? constantU32(*constant) : tripCount(b, f, c, phiValue);
     std::map<uint32_t, uint32_t> replace;  // the offset's indices as they are at the first trip
@@ -113,10 +107,8 @@ uint32_t Injector::fpRangeFn(bool shortRange) {
   const uint32_t entry = f->params[0], first = f->params[1], step = f->params[2], trips = f->params[3],
                  bytes = f->params[4];
   const uint32_t k = m_.newId(), w = m_.newId();
-  for (uint32_t v : {k, w}) {
-    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, u), v,
-                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
-  }
+  declareVariable(b, k, u);
+  declareVariable(b, w, u);
   const uint32_t all = constantU32(0xffffffffu);
   returnIf(b, op(b, spv::Op::OpIEqual, bo, {trips, constantU32(0)}));
   // What tally_fp_bytes marks nothing of.

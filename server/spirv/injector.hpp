@@ -102,6 +102,16 @@ class ModuleBuilder {
 
   uint32_t loadIntAsU32(Body& b, uint32_t var);
 
+  // A Function variable of `type` (made before the call), declared in `b`:
+  // the first block of the function being built, before anything else.
+  uint32_t functionVariable(Body& b, uint32_t type) { return declareVariable(b, m_.newId(), type); }
+  // The same for an id allocated already.
+  uint32_t declareVariable(Body& b, uint32_t id, uint32_t type) {
+    b.insts.emplace_back(spv::Op::OpVariable, std::vector<uint32_t>{tPtr(spv::StorageClass::Function, type), id,
+                                                                     static_cast<uint32_t>(spv::StorageClass::Function)});
+    return id;
+  }
+
   // Where code counted at entry goes: after the entry block's label and its
   // OpVariables (and debug lines).
   static size_t entryStart(const std::vector<Instruction>& insts);
@@ -321,6 +331,10 @@ class Injector : public ModuleBuilder {
   void countLoops(const SiteScan& scan, std::vector<std::map<size_t, std::vector<Instruction>>>& before,
                   const std::vector<uint32_t>& slots);
   uint32_t tripCount(Body& b, const Function& f, const CountedLoop& c, uint32_t phiValue);
+  // The induction variable's value where the loop is entered (`phiValue`, or a load of the variable).
+  uint32_t inductionStart(Body& b, const CountedLoop& c, uint32_t phiValue);
+  // The structured loops of a function, found once per module (loops.hpp).
+  const FunctionLoops& loopsOf(int function);
   uint32_t repeatLoad(Body& b, const Function& f, size_t at);
   std::optional<uint32_t> constantTrips(const Function& f, const CountedLoop& c, size_t branch, uint32_t phiValue) const;
   std::optional<uint32_t> entryParent(const FunctionLoops& fl, size_t self, uint32_t entry, int function, size_t branch,
@@ -554,13 +568,13 @@ class Injector : public ModuleBuilder {
   std::map<Stage, LoopNote> loopNotes_;
   using TripKey = std::tuple<uint32_t, int, size_t, int>;  // entry point, function, loop, class
   std::map<TripKey, uint32_t> tripSlots_;                  // -> its trip counter's slot
+  std::map<int, FunctionLoops> loops_;                     // function -> its loops (loopsOf)
   // footprint
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
   Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup
   uint32_t fpCache_[4] = {};       // the cache's Private registers: word0, bits0, word1, bits1
   uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
   uint32_t fpRange_ = 0, fpRangeShort_ = 0;
-  std::map<int, FunctionLoops> fpLoops_;  // function -> its loops, for footprintLoopRange
   std::map<Stage, uint32_t> fpLoopSites_; // sites marked once per loop entry
 };
 
