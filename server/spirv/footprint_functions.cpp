@@ -33,6 +33,13 @@ void Injector::declareFootprint() {
   fpTable_ = variable(options_.footprintTableBinding, "tally_footprint_table");
   fpBitmap_ = variable(options_.footprintBitmapBinding, "tally_footprint_bitmap");
   fpWordPtr_ = tPtr(storageClass_, tU32());
+  // Neither buffer is the other, and the shader never writes the table: a
+  // driver may keep the table's words across the bitmap's atomics.
+  if ((options_.study & kStudyFpAliased) == 0) {
+    decorate(fpTable_, spv::Decoration::NonWritable);
+    decorate(fpTable_, spv::Decoration::Restrict);
+    decorate(fpBitmap_, spv::Decoration::Restrict);
+  }
 }
 
 uint32_t Injector::tableWord(Body& b, uint32_t entry, uint32_t word) {
@@ -81,11 +88,12 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
     // the shader's own loops.
     // A block marked again is skipped: most accesses lie in one block.
     uint32_t second = ext(b, u, UMin, {op(b, spv::Op::OpIAdd, u, {first, constantU32(1)}), last});
-    fnCall(b, fpMarkFn(), {base, cap, first});
+    uint32_t mark = fpMarkFn(fpCombine(FpMarkKind::Bytes), (options_.study & kStudyFpRed) != 0);
+    fnCall(b, mark, {base, cap, first});
     when(b, op(b, spv::Op::OpINotEqual, tBool(), {second, first}),
-         [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, second}); });
+         [&](Body& bb) { fnCall(bb, mark, {base, cap, second}); });
     when(b, op(b, spv::Op::OpINotEqual, tBool(), {last, second}),
-         [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, last}); });
+         [&](Body& bb) { fnCall(bb, mark, {base, cap, last}); });
     cached = endFunction(std::move(f), "tally_fp_bytes_short");
     return cached;
   }
@@ -97,7 +105,7 @@ uint32_t Injector::fpBytesFn(bool shortRange) {
         i = op(bb, spv::Op::OpLoad, u, {counter});
         return op(bb, spv::Op::OpULessThanEqual, tBool(), {i, last});
       },
-      [&](Body& bb) { fnCall(bb, fpMarkFn(), {base, cap, i}); },
+      [&](Body& bb) { fnCall(bb, fpMarkFn(fpCombine(FpMarkKind::Bytes), (options_.study & kStudyFpRed) != 0), {base, cap, i}); },
       [&](Body& bb) { opNoResult(bb, spv::Op::OpStore, {counter, op(bb, spv::Op::OpIAdd, u, {i, constantU32(1)})}); });
   cached = endFunction(std::move(f), "tally_fp_bytes");
   return cached;
@@ -138,23 +146,26 @@ uint32_t Injector::blockOf(Body& b, const LevelBlocks& g, uint32_t x, uint32_t y
 
 // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
 // Image entry; coordinates outside the level mark nothing.
-uint32_t Injector::fpTexelLevelFn() {
-  if (fpTexelLevel_ != 0) return fpTexelLevel_;
+uint32_t Injector::fpTexelLevelFn(FpCombine combine) {
+  uint32_t& cached = fpTexelLevels_[static_cast<int>(combine)];
+  if (cached != 0) return cached;
   uint32_t u = tU32(), i = tI32();
   auto f = beginFunction({u, i, i, i, u});
   Body b{f->fn.insts};
   uint32_t entry = f->params[0];
   uint32_t level = ext(b, u, UMin, {f->params[4], constantU32(footprint::kMaxLevels - 1)});
   LevelBlocks g = levelBlocks(b, entry, level, f->params[3]);
-  fnCall(b, fpMarkFn(), {g.base, g.cap, blockOf(b, g, f->params[1], f->params[2])});
-  fpTexelLevel_ = endFunction(std::move(f), "tally_fp_texel_level");
-  return fpTexelLevel_;
+  fnCall(b, fpMarkFn(combine, (options_.study & kStudyFpRed) != 0), {g.base, g.cap, blockOf(b, g, f->params[1], f->params[2])});
+  cached = endFunction(std::move(f), "tally_fp_texel_level");
+  return cached;
 }
 
 // tally_fp_texel(entry, x, y, layer, lod): a texel at level `lod` of the
 // bound view (fetches, storage images, attachments).
-uint32_t Injector::fpTexelFn() {
-  if (fpTexel_ != 0) return fpTexel_;
+uint32_t Injector::fpTexelFn(FpMarkKind markKind) {
+  const FpCombine combine = fpCombine(markKind);
+  uint32_t& cached = fpTexels_[static_cast<int>(combine)];
+  if (cached != 0) return cached;
   uint32_t u = tU32(), i = tI32();
   auto f = beginFunction({u, i, i, i, u});
   Body b{f->fn.insts};
@@ -164,9 +175,9 @@ uint32_t Injector::fpTexelFn() {
   uint32_t lastLevel = op(b, spv::Op::OpISub, u, {tableWord(b, entry, footprint::kLevels), constantU32(1)});
   uint32_t level = op(b, spv::Op::OpIAdd, u,
                       {tableWord(b, entry, footprint::kBaseLevel), ext(b, u, UMin, {f->params[4], lastLevel})});
-  fnCall(b, fpTexelLevelFn(), {entry, f->params[1], f->params[2], f->params[3], level});
-  fpTexel_ = endFunction(std::move(f), "tally_fp_texel");
-  return fpTexel_;
+  fnCall(b, fpTexelLevelFn(combine), {entry, f->params[1], f->params[2], f->params[3], level});
+  cached = endFunction(std::move(f), "tally_fp_texel");
+  return cached;
 }
 
 // The texel coordinate after the sampler's address mode; -1 (nothing)
@@ -254,7 +265,10 @@ uint32_t Injector::fpSampleLevelFn() {
   std::pair<uint32_t, uint32_t> ys = axis(f->params[3], g.height, footprint::kAddressVShift, f->params[7], &wrapped[2]);
   uint32_t x0 = xs.first, x1 = xs.second, y0 = ys.first, y1 = ys.second;
   uint32_t b00 = blockOf(b, g, x0, y0);
-  uint32_t mark = fpMarkFn();
+  // A filtered read's blocks are set with the atomic alone: the load that
+  // checks the bit first waits on memory at every texel, and on the H200
+  // that cost more than the atomics it saved (docs/measurement.md).
+  uint32_t mark = fpMarkFn(fpCombine(FpMarkKind::Sample), (options_.study & kStudyFpLoadSamples) == 0);
   fnCall(b, mark, {g.base, g.cap, b00});
   when(b, linear, [&](Body& bb) {
     uint32_t b10 = blockOf(bb, g, x1, y0), b01 = blockOf(bb, g, x0, y1), b11 = blockOf(bb, g, x1, y1);

@@ -26,19 +26,45 @@ bool Injector::footprintSubgroup(const SiteScan& scan) {
   if (!footprintOn()) return false;
   FootprintDedup dedup = options_.footprintDedup.value_or(FootprintDedup{});
   result_.footprintDedup = dedup;
-  if (!dedup.subgroup || scan.entryPoints.empty()) return false;
+  if ((!dedup.subgroup && !dedup.lanes) || scan.entryPoints.empty()) return false;
   Stage stage = scan.entryPoints.front().stage;
   bool oneStage = std::all_of(scan.entryPoints.begin(), scan.entryPoints.end(),
                               [&](const EntryPoint& ep) { return ep.stage == stage; });
   if (!oneStage || stage == Stage::Other || (options_.subgroupStages & stageBit(stage)) == 0) {
     result_.footprintDedup->subgroup = false;
-    noteOnce(std::string("footprint: marks not combined across the subgroup: ") +
-             (oneStage ? "no subgroup arithmetic in the " + std::string(toString(stage)) + " stage"
-                       : "entry points of several stages"));
+    result_.footprintDedup->lanes = false;
+    if (dedup.subgroup) {
+      noteOnce(std::string("footprint: marks not combined across the subgroup: ") +
+               (oneStage ? "no subgroup arithmetic in the " + std::string(toString(stage)) + " stage"
+                         : "entry points of several stages"));
+    }
     return false;
   }
   fpStage_ = stage;
+  fpCombines_ = dedup.lanes;
+  if (fpCombines_ && (options_.study & kStudyFpQuad) != 0) addCapability(spv::Capability::GroupNonUniformShuffle);
   return true;
+}
+
+// Where the lanes' marks combine: texel marks and fragment outputs, by a
+// partition by block where the device has one (NVIDIA), else with the
+// subgroup's first marking lane (ballots only); filtered reads and buffers
+// not (on the H200 that cost more than it saved: docs/measurement.md, "What
+// a mark costs"), but for the study.
+Injector::FpCombine Injector::fpCombine(FpMarkKind kind) const {
+  if (!fpCombines_) return FpCombine::None;
+  const bool match = (options_.partitionedStages & options_.subgroupStages & stageBit(fpStage_)) != 0;
+  switch (kind) {
+    case FpMarkKind::Texel: break;
+    case FpMarkKind::Output:
+      if ((options_.study & kStudyFpOwnOutputs) != 0) return FpCombine::None;
+      break;
+    case FpMarkKind::Sample: return match && (options_.study & kStudyFpMatchSamples) != 0 ? FpCombine::Match : FpCombine::None;
+    case FpMarkKind::Bytes: return match && (options_.study & kStudyFpMatchBytes) != 0 ? FpCombine::Match : FpCombine::None;
+  }
+  if ((options_.study & kStudyFpQuad) != 0) return FpCombine::Quad;
+  if ((options_.study & kStudyFpFirst) != 0 || !match) return FpCombine::First;
+  return FpCombine::Match;
 }
 
 // if the bit is among the bits this invocation marked in the word: return;
@@ -66,13 +92,25 @@ void Injector::fpSkipCached(Body& b, uint32_t word, uint32_t bit) {
 
 // bitmap[word] |= bits, with a load first: the atomic only where a bit is new
 // (`oneBit`: where the one bit is clear).
-void Injector::fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit) {
-  uint32_t u = tU32();
+void Injector::fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit, bool red) {
+  uint32_t u = tU32(), bo = tBool();
   uint32_t ptr = op(b, spv::Op::OpAccessChain, fpWordPtr_, {fpBitmap_, constantU32(0), word});
+  if (red) {
+    op(b, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bits});
+    return;
+  }
+  if ((options_.study & kStudyFpNoBitmap) != 0) {
+    // The work before it kept alive behind a test no word passes.
+    uint32_t never = op(b, spv::Op::OpIEqual, bo, {word, constantU32(~0u)});
+    when(b, never, [&](Body& bb) {
+      op(bb, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bits});
+    });
+    return;
+  }
   uint32_t old = op(b, spv::Op::OpLoad, u, {ptr});
   uint32_t present = op(b, spv::Op::OpBitwiseAnd, u, {old, bits});
-  uint32_t fresh = oneBit ? op(b, spv::Op::OpIEqual, tBool(), {present, constantU32(0)})
-                          : op(b, spv::Op::OpINotEqual, tBool(), {present, bits});
+  uint32_t fresh = oneBit ? op(b, spv::Op::OpIEqual, bo, {present, constantU32(0)})
+                          : op(b, spv::Op::OpINotEqual, bo, {present, bits});
   when(b, fresh, [&](Body& bb) {
     op(bb, spv::Op::OpAtomicOr, u, {ptr, atomicScope(), constantU32(kSemanticsRelaxed), bits});
   });
@@ -106,26 +144,67 @@ void Injector::fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit) {
 
 // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
 // the scratch bit past the bitmap.
-uint32_t Injector::fpMarkFn() {
-  if (fpMark_ != 0) return fpMark_;
-  uint32_t u = tU32();
+uint32_t Injector::fpMarkFn(FpCombine combine, bool red) {
+  uint32_t& cached = fpMarks_[static_cast<int>(combine) + (red ? 4 : 0)];
+  if (cached != 0) return cached;
+  static const char* const names[] = {"tally_fp_mark", "tally_fp_mark_quad", "tally_fp_mark_first", "tally_fp_mark_match"};
+  uint32_t u = tU32(), bo = tBool();
   auto f = beginFunction({u, u, u});
   Body b{f->fn.insts};
+  if ((options_.study & kStudyFpNoMarks) != 0) {
+    cached = endFunction(std::move(f), names[static_cast<int>(combine)]);
+    return cached;
+  }
   uint32_t base = f->params[0], cap = f->params[1], block = f->params[2];
-  uint32_t inside = op(b, spv::Op::OpULessThan, tBool(), {block, cap});
+  uint32_t inside = op(b, spv::Op::OpULessThan, bo, {block, cap});
   block = op(b, spv::Op::OpSelect, u, {inside, block, cap});
   uint32_t word = op(b, spv::Op::OpIAdd, u, {base, op(b, spv::Op::OpShiftRightLogical, u, {block, constantU32(5)})});
   uint32_t bit = op(b, spv::Op::OpShiftLeftLogical, u,
                     {constantU32(1), op(b, spv::Op::OpBitwiseAnd, u, {block, constantU32(31)})});
   const FootprintDedup& dedup = *result_.footprintDedup;
-  if (dedup.cache) fpSkipCached(b, word, bit);
-  if (dedup.subgroup) {
-    fpSetBitsOfSubgroup(b, word, bit);
+  if (combine != FpCombine::None) {
+    // Helper lanes stay out: an atomic from one has no effect. Exact
+    // whatever lanes combine: a lane compares blocks, not pixels.
+    uint32_t scope = constantU32(kScopeSubgroup);
+    uint32_t end = fpStage_ == Stage::Fragment ? skipHelperLanes(b, fpStage_) : 0;
+    uint32_t id = op(b, spv::Op::OpLoad, u, {builtin(fpStage_, spv::BuiltIn::SubgroupLocalInvocationId, u)});
+    uint32_t leader = 0;
+    if (combine == FpCombine::Match) {
+      addCapability(spv::Capability::GroupNonUniformPartitionedNV);
+      addExtension("SPV_NV_shader_subgroup_partitioned");
+      uint32_t part = op(b, spv::Op::OpGroupNonUniformPartitionNV, tVec(u, 4), {block});
+      leader = op(b, spv::Op::OpGroupNonUniformBallotFindLSB, u, {scope, part});
+    } else if (combine == FpCombine::First) {
+      uint32_t first = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, u, {scope, block});
+      uint32_t firstLane = op(b, spv::Op::OpGroupNonUniformBroadcastFirst, u, {scope, id});
+      leader = op(b, spv::Op::OpSelect, u, {op(b, spv::Op::OpIEqual, bo, {first, block}), firstLane, id});
+    } else {
+      uint32_t always = op(b, spv::Op::OpIEqual, bo, {id, id});
+      uint32_t ballot = op(b, spv::Op::OpGroupNonUniformBallot, tVec(u, 4), {scope, always});
+      uint32_t w = op(b, spv::Op::OpVectorExtractDynamic, u, {ballot, op(b, spv::Op::OpShiftRightLogical, u, {id, constantU32(5)})});
+      uint32_t lanes = op(b, spv::Op::OpBitwiseAnd, u,
+                          {op(b, spv::Op::OpShiftRightLogical, u, {w, op(b, spv::Op::OpBitwiseAnd, u, {id, constantU32(28)})}),
+                           constantU32(15)});
+      uint32_t first = op(b, spv::Op::OpIAdd, u,
+                          {op(b, spv::Op::OpBitwiseAnd, u, {id, constantU32(~3u)}), ext(b, u, FindILsb, {lanes})});
+      uint32_t theirs = op(b, spv::Op::OpGroupNonUniformShuffle, u, {scope, block, first});
+      leader = op(b, spv::Op::OpSelect, u, {op(b, spv::Op::OpIEqual, bo, {theirs, block}), first, id});
+    }
+    when(b, op(b, spv::Op::OpIEqual, bo, {leader, id}), [&](Body& bb) { fpSetBits(bb, word, bit, true, red); });
+    if (end != 0) {
+      branch(b, end);
+      label(b, end);
+    }
   } else {
-    fpSetBits(b, word, bit, true);
+    if (dedup.cache) fpSkipCached(b, word, bit);
+    if (dedup.subgroup) {
+      fpSetBitsOfSubgroup(b, word, bit);
+    } else {
+      fpSetBits(b, word, bit, true, red);
+    }
   }
-  fpMark_ = endFunction(std::move(f), "tally_fp_mark");
-  return fpMark_;
+  cached = endFunction(std::move(f), names[static_cast<int>(combine)]);
+  return cached;
 }
 
 }  // namespace tally::spirv

@@ -203,8 +203,9 @@ bool Injector::emitFootprint(Body& b, const FoundSite& s, uint32_t entry, Stage 
   tI32();
   tF32();
   if (site.kind == SiteKind::OutputWrite) {
+    if ((options_.study & kStudyFpNoOutputs) != 0) return true;
     auto [x, y] = fragmentPixel(b, stage);
-    fnCall(b, fpTexelFn(), {entry, x, y, constantI32(0), constantU32(0)});
+    fnCall(b, fpTexelFn(FpMarkKind::Output), {entry, x, y, constantI32(0), constantU32(0)});
     return true;
   }
   if ((site.kind == SiteKind::BufferRead || site.kind == SiteKind::BufferWrite) && site.location) {
@@ -290,6 +291,7 @@ bool Injector::emitImageFootprint(Body& b, const FoundSite& s, const Instruction
 // filter's texels are worked out by the tally_fp_sample helper.
 bool Injector::emitFilteredFootprint(Body& b, const FoundSite& s, const Instruction& inst, uint32_t entry, Stage stage,
                                      uint32_t coord, const Instruction* imageType, std::string& why) {
+  if ((options_.study & kStudyFpNoSamples) != 0) return true;
   // Made in this order whatever the access: the output's ids follow from it.
   const uint32_t u = tU32();
   tI32();

@@ -38,6 +38,27 @@ TileShape sampledTileShape(uint32_t n);
 // no two copies of a slot share a cache line.
 constexpr uint32_t kCopyAlignSlots = 16;
 
+// Footprint's parts, for the study of what each costs (TALLY_ACCUMULATE_STUDY
+// names them fp-*; docs/measurement.md, "What a mark costs"). Altering the
+// footprint (the notes then say it is not the mode's): kStudyFpNoMarks
+// leaves tally_fp_mark empty, kStudyFpNoBitmap works the blocks out and
+// never reads or writes the bitmap, kStudyFpNoOutputs and kStudyFpNoSamples
+// leave fragment outputs and filtered reads unmarked. The same footprint,
+// marked otherwise: kStudyFpAliased without the table's NonWritable and the
+// buffers' Restrict; with FootprintDedup::lanes, kStudyFpQuad combines texel
+// marks within quads and kStudyFpFirst with the subgroup's first lane
+// instead of a partition; kStudyFpOwnOutputs leaves every fragment output's
+// mark to its own lane, kStudyFpMatchSamples combines every mark of a
+// filtered read and kStudyFpMatchBytes every buffer mark (by partition
+// only); kStudyFpRed sets every bit with an atomic and no load first, and
+// kStudyFpLoadSamples loads a filtered read's word first, as marks did
+// before 2026-11-29 (now its atomic goes without: faster on the H200).
+constexpr uint32_t kStudyFpNoMarks = 1u << 8, kStudyFpNoBitmap = 1u << 9, kStudyFpNoOutputs = 1u << 10,
+                   kStudyFpNoSamples = 1u << 11, kStudyFpAliased = 1u << 12, kStudyFpQuad = 1u << 13,
+                   kStudyFpFirst = 1u << 14, kStudyFpOwnOutputs = 1u << 15, kStudyFpMatchSamples = 1u << 16,
+                   kStudyFpMatchBytes = 1u << 17, kStudyFpRed = 1u << 18, kStudyFpLoadSamples = 1u << 19;
+constexpr uint32_t kStudyFpAltered = kStudyFpNoMarks | kStudyFpNoBitmap | kStudyFpNoOutputs | kStudyFpNoSamples;
+
 // Rewrites `module` in place. `slots[i]` is the first slot of scan.sites[i];
 // result.slotCount is already set. Fails with a one-line reason; appends
 // fallbacks to result.notes and sets result.copies and result.copyStride

@@ -419,8 +419,17 @@ class Injector : public ModuleBuilder {
   uint32_t tableWordAt(Body& b, uint32_t entry, uint32_t word, uint32_t dynamicOffset);
 
   // tally_fp_mark(base, capacity, block): sets the bit, block clamped into
-  // the scratch bit past the bitmap (footprint_marks.cpp).
-  uint32_t fpMarkFn();
+  // the scratch bit past the bitmap (footprint_marks.cpp). Where lanes
+  // combine, a lane whose block another lane marks leaves it to that lane:
+  // Quad, the first lane of its quad that marks; First, the subgroup's first
+  // marking lane; Match, the first of the lanes marking the same block
+  // (partitioned by value: SPV_NV_shader_subgroup_partitioned).
+  enum class FpCombine { None, Quad, First, Match };
+  // `red`: the atomic without a load first (the study's fp-red).
+  uint32_t fpMarkFn(FpCombine combine = FpCombine::None, bool red = false);
+  // How each kind of mark combines (FootprintDedup::lanes, and the study's fp-* variants).
+  enum class FpMarkKind { Texel, Output, Sample, Bytes };
+  FpCombine fpCombine(FpMarkKind kind) const;
 
   // Whether marks combine across the subgroup (InstrumentOptions::footprintDedup);
   // records the dedup the marks use in result_.
@@ -430,7 +439,7 @@ class Injector : public ModuleBuilder {
   void fpSkipCached(Body& b, uint32_t word, uint32_t bit);
 
   // bitmap[word] |= bits, the atomic only where a bit is new.
-  void fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit);
+  void fpSetBits(Body& b, uint32_t word, uint32_t bits, bool oneBit, bool red = false);
 
   // The same, once for all the lanes of the subgroup that mark one word.
   void fpSetBitsOfSubgroup(Body& b, uint32_t word, uint32_t bit);
@@ -441,11 +450,11 @@ class Injector : public ModuleBuilder {
 
   // tally_fp_texel_level(entry, x, y, layer, imageLevel): one texel of an
   // Image entry; coordinates outside the level mark nothing.
-  uint32_t fpTexelLevelFn();
+  uint32_t fpTexelLevelFn(FpCombine combine);
 
   // tally_fp_texel(entry, x, y, layer, lod): a texel at level `lod` of the
   // bound view (fetches, storage images, attachments).
-  uint32_t fpTexelFn();
+  uint32_t fpTexelFn(FpMarkKind markKind = FpMarkKind::Texel);
 
   // The texel coordinate after the sampler's address mode; -1 (nothing)
   // outside a clamp-to-border image. `result` is an i32 Function variable
@@ -573,7 +582,9 @@ class Injector : public ModuleBuilder {
   uint32_t fpTable_ = 0, fpBitmap_ = 0, fpWordPtr_ = 0;
   Stage fpStage_ = Stage::Other;   // the stage of every entry point, where marks combine across the subgroup
   uint32_t fpCache_[4] = {};       // the cache's Private registers: word0, bits0, word1, bits1
-  uint32_t fpMark_ = 0, fpBytes_ = 0, fpBytesShort_ = 0, fpTexelLevel_ = 0, fpTexel_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
+  bool fpCombines_ = false;        // marks may combine across lanes (fpCombine)
+  uint32_t fpMarks_[8] = {}, fpTexelLevels_[4] = {}, fpTexels_[4] = {};
+  uint32_t fpBytes_ = 0, fpBytesShort_ = 0, fpSampleLevel_ = 0, fpSample_ = 0;
   uint32_t fpRange_ = 0, fpRangeShort_ = 0;
   std::map<Stage, uint32_t> fpLoopSites_; // sites marked once per loop entry
 };

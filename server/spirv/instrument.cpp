@@ -109,6 +109,16 @@ std::string toString(const Mode& mode) {
   return "exact";
 }
 
+namespace {
+const std::map<std::string_view, uint32_t> kFootprintStudy = {
+    {"fp-no-marks", kStudyFpNoMarks},         {"fp-no-bitmap", kStudyFpNoBitmap},
+    {"fp-no-outputs", kStudyFpNoOutputs},     {"fp-no-samples", kStudyFpNoSamples},
+    {"fp-aliased", kStudyFpAliased},          {"fp-quad", kStudyFpQuad},
+    {"fp-first", kStudyFpFirst},              {"fp-own-outputs", kStudyFpOwnOutputs},
+    {"fp-match-samples", kStudyFpMatchSamples}, {"fp-match-bytes", kStudyFpMatchBytes},
+    {"fp-red", kStudyFpRed},                  {"fp-load-samples", kStudyFpLoadSamples}};
+}  // namespace
+
 Result<uint32_t> parseStudy(std::string_view text) {
   uint32_t bits = 0;
   while (!text.empty()) {
@@ -130,8 +140,10 @@ Result<uint32_t> parseStudy(std::string_view text) {
       bits |= kStudyPartitioned;
     } else if (word == "evict-always") {
       bits |= kStudyEvictAlways;
+    } else if (auto fp = kFootprintStudy.find(word); fp != kFootprintStudy.end()) {
+      bits |= fp->second;
     } else {
-      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each, partitioned or evict-always, comma-separated)");
+      return makeError("unknown variant '" + std::string(word) + "' (expected no-adds, no-flush, inline-flush, elected-adds, split-reductions, waterfall-each, partitioned, evict-always, fp-no-marks, fp-no-bitmap, fp-no-outputs, fp-no-samples, fp-aliased, fp-quad, fp-first, fp-own-outputs, fp-match-samples, fp-match-bytes, fp-red or fp-load-samples, comma-separated)");
     }
     text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
   }
@@ -139,26 +151,31 @@ Result<uint32_t> parseStudy(std::string_view text) {
 }
 
 Result<FootprintDedup> parseFootprintDedup(std::string_view text) {
-  if (text == "none") return FootprintDedup{false, false, false};
-  if (text == "all") return FootprintDedup{true, true, true};
-  FootprintDedup d{false, false, false};
+  if (text == "none") return FootprintDedup{false, false, false, false};
+  if (text == "all") return FootprintDedup{true, true, true, true};
+  FootprintDedup d{false, false, false, false};
   for (std::string_view rest = text;;) {
     size_t comma = rest.find(',');
     std::string_view word = rest.substr(0, comma);
-    bool* flag = word == "subgroup" ? &d.subgroup : word == "cache" ? &d.cache : word == "loops" ? &d.loops : nullptr;
+    bool* flag = word == "subgroup" ? &d.subgroup
+                 : word == "cache"  ? &d.cache
+                 : word == "loops"  ? &d.loops
+                 : word == "lanes"  ? &d.lanes
+                                    : nullptr;
     if (flag == nullptr || *flag) break;
     *flag = true;
     if (comma == std::string_view::npos) return d;
     rest = rest.substr(comma + 1);
   }
   return makeError("unknown footprint dedup '" + std::string(text) +
-                   "' (expected none, all, or a list of subgroup, cache and loops, each once, joined by commas)");
+                   "' (expected none, all, or a list of subgroup, cache, loops and lanes, each once, joined by commas)");
 }
 
 std::string toString(const FootprintDedup& dedup) {
-  if (dedup.subgroup && dedup.cache && dedup.loops) return "all";
+  if (dedup.subgroup && dedup.cache && dedup.loops && dedup.lanes) return "all";
   std::string out;
-  for (auto [on, word] : {std::pair{dedup.subgroup, "subgroup"}, {dedup.cache, "cache"}, {dedup.loops, "loops"}}) {
+  for (auto [on, word] : {std::pair{dedup.subgroup, "subgroup"}, {dedup.cache, "cache"}, {dedup.loops, "loops"},
+                          {dedup.lanes, "lanes"}}) {
     if (on) out += (out.empty() ? "" : ",") + std::string(word);
   }
   return out.empty() ? "none" : out;
@@ -333,10 +350,10 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
   }
   InstrumentOptions resolved = options;
   if (const char* study = std::getenv("TALLY_ACCUMULATE_STUDY");
-      resolved.study == 0 && study != nullptr && *study != '\0' && options.mode.kind == CountMode::Accumulate) {
+      study != nullptr && *study != '\0' && options.mode.kind == CountMode::Accumulate) {
     auto bits = parseStudy(study);
     if (!bits) return makeError("TALLY_ACCUMULATE_STUDY: " + bits.error());
-    resolved.study = *bits;
+    resolved.study |= *bits;  // beside the caller's (tallyd instrument --partitioned)
   }
   auto noted = [&](Result<Instrumented> result) {
     if (result && (resolved.study & (kStudyNoAdds | kStudyNoFlush)) != 0) {
@@ -344,6 +361,10 @@ Result<Instrumented> instrument(std::span<const uint32_t> words, const Instrumen
                               ((resolved.study & kStudyNoAdds) != 0 ? "the adds " : "") +
                               ((resolved.study & kStudyNoFlush) != 0 ? "the flush " : "") +
                               "left out for the study of their cost: these counts are not the mode's");
+    }
+    if (result && (resolved.study & kStudyFpAltered) != 0) {
+      result->notes.push_back("footprint: marks left out for the study of their cost (TALLY_ACCUMULATE_STUDY): "
+                              "these footprints are not the mode's");
     }
     return result;
   };

@@ -58,10 +58,17 @@ struct FootprintDedup {
   // its iterations cover, and nothing inside the loop (docs/measurement.md,
   // "Loops: one range instead of a mark per iteration").
   bool loops = true;
+  // A texel mark (a fetch, a storage image, an attachment read) is left to
+  // the first lane of the subgroup that marks the same block: the lanes are
+  // partitioned by block where the device can (VK_NV_shader_subgroup_partitioned),
+  // else compared within quads. Pixel-addressed passes (lighting, tonemap)
+  // then issue one load and atomic per block instead of one per lane
+  // (docs/measurement.md, "What a mark costs"). In stages with subgroup ballots.
+  bool lanes = true;
   bool operator==(const FootprintDedup&) const = default;
 };
 
-// "none", "all", or a comma-separated list of "subgroup", "cache" and "loops".
+// "none", "all", or a comma-separated list of "subgroup", "cache", "loops" and "lanes".
 Result<FootprintDedup> parseFootprintDedup(std::string_view text);
 std::string toString(const FootprintDedup& dedup);
 

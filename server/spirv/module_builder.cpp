@@ -114,6 +114,10 @@ uint32_t ModuleBuilder::builtin(Stage stage, spv::BuiltIn b, uint32_t valueType,
                              std::vector<uint32_t>{tPtr(spv::StorageClass::Input, valueType), found,
                                                    static_cast<uint32_t>(spv::StorageClass::Input)});
     decorate(found, spv::Decoration::BuiltIn, {static_cast<uint32_t>(b)});
+    // A fragment shader's integer inputs are Flat (SubgroupLocalInvocationId).
+    if (stage == Stage::Fragment && (valueType == tU32() || valueType == tI32())) {
+      decorate(found, spv::Decoration::Flat);
+    }
     // Only demotion can turn an invocation into a helper mid-shader; then
     // the read must be volatile. (Mesa 22.3's lavapipe aborts on volatile
     // HelperInvocation loads, so they are not emitted without need.)

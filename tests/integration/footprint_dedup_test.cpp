@@ -1,6 +1,7 @@
 // What footprint marks skip (InstrumentOptions::footprintDedup: the
 // subgroup's combined marks, each invocation's cache of the words it
-// marked) changes no count: on passes whose blocks are derived here by
+// marked, a loop's range, texel marks left to the lane that marks the same
+// block) changes no count: on passes whose blocks are derived here by
 // hand, every choice gives those blocks, in every counting mode and at
 // every block size; on a trilinear pass, every choice gives what marking
 // without either gives.
@@ -8,7 +9,9 @@
 
 #include "strict.hpp"
 
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "footprint_pass.hpp"
@@ -17,8 +20,9 @@
 namespace tally::test {
 namespace {
 
-const spirv::FootprintDedup kNone{false, false, false}, kSubgroup{true, false, false}, kCache{false, true, false},
-    kLoops{false, false, true}, kAll{true, true, true};
+const spirv::FootprintDedup kNone{false, false, false, false}, kSubgroup{true, false, false, false},
+    kCache{false, true, false, false}, kLoops{false, false, true, false}, kLanes{false, false, false, true},
+    kAll{true, true, true, true};
 
 struct Choice {
   const char* mode;
@@ -28,7 +32,7 @@ struct Choice {
 std::vector<Choice> everyChoice() {
   std::vector<Choice> out;
   for (const char* mode : {"exact", "subgroup", "accumulate"}) {
-    for (const auto& dedup : {kNone, kSubgroup, kCache, kLoops, kAll}) out.push_back({mode, dedup});
+    for (const auto& dedup : {kNone, kSubgroup, kCache, kLoops, kLanes, kAll}) out.push_back({mode, dedup});
   }
   return out;
 }
@@ -81,6 +85,7 @@ class FootprintDedup : public ::testing::TestWithParam<uint32_t> {
     spirv::FootprintDedup expected = c.dedup;
     const spirv::Stage stage = d.compute ? spirv::Stage::Compute : spirv::Stage::Fragment;
     expected.subgroup = expected.subgroup && (ctx_->subgroupStages & spirv::stageBit(stage)) != 0;
+    expected.lanes = expected.lanes && (ctx_->subgroupStages & spirv::stageBit(stage)) != 0;
     EXPECT_FALSE(r->dedup.empty()) << "no module says what its marks skip";
     if (!r->dedup.empty()) {
       EXPECT_EQ(spirv::toString(r->dedup.front()), spirv::toString(expected)) << "the marks skip another choice";
@@ -191,6 +196,67 @@ TEST_P(FootprintDedup, TrilinearReadsAsWithoutDedup) {
     ASSERT_TRUE(r.ok()) << r.error();
     EXPECT_EQ(r->lines["binding 0 read"].blocks, want.blocks);
     EXPECT_EQ(r->lines["target write"].blocks, rgba8Blocks(64, 64, GetParam()));
+  }
+}
+
+// Texel fetches and fragment outputs, the marks FootprintDedup::lanes
+// combines: each pixel (x, y) of 64 x 64 that is not discarded fetches texel
+// t(x, y) of level 0 of a 64 x 64 RGBA8 texture and writes its own texel of
+// the RGBA8 target; the blocks are those of the texels, enumerated here. The
+// lanes of a subgroup share blocks (every pixel its own texel, or 3 x 3
+// pixels one texel), share none (texels 5 apart), or hold holes where pixels
+// were discarded, so that a lane's quad or partition is missing lanes.
+TEST_P(FootprintDedup, FetchedTexelsAsEnumerated) {
+  struct Case {
+    const char* name;
+    const char* texel;    // GLSL of x and y
+    const char* discard;  // GLSL condition
+    uint32_t (*tx)(uint32_t, uint32_t);
+    uint32_t (*ty)(uint32_t, uint32_t);
+    bool (*gone)(uint32_t, uint32_t);
+  };
+  const Case cases[] = {
+      {"each pixel its texel", "ivec2(x, y)", "false", [](uint32_t x, uint32_t) { return x; },
+       [](uint32_t, uint32_t y) { return y; }, [](uint32_t, uint32_t) { return false; }},
+      {"3 x 3 pixels a texel", "ivec2(x / 3, y / 3)", "false", [](uint32_t x, uint32_t) { return x / 3; },
+       [](uint32_t, uint32_t y) { return y / 3; }, [](uint32_t, uint32_t) { return false; }},
+      {"texels 5 apart", "ivec2((x * 5) % 64, (y * 7) % 64)", "false", [](uint32_t x, uint32_t) { return x * 5 % 64; },
+       [](uint32_t, uint32_t y) { return y * 7 % 64; }, [](uint32_t, uint32_t) { return false; }},
+      {"holes", "ivec2(x, (y + x / 8) % 64)", "((x ^ y) % 3) == 1 || (x * y) % 7 == 2",
+       [](uint32_t x, uint32_t) { return x; }, [](uint32_t x, uint32_t y) { return (y + x / 8) % 64; },
+       [](uint32_t x, uint32_t y) { return (x ^ y) % 3 == 1 || (x * y) % 7 == 2; }},
+  };
+  const TileDims tile = rgba8Tile(GetParam());
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.name);
+    PassDesc d;
+    d.textures = {{64, VK_FILTER_NEAREST}};
+    d.source = std::string("#version 450\n"
+                           "layout(set = 0, binding = 0) uniform sampler2D tex;\n"
+                           "layout(location = 0) out vec4 color;\n"
+                           "void main() {\n"
+                           "  int x = int(gl_FragCoord.x), y = int(gl_FragCoord.y);\n"
+                           "  if (") + k.discard + ") discard;\n"
+                           "  color = texelFetch(tex, " + k.texel + ", 0);\n"
+                           "}\n";
+    std::set<std::pair<uint32_t, uint32_t>> blocks, written;
+    uint64_t pixels = 0;
+    for (uint32_t y = 0; y < 64; ++y) {
+      for (uint32_t x = 0; x < 64; ++x) {
+        if (k.gone(x, y)) continue;
+        ++pixels;
+        blocks.insert({k.tx(x, y) / tile.w, k.ty(x, y) / tile.h});
+        written.insert({x / tile.w, y / tile.h});
+      }
+    }
+    for (const Choice& c : everyChoice()) {
+      SCOPED_TRACE(name(c));
+      auto r = run(d, c);
+      ASSERT_TRUE(r.ok()) << r.error();
+      EXPECT_EQ(r->lines["binding 0 read"].blocks, blocks.size());
+      EXPECT_EQ(r->lines["binding 0 read"].requestedBytes, pixels * 4);
+      EXPECT_EQ(r->lines["target write"].blocks, written.size());
+    }
   }
 }
 

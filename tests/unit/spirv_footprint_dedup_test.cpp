@@ -53,20 +53,22 @@ InstrumentOptions withFootprint(std::optional<FootprintDedup> dedup) {
 }
 
 TEST(FootprintDedup, NamesReadBack) {
-  for (const char* name : {"none", "subgroup", "cache", "loops", "subgroup,cache", "subgroup,loops", "cache,loops", "all"}) {
+  for (const char* name : {"none", "subgroup", "cache", "loops", "lanes", "subgroup,cache", "subgroup,loops", "cache,loops",
+                           "loops,lanes", "subgroup,cache,loops", "all"}) {
     auto d = parseFootprintDedup(name);
     ASSERT_TRUE(d.ok()) << name << ": " << d.error();
     EXPECT_EQ(toString(*d), name);
   }
-  EXPECT_EQ(*parseFootprintDedup("all"), (FootprintDedup{true, true, true}));
-  EXPECT_EQ(*parseFootprintDedup("none"), (FootprintDedup{false, false, false}));
-  EXPECT_EQ(*parseFootprintDedup("loops,subgroup"), (FootprintDedup{true, false, true}));
-  EXPECT_EQ(toString(FootprintDedup{}), "loops") << "the default";
-  for (const char* bad : {"both", "", "loops,", ",loops", "loops,loops", "subgroup,none", "all,cache"}) {
+  EXPECT_EQ(*parseFootprintDedup("all"), (FootprintDedup{true, true, true, true}));
+  EXPECT_EQ(*parseFootprintDedup("none"), (FootprintDedup{false, false, false, false}));
+  EXPECT_EQ(*parseFootprintDedup("loops,subgroup"), (FootprintDedup{true, false, true, false}));
+  EXPECT_EQ(*parseFootprintDedup("lanes,cache"), (FootprintDedup{false, true, false, true}));
+  EXPECT_EQ(toString(FootprintDedup{}), "loops,lanes") << "the default";
+  for (const char* bad : {"both", "", "loops,", ",loops", "loops,loops", "subgroup,none", "all,cache", "lanes,lanes"}) {
     auto r = parseFootprintDedup(bad);
     ASSERT_FALSE(r.ok()) << bad;
     EXPECT_EQ(r.error(), "unknown footprint dedup '" + std::string(bad) +
-                             "' (expected none, all, or a list of subgroup, cache and loops, each once, joined by commas)");
+                             "' (expected none, all, or a list of subgroup, cache, loops and lanes, each once, joined by commas)");
   }
 }
 
@@ -84,6 +86,41 @@ TEST(FootprintDedup, EachChoiceAddsItsCode) {
     EXPECT_EQ(contains(dis, "OpGroupNonUniformBitwiseOr"), dedup.subgroup) << dis;
     EXPECT_EQ(contains(dis, "%tally_fp_word0 = OpVariable"), dedup.cache) << dis;
     EXPECT_TRUE(contains(dis, "OpAtomicOr")) << dis;
+  }
+}
+
+// Lanes: a texel fetch's mark is left to the lane that marks the same
+// block, by a partition of the subgroup where the device has one, else by
+// the subgroup's first lane, and so is a fragment output's; the filtered
+// read keeps the plain mark. Without lanes, or without subgroup operations in the
+// stage, no mark combines.
+TEST(FootprintDedup, LanesCombineTexelMarks) {
+  const auto words = compileGlsl(R"(#version 450
+layout(set = 0, binding = 0) uniform sampler2D fetched;
+layout(set = 0, binding = 1) uniform sampler2D filtered;
+layout(location = 0) in vec2 uv;
+layout(location = 0) out vec4 color;
+void main() { color = texelFetch(fetched, ivec2(gl_FragCoord.xy), 0) + texture(filtered, uv); }
+)", Stage::Fragment);
+  struct Want {
+    const char* dedup;
+    uint32_t partitioned, subgroupStages;
+    bool match, first;
+  };
+  for (const Want& w : {Want{"loops,lanes", kAllStages, kAllStages, true, false}, Want{"lanes", 0, kAllStages, false, true},
+                        Want{"loops", kAllStages, kAllStages, false, false},
+                        Want{"lanes", kAllStages, stageBit(Stage::Compute), false, false}}) {
+    SCOPED_TRACE(std::string(w.dedup) + (w.partitioned ? ", partitioned" : ""));
+    InstrumentOptions options = withFootprint(*parseFootprintDedup(w.dedup));
+    options.partitionedStages = w.partitioned;
+    options.subgroupStages = w.subgroupStages;
+    auto r = instrumentOk(words, options);
+    std::string dis = disassemble(r.words);
+    EXPECT_EQ(contains(dis, "OpName %tally_fp_mark_match"), w.match) << dis;
+    EXPECT_EQ(contains(dis, "OpGroupNonUniformPartitionNV"), w.match);
+    EXPECT_EQ(contains(dis, "OpName %tally_fp_mark_first"), w.first);
+    EXPECT_TRUE(contains(dis, "OpName %tally_fp_mark \"tally_fp_mark\"")) << "filtered reads: the plain mark";
+    EXPECT_EQ(r.footprintDedup->lanes, w.match || w.first);
   }
 }
 
@@ -123,7 +160,7 @@ TEST(FootprintDedup, TheEnvironmentChoosesWhereTheOptionsDoNot) {
     auto r = instrument(words, withFootprint(std::nullopt));
     ASSERT_FALSE(r.ok());
     EXPECT_EQ(r.error(), "TALLY_FOOTPRINT_DEDUP: unknown footprint dedup 'fast' (expected none, all, or a list of "
-                         "subgroup, cache and loops, each once, joined by commas)");
+                         "subgroup, cache, loops and lanes, each once, joined by commas)");
     InstrumentOptions off;
     EXPECT_TRUE(instrument(words, off).ok()) << "read with footprint off";
   }

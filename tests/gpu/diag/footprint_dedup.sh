@@ -9,7 +9,8 @@
 #
 #   tests/gpu/diag/footprint_dedup.sh
 #   OUT=dir            results (default ./gpu-out): <choice>.log, <choice>/counting.md, dedup.txt
-#   DEDUPS="a b"       the choices (default: none loops)
+#   DEDUPS="a b"       the choices (default: none loops); "loops+fp-quad,fp-restrict" also sets
+#                      TALLY_ACCUMULATE_STUDY (docs/measurement.md, "What a mark costs")
 #   DEDUP_SPECS="..."  counting_cost.sh's specs (default sponza)
 #   DEDUP_TESTS=0      no tests
 set -uo pipefail
@@ -20,7 +21,9 @@ out="$(cd "$out" && pwd)"
 status=0
 for d in ${DEDUPS:-none loops}; do
   start=$(date +%s)
-  TALLY_FOOTPRINT_DEDUP="$d" OUT="$out/$d" COUNTING_SPECS="${DEDUP_SPECS:-sponza}" COUNTING_MODES=accumulate \
+  study=""
+  [[ "$d" == *+* ]] && study="${d#*+}"
+  TALLY_ACCUMULATE_STUDY="$study" TALLY_FOOTPRINT_DEDUP="${d%%+*}" OUT="$out/$d" COUNTING_SPECS="${DEDUP_SPECS:-sponza}" COUNTING_MODES=accumulate \
     COUNTING_FOOTPRINT=64 timeout 240 bash tests/gpu/counting_cost.sh > "$out/$d.log" 2>&1 || status=1
   {
     echo "== $d ($(( $(date +%s) - start )) s)"
