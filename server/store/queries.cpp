@@ -242,11 +242,11 @@ Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
   if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
   std::lock_guard lock(mutex_);
   return guarded<RunPage>("listRuns", [&]() -> Result<RunPage> {
-    // The page's ids first, then the summary columns of those runs only. A
-    // filter that the index cannot return in id order (a device or scene
-    // name matching several ids) makes SQLite sort, and it computes every
-    // result column, the per-run sample aggregates included, before it sorts.
-    // One statement whatever the page size.
+    // The page's ids first, then the columns of those runs only (a filter
+    // that the index cannot return in id order, a device or scene name
+    // matching several ids, makes SQLite sort, and it reads every result
+    // column before it sorts). One statement whatever the page size; the
+    // run's summary over its samples is on its row (0013).
     std::string pageIds = "SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
     if (after) pageIds += " AND r.id < ?";
     pageIds += " ORDER BY r.id DESC LIMIT ?";

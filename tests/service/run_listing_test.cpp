@@ -76,10 +76,20 @@ TEST_F(RunListing, SameJsonFromTheStoredSummaryAsFromTheSamples) {
   for (const auto& r : stored["list"]["runs"]) sources.insert(r["frame_ms_median_source"].get<std::string>());
   EXPECT_EQ(sources, (std::set<std::string>{"frames", "samples", "none"}));
 
+  // A page of runs with and without a stored frame time (some stored before
+  // 0013): the same JSON, the missing ones computed from their samples.
+  auto& db = store_->connection();
+  db.exec(
+      "UPDATE runs SET frame_time_median = NULL, frame_time_lower = NULL, frame_time_upper = NULL, "
+      "frame_time_frames = NULL, frame_time_source = NULL WHERE id % 2 = 0");
+  EXPECT_GT(st::scalar(*store_, "SELECT COUNT(*) FROM runs WHERE frame_time_source IS NULL"), 0);
+  EXPECT_GT(st::scalar(*store_, "SELECT COUNT(*) FROM runs WHERE frame_time_source IS NOT NULL"), 0);
+  json mixed = reads();
+  EXPECT_EQ(mixed, stored);
+
   // As runs stored before 0013: the frame time from the samples, and the
   // aggregates as the old query computed them (here over the same samples,
   // from columns zeroed first so that nothing stored survives).
-  auto& db = store_->connection();
   db.exec(
       "UPDATE runs SET frame_time_median = NULL, frame_time_lower = NULL, frame_time_upper = NULL, "
       "frame_time_frames = NULL, frame_time_source = NULL, sample_count = 0, mean_frame_ms = NULL, "
