@@ -1,12 +1,12 @@
 #include "store/frame_time.hpp"
 
-#include "analysis/stats.hpp"
+#include "common/median.hpp"
 
 namespace tally::store {
 
 RunFrameTime medianOfFrames(std::vector<double> times) {
   RunFrameTime out;
-  const analysis::MedianInterval m = analysis::medianInterval(std::move(times));
+  const MedianInterval m = medianInterval(std::move(times));
   if (!m.median) return out;
   out.median = m.median;
   out.lower = m.lower;
