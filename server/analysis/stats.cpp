@@ -29,21 +29,6 @@ Spread spreadOf(std::vector<double> values) {
   return s;
 }
 
-MedianInterval medianInterval(std::vector<double> values) {
-  MedianInterval out;
-  if (values.empty()) return out;
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  out.median = n % 2 ? values[n / 2] : (values[n / 2 - 1] + values[n / 2]) / 2;
-  out.n = n;
-  const double k = std::floor(n / 2.0 - 0.98 * std::sqrt(static_cast<double>(n)));
-  if (k >= 1) {
-    out.lower = values[static_cast<size_t>(k) - 1];
-    out.upper = values[n - static_cast<size_t>(k)];
-  }
-  return out;
-}
-
 nlohmann::json toJson(const Spread& s) {
   return {{"median", s.median}, {"q1", s.q1}, {"q3", s.q3}, {"iqr", s.iqr()},
           {"min", s.min},       {"max", s.max}, {"mean", s.mean}, {"n", s.n}};

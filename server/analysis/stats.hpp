@@ -7,6 +7,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/median.hpp"
+
 namespace tally::analysis {
 
 struct Spread {
@@ -24,17 +26,10 @@ struct Spread {
 Spread spreadOf(std::vector<double> values);
 nlohmann::json toJson(const Spread& s);
 
-// The median of values and its distribution-free 95% interval: order
-// statistics k and n + 1 - k, k = floor(n/2 - 0.98 sqrt(n)) from the normal
-// approximation to Binomial(n, 1/2) (P(X < k) <= 2.5%). A run's frame time
-// (reports/frame_time.hpp) and the repeats' per-run figure (analysis/repeats.hpp)
-// are this over the run's frames.
-struct MedianInterval {
-  std::optional<double> median;        // absent: no values
-  std::optional<double> lower, upper;  // absent when k < 1 (fewer than 8 values)
-  size_t n = 0;
-};
-MedianInterval medianInterval(std::vector<double> values);
+// The median of values and its distribution-free 95% interval
+// (common/median.hpp, shared with the store).
+using tally::MedianInterval;
+using tally::medianInterval;
 
 // The IQR of a stored spread (toJson's object): 0 when there is none.
 double iqrOf(const nlohmann::json& spread);

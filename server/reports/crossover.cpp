@@ -54,7 +54,7 @@ Result<json> crossoverModels(store::Store& store, const store::RunFilter& filter
       // Frame time as every view shows it: the run's median (reports/frame_time.hpp).
       std::optional<double> v = r->meanBytes;
       if (metric != "bytes") {
-        auto t = runFrameTime(store, r->id);
+        auto t = frameTimeOf(store, *r);
         if (!t) return makeError(t.error());
         v = t->median;
       }

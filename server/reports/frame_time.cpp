@@ -1,42 +1,8 @@
 #include "reports/frame_time.hpp"
 
-#include "analysis/stats.hpp"
-
 namespace tally::reports {
 
 using nlohmann::json;
-
-RunFrameTime medianOfFrames(std::vector<double> times) {
-  RunFrameTime out;
-  const analysis::MedianInterval m = analysis::medianInterval(std::move(times));
-  if (!m.median) return out;
-  out.median = m.median;
-  out.lower = m.lower;
-  out.upper = m.upper;
-  out.frames = m.n;
-  out.source = "frames";
-  return out;
-}
-
-RunFrameTime runFrameTime(const std::vector<store::SampleFrameTimes>& samples) {
-  std::vector<double> times, medians;
-  bool everyFrame = !samples.empty();
-  for (const auto& s : samples) {
-    medians.push_back(s.frameMs);
-    everyFrame = everyFrame && !s.frames.empty();
-    times.insert(times.end(), s.frames.begin(), s.frames.end());
-  }
-  if (everyFrame) return medianOfFrames(std::move(times));
-  RunFrameTime out;
-  if (medians.empty()) return out;
-  // A sample without its frames: the median of the samples' medians, the
-  // nearest statistic to the pooled median, without an interval.
-  out = medianOfFrames(std::move(medians));
-  out.lower = out.upper = std::nullopt;
-  out.frames = 0;
-  out.source = "samples";
-  return out;
-}
 
 Result<RunFrameTime> runFrameTime(store::Store& store, int64_t runId) {
   auto samples = store.runs().sampleFrameTimes(runId);
@@ -52,6 +18,28 @@ Result<std::map<int64_t, RunFrameTime>> runFrameTimes(store::Store& store, std::
     auto it = samples->find(id);
     out[id] = it == samples->end() ? RunFrameTime{} : runFrameTime(it->second);
   }
+  return out;
+}
+
+Result<RunFrameTime> frameTimeOf(store::Store& store, const store::RunRow& run) {
+  if (run.frameTime) return *run.frameTime;
+  return runFrameTime(store, run.id);
+}
+
+Result<std::map<int64_t, RunFrameTime>> frameTimesOf(store::Store& store, std::span<const store::RunRow> runs) {
+  std::map<int64_t, RunFrameTime> out;
+  std::vector<int64_t> missing;
+  for (const auto& r : runs) {
+    if (r.frameTime) {
+      out[r.id] = *r.frameTime;
+    } else {
+      missing.push_back(r.id);
+    }
+  }
+  if (missing.empty()) return out;
+  auto computed = runFrameTimes(store, missing);
+  if (!computed) return makeError(computed.error());
+  out.merge(*computed);
   return out;
 }
 

@@ -133,7 +133,7 @@ Response getAlert(ServiceContext& ctx, const Request& req) {
   json out = alertJson(*a);
   auto run = check(store.runs().get(a->runId));
   out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
-  if (run) reports::addFrameMedian(check(reports::runFrameTime(store, a->runId)), out["run_row"]);
+  if (run) reports::addFrameMedian(check(reports::frameTimeOf(store, run->row)), out["run_row"]);
   auto baseline = check(store.alerts().getBaseline(a->baselineId));
   out["baseline_row"] = baseline ? baselineJson(*baseline) : json(nullptr);
   return Response::ok(out);
@@ -172,9 +172,7 @@ Response trend(ServiceContext& ctx, const Request& req) {
     alertList.push_back(alertJson(a));
   }
   auto configurationRuns = check(store.alerts().configurationRuns(*id, limit));
-  std::vector<int64_t> ids;
-  for (const auto& r : configurationRuns) ids.push_back(r.id);
-  auto frameTimes = check(reports::runFrameTimes(store, ids));
+  auto frameTimes = check(reports::frameTimesOf(store, configurationRuns));
   json runs = json::array();
   for (const auto& r : configurationRuns) {
     runs.push_back({{"id", r.id},

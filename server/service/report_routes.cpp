@@ -63,12 +63,13 @@ Response compare(ServiceContext& ctx, const Request& req) {
     if (!run) missing("no run " + std::to_string(id));
     runs.push_back(std::move(*run));
   }
-  json out = comparisonJson(check(store.runs().compare(ids)));
+  store::Comparison comparison = check(store.runs().compare(ids));
+  json out = comparisonJson(comparison);
   // The runs' frame times as medians (reports/frame_time.hpp), beside the
   // store's frame_ms (the mean of the samples' medians), against the first.
   json medians = json::array();
   std::optional<double> first;
-  auto frameTimes = check(reports::runFrameTimes(store, ids));
+  auto frameTimes = check(reports::frameTimesOf(store, comparison.runs));
   for (size_t i = 0; i < ids.size(); ++i) {
     const reports::RunFrameTime& t = frameTimes[ids[i]];
     reports::addFrameMedian(t, out["runs"][i]);

@@ -101,7 +101,8 @@ struct CaptureRows {
         runs(db, "runs",
              {"id", "job_id", "device_id", "renderer", "scene_id", "width", "height", "counting", "lights",
               "render_target_bytes", "notes", "shaders", "counter_headroom", "options", "variant", "tally_version",
-              "tally_commit", "footprint_block_bytes", "host"}),
+              "tally_commit", "footprint_block_bytes", "host", "frame_time_median", "frame_time_lower",
+              "frame_time_upper", "frame_time_frames", "frame_time_source"}),
         resources(db, "run_resources",
                   {"run_id", "position", "name", "kind", "format", "element_bytes", "width", "height",
                    "allocation_bytes", "format_bytes", "usage"}),
@@ -332,9 +333,11 @@ int64_t cameraIndexOf(const json& camera, size_t s, const std::string& at, std::
   return index;
 }
 
-void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path,
-                const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+// Adds the run's samples; returns their frame times (for the run's, written on its row).
+std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path,
+                                         const std::map<std::string, std::vector<uint8_t>>& screenshots) {
   const json& samples = kMembers.array(run, "samples", path);
+  std::vector<SampleFrameTimes> frameTimesOfSamples;
   std::map<int64_t, size_t> cameras;  // camera index -> the sample that has it
   for (size_t s = 0; s < samples.size(); ++s) {
     std::string at = path + ".samples[" + std::to_string(s) + "]";
@@ -381,7 +384,15 @@ void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::stri
         .add(in.sums.bytes)
         .add(in.sums.footprint)
         .add(in.sums.footprintRequested);
+    // As the readers get them back (queries.cpp, frameTimes): an empty array is none.
+    SampleFrameTimes times{frameMs, {}};
+    if (frameTimes) {
+      times.frames.reserve(frameTimes->size());
+      for (const auto& ms : *frameTimes) times.frames.push_back(ms.get<double>());
+    }
+    frameTimesOfSamples.push_back(std::move(times));
   }
+  return frameTimesOfSamples;
 }
 
 void addResources(CaptureRows& in, int64_t runId, const json& list, const std::string& path) {
@@ -465,7 +476,17 @@ void addRun(CaptureRows& in, const RunContext& context, const json& run, const s
   if (footprintBlock && *footprintBlock != 32 && *footprintBlock != 64 && *footprintBlock != 128)
     bad(path + ".footprint_block_bytes", "must be 32, 64 or 128, got " + std::to_string(*footprintBlock));
   std::string renderer = kMembers.text(run, "renderer", path);
+  std::string counting = kMembers.optText(run, "counting", path).value_or("exact");
+  std::optional<int64_t> renderTargetBytes = kMembers.optInteger(resources, "render_target_bytes", path + ".resources");
+  json notes = kMembers.object(run, "notes", path);
+  json options = kMembers.object(run, "options", path);
+  std::string variant = kMembers.optText(run, "variant", path).value_or(renderer);
   int64_t runId = in.runIds.next();
+  addResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
+  in.runShaders.emplace_back(runId, &run, path);
+  // The run's row after its samples: it carries their frame time (0013); its
+  // summary over the samples follows in SQL (writeRunSummaries).
+  RunFrameTime frameTime = runFrameTime(addSamples(in, runId, run, path, screenshots));
   in.runs.row()
       .add(runId)
       .add(context.jobId)
@@ -474,21 +495,23 @@ void addRun(CaptureRows& in, const RunContext& context, const json& run, const s
       .add(scene)
       .add(width)
       .add(height)
-      .add(kMembers.optText(run, "counting", path).value_or("exact"))
+      .add(std::move(counting))
       .add(lights)
-      .add(kMembers.optInteger(resources, "render_target_bytes", path + ".resources"))
-      .add(kMembers.object(run, "notes", path))
+      .add(renderTargetBytes)
+      .add(notes)
       .add(context.shaders)
       .add(headroom)
-      .add(kMembers.object(run, "options", path))
-      .add(kMembers.optText(run, "variant", path).value_or(renderer))
+      .add(options)
+      .add(std::move(variant))
       .add(context.build.version)
       .add(context.build.commit)
       .add(footprintBlock)
-      .add(context.host);
-  addResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
-  in.runShaders.emplace_back(runId, &run, path);
-  addSamples(in, runId, run, path, screenshots);
+      .add(context.host)
+      .add(frameTime.median)
+      .add(frameTime.lower)
+      .add(frameTime.upper)
+      .add(static_cast<int64_t>(frameTime.frames))
+      .add(frameTime.source);
 }
 
 }  // namespace
@@ -521,6 +544,7 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
     addRun(in, context, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
   }
   in.write();
+  writeRunSummaries(db, jobId);
   for (const auto& [runId, run, path] : in.runShaders) insertShaderSources(db, runId, *run, path);
   for (const auto& [passId, pass, path] : in.passSites) insertPassSites(db, passId, *pass, path);
   return static_cast<int64_t>(runs->size());

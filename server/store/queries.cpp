@@ -13,41 +13,19 @@ using nlohmann::json;
 
 namespace detail {
 
-std::string runSelect(const Connection& db, std::string_view where) {
-  // Each run's sample aggregates in one pass over its samples (the
-  // samples-by-run index) instead of a correlated subquery per aggregate:
-  // one index walk per run, not eleven. PostgreSQL computes them in a
-  // LATERAL subquery, which keeps that walk per run in every plan (a
-  // generic plan, not knowing LIMIT's value, would otherwise hash the whole
-  // samples table); SQLite, which has no LATERAL, by grouping a join.
-  static const char* const kAggregates[] = {
-      "COUNT(s.id)",         "AVG(s.frame_ms)",        "AVG(s.bytes)",
-      "AVG(s.frame_ms_instrumented)", "AVG(s.overhead_ratio)", "COUNT(s.image_against)",
-      "COUNT(CASE WHEN s.image_identical = 1 THEN 1 END)", "AVG(s.psnr)", "MIN(s.psnr)",
-      "AVG(s.footprint_bytes)", "AVG(s.footprint_requested_bytes)"};
-  const bool lateral = db.engine() == Engine::Postgres;
-  auto aggregate = [&](size_t k) {
-    return lateral ? "a.a" + std::to_string(k) : std::string(kAggregates[k]);
-  };
+std::string runSelect(const Connection&, std::string_view where) {
+  // The run's summary over its samples and its frame time are columns of
+  // the run (migration 0013, written at ingest): no walk over the samples.
   std::string sql =
       "SELECT r.id, r.job_id, r.device_id, d.name, r.renderer, sc.name, sc.params, r.width, r.height, "
-      "r.counting, r.lights, r.render_target_bytes, r.notes, r.created_at";
-  for (size_t k = 0; k < 9; ++k) sql += ", " + aggregate(k);
-  sql += ", r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, r.footprint_block_bytes, " +
-         aggregate(9) + ", " + aggregate(10) +
-         ", r.host, j.labels FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
-         "LEFT JOIN jobs j ON j.id = r.job_id ";
-  if (lateral) {
-    sql += "CROSS JOIN LATERAL (SELECT ";
-    for (size_t k = 0; k < 11; ++k) sql += (k ? ", " : "") + std::string(kAggregates[k]) + " AS a" + std::to_string(k);
-    sql += " FROM samples s WHERE s.run_id = r.id) a ";
-  } else {
-    sql += "LEFT JOIN samples s ON s.run_id = r.id ";
-  }
+      "r.counting, r.lights, r.render_target_bytes, r.notes, r.created_at, r.sample_count, r.mean_frame_ms, "
+      "r.mean_bytes, r.mean_frame_ms_instrumented, r.mean_overhead_ratio, r.image_compared, r.image_identical, "
+      "r.mean_psnr, r.min_psnr, r.options, COALESCE(r.variant, r.renderer), r.tally_version, r.tally_commit, "
+      "r.footprint_block_bytes, r.mean_footprint_bytes, r.mean_footprint_requested_bytes, r.host, j.labels, "
+      "r.frame_time_median, r.frame_time_lower, r.frame_time_upper, r.frame_time_frames, r.frame_time_source "
+      "FROM runs r JOIN devices d ON d.id = r.device_id JOIN scenes sc ON sc.id = r.scene_id "
+      "LEFT JOIN jobs j ON j.id = r.job_id ";
   sql += where;
-  // SQLite: the other tables' columns are the run's own (joined on their
-  // keys); grouping by the run alone lets the walk in id order be the grouping.
-  if (!lateral) sql += " GROUP BY r.id";
   return sql;
 }
 
@@ -87,6 +65,11 @@ RunRow readRunRow(const Statement& statement) {
   run.host = row.getOptText();
   json labels = row.getJson();
   run.labels = labels.is_null() ? json::object() : std::move(labels);
+  auto median = row.getOptDouble(), lower = row.getOptDouble(), upper = row.getOptDouble();
+  auto frames = row.getOptInt();
+  if (auto source = row.getOptText()) {  // NULL: stored before 0013, computed by the reader
+    run.frameTime = RunFrameTime{median, lower, upper, static_cast<size_t>(frames.value_or(0)), std::move(*source)};
+  }
   row.end();
   return run;
 }
@@ -259,11 +242,11 @@ Result<RunPage> Runs::list(const RunFilter& filter, const Page& page) {
   if (filter.runIds.size() > 1000) return makeError("runs: at most 1000 run ids");
   std::lock_guard lock(mutex_);
   return guarded<RunPage>("listRuns", [&]() -> Result<RunPage> {
-    // The page's ids first, then the summary columns of those runs only. A
-    // filter that the index cannot return in id order (a device or scene
-    // name matching several ids) makes SQLite sort, and it computes every
-    // result column, the per-run sample aggregates included, before it sorts.
-    // One statement whatever the page size.
+    // The page's ids first, then the columns of those runs only (a filter
+    // that the index cannot return in id order, a device or scene name
+    // matching several ids, makes SQLite sort, and it reads every result
+    // column before it sorts). One statement whatever the page size; the
+    // run's summary over its samples is on its row (0013).
     std::string pageIds = "SELECT r.id FROM runs r WHERE TRUE" + detail::runFilterSql(filter);
     if (after) pageIds += " AND r.id < ?";
     pageIds += " ORDER BY r.id DESC LIMIT ?";

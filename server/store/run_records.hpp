@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "store/frame_time.hpp"
+
 namespace tally::store {
 
 // ---- runs, samples ------------------------------------------------------------
@@ -90,6 +92,10 @@ struct RunRow {
   std::optional<double> meanFootprintBytes, meanFootprintRequestedBytes;
   std::optional<std::string> host;  // the host it was captured on (0007); absent before
   nlohmann::json labels = nlohmann::json::object();  // its capture's labels (0009); {} for none
+  // The run's frame time as the ingest computed it (0013); absent for runs
+  // stored before, whose readers compute it from the samples
+  // (reports::frameTimesOf).
+  std::optional<RunFrameTime> frameTime;
 };
 
 struct RunPage {

@@ -18,13 +18,6 @@
 
 namespace tally::store {
 
-// A sample's frame time (frame_ms: its median over the frames) and its
-// per-frame times (empty when not stored).
-struct SampleFrameTimes {
-  double frameMs = 0;
-  std::vector<double> frames;
-};
-
 class Runs : public Facet {
  public:
   // Stores a whole capture result (docs/result-schema.md) for a job, in one

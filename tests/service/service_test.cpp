@@ -235,7 +235,11 @@ TEST_F(ServiceTest, FootprintReachesTheRunCompareAndExportRoutes) {
         "UPDATE counters SET footprint_bytes = NULL WHERE pass_id IN (SELECT p.id FROM passes p JOIN samples s "
         "ON s.id = p.sample_id WHERE s.run_id = " + std::to_string(plain) + ");"
         "UPDATE samples SET footprint_bytes = NULL, footprint_requested_bytes = NULL WHERE run_id = " +
-        std::to_string(plain) + ";";
+        std::to_string(plain) + ";"
+        // And the runs' means over their samples, as ingest keeps them on the run (migration 0013).
+        "UPDATE runs SET (mean_footprint_bytes, mean_footprint_requested_bytes) = (SELECT AVG(s.footprint_bytes), "
+        "AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = runs.id) WHERE id IN (" + run + ", " +
+        std::to_string(plain) + ");";
     ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     sqlite3_close(db);
   }

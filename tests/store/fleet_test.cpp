@@ -496,7 +496,7 @@ TEST(Engines, CounterRowsBecomeArraysOnTheirPassKeepingEveryValue) {
   }
   auto store = openStore(db.path());
   ASSERT_NE(store, nullptr);
-  EXPECT_EQ(store->schemaVersion(), 12);
+  EXPECT_GE(store->schemaVersion(), 12);  // and later ones
   auto& c = store->connection();
   Statement rows(c,
                  "SELECT pass_id, position, resource, COALESCE(kind, '-'), COALESCE(format, '-'), access, count, "

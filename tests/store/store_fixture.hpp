@@ -313,6 +313,44 @@ inline Capture realisticCapture(int seed = 0, const std::string& scene = "atrium
   return c;
 }
 
+// A capture with every kind of missing value: identical images (NULL psnr),
+// a sample without image error, without instrumented time or overhead, with
+// and without footprint, with and without per-frame times, and a run without
+// samples; times whose sums depend on the order they are added in.
+inline Capture mixedCapture(double shift) {
+  Capture c = realisticCapture(static_cast<int>(shift));
+  json& runs = c.result["runs"];
+  // forward: every sample with its per-frame times (18 frames: an interval).
+  for (size_t s = 0; s < runs[0]["samples"].size(); ++s) {
+    json frames = json::array();
+    for (int f = 0; f < 9; ++f) frames.push_back(0.1 * (f + 1) + 0.3 * static_cast<double>(s) + shift);
+    runs[0]["samples"][s]["frame_ms_frames"] = frames;
+    runs[0]["samples"][s]["frame_ms"] = 0.1 + 0.2 * static_cast<double>(s) + shift;
+  }
+  // deferred: one sample with per-frame times, one without (the samples' medians);
+  // the second has no image error, no instrumented time and no overhead, the
+  // first a footprint on one of its counters.
+  runs[1]["samples"][0]["frame_ms_frames"] = {0.7, 0.1, 0.2};
+  runs[1]["samples"][1].erase("image_error");
+  runs[1]["samples"][1].erase("frame_ms_instrumented");
+  runs[1]["samples"][1].erase("overhead_ratio");
+  runs[1]["samples"][0]["passes"][0]["resources"][0]["footprint_bytes"] = 0.3 + shift;
+  runs[1]["samples"][0]["passes"][1]["resources"][1]["footprint_bytes"] = 0.1;
+  // Three samples of 0.1, 0.2, 0.3 ms: (0.1 + 0.2) + 0.3 != 0.1 + (0.2 + 0.3).
+  json third = runs[1]["samples"][1];
+  third["camera"]["index"] = 2;
+  third["screenshot"] = nullptr;
+  third["frame_ms_frames"] = json::array();  // stored as none
+  runs[1]["samples"].push_back(third);
+  for (size_t s = 0; s < 3; ++s) runs[1]["samples"][s]["frame_ms"] = 0.1 * static_cast<double>(s + 1);
+  // A run without samples.
+  json empty = runs[1];
+  empty["renderer"] = "visbuffer";
+  empty["samples"] = json::array();
+  runs.push_back(empty);
+  return c;
+}
+
 // A store on a fresh temporary file; checks integrity after every test.
 class StoreTest : public ::testing::Test {
  protected:

@@ -993,6 +993,9 @@ with db:
                "ON p.id = c.pass_id WHERE p.sample_id = samples.id), footprint_requested_bytes = (SELECT SUM(c.bytes) "
                "FROM counters c JOIN passes p ON p.id = c.pass_id WHERE p.sample_id = samples.id AND "
                "c.footprint_bytes IS NOT NULL) WHERE run_id = ?", (run,))
+    # and the run's means over its samples, as ingest keeps them on the run (migration 0013)
+    db.execute("UPDATE runs SET (mean_footprint_bytes, mean_footprint_requested_bytes) = (SELECT AVG(s.footprint_bytes), "
+               "AVG(s.footprint_requested_bytes) FROM samples s WHERE s.run_id = runs.id) WHERE id = ?", (run,))
 `, join(daemon.dir, 'tally.db'), String(id)]);
     const run = await daemon.get(`/runs/${id}`);
     const { samples } = await daemon.get(`/runs/${id}/samples`);
