@@ -9,7 +9,7 @@
 #
 #   tests/gpu/diag/footprint_dedup.sh
 #   OUT=dir            results (default ./gpu-out): <choice>.log, <choice>/counting.md, dedup.txt
-#   DEDUPS="a b"       the choices (default: none loops); "loops+fp-quad,fp-restrict" also sets
+#   DEDUPS="a b"       the choices (default: none loops,lanes); "loops+fp-quad,fp-aliased" also sets
 #                      TALLY_ACCUMULATE_STUDY (docs/measurement.md, "What a mark costs")
 #   DEDUP_SPECS="..."  counting_cost.sh's specs (default sponza)
 #   DEDUP_TESTS=0      no tests
@@ -19,7 +19,7 @@ out="${OUT:-./gpu-out}"
 mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 status=0
-for d in ${DEDUPS:-none loops}; do
+for d in ${DEDUPS:-none loops,lanes}; do
   start=$(date +%s)
   study=""
   [[ "$d" == *+* ]] && study="${d#*+}"
