@@ -57,16 +57,21 @@ BatchInsert& BatchInsert::add(const nlohmann::json& value) {
   return put(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
-void BatchInsert::flush() {
+BatchInsert::~BatchInsert() {
+  if (copying_) db_->copyAbort();
+}
+
+void BatchInsert::flush() { write(true); }
+void BatchInsert::send() { write(false); }
+
+void BatchInsert::write(bool end) {
   if (cells_.size() % columns_.size() != 0) {
     throw std::logic_error("BatchInsert: a row of " + table_ + " has the wrong number of values");
   }
-  if (!cells_.empty()) {
-    if (db_->engine() == Engine::Postgres) {
-      flushPostgres();
-    } else {
-      flushSqlite();
-    }
+  if (db_->engine() == Engine::Postgres) {
+    sendPostgres(end);
+  } else if (!cells_.empty()) {
+    flushSqlite();
   }
   cells_.clear();
 }
@@ -108,10 +113,14 @@ void BatchInsert::flushSqlite() {
   }
 }
 
-void BatchInsert::flushPostgres() {
-  std::string copy = "COPY " + table_ + " (";
-  for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
-  copy += ") FROM STDIN";
+void BatchInsert::sendPostgres(bool end) {
+  if (!cells_.empty() && !copying_) {
+    std::string copy = "COPY " + table_ + " (";
+    for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
+    copy += ") FROM STDIN";
+    db_->copyBegin(copy);
+    copying_ = true;
+  }
   std::string data;
   const size_t width = columns_.size();
   for (size_t k = 0; k < cells_.size(); ++k) {
@@ -129,7 +138,11 @@ void BatchInsert::flushPostgres() {
     }
     data += (k + 1) % width == 0 ? '\n' : '\t';
   }
-  db_->copyIn(copy, data);
+  if (!data.empty()) db_->copyData(data);
+  if (end && copying_) {
+    copying_ = false;
+    db_->copyEnd();
+  }
 }
 
 ArrayLiteral& ArrayLiteral::add(std::string_view text) {
@@ -169,22 +182,38 @@ std::string ArrayLiteral::take() {
   return out;
 }
 
-std::vector<int64_t> reserveIds(Connection* db, std::string_view table, size_t count) {
-  std::vector<int64_t> ids;
-  if (count == 0) return ids;
-  ids.reserve(count);
+std::vector<std::vector<int64_t>> reserveIds(Connection* db,
+                                             std::span<const std::pair<std::string_view, size_t>> tables) {
+  std::vector<std::vector<int64_t>> ids(tables.size());
   if (db->engine() == Engine::Postgres) {
-    // nextval is outside transactions: concurrent ingests never get the same id.
-    Statement next(db, "SELECT nextval(pg_get_serial_sequence(?1, 'id')) FROM generate_series(1, ?2::bigint)");
-    next.bind(1, table).bind(2, static_cast<int64_t>(count));
-    while (next.step()) ids.push_back(next.getInt(0));
-    if (ids.size() != count) throw DbError(0, "", "PostgreSQL: reserving ids of " + std::string(table) + " failed");
+    // One statement for every table. nextval is outside transactions:
+    // concurrent ingests never get the same id.
+    std::string sql;
+    for (size_t t = 0; t < tables.size(); ++t) {
+      std::string k = std::to_string(t), name = std::to_string(2 * t + 1), count = std::to_string(2 * t + 2);
+      sql += (t ? " UNION ALL " : "") + std::string("SELECT ") + k + " AS k, nextval(s) FROM (SELECT pg_get_serial_sequence(?" +
+             name + ", 'id')::regclass AS s) q CROSS JOIN generate_series(1, ?" + count + "::bigint)";
+    }
+    Statement next(db, sql);
+    for (size_t t = 0; t < tables.size(); ++t) {
+      next.bind(static_cast<int>(2 * t + 1), tables[t].first).bind(static_cast<int>(2 * t + 2), static_cast<int64_t>(tables[t].second));
+    }
+    while (next.step()) ids.at(static_cast<size_t>(next.getInt(0))).push_back(next.getInt(1));
+    for (size_t t = 0; t < tables.size(); ++t) {
+      std::sort(ids[t].begin(), ids[t].end());
+      if (ids[t].size() != tables[t].second)
+        throw DbError(0, "", "PostgreSQL: reserving ids of " + std::string(tables[t].first) + " failed");
+    }
     return ids;
   }
-  Statement largest(db, "SELECT COALESCE(MAX(id), 0) FROM " + std::string(table));
-  int64_t last = largest.step() ? largest.getInt(0) : 0;
-  largest.run();
-  for (size_t k = 1; k <= count; ++k) ids.push_back(last + static_cast<int64_t>(k));
+  for (size_t t = 0; t < tables.size(); ++t) {
+    if (tables[t].second == 0) continue;
+    Statement largest(db, "SELECT COALESCE(MAX(id), 0) FROM " + std::string(tables[t].first));
+    int64_t last = largest.step() ? largest.getInt(0) : 0;
+    largest.run();
+    ids[t].reserve(tables[t].second);
+    for (size_t k = 1; k <= tables[t].second; ++k) ids[t].push_back(last + static_cast<int64_t>(k));
+  }
   return ids;
 }
 

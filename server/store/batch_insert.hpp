@@ -7,7 +7,9 @@
 //   counters.flush();   // inside the caller's transaction
 //
 // PostgreSQL takes the rows through COPY (one command, the rows streamed in
-// its text format); SQLite through prepared multi-row INSERTs of up to
+// its text format; send() hands over the rows read so far and keeps the
+// copy open, so that the server stores them while the caller reads the
+// next); SQLite through prepared multi-row INSERTs of up to
 // kSqliteRowsPerStatement rows. Values are stored exactly as Statement::bind
 // stores them (the same text for numbers and JSON), so a batched row reads
 // back as a row inserted alone would.
@@ -24,6 +26,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -54,10 +57,18 @@ class BatchInsert {
     return value ? add(*value) : add(nullptr);
   }
 
+  BatchInsert(const BatchInsert&) = delete;
+  BatchInsert& operator=(const BatchInsert&) = delete;
+  ~BatchInsert();  // a copy left open is aborted: its transaction must roll back
+
   size_t rows() const { return cells_.size() / columns_.size(); }
   // Writes the rows held and forgets them. Throws DbError (the engine's
   // message) or std::logic_error for a row of the wrong width.
   void flush();
+  // The same, but PostgreSQL's COPY stays open for more rows, which the
+  // server stores while the caller reads the next; flush() ends it. Nothing
+  // else may run on the connection until then.
+  void send();
 
   // SQLite's limit on parameters per statement is 32,766; 256 rows of the
   // widest table (samples, 27 columns) stay well within it.
@@ -66,8 +77,9 @@ class BatchInsert {
  private:
   using Cell = std::variant<std::nullptr_t, int64_t, double, std::string, std::span<const uint8_t>>;
   BatchInsert& put(Cell cell);
+  void write(bool end);
   void flushSqlite();
-  void flushPostgres();
+  void sendPostgres(bool end);
   std::string insertSql(size_t rows) const;
 
   Connection* db_;
@@ -75,6 +87,7 @@ class BatchInsert {
   std::vector<std::string> columns_;
   std::vector<Cell> cells_;
   std::optional<Statement> full_;  // SQLite: the statement of a full chunk, prepared once
+  bool copying_ = false;           // PostgreSQL: send() left the copy open
 };
 
 // A PostgreSQL array literal ({"a",NULL,1.5}), built element by element, for
@@ -100,7 +113,9 @@ class ArrayLiteral {
   std::string text_;
 };
 
-// `count` new ids of `table`'s id column, ascending; no other writer gets them.
-std::vector<int64_t> reserveIds(Connection* db, std::string_view table, size_t count);
+// For each (table, count): `count` new ids of the table's id column,
+// ascending; no other writer gets them. PostgreSQL: one statement for all.
+std::vector<std::vector<int64_t>> reserveIds(Connection* db,
+                                             std::span<const std::pair<std::string_view, size_t>> tables);
 
 }  // namespace tally::store::detail

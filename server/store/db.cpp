@@ -89,9 +89,11 @@ thread_local Fault tLastFault = Fault::kNone;
 Fault lastFault() { return tLastFault; }
 void setLastFault(Fault fault) { tLastFault = fault; }
 
-void Connection::copyIn(std::string_view copySql, std::string_view) {
+void Connection::copyBegin(std::string_view copySql) {
   throw DbError(0, "", "this engine has no COPY: " + std::string(copySql.substr(0, 120)));
 }
+void Connection::copyData(std::string_view) { throw DbError(0, "", "this engine has no COPY"); }
+void Connection::copyEnd() { throw DbError(0, "", "this engine has no COPY"); }
 
 bool isPostgresUrl(std::string_view location) {
   return location.starts_with("postgresql://") || location.starts_with("postgres://");

@@ -81,9 +81,22 @@ class Connection {
   virtual int64_t changes() const = 0;
   // What the connection is, for messages: the file path, or the server without the password.
   virtual std::string describe() const = 0;
-  // PostgreSQL: runs `copySql` (COPY ... FROM STDIN) and sends `data`, rows
-  // in COPY's text format. SQLite has no COPY: it throws.
-  virtual void copyIn(std::string_view copySql, std::string_view data);
+  // PostgreSQL's COPY ... FROM STDIN, rows in COPY's text format: copyBegin
+  // runs `copySql`; copyData sends rows, which the server stores while the
+  // caller makes the next; copyEnd ends the copy and throws the server's
+  // reason for any row it refused. Nothing else runs on the connection while
+  // a copy is open; copyAbort ends an open copy refused (the transaction then
+  // rolls back) and does nothing otherwise. SQLite has no COPY: they throw.
+  virtual void copyBegin(std::string_view copySql);
+  virtual void copyData(std::string_view data);
+  virtual void copyEnd();
+  virtual void copyAbort() noexcept {}
+  // All of a copy's rows at once.
+  void copyIn(std::string_view copySql, std::string_view data) {
+    copyBegin(copySql);
+    copyData(data);
+    copyEnd();
+  }
 };
 
 // Opens a SQLite file (created when create is set), with extended result codes

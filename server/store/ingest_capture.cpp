@@ -1,11 +1,15 @@
 // storeCapture: one capture result (docs/result-schema.md) -> rows, inside
-// the caller's transaction. The result is read and checked whole first, its
-// rows gathered per table (CaptureRows), and then each table's rows are
-// written in one batch (batch_insert.hpp), parents before children. Ids that
-// children refer to (runs, screenshots, samples, passes) are reserved up
-// front, so no row waits for its parent's id. Bad input throws IngestError
-// naming the JSON path before anything of the capture is written.
+// the caller's transaction. The runs, their resources, screenshots and
+// samples are read and checked first (with the sums of the samples' lines),
+// their rows gathered per table (CaptureRows) and each table's rows written
+// in one batch (batch_insert.hpp), parents before children; then the passes,
+// most of a capture's bytes, are read and sent in pieces, which PostgreSQL
+// stores while the next piece is read. Ids that children refer to (runs,
+// screenshots, samples, passes) are reserved up front, so no row waits for
+// its parent's id. Bad input throws IngestError naming the JSON path, and
+// the caller's transaction rolls back whatever was written.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 #include <tuple>
@@ -13,6 +17,7 @@
 
 #include "common/json_fields.hpp"
 #include "store/batch_insert.hpp"
+#include "store/count_spread.hpp"
 #include "store/ingest_input.hpp"
 #include "store/ingest_sites.hpp"
 #include "store/internal.hpp"
@@ -24,24 +29,10 @@ using json_fields::find;
 
 namespace {
 
-// Width and height from a PNG's IHDR chunk (the signature and IHDR come first).
-std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::string& path) {
-  static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (png.size() < 24 || !std::equal(kSignature, kSignature + 8, png.begin()) || png[12] != 'I' ||
-      png[13] != 'H' || png[14] != 'D' || png[15] != 'R') {
-    bad(path, "not a PNG image");
-  }
-  auto be32 = [&](size_t at) {
-    return int64_t{png[at]} << 24 | int64_t{png[at + 1]} << 16 | int64_t{png[at + 2]} << 8 |
-           int64_t{png[at + 3]};
-  };
-  return {be32(16), be32(20)};
-}
-
 // Ids handed out in order from a reserved list.
 class Ids {
  public:
-  Ids(Connection* db, std::string_view table, size_t count) : ids_(reserveIds(db, table, count)) {}
+  explicit Ids(std::vector<int64_t> ids) : ids_(std::move(ids)) {}
   int64_t next() {
     // The count came from the same result, so this holds unless the counting below is wrong.
     if (at_ == ids_.size()) throw IngestError("more rows than ids reserved for them");
@@ -94,10 +85,14 @@ std::vector<std::string> passColumns(bool counterArrays) {
 struct CaptureRows {
   CaptureRows(Connection* connection, const RowCounts& counts)
       : db(connection),
-        runIds(db, "runs", counts.runs),
-        screenshotIds(db, "screenshots", counts.screenshots),
-        sampleIds(db, "samples", counts.samples),
-        passIds(db, "passes", counts.passes),
+        reserved(reserveIds(db, std::array<std::pair<std::string_view, size_t>, 4>{{{"runs", counts.runs},
+                                                                                   {"screenshots", counts.screenshots},
+                                                                                   {"samples", counts.samples},
+                                                                                   {"passes", counts.passes}}})),
+        runIds(std::move(reserved[0])),
+        screenshotIds(std::move(reserved[1])),
+        sampleIds(std::move(reserved[2])),
+        passIds(std::move(reserved[3])),
         runs(db, "runs",
              {"id", "job_id", "device_id", "renderer", "scene_id", "width", "height", "counting", "lights",
               "render_target_bytes", "notes", "shaders", "counter_headroom", "options", "variant", "tally_version",
@@ -123,15 +118,20 @@ struct CaptureRows {
                     "INSERT INTO scenes (name, params) VALUES (?1, ?2) "
                     "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id") {}
 
+  // Each table's rows in one batch, parents first; the passes' rows are
+  // read now (writePasses).
   void write() {
-    for (BatchInsert* table : {&runs, &resources, &screenshots, &samples, &passes, &counters}) table->flush();
+    for (BatchInsert* table : {&runs, &resources, &screenshots, &samples}) table->flush();
+    writePasses();
   }
+  void writePasses();
 
   Connection* db;
   // Sites, draws and materials of each pass, and each run's shader sources
   // (store/ingest_sites.hpp): written after the rows they refer to, in the
   // same transaction.
   std::vector<std::tuple<int64_t, const json*, std::string>> passSites, runShaders;
+  std::vector<std::vector<int64_t>> reserved;  // handed to the Ids below
   Ids runIds, screenshotIds, sampleIds, passIds;
   BatchInsert runs, resources, screenshots, samples;
   // PostgreSQL: a pass's counters are arrays on its row (migration 0012), and
@@ -141,33 +141,53 @@ struct CaptureRows {
   Statement findScene, insertScene;
   std::map<std::pair<std::string, std::string>, int64_t> sceneIds;  // by name and compact params
   json ceilings;  // the capture's device.ceilings (null when not measured)
-  // The sample being read: all its lines' bytes; the footprint of the lines
-  // that have one and those lines' requested bytes (null when none has).
-  struct Sums {
-    double bytes = 0;
-    std::optional<double> footprint, footprintRequested;
-  } sums;
+  // Each sample's id, object and path, for its passes' rows (writePasses).
+  std::vector<std::tuple<int64_t, const json*, std::string>> samplesPasses;
 };
 
 // The member, not copied (null when absent), for BatchInsert::add(const json*).
 const json* optJson(const json& object, const char* key) { return find(object, key); }
 
-// Per-frame times (frame_ms_frames, gpu_ms_frames): absent (or null), or an
-// array of finite, non-negative milliseconds; errors name the entry.
-std::optional<json> optFrameTimes(const json& object, const char* key, const std::string& path) {
-  const json* value = find(object, key);
-  if (!value) return std::nullopt;
-  std::string at = path + "." + key;
-  if (!value->is_array()) bad(at, "must be an array of milliseconds, got " + value->dump());
-  for (size_t i = 0; i < value->size(); ++i) {
-    const json& ms = (*value)[i];
-    std::string entry = at + "[" + std::to_string(i) + "]";
-    if (!ms.is_number()) bad(entry, "must be a number, got " + ms.dump());
-    double x = ms.get<double>();
-    if (!std::isfinite(x)) bad(entry, "must be finite");
-    if (x < 0) bad(entry, "must not be negative, got " + ms.dump());
+// A counter's numbers, checked.
+struct CounterNumbers {
+  double count = 0, bytes = 0;
+  std::optional<double> footprint;  // absent (or null) where the line's footprint was not measured
+};
+
+CounterNumbers counterNumbers(const json& counter, const std::string& at) {
+  if (!counter.is_object()) bad(at, "must be an object");
+  CounterNumbers n{kMembers.number(counter, "count", at), kMembers.number(counter, "bytes", at),
+                   kMembers.optNumber(counter, "footprint_bytes", at)};
+  if (n.footprint && *n.footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
+  return n;
+}
+
+// A sample's sums over its passes' lines, written on its row: all the
+// lines' bytes; the footprint of the lines that have one and those lines'
+// requested bytes (null when none has). Read with the sample, before its
+// passes' rows (writePasses).
+struct CounterSums {
+  double bytes = 0;
+  std::optional<double> footprint, footprintRequested;
+};
+
+CounterSums counterSums(const json& sample, const std::string& path) {
+  CounterSums sums;
+  const json& passes = kMembers.array(sample, "passes", path);
+  for (size_t p = 0; p < passes.size(); ++p) {
+    std::string at = path + ".passes[" + std::to_string(p) + "]";
+    if (!passes[p].is_object()) bad(at, "must be an object");
+    const json& counters = kMembers.array(passes[p], "resources", at);
+    for (size_t c = 0; c < counters.size(); ++c) {
+      CounterNumbers n = counterNumbers(counters[c], at + ".resources[" + std::to_string(c) + "]");
+      sums.bytes += n.bytes;
+      if (n.footprint) {
+        sums.footprint = sums.footprint.value_or(0) + *n.footprint;
+        sums.footprintRequested = sums.footprintRequested.value_or(0) + n.bytes;
+      }
+    }
   }
-  return *value;
+  return sums;
 }
 
 // The pass's counters: rows of counters, or (in.counterArrays) the arrays
@@ -178,19 +198,23 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
   for (size_t c = 0; c < counters.size(); ++c) {
     std::string at = path + ".resources[" + std::to_string(c) + "]";
     const json& counter = counters[c];
-    if (!counter.is_object()) bad(at, "must be an object");
+    auto [count, bytes, footprint] = counterNumbers(counter, at);
     std::string access = kMembers.text(counter, "access", at);
     if (access != "read" && access != "write")
       bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
-    // Absent (or null) where the line's footprint was not measured.
-    std::optional<double> footprint = kMembers.optNumber(counter, "footprint_bytes", at);
-    if (footprint && *footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
     std::string resource = kMembers.text(counter, "name", at);
     auto kind = kMembers.optText(counter, "kind", at);
     auto format = kMembers.optText(counter, "format", at);
-    double count = kMembers.number(counter, "count", at);
-    double bytes = kMembers.number(counter, "bytes", at);
+    // Absent (or null) where not measured; n alone where every frame
+    // counted the same (store/count_spread.hpp).
     const json* spread = optJson(counter, "count_spread");
+    if (spread && !spread->is_object() && !spread->is_null())
+      bad(at + ".count_spread", "must be an object (the count over the frames), got " + spread->dump());
+    std::optional<json> frames;
+    if (auto n = spread ? constantSpreadFrames(*spread, count) : std::nullopt) {
+      frames = *n;
+      spread = &*frames;
+    }
     std::string source = kMembers.text(counter, "source", at);
     if (in.counterArrays) {
       resources.add(resource);
@@ -216,11 +240,6 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
           .add(std::move(source))
           .add(footprint);
     }
-    in.sums.bytes += bytes;
-    if (footprint) {
-      in.sums.footprint = in.sums.footprint.value_or(0) + *footprint;
-      in.sums.footprintRequested = in.sums.footprintRequested.value_or(0) + bytes;
-    }
   }
   if (in.counterArrays) {
     for (ArrayLiteral* array :
@@ -230,7 +249,8 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
   }
 }
 
-void addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const std::string& path) {
+// The sample's passes; how many.
+size_t addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const std::string& path) {
   const json& passes = kMembers.array(sample, "passes", path);
   for (size_t p = 0; p < passes.size(); ++p) {
     std::string at = path + ".passes[" + std::to_string(p) + "]";
@@ -254,6 +274,25 @@ void addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const std:
     addCounters(in, passId, pass, at);
     in.passSites.emplace_back(passId, &pass, at);
   }
+  return passes.size();
+}
+
+// The passes of every sample, after the samples' rows they refer to. On
+// PostgreSQL they go in pieces into one open COPY, so that the server
+// stores a piece while this reads the next: most of a capture's bytes are
+// its passes (docs/benchmarks.md, "Ingest, fourth pass").
+void CaptureRows::writePasses() {
+  constexpr size_t kPassesPerPiece = 64;
+  size_t held = 0;
+  for (const auto& [sampleId, sample, path] : samplesPasses) {
+    held += addPasses(*this, sampleId, *sample, path);
+    if (held >= kPassesPerPiece) {
+      passes.send();
+      held = 0;
+    }
+  }
+  passes.flush();
+  counters.flush();
 }
 
 std::optional<int64_t> addScreenshot(CaptureRows& in, const json& sample, const std::string& path,
@@ -299,28 +338,6 @@ BatchInsert& addImageError(BatchInsert& row, const ImageErrorColumns& e) {
   return row.add(e.against).add(e.identical).add(e.psnr).add(e.maxAbs).add(e.meanAbs);
 }
 
-// The sample's extras, with "roofline" added where its passes carry one: the
-// capture's ceilings and each pass's roofline with its time, kept per run
-// (the device row holds only the latest capture's device object) and without
-// columns of their own (docs/result-schema.md, "extras.roofline").
-json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
-  const json* passes = find(sample, "passes");
-  if (!passes || !passes->is_array()) return extras;
-  json byPass = json::object();
-  for (const auto& pass : *passes) {
-    const json* roofline = pass.is_object() ? find(pass, "roofline") : nullptr;
-    const json* name = pass.is_object() ? find(pass, "name") : nullptr;
-    if (!roofline || !roofline->is_object() || !name || !name->is_string()) continue;
-    json entry = *roofline;
-    if (const json* ms = find(pass, "gpu_ms")) entry["gpu_ms"] = *ms;
-    byPass[name->get<std::string>()] = std::move(entry);
-  }
-  if (byPass.empty()) return extras;
-  if (!extras.is_object()) extras = json::object();
-  extras["roofline"] = {{"ceilings", ceilings.is_object() ? ceilings : json(nullptr)}, {"passes", std::move(byPass)}};
-  return extras;
-}
-
 // The camera's index within its run, refused when an earlier sample of the
 // run has it (the samples table keeps one sample per camera and run).
 int64_t cameraIndexOf(const json& camera, size_t s, const std::string& at, std::map<int64_t, size_t>& seen) {
@@ -364,8 +381,8 @@ std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const j
     json extras = extrasWithRoofline(kMembers.object(sample, "extras", at), sample, in.ceilings);
     auto frameTimes = optFrameTimes(sample, "frame_ms_frames", at);
     int64_t sampleId = in.sampleIds.next();
-    in.sums = {};
-    addPasses(in, sampleId, sample, at);
+    CounterSums sums = counterSums(sample, at);
+    in.samplesPasses.emplace_back(sampleId, &sample, at);
     in.samples.row()
         .add(sampleId)
         .add(runId)
@@ -381,9 +398,9 @@ std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const j
     addImageError(in.samples, image).add(screenshotId).add(extras);
     addImageError(in.samples, variant)
         .add(frameTimes)
-        .add(in.sums.bytes)
-        .add(in.sums.footprint)
-        .add(in.sums.footprintRequested);
+        .add(sums.bytes)
+        .add(sums.footprint)
+        .add(sums.footprintRequested);
     // As the readers get them back (queries.cpp, frameTimes): an empty array is none.
     SampleFrameTimes times{frameMs, {}};
     if (frameTimes) {

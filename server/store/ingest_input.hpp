@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -27,6 +28,17 @@ struct IngestError : std::runtime_error {
 
 // Members of the result: a fault throws IngestError naming the path.
 inline constexpr json_fields::Members kMembers{[](const Error& error) { throw IngestError(error.text()); }};
+
+// Width and height from a PNG's IHDR chunk; `path` names it in errors.
+std::pair<int64_t, int64_t> pngSize(const std::vector<uint8_t>& png, const std::string& path);
+
+// Per-frame times (frame_ms_frames, gpu_ms_frames): absent (or null), or an
+// array of finite, non-negative milliseconds, not copied; errors name the entry.
+const nlohmann::json* optFrameTimes(const nlohmann::json& object, const char* key, const std::string& path);
+
+// The sample's extras, with "roofline" added where its passes carry one
+// (docs/result-schema.md, "extras.roofline").
+nlohmann::json extrasWithRoofline(nlohmann::json extras, const nlohmann::json& sample, const nlohmann::json& ceilings);
 
 // A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
 // sweeps list and the dashboard's charts rely on, whatever the sweep.

@@ -21,6 +21,7 @@
 #include <atomic>
 #include <map>
 #include <mutex>
+#include <utility>
 
 #include "store/db.hpp"
 
@@ -146,7 +147,10 @@ class PgConnection final : public Connection {
   }
   int64_t changes() const override { return changes_; }
   std::string describe() const override { return redactUrl(url_); }
-  void copyIn(std::string_view copySql, std::string_view data) override;
+  void copyBegin(std::string_view copySql) override;
+  void copyData(std::string_view data) override;
+  void copyEnd() override;
+  void copyAbort() noexcept override;
 
   // Prepares pgSql once (per connection and re-connection); the statement's name.
   const std::string& prepared(const std::string& pgSql, std::string_view original) {
@@ -221,6 +225,8 @@ class PgConnection final : public Connection {
   std::map<std::string, std::string> prepared_;  // PostgreSQL SQL -> statement name
   uint64_t counter_ = 0;
   int64_t changes_ = 0;
+  std::string copySql_;    // the open copy's command; empty when none is open
+  bool copySent_ = false;  // every row of the open copy reached libpq
 };
 
 PgStatement::PgStatement(PgConnection& db, std::string_view sql) : db_(db), sql_(sql) {
@@ -259,7 +265,8 @@ bool PgStatement::step() {
   return false;
 }
 
-void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
+void PgConnection::copyBegin(std::string_view copySql) {
+  if (!copySql_.empty()) throw DbError(0, "", "PostgreSQL: a copy is open already: " + copySql_);
   ensureConnected();
   std::string sql(copySql);
   PGresult* started = PQexec(conn_, sql.c_str());
@@ -268,13 +275,24 @@ void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
     throw DbError(0, "", "PostgreSQL: " + sql + " did not start a copy");
   }
   PQclear(started);
+  copySql_ = std::move(sql);
+  copySent_ = true;
+}
+
+void PgConnection::copyData(std::string_view data) {
+  if (copySql_.empty()) throw DbError(0, "", "PostgreSQL: rows sent with no copy open");
   // In pieces, so that libpq's buffer stays small whatever the batch.
   constexpr size_t kPiece = size_t{1} << 20;
-  bool sent = true;
-  for (size_t at = 0; at < data.size() && sent; at += kPiece) {
+  for (size_t at = 0; at < data.size() && copySent_; at += kPiece) {
     size_t length = std::min(kPiece, data.size() - at);
-    sent = PQputCopyData(conn_, data.data() + at, static_cast<int>(length)) == 1;
+    copySent_ = PQputCopyData(conn_, data.data() + at, static_cast<int>(length)) == 1;
   }
+}
+
+void PgConnection::copyEnd() {
+  if (copySql_.empty()) throw DbError(0, "", "PostgreSQL: no copy to end");
+  std::string sql = std::exchange(copySql_, {});
+  bool sent = copySent_;
   if (PQputCopyEnd(conn_, sent ? nullptr : "the client failed to send the rows") != 1) sent = false;
   // The command's own result, then nothing: every result is read so that the
   // connection is ready for the next statement.
@@ -283,6 +301,14 @@ void PgConnection::copyIn(std::string_view copySql, std::string_view data) {
   while ((rest = PQgetResult(conn_)) != nullptr) PQclear(rest);
   finish(result, sql);
   if (!sent) throw DbError(0, "08006", "PostgreSQL: sending the rows of " + sql + " failed: " + trimmed(PQerrorMessage(conn_)));
+}
+
+void PgConnection::copyAbort() noexcept {
+  if (copySql_.empty()) return;
+  copySql_.clear();
+  PQputCopyEnd(conn_, "the rows were refused before they were all sent");
+  PGresult* result = nullptr;
+  while ((result = PQgetResult(conn_)) != nullptr) PQclear(result);
 }
 
 void ignoreNotice(void*, const char*) {}

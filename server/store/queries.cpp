@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "store/count_spread.hpp"
 #include "store/internal.hpp"
 
 namespace tally::store {
@@ -429,10 +430,11 @@ Result<std::optional<Sample>> Runs::sample(int64_t sampleId) {
     while (counters.step()) {
       RowReader counter(counters);
       size_t pass = byId.at(counter.getInt());
-      sample.passes[pass].counters.push_back(
-          Counter{counter.getText(), counter.getOptText(), counter.getOptText(), counter.getText(),
-                  counter.getDouble(), counter.getDouble(), counter.getJson(), counter.getText(),
-                  counter.getOptDouble()});
+      Counter read{counter.getText(), counter.getOptText(), counter.getOptText(), counter.getText(),
+                   counter.getDouble(), counter.getDouble(), counter.getJson(), counter.getText(),
+                   counter.getOptDouble()};
+      read.countSpread = expandCountSpread(std::move(read.countSpread), read.count);
+      sample.passes[pass].counters.push_back(std::move(read));
       counter.end();
     }
     tx.commit();

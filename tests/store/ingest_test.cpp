@@ -213,6 +213,90 @@ TEST_F(Ingest, CounterTextsAndAbsentValuesRoundTripExactly) {
   EXPECT_TRUE((*passes)[1].counters.empty());
 }
 
+// A spread whose frames all counted the counter's count is stored as its
+// frames alone (store/count_spread.hpp) and read back as the object that
+// went in, bit for bit; a spread that differs from that in any way (one
+// value an ulp off, -0.0, an integer where a float was, a key more or less,
+// n not an unsigned integer) is stored whole.
+TEST_F(Ingest, ConstantCountSpreadsAreStoredAsTheirFramesAndReadBackWhole) {
+  const double c = 136911.9603947413;
+  auto constant = [&](double count) {
+    return json{{"iqr", 0.0},   {"max", count}, {"mean", count}, {"median", count},
+                {"min", count}, {"q1", count},  {"q3", count},   {"n", 20u}};
+  };
+  std::vector<std::pair<json, bool>> spreads;  // the spread, and whether it is stored as its frames
+  spreads.emplace_back(constant(c), true);
+  spreads.emplace_back(constant(0.0), true);
+  spreads.emplace_back(json::parse(constant(1e-300).dump()), true);  // as a result's text parses
+  json integerFrames = constant(c);
+  integerFrames["n"] = 7;  // a signed integer, as code that builds JSON may write it
+  spreads.emplace_back(integerFrames, true);
+  json offByAnUlp = constant(c);
+  offByAnUlp["q3"] = std::nextafter(c, 1e300);
+  spreads.emplace_back(offByAnUlp, false);
+  json negativeZero = constant(c);
+  negativeZero["iqr"] = -0.0;
+  spreads.emplace_back(negativeZero, false);
+  json integerValue = constant(3.0);
+  integerValue["max"] = 3;
+  spreads.emplace_back(integerValue, false);
+  json extraKey = constant(c);
+  extraKey["note"] = "kept";
+  spreads.emplace_back(extraKey, false);
+  json missingKey = constant(c);
+  missingKey.erase("mean");
+  spreads.emplace_back(missingKey, false);
+  json fractionalFrames = constant(c);
+  fractionalFrames["n"] = 20.0;
+  spreads.emplace_back(fractionalFrames, false);
+  json negativeFrames = constant(c);
+  negativeFrames["n"] = -20;
+  spreads.emplace_back(negativeFrames, false);
+  spreads.emplace_back(constant(c + 1), false);  // constant, but not the counter's count
+
+  std::vector<json> counters;
+  for (size_t k = 0; k < spreads.size(); ++k) {
+    double count = spreads[k].first.contains("median") ? spreads[k].first["median"].get<double>() : c;
+    if (k == spreads.size() - 1) count = c;
+    json counter = makeCounter("line" + std::to_string(k), "read", count, count * 4);
+    counter["count_spread"] = spreads[k].first;
+    counters.push_back(std::move(counter));
+  }
+  Capture capture;
+  capture.result = makeCapture(
+      {makeRun("forward", "atrium", 64, 36, {makeSample(0, 2.0, {makePass("p", 1.0, 10, counters)})})});
+  int64_t jobId = newJob();
+  ASSERT_EQ(ingest(jobId, capture), 1);
+
+  // As stored: the frames, or the text.
+  Statement stored(store_->connection(), "SELECT count_spread FROM counters ORDER BY position");
+  for (size_t k = 0; k < spreads.size(); ++k) {
+    SCOPED_TRACE("spread " + std::to_string(k) + ": " + spreads[k].first.dump());
+    ASSERT_TRUE(stored.step());
+    json text = json::parse(stored.getText(0));
+    if (spreads[k].second) {
+      EXPECT_EQ(text, spreads[k].first["n"]);
+    } else {
+      EXPECT_EQ(text.dump(), spreads[k].first.dump());
+    }
+  }
+  EXPECT_FALSE(stored.step());
+
+  // As read: the object that went in, to the byte.
+  auto page = store_->runs().list({.jobId = jobId}, {});
+  ASSERT_TRUE(page && page->runs.size() == 1u);
+  auto samples = store_->runs().samples(page->runs[0].id);
+  ASSERT_TRUE(samples && samples->size() == 1u);
+  auto got = store_->runs().sample((*samples)[0].id);
+  ASSERT_TRUE(got && got->has_value());
+  const auto& read = (*got)->passes.at(0).counters;
+  ASSERT_EQ(read.size(), spreads.size());
+  for (size_t k = 0; k < spreads.size(); ++k) {
+    SCOPED_TRACE("spread " + std::to_string(k));
+    EXPECT_EQ(read[k].countSpread.dump(), spreads[k].first.dump());
+  }
+}
+
 TEST_F(Ingest, MissingThingsAreEmptyNotErrors) {
   auto run = store_->runs().get(424242);
   ASSERT_TRUE(run);
@@ -379,6 +463,38 @@ TEST_F(Ingest, FailureMidwayLeavesNothing) {
   }
 }
 
+// A pass refused after others went to the server (on PostgreSQL they go in
+// pieces through one open COPY while the rest is read): the copy is
+// abandoned, nothing of the capture stays, the error names the field, and
+// the connection takes the next capture.
+TEST_F(Ingest, PassRefusedAfterOthersWereSentLeavesNothing) {
+  std::vector<json> samples;
+  for (int s = 0; s < 40; ++s) {
+    std::vector<json> passes;
+    for (int p = 0; p < 4; ++p) {
+      passes.push_back(makePass("pass" + std::to_string(p), 1.0 + p, 100,
+                                {makeCounter("color", "write", 10.0 + s, 40.0), makeCounter("depth", "read", 5, 20)}));
+    }
+    samples.push_back(makeSample(s, 2.0, passes));
+  }
+  Capture c;
+  c.result = makeCapture({makeRun("forward", "atrium", 64, 36, samples)});
+  // The 160th pass of 160: read after the first 128 were sent.
+  c.result["runs"][0]["samples"][39]["passes"][3]["resources"][1]["access"] = "both";
+  int64_t jobId = newJob();
+  auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[0].samples[39].passes[3].resources[1].access: must be"), std::string::npos)
+      << stored.error();
+  for (const char* table : {"runs", "samples", "passes", "counters", "run_resources"}) {
+    EXPECT_EQ(scalar(*store_, std::string("SELECT COUNT(*) FROM ") + table), 0) << table;
+  }
+  c.result["runs"][0]["samples"][39]["passes"][3]["resources"][1]["access"] = "read";
+  ASSERT_EQ(ingest(jobId, c), 1);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM passes"), 160);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM counters"), 320);
+}
+
 TEST_F(Ingest, FailedReingestKeepsThePreviousResult) {
   int64_t jobId = newJob();
   ingest(jobId, realisticCapture());
@@ -425,6 +541,9 @@ TEST_F(Ingest, BadInputNamesTheField) {
        "runs[0].samples[1].screenshot: not a PNG"},
       {"camera", [](Capture& c) { c.result["runs"][0]["samples"][0].erase("camera"); },
        "runs[0].samples[0].camera"},
+      {"count_spread a number",
+       [](Capture& c) { c.result["runs"][1]["samples"][0]["passes"][0]["resources"][1]["count_spread"] = 20; },
+       "runs[1].samples[0].passes[0].resources[1].count_spread: must be an object"},
   };
   int64_t jobId = newJob();
   for (const auto& test : cases) {
