@@ -23,9 +23,14 @@ void printDatabase(const DatabaseReport& db, bool postgres) {
   std::printf("database: %s\n", db.path.c_str());
   if (db.filled) {
     std::printf(
-        "  filled: %lld samples in %d captures in %.1f s (%.1f s in Store::ingestCapture, %.0f samples/s)\n",
-        static_cast<long long>(db.fill.samples), db.fill.captures, db.fill.seconds, db.fill.ingestSeconds,
-        static_cast<double>(db.fill.samples) / db.fill.seconds);
+        "  filled: %lld samples in %d captures in %.1f s (%.0f samples/s with making the captures); "
+        "%.1f s in Store::ingestCapture: %.0f samples/s ingested\n",
+        static_cast<long long>(db.fill.samples), db.fill.captures, db.fill.seconds,
+        static_cast<double>(db.fill.samples) / db.fill.seconds, db.fill.ingestSeconds,
+        db.fill.ingestSeconds > 0 ? static_cast<double>(db.fill.samples) / db.fill.ingestSeconds : 0.0);
+    std::printf("  ingest CPU: %.1f s in this process", db.fill.ingestClientCpuSeconds);
+    if (db.fill.ingestServerCpuSeconds >= 0) std::printf(", %.1f s in its PostgreSQL backend", db.fill.ingestServerCpuSeconds);
+    std::printf("\n");
   } else {
     std::printf("  reused as found (--reuse)\n");
   }
@@ -214,7 +219,10 @@ void printJson(const Report& report) {
     database["fill"] = {{"samples", db.fill.samples},
                         {"captures", db.fill.captures},
                         {"seconds", db.fill.seconds},
-                        {"ingest_seconds", db.fill.ingestSeconds}};
+                        {"ingest_seconds", db.fill.ingestSeconds},
+                        {"ingest_client_cpu_seconds", db.fill.ingestClientCpuSeconds},
+                        {"ingest_server_cpu_seconds", db.fill.ingestServerCpuSeconds < 0 ? nlohmann::json(nullptr)
+                                                                                           : nlohmann::json(db.fill.ingestServerCpuSeconds)}};
   }
   json cold = json::array();
   for (const auto& [route, ms] : report.cold) cold.push_back({{"route", route}, {"ms", ms}});

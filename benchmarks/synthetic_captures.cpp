@@ -4,6 +4,9 @@
 #include <zlib.h>
 
 #include <chrono>
+#include <ctime>
+#include <fstream>
+#include <sstream>
 #include <cstdio>
 #include <filesystem>
 #include <iterator>
@@ -253,12 +256,53 @@ SyntheticCapture makeCapture(const CaptureTemplate& source, const std::vector<st
   return capture;
 }
 
+namespace {
+
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
+}
+
+// The writer's PostgreSQL backend, where it runs on this machine: its pid, else 0.
+int64_t backendPid(store::Store& writer) {
+  if (writer.connection().engine() != store::Engine::Postgres) return 0;
+  try {
+    store::Statement pid(writer.connection(), "SELECT pg_backend_pid()");
+    int64_t found = pid.step() ? pid.getInt(0) : 0;
+    pid.run();
+    return std::filesystem::exists("/proc/" + std::to_string(found) + "/stat") ? found : 0;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+// A process's user and system CPU seconds from /proc/PID/stat; -1 when unreadable.
+double processCpuSeconds(int64_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!pid || !std::getline(in, line)) return -1;
+  size_t close = line.rfind(')');  // the command may hold spaces
+  if (close == std::string::npos) return -1;
+  std::istringstream fields(line.substr(close + 2));
+  std::string field;
+  double ticks = 0;
+  for (int k = 3; k <= 15 && fields >> field; ++k) {
+    if (k == 14 || k == 15) ticks += std::stod(field);  // utime, stime
+  }
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+}  // namespace
+
 Result<FillStats> fillDatabase(store::Store& writer, const CaptureTemplate& source,
                                const std::vector<std::string>& renderers, int64_t samples,
                                const std::function<void(int64_t)>& progress) {
   using Clock = std::chrono::steady_clock;
   auto seconds = [](Clock::duration d) { return std::chrono::duration<double>(d).count(); };
   FillStats stats;
+  const int64_t backend = backendPid(writer);
+  if (backend) stats.ingestServerCpuSeconds = 0;
   auto start = Clock::now();
   while (stats.samples < samples) {
     SyntheticCapture capture = makeCapture(source, renderers, stats.captures, samples - stats.samples);
@@ -270,8 +314,11 @@ Result<FillStats> fillDatabase(store::Store& writer, const CaptureTemplate& sour
     if (!*claimed || (*claimed)->id != created->job.id)
       return makeError("the database has other queued jobs; fill a fresh one");
     auto ingestStart = Clock::now();
+    double clientCpu = threadCpuSeconds(), serverCpu = processCpuSeconds(backend);
     auto ingested = writer.runs().ingestCapture(created->job.id, capture.result, capture.screenshots);
     stats.ingestSeconds += seconds(Clock::now() - ingestStart);
+    stats.ingestClientCpuSeconds += threadCpuSeconds() - clientCpu;
+    if (backend && serverCpu >= 0) stats.ingestServerCpuSeconds += processCpuSeconds(backend) - serverCpu;
     if (!ingested)
       return makeError("ingesting capture " + std::to_string(stats.captures) + ": " + ingested.error());
     auto finished = writer.jobs().finish(created->job.id, store::JobStatus::Done);

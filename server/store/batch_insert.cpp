@@ -187,18 +187,29 @@ std::vector<std::vector<int64_t>> reserveIds(Connection* db,
   std::vector<std::vector<int64_t>> ids(tables.size());
   if (db->engine() == Engine::Postgres) {
     // One statement for every table. nextval is outside transactions:
-    // concurrent ingests never get the same id.
+    // concurrent ingests never get the same id. A sequence that increments
+    // by more than 1 (migration 0014) hands out blocks: the value nextval
+    // returns and the increment - 1 ids after it are this caller's alone.
     std::string sql;
     for (size_t t = 0; t < tables.size(); ++t) {
-      std::string k = std::to_string(t), name = std::to_string(2 * t + 1), count = std::to_string(2 * t + 2);
-      sql += (t ? " UNION ALL " : "") + std::string("SELECT ") + k + " AS k, nextval(s) FROM (SELECT pg_get_serial_sequence(?" +
-             name + ", 'id')::regclass AS s) q CROSS JOIN generate_series(1, ?" + count + "::bigint)";
+      std::string name = std::to_string(2 * t + 1), count = std::to_string(2 * t + 2);
+      sql += (t ? " UNION ALL " : "") + std::string("SELECT ") + std::to_string(t) +
+             " AS k, nextval(q.seqrelid), q.seqincrement FROM pg_sequence q CROSS JOIN generate_series(1, (?" +
+             count + "::bigint + q.seqincrement - 1) / q.seqincrement) WHERE q.seqrelid = pg_get_serial_sequence(?" +
+             name + ", 'id')::regclass";
     }
     Statement next(db, sql);
     for (size_t t = 0; t < tables.size(); ++t) {
-      next.bind(static_cast<int>(2 * t + 1), tables[t].first).bind(static_cast<int>(2 * t + 2), static_cast<int64_t>(tables[t].second));
+      next.bind(static_cast<int>(2 * t + 1), tables[t].first)
+          .bind(static_cast<int>(2 * t + 2), static_cast<int64_t>(tables[t].second));
     }
-    while (next.step()) ids.at(static_cast<size_t>(next.getInt(0))).push_back(next.getInt(1));
+    while (next.step()) {
+      auto& list = ids.at(static_cast<size_t>(next.getInt(0)));
+      size_t wanted = tables[static_cast<size_t>(next.getInt(0))].second;
+      for (int64_t id = next.getInt(1), end = id + next.getInt(2); id < end && list.size() < wanted; ++id) {
+        list.push_back(id);
+      }
+    }
     for (size_t t = 0; t < tables.size(); ++t) {
       std::sort(ids[t].begin(), ids[t].end());
       if (ids[t].size() != tables[t].second)
