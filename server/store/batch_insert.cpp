@@ -1,6 +1,8 @@
 #include "store/batch_insert.hpp"
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <stdexcept>
 
 namespace tally::store::detail {
@@ -162,7 +164,14 @@ ArrayLiteral& ArrayLiteral::add(std::string_view text) {
 
 ArrayLiteral& ArrayLiteral::add(double value) {
   separate();
-  text_ += postgresDoubleText(value);
+  if (!std::isfinite(value)) {
+    text_ += postgresDoubleText(value);
+    return *this;
+  }
+  char text[32];
+  auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // as postgresDoubleText, without its string
+  (void)ec;
+  text_.append(text, end);
   return *this;
 }
 

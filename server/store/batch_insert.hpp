@@ -48,6 +48,7 @@ class BatchInsert {
   BatchInsert& add(double value) { return put(value); }
   BatchInsert& add(std::string value) { return put(std::move(value)); }
   BatchInsert& add(const char* value) { return put(std::string(value)); }
+  BatchInsert& add(std::string_view value) { return put(std::string(value)); }
   // Borrowed: the bytes must outlive flush().
   BatchInsert& add(std::span<const uint8_t> blob) { return put(blob); }
   BatchInsert& add(const nlohmann::json& value);  // compact JSON text, as Statement::bind

@@ -11,7 +11,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <set>
+#include <stdexcept>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -148,20 +151,6 @@ struct CaptureRows {
 // The member, not copied (null when absent), for BatchInsert::add(const json*).
 const json* optJson(const json& object, const char* key) { return find(object, key); }
 
-// A counter's numbers, checked.
-struct CounterNumbers {
-  double count = 0, bytes = 0;
-  std::optional<double> footprint;  // absent (or null) where the line's footprint was not measured
-};
-
-CounterNumbers counterNumbers(const json& counter, const std::string& at) {
-  if (!counter.is_object()) bad(at, "must be an object");
-  CounterNumbers n{kMembers.number(counter, "count", at), kMembers.number(counter, "bytes", at),
-                   kMembers.optNumber(counter, "footprint_bytes", at)};
-  if (n.footprint && *n.footprint < 0) bad(at + ".footprint_bytes", "must not be negative");
-  return n;
-}
-
 // A sample's sums over its passes' lines, written on its row: all the
 // lines' bytes; the footprint of the lines that have one and those lines'
 // requested bytes (null when none has). Read with the sample, before its
@@ -179,7 +168,7 @@ CounterSums counterSums(const json& sample, const std::string& path) {
     if (!passes[p].is_object()) bad(at, "must be an object");
     const json& counters = kMembers.array(passes[p], "resources", at);
     for (size_t c = 0; c < counters.size(); ++c) {
-      CounterNumbers n = counterNumbers(counters[c], at + ".resources[" + std::to_string(c) + "]");
+      CounterFields n = counterFields(counters[c], at, c);
       sums.bytes += n.bytes;
       if (n.footprint) {
         sums.footprint = sums.footprint.value_or(0) + *n.footprint;
@@ -196,26 +185,14 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
   const json& counters = kMembers.array(pass, "resources", path);
   ArrayLiteral resources, kinds, formats, accesses, counts, bytesArray, spreads, sources, footprints;
   for (size_t c = 0; c < counters.size(); ++c) {
-    std::string at = path + ".resources[" + std::to_string(c) + "]";
-    const json& counter = counters[c];
-    auto [count, bytes, footprint] = counterNumbers(counter, at);
-    std::string access = kMembers.text(counter, "access", at);
-    if (access != "read" && access != "write")
-      bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
-    std::string resource = kMembers.text(counter, "name", at);
-    auto kind = kMembers.optText(counter, "kind", at);
-    auto format = kMembers.optText(counter, "format", at);
-    // Absent (or null) where not measured; n alone where every frame
-    // counted the same (store/count_spread.hpp).
-    const json* spread = optJson(counter, "count_spread");
-    if (spread && !spread->is_object() && !spread->is_null())
-      bad(at + ".count_spread", "must be an object (the count over the frames), got " + spread->dump());
+    auto [resource, access, source, kind, format, count, bytes, footprint, spread] =
+        counterFields(counters[c], path, c);
+    // n alone where every frame counted the same (store/count_spread.hpp).
     std::optional<json> frames;
     if (auto n = spread ? constantSpreadFrames(*spread, count) : std::nullopt) {
       frames = *n;
       spread = &*frames;
     }
-    std::string source = kMembers.text(counter, "source", at);
     if (in.counterArrays) {
       resources.add(resource);
       kinds.add(kind);
@@ -230,14 +207,14 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
       in.counters.row()
           .add(passId)
           .add(static_cast<int64_t>(c))
-          .add(std::move(resource))
+          .add(resource)
           .add(kind)
           .add(format)
-          .add(std::move(access))
+          .add(access)
           .add(count)
           .add(bytes)
           .add(spread)
-          .add(std::move(source))
+          .add(source)
           .add(footprint);
     }
   }

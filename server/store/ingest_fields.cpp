@@ -1,6 +1,7 @@
 // The ingest's readers of single fields of a result (ingest_input.hpp).
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "store/ingest_input.hpp"
 
@@ -61,6 +62,66 @@ json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
   if (!extras.is_object()) extras = json::object();
   extras["roofline"] = {{"ceilings", ceilings.is_object() ? ceilings : json(nullptr)}, {"passes", std::move(byPass)}};
   return extras;
+}
+
+// The fields of a well-formed counter, read without building its path
+// (counters are most of a result): nothing when any field is not as the
+// checked read below takes it, which then names that field.
+namespace {
+
+std::optional<CounterFields> plainCounter(const json& counter) {
+  if (!counter.is_object()) return std::nullopt;
+  auto text = [&](const char* key, std::string_view& out) {
+    const json* v = find(counter, key);
+    if (!v || !v->is_string()) return false;
+    out = v->get_ref<const std::string&>();
+    return true;
+  };
+  auto optText = [&](const char* key, std::optional<std::string_view>& out) {
+    const json* v = find(counter, key);
+    if (v && !v->is_string()) return false;
+    if (v) out = v->get_ref<const std::string&>();
+    return true;
+  };
+  auto number = [](const json* v, double& out) {
+    if (!v || !v->is_number()) return false;
+    out = v->get<double>();
+    return std::isfinite(out);
+  };
+  CounterFields f;
+  if (const json* footprint = find(counter, "footprint_bytes")) {
+    double bytes = 0;
+    if (!number(footprint, bytes) || bytes < 0) return std::nullopt;
+    f.footprint = bytes;
+  }
+  f.spread = find(counter, "count_spread");
+  bool plain = (!f.spread || f.spread->is_object()) && number(find(counter, "count"), f.count) &&
+               number(find(counter, "bytes"), f.bytes) && text("access", f.access) &&
+               (f.access == "read" || f.access == "write") && text("name", f.name) && optText("kind", f.kind) &&
+               optText("format", f.format) && text("source", f.source);
+  return plain ? std::optional(f) : std::nullopt;
+}
+
+}  // namespace
+
+CounterFields counterFields(const json& counter, const std::string& passPath, size_t c) {
+  if (auto plain = plainCounter(counter)) return *plain;
+  std::string at = passPath + ".resources[" + std::to_string(c) + "]";
+  if (!counter.is_object()) bad(at, "must be an object");
+  kMembers.number(counter, "count", at);
+  kMembers.number(counter, "bytes", at);
+  if (auto footprint = kMembers.optNumber(counter, "footprint_bytes", at); footprint && *footprint < 0)
+    bad(at + ".footprint_bytes", "must not be negative");
+  std::string access = kMembers.text(counter, "access", at);
+  if (access != "read" && access != "write")
+    bad(at + ".access", "must be \"read\" or \"write\", got \"" + access + "\"");
+  kMembers.text(counter, "name", at);
+  kMembers.optText(counter, "kind", at);
+  kMembers.optText(counter, "format", at);
+  if (const json* spread = find(counter, "count_spread"); spread && !spread->is_object())
+    bad(at + ".count_spread", "must be an object (the count over the frames), got " + spread->dump());
+  kMembers.text(counter, "source", at);
+  throw std::logic_error(at + ": refused by plainCounter, taken by every check");
 }
 
 }  // namespace tally::store::detail

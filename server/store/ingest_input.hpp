@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -39,6 +40,19 @@ const nlohmann::json* optFrameTimes(const nlohmann::json& object, const char* ke
 // The sample's extras, with "roofline" added where its passes carry one
 // (docs/result-schema.md, "extras.roofline").
 nlohmann::json extrasWithRoofline(nlohmann::json extras, const nlohmann::json& sample, const nlohmann::json& ceilings);
+
+// A counter's fields, read in place (views into the result).
+struct CounterFields {
+  std::string_view name, access, source;
+  std::optional<std::string_view> kind, format;
+  double count = 0, bytes = 0;
+  std::optional<double> footprint;  // absent (or null) where the line's footprint was not measured
+  const nlohmann::json* spread = nullptr;     // absent (or null) where not measured; else an object
+};
+
+// The counter at `index` of a pass's "resources" (the pass at `passPath`);
+// IngestError naming the first field that is off.
+CounterFields counterFields(const nlohmann::json& counter, const std::string& passPath, size_t index);
 
 // A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
 // sweeps list and the dashboard's charts rely on, whatever the sweep.
