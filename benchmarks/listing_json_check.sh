@@ -5,6 +5,7 @@
 #
 #   benchmarks/listing_json_check.sh OLD_TALLYD NEW_TALLYD OLD_BENCH NEW_BENCH
 #
+# The listing's pages are also compared as the bytes sent (old and migrated database: the same rows).
 # (tallyd and tally_bench_read_latency of each build; works in /tmp/rs-json; needs sqlite3, curl, python3)
 set -e
 OLD_TALLYD=$1; NEW_TALLYD=$2; OLD_BENCH=$3; NEW_BENCH=$4
@@ -23,9 +24,11 @@ dump() {  # tallyd db port out
 import json, sys, urllib.request
 port, out = sys.argv[1], sys.argv[2]
 get = lambda p: json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}{p}"))
-pages, cursor = [], None
+pages, cursor, raw = [], None, open(out + ".raw", "wb")
 while True:
-    page = get("/api/runs?limit=50" + (f"&cursor={cursor}" if cursor else ""))
+    body = urllib.request.urlopen(f"http://127.0.0.1:{port}/api/runs?limit=50" + (f"&cursor={cursor}" if cursor else "")).read()
+    raw.write(body + b"\n")  # the listing's bytes as sent
+    page = json.loads(body)
     pages.append(page); cursor = page["next_cursor"]
     if not cursor: break
 runs = [r for p in pages for r in p["runs"]]
@@ -46,4 +49,5 @@ dump $NEW_TALLYD mig.db 18472 after-migrated.json
 dump $NEW_TALLYD new.db 18473 after-ingested.json
 echo "schema: old.db $(sqlite3 old.db 'PRAGMA user_version'), mig.db $(sqlite3 mig.db 'PRAGMA user_version'), frame time stored in mig.db: $(sqlite3 mig.db 'SELECT COUNT(frame_time_source) FROM runs'), in new.db: $(sqlite3 new.db 'SELECT COUNT(frame_time_source) FROM runs') of $(sqlite3 new.db 'SELECT COUNT(*) FROM runs')"
 cmp before.json after-migrated.json && echo "before == after (migrated): identical, $(wc -c < before.json) bytes"
+cmp before.json.raw after-migrated.json.raw && echo "the listing's pages as sent, before == after (migrated): byte for byte, $(wc -c < before.json.raw) bytes"
 cmp before.json after-ingested.json && echo "before == after (ingested by the new binary): identical"

@@ -62,13 +62,13 @@ void setUncompressed(httplib::Response& res, std::string body, const std::string
                            });
 }
 
-void write(httplib::Response& res, const Response& r, bool api) {
+void write(httplib::Response& res, Response r, bool api) {
   res.status = r.status;
   for (const auto& [k, v] : r.headers) res.set_header(k, v);
   if (api) res.set_header("Cache-Control", "no-store");
   if (r.status == 204 || r.status == 304) return;
   if (r.isRaw()) {
-    setUncompressed(res, r.bytes, r.contentType);
+    setUncompressed(res, std::move(r.bytes), r.contentType);
   } else {
     setUncompressed(res, dumpJson(r.json), "application/json");
   }

@@ -52,9 +52,4 @@ json toJson(const RunFrameTime& t) {
           {"source", t.source}};
 }
 
-void addFrameMedian(const RunFrameTime& t, json& row) {
-  row["frame_ms_median"] = t.median ? json(*t.median) : json(nullptr);
-  row["frame_ms_median_source"] = t.source;
-}
-
 }  // namespace tally::reports

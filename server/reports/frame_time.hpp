@@ -48,8 +48,4 @@ Result<std::map<int64_t, RunFrameTime>> frameTimesOf(store::Store& store, std::s
 // frame_ms.
 nlohmann::json toJson(const RunFrameTime& t);
 
-// Adds frame_ms_median (a number or null) and frame_ms_median_source to a
-// run's JSON row (service::runRowJson).
-void addFrameMedian(const RunFrameTime& t, nlohmann::json& row);
-
 }  // namespace tally::reports

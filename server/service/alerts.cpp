@@ -132,8 +132,12 @@ Response getAlert(ServiceContext& ctx, const Request& req) {
   if (!a) missing("no alert " + std::to_string(id));
   json out = alertJson(*a);
   auto run = check(store.runs().get(a->runId));
-  out["run_row"] = run ? runRowJson(run->row) : json(nullptr);
-  if (run) reports::addFrameMedian(check(reports::frameTimeOf(store, run->row)), out["run_row"]);
+  if (run) {
+    auto frameTime = check(reports::frameTimeOf(store, run->row));
+    out["run_row"] = runRowJson(run->row, &frameTime);
+  } else {
+    out["run_row"] = nullptr;
+  }
   auto baseline = check(store.alerts().getBaseline(a->baselineId));
   out["baseline_row"] = baseline ? baselineJson(*baseline) : json(nullptr);
   return Response::ok(out);

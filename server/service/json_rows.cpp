@@ -7,9 +7,13 @@ using nlohmann::json;
 
 // Reuse: requested bytes over the footprint of the same lines (how many
 // times each distinct byte was asked for); null without a footprint or at 0.
-json reuseJson(std::optional<double> requested, std::optional<double> footprint) {
-  if (!footprint || *footprint <= 0) return nullptr;
+std::optional<double> reuseOf(std::optional<double> requested, std::optional<double> footprint) {
+  if (!footprint || *footprint <= 0) return std::nullopt;
   return requested.value_or(0) / *footprint;
+}
+
+json reuseJson(std::optional<double> requested, std::optional<double> footprint) {
+  return opt(reuseOf(requested, footprint));
 }
 
 json jobJson(const store::Job& j) {
@@ -96,40 +100,142 @@ json waitingReason(const store::Job& job, const std::vector<store::Host>& hosts,
   return "waiting for a " + std::string(requirement ? "matching " : "") + "worker to finish: " + busy;
 }
 
-json runRowJson(const store::RunRow& r) {
-  return {{"id", r.id},
-          {"capture", r.jobId},
-          {"device_id", r.deviceId},
-          {"device", r.deviceName},
-          {"renderer", r.renderer},
-          {"options", r.options},
-          {"variant", r.variant},
-          {"scene", r.scene},
-          {"scene_params", r.sceneParams},
-          {"width", r.width},
-          {"height", r.height},
-          {"counting", r.counting},
-          {"footprint_block_bytes", opt(r.footprintBlockBytes)},
-          {"lights", r.lights},
-          {"render_target_bytes", opt(r.renderTargetBytes)},
-          {"notes", r.notes},
-          {"created_at", r.createdAt},
-          {"tally_version", opt(r.tallyVersion)},
-          {"tally_commit", opt(r.tallyCommit)},
-          {"host", opt(r.host)},
-          {"labels", r.labels},
-          {"sample_count", r.sampleCount},
-          {"mean_frame_ms", opt(r.meanFrameMs)},
-          {"mean_bytes", opt(r.meanBytes)},
-          {"mean_footprint_bytes", opt(r.meanFootprintBytes)},
-          {"mean_reuse", reuseJson(r.meanFootprintRequestedBytes, r.meanFootprintBytes)},
-          {"mean_frame_ms_instrumented", opt(r.meanFrameMsInstrumented)},
-          {"mean_overhead_ratio", opt(r.meanOverheadRatio)},
-          {"image_error", r.imageCompared == 0 ? json(nullptr)
-                                                : json{{"samples", r.imageCompared},
-                                                       {"identical", r.imageIdentical},
-                                                       {"mean_psnr", opt(r.meanPsnr)},
-                                                       {"min_psnr", opt(r.minPsnr)}}}};
+namespace {
+
+json jsonOf(const json& v) { return v; }
+template <class T>
+json jsonOf(const T& v) {
+  return json(v);
+}
+template <class T>
+json jsonOf(const std::optional<T>& v) {
+  return opt(v);
+}
+
+// A run row's fields into a json object (runRowJson)...
+struct ObjectFields {
+  json& j;
+  template <class T>
+  void field(const char* key, const T& v) {
+    j[key] = jsonOf(v);
+  }
+  template <class Fill>
+  void object(const char* key, bool present, Fill fill) {
+    if (!present) {
+      j[key] = nullptr;
+      return;
+    }
+    json o = json::object();
+    ObjectFields inner{o};
+    fill(inner);
+    j[key] = std::move(o);
+  }
+};
+
+// ...or as text (writeRunRow): the same bytes as that object's dump().
+struct TextFields {
+  JsonText& t;
+  template <class T>
+  void field(const char* key, const T& v) {
+    t.key(key);
+    t.value(v);
+  }
+  template <class Fill>
+  void object(const char* key, bool present, Fill fill) {
+    t.key(key);
+    if (!present) {
+      t.null();
+      return;
+    }
+    t.beginObject();
+    TextFields inner{t};
+    fill(inner);
+    t.endObject();
+  }
+};
+
+// The one list of a run row's keys, in the order nlohmann writes them
+// (ascending; JsonText refuses any other). With a frame time, its median
+// and source (frame_ms_median, frame_ms_median_source).
+template <class Fields>
+void runRowFields(const store::RunRow& r, const store::RunFrameTime* frame, Fields& f) {
+  f.field("capture", r.jobId);
+  f.field("counting", r.counting);
+  f.field("created_at", r.createdAt);
+  f.field("device", r.deviceName);
+  f.field("device_id", r.deviceId);
+  f.field("footprint_block_bytes", r.footprintBlockBytes);
+  if (frame) {
+    f.field("frame_ms_median", frame->median);
+    f.field("frame_ms_median_source", frame->source);
+  }
+  f.field("height", r.height);
+  f.field("host", r.host);
+  f.field("id", r.id);
+  f.object("image_error", r.imageCompared != 0, [&](auto& e) {
+    e.field("identical", r.imageIdentical);
+    e.field("mean_psnr", r.meanPsnr);
+    e.field("min_psnr", r.minPsnr);
+    e.field("samples", r.imageCompared);
+  });
+  f.field("labels", r.labels);
+  f.field("lights", r.lights);
+  f.field("mean_bytes", r.meanBytes);
+  f.field("mean_footprint_bytes", r.meanFootprintBytes);
+  f.field("mean_frame_ms", r.meanFrameMs);
+  f.field("mean_frame_ms_instrumented", r.meanFrameMsInstrumented);
+  f.field("mean_overhead_ratio", r.meanOverheadRatio);
+  f.field("mean_reuse", reuseOf(r.meanFootprintRequestedBytes, r.meanFootprintBytes));
+  f.field("notes", r.notes);
+  f.field("options", r.options);
+  f.field("render_target_bytes", r.renderTargetBytes);
+  f.field("renderer", r.renderer);
+  f.field("sample_count", r.sampleCount);
+  f.field("scene", r.scene);
+  f.field("scene_params", r.sceneParams);
+  f.field("tally_commit", r.tallyCommit);
+  f.field("tally_version", r.tallyVersion);
+  f.field("variant", r.variant);
+  f.field("width", r.width);
+}
+
+}  // namespace
+
+json runRowJson(const store::RunRow& r, const store::RunFrameTime* frame) {
+  json j = json::object();
+  ObjectFields fields{j};
+  runRowFields(r, frame, fields);
+  return j;
+}
+
+void writeRunRow(JsonText& out, const store::RunRow& r, const store::RunFrameTime* frame) {
+  out.beginObject();
+  TextFields fields{out};
+  runRowFields(r, frame, fields);
+  out.endObject();
+}
+
+std::string runPageText(const store::RunPage& page, const std::map<int64_t, store::RunFrameTime>& frameTimes) {
+  std::string body;
+  body.reserve(1024 * (page.runs.size() + 1));  // about 850 bytes a run
+  JsonText out(body);
+  out.beginObject();
+  out.key("next_cursor");
+  if (page.nextCursor.empty()) {
+    out.null();
+  } else {
+    out.value(page.nextCursor);
+  }
+  out.key("runs");
+  out.beginArray();
+  const store::RunFrameTime none;
+  for (const auto& r : page.runs) {
+    auto it = frameTimes.find(r.id);
+    writeRunRow(out, r, it == frameTimes.end() ? &none : &it->second);
+  }
+  out.endArray();
+  out.endObject();
+  return body;
 }
 
 json deviceJson(const store::Device& d) {

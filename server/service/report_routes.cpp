@@ -72,7 +72,7 @@ Response compare(ServiceContext& ctx, const Request& req) {
   auto frameTimes = check(reports::frameTimesOf(store, comparison.runs));
   for (size_t i = 0; i < ids.size(); ++i) {
     const reports::RunFrameTime& t = frameTimes[ids[i]];
-    reports::addFrameMedian(t, out["runs"][i]);
+    out["runs"][i] = runRowJson(comparison.runs[i], &t);
     if (i == 0) first = t.median;
     bool against = first && t.median && *first != 0;
     medians.push_back({{"value", t.median ? json(*t.median) : json(nullptr)},

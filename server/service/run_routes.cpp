@@ -25,12 +25,8 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
   // The frame times stored at ingest (0013); those of runs stored before, in
   // one statement: the listing is one statement, or two with such runs.
   auto frameTimes = check(reports::frameTimesOf(store, page.runs));
-  json runs = json::array();
-  for (const auto& r : page.runs) {
-    runs.push_back(runRowJson(r));
-    reports::addFrameMedian(frameTimes[r.id], runs.back());
-  }
-  return Response::ok({{"runs", runs}, {"next_cursor", page.nextCursor.empty() ? json(nullptr) : json(page.nextCursor)}});
+  // Written as text, without a json value per run (json_rows.hpp).
+  return Response::raw(runPageText(page, frameTimes), "application/json");
 }
 
 Response getRun(ServiceContext& ctx, const Request& req) {
@@ -38,8 +34,8 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   int64_t id = pathId(req);
   auto run = check(reader(ctx).runs().get(id));
   if (!run) missing("no run " + std::to_string(id));
-  json j = runRowJson(run->row);
-  reports::addFrameMedian(check(reports::frameTimeOf(reader(ctx), run->row)), j);
+  auto frameTime = check(reports::frameTimeOf(reader(ctx), run->row));
+  json j = runRowJson(run->row, &frameTime);
   j["device_info"] = deviceJson(run->device);
   json resources = json::array();
   for (const auto& r : run->resources) {

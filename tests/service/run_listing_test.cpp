@@ -41,6 +41,11 @@ class RunListing : public ::testing::Test {
     req.query = std::move(query);
     auto response = router_.dispatch(req);
     EXPECT_EQ(response.status, 200) << path << ": " << response.json.dump();
+    // The listing answers its JSON as text (application/json), the others a json value.
+    if (response.isRaw()) {
+      EXPECT_EQ(response.contentType, "application/json") << path;
+      return json::parse(response.bytes);
+    }
     return response.json;
   }
   // Every read that shows a run row with its frame time.
