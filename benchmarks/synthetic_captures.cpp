@@ -109,6 +109,8 @@ void scale(json& value, double factor) {
     for (auto item : value.items()) {
       if (item.key() != "n") scale(item.value(), factor);
     }
+  } else if (value.is_array()) {
+    for (json& item : value) scale(item, factor);
   }
 }
 
@@ -118,18 +120,37 @@ void scaleFields(json& object, std::initializer_list<const char*> keys, double f
   }
 }
 
+// Per-frame times (frame_ms_frames, gpu_ms_frames) for a template that
+// predates them, as a capture stores them now: one a frame, spread over the
+// time's own [min, max] around its median, in a fixed order per frame count.
+json perFrameTimes(const json& object, const char* time, const char* spread) {
+  double ms = object.value(time, 0.0);
+  const json& s = object.contains(spread) && object[spread].is_object() ? object[spread] : json::object();
+  double low = s.value("min", ms), high = s.value("max", ms);
+  int frames = s.value("n", 20);
+  json out = json::array();
+  for (int f = 0; f < frames; ++f) {
+    double t = frames > 1 ? static_cast<double>((f * 7) % frames) / (frames - 1) : 0.5;  // 0..1, shuffled
+    out.push_back(low + (high - low) * t);
+  }
+  return out;
+}
+
 // A template sample for another camera, resolution and device: times and
-// counts scaled by `factor` (pixels, and a jitter so that no two runs agree).
+// counts scaled by `factor` (pixels, and a jitter so that no two runs agree),
+// with per-frame times where the template has none.
 json makeSample(const json& source, int camera, double factor, const std::string& screenshot) {
   json sample = source;
   sample["camera"]["index"] = camera;
   sample["screenshot"] = screenshot;
-  scaleFields(sample, {"frame_ms", "frame_ms_spread", "frame_ms_instrumented"}, factor);
+  scaleFields(sample, {"frame_ms", "frame_ms_spread", "frame_ms_instrumented", "frame_ms_frames"}, factor);
+  if (!sample.contains("frame_ms_frames")) sample["frame_ms_frames"] = perFrameTimes(sample, "frame_ms", "frame_ms_spread");
   for (json& pass : sample["passes"]) {
     scaleFields(pass,
                 {"gpu_ms", "gpu_ms_spread", "gpu_ms_instrumented", "fragment_invocations",
-                 "fragment_invocations_statistic"},
+                 "fragment_invocations_statistic", "gpu_ms_frames"},
                 factor);
+    if (!pass.contains("gpu_ms_frames")) pass["gpu_ms_frames"] = perFrameTimes(pass, "gpu_ms", "gpu_ms_spread");
     for (json& counter : pass["resources"]) scaleFields(counter, {"count", "bytes", "count_spread"}, factor);
   }
   return sample;

@@ -33,11 +33,11 @@ const json* optFrameTimes(const json& object, const char* key, const std::string
   if (!value->is_array()) bad(at, "must be an array of milliseconds, got " + value->dump());
   for (size_t i = 0; i < value->size(); ++i) {
     const json& ms = (*value)[i];
-    std::string entry = at + "[" + std::to_string(i) + "]";
+    if (ms.is_number() && std::isfinite(ms.get<double>()) && ms.get<double>() >= 0) continue;
+    std::string entry = at + "[" + std::to_string(i) + "]";  // built only to name what is off
     if (!ms.is_number()) bad(entry, "must be a number, got " + ms.dump());
-    double x = ms.get<double>();
-    if (!std::isfinite(x)) bad(entry, "must be finite");
-    if (x < 0) bad(entry, "must not be negative, got " + ms.dump());
+    if (!std::isfinite(ms.get<double>())) bad(entry, "must be finite");
+    bad(entry, "must not be negative, got " + ms.dump());
   }
   return value;
 }
