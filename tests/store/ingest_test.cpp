@@ -11,6 +11,27 @@ namespace {
 
 class Ingest : public StoreTest {
  protected:
+  // The one sample of the job's one run, read whole; nothing (and a
+  // failure) when the job has more or less.
+  std::optional<Sample> onlySample(int64_t jobId) {
+    auto page = store_->runs().list({.jobId = jobId}, {});
+    if (!page || page->runs.size() != 1u) {
+      ADD_FAILURE() << "the job has not exactly one run";
+      return std::nullopt;
+    }
+    auto samples = store_->runs().samples(page->runs[0].id);
+    if (!samples || samples->size() != 1u) {
+      ADD_FAILURE() << "the run has not exactly one sample";
+      return std::nullopt;
+    }
+    auto got = store_->runs().sample((*samples)[0].id);
+    if (!got || !got->has_value()) {
+      ADD_FAILURE() << "the sample does not read back";
+      return std::nullopt;
+    }
+    return std::move(**got);
+  }
+
   int64_t rowsOfJob(int64_t jobId) {
     std::string job = std::to_string(jobId);
     return scalar(*store_, "SELECT COUNT(*) FROM runs WHERE job_id = " + job) +
@@ -184,13 +205,9 @@ TEST_F(Ingest, CounterTextsAndAbsentValuesRoundTripExactly) {
   c.result = makeCapture({makeRun("forward", "atrium", 64, 36, {makeSample(0, 2.0, {withCounters, without})})});
   int64_t jobId = newJob();
   ASSERT_EQ(ingest(jobId, c), 1);
-  auto page = store_->runs().list({.jobId = jobId}, {});
-  ASSERT_TRUE(page && page->runs.size() == 1u);
-  auto samples = store_->runs().samples(page->runs[0].id);
-  ASSERT_TRUE(samples && samples->size() == 1u);
-  auto got = store_->runs().sample((*samples)[0].id);
-  ASSERT_TRUE(got && got->has_value());
-  const Sample& sample = **got;
+  auto got = onlySample(jobId);
+  ASSERT_TRUE(got);
+  const Sample& sample = *got;
   ASSERT_EQ(sample.passes.size(), 2u);
   EXPECT_TRUE(sample.passes[1].counters.empty());
   ASSERT_EQ(sample.passes[0].counters.size(), counters.size());
@@ -210,7 +227,7 @@ TEST_F(Ingest, CounterTextsAndAbsentValuesRoundTripExactly) {
               in.contains("footprint_bytes") ? std::optional<double>(in["footprint_bytes"]) : std::nullopt);
   }
   // The run's per-pass averages read the same counters.
-  auto passes = store_->runs().passes(page->runs[0].id);
+  auto passes = store_->runs().passes(sample.row.runId);
   ASSERT_TRUE(passes && passes->size() == 2u);
   EXPECT_EQ((*passes)[0].counters.size(), counters.size());
   EXPECT_TRUE((*passes)[1].counters.empty());
@@ -286,13 +303,9 @@ TEST_F(Ingest, ConstantCountSpreadsAreStoredAsTheirFramesAndReadBackWhole) {
   EXPECT_FALSE(stored.step());
 
   // As read: the object that went in, to the byte.
-  auto page = store_->runs().list({.jobId = jobId}, {});
-  ASSERT_TRUE(page && page->runs.size() == 1u);
-  auto samples = store_->runs().samples(page->runs[0].id);
-  ASSERT_TRUE(samples && samples->size() == 1u);
-  auto got = store_->runs().sample((*samples)[0].id);
-  ASSERT_TRUE(got && got->has_value());
-  const auto& read = (*got)->passes.at(0).counters;
+  auto got = onlySample(jobId);
+  ASSERT_TRUE(got);
+  const auto& read = got->passes.at(0).counters;
   ASSERT_EQ(read.size(), spreads.size());
   for (size_t k = 0; k < spreads.size(); ++k) {
     SCOPED_TRACE("spread " + std::to_string(k));
