@@ -337,10 +337,10 @@ Result<std::optional<Run>> Runs::get(int64_t runId) {
       run.counterHeadroom = columns.getJson();
       columns.end();
     }
-    // The text's test first: parsing every sample's extras (a roofline per
-    // pass) where the run has no ceilings was half of this route's store
-    // time at 1M on PostgreSQL. The store writes extras as dump() does, so
-    // a "ceilings" key is always there in the text as the word itself.
+    // The text's test first, so that a sample whose extras cannot hold
+    // ceilings is not parsed as JSON (at 1M on PostgreSQL, warm: 0.045 ms
+    // against 0.070 for a run without ceilings). The store writes extras as
+    // dump() does, so a "ceilings" key is always in the text as the word.
     Statement ceilings(
         db_, db_->engine() == Engine::Sqlite
                  ? "SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = ?1 AND "
