@@ -1,8 +1,6 @@
 #include "store/batch_insert.hpp"
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
 #include <stdexcept>
 
 namespace tally::store::detail {
@@ -132,7 +130,7 @@ void BatchInsert::sendPostgres(bool end) {
     } else if (const auto* i = std::get_if<int64_t>(&cell)) {
       data += std::to_string(*i);
     } else if (const auto* d = std::get_if<double>(&cell)) {
-      data += postgresDoubleText(*d);
+      appendPostgresDouble(data, *d);
     } else if (const auto* text = std::get_if<std::string>(&cell)) {
       appendCopyText(data, *text);
     } else {
@@ -164,14 +162,7 @@ ArrayLiteral& ArrayLiteral::add(std::string_view text) {
 
 ArrayLiteral& ArrayLiteral::add(double value) {
   separate();
-  if (!std::isfinite(value)) {
-    text_ += postgresDoubleText(value);
-    return *this;
-  }
-  char text[32];
-  auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // as postgresDoubleText, without its string
-  (void)ec;
-  text_.append(text, end);
+  appendPostgresDouble(text_, value);
   return *this;
 }
 
@@ -213,9 +204,9 @@ std::vector<std::vector<int64_t>> reserveIds(Connection* db,
           .bind(static_cast<int>(2 * t + 2), static_cast<int64_t>(tables[t].second));
     }
     while (next.step()) {
-      auto& list = ids.at(static_cast<size_t>(next.getInt(0)));
-      size_t wanted = tables[static_cast<size_t>(next.getInt(0))].second;
-      for (int64_t id = next.getInt(1), end = id + next.getInt(2); id < end && list.size() < wanted; ++id) {
+      size_t t = static_cast<size_t>(next.getInt(0));
+      auto& list = ids.at(t);
+      for (int64_t id = next.getInt(1), end = id + next.getInt(2); id < end && list.size() < tables[t].second; ++id) {
         list.push_back(id);
       }
     }

@@ -91,12 +91,6 @@ class Connection {
   virtual void copyData(std::string_view data);
   virtual void copyEnd();
   virtual void copyAbort() noexcept {}
-  // All of a copy's rows at once.
-  void copyIn(std::string_view copySql, std::string_view data) {
-    copyBegin(copySql);
-    copyData(data);
-    copyEnd();
-  }
 };
 
 // Opens a SQLite file (created when create is set), with extended result codes
@@ -107,6 +101,8 @@ std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTime
 // A double as the PostgreSQL connection sends it: the shortest text that
 // reads back as the same value; NaN and the infinities spelled as the server reads them.
 std::string postgresDoubleText(double value);
+// The same text appended to `out`, without a string of its own (COPY's rows).
+void appendPostgresDouble(std::string& out, double value);
 // Sees every statement a PostgreSQL connection of this process executes, as
 // sent (its "$N" text) with its parameters' text (nullopt: NULL or a blob),
 // from the executing thread. For benchmarks that EXPLAIN what the store ran

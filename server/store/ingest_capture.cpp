@@ -170,18 +170,7 @@ CounterSums counterSums(const json& sample, const std::string& path) {
     for (size_t c = 0; c < counters.size(); ++c) {
       // Only the two numbers here; the whole counter is read and checked
       // with its pass (addCounters), in the same transaction.
-      const json* bytes = counters[c].is_object() ? find(counters[c], "bytes") : nullptr;
-      const json* footprint = bytes ? find(counters[c], "footprint_bytes") : nullptr;
-      bool plain = bytes && bytes->is_number() && std::isfinite(bytes->get<double>()) &&
-                   (!footprint || (footprint->is_number() && footprint->get<double>() >= 0 &&
-                                   std::isfinite(footprint->get<double>())));
-      CounterFields n;
-      if (plain) {
-        n.bytes = bytes->get<double>();
-        if (footprint) n.footprint = footprint->get<double>();
-      } else {
-        n = counterFields(counters[c], at, c);  // names what is off
-      }
+      CounterFields n = counterBytes(counters[c], at, c);
       sums.bytes += n.bytes;
       if (n.footprint) {
         sums.footprint = sums.footprint.value_or(0) + *n.footprint;

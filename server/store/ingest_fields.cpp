@@ -64,13 +64,30 @@ json extrasWithRoofline(json extras, const json& sample, const json& ceilings) {
   return extras;
 }
 
+namespace {
+
+bool finiteNumber(const json* v, double& out) {
+  if (!v || !v->is_number()) return false;
+  out = v->get<double>();
+  return std::isfinite(out);
+}
+
+// A counter object's bytes and footprint_bytes into `f`, as plainCounter takes them.
+bool plainBytes(const json& counter, CounterFields& f) {
+  if (const json* footprint = find(counter, "footprint_bytes")) {
+    double bytes = 0;
+    if (!finiteNumber(footprint, bytes) || bytes < 0) return false;
+    f.footprint = bytes;
+  }
+  return finiteNumber(find(counter, "bytes"), f.bytes);
+}
+
 // The fields of a well-formed counter, read without building its path
 // (counters are most of a result): nothing when any field is not as the
 // checked read below takes it, which then names that field.
-namespace {
-
 std::optional<CounterFields> plainCounter(const json& counter) {
-  if (!counter.is_object()) return std::nullopt;
+  CounterFields f;
+  if (!counter.is_object() || !plainBytes(counter, f)) return std::nullopt;
   auto text = [&](const char* key, std::string_view& out) {
     const json* v = find(counter, key);
     if (!v || !v->is_string()) return false;
@@ -83,20 +100,9 @@ std::optional<CounterFields> plainCounter(const json& counter) {
     if (v) out = v->get_ref<const std::string&>();
     return true;
   };
-  auto number = [](const json* v, double& out) {
-    if (!v || !v->is_number()) return false;
-    out = v->get<double>();
-    return std::isfinite(out);
-  };
-  CounterFields f;
-  if (const json* footprint = find(counter, "footprint_bytes")) {
-    double bytes = 0;
-    if (!number(footprint, bytes) || bytes < 0) return std::nullopt;
-    f.footprint = bytes;
-  }
   f.spread = find(counter, "count_spread");
-  bool plain = (!f.spread || f.spread->is_object()) && number(find(counter, "count"), f.count) &&
-               number(find(counter, "bytes"), f.bytes) && text("access", f.access) &&
+  bool plain = (!f.spread || f.spread->is_object()) && finiteNumber(find(counter, "count"), f.count) &&
+               text("access", f.access) &&
                (f.access == "read" || f.access == "write") && text("name", f.name) && optText("kind", f.kind) &&
                optText("format", f.format) && text("source", f.source);
   return plain ? std::optional(f) : std::nullopt;
@@ -122,6 +128,12 @@ CounterFields counterFields(const json& counter, const std::string& passPath, si
     bad(at + ".count_spread", "must be an object (the count over the frames), got " + spread->dump());
   kMembers.text(counter, "source", at);
   throw std::logic_error(at + ": refused by plainCounter, taken by every check");
+}
+
+CounterFields counterBytes(const json& counter, const std::string& passPath, size_t c) {
+  CounterFields f;
+  if (counter.is_object() && plainBytes(counter, f)) return f;
+  return counterFields(counter, passPath, c);
 }
 
 }  // namespace tally::store::detail

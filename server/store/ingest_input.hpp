@@ -53,6 +53,9 @@ struct CounterFields {
 // The counter at `index` of a pass's "resources" (the pass at `passPath`);
 // IngestError naming the first field that is off.
 CounterFields counterFields(const nlohmann::json& counter, const std::string& passPath, size_t index);
+// Only its bytes and footprint (the rest left empty), read and checked as
+// counterFields reads them; errors as counterFields names them.
+CounterFields counterBytes(const nlohmann::json& counter, const std::string& passPath, size_t index);
 
 // A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
 // sweeps list and the dashboard's charts rely on, whatever the sweep.

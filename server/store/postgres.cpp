@@ -321,13 +321,23 @@ void observePostgresStatements(StatementObserver observer) {
   gObserved = static_cast<bool>(gObserver);
 }
 
+void appendPostgresDouble(std::string& out, double value) {
+  if (std::isnan(value)) {
+    out += "NaN";
+  } else if (std::isinf(value)) {
+    out += value > 0 ? "Infinity" : "-Infinity";
+  } else {
+    char text[32];
+    auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
+    (void)ec;
+    out.append(text, end);
+  }
+}
+
 std::string postgresDoubleText(double value) {
-  if (std::isnan(value)) return "NaN";
-  if (std::isinf(value)) return value > 0 ? "Infinity" : "-Infinity";
-  char text[32];
-  auto [end, ec] = std::to_chars(text, text + sizeof text, value);  // shortest exact form
-  (void)ec;
-  return std::string(text, end);
+  std::string text;
+  appendPostgresDouble(text, value);
+  return text;
 }
 
 std::unique_ptr<Connection> openPostgres(const std::string& url, int connectTimeoutSeconds) {
