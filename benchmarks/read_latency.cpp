@@ -41,6 +41,7 @@ struct Options {
   bool reuse = false;
   bool json = false;
   std::string templatePath = TALLY_BENCH_TEMPLATE;
+  std::string route;  // only the routes whose name holds this text; empty: all
 };
 
 // ---- workloads ---------------------------------------------------------------
@@ -369,6 +370,13 @@ int run(const Options& options) {
   loadIntoPageCache(path);
 
   auto benches = routeBenches(pools);
+  // A route named exactly is that one alone ("GET /api/runs/{id}" is also in
+  // its samples' route's name); otherwise every route whose name holds the text.
+  const bool exact = std::ranges::any_of(benches, [&](const RouteBench& b) { return b.route == options.route; });
+  std::erase_if(benches, [&](const RouteBench& b) {
+    return exact ? b.route != options.route : b.route.find(options.route) == std::string::npos;
+  });
+  if (benches.empty()) return fail("--route: no route's name holds " + options.route);
   report.figures = timeRoutes(port, options, benches, report.httpThreads, source);
   bool failed = false;
   for (const auto& bench : benches) {
@@ -416,6 +424,8 @@ int main(int argc, char** argv) {
                             "temporary file)");
   app.add_flag("--reuse", options.reuse, "Use the samples already in --db instead of refusing it")->needs(db);
   app.add_flag("--json", options.json, "Print the figures as JSON");
+  app.add_option("--route", options.route,
+                 "Time only the route of this name, or those whose name holds it (default: all)");
   app.add_option("--template", options.templatePath,
                  "Capture result whose shapes the samples take (JSON or .gz)")
       ->capture_default_str();

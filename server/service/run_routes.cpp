@@ -32,8 +32,9 @@ Response listRuns(ServiceContext& ctx, const Request& req) {
 Response getRun(ServiceContext& ctx, const Request& req) {
   allowOnly(req, {});
   int64_t id = pathId(req);
-  auto run = check(reader(ctx).runs().get(id));
-  if (!run) missing("no run " + std::to_string(id));
+  auto found = check(reader(ctx).runs().detail(id));  // one transaction
+  if (!found) missing("no run " + std::to_string(id));
+  const store::Run* run = &found->run;
   auto frameTime = check(reports::frameTimeOf(reader(ctx), run->row));
   json j = runRowJson(run->row, &frameTime);
   j["device_info"] = deviceJson(run->device);
@@ -54,7 +55,7 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   j["counter_headroom"] = run->counterHeadroom;
   j["ceilings"] = run->ceilings;  // the roofline's device ceilings (docs/measurement.md)
   json passes = json::array();
-  for (const auto& p : check(reader(ctx).runs().passes(id))) passes.push_back(passJson(p));
+  for (const auto& p : found->passes) passes.push_back(passJson(p));
   j["passes"] = passes;
   return Response::ok(j);
 }

@@ -214,49 +214,7 @@ Result<std::vector<Pass>> Runs::passes(int64_t runId) {
     Statement count(db_, "SELECT COUNT(*) FROM samples WHERE run_id = ?1");
     count.bind(1, runId);
     count.step();
-    int samples = static_cast<int>(count.getInt(0));
-    std::vector<Pass> out;
-    if (samples == 0) return out;
-    auto mean = [samples](std::optional<double> sum) { return sum ? std::optional(*sum / samples) : sum; };
-
-    Statement passes(db_,
-                     "SELECT p.name, SUM(p.gpu_ms), SUM(p.gpu_ms_instrumented), AVG(p.overhead_ratio), "
-                     "SUM(p.fragment_invocations), SUM(p.fragment_invocations_statistic) "
-                     "FROM passes p JOIN samples s ON s.id = p.sample_id WHERE s.run_id = ?1 "
-                     "GROUP BY p.name ORDER BY MIN(p.position), p.name");
-    passes.bind(1, runId);
-    std::map<std::string, size_t> byName;
-    while (passes.step()) {
-      RowReader pass(passes);
-      std::string name = pass.getText();
-      byName[name] = out.size();
-      out.push_back(Pass{name,
-                         pass.getDouble() / samples,
-                         nullptr,
-                         mean(pass.getOptDouble()),
-                         pass.getOptDouble(),
-                         mean(pass.getOptDouble()),
-                         mean(pass.getOptDouble()),
-                         {}});
-      pass.end();
-    }
-    Statement counters(db_,
-                       "SELECT p.name, c.resource, MIN(c.kind), MIN(c.format), c.access, SUM(c.count), SUM(c.bytes), "
-                       "c.source, SUM(c.footprint_bytes) FROM samples s JOIN passes p ON p.sample_id = s.id" +
-                           detail::joinPassCounters(*db_, {"resource", "kind", "format", "access", "count", "bytes",
-                                                           "source", "footprint_bytes"}) +
-                           " WHERE s.run_id = ?1 "
-                       "GROUP BY p.name, c.resource, c.access, c.source ORDER BY MIN(p.position), MIN(c.position)");
-    counters.bind(1, runId);
-    while (counters.step()) {
-      RowReader counter(counters);
-      size_t pass = byName.at(counter.getText());
-      out[pass].counters.push_back(Counter{counter.getText(), counter.getOptText(), counter.getOptText(),
-                                           counter.getText(), counter.getDouble() / samples,
-                                           counter.getDouble() / samples, nullptr, counter.getText(),
-                                           mean(counter.getOptDouble())});
-      counter.end();
-    }
+    auto out = detail::readRunPasses(db_, runId, static_cast<int>(count.getInt(0)));
     tx.commit();
     return out;
   });

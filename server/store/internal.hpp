@@ -67,6 +67,11 @@ Device readDevice(RowReader& row);
 // readRunRow; `where` names the runs through the alias r.
 std::string runSelect(const Connection& db, std::string_view where);
 RunRow readRunRow(const Statement& row);
+// A run with its device, resources and ceilings (Runs::get), and its passes
+// averaged over `samples` samples (Runs::passes), inside the caller's
+// transaction: Runs::detail reads both in one.
+std::optional<Run> readRun(Connection* db, int64_t runId);
+std::vector<Pass> readRunPasses(Connection* db, int64_t runId, int samples);
 // The summary columns of a job's runs (migration 0013) from their samples,
 // with the expressions and the walk (one run's samples in camera order) that
 // the listing used before 0013 and the migration's backfill uses: written by

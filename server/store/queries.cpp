@@ -322,52 +322,76 @@ Result<std::optional<Run>> Runs::get(int64_t runId) {
   std::lock_guard lock(mutex_);
   return guarded<std::optional<Run>>("getRun", [&]() -> Result<std::optional<Run>> {
     Transaction tx(db_, Transaction::Kind::Read);
-    auto row = findRunRow(db_, runId);
-    if (!row) return std::optional<Run>();
-    Run run;
-    run.row = std::move(*row);
-    Statement device(db_,
-                     "SELECT d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info, r.shaders, "
-                     "r.counter_headroom FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
-    device.bind(1, runId);
-    if (device.step()) {
-      RowReader columns(device);
-      run.device = detail::readDevice(columns);
-      run.shaders = columns.getJson();
-      run.counterHeadroom = columns.getJson();
-      columns.end();
-    }
-    // The text's test first, so that a sample whose extras cannot hold
-    // ceilings is not parsed as JSON (at 1M on PostgreSQL, warm: 0.045 ms
-    // against 0.070 for a run without ceilings). The store writes extras as
-    // dump() does, so a "ceilings" key is always in the text as the word.
-    Statement ceilings(
-        db_, db_->engine() == Engine::Sqlite
-                 ? "SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = ?1 AND "
-                   "instr(extras, 'ceilings') > 0 AND json_type(extras, '$.roofline.ceilings') = 'object' "
-                   "ORDER BY camera_index LIMIT 1"
-                 : "SELECT CAST(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings' AS text) FROM samples "
-                   "WHERE run_id = ?1 AND strpos(extras, 'ceilings') > 0 AND "
-                   "jsonb_typeof(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings') = 'object' "
-                   "ORDER BY camera_index LIMIT 1");
-    ceilings.bind(1, runId);
-    run.ceilings = ceilings.step() ? ceilings.getJson(0) : nlohmann::json(nullptr);
-    Statement resources(
-        db_,
-        "SELECT name, kind, format, element_bytes, width, height, allocation_bytes, format_bytes, "
-        "usage FROM run_resources WHERE run_id = ?1 ORDER BY position");
-    resources.bind(1, runId);
-    while (resources.step()) {
-      RowReader resource(resources);  // a braced list reads its columns in order
-      run.resources.push_back(RunResource{resource.getText(), resource.getText(), resource.getOptText(),
-                                          resource.getOptInt(), resource.getOptInt(), resource.getOptInt(),
-                                          resource.getOptInt(), resource.getOptInt(), resource.getOptText()});
-      resource.end();
-    }
+    auto run = detail::readRun(db_, runId);
     tx.commit();
-    return std::optional<Run>(std::move(run));
+    return run;
   });
 }
+
+Result<std::optional<RunDetail>> Runs::detail(int64_t runId) {
+  std::lock_guard lock(mutex_);
+  return guarded<std::optional<RunDetail>>("getRunDetail", [&]() -> Result<std::optional<RunDetail>> {
+    Transaction tx(db_, Transaction::Kind::Read);
+    auto run = detail::readRun(db_, runId);
+    if (!run) return std::optional<RunDetail>();
+    // The run's sample count is on its row (0013), kept by the ingest in the
+    // transaction that stores the samples: no COUNT(*) as passes() needs.
+    std::vector<Pass> passes = detail::readRunPasses(db_, runId, run->row.sampleCount);
+    tx.commit();
+    return std::optional<RunDetail>(RunDetail{std::move(*run), std::move(passes)});
+  });
+}
+
+namespace detail {
+
+std::optional<Run> readRun(Connection* db, int64_t runId) {
+  auto row = findRunRow(db, runId);
+  if (!row) return std::nullopt;
+  Run run;
+  run.row = std::move(*row);
+  // The device, and the run's ceilings in the same statement. The text's
+  // test comes first, so that a sample whose extras cannot hold ceilings is
+  // not parsed as JSON (at 1M on PostgreSQL, warm: 0.045 ms against 0.070
+  // for a run without ceilings). The store writes extras as dump() does, so
+  // a "ceilings" key is always in the text as the word.
+  const char* ceilings =
+      db->engine() == Engine::Sqlite
+          ? "(SELECT json_extract(extras, '$.roofline.ceilings') FROM samples WHERE run_id = r.id AND "
+            "instr(extras, 'ceilings') > 0 AND json_type(extras, '$.roofline.ceilings') = 'object' "
+            "ORDER BY camera_index LIMIT 1)"
+          : "(SELECT CAST(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings' AS text) FROM samples "
+            "WHERE run_id = r.id AND strpos(extras, 'ceilings') > 0 AND "
+            "jsonb_typeof(CAST(extras AS jsonb) -> 'roofline' -> 'ceilings') = 'object' "
+            "ORDER BY camera_index LIMIT 1)";
+  Statement device(db, std::string("SELECT d.id, d.name, d.vendor, d.driver, d.api_version, d.features, d.info, "
+                                   "r.shaders, r.counter_headroom, ") +
+                           ceilings + " FROM runs r JOIN devices d ON d.id = r.device_id WHERE r.id = ?1");
+  device.bind(1, runId);
+  run.ceilings = nullptr;
+  if (device.step()) {
+    RowReader columns(device);
+    run.device = detail::readDevice(columns);
+    run.shaders = columns.getJson();
+    run.counterHeadroom = columns.getJson();
+    run.ceilings = columns.getJson();
+    columns.end();
+  }
+  Statement resources(
+      db,
+      "SELECT name, kind, format, element_bytes, width, height, allocation_bytes, format_bytes, "
+      "usage FROM run_resources WHERE run_id = ?1 ORDER BY position");
+  resources.bind(1, runId);
+  while (resources.step()) {
+    RowReader resource(resources);  // a braced list reads its columns in order
+    run.resources.push_back(RunResource{resource.getText(), resource.getText(), resource.getOptText(),
+                                        resource.getOptInt(), resource.getOptInt(), resource.getOptInt(),
+                                        resource.getOptInt(), resource.getOptInt(), resource.getOptText()});
+    resource.end();
+  }
+  return run;
+}
+
+}  // namespace detail
 
 Result<std::vector<SampleRow>> Runs::samples(int64_t runId) {
   std::lock_guard lock(mutex_);

@@ -187,6 +187,12 @@ struct Sample {
   std::vector<Pass> passes;  // in frame order
 };
 
+// A run and its passes averaged over its samples (Runs::detail).
+struct RunDetail {
+  Run run;
+  std::vector<Pass> passes;
+};
+
 // ---- sweeps --------------------------------------------------------------------
 
 struct SweepFilter {

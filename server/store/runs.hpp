@@ -51,6 +51,9 @@ class Runs : public Facet {
   Result<std::vector<Device>> devices();
   Result<RunPage> list(const RunFilter& filter, const Page& page);
   Result<std::optional<Run>> get(int64_t runId);
+  // A run with its passes (as passes() averages them) read in one
+  // transaction: what GET /api/runs/{id} serves. Empty for an unknown run.
+  Result<std::optional<RunDetail>> detail(int64_t runId);
   // Empty vector for an unknown run or one without samples.
   Result<std::vector<SampleRow>> samples(int64_t runId);
   Result<std::optional<Sample>> sample(int64_t sampleId);

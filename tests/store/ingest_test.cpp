@@ -368,6 +368,13 @@ TEST_F(Ingest, RooflineIsKeptPerRun) {
   auto plain = store_->runs().get(secondRuns->runs[1].id);
   ASSERT_TRUE(plain && plain->has_value());
   EXPECT_TRUE((*plain)->ceilings.is_null());
+  // detail() reads the ceilings in the device's statement: the same answers.
+  auto detailed = store_->runs().detail(withRoofline.id);
+  ASSERT_TRUE(detailed && detailed->has_value()) << (detailed ? "" : detailed.error());
+  EXPECT_EQ((*detailed)->run.ceilings, ceilings);
+  auto plainDetailed = store_->runs().detail(secondRuns->runs[1].id);
+  ASSERT_TRUE(plainDetailed && plainDetailed->has_value());
+  EXPECT_TRUE((*plainDetailed)->run.ceilings.is_null());
 }
 
 TEST_F(Ingest, SampleWithoutScreenshotOrImageError) {

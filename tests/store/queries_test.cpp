@@ -348,6 +348,41 @@ TEST_F(Queries, RunSummaries) {
   auto none = store_->runs().passes(forward.id + 1000);
   ASSERT_TRUE(none);
   EXPECT_TRUE(none->empty());
+
+  // detail(): the run as get() reads it and its passes as passes() averages
+  // them (over the run row's sample count, not a COUNT of its samples), in
+  // one transaction.
+  auto detailed = store_->runs().detail(forward.id);
+  ASSERT_TRUE(detailed && detailed->has_value()) << (detailed ? "" : detailed.error());
+  auto run = store_->runs().get(forward.id);
+  ASSERT_TRUE(run && run->has_value());
+  const RunDetail& d = **detailed;
+  EXPECT_EQ(d.run.row.id, forward.id);
+  EXPECT_EQ(d.run.row.sampleCount, 2);
+  EXPECT_EQ(d.run.device.name, (*run)->device.name);
+  EXPECT_EQ(d.run.shaders, (*run)->shaders);
+  EXPECT_EQ(d.run.counterHeadroom, (*run)->counterHeadroom);
+  ASSERT_EQ(d.run.resources.size(), (*run)->resources.size());
+  for (size_t i = 0; i < d.run.resources.size(); ++i) EXPECT_EQ(d.run.resources[i].name, (*run)->resources[i].name);
+  ASSERT_EQ(d.passes.size(), passes->size());
+  for (size_t i = 0; i < d.passes.size(); ++i) {
+    const Pass& a = d.passes[i];
+    const Pass& b = (*passes)[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_CLOSE(a.gpuMs, b.gpuMs);
+    EXPECT_EQ(a.gpuMsInstrumented, b.gpuMsInstrumented);
+    EXPECT_EQ(a.fragmentInvocations, b.fragmentInvocations);
+    ASSERT_EQ(a.counters.size(), b.counters.size());
+    for (size_t k = 0; k < a.counters.size(); ++k) {
+      EXPECT_EQ(a.counters[k].resource, b.counters[k].resource);
+      EXPECT_CLOSE(a.counters[k].count, b.counters[k].count);
+      EXPECT_CLOSE(a.counters[k].bytes, b.counters[k].bytes);
+    }
+  }
+  EXPECT_CLOSE(d.passes[0].gpuMs, 2.0);  // (1 + 3) / 2, as above
+  auto unknown = store_->runs().detail(forward.id + 1000);
+  ASSERT_TRUE(unknown) << unknown.error();
+  EXPECT_FALSE(unknown->has_value());
 }
 
 TEST_F(Queries, CreatedBetween) {
