@@ -2,6 +2,9 @@
 // passes and comparisons.
 #include "service/json_rows.hpp"
 
+#include <functional>
+#include <utility>
+
 namespace tally::service::detail {
 using nlohmann::json;
 
@@ -130,6 +133,18 @@ struct ObjectFields {
     fill(inner);
     j[key] = std::move(o);
   }
+  // An array of objects, one per item, each filled by fill(fields, item).
+  template <class Items, class Fill>
+  void objects(const char* key, const Items& items, Fill fill) {
+    json a = json::array();
+    for (const auto& item : items) {
+      json o = json::object();
+      ObjectFields inner{o};
+      fill(inner, item);
+      a.push_back(std::move(o));
+    }
+    j[key] = std::move(a);
+  }
 };
 
 // ...or as text (writeRunRow): the same bytes as that object's dump().
@@ -151,6 +166,50 @@ struct TextFields {
     TextFields inner{t};
     fill(inner);
     t.endObject();
+  }
+  template <class Items, class Fill>
+  void objects(const char* key, const Items& items, Fill fill) {
+    t.key(key);
+    t.beginArray();
+    for (const auto& item : items) {
+      t.beginObject();
+      TextFields inner{t};
+      fill(inner, item);
+      t.endObject();
+    }
+    t.endArray();
+  }
+};
+
+// TextFields with more keys than a field list names: each extra is written
+// where its key falls among the list's (the keys of an object ascend).
+// `extras` ascending; finish() writes those after the list's last key.
+struct MergedTextFields {
+  using Extra = std::pair<const char*, std::function<void(JsonText&)>>;
+  JsonText& t;
+  std::vector<Extra> extras;
+  size_t next = 0;
+  void before(std::string_view key) {
+    for (; next < extras.size() && std::string_view(extras[next].first) < key; ++next) {
+      t.key(extras[next].first);
+      extras[next].second(t);
+    }
+  }
+  void finish() {
+    for (; next < extras.size(); ++next) {
+      t.key(extras[next].first);
+      extras[next].second(t);
+    }
+  }
+  template <class T>
+  void field(const char* key, const T& v) {
+    before(key);
+    TextFields{t}.field(key, v);
+  }
+  template <class Fill>
+  void object(const char* key, bool present, Fill fill) {
+    before(key);
+    TextFields{t}.object(key, present, fill);
   }
 };
 
@@ -199,6 +258,69 @@ void runRowFields(const store::RunRow& r, const store::RunFrameTime* frame, Fiel
   f.field("width", r.width);
 }
 
+// A pass's keys (passJson, runDetailText), in ascending order; its bytes and
+// footprint summed over its resources' lines.
+template <class Fields>
+void passFields(const store::Pass& p, Fields& f) {
+  double bytes = 0;
+  std::optional<double> footprint, footprintRequested;  // over the lines that have a footprint
+  for (const auto& c : p.counters) {
+    bytes += c.bytes;
+    if (c.footprintBytes) {
+      footprint = footprint.value_or(0) + *c.footprintBytes;
+      footprintRequested = footprintRequested.value_or(0) + c.bytes;
+    }
+  }
+  f.field("bytes", bytes);
+  f.field("compute_invocations", p.computeInvocations);
+  f.field("compute_invocations_statistic", p.computeInvocationsStatistic);
+  f.field("footprint_bytes", footprint);
+  f.field("fragment_invocations", p.fragmentInvocations);
+  f.field("fragment_invocations_statistic", p.fragmentInvocationsStatistic);
+  f.field("gpu_ms", p.gpuMs);
+  f.field("gpu_ms_instrumented", p.gpuMsInstrumented);
+  f.field("gpu_ms_spread", p.gpuMsSpread);
+  f.field("name", p.name);
+  f.field("overhead_ratio", p.overheadRatio);
+  f.objects("resources", p.counters, [](auto& r, const store::Counter& c) {
+    r.field("access", c.access);
+    r.field("bytes", c.bytes);
+    r.field("count", c.count);
+    r.field("count_spread", c.countSpread);
+    r.field("footprint_bytes", c.footprintBytes);
+    r.field("format", c.format);
+    r.field("kind", c.kind);
+    r.field("name", c.resource);
+    r.field("reuse", reuseOf(c.bytes, c.footprintBytes));
+    r.field("source", c.source);
+  });
+  f.field("reuse", reuseOf(footprintRequested, footprint));
+}
+
+template <class Fields>
+void deviceFields(const store::Device& d, Fields& f) {
+  f.field("api_version", d.apiVersion);
+  f.field("driver", d.driver);
+  f.field("features", d.features);
+  f.field("id", d.id);
+  f.field("info", d.info);
+  f.field("name", d.name);
+  f.field("vendor", d.vendor);
+}
+
+template <class Fields>
+void resourceFields(const store::RunResource& r, Fields& f) {
+  f.field("allocation_bytes", r.allocationBytes);
+  f.field("element_bytes", r.elementBytes);
+  f.field("format", r.format);
+  f.field("format_bytes", r.formatBytes);
+  f.field("height", r.height);
+  f.field("kind", r.kind);
+  f.field("name", r.name);
+  f.field("usage", r.usage);
+  f.field("width", r.width);
+}
+
 }  // namespace
 
 json runRowJson(const store::RunRow& r, const store::RunFrameTime* frame) {
@@ -239,8 +361,10 @@ std::string runPageText(const store::RunPage& page, const std::map<int64_t, stor
 }
 
 json deviceJson(const store::Device& d) {
-  return {{"id", d.id},           {"name", d.name},         {"vendor", d.vendor}, {"driver", d.driver},
-          {"api_version", d.apiVersion}, {"features", d.features}, {"info", d.info}};
+  json j = json::object();
+  ObjectFields fields{j};
+  deviceFields(d, fields);
+  return j;
 }
 
 json sweepRowJson(const store::SweepRow& s) {
@@ -295,39 +419,56 @@ json sampleRowJson(const store::SampleRow& s) {
 }
 
 json passJson(const store::Pass& p) {
-  json resources = json::array();
-  double bytes = 0;
-  std::optional<double> footprint, footprintRequested;  // over the lines that have a footprint
-  for (const auto& c : p.counters) {
-    resources.push_back({{"name", c.resource},
-                         {"kind", opt(c.kind)},
-                         {"format", opt(c.format)},
-                         {"access", c.access},
-                         {"count", c.count},
-                         {"bytes", c.bytes},
-                         {"footprint_bytes", opt(c.footprintBytes)},
-                         {"reuse", reuseJson(c.bytes, c.footprintBytes)},
-                         {"count_spread", c.countSpread},
-                         {"source", c.source}});
-    bytes += c.bytes;
-    if (c.footprintBytes) {
-      footprint = footprint.value_or(0) + *c.footprintBytes;
-      footprintRequested = footprintRequested.value_or(0) + c.bytes;
-    }
-  }
-  return {{"name", p.name},
-          {"gpu_ms", p.gpuMs},
-          {"gpu_ms_spread", p.gpuMsSpread},
-          {"gpu_ms_instrumented", opt(p.gpuMsInstrumented)},
-          {"overhead_ratio", opt(p.overheadRatio)},
-          {"fragment_invocations", opt(p.fragmentInvocations)},
-          {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
-          {"compute_invocations", opt(p.computeInvocations)},
-          {"compute_invocations_statistic", opt(p.computeInvocationsStatistic)},
-          {"bytes", bytes},
-          {"footprint_bytes", opt(footprint)},
-          {"reuse", reuseJson(footprintRequested, footprint)},
-          {"resources", resources}};
+  json j = json::object();
+  ObjectFields fields{j};
+  passFields(p, fields);
+  return j;
+}
+
+std::string runDetailText(const store::RunDetail& d, const store::RunFrameTime* frame) {
+  std::string body;
+  body.reserve(16384);
+  JsonText out(body);
+  out.beginObject();
+  MergedTextFields fields{out, {}};
+  fields.extras = {
+      {"ceilings", [&](JsonText& t) { t.value(d.run.ceilings); }},
+      {"counter_headroom", [&](JsonText& t) { t.value(d.run.counterHeadroom); }},
+      {"device_info",
+       [&](JsonText& t) {
+         t.beginObject();
+         TextFields inner{t};
+         deviceFields(d.run.device, inner);
+         t.endObject();
+       }},
+      {"passes",
+       [&](JsonText& t) {
+         t.beginArray();
+         for (const auto& p : d.passes) {
+           t.beginObject();
+           TextFields inner{t};
+           passFields(p, inner);
+           t.endObject();
+         }
+         t.endArray();
+       }},
+      {"resources",
+       [&](JsonText& t) {
+         t.beginArray();
+         for (const auto& r : d.run.resources) {
+           t.beginObject();
+           TextFields inner{t};
+           resourceFields(r, inner);
+           t.endObject();
+         }
+         t.endArray();
+       }},
+      {"shaders", [&](JsonText& t) { t.value(d.run.shaders); }},
+  };
+  runRowFields(d.run.row, frame, fields);
+  fields.finish();
+  out.endObject();
+  return body;
 }
 
 json comparedJson(const std::vector<store::Compared>& values) {

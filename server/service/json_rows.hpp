@@ -41,6 +41,11 @@ nlohmann::json deviceJson(const store::Device& d);
 nlohmann::json sweepRowJson(const store::SweepRow& s);
 nlohmann::json sampleRowJson(const store::SampleRow& s);
 nlohmann::json passJson(const store::Pass& p);
+// GET /api/runs/{id}'s body: the run's row (with its frame time, as
+// runRowJson), device_info, resources, shaders, counter_headroom, ceilings
+// and passes (as passJson), written as the text that dump() writes for the
+// same object (one list of keys for each part, in json_rows.cpp).
+std::string runDetailText(const store::RunDetail& d, const store::RunFrameTime* frame);
 nlohmann::json comparisonJson(const store::Comparison& c);
 
 }  // namespace tally::service::detail

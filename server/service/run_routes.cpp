@@ -34,30 +34,9 @@ Response getRun(ServiceContext& ctx, const Request& req) {
   int64_t id = pathId(req);
   auto found = check(reader(ctx).runs().detail(id));  // one transaction
   if (!found) missing("no run " + std::to_string(id));
-  const store::Run* run = &found->run;
-  auto frameTime = check(reports::frameTimeOf(reader(ctx), run->row));
-  json j = runRowJson(run->row, &frameTime);
-  j["device_info"] = deviceJson(run->device);
-  json resources = json::array();
-  for (const auto& r : run->resources) {
-    resources.push_back({{"name", r.name},
-                         {"kind", r.kind},
-                         {"format", opt(r.format)},
-                         {"element_bytes", opt(r.elementBytes)},
-                         {"width", opt(r.width)},
-                         {"height", opt(r.height)},
-                         {"allocation_bytes", opt(r.allocationBytes)},
-                         {"format_bytes", opt(r.formatBytes)},
-                         {"usage", opt(r.usage)}});
-  }
-  j["resources"] = resources;
-  j["shaders"] = run->shaders;
-  j["counter_headroom"] = run->counterHeadroom;
-  j["ceilings"] = run->ceilings;  // the roofline's device ceilings (docs/measurement.md)
-  json passes = json::array();
-  for (const auto& p : found->passes) passes.push_back(passJson(p));
-  j["passes"] = passes;
-  return Response::ok(j);
+  auto frameTime = check(reports::frameTimeOf(reader(ctx), found->run.row));
+  // Written as text, without a json value (json_rows.hpp).
+  return Response::raw(runDetailText(*found, &frameTime), "application/json");
 }
 
 Response listSweeps(ServiceContext& ctx, const Request& req) {

@@ -187,7 +187,7 @@ TEST_F(ApplicationCapture, ResultStoredAndServed) {
     }
     auto response = router.dispatch(req);
     EXPECT_EQ(response.status, 200) << path << ": " << response.json.dump();
-    // The runs listing answers its JSON as text (a raw application/json body).
+    // The runs listing and a run answer their JSON as text (a raw application/json body).
     return response.isRaw() ? json::parse(response.bytes) : response.json;
   };
   json runs = get("/api/runs?capture=" + std::to_string(job->job.id));

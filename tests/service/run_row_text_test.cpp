@@ -172,4 +172,103 @@ TEST(JsonText, RunRowsAndPagesAsTheJsonDumped) {
   EXPECT_EQ(sd::runPageText(empty, {}), dumped({{"runs", json::array()}, {"next_cursor", nullptr}}));
 }
 
+// GET /api/runs/{id}'s body as the route built it before, as json: the row
+// with its frame time, then each part with its keys listed here.
+json oldDetail(const store::RunDetail& d, const store::RunFrameTime& t) {
+  auto opt = [](const auto& v) { return v ? json(*v) : json(nullptr); };
+  auto reuse = [](std::optional<double> requested, std::optional<double> footprint) {
+    return footprint && *footprint > 0 ? json(requested.value_or(0) / *footprint) : json(nullptr);
+  };
+  json j = sd::runRowJson(d.run.row, &t);
+  const store::Device& dev = d.run.device;
+  j["device_info"] = {{"id", dev.id},           {"name", dev.name},         {"vendor", dev.vendor}, {"driver", dev.driver},
+                      {"api_version", dev.apiVersion}, {"features", dev.features}, {"info", dev.info}};
+  json resources = json::array();
+  for (const auto& r : d.run.resources) {
+    resources.push_back({{"name", r.name}, {"kind", r.kind}, {"format", opt(r.format)},
+                         {"element_bytes", opt(r.elementBytes)}, {"width", opt(r.width)}, {"height", opt(r.height)},
+                         {"allocation_bytes", opt(r.allocationBytes)}, {"format_bytes", opt(r.formatBytes)},
+                         {"usage", opt(r.usage)}});
+  }
+  j["resources"] = resources;
+  j["shaders"] = d.run.shaders;
+  j["counter_headroom"] = d.run.counterHeadroom;
+  j["ceilings"] = d.run.ceilings;
+  json passes = json::array();
+  for (const auto& p : d.passes) {
+    json lines = json::array();
+    double bytes = 0;
+    std::optional<double> footprint, requested;
+    for (const auto& c : p.counters) {
+      lines.push_back({{"name", c.resource}, {"kind", opt(c.kind)}, {"format", opt(c.format)}, {"access", c.access},
+                       {"count", c.count}, {"bytes", c.bytes}, {"footprint_bytes", opt(c.footprintBytes)},
+                       {"reuse", reuse(c.bytes, c.footprintBytes)}, {"count_spread", c.countSpread},
+                       {"source", c.source}});
+      bytes += c.bytes;
+      if (c.footprintBytes) {
+        footprint = footprint.value_or(0) + *c.footprintBytes;
+        requested = requested.value_or(0) + c.bytes;
+      }
+    }
+    passes.push_back({{"name", p.name}, {"gpu_ms", p.gpuMs}, {"gpu_ms_spread", p.gpuMsSpread},
+                      {"gpu_ms_instrumented", opt(p.gpuMsInstrumented)}, {"overhead_ratio", opt(p.overheadRatio)},
+                      {"fragment_invocations", opt(p.fragmentInvocations)},
+                      {"fragment_invocations_statistic", opt(p.fragmentInvocationsStatistic)},
+                      {"compute_invocations", opt(p.computeInvocations)},
+                      {"compute_invocations_statistic", opt(p.computeInvocationsStatistic)}, {"bytes", bytes},
+                      {"footprint_bytes", opt(footprint)}, {"reuse", reuse(requested, footprint)},
+                      {"resources", lines}});
+  }
+  j["passes"] = passes;
+  return j;
+}
+
+TEST(JsonText, RunDetailAsTheJsonDumped) {
+  std::mt19937 rng(3);
+  const std::vector<double> doubles = someDoubles();
+  const std::vector<std::string> strings = someStrings();
+  auto number = [&]() { return doubles[rng() % doubles.size()]; };
+  auto text = [&]() { return strings[rng() % strings.size()]; };
+  auto maybe = [&](auto value) { return rng() % 3 ? std::optional(value) : std::nullopt; };
+  for (int64_t id = 1; id <= 200; ++id) {
+    store::RunDetail d;
+    d.run.row = someRun(id, id % 3 != 0, rng);
+    d.run.device = {id, text(), text(), text(), text(), id % 2 ? json{{"shaderInt64", true}} : json::object(),
+                    id % 4 ? json{{"sub", {{"x", number()}}}} : json::object()};
+    for (int r = 0; r < static_cast<int>(id % 5); ++r) {
+      d.run.resources.push_back({text(), text(), maybe(text()), maybe(int64_t{8}), maybe(int64_t{1920}),
+                                 maybe(int64_t{-1}), maybe(int64_t{1} << 40), maybe(int64_t{0}), maybe(text())});
+    }
+    d.run.shaders = id % 2 ? json{{"forward.frag", "9c1d00aa"}, {text(), text()}} : json::object();
+    d.run.counterHeadroom = id % 3 ? json{{"wrap_factor", number()}} : json(nullptr);
+    d.run.ceilings = id % 4 ? json{{"bandwidth_bytes_per_s", number()}, {"ridge_intensity", number()}} : json(nullptr);
+    for (int p = 0; p < static_cast<int>(id % 6); ++p) {
+      store::Pass pass;
+      pass.name = text();
+      pass.gpuMs = number();
+      pass.gpuMsSpread = id % 2 ? json(nullptr) : json{{"median", number()}, {"n", 20}};
+      pass.gpuMsInstrumented = maybe(number());
+      pass.overheadRatio = maybe(number());
+      pass.fragmentInvocations = maybe(number());
+      pass.fragmentInvocationsStatistic = maybe(number());
+      pass.computeInvocations = maybe(number());
+      pass.computeInvocationsStatistic = maybe(number());
+      for (int c = 0; c < static_cast<int>(rng() % 8); ++c) {
+        // Footprints of 0, absent and any double: reuse null, and not.
+        std::optional<double> footprint = rng() % 3 == 0 ? std::nullopt : std::optional(rng() % 4 ? number() : 0.0);
+        pass.counters.push_back({text(), maybe(text()), maybe(text()), c % 2 ? "read" : "write", number(), number(),
+                                 rng() % 2 ? json(nullptr) : json{{"n", 20}, {"q1", number()}}, text(), footprint});
+      }
+      d.passes.push_back(std::move(pass));
+    }
+    store::RunFrameTime t;
+    if (id % 5) t.median = number();
+    t.source = id % 2 ? "frames" : "none";
+    EXPECT_EQ(sd::runDetailText(d, &t), dumped(oldDetail(d, t))) << id;
+    if (!d.passes.empty()) {  // passJson, which a sample's route uses, from the same list of keys
+      EXPECT_EQ(dumped(sd::passJson(d.passes[0])), dumped(oldDetail(d, t)["passes"][0])) << id;
+    }
+  }
+}
+
 }  // namespace
