@@ -339,7 +339,9 @@ Result<json> runOne(CaptureSession& session, const SceneInCapture& current, rend
     double sky = m.fragmentInvocations.count("skybox") ? spreadOf(m.fragmentInvocations.at("skybox")).mean : -1;
     sample["sky_fraction"] = sky >= 0 ? sky / (double(res.width) * res.height) : -1.0;
     sample["sky_fraction_estimate"] = camera.skyFraction;
-    sample["extras"] = extras.is_object() ? std::move(extras) : json::object();
+    if (!extras.is_object()) extras = json::object();
+    addFrameWall(m, extras);
+    sample["extras"] = std::move(extras);
     {
       auto timed = phases.scope("image_error");
       // Workloads draw no scene: no image_error against forward (variant_error only).

@@ -189,6 +189,7 @@ void addCounts(SampleMeasure& m, const renderers::FrameResult& frame) {
     addDraws(m, pass);
   }
   m.instrumentedFrameMs.push_back(total);
+  m.instrumentedWallMs.push_back(frame.submitSeconds * 1e3);
 }
 
 void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
@@ -202,6 +203,12 @@ void addTimes(SampleMeasure& m, const renderers::FrameResult& frame) {
     total += pass.gpuMs;
   }
   m.frameMs.push_back(total);
+  m.wallMs.push_back(frame.submitSeconds * 1e3);
+}
+
+void addFrameWall(const SampleMeasure& m, json& extras) {
+  if (!m.wallMs.empty()) extras["frame_wall_ms"] = spreadOf(m.wallMs).median;
+  if (!m.instrumentedWallMs.empty()) extras["frame_wall_ms_instrumented"] = spreadOf(m.instrumentedWallMs).median;
 }
 
 json sampleJson(const SampleMeasure& m, const std::vector<renderers::ResourceInfo>& resources, uint32_t frames,

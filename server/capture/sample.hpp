@@ -57,6 +57,10 @@ struct SampleMeasure {
   // Passes that dispatch compute work only.
   std::map<std::string, std::vector<double>> computeInvocations, computeStatistic;
   std::vector<double> frameMs, instrumentedFrameMs;
+  // Each frame's host wall time (FrameResult::submitSeconds, in ms):
+  // recording, submitting and waiting for the GPU, as a user's frame loop
+  // sees it; uninstrumented and counted frames.
+  std::vector<double> wallMs, instrumentedWallMs;
   // Each pass's time in every uninstrumented frame, in frame order and
   // aligned with frameMs (0 in a frame the pass did not run in).
   std::map<std::string, std::vector<double>> plainMsByFrame;
@@ -77,6 +81,10 @@ struct SampleMeasure {
 void addCounts(SampleMeasure& m, const renderers::FrameResult& frame);
 // An uninstrumented frame: its pass times.
 void addTimes(SampleMeasure& m, const renderers::FrameResult& frame);
+// The frames' wall times beside their GPU times, into the sample's extras:
+// "frame_wall_ms" (median of the uninstrumented frames) and
+// "frame_wall_ms_instrumented" (median of the counted frames).
+void addFrameWall(const SampleMeasure& m, nlohmann::json& extras);
 
 // The sample's JSON (frames, times, passes with their lines), without the
 // camera, images and extras the runner adds. Each line has "bytes" (the

@@ -104,6 +104,15 @@ TEST_F(CaptureRun, ResultFollowsTheSchema) {
     }
     EXPECT_TRUE(fs::exists(dir_ / "result-screenshots" / sample["screenshot"].get<std::string>()));
     EXPECT_GT(sample["frame_ms"].get<double>(), 0.0);
+    // The frames' host wall time beside their GPU time: the passes' GPU
+    // work lies between submitting and the fence, so the wall median is at
+    // least the GPU median, and no frame outlasts its whole phase's clock.
+    const json& extras = sample["extras"];
+    ASSERT_TRUE(extras.contains("frame_wall_ms") && extras.contains("frame_wall_ms_instrumented")) << extras.dump();
+    EXPECT_GE(extras["frame_wall_ms"].get<double>(), sample["frame_ms"].get<double>());
+    EXPECT_GE(extras["frame_wall_ms_instrumented"].get<double>(), sample["frame_ms_instrumented"].get<double>());
+    EXPECT_LE(extras["frame_wall_ms"].get<double>(), result["timing"]["timed_frames"].get<double>() * 1e3);
+    EXPECT_LE(extras["frame_wall_ms_instrumented"].get<double>(), result["timing"]["counted_frames"].get<double>() * 1e3);
     EXPECT_EQ(sample["frames"], 3);
     EXPECT_EQ(sample["counted_frames"], 2);
     EXPECT_EQ(sample["counts_vary"], false);  // a fixed camera counts the same every frame

@@ -2,7 +2,8 @@
 """The cost of counting, by renderer (or variant), pass and counting mode,
 from capture results: the median over a run's samples of the overhead ratio
 (counted frame or pass time over the uninstrumented one of the same run).
-Prints Markdown tables: frames, then passes.
+Prints Markdown tables: frames, then the frames' host wall time beside
+their GPU time (where the results carry it), then passes.
 
   counting_summary.py RESULT.json [RESULT.json ...]
 """
@@ -22,6 +23,7 @@ def fmt(v):
 
 
 frames = OrderedDict()  # (label, scene, size) -> {mode: ratio}
+walls = OrderedDict()  # (label, scene, size, mode) -> (gpu ms, counted gpu ms, wall ms, counted wall ms)
 passes = OrderedDict()  # (label, scene, size, pass) -> {mode: ratio}
 modes = []
 for path in sys.argv[1:]:
@@ -33,6 +35,14 @@ for path in sys.argv[1:]:
         if mode not in modes:
             modes.append(mode)
         frames.setdefault(key, {})[mode] = median(s.get("overhead_ratio") for s in run["samples"])
+        # Host wall time of a frame (recording, submitting, waiting for the
+        # GPU: extras.frame_wall_ms), medians over the samples.
+        samples = run["samples"]
+        wall = median(s.get("extras", {}).get("frame_wall_ms") for s in samples)
+        if wall is not None:
+            walls[key + (mode,)] = (median(s.get("frame_ms") for s in samples),
+                                    median(s.get("frame_ms_instrumented") for s in samples), wall,
+                                    median(s.get("extras", {}).get("frame_wall_ms_instrumented") for s in samples))
         names = [p["name"] for p in run["samples"][0]["passes"]] if run["samples"] else []
         for name in names:
             ratios = [p.get("overhead_ratio") for s in run["samples"] for p in s["passes"] if p["name"] == name]
@@ -42,6 +52,19 @@ print("| renderer | scene | size | " + " | ".join(modes) + " |")
 print("|---|---|---|" + "---|" * len(modes))
 for (label, scene, size), by in frames.items():
     print(f"| {label} | {scene} | {size} | " + " | ".join(fmt(by.get(m)) for m in modes) + " |")
+if walls:
+    def ms(v):
+        return "-" if v is None else f"{v:.3f}"
+
+    def ratio(a, b):
+        return "-" if a is None or not b else f"x{a / b:.3f}"
+
+    print()
+    print("| renderer | mode | GPU ms plain | GPU ms counted | GPU ratio | wall ms plain | wall ms counted | wall ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for (label, scene, size, mode), (gpu, gpuCounted, wall, wallCounted) in walls.items():
+        print(f"| {label} | {mode} | {ms(gpu)} | {ms(gpuCounted)} | {ratio(gpuCounted, gpu)} | {ms(wall)} | "
+              f"{ms(wallCounted)} | {ratio(wallCounted, wall)} |")
 print()
 print("| renderer | pass | " + " | ".join(modes) + " |")
 print("|---|---|" + "---|" * len(modes))
