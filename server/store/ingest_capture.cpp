@@ -1,10 +1,10 @@
 // storeCapture: one capture result (docs/result-schema.md) -> rows, inside
-// the caller's transaction. The runs, their resources, screenshots and
-// samples are read and checked first (with the sums of the samples' lines),
-// their rows gathered per table (CaptureRows) and each table's rows written
-// in one batch (batch_insert.hpp), parents before children; then the passes,
-// most of a capture's bytes, are read and sent in pieces, which PostgreSQL
-// stores while the next piece is read. Ids that children refer to (runs,
+// the caller's transaction. The runs are read and checked first (their
+// scenes looked up, their frame times read from their samples) and written;
+// then each table in the foreign keys' order (resources, screenshots,
+// samples with the sums of their lines, passes) is read in its own walk of
+// the result and sent in pieces (batch_insert.hpp), which PostgreSQL stores
+// while the next piece is read. Ids that children refer to (runs,
 // screenshots, samples, passes) are reserved up front, so no row waits for
 // its parent's id. Bad input throws IngestError naming the JSON path, and
 // the caller's transaction rolls back whatever was written.
@@ -83,8 +83,8 @@ std::vector<std::string> passColumns(bool counterArrays) {
   return columns;
 }
 
-// Every row of one capture, by table, and the ids reserved for them. Write
-// order (write()) is the foreign keys' order.
+// Every row of one capture, by table, and the ids reserved for them,
+// written in the foreign keys' order (storeCapture).
 struct CaptureRows {
   CaptureRows(Connection* connection, const RowCounts& counts)
       : db(connection),
@@ -121,12 +121,6 @@ struct CaptureRows {
                     "INSERT INTO scenes (name, params) VALUES (?1, ?2) "
                     "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id") {}
 
-  // Each table's rows in one batch, parents first; the passes' rows are
-  // read now (writePasses).
-  void write() {
-    for (BatchInsert* table : {&runs, &resources, &screenshots, &samples}) table->flush();
-    writePasses();
-  }
   void writePasses();
 
   Connection* db;
@@ -146,6 +140,9 @@ struct CaptureRows {
   json ceilings;  // the capture's device.ceilings (null when not measured)
   // Each sample's id, object and path, for its passes' rows (writePasses).
   std::vector<std::tuple<int64_t, const json*, std::string>> samplesPasses;
+  // Each sample's screenshot id, in the samples' order (addScreenshots),
+  // for its row (addSamples).
+  std::vector<std::optional<int64_t>> sampleScreenshots;
 };
 
 // The member, not copied (null when absent), for BatchInsert::add(const json*).
@@ -329,11 +326,42 @@ int64_t cameraIndexOf(const json& camera, size_t s, const std::string& at, std::
   return index;
 }
 
-// Adds the run's samples; returns their frame times (for the run's, written on its row).
-std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path,
-                                         const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+// The run's samples' frame times, for the run's (written on its row, which
+// is written before the samples'): read and checked again with the rest of
+// the sample (addSamples).
+std::vector<SampleFrameTimes> sampleFrameTimes(const json& run, const std::string& path) {
   const json& samples = kMembers.array(run, "samples", path);
-  std::vector<SampleFrameTimes> frameTimesOfSamples;
+  std::vector<SampleFrameTimes> out;
+  for (size_t s = 0; s < samples.size(); ++s) {
+    std::string at = path + ".samples[" + std::to_string(s) + "]";
+    if (!samples[s].is_object()) bad(at, "must be an object");
+    // As the readers get them back (queries.cpp, frameTimes): an empty array is none.
+    SampleFrameTimes times{kMembers.number(samples[s], "frame_ms", at), {}};
+    if (auto frames = optFrameTimes(samples[s], "frame_ms_frames", at)) {
+      times.frames.reserve(frames->size());
+      for (const auto& ms : *frames) times.frames.push_back(ms.get<double>());
+    }
+    out.push_back(std::move(times));
+  }
+  return out;
+}
+
+// The screenshots of the run's samples (before the samples' rows, which
+// refer to them).
+void addScreenshots(CaptureRows& in, const json& run, const std::string& path,
+                    const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+  const json& samples = kMembers.array(run, "samples", path);
+  for (size_t s = 0; s < samples.size(); ++s) {
+    in.sampleScreenshots.push_back(
+        addScreenshot(in, samples[s], path + ".samples[" + std::to_string(s) + "]", screenshots));
+  }
+}
+
+// Adds the run's samples' rows, sending them in pieces; `screenshotAt`: the
+// first of the run's samples in CaptureRows::sampleScreenshots.
+void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path, size_t& screenshotAt) {
+  constexpr size_t kSamplesPerPiece = 64;
+  const json& samples = kMembers.array(run, "samples", path);
   std::map<int64_t, size_t> cameras;  // camera index -> the sample that has it
   for (size_t s = 0; s < samples.size(); ++s) {
     std::string at = path + ".samples[" + std::to_string(s) + "]";
@@ -351,7 +379,7 @@ std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const j
     // A variant's error against its reference variant; "against" is required
     // there, as no renderer is its implied reference.
     ImageErrorColumns variant = imageErrorColumns(sample, "variant_error", at, std::nullopt);
-    auto screenshotId = addScreenshot(in, sample, at, screenshots);
+    std::optional<int64_t> screenshotId = in.sampleScreenshots.at(screenshotAt++);
     auto frames = kMembers.optInteger(sample, "frames", at);
     auto skyEstimate = kMembers.optNumber(sample, "sky_fraction_estimate", at);
     double frameMs = kMembers.number(sample, "frame_ms", at);
@@ -380,15 +408,8 @@ std::vector<SampleFrameTimes> addSamples(CaptureRows& in, int64_t runId, const j
         .add(sums.bytes)
         .add(sums.footprint)
         .add(sums.footprintRequested);
-    // As the readers get them back (queries.cpp, frameTimes): an empty array is none.
-    SampleFrameTimes times{frameMs, {}};
-    if (frameTimes) {
-      times.frames.reserve(frameTimes->size());
-      for (const auto& ms : *frameTimes) times.frames.push_back(ms.get<double>());
-    }
-    frameTimesOfSamples.push_back(std::move(times));
+    if (in.samples.rows() >= kSamplesPerPiece) in.samples.send();
   }
-  return frameTimesOfSamples;
 }
 
 void addResources(CaptureRows& in, int64_t runId, const json& list, const std::string& path) {
@@ -451,8 +472,8 @@ struct RunContext {
   std::optional<std::string> host;
 };
 
-void addRun(CaptureRows& in, const RunContext& context, const json& run, const std::string& path,
-            const std::map<std::string, std::vector<uint8_t>>& screenshots) {
+// The run's row; its id. Its resources and samples follow (storeCapture).
+int64_t addRun(CaptureRows& in, const RunContext& context, const json& run, const std::string& path) {
   if (!run.is_object()) bad(path, "must be an object");
   int64_t scene = sceneId(in, kMembers.text(run, "scene", path), kMembers.object(run, "scene_params", path));
   int64_t width = kMembers.integer(run, "width", path);
@@ -477,12 +498,12 @@ void addRun(CaptureRows& in, const RunContext& context, const json& run, const s
   json notes = kMembers.object(run, "notes", path);
   json options = kMembers.object(run, "options", path);
   std::string variant = kMembers.optText(run, "variant", path).value_or(renderer);
+  kMembers.array(resources, "list", path + ".resources");  // checked here, read by addResources
   int64_t runId = in.runIds.next();
-  addResources(in, runId, kMembers.array(resources, "list", path + ".resources"), path + ".resources.list");
   in.runShaders.emplace_back(runId, &run, path);
-  // The run's row after its samples: it carries their frame time (0013); its
-  // summary over the samples follows in SQL (writeRunSummaries).
-  RunFrameTime frameTime = runFrameTime(addSamples(in, runId, run, path, screenshots));
+  // The run's row carries its samples' frame time (0013); its summary over
+  // the samples follows in SQL (writeRunSummaries).
+  RunFrameTime frameTime = runFrameTime(sampleFrameTimes(run, path));
   in.runs.row()
       .add(runId)
       .add(context.jobId)
@@ -508,6 +529,7 @@ void addRun(CaptureRows& in, const RunContext& context, const json& run, const s
       .add(frameTime.upper)
       .add(static_cast<int64_t>(frameTime.frames))
       .add(frameTime.source);
+  return runId;
 }
 
 }  // namespace
@@ -536,10 +558,31 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
   if (!runs || !runs->is_array()) bad("runs", "missing or not an array");
   CaptureRows in(db, countRows(*runs));
   in.ceilings = std::move(ceilings);
+  // The runs first: their scenes are looked up by statements, which cannot
+  // run while a COPY is open. Then every other table in its own walk, in
+  // the foreign keys' order, sent in pieces while the next is read.
+  std::vector<std::tuple<int64_t, const json*, std::string>> stored;  // each run's id, object and path
   for (size_t r = 0; r < runs->size(); ++r) {
-    addRun(in, context, (*runs)[r], "runs[" + std::to_string(r) + "]", screenshots);
+    std::string path = "runs[" + std::to_string(r) + "]";
+    stored.emplace_back(addRun(in, context, (*runs)[r], path), &(*runs)[r], std::move(path));
   }
-  in.write();
+  in.runs.flush();
+  constexpr size_t kResourcesPerPiece = 512, kScreenshotsPerPiece = 16;
+  for (const auto& [runId, run, path] : stored) {
+    const json& list = kMembers.array(kMembers.object(*run, "resources", path), "list", path + ".resources");
+    addResources(in, runId, list, path + ".resources.list");
+    if (in.resources.rows() >= kResourcesPerPiece) in.resources.send();
+  }
+  in.resources.flush();
+  for (const auto& [runId, run, path] : stored) {
+    addScreenshots(in, *run, path, screenshots);
+    if (in.screenshots.rows() >= kScreenshotsPerPiece) in.screenshots.send();
+  }
+  in.screenshots.flush();
+  size_t screenshotAt = 0;
+  for (const auto& [runId, run, path] : stored) addSamples(in, runId, *run, path, screenshotAt);
+  in.samples.flush();
+  in.writePasses();
   writeRunSummaries(db, jobId);
   for (const auto& [runId, run, path] : in.runShaders) insertShaderSources(db, runId, *run, path);
   for (const auto& [passId, pass, path] : in.passSites) insertPassSites(db, passId, *pass, path);

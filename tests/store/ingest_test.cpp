@@ -518,6 +518,51 @@ TEST_F(Ingest, PassRefusedAfterOthersWereSentLeavesNothing) {
   EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM counters"), 320);
 }
 
+// Every table is sent in pieces while the next is read: a sample refused
+// after 64 samples' rows were sent, and a screenshot refused after 16
+// screenshots were, leave nothing stored either, and the connection takes
+// the corrected capture.
+TEST_F(Ingest, SampleOrScreenshotRefusedAfterOthersWereSentLeavesNothing) {
+  Capture c;
+  std::vector<json> runs;
+  for (int r = 0; r < 3; ++r) {
+    std::vector<json> samples;
+    for (int s = 0; s < 30; ++s) {
+      std::string shot = "r" + std::to_string(r) + "s" + std::to_string(s) + ".png";
+      samples.push_back(makeSample(s, 2.0 + s, {makePass("opaque", 1.0, 100, {makeCounter("color", "write", 10, 40)})},
+                                   shot));
+      c.screenshots[shot] = fakePng(8, 8, static_cast<uint8_t>(s));
+    }
+    runs.push_back(makeRun("forward", "atrium", 64, 36, samples));
+  }
+  c.result = makeCapture(runs);
+  int64_t jobId = newJob();
+  auto nothingStored = [&](const std::string& why) {
+    for (const char* table : {"runs", "samples", "passes", "counters", "run_resources", "screenshots"}) {
+      EXPECT_EQ(scalar(*store_, std::string("SELECT COUNT(*) FROM ") + table), 0) << table << " after " << why;
+    }
+  };
+  // The 81st sample of 90: its row is read after 64 were sent.
+  c.result["runs"][2]["samples"][20]["image_error"]["identical"] = "yes";
+  auto stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[2].samples[20].image_error.identical: must be true or false"), std::string::npos)
+      << stored.error();
+  nothingStored("a sample refused");
+  c.result["runs"][2]["samples"][20]["image_error"]["identical"] = false;
+  // The 61st screenshot of 90, after 60 were sent: not a PNG.
+  c.screenshots["r2s0.png"] = {1, 2, 3};
+  stored = store_->runs().ingestCapture(jobId, c.result, c.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[2].samples[0].screenshot"), std::string::npos) << stored.error();
+  nothingStored("a screenshot refused");
+  c.screenshots["r2s0.png"] = fakePng(8, 8, 0);
+  ASSERT_EQ(ingest(jobId, c), 3);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM samples"), 90);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM screenshots"), 90);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM run_resources"), 6);
+}
+
 // Ids reserved by two connections, interleaved, never meet, and each list
 // is ascending and as long as asked. PostgreSQL hands samples', passes' and
 // screenshots' ids out in blocks of 1,024 (migration 0014), runs' one by one;
