@@ -148,6 +148,14 @@ struct ObjectFields {
 };
 
 // ...or as text (writeRunRow): the same bytes as that object's dump().
+struct TextFields;
+// An object, or an array of objects (one per item), as text: filled by
+// fill(fields) or fill(fields, item) through TextFields.
+template <class Fill>
+void writeObject(JsonText& t, Fill fill);
+template <class Items, class Fill>
+void writeObjects(JsonText& t, const Items& items, Fill fill);
+
 struct TextFields {
   JsonText& t;
   template <class T>
@@ -158,28 +166,33 @@ struct TextFields {
   template <class Fill>
   void object(const char* key, bool present, Fill fill) {
     t.key(key);
-    if (!present) {
+    if (present) {
+      writeObject(t, fill);
+    } else {
       t.null();
-      return;
     }
-    t.beginObject();
-    TextFields inner{t};
-    fill(inner);
-    t.endObject();
   }
   template <class Items, class Fill>
   void objects(const char* key, const Items& items, Fill fill) {
     t.key(key);
-    t.beginArray();
-    for (const auto& item : items) {
-      t.beginObject();
-      TextFields inner{t};
-      fill(inner, item);
-      t.endObject();
-    }
-    t.endArray();
+    writeObjects(t, items, fill);
   }
 };
+
+template <class Fill>
+void writeObject(JsonText& t, Fill fill) {
+  t.beginObject();
+  TextFields inner{t};
+  fill(inner);
+  t.endObject();
+}
+
+template <class Items, class Fill>
+void writeObjects(JsonText& t, const Items& items, Fill fill) {
+  t.beginArray();
+  for (const auto& item : items) writeObject(t, [&](TextFields& inner) { fill(inner, item); });
+  t.endArray();
+}
 
 // TextFields with more keys than a field list names: each extra is written
 // where its key falls among the list's (the keys of an object ascend).
@@ -434,34 +447,12 @@ std::string runDetailText(const store::RunDetail& d, const store::RunFrameTime* 
   fields.extras = {
       {"ceilings", [&](JsonText& t) { t.value(d.run.ceilings); }},
       {"counter_headroom", [&](JsonText& t) { t.value(d.run.counterHeadroom); }},
-      {"device_info",
-       [&](JsonText& t) {
-         t.beginObject();
-         TextFields inner{t};
-         deviceFields(d.run.device, inner);
-         t.endObject();
-       }},
+      {"device_info", [&](JsonText& t) { writeObject(t, [&](auto& f) { deviceFields(d.run.device, f); }); }},
       {"passes",
-       [&](JsonText& t) {
-         t.beginArray();
-         for (const auto& p : d.passes) {
-           t.beginObject();
-           TextFields inner{t};
-           passFields(p, inner);
-           t.endObject();
-         }
-         t.endArray();
-       }},
+       [&](JsonText& t) { writeObjects(t, d.passes, [](auto& f, const store::Pass& p) { passFields(p, f); }); }},
       {"resources",
        [&](JsonText& t) {
-         t.beginArray();
-         for (const auto& r : d.run.resources) {
-           t.beginObject();
-           TextFields inner{t};
-           resourceFields(r, inner);
-           t.endObject();
-         }
-         t.endArray();
+         writeObjects(t, d.run.resources, [](auto& f, const store::RunResource& r) { resourceFields(r, f); });
        }},
       {"shaders", [&](JsonText& t) { t.value(d.run.shaders); }},
   };

@@ -104,7 +104,6 @@ struct CounterSums {
 };
 
 struct PassSums {
-  std::string name;
   int64_t position = 0;  // the least: the passes' order
   double gpuMs = 0;
   std::optional<double> gpuMsInstrumented, fragmentInvocations, fragmentInvocationsStatistic;
@@ -117,11 +116,7 @@ class Summer {
  public:
   PassSums& pass(const std::string& name, int64_t position) {
     auto [it, added] = passes_.try_emplace(name);
-    if (added) {
-      it->second.name = name;
-      it->second.position = position;
-    }
-    it->second.position = std::min(it->second.position, position);
+    it->second.position = added ? position : std::min(it->second.position, position);
     return it->second;
   }
   static void addPass(PassSums& p, RowReader& row) {
@@ -158,14 +153,15 @@ class Summer {
   // their pass's least position, then their own, then first seen.
   std::vector<Pass> result(int samples) const {
     auto mean = [samples](std::optional<double> sum) { return sum ? std::optional(*sum / samples) : sum; };
-    std::vector<const PassSums*> order;
-    for (const auto& [name, p] : passes_) order.push_back(&p);
-    std::stable_sort(order.begin(), order.end(), [](const PassSums* a, const PassSums* b) {
-      return std::tie(a->position, a->name) < std::tie(b->position, b->name);
-    });
+    // The map holds them by name: a stable sort by position keeps names in order.
+    std::vector<const std::pair<const std::string, PassSums>*> order;
+    for (const auto& entry : passes_) order.push_back(&entry);
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto* a, const auto* b) { return a->second.position < b->second.position; });
     std::vector<Pass> out;
-    for (const PassSums* p : order) {
-      Pass pass{p->name,
+    for (const auto* entry : order) {
+      const PassSums* p = &entry->second;
+      Pass pass{entry->first,
                 p->gpuMs / samples,
                 nullptr,
                 mean(p->gpuMsInstrumented),
@@ -194,7 +190,7 @@ class Summer {
 };
 
 constexpr const char* kPassColumns =
-    "p.id, p.name, p.position, p.gpu_ms, p.gpu_ms_instrumented, p.overhead_ratio, p.fragment_invocations, "
+    "p.name, p.position, p.gpu_ms, p.gpu_ms_instrumented, p.overhead_ratio, p.fragment_invocations, "
     "p.fragment_invocations_statistic";
 
 void readPostgres(Connection* db, int64_t runId, Summer& summer) {
@@ -206,7 +202,6 @@ void readPostgres(Connection* db, int64_t runId, Summer& summer) {
   rows.bind(1, runId);
   while (rows.step()) {
     RowReader row(rows);
-    row.getInt();  // the pass's id: SQLite's rows need it
     std::string name = row.getText();
     int64_t position = row.getInt();
     PassSums& pass = summer.pass(name, position);
@@ -232,7 +227,7 @@ void readPostgres(Connection* db, int64_t runId, Summer& summer) {
 void readSqlite(Connection* db, int64_t runId, Summer& summer) {
   // One row per counter, and one with NULL counter columns for a pass
   // without counters.
-  Statement rows(db, std::string("SELECT ") + kPassColumns +
+  Statement rows(db, std::string("SELECT p.id, ") + kPassColumns +
                          ", c.position, c.resource, c.kind, c.format, c.access, c.count, c.bytes, c.source, "
                          "c.footprint_bytes FROM samples s JOIN passes p ON p.sample_id = s.id "
                          "LEFT JOIN counters c ON c.pass_id = p.id WHERE s.run_id = ?1 "
@@ -240,12 +235,11 @@ void readSqlite(Connection* db, int64_t runId, Summer& summer) {
   rows.bind(1, runId);
   std::optional<int64_t> current;
   PassSums* pass = nullptr;
-  int64_t position = 0;
   while (rows.step()) {
     RowReader row(rows);
-    int64_t id = row.getInt();
+    int64_t id = row.getInt();  // one pass's rows follow each other
     std::string name = row.getText();
-    position = row.getInt();
+    int64_t position = row.getInt();
     if (id != current) {
       current = id;
       pass = &summer.pass(name, position);
