@@ -1,8 +1,9 @@
 // storeCapture: one capture result (docs/result-schema.md) -> rows, inside
 // the caller's transaction. The runs are read and checked first (their
-// scenes looked up, their frame times read from their samples) and written;
-// then each table in the foreign keys' order (resources, screenshots,
-// samples with the sums of their lines, passes) is read in its own walk of
+// scenes looked up; their samples' values read once, for the run's frame
+// time and summary and for the samples' rows) and written; then each table
+// in the foreign keys' order (resources, screenshots, samples, passes) is
+// read in its own walk of
 // the result and sent in pieces (batch_insert.hpp), which PostgreSQL stores
 // while the next piece is read. Ids that children refer to (runs,
 // screenshots, samples, passes) are reserved up front, so no row waits for
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -100,7 +102,10 @@ struct CaptureRows {
              {"id", "job_id", "device_id", "renderer", "scene_id", "width", "height", "counting", "lights",
               "render_target_bytes", "notes", "shaders", "counter_headroom", "options", "variant", "tally_version",
               "tally_commit", "footprint_block_bytes", "host", "frame_time_median", "frame_time_lower",
-              "frame_time_upper", "frame_time_frames", "frame_time_source"}),
+              "frame_time_upper", "frame_time_frames", "frame_time_source", "sample_count", "mean_frame_ms",
+              "mean_bytes", "mean_frame_ms_instrumented", "mean_overhead_ratio", "image_compared",
+              "image_identical", "mean_psnr", "min_psnr", "mean_footprint_bytes",
+              "mean_footprint_requested_bytes"}),
         resources(db, "run_resources",
                   {"run_id", "position", "name", "kind", "format", "element_bytes", "width", "height",
                    "allocation_bytes", "format_bytes", "usage"}),
@@ -143,40 +148,13 @@ struct CaptureRows {
   // Each sample's screenshot id, in the samples' order (addScreenshots),
   // for its row (addSamples).
   std::vector<std::optional<int64_t>> sampleScreenshots;
+  // Each sample's values that its run's row summarises, read with the run
+  // (addRun), in the samples' order, for its row (addSamples).
+  std::vector<SampleValues> sampleValues;
 };
 
 // The member, not copied (null when absent), for BatchInsert::add(const json*).
 const json* optJson(const json& object, const char* key) { return find(object, key); }
-
-// A sample's sums over its passes' lines, written on its row: all the
-// lines' bytes; the footprint of the lines that have one and those lines'
-// requested bytes (null when none has). Read with the sample, before its
-// passes' rows (writePasses).
-struct CounterSums {
-  double bytes = 0;
-  std::optional<double> footprint, footprintRequested;
-};
-
-CounterSums counterSums(const json& sample, const std::string& path) {
-  CounterSums sums;
-  const json& passes = kMembers.array(sample, "passes", path);
-  for (size_t p = 0; p < passes.size(); ++p) {
-    std::string at = path + ".passes[" + std::to_string(p) + "]";
-    if (!passes[p].is_object()) bad(at, "must be an object");
-    const json& counters = kMembers.array(passes[p], "resources", at);
-    for (size_t c = 0; c < counters.size(); ++c) {
-      // Only the two numbers here; the whole counter is read and checked
-      // with its pass (addCounters), in the same transaction.
-      CounterFields n = counterBytes(counters[c], at, c);
-      sums.bytes += n.bytes;
-      if (n.footprint) {
-        sums.footprint = sums.footprint.value_or(0) + *n.footprint;
-        sums.footprintRequested = sums.footprintRequested.value_or(0) + n.bytes;
-      }
-    }
-  }
-  return sums;
-}
 
 // The pass's counters: rows of counters, or (in.counterArrays) the arrays
 // that end the pass's row, which addPasses has begun.
@@ -284,66 +262,8 @@ std::optional<int64_t> addScreenshot(CaptureRows& in, const json& sample, const 
   return id;
 }
 
-// The columns of an {"against", "psnr", "identical", "max_abs", "mean_abs"}
-// object; all empty when the sample has no such key.
-struct ImageErrorColumns {
-  std::optional<std::string> against;
-  std::optional<int64_t> identical;
-  std::optional<double> psnr, maxAbs, meanAbs;
-};
-
-ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const std::string& at,
-                                    const std::optional<std::string>& defaultAgainst) {
-  ImageErrorColumns out;
-  const json* error = find(sample, key);
-  if (!error) return out;
-  std::string errorPath = at + "." + key;
-  if (!error->is_object()) bad(errorPath, "must be an object");
-  out.against = defaultAgainst ? kMembers.optText(*error, "against", errorPath).value_or(*defaultAgainst)
-                               : kMembers.text(*error, "against", errorPath);
-  const json* same = find(*error, "identical");
-  if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
-  out.psnr = kMembers.optNumber(*error, "psnr", errorPath);
-  out.identical = same ? int64_t{same->get<bool>()} : int64_t{!out.psnr};
-  out.maxAbs = kMembers.number(*error, "max_abs", errorPath);
-  out.meanAbs = kMembers.number(*error, "mean_abs", errorPath);
-  return out;
-}
-
 BatchInsert& addImageError(BatchInsert& row, const ImageErrorColumns& e) {
   return row.add(e.against).add(e.identical).add(e.psnr).add(e.maxAbs).add(e.meanAbs);
-}
-
-// The camera's index within its run, refused when an earlier sample of the
-// run has it (the samples table keeps one sample per camera and run).
-int64_t cameraIndexOf(const json& camera, size_t s, const std::string& at, std::map<int64_t, size_t>& seen) {
-  int64_t index = kMembers.optInteger(camera, "index", at + ".camera").value_or(static_cast<int64_t>(s));
-  auto [it, added] = seen.emplace(index, s);
-  if (!added) {
-    bad(at + ".camera.index", std::to_string(index) + " is already the camera of samples[" +
-                                  std::to_string(it->second) + "] of this run: a run holds one sample per camera");
-  }
-  return index;
-}
-
-// The run's samples' frame times, for the run's (written on its row, which
-// is written before the samples'): read and checked again with the rest of
-// the sample (addSamples).
-std::vector<SampleFrameTimes> sampleFrameTimes(const json& run, const std::string& path) {
-  const json& samples = kMembers.array(run, "samples", path);
-  std::vector<SampleFrameTimes> out;
-  for (size_t s = 0; s < samples.size(); ++s) {
-    std::string at = path + ".samples[" + std::to_string(s) + "]";
-    if (!samples[s].is_object()) bad(at, "must be an object");
-    // As the readers get them back (queries.cpp, frameTimes): an empty array is none.
-    SampleFrameTimes times{kMembers.number(samples[s], "frame_ms", at), {}};
-    if (auto frames = optFrameTimes(samples[s], "frame_ms_frames", at)) {
-      times.frames.reserve(frames->size());
-      for (const auto& ms : *frames) times.frames.push_back(ms.get<double>());
-    }
-    out.push_back(std::move(times));
-  }
-  return out;
 }
 
 // The screenshots of the run's samples (before the samples' rows, which
@@ -357,52 +277,45 @@ void addScreenshots(CaptureRows& in, const json& run, const std::string& path,
   }
 }
 
-// Adds the run's samples' rows, sending them in pieces; `screenshotAt`: the
-// first of the run's samples in CaptureRows::sampleScreenshots.
-void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path, size_t& screenshotAt) {
+// Adds the run's samples' rows, sending them in pieces; `sampleAt`: the
+// first of the run's samples in CaptureRows::sampleScreenshots and
+// sampleValues (read with the run, addRun).
+void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path, size_t& sampleAt) {
   constexpr size_t kSamplesPerPiece = 64;
   const json& samples = kMembers.array(run, "samples", path);
-  std::map<int64_t, size_t> cameras;  // camera index -> the sample that has it
-  for (size_t s = 0; s < samples.size(); ++s) {
+  for (size_t s = 0; s < samples.size(); ++s, ++sampleAt) {
     std::string at = path + ".samples[" + std::to_string(s) + "]";
-    const json& sample = samples[s];
-    if (!sample.is_object()) bad(at, "must be an object");
-    const json* camera = find(sample, "camera");
-    if (!camera || !camera->is_object()) bad(at + ".camera", "missing or not an object");
-    int64_t cameraIndex = cameraIndexOf(*camera, s, at, cameras);
+    const json& sample = samples[s];  // an object with a camera object: readSampleValues checked
+    const SampleValues& values = in.sampleValues.at(sampleAt);
     // -1: the renderer has no skybox pass.
     std::optional<double> sky;
     if (find(sample, "sky_fraction")) {
       if (double given = kMembers.number(sample, "sky_fraction", at); given >= 0) sky = given;
     }
-    ImageErrorColumns image = imageErrorColumns(sample, "image_error", at, "forward");
     // A variant's error against its reference variant; "against" is required
     // there, as no renderer is its implied reference.
     ImageErrorColumns variant = imageErrorColumns(sample, "variant_error", at, std::nullopt);
-    std::optional<int64_t> screenshotId = in.sampleScreenshots.at(screenshotAt++);
+    std::optional<int64_t> screenshotId = in.sampleScreenshots.at(sampleAt);
     auto frames = kMembers.optInteger(sample, "frames", at);
     auto skyEstimate = kMembers.optNumber(sample, "sky_fraction_estimate", at);
-    double frameMs = kMembers.number(sample, "frame_ms", at);
-    auto frameMsInstrumented = kMembers.optNumber(sample, "frame_ms_instrumented", at);
-    auto overhead = kMembers.optNumber(sample, "overhead_ratio", at);
     json extras = extrasWithRoofline(kMembers.object(sample, "extras", at), sample, in.ceilings);
     auto frameTimes = optFrameTimes(sample, "frame_ms_frames", at);
     int64_t sampleId = in.sampleIds.next();
-    CounterSums sums = counterSums(sample, at);
+    const CounterSums& sums = values.sums;
     in.samplesPasses.emplace_back(sampleId, &sample, at);
     in.samples.row()
         .add(sampleId)
         .add(runId)
-        .add(cameraIndex)
-        .add(*camera)
+        .add(values.cameraIndex)
+        .add(*find(sample, "camera"))
         .add(sky)
         .add(skyEstimate)
         .add(frames)
-        .add(frameMs)
+        .add(values.times.frameMs)
         .add(optJson(sample, "frame_ms_spread"))
-        .add(frameMsInstrumented)
-        .add(overhead);
-    addImageError(in.samples, image).add(screenshotId).add(extras);
+        .add(values.frameMsInstrumented)
+        .add(values.overheadRatio);
+    addImageError(in.samples, values.image).add(screenshotId).add(extras);
     addImageError(in.samples, variant)
         .add(frameTimes)
         .add(sums.bytes)
@@ -501,9 +414,15 @@ int64_t addRun(CaptureRows& in, const RunContext& context, const json& run, cons
   kMembers.array(resources, "list", path + ".resources");  // checked here, read by addResources
   int64_t runId = in.runIds.next();
   in.runShaders.emplace_back(runId, &run, path);
-  // The run's row carries its samples' frame time (0013); its summary over
-  // the samples follows in SQL (writeRunSummaries).
-  RunFrameTime frameTime = runFrameTime(sampleFrameTimes(run, path));
+  // The run's row carries its samples' frame time and summary (0013), from
+  // their values read here once, and kept for their own rows (addSamples).
+  std::vector<SampleValues> values = readSampleValues(run, path);
+  std::vector<SampleFrameTimes> times;
+  times.reserve(values.size());
+  for (const SampleValues& v : values) times.push_back(v.times);
+  RunFrameTime frameTime = runFrameTime(times);
+  RunSummaryColumns summary = summarizeRun(values, path);
+  std::move(values.begin(), values.end(), std::back_inserter(in.sampleValues));
   in.runs.row()
       .add(runId)
       .add(context.jobId)
@@ -528,7 +447,18 @@ int64_t addRun(CaptureRows& in, const RunContext& context, const json& run, cons
       .add(frameTime.lower)
       .add(frameTime.upper)
       .add(static_cast<int64_t>(frameTime.frames))
-      .add(frameTime.source);
+      .add(frameTime.source)
+      .add(summary.sampleCount)
+      .add(summary.meanFrameMs)
+      .add(summary.meanBytes)
+      .add(summary.meanFrameMsInstrumented)
+      .add(summary.meanOverheadRatio)
+      .add(summary.imageCompared)
+      .add(summary.imageIdentical)
+      .add(summary.meanPsnr)
+      .add(summary.minPsnr)
+      .add(summary.meanFootprintBytes)
+      .add(summary.meanFootprintRequestedBytes);
   return runId;
 }
 
@@ -579,11 +509,10 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
     if (in.screenshots.rows() >= kScreenshotsPerPiece) in.screenshots.send();
   }
   in.screenshots.flush();
-  size_t screenshotAt = 0;
-  for (const auto& [runId, run, path] : stored) addSamples(in, runId, *run, path, screenshotAt);
+  size_t sampleAt = 0;
+  for (const auto& [runId, run, path] : stored) addSamples(in, runId, *run, path, sampleAt);
   in.samples.flush();
   in.writePasses();
-  writeRunSummaries(db, jobId);
   for (const auto& [runId, run, path] : in.runShaders) insertShaderSources(db, runId, *run, path);
   for (const auto& [passId, pass, path] : in.passSites) insertPassSites(db, passId, *pass, path);
   return static_cast<int64_t>(runs->size());

@@ -136,4 +136,44 @@ CounterFields counterBytes(const json& counter, const std::string& passPath, siz
   return counterFields(counter, passPath, c);
 }
 
+ImageErrorColumns imageErrorColumns(const json& sample, const char* key, const std::string& at,
+                                    const std::optional<std::string>& defaultAgainst) {
+  ImageErrorColumns out;
+  const json* error = find(sample, key);
+  if (!error) return out;
+  std::string errorPath = at + "." + key;
+  if (!error->is_object()) bad(errorPath, "must be an object");
+  out.against = defaultAgainst ? kMembers.optText(*error, "against", errorPath).value_or(*defaultAgainst)
+                               : kMembers.text(*error, "against", errorPath);
+  const json* same = find(*error, "identical");
+  if (same && !same->is_boolean()) bad(errorPath + ".identical", "must be true or false");
+  out.psnr = kMembers.optNumber(*error, "psnr", errorPath);
+  out.identical = same ? int64_t{same->get<bool>()} : int64_t{!out.psnr};
+  out.maxAbs = kMembers.number(*error, "max_abs", errorPath);
+  out.meanAbs = kMembers.number(*error, "mean_abs", errorPath);
+  return out;
+}
+
+// The lines' sums (ingest_input.hpp): only the two numbers of each line are
+// read here; the whole line is read and checked with its pass (addCounters),
+// in the same transaction.
+CounterSums counterSums(const json& sample, const std::string& path) {
+  CounterSums sums;
+  const json& passes = kMembers.array(sample, "passes", path);
+  for (size_t p = 0; p < passes.size(); ++p) {
+    std::string at = path + ".passes[" + std::to_string(p) + "]";
+    if (!passes[p].is_object()) bad(at, "must be an object");
+    const json& counters = kMembers.array(passes[p], "resources", at);
+    for (size_t c = 0; c < counters.size(); ++c) {
+      CounterFields n = counterBytes(counters[c], at, c);
+      sums.bytes += n.bytes;
+      if (n.footprint) {
+        sums.footprint = sums.footprint.value_or(0) + *n.footprint;
+        sums.footprintRequested = sums.footprintRequested.value_or(0) + n.bytes;
+      }
+    }
+  }
+  return sums;
+}
+
 }  // namespace tally::store::detail

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -16,6 +17,7 @@
 
 #include "common/json_fields.hpp"
 #include "store/db.hpp"
+#include "store/frame_time.hpp"
 
 namespace tally::store::detail {
 
@@ -56,6 +58,53 @@ CounterFields counterFields(const nlohmann::json& counter, const std::string& pa
 // Only its bytes and footprint (the rest left empty), read and checked as
 // counterFields reads them; errors as counterFields names them.
 CounterFields counterBytes(const nlohmann::json& counter, const std::string& passPath, size_t index);
+
+// The columns of an {"against", "psnr", "identical", "max_abs", "mean_abs"}
+// object (image_error, variant_error); all empty when the sample has no such
+// key. "against" defaults to `defaultAgainst` where given, else is required.
+struct ImageErrorColumns {
+  std::optional<std::string> against;
+  std::optional<int64_t> identical;
+  std::optional<double> psnr, maxAbs, meanAbs;
+};
+ImageErrorColumns imageErrorColumns(const nlohmann::json& sample, const char* key, const std::string& at,
+                                    const std::optional<std::string>& defaultAgainst);
+
+// A sample's sums over its passes' lines, written on its row: all the
+// lines' bytes; the footprint of the lines that have one and those lines'
+// requested bytes (absent when none has).
+struct CounterSums {
+  double bytes = 0;
+  std::optional<double> footprint, footprintRequested;
+};
+CounterSums counterSums(const nlohmann::json& sample, const std::string& path);
+
+// A sample's values that both its row and its run's row (migration 0013)
+// hold, read and checked once, before the run's row is written: the camera's
+// index in the run (refused when an earlier sample has it), frame_ms and its
+// per-frame times as the readers get them back (an empty array is none), the
+// counted frame, the image error against the reference and the lines' sums.
+struct SampleValues {
+  int64_t cameraIndex = 0;
+  SampleFrameTimes times;
+  std::optional<double> frameMsInstrumented, overheadRatio;
+  ImageErrorColumns image;
+  CounterSums sums;
+};
+// The run's samples' values, in the result's order (the run at `path`).
+std::vector<SampleValues> readSampleValues(const nlohmann::json& run, const std::string& path);
+
+// A run's summary columns (migration 0013) over its samples' values.
+struct RunSummaryColumns {
+  int64_t sampleCount = 0, imageCompared = 0, imageIdentical = 0;
+  std::optional<double> meanFrameMs, meanBytes, meanFrameMsInstrumented, meanOverheadRatio, meanPsnr, minPsnr,
+      meanFootprintBytes, meanFootprintRequestedBytes;
+};
+// COUNT, AVG and MIN as both engines computed them in the statement of
+// migration 0013 (a plain sum in the samples' camera order, divided by the
+// count of values); a sum that leaves the doubles throws IngestError naming
+// the column, as PostgreSQL's AVG refused it. `path`: the run.
+RunSummaryColumns summarizeRun(std::span<const SampleValues> samples, const std::string& path);
 
 // A sweep result's frame (docs/result-schema.md, "Sweep results"): what the
 // sweeps list and the dashboard's charts rely on, whatever the sweep.

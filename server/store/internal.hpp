@@ -72,12 +72,6 @@ RunRow readRunRow(const Statement& row);
 // transaction: Runs::detail reads both in one.
 std::optional<Run> readRun(Connection* db, int64_t runId);
 std::vector<Pass> readRunPasses(Connection* db, int64_t runId, int samples);
-// The summary columns of a job's runs (migration 0013) from their samples,
-// with the expressions and the walk (one run's samples in camera order) that
-// the listing used before 0013 and the migration's backfill uses: written by
-// the ingest after the capture's samples, in its transaction.
-void writeRunSummaries(Connection* db, int64_t jobId);
-
 // "WHERE"-less clause list for a RunFilter (" AND ..." each, positional "?"),
 // and binding its values from parameter index `first`; returns the next index.
 std::string runFilterSql(const RunFilter& filter);

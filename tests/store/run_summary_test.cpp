@@ -164,6 +164,54 @@ TEST_F(RunSummary, IngestWritesTheOldAggregatesAndTheFrameTime) {
   EXPECT_EQ(scalar(*store_, "SELECT sample_count FROM runs WHERE renderer = 'forward' ORDER BY id DESC LIMIT 1"), 1);
 }
 
+// The summary is summed in camera order, whatever order the result lists
+// the samples in: the walk of 0013's statement over its (run_id,
+// camera_index) index. The values make the order show in the last bit:
+// 1e16 + 1 is 1e16 in doubles, so cameras 0, 1, 2 sum to 0, and the
+// result's order (2, 0, 1) would sum to 1.
+TEST_F(RunSummary, SumsAddInCameraOrderWhateverTheResultsOrder) {
+  Capture c = mixedCapture(0);
+  json& samples = c.result["runs"][1]["samples"];
+  ASSERT_EQ(samples.size(), 3u);
+  const double frame[3] = {1e16, 1.0, -1e16}, psnr[3] = {1e16, 1.0, -1e16};
+  for (int s = 0; s < 3; ++s) {
+    samples[s]["camera"]["index"] = s;
+    samples[s]["frame_ms"] = frame[s];
+    samples[s]["frame_ms_frames"] = json::array();
+    samples[s]["image_error"] = {{"psnr", psnr[s]}, {"max_abs", 1}, {"mean_abs", 0.5}};
+  }
+  json listed = json::array({samples[2], samples[0], samples[1]});
+  samples = listed;
+  ASSERT_EQ(ingest(newJob(), c), 3);
+  Statement run(store_->connection(),
+                "SELECT mean_frame_ms, mean_psnr, min_psnr, sample_count, image_compared, image_identical "
+                "FROM runs WHERE renderer = 'deferred'");
+  ASSERT_TRUE(run.step());
+  EXPECT_EQ(run.getDouble(0), 0.0);
+  EXPECT_EQ(run.getDouble(1), 0.0);
+  EXPECT_EQ(run.getDouble(2), -1e16);
+  EXPECT_EQ(run.getInt(3), 3);
+  EXPECT_EQ(run.getInt(4), 3);
+  EXPECT_EQ(run.getInt(5), 0);  // a psnr and no "identical": not identical
+  EXPECT_FALSE(run.step());
+}
+
+// A mean whose sum of finite values leaves the doubles is refused, naming
+// the column, as PostgreSQL's AVG refused it; nothing of the capture is stored.
+TEST_F(RunSummary, SumBeyondTheDoublesIsRefused) {
+  Capture c = mixedCapture(0);
+  json& samples = c.result["runs"][1]["samples"];
+  samples[0]["frame_ms"] = 1.5e308;
+  samples[1]["frame_ms"] = 1.5e308;
+  auto stored = store_->runs().ingestCapture(newJob(), c.result, c.screenshots);
+  ASSERT_FALSE(stored);
+  EXPECT_NE(stored.error().find("runs[1].samples: the sum of the samples' frame_ms is beyond the largest double"),
+            std::string::npos)
+      << stored.error();
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM runs"), 0);
+  EXPECT_EQ(scalar(*store_, "SELECT COUNT(*) FROM samples"), 0);
+}
+
 // The columns' checks: a frame time's source is one of three, its frame count not negative.
 TEST_F(RunSummary, StoredFrameTimeColumnsAreChecked) {
   ASSERT_EQ(ingest(newJob(), mixedCapture(0)), 3);
