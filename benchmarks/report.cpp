@@ -31,6 +31,12 @@ void printDatabase(const DatabaseReport& db, bool postgres) {
     std::printf("  ingest CPU: %.1f s in this process", db.fill.ingestClientCpuSeconds);
     if (db.fill.ingestServerCpuSeconds >= 0) std::printf(", %.1f s in its PostgreSQL backend", db.fill.ingestServerCpuSeconds);
     std::printf("\n");
+    if (postgres) {
+      double total = db.fill.ingestSeconds + db.fill.statisticsWaitSeconds;
+      std::printf("  with the statistics the ingests asked for (ANALYZE beside them): %.2f s more after the last, "
+                  "%.0f samples/s ingested and analysed\n",
+                  db.fill.statisticsWaitSeconds, total > 0 ? static_cast<double>(db.fill.samples) / total : 0.0);
+    }
   } else {
     std::printf("  reused as found (--reuse)\n");
   }
@@ -221,6 +227,7 @@ void printJson(const Report& report) {
                         {"seconds", db.fill.seconds},
                         {"ingest_seconds", db.fill.ingestSeconds},
                         {"ingest_client_cpu_seconds", db.fill.ingestClientCpuSeconds},
+                        {"statistics_wait_seconds", db.fill.statisticsWaitSeconds},
                         {"ingest_server_cpu_seconds", db.fill.ingestServerCpuSeconds < 0 ? nlohmann::json(nullptr)
                                                                                            : nlohmann::json(db.fill.ingestServerCpuSeconds)}};
   }

@@ -348,6 +348,9 @@ Result<FillStats> fillDatabase(store::Store& writer, const CaptureTemplate& sour
     stats.samples += capture.samples;
     progress(stats.samples);
   }
+  auto settle = Clock::now();
+  writer.runs().waitForStatistics();
+  stats.statisticsWaitSeconds = seconds(Clock::now() - settle);
   stats.seconds = seconds(Clock::now() - start);
   return stats;
 }

@@ -50,6 +50,9 @@ struct FillStats {
   // machine, where /proc shows its backend) the server backend's; -1 when
   // not known.
   double ingestClientCpuSeconds = 0, ingestServerCpuSeconds = -1;
+  // After the last ingest: waiting for the statistics the ingests asked for
+  // (PostgreSQL's ANALYZE, which runs beside them; Runs::waitForStatistics).
+  double statisticsWaitSeconds = 0;
 };
 
 // Creates, claims, ingests and finishes one job per capture until `samples`

@@ -3,10 +3,12 @@
 // whichever facet makes the call.
 #pragma once
 
+#include <memory>
 #include <mutex>
 #include <string>
 
 #include "store/db.hpp"
+#include "store/statistics_keeper.hpp"
 
 namespace tally::store {
 
@@ -17,10 +19,11 @@ struct Shared {
   Connection* db;
   std::string location;  // as given to Store::open: the job queue's wake-ups are keyed by it
   std::mutex mutex;  // one call at a time on this connection
-  // PostgreSQL: samples this Store ingested since it last analysed the
-  // growing tables, and the samples the database held then (Runs::ingestCapture).
+  // PostgreSQL: samples this Store ingested since it last asked for the
+  // growing tables' statistics, and who keeps them (made by the first ask;
+  // Runs::ingestCapture).
   int64_t samplesSinceAnalyze = 0;
-  int64_t samplesAtAnalyze = 0;
+  std::unique_ptr<StatisticsKeeper> statistics;
 };
 
 // A facet is a view of its Store's connection: the Store makes it, and it

@@ -137,10 +137,12 @@ Result<int64_t> Runs::ingestSweep(const Lease& lease, const json& result) {
 // times over within that minute leave it planning for nearly empty tables:
 // 20,000 samples stored in 10 s into a new database, and a run's samples
 // took 1.1 s a request (sequential scans of the counters table it had then)
-// until the statistics caught up, 1 ms after. So the store analyses the growing tables itself
-// whenever the samples it stored since it last did reach the samples the
-// database held then, and at least kAnalyzeEvery: a few times while a
-// database grows from nothing, rarely after (a doubling each time).
+// until the statistics caught up, 1 ms after. So the store asks for the
+// growing tables' statistics (StatisticsKeeper, on a connection and thread of
+// its own, which no ingest waits for) whenever the samples it stored since
+// it last asked reach the samples the database held at the last ANALYZE, and
+// at least kAnalyzeEvery: a few times while a database grows from nothing,
+// rarely after (a doubling each time).
 constexpr int64_t kAnalyzeEvery = 5000;
 
 void Runs::keepStatisticsCurrent(const json& result) {
@@ -152,21 +154,16 @@ void Runs::keepStatisticsCurrent(const json& result) {
     }
   }
   shared_.samplesSinceAnalyze += samples;
-  if (shared_.samplesSinceAnalyze < std::max(kAnalyzeEvery, shared_.samplesAtAnalyze)) return;
-  // The result is committed: a failure here costs plans, not data, and the
-  // next ingest tries again.
-  try {
-    // Only the columns that queries filter or join the big tables by: the
-    // others' statistics (the passes' JSON and arrays above all) were half
-    // of the time, and no plan reads them. counters: a view of passes.
-    db_->exec(
-        "ANALYZE runs, samples (id, run_id, camera_index, screenshot_id), passes (id, sample_id, position, name), "
-        "run_resources (run_id, position), screenshots (id)");
-    Statement held(*db_, "SELECT reltuples::bigint FROM pg_class WHERE oid = 'samples'::regclass");
-    shared_.samplesAtAnalyze = held.step() ? held.getInt(0) : 0;
-    shared_.samplesSinceAnalyze = 0;
-  } catch (const std::exception&) {
-  }
+  if (!shared_.statistics) shared_.statistics = std::make_unique<StatisticsKeeper>(location_);
+  int64_t held = shared_.statistics->state().samplesAtAnalyze;
+  if (shared_.samplesSinceAnalyze < std::max(kAnalyzeEvery, held)) return;
+  shared_.statistics->request();
+  shared_.samplesSinceAnalyze = 0;
+}
+
+void Runs::waitForStatistics() {
+  std::lock_guard lock(mutex_);
+  if (shared_.statistics) shared_.statistics->waitIdle();
 }
 
 Result<int64_t> Runs::ingestCapture(int64_t jobId, const json& result,

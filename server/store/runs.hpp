@@ -86,6 +86,10 @@ class Runs : public Facet {
   // A run's shader sources by name, without their text; one with its text.
   Result<std::vector<ShaderSource>> shaderSources(int64_t runId);
   Result<std::optional<ShaderSource>> shaderSource(int64_t runId, const std::string& name);
+  // PostgreSQL: blocks until the growing tables' statistics that ingests
+  // asked for are current (their ANALYZE runs beside the ingests, which do
+  // not wait for it; ingest.cpp). SQLite: returns at once.
+  void waitForStatistics();
   // Rows for CSV/JSON export, ordered by run id, pass order, resource, access.
   Result<std::vector<ExportRow>> exportRows(const RunFilter& filter);
 

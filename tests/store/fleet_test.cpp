@@ -378,9 +378,11 @@ TEST(Engines, MigrationsBuildTheSameSchema) {
 // The PostgreSQL statement: every type through a bind and back, named and
 // numbered parameters, errors with the SQLSTATE, rollback by default.
 // A young PostgreSQL database grown by ingests faster than autovacuum looks
-// at it gets its statistics from the store (Runs::keepStatisticsCurrent): no
-// analyse after a small result, one (pg_stat_user_tables.last_analyze, which
-// autovacuum's own analyses leave alone) once 5,000 samples are stored.
+// at it gets its statistics from the store (Runs::keepStatisticsCurrent,
+// StatisticsKeeper): no analyse after a small result, one
+// (pg_stat_user_tables.last_analyze, which autovacuum's own analyses leave
+// alone) once 5,000 samples are stored, run beside the ingests and waited
+// for here.
 TEST(Engines, IngestsKeepPostgresStatisticsCurrent) {
   if (!postgresServer()) GTEST_SKIP() << "runs in store.postgresql (TALLY_TEST_STORE=postgres)";
   TempDb db;
@@ -403,9 +405,44 @@ TEST(Engines, IngestsKeepPostgresStatisticsCurrent) {
     ASSERT_TRUE(stored) << stored.error();
   };
   ingest(10);
+  store->runs().waitForStatistics();
   EXPECT_FALSE(analysed()) << "10 samples are below the first analyse";
   ingest(5000);
+  store->runs().waitForStatistics();
   EXPECT_TRUE(analysed()) << "5,010 samples stored and no analyse";
+}
+
+// The keeper on its own: requests made together are served by at least one
+// ANALYZE and at most one each; a database it cannot reach is a failure
+// counted with its message, and the next request tries again.
+TEST(Engines, StatisticsKeeperAnalysesAndCountsFailures) {
+  if (!postgresServer()) GTEST_SKIP() << "runs in store.postgresql (TALLY_TEST_STORE=postgres)";
+  TempDb db;
+  auto store = openStore(db.path());
+  ASSERT_NE(store, nullptr);
+  {
+    StatisticsKeeper keeper(db.path());
+    for (int i = 0; i < 3; ++i) keeper.request();
+    keeper.waitIdle();
+    auto state = keeper.state();
+    EXPECT_GE(state.analyses, 1);
+    EXPECT_LE(state.analyses, 3);
+    EXPECT_EQ(state.failures, 0) << state.lastFailure;
+    EXPECT_EQ(scalar(*store, "SELECT COUNT(*) FROM pg_stat_user_tables WHERE relname = 'passes' AND "
+                             "last_analyze IS NOT NULL"),
+              1);
+  }
+  std::string missing = db.path();
+  missing = missing.substr(0, missing.rfind('/') + 1) + "tally_no_such_database";
+  StatisticsKeeper keeper(missing);
+  keeper.request();
+  keeper.waitIdle();
+  EXPECT_EQ(keeper.state().failures, 1);
+  EXPECT_NE(keeper.state().lastFailure.find("tally_no_such_database"), std::string::npos) << keeper.state().lastFailure;
+  keeper.request();
+  keeper.waitIdle();
+  EXPECT_EQ(keeper.state().failures, 2);
+  EXPECT_EQ(keeper.state().analyses, 0);
 }
 
 TEST(Engines, PostgresStatementsBindAndReadEveryType) {
