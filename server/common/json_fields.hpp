@@ -4,6 +4,8 @@
 // "resolutions[2]: must be [width, height], got 3".
 #pragma once
 
+#include <array>
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -81,6 +83,42 @@ Error missing(const std::string& field, const std::string& hint = "");
 
 // The member `key` of `object`, or nullptr where it is absent or null.
 const nlohmann::json* find(const nlohmann::json& object, std::string_view key);
+
+// Whether `keys` are in the order an object keeps its members (ascending,
+// as std::string compares): what findAll needs, checked where they are declared.
+template <size_t N>
+constexpr bool inMemberOrder(const std::array<std::string_view, N>& keys) {
+  for (size_t k = 1; k < N; ++k) {
+    if (!(keys[k - 1] < keys[k])) return false;
+  }
+  return true;
+}
+
+// The members `keys` of `object`, each as find() reads it (nullptr where
+// absent or null; all nullptr when `object` is not an object), found in one
+// walk of the object's members beside `keys` instead of a search per key:
+// for the many small objects of a result. `keys` must be inMemberOrder.
+template <size_t N>
+std::array<const nlohmann::json*, N> findAll(const nlohmann::json& object,
+                                             const std::array<std::string_view, N>& keys) {
+  std::array<const nlohmann::json*, N> out{};
+  if (!object.is_object()) return out;
+  const auto& members = object.get_ref<const nlohmann::json::object_t&>();
+  auto it = members.begin();
+  for (size_t k = 0; k < N && it != members.end();) {
+    int order = std::string_view(it->first).compare(keys[k]);
+    if (order < 0) {
+      ++it;
+    } else if (order > 0) {
+      ++k;
+    } else {
+      if (!it->second.is_null()) out[k] = &it->second;
+      ++it;
+      ++k;
+    }
+  }
+  return out;
+}
 
 // Members of a document that must be whole (a result file, the layer's
 // output), read where any fault ends the reading: each getter calls `fail`,

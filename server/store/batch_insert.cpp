@@ -9,19 +9,18 @@ namespace {
 
 // COPY's text format: backslash, and the row and column separators, escaped.
 void appendCopyText(std::string& out, std::string_view text) {
-  // Runs without a character to escape go in whole.
-  for (size_t at = 0; at < text.size();) {
-    size_t special = std::min(text.find_first_of("\\\n\r\t", at), text.size());
-    out.append(text, at, special - at);
-    if (special == text.size()) break;
-    switch (text[special]) {
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      default: out += "\\t"; break;
-    }
-    at = special + 1;
+  // Runs without a character to escape go in whole. One test per character:
+  // find_first_of with a set of four searched the set for every character.
+  auto special = [](char c) { return c == '\\' || c == '\n' || c == '\r' || c == '\t'; };
+  size_t run = 0;
+  for (size_t at = 0; at < text.size(); ++at) {
+    char c = text[at];
+    if (!special(c)) continue;
+    out.append(text, run, at - run);
+    out += c == '\\' ? "\\\\" : c == '\n' ? "\\n" : c == '\r' ? "\\r" : "\\t";
+    run = at + 1;
   }
+  out.append(text, run, text.size() - run);
 }
 
 // bytea's hex input form ("\x0a1b..."), its backslash escaped for COPY.
@@ -148,14 +147,15 @@ void BatchInsert::sendPostgres(bool end) {
 ArrayLiteral& ArrayLiteral::add(std::string_view text) {
   separate();
   text_ += '"';
-  for (size_t at = 0; at < text.size();) {
-    size_t special = std::min(text.find_first_of("\"\\", at), text.size());
-    text_.append(text, at, special - at);
-    if (special == text.size()) break;
+  size_t run = 0;
+  for (size_t at = 0; at < text.size(); ++at) {
+    if (text[at] != '"' && text[at] != '\\') continue;
+    text_.append(text, run, at - run);
     text_ += '\\';
-    text_ += text[special];
-    at = special + 1;
+    text_ += text[at];
+    run = at + 1;
   }
+  text_.append(text, run, text.size() - run);
   text_ += '"';
   return *this;
 }

@@ -1,5 +1,6 @@
 // The ingest's readers of single fields of a result (ingest_input.hpp).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -72,39 +73,46 @@ bool finiteNumber(const json* v, double& out) {
   return std::isfinite(out);
 }
 
-// A counter object's bytes and footprint_bytes into `f`, as plainCounter takes them.
-bool plainBytes(const json& counter, CounterFields& f) {
-  if (const json* footprint = find(counter, "footprint_bytes")) {
-    double bytes = 0;
-    if (!finiteNumber(footprint, bytes) || bytes < 0) return false;
-    f.footprint = bytes;
+// A counter's members, found in one walk (json_fields::findAll).
+constexpr std::array<std::string_view, 9> kCounterKeys = {
+    "access", "bytes", "count", "count_spread", "footprint_bytes", "format", "kind", "name", "source"};
+static_assert(json_fields::inMemberOrder(kCounterKeys));
+enum CounterKey { kAccess, kBytes, kCount, kSpread, kFootprint, kFormat, kKind, kName, kSource };
+constexpr std::array<std::string_view, 2> kBytesKeys = {"bytes", "footprint_bytes"};
+static_assert(json_fields::inMemberOrder(kBytesKeys));
+
+// A counter's bytes and footprint_bytes into `f`, as plainCounter takes them.
+bool plainBytes(const json* bytes, const json* footprint, CounterFields& f) {
+  if (footprint) {
+    double value = 0;
+    if (!finiteNumber(footprint, value) || value < 0) return false;
+    f.footprint = value;
   }
-  return finiteNumber(find(counter, "bytes"), f.bytes);
+  return finiteNumber(bytes, f.bytes);
 }
 
 // The fields of a well-formed counter, read without building its path
 // (counters are most of a result): nothing when any field is not as the
 // checked read below takes it, which then names that field.
 std::optional<CounterFields> plainCounter(const json& counter) {
+  if (!counter.is_object()) return std::nullopt;
+  auto m = json_fields::findAll(counter, kCounterKeys);
   CounterFields f;
-  if (!counter.is_object() || !plainBytes(counter, f)) return std::nullopt;
-  auto text = [&](const char* key, std::string_view& out) {
-    const json* v = find(counter, key);
-    if (!v || !v->is_string()) return false;
-    out = v->get_ref<const std::string&>();
+  if (!plainBytes(m[kBytes], m[kFootprint], f)) return std::nullopt;
+  auto text = [&](CounterKey key, std::string_view& out) {
+    if (!m[key] || !m[key]->is_string()) return false;
+    out = m[key]->get_ref<const std::string&>();
     return true;
   };
-  auto optText = [&](const char* key, std::optional<std::string_view>& out) {
-    const json* v = find(counter, key);
-    if (v && !v->is_string()) return false;
-    if (v) out = v->get_ref<const std::string&>();
+  auto optText = [&](CounterKey key, std::optional<std::string_view>& out) {
+    if (m[key] && !m[key]->is_string()) return false;
+    if (m[key]) out = m[key]->get_ref<const std::string&>();
     return true;
   };
-  f.spread = find(counter, "count_spread");
-  bool plain = (!f.spread || f.spread->is_object()) && finiteNumber(find(counter, "count"), f.count) &&
-               text("access", f.access) &&
-               (f.access == "read" || f.access == "write") && text("name", f.name) && optText("kind", f.kind) &&
-               optText("format", f.format) && text("source", f.source);
+  f.spread = m[kSpread];
+  bool plain = (!f.spread || f.spread->is_object()) && finiteNumber(m[kCount], f.count) && text(kAccess, f.access) &&
+               (f.access == "read" || f.access == "write") && text(kName, f.name) && optText(kKind, f.kind) &&
+               optText(kFormat, f.format) && text(kSource, f.source);
   return plain ? std::optional(f) : std::nullopt;
 }
 
@@ -132,7 +140,8 @@ CounterFields counterFields(const json& counter, const std::string& passPath, si
 
 CounterFields counterBytes(const json& counter, const std::string& passPath, size_t c) {
   CounterFields f;
-  if (counter.is_object() && plainBytes(counter, f)) return f;
+  auto m = json_fields::findAll(counter, kBytesKeys);
+  if (counter.is_object() && plainBytes(m[0], m[1], f)) return f;
   return counterFields(counter, passPath, c);
 }
 

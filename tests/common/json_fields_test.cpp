@@ -172,5 +172,33 @@ TEST(JsonFields, MembersOfAWholeDocumentThrowWithTheirPath) {
             "samples[0].passes[0].name: must be an object");
 }
 
+// findAll reads each key as find() does, whatever members sit between,
+// before or after the keys; null reads as absent; a non-object has none.
+TEST(JsonFields, FindAllReadsEachKeyAsFindDoes) {
+  constexpr std::array<std::string_view, 5> keys = {"b", "bb", "count", "count_spread", "z"};
+  static_assert(inMemberOrder(keys));
+  static_assert(!inMemberOrder(std::array<std::string_view, 2>{"count_spread", "count"}));
+  static_assert(!inMemberOrder(std::array<std::string_view, 2>{"a", "a"}));
+  const std::vector<json> objects = {
+      json::object(),
+      {{"a", 1}, {"b", 2}, {"bb", nullptr}, {"c", 3}, {"count", 4}, {"count_spread", {{"n", 1}}}, {"z", "last"}},
+      {{"bb", 1}, {"count_s", 2}, {"zz", 3}},
+      {{"aa", 1}, {"ab", 2}, {"z", nullptr}, {"zz", 4}},
+      {{"count", 1}},
+      json::array({1, 2}),
+      json(3)};
+  for (const json& object : objects) {
+    SCOPED_TRACE(object.dump());
+    auto found = findAll(object, keys);
+    for (size_t k = 0; k < keys.size(); ++k) {
+      EXPECT_EQ(found[k], object.is_object() ? find(object, keys[k]) : nullptr) << keys[k];
+    }
+  }
+  auto both = findAll(objects[1], keys);
+  ASSERT_NE(both[3], nullptr);
+  EXPECT_EQ((*both[3])["n"], 1);
+  EXPECT_EQ(both[1], nullptr);  // null
+}
+
 }  // namespace
 }  // namespace tally::json_fields

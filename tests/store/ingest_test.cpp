@@ -185,7 +185,7 @@ TEST_F(Ingest, ReadsBackWhatWentIn) {
 TEST_F(Ingest, CounterTextsAndAbsentValuesRoundTripExactly) {
   std::vector<json> counters;
   const std::vector<std::string> names = {"quote\"d",  "back\\slash\\",  "{braces},comma", "tab\there",
-                                          "new\nline", "NULL",           "  padded  ",     "caf\u00e9 \u2713",
+                                          "new\nline", "NULL",           "\r padded \r\n",     "caf\u00e9 \u2713",
                                           "",          "\\\"{,}\\N"};
   const std::vector<double> numbers = {0.1, 1e-300, 1.7976931348623157e308, 0, 123456789.125, 5e-324,
                                        3.0,  2.5e15,  7.25,                   1.0 / 3};
