@@ -87,7 +87,8 @@ Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::st
     return makeError(out.path + " already holds samples; pass --reuse, or remove it" +
                      (store::isPostgresUrl(path) ? " (drop and create the database)" : ""));
   }
-  if (empty) {
+  if (empty || options.add > 0) {
+    const int64_t samples = empty ? options.samples : options.add;
     auto renderers = renderers::rendererNames();
     auto source = loadTemplate(options.templatePath, renderers);
     if (!source) return makeError("capture template: " + source.error());
@@ -95,12 +96,13 @@ Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::st
     auto progress = [&](int64_t stored) {
       if (options.quiet || stored < nextReport) return;
       std::fprintf(stderr, "filling: %lld of %lld samples\n", static_cast<long long>(stored),
-                   static_cast<long long>(options.samples));
-      nextReport = stored + std::max<int64_t>(1, options.samples / 10);
+                   static_cast<long long>(samples));
+      nextReport = stored + std::max<int64_t>(1, samples / 10);
     };
-    auto filled = fillDatabase(writer, *source, renderers, options.samples, progress);
+    auto filled = fillDatabase(writer, *source, renderers, samples, progress);
     if (!filled) return makeError(filled.error());
     out.filled = true;
+    out.added = !empty;
     out.fill = *filled;
   }
   out.bytes = databaseBytes(writer.connection(), path);

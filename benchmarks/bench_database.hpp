@@ -18,9 +18,13 @@ struct FillOptions {
   bool reuse = false;  // a database that holds samples is used as found, not refused
   std::string templatePath;
   bool quiet = false;  // no progress lines
+  // With reuse: samples to ingest into the database as found, before it is
+  // described (the ingest's rate at the database's size; the fill's figures
+  // then describe these).
+  int64_t add = 0;
 };
 
-// Fills the writer's database when it holds no samples, then checkpoints
+// Fills the writer's database when it holds no samples (or adds `add` to it), then checkpoints
 // the WAL (SQLite) and describes it. path: a SQLite file or a PostgreSQL URL.
 Result<DatabaseReport> prepareDatabase(const FillOptions& options, const std::string& path,
                                        store::Store& writer);

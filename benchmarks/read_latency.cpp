@@ -39,6 +39,7 @@ struct Options {
   int seconds = 30;  // per route and client count: no request starts later
   std::string db;    // a file or a postgresql:// URL; empty: a temporary file, removed at the end
   bool reuse = false;
+  int64_t add = 0;  // with reuse: samples ingested into the database first
   bool json = false;
   std::string templatePath = TALLY_BENCH_TEMPLATE;
   std::string route;  // only the routes whose name holds this text; empty: all
@@ -345,7 +346,7 @@ int run(const Options& options) {
   std::string serverStatementsMissing;
   if (postgres) source.server = ServerStatements::connect(path, &serverStatementsMissing);
   const std::string engine = engineVersion(**writer);  // before the server shares the writer
-  FillOptions fill{options.samples, options.reuse, options.templatePath, options.json};
+  FillOptions fill{options.samples, options.reuse, options.templatePath, options.json, options.add};
   auto database = prepareDatabase(fill, path, **writer);
   if (!database) return fail(database.error());
   Pools pools = readPools(**writer);
@@ -422,7 +423,13 @@ int main(int argc, char** argv) {
   auto* db = app.add_option("--db", options.db,
                             "Keep the database in this file, or use this postgresql:// database (default: a "
                             "temporary file)");
-  app.add_flag("--reuse", options.reuse, "Use the samples already in --db instead of refusing it")->needs(db);
+  auto* reuse =
+      app.add_flag("--reuse", options.reuse, "Use the samples already in --db instead of refusing it")->needs(db);
+  app.add_option("--add", options.add,
+                 "With --reuse: ingest this many samples more first, timed as a fill is (the ingest's rate at the "
+                 "database's size)")
+      ->needs(reuse)
+      ->check(CLI::Range(int64_t{1}, int64_t{100'000'000}));
   app.add_flag("--json", options.json, "Print the figures as JSON");
   app.add_option("--route", options.route,
                  "Time only the route of this name, or those whose name holds it (default: all)");

@@ -23,9 +23,9 @@ void printDatabase(const DatabaseReport& db, bool postgres) {
   std::printf("database: %s\n", db.path.c_str());
   if (db.filled) {
     std::printf(
-        "  filled: %lld samples in %d captures in %.1f s (%.0f samples/s with making the captures); "
+        "  %s: %lld samples in %d captures in %.1f s (%.0f samples/s with making the captures); "
         "%.1f s in Store::ingestCapture: %.0f samples/s ingested\n",
-        static_cast<long long>(db.fill.samples), db.fill.captures, db.fill.seconds,
+        db.added ? "added to the samples found" : "filled", static_cast<long long>(db.fill.samples), db.fill.captures, db.fill.seconds,
         static_cast<double>(db.fill.samples) / db.fill.seconds, db.fill.ingestSeconds,
         db.fill.ingestSeconds > 0 ? static_cast<double>(db.fill.samples) / db.fill.ingestSeconds : 0.0);
     std::printf("  ingest CPU: %.1f s in this process", db.fill.ingestClientCpuSeconds);
@@ -220,7 +220,7 @@ void printJson(const Report& report) {
   json largest = json::object();
   for (const auto& [name, bytes] : db.largest) largest[name] = bytes;
   json database = {
-      {"path", db.path}, {"filled", db.filled}, {"bytes", db.bytes}, {"rows", rows}, {"largest", largest}};
+      {"path", db.path}, {"filled", db.filled}, {"added", db.added}, {"bytes", db.bytes}, {"rows", rows}, {"largest", largest}};
   if (db.filled) {
     database["fill"] = {{"samples", db.fill.samples},
                         {"captures", db.fill.captures},

@@ -23,6 +23,7 @@ std::string loadAverage();
 struct DatabaseReport {
   std::string path;     // a file, or a PostgreSQL URL without its password
   bool filled = false;  // false: reused as found
+  bool added = false;   // filled on top of the samples found (--reuse --add)
   FillStats fill;
   uint64_t bytes = 0;  // SQLite: database file and WAL, after a checkpoint; PostgreSQL: pg_database_size
   std::vector<std::pair<std::string, int64_t>> rows;      // table -> row count
