@@ -1,7 +1,9 @@
 #include "store/batch_insert.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
+#include <type_traits>
 
 namespace tally::store::detail {
 
@@ -33,10 +35,30 @@ void appendCopyBytea(std::string& out, std::span<const uint8_t> bytes) {
   }
 }
 
+// COPY's binary format: integers in network byte order.
+void appendBig32(std::string& out, uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out += static_cast<char>((v >> shift) & 0xff);
+}
+void appendBig64(std::string& out, uint64_t v) {
+  for (int shift = 56; shift >= 0; shift -= 8) out += static_cast<char>((v >> shift) & 0xff);
+}
+void appendBig16(std::string& out, uint16_t v) {
+  out += static_cast<char>(v >> 8);
+  out += static_cast<char>(v & 0xff);
+}
+// A field: its length, then its bytes.
+void appendField(std::string& out, std::string_view bytes) {
+  appendBig32(out, static_cast<uint32_t>(bytes.size()));
+  out.append(bytes);
+}
+
+// The signature, no flags, no header extension (PostgreSQL's COPY, "Binary Format").
+constexpr std::string_view kBinaryHeader{"PGCOPY\n\377\r\n\0\0\0\0\0\0\0\0\0", 19};
+
 }  // namespace
 
-BatchInsert::BatchInsert(Connection* db, std::string table, std::vector<std::string> columns)
-    : db_(db), table_(std::move(table)), columns_(std::move(columns)) {
+BatchInsert::BatchInsert(Connection* db, std::string table, std::vector<std::string> columns, Format format)
+    : db_(db), table_(std::move(table)), columns_(std::move(columns)), format_(format) {
   if (columns_.empty()) throw std::logic_error("BatchInsert: no columns for " + table_);
 }
 
@@ -55,6 +77,8 @@ BatchInsert& BatchInsert::put(Cell cell) {
 BatchInsert& BatchInsert::add(const nlohmann::json& value) {
   return put(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
+
+BatchInsert& BatchInsert::add(BinaryArray& array) { return put(Encoded{array.take()}); }
 
 BatchInsert::~BatchInsert() {
   if (copying_) db_->copyAbort();
@@ -106,21 +130,45 @@ void BatchInsert::flushSqlite() {
     }
     int index = 1;
     for (size_t k = first * width; k < (first + count) * width; ++k, ++index) {
-      std::visit([&](const auto& value) { insert->bind(index, value); }, cells_[k]);
+      std::visit(
+          [&](const auto& value) {
+            if constexpr (std::is_same_v<std::decay_t<decltype(value)>, Encoded>) {
+              throw std::logic_error("BatchInsert: an array of " + table_ + " is for PostgreSQL's binary COPY");
+            } else {
+              insert->bind(index, value);
+            }
+          },
+          cells_[k]);
     }
     insert->run();
   }
 }
 
 void BatchInsert::sendPostgres(bool end) {
+  const bool binary = format_ == Format::kBinary;
+  std::string data;
   if (!cells_.empty() && !copying_) {
     std::string copy = "COPY " + table_ + " (";
     for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
-    copy += ") FROM STDIN";
+    copy += binary ? ") FROM STDIN WITH (FORMAT binary)" : ") FROM STDIN";
     db_->copyBegin(copy);
     copying_ = true;
+    if (binary) data.append(kBinaryHeader);
   }
-  std::string data;
+  if (binary) {
+    appendBinary(data);
+    if (end && copying_) appendBig16(data, 0xffff);  // the trailer: a row of -1 fields
+  } else {
+    appendText(data);
+  }
+  if (!data.empty()) db_->copyData(data);
+  if (end && copying_) {
+    copying_ = false;
+    db_->copyEnd();
+  }
+}
+
+void BatchInsert::appendText(std::string& data) const {
   const size_t width = columns_.size();
   for (size_t k = 0; k < cells_.size(); ++k) {
     const Cell& cell = cells_[k];
@@ -132,53 +180,80 @@ void BatchInsert::sendPostgres(bool end) {
       appendPostgresDouble(data, *d);
     } else if (const auto* text = std::get_if<std::string>(&cell)) {
       appendCopyText(data, *text);
+    } else if (const auto* bytes = std::get_if<std::span<const uint8_t>>(&cell)) {
+      appendCopyBytea(data, *bytes);
     } else {
-      appendCopyBytea(data, std::get<std::span<const uint8_t>>(cell));
+      throw std::logic_error("BatchInsert: an array of " + table_ + " needs the binary format");
     }
     data += (k + 1) % width == 0 ? '\n' : '\t';
   }
-  if (!data.empty()) db_->copyData(data);
-  if (end && copying_) {
-    copying_ = false;
-    db_->copyEnd();
+}
+
+void BatchInsert::appendBinary(std::string& data) const {
+  const size_t width = columns_.size();
+  for (size_t k = 0; k < cells_.size(); ++k) {
+    if (k % width == 0) appendBig16(data, static_cast<uint16_t>(width));
+    const Cell& cell = cells_[k];
+    if (std::holds_alternative<std::nullptr_t>(cell)) {
+      appendBig32(data, 0xffffffffu);  // -1: NULL
+    } else if (const auto* i = std::get_if<int64_t>(&cell)) {
+      appendBig32(data, 8);
+      appendBig64(data, static_cast<uint64_t>(*i));
+    } else if (const auto* d = std::get_if<double>(&cell)) {
+      appendBig32(data, 8);
+      appendBig64(data, std::bit_cast<uint64_t>(*d));
+    } else if (const auto* text = std::get_if<std::string>(&cell)) {
+      appendField(data, *text);
+    } else if (const auto* bytes = std::get_if<std::span<const uint8_t>>(&cell)) {
+      appendField(data, std::string_view(reinterpret_cast<const char*>(bytes->data()), bytes->size()));
+    } else {
+      appendField(data, std::get<Encoded>(cell).bytes);
+    }
   }
 }
 
-ArrayLiteral& ArrayLiteral::add(std::string_view text) {
-  separate();
-  text_ += '"';
-  size_t run = 0;
-  for (size_t at = 0; at < text.size(); ++at) {
-    if (text[at] != '"' && text[at] != '\\') continue;
-    text_.append(text, run, at - run);
-    text_ += '\\';
-    text_ += text[at];
-    run = at + 1;
-  }
-  text_.append(text, run, text.size() - run);
-  text_ += '"';
+BinaryArray& BinaryArray::add(std::string_view text) {
+  if (of_ != Of::kText) throw std::logic_error("BinaryArray: text in an array of doubles");
+  appendField(elements_, text);
+  ++count_;
   return *this;
 }
 
-ArrayLiteral& ArrayLiteral::add(double value) {
-  separate();
-  appendPostgresDouble(text_, value);
+BinaryArray& BinaryArray::add(double value) {
+  if (of_ != Of::kFloat8) throw std::logic_error("BinaryArray: a double in an array of text");
+  appendBig32(elements_, 8);
+  appendBig64(elements_, std::bit_cast<uint64_t>(value));
+  ++count_;
   return *this;
 }
 
-ArrayLiteral& ArrayLiteral::add(std::nullptr_t) {
-  separate();
-  text_ += "NULL";
+BinaryArray& BinaryArray::add(std::nullptr_t) {
+  appendBig32(elements_, 0xffffffffu);
+  nulls_ = true;
+  ++count_;
   return *this;
 }
 
-ArrayLiteral& ArrayLiteral::add(const nlohmann::json& value) {
+BinaryArray& BinaryArray::add(const nlohmann::json& value) {
   return add(std::string_view(value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)));
 }
 
-std::string ArrayLiteral::take() {
-  std::string out = text_.empty() ? std::string("{}") : std::move(text_) + '}';
-  text_.clear();
+std::string BinaryArray::take() {
+  // pg_type's oids of text and double precision, fixed since PostgreSQL's first releases.
+  constexpr uint32_t kTextOid = 25, kFloat8Oid = 701;
+  std::string out;
+  out.reserve(20 + elements_.size());
+  appendBig32(out, count_ ? 1 : 0);  // dimensions: an empty array has none
+  appendBig32(out, nulls_ ? 1 : 0);
+  appendBig32(out, of_ == Of::kText ? kTextOid : kFloat8Oid);
+  if (count_) {
+    appendBig32(out, static_cast<uint32_t>(count_));
+    appendBig32(out, 1);  // the lower bound
+  }
+  out += elements_;
+  elements_.clear();
+  count_ = 0;
+  nulls_ = false;
   return out;
 }
 

@@ -7,9 +7,10 @@
 //   counters.flush();   // inside the caller's transaction
 //
 // PostgreSQL takes the rows through COPY (one command, the rows streamed in
-// its text format; send() hands over the rows read so far and keeps the
-// copy open, so that the server stores them while the caller reads the
-// next); SQLite through prepared multi-row INSERTs of up to
+// its text format, or in its binary format where the table asks for it;
+// send() hands over the rows read so far and keeps the copy open, so that
+// the server stores them while the caller reads the next); SQLite through
+// prepared multi-row INSERTs of up to
 // kSqliteRowsPerStatement rows. Values are stored exactly as Statement::bind
 // stores them (the same text for numbers and JSON), so a batched row reads
 // back as a row inserted alone would.
@@ -36,9 +37,44 @@
 
 namespace tally::store::detail {
 
+// A PostgreSQL array of text or of double precision in COPY's binary form
+// (array_recv's: one dimension, or none when empty; whether an element is
+// NULL; the element type; then each element's length and bytes), built
+// element by element for an array column of a kBinary BatchInsert. An
+// element of the other type is a programming error (std::logic_error).
+class BinaryArray {
+ public:
+  enum class Of { kText, kFloat8 };
+  explicit BinaryArray(Of of) : of_(of) {}
+  BinaryArray& add(std::string_view text);  // kText: any bytes of valid UTF-8
+  BinaryArray& add(const std::string& text) { return add(std::string_view(text)); }
+  BinaryArray& add(double value);  // kFloat8
+  BinaryArray& add(std::nullptr_t);
+  BinaryArray& add(const nlohmann::json& value);  // kText: compact JSON text, as BatchInsert::add
+  BinaryArray& add(const nlohmann::json* value) { return value ? add(*value) : add(nullptr); }  // null: NULL
+  template <class T>
+  BinaryArray& add(const std::optional<T>& value) {
+    return value ? add(*value) : add(nullptr);
+  }
+  // The array's bytes; the array is empty again afterwards.
+  std::string take();
+
+ private:
+  Of of_;
+  std::string elements_;
+  int32_t count_ = 0;
+  bool nulls_ = false;
+};
+
 class BatchInsert {
  public:
-  BatchInsert(Connection* db, std::string table, std::vector<std::string> columns);
+  // kBinary (PostgreSQL; SQLite ignores it): COPY's binary format, which the
+  // server reads without parsing text (arrays and doubles above all: half
+  // of the passes' COPY as text). Each value must then be of its column's
+  // type exactly: int64_t for BIGINT, double for DOUBLE PRECISION, text for
+  // TEXT, bytes for BYTEA, a BinaryArray of the column's element type.
+  enum class Format { kText, kBinary };
+  BatchInsert(Connection* db, std::string table, std::vector<std::string> columns, Format format = Format::kText);
 
   // Starts a row; its values follow with add(), one per column in order.
   BatchInsert& row();
@@ -57,6 +93,8 @@ class BatchInsert {
   BatchInsert& add(const std::optional<T>& value) {
     return value ? add(*value) : add(nullptr);
   }
+  // An array column (kBinary only); the array is empty again afterwards.
+  BatchInsert& add(BinaryArray& array);
 
   BatchInsert(const BatchInsert&) = delete;
   BatchInsert& operator=(const BatchInsert&) = delete;
@@ -76,11 +114,16 @@ class BatchInsert {
   static constexpr size_t kSqliteRowsPerStatement = 256;
 
  private:
-  using Cell = std::variant<std::nullptr_t, int64_t, double, std::string, std::span<const uint8_t>>;
+  struct Encoded {  // a value already in COPY's binary form (an array)
+    std::string bytes;
+  };
+  using Cell = std::variant<std::nullptr_t, int64_t, double, std::string, std::span<const uint8_t>, Encoded>;
   BatchInsert& put(Cell cell);
   void write(bool end);
   void flushSqlite();
   void sendPostgres(bool end);
+  void appendText(std::string& data) const;
+  void appendBinary(std::string& data) const;
   std::string insertSql(size_t rows) const;
 
   Connection* db_;
@@ -89,30 +132,9 @@ class BatchInsert {
   std::vector<Cell> cells_;
   std::optional<Statement> full_;  // SQLite: the statement of a full chunk, prepared once
   bool copying_ = false;           // PostgreSQL: send() left the copy open
+  Format format_;
 };
 
-// A PostgreSQL array literal ({"a",NULL,1.5}), built element by element, for
-// an array column written through BatchInsert::add(std::string): the
-// literal's own quoting here, COPY's escaping there.
-class ArrayLiteral {
- public:
-  ArrayLiteral& add(std::string_view text);  // quoted: any character round-trips
-  ArrayLiteral& add(const std::string& text) { return add(std::string_view(text)); }
-  ArrayLiteral& add(double value);
-  ArrayLiteral& add(std::nullptr_t);
-  ArrayLiteral& add(const nlohmann::json& value);  // compact JSON text, as BatchInsert::add
-  ArrayLiteral& add(const nlohmann::json* value) { return value ? add(*value) : add(nullptr); }  // null: NULL
-  template <class T>
-  ArrayLiteral& add(const std::optional<T>& value) {
-    return value ? add(*value) : add(nullptr);
-  }
-  // "{...}"; the literal is empty again afterwards.
-  std::string take();
-
- private:
-  void separate() { text_ += text_.empty() ? '{' : ','; }
-  std::string text_;
-};
 
 // For each (table, count): `count` new ids of the table's id column,
 // ascending; no other writer gets them. PostgreSQL: one statement for all.

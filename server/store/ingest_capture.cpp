@@ -117,7 +117,8 @@ struct CaptureRows {
                  "variant_identical", "variant_psnr", "variant_max_abs", "variant_mean_abs", "frame_ms_frames",
                  "bytes", "footprint_bytes", "footprint_requested_bytes"}),
         counterArrays(db->engine() == Engine::Postgres),
-        passes(db, "passes", passColumns(counterArrays)),
+        passes(db, "passes", passColumns(counterArrays),
+               counterArrays ? BatchInsert::Format::kBinary : BatchInsert::Format::kText),
         counters(db, "counters",
                  {"pass_id", "position", "resource", "kind", "format", "access", "count", "bytes", "count_spread",
                   "source", "footprint_bytes"}),
@@ -160,7 +161,10 @@ const json* optJson(const json& object, const char* key) { return find(object, k
 // that end the pass's row, which addPasses has begun.
 void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::string& path) {
   const json& counters = kMembers.array(pass, "resources", path);
-  ArrayLiteral resources, kinds, formats, accesses, counts, bytesArray, spreads, sources, footprints;
+  using Of = BinaryArray::Of;
+  BinaryArray resources(Of::kText), kinds(Of::kText), formats(Of::kText), accesses(Of::kText),
+      counts(Of::kFloat8), bytesArray(Of::kFloat8), spreads(Of::kText), sources(Of::kText),
+      footprints(Of::kFloat8);
   for (size_t c = 0; c < counters.size(); ++c) {
     auto [resource, access, source, kind, format, count, bytes, footprint, spread] =
         counterFields(counters[c], path, c);
@@ -196,9 +200,9 @@ void addCounters(CaptureRows& in, int64_t passId, const json& pass, const std::s
     }
   }
   if (in.counterArrays) {
-    for (ArrayLiteral* array :
+    for (BinaryArray* array :
          {&resources, &kinds, &formats, &accesses, &counts, &bytesArray, &spreads, &sources, &footprints}) {
-      in.passes.add(array->take());
+      in.passes.add(*array);
     }
   }
 }
