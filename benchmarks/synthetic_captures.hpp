@@ -46,7 +46,7 @@ struct FillStats {
   int64_t samples = 0;
   double seconds = 0;        // the whole fill
   double ingestSeconds = 0;  // inside Store::ingestCapture
-  // The CPU time of those calls: this thread's, and (PostgreSQL on this
+  // The CPU time of those calls: this process's (the ingest's threads), and (PostgreSQL on this
   // machine, where /proc shows its backend) the server backend's; -1 when
   // not known.
   double ingestClientCpuSeconds = 0, ingestServerCpuSeconds = -1;

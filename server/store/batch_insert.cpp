@@ -57,8 +57,32 @@ constexpr std::string_view kBinaryHeader{"PGCOPY\n\377\r\n\0\0\0\0\0\0\0\0\0", 1
 
 }  // namespace
 
+CopyStream::~CopyStream() {
+  if (open_) db_->copyAbort();
+}
+
+void CopyStream::send(std::string_view piece) {
+  if (!open_) {
+    db_->copyBegin(statement_);
+    open_ = true;
+    if (binary_) db_->copyData(kBinaryHeader);
+  }
+  if (!piece.empty()) db_->copyData(piece);
+}
+
+void CopyStream::finish() {
+  if (!open_) return;
+  if (binary_) db_->copyData(std::string_view("\xff\xff", 2));  // the trailer: a row of -1 fields
+  open_ = false;
+  db_->copyEnd();
+}
+
 BatchInsert::BatchInsert(Connection* db, std::string table, std::vector<std::string> columns, Format format)
-    : db_(db), table_(std::move(table)), columns_(std::move(columns)), format_(format) {
+    : db_(db),
+      table_(std::move(table)),
+      columns_(std::move(columns)),
+      format_(format),
+      copy_(db, copyStatement(), format == Format::kBinary) {
   if (columns_.empty()) throw std::logic_error("BatchInsert: no columns for " + table_);
 }
 
@@ -80,9 +104,7 @@ BatchInsert& BatchInsert::add(const nlohmann::json& value) {
 
 BatchInsert& BatchInsert::add(BinaryArray& array) { return put(Encoded{array.take()}); }
 
-BatchInsert::~BatchInsert() {
-  if (copying_) db_->copyAbort();
-}
+BatchInsert::~BatchInsert() = default;
 
 void BatchInsert::flush() { write(true); }
 void BatchInsert::send() { write(false); }
@@ -144,28 +166,29 @@ void BatchInsert::flushSqlite() {
   }
 }
 
-void BatchInsert::sendPostgres(bool end) {
-  const bool binary = format_ == Format::kBinary;
-  std::string data;
-  if (!cells_.empty() && !copying_) {
-    std::string copy = "COPY " + table_ + " (";
-    for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
-    copy += binary ? ") FROM STDIN WITH (FORMAT binary)" : ") FROM STDIN";
-    db_->copyBegin(copy);
-    copying_ = true;
-    if (binary) data.append(kBinaryHeader);
+std::string BatchInsert::copyStatement() const {
+  std::string copy = "COPY " + table_ + " (";
+  for (size_t c = 0; c < columns_.size(); ++c) copy += (c ? ", " : "") + columns_[c];
+  return copy + (format_ == Format::kBinary ? ") FROM STDIN WITH (FORMAT binary)" : ") FROM STDIN");
+}
+
+std::string BatchInsert::take() {
+  if (cells_.size() % columns_.size() != 0) {
+    throw std::logic_error("BatchInsert: a row of " + table_ + " has the wrong number of values");
   }
-  if (binary) {
+  std::string data;
+  if (format_ == Format::kBinary) {
     appendBinary(data);
-    if (end && copying_) appendBig16(data, 0xffff);  // the trailer: a row of -1 fields
   } else {
     appendText(data);
   }
-  if (!data.empty()) db_->copyData(data);
-  if (end && copying_) {
-    copying_ = false;
-    db_->copyEnd();
-  }
+  cells_.clear();
+  return data;
+}
+
+void BatchInsert::sendPostgres(bool end) {
+  if (!cells_.empty()) copy_.send(take());
+  if (end) copy_.finish();
 }
 
 void BatchInsert::appendText(std::string& data) const {

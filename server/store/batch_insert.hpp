@@ -66,6 +66,28 @@ class BinaryArray {
   bool nulls_ = false;
 };
 
+// One PostgreSQL COPY fed with pieces of rows already formatted
+// (BatchInsert::take), which another thread may have formatted: the first
+// piece begins the copy (with the binary header where it is binary),
+// finish() ends it. Destroyed while open, it aborts the copy, whose
+// transaction must then roll back.
+class CopyStream {
+ public:
+  CopyStream(Connection* db, std::string statement, bool binary)
+      : db_(db), statement_(std::move(statement)), binary_(binary) {}
+  ~CopyStream();
+  CopyStream(const CopyStream&) = delete;
+  CopyStream& operator=(const CopyStream&) = delete;
+  void send(std::string_view piece);
+  void finish();
+
+ private:
+  Connection* db_;
+  std::string statement_;
+  bool binary_;
+  bool open_ = false;
+};
+
 class BatchInsert {
  public:
   // kBinary (PostgreSQL; SQLite ignores it): COPY's binary format, which the
@@ -109,6 +131,14 @@ class BatchInsert {
   // else may run on the connection until then.
   void send();
 
+  // PostgreSQL: the rows held, formatted for COPY (without the binary
+  // header and trailer: a CopyStream adds them), and forgotten; the
+  // connection is not used, so one thread may format while another sends
+  // with a CopyStream of copyStatement().
+  std::string take();
+  std::string copyStatement() const;  // COPY table (columns) FROM STDIN [WITH (FORMAT binary)]
+  Format format() const { return format_; }
+
   // SQLite's limit on parameters per statement is 32,766; 256 rows of the
   // widest table (samples, 27 columns) stay well within it.
   static constexpr size_t kSqliteRowsPerStatement = 256;
@@ -131,8 +161,8 @@ class BatchInsert {
   std::vector<std::string> columns_;
   std::vector<Cell> cells_;
   std::optional<Statement> full_;  // SQLite: the statement of a full chunk, prepared once
-  bool copying_ = false;           // PostgreSQL: send() left the copy open
   Format format_;
+  CopyStream copy_;  // PostgreSQL: the copy that send() leaves open
 };
 
 

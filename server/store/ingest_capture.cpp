@@ -26,6 +26,7 @@
 #include "store/ingest_input.hpp"
 #include "store/ingest_sites.hpp"
 #include "store/internal.hpp"
+#include "store/piece_pipe.hpp"
 
 namespace tally::store::detail {
 
@@ -127,6 +128,7 @@ struct CaptureRows {
                     "INSERT INTO scenes (name, params) VALUES (?1, ?2) "
                     "ON CONFLICT (name, params) DO UPDATE SET name = excluded.name RETURNING id") {}
 
+  void startPasses();
   void writePasses();
 
   Connection* db;
@@ -144,7 +146,9 @@ struct CaptureRows {
   Statement findScene, insertScene;
   std::map<std::pair<std::string, std::string>, int64_t> sceneIds;  // by name and compact params
   json ceilings;  // the capture's device.ceilings (null when not measured)
-  // Each sample's id, object and path, for its passes' rows (writePasses).
+  // Each sample's id (taken with its run's row, addRun), object and path,
+  // in the samples' order: for its row (addSamples) and its passes' rows
+  // (startPasses, writePasses).
   std::vector<std::tuple<int64_t, const json*, std::string>> samplesPasses;
   // Each sample's screenshot id, in the samples' order (addScreenshots),
   // for its row (addSamples).
@@ -152,6 +156,11 @@ struct CaptureRows {
   // Each sample's values that its run's row summarises, read with the run
   // (addRun), in the samples' order, for its row (addSamples).
   std::vector<SampleValues> sampleValues;
+  // PostgreSQL: the passes' rows, read and formatted on a thread of their
+  // own (startPasses) while the tables before them are written. Last, so
+  // that it is destroyed (the thread stopped and joined) before the members
+  // that thread uses.
+  std::optional<PiecePipe> passPieces;
 };
 
 // The member, not copied (null when absent), for BatchInsert::add(const json*).
@@ -235,12 +244,44 @@ size_t addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const st
   return passes.size();
 }
 
-// The passes of every sample, after the samples' rows they refer to. On
-// PostgreSQL they go in pieces into one open COPY, so that the server
-// stores a piece while this reads the next: most of a capture's bytes are
-// its passes (docs/benchmarks.md, "Ingest, fourth pass").
+constexpr size_t kPassesPerPiece = 64;
+
+// PostgreSQL: the passes of every sample are read into rows and formatted
+// for their COPY on a thread of their own, from when every sample has its
+// id (after the runs' rows) while this thread writes the resources,
+// screenshots and samples; writePasses then only sends them. Most of a
+// capture's rows are its passes, and the server stores a piece while the
+// next is read (docs/benchmarks.md, "Ingest on PostgreSQL at 5,000
+// samples/s"). That thread uses the passes' rows, ids and sites alone, and
+// reads the result and samplesPasses, which nothing changes meanwhile.
+void CaptureRows::startPasses() {
+  if (!counterArrays) return;  // SQLite: writePasses reads them on this thread
+  passPieces.emplace([this](PiecePipe& out) {
+    size_t held = 0;
+    for (const auto& [sampleId, sample, path] : samplesPasses) {
+      held += addPasses(*this, sampleId, *sample, path);
+      if (held < kPassesPerPiece) continue;
+      if (!out.push(passes.take())) return;  // the ingest gave up
+      held = 0;
+    }
+    out.push(passes.take());
+  });
+}
+
+// The passes of every sample, after the samples' rows they refer to: on
+// PostgreSQL the pieces startPasses formatted, into one COPY as they come
+// (its errors, bad input among them, rethrown here); on SQLite read and
+// inserted in pieces.
 void CaptureRows::writePasses() {
-  constexpr size_t kPassesPerPiece = 64;
+  if (passPieces) {
+    CopyStream stream(db, passes.copyStatement(), passes.format() == BatchInsert::Format::kBinary);
+    while (auto piece = passPieces->pop()) {
+      if (!piece->empty()) stream.send(*piece);
+    }
+    passPieces.reset();  // joined: its passes' sites are whole
+    stream.finish();
+    return;
+  }
   size_t held = 0;
   for (const auto& [sampleId, sample, path] : samplesPasses) {
     held += addPasses(*this, sampleId, *sample, path);
@@ -282,8 +323,8 @@ void addScreenshots(CaptureRows& in, const json& run, const std::string& path,
 }
 
 // Adds the run's samples' rows, sending them in pieces; `sampleAt`: the
-// first of the run's samples in CaptureRows::sampleScreenshots and
-// sampleValues (read with the run, addRun).
+// first of the run's samples in CaptureRows::sampleScreenshots, sampleValues
+// and samplesPasses (read with the run, addRun).
 void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::string& path, size_t& sampleAt) {
   constexpr size_t kSamplesPerPiece = 64;
   const json& samples = kMembers.array(run, "samples", path);
@@ -304,9 +345,8 @@ void addSamples(CaptureRows& in, int64_t runId, const json& run, const std::stri
     auto skyEstimate = kMembers.optNumber(sample, "sky_fraction_estimate", at);
     json extras = extrasWithRoofline(kMembers.object(sample, "extras", at), sample, in.ceilings);
     auto frameTimes = optFrameTimes(sample, "frame_ms_frames", at);
-    int64_t sampleId = in.sampleIds.next();
+    int64_t sampleId = std::get<0>(in.samplesPasses.at(sampleAt));
     const CounterSums& sums = values.sums;
-    in.samplesPasses.emplace_back(sampleId, &sample, at);
     in.samples.row()
         .add(sampleId)
         .add(runId)
@@ -426,6 +466,9 @@ int64_t addRun(CaptureRows& in, const RunContext& context, const json& run, cons
   for (const SampleValues& v : values) times.push_back(v.times);
   RunFrameTime frameTime = runFrameTime(times);
   RunSummaryColumns summary = summarizeRun(values, path);
+  const json& samples = kMembers.array(run, "samples", path);  // as readSampleValues read it
+  for (size_t s = 0; s < samples.size(); ++s)
+    in.samplesPasses.emplace_back(in.sampleIds.next(), &samples[s], path + ".samples[" + std::to_string(s) + "]");
   std::move(values.begin(), values.end(), std::back_inserter(in.sampleValues));
   in.runs.row()
       .add(runId)
@@ -500,6 +543,7 @@ int64_t storeCapture(Connection* db, int64_t jobId, const json& result,
     std::string path = "runs[" + std::to_string(r) + "]";
     stored.emplace_back(addRun(in, context, (*runs)[r], path), &(*runs)[r], std::move(path));
   }
+  in.startPasses();
   in.runs.flush();
   constexpr size_t kResourcesPerPiece = 512, kScreenshotsPerPiece = 16;
   for (const auto& [runId, run, path] : stored) {
