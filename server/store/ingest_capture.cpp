@@ -130,6 +130,10 @@ struct CaptureRows {
 
   void startPasses();
   void writePasses();
+  // Reads every sample's passes into rows, calling `piece` after each
+  // kPassesPerPiece of them and once at the end; stops when it returns false.
+  template <class Piece>
+  void readPasses(Piece piece);
 
   Connection* db;
   // Sites, draws and materials of each pass, and each run's shader sources
@@ -246,6 +250,18 @@ size_t addPasses(CaptureRows& in, int64_t sampleId, const json& sample, const st
 
 constexpr size_t kPassesPerPiece = 64;
 
+template <class Piece>
+void CaptureRows::readPasses(Piece piece) {
+  size_t held = 0;
+  for (const auto& [sampleId, sample, path] : samplesPasses) {
+    held += addPasses(*this, sampleId, *sample, path);
+    if (held < kPassesPerPiece) continue;
+    if (!piece()) return;
+    held = 0;
+  }
+  piece();
+}
+
 // PostgreSQL: the passes of every sample are read into rows and formatted
 // for their COPY on a thread of their own, from when every sample has its
 // id (after the runs' rows) while this thread writes the resources,
@@ -256,16 +272,8 @@ constexpr size_t kPassesPerPiece = 64;
 // reads the result and samplesPasses, which nothing changes meanwhile.
 void CaptureRows::startPasses() {
   if (!counterArrays) return;  // SQLite: writePasses reads them on this thread
-  passPieces.emplace([this](PiecePipe& out) {
-    size_t held = 0;
-    for (const auto& [sampleId, sample, path] : samplesPasses) {
-      held += addPasses(*this, sampleId, *sample, path);
-      if (held < kPassesPerPiece) continue;
-      if (!out.push(passes.take())) return;  // the ingest gave up
-      held = 0;
-    }
-    out.push(passes.take());
-  });
+  // push() is false once the ingest gave up.
+  passPieces.emplace([this](PiecePipe& out) { readPasses([&] { return out.push(passes.take()); }); });
 }
 
 // The passes of every sample, after the samples' rows they refer to: on
@@ -282,14 +290,10 @@ void CaptureRows::writePasses() {
     stream.finish();
     return;
   }
-  size_t held = 0;
-  for (const auto& [sampleId, sample, path] : samplesPasses) {
-    held += addPasses(*this, sampleId, *sample, path);
-    if (held >= kPassesPerPiece) {
-      passes.send();
-      held = 0;
-    }
-  }
+  readPasses([&] {
+    passes.send();
+    return true;
+  });
   passes.flush();
   counters.flush();
 }
