@@ -7,12 +7,19 @@ cd "$(dirname "$0")/.."
 
 phase_started=$(date +%s)
 phases=()
-phase() {  # phase NAME: the time since the last call, printed at the end
+free_mib() { df -Pm . | awk 'NR == 2 { print $4 }'; }
+phase() {  # phase NAME: the time since the last call and the disk left, printed at the end
   local now
   now=$(date +%s)
-  phases+=("$(printf '%-22s %5d s' "$1" $((now - phase_started)))")
+  phases+=("$(printf '%-22s %5d s %8d MiB free' "$1" $((now - phase_started)) "$(free_mib)")")
   phase_started=$now
 }
+# A cold run (no build trees, an empty compiler cache) writes about 7 GiB
+# here besides what setup.sh installs (docs/operating.md, "Disk"). Say so
+# before the build rather than let a linker fail on a full disk at the end.
+if [ ! -d build ] && [ "$(free_mib)" -lt 8192 ]; then
+  echo "test.sh: warning: $(free_mib) MiB free on $(df -P . | awk 'NR == 2 { print $6 }'); a cold run needs about 7 GiB" >&2
+fi
 
 bash scripts/setup.sh
 phase "setup"
@@ -51,11 +58,12 @@ phase "tests"
 
 # Sanitizer build, with clang: the targets whose input is untrusted SPIR-V,
 # and the fuzz harnesses (TALLY_FUZZ: ASan, UBSan and libFuzzer; tests/fuzz/).
-# -O1: the fuzzers run several times faster than at -O0.
+# -O1: the fuzzers run several times faster than at -O0. -g1: line tables,
+# all a sanitizer's report needs, in a quarter of -g's disk.
 if [ -f build-asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:.*clang' build-asan/CMakeCache.txt; then
   rm -rf build-asan  # a tree configured with gcc before the switch to clang
 fi
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g1 -O1" \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTALLY_FUZZ=ON -DTALLY_BUILD_BENCHMARKS=OFF \
   "${launcher[@]}" >/dev/null
 cmake --build build-asan -j"$jobs" --target tally_unit_tests tally_corpus_tests tallyd \
