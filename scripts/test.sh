@@ -14,11 +14,12 @@ phase() {  # phase NAME: the time since the last call and the disk left, printed
   phases+=("$(printf '%-22s %5d s %8d MiB free' "$1" $((now - phase_started)) "$(free_mib)")")
   phase_started=$now
 }
-# A cold run (no build trees, an empty compiler cache) writes about 7 GiB
-# here besides what setup.sh installs (docs/operating.md, "Disk"). Say so
+# A cold run (no build trees, an empty compiler cache) writes about 2.5 GiB
+# besides what setup.sh installs (docs/benchmarks.md, "A cold run, end to
+# end, and the disk it takes"); 8 GiB leaves room for -g builds. Say so
 # before the build rather than let a linker fail on a full disk at the end.
 if [ ! -d build ] && [ "$(free_mib)" -lt 8192 ]; then
-  echo "test.sh: warning: $(free_mib) MiB free on $(df -P . | awk 'NR == 2 { print $6 }'); a cold run needs about 7 GiB" >&2
+  echo "test.sh: warning: $(free_mib) MiB free on $(df -P . | awk 'NR == 2 { print $6 }'); a cold run needs about 2.5 GiB, and more with TALLY_DEBUG_INFO=full" >&2
 fi
 
 bash scripts/setup.sh
